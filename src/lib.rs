@@ -4,6 +4,8 @@
 //! `export`) never depend on egui or wgpu; the workbench lives in `app` behind the `gui` feature.
 #![forbid(unsafe_code)]
 
+#[cfg(feature = "gui")]
+pub mod app;
 pub mod dataset;
 pub mod kinematics;
 pub mod params;

@@ -1,0 +1,153 @@
+//! The calibration worker: `solver::calibrate` on its own thread, progress through a bounded channel.
+//!
+//! Iteration events are sent with `try_send` and dropped when the UI is behind (the curves only lose
+//! points); the final message is always delivered. Cancel is an `Arc<AtomicBool>` the solver polls.
+//! The UI drains the channel once per frame and never blocks on it.
+
+use super::session::{Analysis, Calibrated};
+use crate::dataset::Dataset;
+use crate::kinematics::DualArmModel;
+use crate::solver::{self, CalibrationEvent, CalibrationSettings};
+use nalgebra::Isometry3;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::{Receiver, SyncSender, TryRecvError, TrySendError, sync_channel};
+
+/// Channel capacity for progress events.
+const CHANNEL_CAPACITY: usize = 512;
+
+/// Messages from the worker.
+pub enum WorkerMessage {
+    Progress(CalibrationEvent),
+    /// The run ended: the calibrated result with its figures, or the reason it did not succeed.
+    Finished(Result<Box<Calibrated>, String>),
+}
+
+/// A running calibration.
+pub struct CalibrationJob {
+    cancel: Arc<AtomicBool>,
+    receiver: Receiver<WorkerMessage>,
+    thread: Option<std::thread::JoinHandle<()>>,
+    pub started: std::time::Instant,
+    /// Dropped progress events (the UI was behind).
+    pub finished: bool,
+}
+
+impl CalibrationJob {
+    /// Start a run. `repaint` is called after each message so the UI wakes up.
+    pub fn spawn(
+        dataset: Arc<Dataset>,
+        nominal: DualArmModel,
+        settings: CalibrationSettings,
+        body_from_left_base: Isometry3<f64>,
+        repaint: impl Fn() + Send + 'static,
+    ) -> std::io::Result<Self> {
+        let cancel = Arc::new(AtomicBool::new(false));
+        let (sender, receiver) = sync_channel(CHANNEL_CAPACITY);
+        let flag = cancel.clone();
+        let thread = std::thread::Builder::new()
+            .name("dualcal-calibration".into())
+            .spawn(move || {
+                run(
+                    &dataset,
+                    &nominal,
+                    &settings,
+                    &body_from_left_base,
+                    &flag,
+                    &sender,
+                    &repaint,
+                )
+            })?;
+        Ok(Self {
+            cancel,
+            receiver,
+            thread: Some(thread),
+            started: std::time::Instant::now(),
+            finished: false,
+        })
+    }
+
+    /// Ask the solver to stop; the worker then reports `Finished(Err("cancelled"))`.
+    pub fn cancel(&self) {
+        self.cancel.store(true, Ordering::Relaxed);
+    }
+
+    pub fn is_cancelling(&self) -> bool {
+        self.cancel.load(Ordering::Relaxed)
+    }
+
+    /// Every message that has arrived, without blocking.
+    pub fn drain(&mut self) -> Vec<WorkerMessage> {
+        let mut out = Vec::new();
+        loop {
+            match self.receiver.try_recv() {
+                Ok(m) => {
+                    if matches!(m, WorkerMessage::Finished(_)) {
+                        self.finished = true;
+                    }
+                    out.push(m);
+                }
+                Err(TryRecvError::Empty) => break,
+                Err(TryRecvError::Disconnected) => {
+                    if !self.finished {
+                        self.finished = true;
+                        out.push(WorkerMessage::Finished(Err(
+                            "the calibration thread stopped unexpectedly".into(),
+                        )));
+                    }
+                    break;
+                }
+            }
+        }
+        if self.finished {
+            if let Some(t) = self.thread.take() {
+                // The thread has sent its last message; it is returning.
+                let _ = t.join();
+            }
+        }
+        out
+    }
+}
+
+impl Drop for CalibrationJob {
+    fn drop(&mut self) {
+        // A dropped job (new dataset, app closed) stops its worker; it is not joined here.
+        self.cancel();
+    }
+}
+
+fn run(
+    dataset: &Dataset,
+    nominal: &DualArmModel,
+    settings: &CalibrationSettings,
+    body_from_left_base: &Isometry3<f64>,
+    cancel: &AtomicBool,
+    sender: &SyncSender<WorkerMessage>,
+    repaint: &dyn Fn(),
+) {
+    let mut observer = |event: &CalibrationEvent| {
+        let important = !matches!(event, CalibrationEvent::Iteration(_));
+        let message = WorkerMessage::Progress(event.clone());
+        if important {
+            // Stage boundaries are few; wait for room rather than lose them.
+            let _ = sender.send(message);
+        } else {
+            match sender.try_send(message) {
+                Ok(()) | Err(TrySendError::Full(_)) | Err(TrySendError::Disconnected(_)) => {}
+            }
+        }
+        repaint();
+    };
+    let outcome = solver::calibrate(dataset, nominal, settings, &mut observer, cancel);
+    let message = match outcome {
+        Ok(result) => {
+            match Analysis::compute(dataset, &result.calibrated, body_from_left_base) {
+                Ok(analysis) => Ok(Box::new(Calibrated { result, analysis })),
+                Err(e) => Err(format!("calibrated model: {e:#}")),
+            }
+        }
+        Err(e) => Err(e.to_string()),
+    };
+    let _ = sender.send(WorkerMessage::Finished(message));
+    repaint();
+}
