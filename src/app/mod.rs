@@ -79,6 +79,13 @@ enum Status {
     },
 }
 
+/// A dataset being loaded on a helper thread.
+struct LoadJob {
+    receiver: Receiver<Result<(Session, f64), String>>,
+    /// The robot override to restore if loading fails (when the load was a URDF change).
+    previous_override: Option<Option<PathBuf>>,
+}
+
 /// How often to print frame statistics (`DUALCAL_FRAME_STATS=1`).
 const FRAME_STATS_WINDOW: usize = 120;
 
@@ -115,6 +122,11 @@ pub struct WorkbenchApp {
     shot_sender: Sender<std::sync::Arc<egui::ColorImage>>,
     shot_receiver: Receiver<std::sync::Arc<egui::ColorImage>>,
     urdf_override: Option<PathBuf>,
+    loading: Option<LoadJob>,
+    /// Side and bottom panels shown (off: the viewport fills the window).
+    panels_visible: bool,
+    /// Wakes the UI from helper threads (None before the first frame in some hosts).
+    repaint: Option<egui::Context>,
     frame_stats: Option<FrameStats>,
 }
 
@@ -154,6 +166,9 @@ impl WorkbenchApp {
             shot_sender,
             shot_receiver,
             urdf_override: launch.urdf.clone(),
+            loading: None,
+            panels_visible: true,
+            repaint: Some(cc.egui_ctx.clone()),
             frame_stats: std::env::var_os("DUALCAL_FRAME_STATS").map(|_| FrameStats {
                 last: None,
                 samples_ms: Vec::new(),
@@ -196,6 +211,11 @@ impl WorkbenchApp {
         &mut self.viewport
     }
 
+    /// Show or hide everything but the viewport (for snapshots and presentations).
+    pub fn set_panels_visible(&mut self, visible: bool) {
+        self.panels_visible = visible;
+    }
+
     /// Replace the file-dialog seam (a browser build, or tests).
     pub fn set_file_access(&mut self, files: Box<dyn FileAccess>) {
         self.files = files;
@@ -203,46 +223,95 @@ impl WorkbenchApp {
 
     // ---- actions -------------------------------------------------------------------------------
 
-    /// Load a dataset; on failure the error is shown and the current session stays.
+    /// Load a dataset on a helper thread; on failure the error is shown and the current session
+    /// stays.
     pub fn open_dataset(&mut self, path: &Path) {
-        let started = std::time::Instant::now();
-        match Session::load(path, self.urdf_override.as_deref())
-            .with_context(|| format!("cannot open dataset {}", path.display()))
-        {
-            Ok(session) => {
-                self.job = None;
-                self.history.clear();
-                self.selection = None;
-                self.viewport.poses = [Some(0), Some(0)];
-                let warnings = session.robot.warnings.clone();
-                let d = &session.dataset;
-                self.status = Status::Idle(format!(
-                    "Loaded {} ({} left + {} right configurations) in {:.2} s.",
-                    d.dir.display(),
-                    d.left.measurements.len(),
-                    d.right.measurements.len(),
-                    started.elapsed().as_secs_f64()
-                ));
-                self.errors.extend(warnings.into_iter().map(|w| format!("robot: {w}")));
-                self.session = Some(session);
-                self.generation += 1;
-            }
-            Err(e) => self.errors.push(format!("{e:#}")),
-        }
+        self.start_load(path, None);
     }
 
     /// Use another robot description for the current dataset (and later ones).
     pub fn open_urdf(&mut self, path: &Path) {
-        let Some(current) = &self.session else {
-            self.urdf_override = Some(path.to_path_buf());
+        let previous = self.urdf_override.replace(path.to_path_buf());
+        if let Some(dir) = self.session.as_ref().map(|s| s.dataset.dir.clone()) {
+            self.start_load(&dir, Some(previous));
+        }
+    }
+
+    fn start_load(&mut self, path: &Path, previous_override: Option<Option<PathBuf>>) {
+        let (sender, receiver) = channel();
+        let dataset = path.to_path_buf();
+        let urdf = self.urdf_override.clone();
+        let repaint = self.repaint.clone();
+        let spawned = std::thread::Builder::new()
+            .name("dualcal-load".into())
+            .spawn(move || {
+                let started = std::time::Instant::now();
+                let result = Session::load(&dataset, urdf.as_deref())
+                    .with_context(|| format!("cannot open dataset {}", dataset.display()))
+                    .map(|s| (s, started.elapsed().as_secs_f64()))
+                    .map_err(|e| format!("{e:#}"));
+                let _ = sender.send(result);
+                if let Some(ctx) = repaint {
+                    ctx.request_repaint();
+                }
+            });
+        match spawned {
+            Ok(_) => {
+                self.status = Status::Idle(format!("Loading {}…", path.display()));
+                self.loading = Some(LoadJob {
+                    receiver,
+                    previous_override,
+                });
+            }
+            Err(e) => self.errors.push(format!("cannot start loading: {e}")),
+        }
+    }
+
+    /// Whether a dataset is being loaded.
+    pub fn is_loading(&self) -> bool {
+        self.loading.is_some()
+    }
+
+    fn poll_loading(&mut self) {
+        let Some(job) = &self.loading else {
             return;
         };
-        let dataset_dir = current.dataset.dir.clone();
-        let previous = self.urdf_override.replace(path.to_path_buf());
-        let before = self.errors.len();
-        self.open_dataset(&dataset_dir);
-        if self.errors.len() > before {
-            self.urdf_override = previous;
+        let result = match job.receiver.try_recv() {
+            Ok(r) => r,
+            Err(std::sync::mpsc::TryRecvError::Empty) => return,
+            Err(std::sync::mpsc::TryRecvError::Disconnected) => {
+                Err("the loading thread stopped unexpectedly".into())
+            }
+        };
+        let Some(job) = self.loading.take() else {
+            return;
+        };
+        match result {
+            Ok((session, secs)) => {
+                self.job = None;
+                self.history.clear();
+                self.selection = None;
+                self.viewport.poses = [Some(0), Some(0)];
+                self.viewport.auto_scale(&session);
+                let d = &session.dataset;
+                self.status = Status::Idle(format!(
+                    "Loaded {} ({} left + {} right configurations) in {secs:.2} s.",
+                    d.dir.display(),
+                    d.left.measurements.len(),
+                    d.right.measurements.len(),
+                ));
+                self.errors
+                    .extend(session.robot.warnings.iter().map(|w| format!("robot: {w}")));
+                self.session = Some(session);
+                self.generation += 1;
+            }
+            Err(e) => {
+                if let Some(previous) = job.previous_override {
+                    self.urdf_override = previous;
+                }
+                self.status = Status::Idle("Loading failed; the previous dataset stays.".into());
+                self.errors.push(e);
+            }
         }
     }
 
@@ -333,6 +402,7 @@ impl WorkbenchApp {
                     self.history = calibrated.result.history.clone();
                     if let Some(session) = &mut self.session {
                         session.calibrated = Some(*calibrated);
+                        self.viewport.auto_scale(session);
                     }
                     self.generation += 1;
                     self.status = Status::Idle(format!(
@@ -510,7 +580,7 @@ impl WorkbenchApp {
                     self.files.open(OpenKind::Dataset, self.file_sender.clone());
                 }
                 if ui
-                    .button("Example")
+                    .add_enabled(self.loading.is_none(), egui::Button::new("Example"))
                     .on_hover_text("Open the bundled simulated example dataset")
                     .clicked()
                 {
@@ -614,14 +684,14 @@ impl WorkbenchApp {
             ui.horizontal(|ui| {
                 let can_start = !running && self.session.is_some();
                 if ui
-                    .add_enabled(can_start, egui::Button::new(RichText::new("▶ Calibrate").strong()))
+                    .add_enabled(can_start, egui::Button::new(RichText::new("Calibrate").strong()))
                     .on_hover_text("Run the two-step calibration (step 1 per arm, then step 2) on a worker thread")
                     .clicked()
                 {
                     self.start_calibration(ui.ctx());
                 }
                 if ui
-                    .add_enabled(running, egui::Button::new("■ Cancel"))
+                    .add_enabled(running, egui::Button::new("Cancel"))
                     .on_hover_text("Stop the run; the previous result stays")
                     .clicked()
                 {
@@ -701,8 +771,11 @@ impl WorkbenchApp {
                     .on_disabled_hover_text("Calibrate first");
             });
         });
+        ui.checkbox(&mut self.viewport.auto_scale, "auto scale")
+            .on_hover_text("Set the vector exaggeration and colour range from the current errors whenever a model is loaded or calibrated");
+        let o = &mut self.viewport.options;
         ui.add(
-            egui::Slider::new(&mut o.exaggeration, 1.0..=1000.0)
+            egui::Slider::new(&mut o.exaggeration, 1.0..=5000.0)
                 .logarithmic(true)
                 .text("× vectors"),
         )
@@ -774,7 +847,7 @@ impl WorkbenchApp {
         ui.horizontal(|ui| {
             ui.heading("Configurations");
             if ui
-                .button("worst ⏷")
+                .button("Select worst")
                 .on_hover_text("Select the configuration with the largest |Δd|")
                 .clicked()
             {
@@ -827,7 +900,7 @@ impl WorkbenchApp {
         let mut dismiss = None;
         for (k, e) in self.errors.iter().enumerate() {
             ui.horizontal(|ui| {
-                if ui.small_button("✖").on_hover_text("Dismiss").clicked() {
+                if ui.small_button("×").on_hover_text("Dismiss").clicked() {
                     dismiss = Some(k);
                 }
                 ui.label(RichText::new(e).color(Color32::from_rgb(255, 110, 100)));
@@ -839,6 +912,9 @@ impl WorkbenchApp {
         ui.horizontal(|ui| {
             match &self.status {
                 Status::Idle(text) => {
+                    if self.loading.is_some() {
+                        ui.spinner();
+                    }
                     ui.label(text);
                 }
                 Status::Running { stage, iteration } => {
@@ -864,7 +940,7 @@ impl WorkbenchApp {
                         .color(Color32::GRAY),
                     )
                     .on_hover_text(
-                        "RMS residual of the best-fit tracker → robot transform used to draw the measured points",
+                        "RMS residual of the best-fit tracker-to-robot transform used to draw the measured points",
                     );
                 });
             }
@@ -962,25 +1038,16 @@ pub fn export_urdf(_session: &Session, _cal: &session::Calibrated) -> anyhow::Re
 
 impl eframe::App for WorkbenchApp {
     fn logic(&mut self, ctx: &egui::Context, _frame: &mut eframe::Frame) {
+        self.poll_loading();
         self.poll_worker();
         self.poll_files(ctx);
     }
 
     fn ui(&mut self, ui: &mut egui::Ui, frame: &mut eframe::Frame) {
         self.record_frame_time(ui.ctx());
-        egui::Panel::bottom("status bar").show(ui, |ui| self.status_bar_ui(ui));
-        egui::Panel::left("settings")
-            .default_size(270.0)
-            .resizable(true)
-            .show(ui, |ui| self.settings_panel_ui(ui));
-        egui::Panel::right("table")
-            .default_size(520.0)
-            .resizable(true)
-            .show(ui, |ui| self.table_ui(ui));
-        egui::Panel::bottom("plots")
-            .default_size(300.0)
-            .resizable(true)
-            .show(ui, |ui| self.plots_ui(ui));
+        if self.panels_visible {
+            self.panels_ui(ui);
+        }
         egui::CentralPanel::default()
             .frame(egui::Frame::NONE)
             .show(ui, |ui| {
@@ -995,5 +1062,23 @@ impl eframe::App for WorkbenchApp {
                     self.select(sel, true);
                 }
             });
+    }
+}
+
+impl WorkbenchApp {
+    fn panels_ui(&mut self, ui: &mut egui::Ui) {
+        egui::Panel::bottom("status bar").show(ui, |ui| self.status_bar_ui(ui));
+        egui::Panel::left("settings")
+            .default_size(270.0)
+            .resizable(true)
+            .show(ui, |ui| self.settings_panel_ui(ui));
+        egui::Panel::right("table")
+            .default_size(520.0)
+            .resizable(true)
+            .show(ui, |ui| self.table_ui(ui));
+        egui::Panel::bottom("plots")
+            .default_size(300.0)
+            .resizable(true)
+            .show(ui, |ui| self.plots_ui(ui));
     }
 }

@@ -70,7 +70,7 @@ pub fn convergence_plot_ui(ui: &mut egui::Ui, history: &[IterationRecord], stage
             last.kkt_residual
         ));
     }
-    let h = ((ui.available_height() - 8.0) * 0.5).max(80.0);
+    let h = ((ui.available_height() - 2.0 * ui.spacing().item_spacing.y) * 0.5).max(60.0);
     let series = |f: &dyn Fn(&IterationRecord) -> f64| -> Vec<[f64; 2]> {
         records
             .iter()

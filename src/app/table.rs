@@ -130,7 +130,7 @@ pub fn config_table_ui(
     ui.horizontal(|ui| {
         for column in Column::ALL {
             let arrow = if state.column == column {
-                if state.descending { " ⏷" } else { " ⏶" }
+                if state.descending { " (desc)" } else { " (asc)" }
             } else {
                 ""
             };

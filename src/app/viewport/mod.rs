@@ -37,7 +37,9 @@ pub struct ViewportState {
     scene_key: Option<SceneKey>,
     version: u64,
     texture: Option<egui::TextureId>,
-    /// Whether a click on the viewport should select.
+    /// Choose exaggeration and colour range from the errors when a model arrives.
+    pub auto_scale: bool,
+    /// The configuration under the pointer.
     pub hovered_config: Option<(crate::kinematics::Side, usize)>,
 }
 
@@ -61,6 +63,7 @@ impl Default for ViewportState {
             version: 0,
             texture: None,
             hovered_config: None,
+            auto_scale: true,
         }
     }
 }
@@ -73,6 +76,34 @@ pub struct ViewportResponse {
 }
 
 impl ViewportState {
+    /// With auto scale on: draw the 95th-percentile point error as about 60 mm and put it at the
+    /// top of the colour bar.
+    pub fn auto_scale(&mut self, session: &Session) {
+        if !self.auto_scale {
+            return;
+        }
+        let analysis = if self.options.use_calibrated {
+            session.current()
+        } else {
+            &session.nominal
+        };
+        let mut errors: Vec<f64> = analysis
+            .configs
+            .iter()
+            .flat_map(|r| r.point_errors_mm())
+            .filter(|e| e.is_finite())
+            .collect();
+        if errors.is_empty() {
+            return;
+        }
+        errors.sort_by(f64::total_cmp);
+        let p95 = errors[(errors.len() * 95 / 100).min(errors.len() - 1)];
+        if p95 > 0.0 {
+            self.options.exaggeration = nice_round(60.0 / p95).clamp(1.0, 5000.0) as f32;
+            self.options.color_max_mm = nice_round(p95).clamp(0.01, 20.0) as f32;
+        }
+    }
+
     /// Draw the viewport into the remaining space of `ui`. `generation` identifies the session's
     /// content (bump it when the session or its models change).
     pub fn ui(
@@ -322,5 +353,37 @@ impl ViewportState {
             Stroke::new(1.0, Color32::from_gray(40)),
             egui::StrokeKind::Inside,
         );
+    }
+}
+
+/// Round to 1, 2 or 5 times a power of ten.
+fn nice_round(x: f64) -> f64 {
+    if !(x.is_finite() && x > 0.0) {
+        return 1.0;
+    }
+    let p = 10f64.powf(x.log10().floor());
+    let m = x / p;
+    let m = if m < 1.5 {
+        1.0
+    } else if m < 3.5 {
+        2.0
+    } else if m < 7.5 {
+        5.0
+    } else {
+        10.0
+    };
+    m * p
+}
+
+#[cfg(test)]
+mod tests {
+    use super::nice_round;
+
+    #[test]
+    fn nice_round_picks_1_2_5() {
+        assert!((nice_round(0.031) - 0.02).abs() < 1e-12);
+        assert_eq!(nice_round(42.0), 50.0);
+        assert_eq!(nice_round(1.2), 1.0);
+        assert_eq!(nice_round(f64::NAN), 1.0);
     }
 }

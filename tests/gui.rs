@@ -1,0 +1,161 @@
+//! The workbench driven headlessly with egui_kittest on wgpu (Mesa lavapipe, no window, no GPU):
+//! start on the bundled example, calibrate, cancel, open a broken dataset, snapshot the viewport.
+//! (Set `XDG_RUNTIME_DIR` to a mode-700 directory to silence a harmless warning; `.ci/run` does.)
+#![cfg(feature = "gui")]
+
+use dualcal::app::{AppLaunch, WorkbenchApp};
+use egui_kittest::Harness;
+use egui_kittest::kittest::Queryable;
+
+/// Frame caps: generous, so a slow machine passes; they only stop a hung test.
+const MAX_LOAD_FRAMES: usize = 20_000;
+const MAX_RUN_FRAMES: usize = 200_000;
+
+fn harness(size: [f32; 2], launch: AppLaunch) -> Harness<'static, WorkbenchApp> {
+    Harness::builder()
+        .with_size(eframe::egui::Vec2::new(size[0], size[1]))
+        .wgpu()
+        .build_eframe(move |cc| WorkbenchApp::with_msaa(cc, launch, false))
+}
+
+/// Step frames until `done` holds (or the cap is hit, which fails the test).
+fn step_until(
+    harness: &mut Harness<'_, WorkbenchApp>,
+    max_frames: usize,
+    what: &str,
+    done: impl Fn(&WorkbenchApp) -> bool,
+) {
+    for _ in 0..max_frames {
+        if done(harness.state()) {
+            // One more frame so the UI shows the new state.
+            harness.step();
+            return;
+        }
+        harness.step();
+        std::thread::sleep(std::time::Duration::from_millis(2));
+    }
+    panic!("{what}: not reached within {max_frames} frames");
+}
+
+fn loaded(harness: &mut Harness<'_, WorkbenchApp>) {
+    step_until(harness, MAX_LOAD_FRAMES, "loading the example", |app| {
+        !app.is_loading()
+    });
+    assert!(
+        harness.state().session().is_some(),
+        "example not loaded: {:?}",
+        harness.state().errors()
+    );
+}
+
+#[test]
+fn calibrate_shows_calibrated_figures() {
+    let mut harness = harness([1400.0, 900.0], AppLaunch::default());
+    loaded(&mut harness);
+    harness.get_by_label("errors of the nominal model");
+    harness.get_by_label("Accuracy").click();
+    harness.step();
+    harness.get_by_label("Calibrate to see the calibrated figures.");
+
+    harness.get_by_label("Calibrate").click();
+    harness.step();
+    assert!(harness.state().is_calibrating());
+    step_until(&mut harness, MAX_RUN_FRAMES, "calibration result", |app| {
+        !app.is_calibrating()
+    });
+    let app = harness.state();
+    assert!(app.errors().is_empty(), "{:?}", app.errors());
+    let session = app.session().unwrap();
+    let calibrated = session.calibrated.as_ref().expect("a calibrated result");
+    assert!(!app.history().is_empty(), "no convergence history");
+
+    // The table now lists the calibrated model's errors, and the accuracy panel shows both columns.
+    harness.get_by_label("errors of the calibrated model");
+    assert!(
+        harness
+            .query_by_label("Calibrate to see the calibrated figures.")
+            .is_none()
+    );
+    // The calibrated relative figures on the verification split are shown with 3 decimals; they
+    // must be among the labels.
+    let ver = calibrated.analysis.reports[1]
+        .as_ref()
+        .expect("verification report");
+    let rms = format!("{:.3}", ver.relative_left.pos_rms_mm);
+    assert!(harness.query_all_by_label(&rms).count() >= 1, "{rms} mm not shown");
+    // Calibration must have lowered the worst configuration error it shows in the table.
+    let worst = |a: &dualcal::app::session::Analysis| {
+        a.configs
+            .iter()
+            .map(|r| r.worst_pos_mm)
+            .fold(0.0f64, f64::max)
+    };
+    assert!(worst(&calibrated.analysis) < worst(&session.nominal));
+}
+
+#[test]
+fn cancel_stops_the_run_and_keeps_the_previous_state() {
+    let mut harness = harness([1400.0, 900.0], AppLaunch::default());
+    loaded(&mut harness);
+    harness.get_by_label("Calibrate").click();
+    harness.step();
+    assert!(harness.state().is_calibrating());
+    harness.get_by_label("Cancel").click();
+    step_until(&mut harness, MAX_RUN_FRAMES, "cancellation", |app| {
+        !app.is_calibrating()
+    });
+    let app = harness.state();
+    assert!(
+        app.session().unwrap().calibrated.is_none(),
+        "a cancelled run must not replace the current result"
+    );
+    assert!(app.errors().is_empty(), "{:?}", app.errors());
+    harness.get_by_label_contains("cancelled");
+    harness.get_by_label("errors of the nominal model");
+}
+
+#[test]
+fn a_broken_dataset_shows_its_error_and_keeps_the_last_good_one() {
+    let mut harness = harness([1400.0, 900.0], AppLaunch::default());
+    loaded(&mut harness);
+    let before = harness.state().session().unwrap().dataset.dir.clone();
+
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("dataset.toml"),
+        "format = \"dualcal-dataset/1\"\n[units]\nlength = \"furlong\"\nangle = \"deg\"\n",
+    )
+    .unwrap();
+    harness.state_mut().open_dataset(dir.path());
+    step_until(&mut harness, MAX_LOAD_FRAMES, "loading the broken dataset", |app| {
+        !app.is_loading()
+    });
+    let app = harness.state();
+    assert_eq!(app.errors().len(), 1, "{:?}", app.errors());
+    assert!(app.errors()[0].contains("dataset.toml"), "{:?}", app.errors());
+    assert_eq!(app.session().unwrap().dataset.dir, before);
+    harness.get_by_label_contains("cannot open dataset");
+    harness.get_by_label_contains("previous dataset stays");
+
+    // The error can be dismissed.
+    harness.get_by_label("×").click();
+    harness.step();
+    assert!(harness.state().errors().is_empty());
+}
+
+#[test]
+fn viewport_snapshot() {
+    let mut harness = harness([480.0, 320.0], AppLaunch::default());
+    loaded(&mut harness);
+    {
+        let app = harness.state_mut();
+        app.set_panels_visible(false);
+        let view = app.viewport_mut();
+        view.camera = dualcal::app::viewport::camera::OrbitCamera::default();
+        view.auto_scale = false;
+        view.options.exaggeration = 20.0;
+        view.options.color_max_mm = 5.0;
+    }
+    harness.run_steps(3);
+    harness.snapshot("viewport");
+}
