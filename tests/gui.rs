@@ -82,7 +82,10 @@ fn calibrate_shows_calibrated_figures() {
         .as_ref()
         .expect("verification report");
     let rms = format!("{:.3}", ver.relative_left.pos_rms_mm);
-    assert!(harness.query_all_by_label(&rms).count() >= 1, "{rms} mm not shown");
+    assert!(
+        harness.query_all_by_label(&rms).count() >= 1,
+        "{rms} mm not shown"
+    );
     // Calibration must have lowered the worst configuration error it shows in the table.
     let worst = |a: &dualcal::app::session::Analysis| {
         a.configs
@@ -127,12 +130,19 @@ fn a_broken_dataset_shows_its_error_and_keeps_the_last_good_one() {
     )
     .unwrap();
     harness.state_mut().open_dataset(dir.path());
-    step_until(&mut harness, MAX_LOAD_FRAMES, "loading the broken dataset", |app| {
-        !app.is_loading()
-    });
+    step_until(
+        &mut harness,
+        MAX_LOAD_FRAMES,
+        "loading the broken dataset",
+        |app| !app.is_loading(),
+    );
     let app = harness.state();
     assert_eq!(app.errors().len(), 1, "{:?}", app.errors());
-    assert!(app.errors()[0].contains("dataset.toml"), "{:?}", app.errors());
+    assert!(
+        app.errors()[0].contains("dataset.toml"),
+        "{:?}",
+        app.errors()
+    );
     assert_eq!(app.session().unwrap().dataset.dir, before);
     harness.get_by_label_contains("cannot open dataset");
     harness.get_by_label_contains("previous dataset stays");

@@ -12,7 +12,11 @@ fn validate(path: &Path) -> Result<(), String> {
     )
     .validate(&module)
     .map_err(|e| format!("{}: {}", path.display(), e.emit_to_string(&source)))?;
-    let entry_points: Vec<_> = module.entry_points.iter().map(|e| e.name.as_str()).collect();
+    let entry_points: Vec<_> = module
+        .entry_points
+        .iter()
+        .map(|e| e.name.as_str())
+        .collect();
     for needed in ["vs_main", "fs_main"] {
         if !entry_points.contains(&needed) {
             return Err(format!("{}: no entry point `{needed}`", path.display()));
@@ -30,7 +34,10 @@ fn every_shader_validates() {
         .filter(|p| p.extension().is_some_and(|x| x == "wgsl"))
         .collect();
     paths.sort();
-    assert!(paths.len() >= 3, "expected the mesh, line and background shaders, found {paths:?}");
+    assert!(
+        paths.len() >= 3,
+        "expected the mesh, line and background shaders, found {paths:?}"
+    );
     let failures: Vec<String> = paths.iter().filter_map(|p| validate(p).err()).collect();
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }

@@ -15,7 +15,11 @@ const STOPS: [[f32; 3]; 6] = [
 
 /// Colour (sRGB, 0–1) of `t` in 0..1 (clamped).
 pub fn srgb(t: f32) -> [f32; 3] {
-    let t = if t.is_finite() { t.clamp(0.0, 1.0) } else { 1.0 };
+    let t = if t.is_finite() {
+        t.clamp(0.0, 1.0)
+    } else {
+        1.0
+    };
     let x = t * (STOPS.len() - 1) as f32;
     let i = (x.floor() as usize).min(STOPS.len() - 2);
     let f = x - i as f32;

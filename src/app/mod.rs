@@ -412,8 +412,9 @@ impl WorkbenchApp {
                 }
                 WorkerMessage::Finished(Err(message)) => {
                     if message == "cancelled" {
-                        self.status =
-                            Status::Idle("Calibration cancelled; the previous result is kept.".into());
+                        self.status = Status::Idle(
+                            "Calibration cancelled; the previous result is kept.".into(),
+                        );
                     } else {
                         self.status = Status::Idle("Calibration failed.".into());
                         self.errors.push(format!("calibration: {message}"));
@@ -457,26 +458,26 @@ impl WorkbenchApp {
             }
         }
         // A requested screenshot of the plots.
-        if self.screenshot_pending {
-            if let Ok(image) = self.shot_receiver.try_recv() {
-                self.screenshot_pending = false;
-                let ppp = ctx.pixels_per_point();
-                let region = self
-                    .plot_rect
-                    .map_or_else(|| (*image).clone(), |r| image.region(&r, Some(ppp)));
-                match encode_png(&region) {
-                    Ok(bytes) => self.files.save(
-                        SaveRequest {
-                            title: "Export plots as PNG",
-                            file_name: "dualcal-plots.png".into(),
-                            filter_name: "PNG image",
-                            extensions: &["png"],
-                            bytes,
-                        },
-                        self.file_sender.clone(),
-                    ),
-                    Err(e) => self.errors.push(format!("plot export: {e}")),
-                }
+        if self.screenshot_pending
+            && let Ok(image) = self.shot_receiver.try_recv()
+        {
+            self.screenshot_pending = false;
+            let ppp = ctx.pixels_per_point();
+            let region = self
+                .plot_rect
+                .map_or_else(|| (*image).clone(), |r| image.region(&r, Some(ppp)));
+            match encode_png(&region) {
+                Ok(bytes) => self.files.save(
+                    SaveRequest {
+                        title: "Export plots as PNG",
+                        file_name: "dualcal-plots.png".into(),
+                        filter_name: "PNG image",
+                        extensions: &["png"],
+                        bytes,
+                    },
+                    self.file_sender.clone(),
+                ),
+                Err(e) => self.errors.push(format!("plot export: {e}")),
             }
         }
     }
@@ -745,7 +746,10 @@ impl WorkbenchApp {
 
     fn view_options_ui(&mut self, ui: &mut egui::Ui) {
         ui.heading("View");
-        let has_cal = self.session.as_ref().is_some_and(|s| s.calibrated.is_some());
+        let has_cal = self
+            .session
+            .as_ref()
+            .is_some_and(|s| s.calibrated.is_some());
         let o = &mut self.viewport.options;
         ui.horizontal_wrapped(|ui| {
             ui.checkbox(&mut o.show_robot, "robot");
@@ -787,21 +791,29 @@ impl WorkbenchApp {
         )
         .on_hover_text("Error at the top of the colour bar, mm");
         ui.horizontal(|ui| {
-            if ui.button("Reset view").on_hover_text("Also: double-click the viewport").clicked() {
+            if ui
+                .button("Reset view")
+                .on_hover_text("Also: double-click the viewport")
+                .clicked()
+            {
                 self.viewport.camera = viewport::camera::OrbitCamera::default();
             }
             if ui
                 .button("Select worst")
-                .on_hover_text("Select the configuration with the largest |Δd| of the current model")
+                .on_hover_text(
+                    "Select the configuration with the largest |Δd| of the current model",
+                )
                 .clicked()
             {
                 self.select_worst();
             }
         });
         ui.label(
-            RichText::new("drag: orbit · right/middle or shift-drag: pan · wheel: zoom · click: select")
-                .small()
-                .color(Color32::GRAY),
+            RichText::new(
+                "drag: orbit · right/middle or shift-drag: pan · wheel: zoom · click: select",
+            )
+            .small()
+            .color(Color32::GRAY),
         );
     }
 
@@ -864,24 +876,27 @@ impl WorkbenchApp {
             "errors of the nominal model"
         };
         ui.label(RichText::new(label).small().color(Color32::GRAY));
-        if let Some((side, index)) = self.selection {
-            if let Some(row) = session
+        if let Some((side, index)) = self.selection
+            && let Some(row) = session
                 .current()
                 .configs
                 .iter()
                 .find(|r| r.side == side && r.index == index)
-            {
-                let e = row.point_errors_mm();
-                ui.label(format!(
-                    "selected: {} ({} arm, {}), point errors a/b/c = {:.3} / {:.3} / {:.3} mm",
-                    row.id,
-                    side,
-                    if row.split == Split::Cal { "cal" } else { "ver" },
-                    e[0],
-                    e[1],
-                    e[2]
-                ));
-            }
+        {
+            let e = row.point_errors_mm();
+            ui.label(format!(
+                "selected: {} ({} arm, {}), point errors a/b/c = {:.3} / {:.3} / {:.3} mm",
+                row.id,
+                side,
+                if row.split == Split::Cal {
+                    "cal"
+                } else {
+                    "ver"
+                },
+                e[0],
+                e[1],
+                e[2]
+            ));
         }
         let clicked = table::config_table_ui(
             ui,
@@ -988,7 +1003,10 @@ fn encode_png(image: &egui::ColorImage) -> anyhow::Result<Vec<u8>> {
     let buffer = image::RgbaImage::from_raw(w as u32, h as u32, rgba)
         .context("screenshot has an inconsistent size")?;
     let mut bytes = Vec::new();
-    buffer.write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png)?;
+    buffer.write_to(
+        &mut std::io::Cursor::new(&mut bytes),
+        image::ImageFormat::Png,
+    )?;
     Ok(bytes)
 }
 
@@ -1011,7 +1029,12 @@ pub fn export_csv(session: &Session) -> anyhow::Result<Vec<u8>> {
         w.write_record([
             row.id.clone(),
             row.side.name().to_string(),
-            if row.split == Split::Cal { "cal" } else { "ver" }.to_string(),
+            if row.split == Split::Cal {
+                "cal"
+            } else {
+                "ver"
+            }
+            .to_string(),
             format!("{:.6}", row.worst_pos_mm),
             format!("{:.8}", row.worst_ori_rad),
             format!("{:.6}", row.rigidity_mm),

@@ -8,11 +8,7 @@ use crate::solver::{IterationRecord, Stage};
 use eframe::egui::{self, Color32, RichText};
 use egui_plot::{Bar, BarChart, Legend, Line, Plot, VLine};
 
-pub const STAGES: [Stage; 3] = [
-    Stage::Arm(Side::Left),
-    Stage::Arm(Side::Right),
-    Stage::Base,
-];
+pub const STAGES: [Stage; 3] = [Stage::Arm(Side::Left), Stage::Arm(Side::Right), Stage::Base];
 
 const F_COLORS: [Color32; 3] = [
     Color32::from_rgb(230, 120, 90),

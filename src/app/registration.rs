@@ -51,7 +51,10 @@ mod tests {
 
     #[test]
     fn recovers_a_known_transform_from_noisy_points() {
-        let truth = Isometry3::new(Vector3::new(1500.0, -300.0, 200.0), Vector3::new(0.3, -1.1, 2.0));
+        let truth = Isometry3::new(
+            Vector3::new(1500.0, -300.0, 200.0),
+            Vector3::new(0.3, -1.1, 2.0),
+        );
         let from: Vec<Vector3<f64>> = (0..50)
             .map(|k| {
                 let t = k as f64;
@@ -61,7 +64,9 @@ mod tests {
         let to: Vec<Vector3<f64>> = from
             .iter()
             .enumerate()
-            .map(|(k, p)| truth * nalgebra::Point3::from(*p) + Vector3::repeat(0.01 * ((k % 3) as f64 - 1.0)))
+            .map(|(k, p)| {
+                truth * nalgebra::Point3::from(*p) + Vector3::repeat(0.01 * ((k % 3) as f64 - 1.0))
+            })
             .map(|p| p.coords)
             .collect();
         let fit = best_fit_rigid(&from, &to).unwrap();

@@ -73,7 +73,10 @@ impl Figure {
             (
                 stats.ori_rms_rad,
                 stats.ori_max_rad,
-                [stats.ori_within_0_005rad_frac, stats.ori_within_0_01rad_frac],
+                [
+                    stats.ori_within_0_005rad_frac,
+                    stats.ori_within_0_01rad_frac,
+                ],
             )
         }
     }
@@ -228,16 +231,14 @@ impl Analysis {
                 let err = per_config
                     .iter()
                     .find(|c| c.side == side && c.index == index);
-                let (worst_pos_mm, worst_ori_rad, rigidity_mm) = err.map_or(
-                    (f64::NAN, f64::NAN, f64::NAN),
-                    |c| {
+                let (worst_pos_mm, worst_ori_rad, rigidity_mm) =
+                    err.map_or((f64::NAN, f64::NAN, f64::NAN), |c| {
                         (
                             c.relative_pos_max_mm.max(c.collaborative_pos_max_mm),
                             c.relative_ori_max_rad.max(c.collaborative_ori_max_rad),
                             c.rigidity_mm,
                         )
-                    },
-                );
+                    });
                 configs.push(ConfigRow {
                     side,
                     index,
@@ -288,7 +289,9 @@ impl Session {
     /// or the built-in IRB 14000.
     pub fn load(dataset_path: &Path, urdf: Option<&Path>) -> anyhow::Result<Self> {
         let dataset = dataset::load(dataset_path)?;
-        let robot_path = urdf.map(Path::to_path_buf).or_else(|| dataset.robot.clone());
+        let robot_path = urdf
+            .map(Path::to_path_buf)
+            .or_else(|| dataset.robot.clone());
         let robot = match &robot_path {
             Some(p) => RobotDescription::load(p)?,
             None => RobotDescription::builtin_irb14000(),

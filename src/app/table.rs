@@ -1,7 +1,7 @@
 //! The per-configuration table: sortable by every column, rows select in 3D.
 
-use crate::app::viewport::scene::Selection;
 use crate::app::session::{Analysis, ConfigRow};
+use crate::app::viewport::scene::Selection;
 use crate::dataset::Split;
 use eframe::egui::{self, Color32, RichText, Sense};
 
@@ -130,7 +130,11 @@ pub fn config_table_ui(
     ui.horizontal(|ui| {
         for column in Column::ALL {
             let arrow = if state.column == column {
-                if state.descending { " (desc)" } else { " (asc)" }
+                if state.descending {
+                    " (desc)"
+                } else {
+                    " (asc)"
+                }
             } else {
                 ""
             };
@@ -160,14 +164,14 @@ pub fn config_table_ui(
     let mut scroll = egui::ScrollArea::vertical()
         .auto_shrink([false, false])
         .id_salt("config table");
-    if scroll_to_selection {
-        if let Some(pos) = order
+    if scroll_to_selection
+        && let Some(pos) = order
             .iter()
             .position(|&i| selection == Some((analysis.configs[i].side, analysis.configs[i].index)))
-        {
-            let spacing = ui.spacing().item_spacing.y;
-            scroll = scroll.vertical_scroll_offset((pos as f32 * (row_height + spacing) - 60.0).max(0.0));
-        }
+    {
+        let spacing = ui.spacing().item_spacing.y;
+        scroll =
+            scroll.vertical_scroll_offset((pos as f32 * (row_height + spacing) - 60.0).max(0.0));
     }
     scroll.show_rows(ui, row_height, order.len(), |ui, range| {
         for &i in &order[range] {
@@ -178,11 +182,7 @@ pub fn config_table_ui(
                     ui.set_height(row_height);
                     let strong = |t: String| {
                         let t = RichText::new(t).monospace();
-                        if selected {
-                            t.color(Color32::WHITE)
-                        } else {
-                            t
-                        }
+                        if selected { t.color(Color32::WHITE) } else { t }
                     };
                     let num = |x: f64, digits: usize| {
                         if x.is_finite() {
@@ -201,9 +201,21 @@ pub fn config_table_ui(
                             Split::Ver => "ver".into(),
                         }),
                     );
-                    cell(ui, Column::WorstPos.width(), strong(num(row.worst_pos_mm, 3)));
-                    cell(ui, Column::WorstOri.width(), strong(num(row.worst_ori_rad, 5)));
-                    cell(ui, Column::Rigidity.width(), strong(num(row.rigidity_mm, 3)));
+                    cell(
+                        ui,
+                        Column::WorstPos.width(),
+                        strong(num(row.worst_pos_mm, 3)),
+                    );
+                    cell(
+                        ui,
+                        Column::WorstOri.width(),
+                        strong(num(row.worst_ori_rad, 5)),
+                    );
+                    cell(
+                        ui,
+                        Column::Rigidity.width(),
+                        strong(num(row.rigidity_mm, 3)),
+                    );
                 })
                 .response;
             if selected {

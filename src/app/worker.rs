@@ -99,11 +99,11 @@ impl CalibrationJob {
                 }
             }
         }
-        if self.finished {
-            if let Some(t) = self.thread.take() {
-                // The thread has sent its last message; it is returning.
-                let _ = t.join();
-            }
+        if self.finished
+            && let Some(t) = self.thread.take()
+        {
+            // The thread has sent its last message; it is returning.
+            let _ = t.join();
         }
         out
     }
@@ -140,12 +140,10 @@ fn run(
     };
     let outcome = solver::calibrate(dataset, nominal, settings, &mut observer, cancel);
     let message = match outcome {
-        Ok(result) => {
-            match Analysis::compute(dataset, &result.calibrated, body_from_left_base) {
-                Ok(analysis) => Ok(Box::new(Calibrated { result, analysis })),
-                Err(e) => Err(format!("calibrated model: {e:#}")),
-            }
-        }
+        Ok(result) => match Analysis::compute(dataset, &result.calibrated, body_from_left_base) {
+            Ok(analysis) => Ok(Box::new(Calibrated { result, analysis })),
+            Err(e) => Err(format!("calibrated model: {e:#}")),
+        },
         Err(e) => Err(e.to_string()),
     };
     let _ = sender.send(WorkerMessage::Finished(message));

@@ -105,7 +105,12 @@ impl OrbitCamera {
     /// Project a body-frame point to viewport coordinates in points (origin top-left), or `None`
     /// when it is behind the camera.
     pub fn project(&self, p_mm: &Vector3<f32>, width: f32, height: f32) -> Option<[f32; 2]> {
-        self.project_with(&self.view_proj(width / height.max(1.0)), p_mm, width, height)
+        self.project_with(
+            &self.view_proj(width / height.max(1.0)),
+            p_mm,
+            width,
+            height,
+        )
     }
 
     /// Like [`project`](Self::project) with a precomputed view-projection matrix.
@@ -134,7 +139,10 @@ mod tests {
     fn target_projects_to_the_centre() {
         let cam = OrbitCamera::default();
         let [x, y] = cam.project(&cam.target_mm, 800.0, 600.0).unwrap();
-        assert!((x - 400.0).abs() < 1e-2 && (y - 300.0).abs() < 1e-2, "{x} {y}");
+        assert!(
+            (x - 400.0).abs() < 1e-2 && (y - 300.0).abs() < 1e-2,
+            "{x} {y}"
+        );
     }
 
     #[test]

@@ -193,10 +193,10 @@ impl ViewportState {
             if let Some(pos) = pointer {
                 self.hovered_config = pick(pos);
             }
-            if response.clicked() {
-                if let Some(pos) = response.interact_pointer_pos() {
-                    out.clicked = Some(pick(pos));
-                }
+            if response.clicked()
+                && let Some(pos) = response.interact_pointer_pos()
+            {
+                out.clicked = Some(pick(pos));
             }
         }
 
@@ -268,13 +268,12 @@ impl ViewportState {
         }
 
         self.legends_ui(&painter, rect, session);
-        if let (Some(session), Some((side, index))) = (session, self.hovered_config) {
-            if let Some(m) = session.dataset.arm(side).measurements.get(index) {
-                response.clone().on_hover_text_at_pointer(format!(
-                    "{} ({side} arm) — click to select",
-                    m.id
-                ));
-            }
+        if let (Some(session), Some((side, index))) = (session, self.hovered_config)
+            && let Some(m) = session.dataset.arm(side).measurements.get(index)
+        {
+            response
+                .clone()
+                .on_hover_text_at_pointer(format!("{} ({side} arm) — click to select", m.id));
         }
         out
     }

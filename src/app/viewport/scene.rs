@@ -41,15 +41,21 @@ impl MeshInstance {
         let iso: Matrix4<f32> = body_from_shape.to_homogeneous().cast();
         let s: Vector3<f32> = scale.cast();
         let model = iso * Matrix4::new_nonuniform_scaling(&s);
-        let rot: Matrix3<f32> = body_from_shape.rotation.to_rotation_matrix().matrix().cast();
-        let inv = Vector3::new(1.0 / s.x.max(1e-6), 1.0 / s.y.max(1e-6), 1.0 / s.z.max(1e-6));
+        let rot: Matrix3<f32> = body_from_shape
+            .rotation
+            .to_rotation_matrix()
+            .matrix()
+            .cast();
+        let inv = Vector3::new(
+            1.0 / s.x.max(1e-6),
+            1.0 / s.y.max(1e-6),
+            1.0 / s.z.max(1e-6),
+        );
         let normal = rot * Matrix3::from_diagonal(&inv);
         Self {
             primitive,
             model: std::array::from_fn(|c| std::array::from_fn(|r| model[(r, c)])),
-            normal: std::array::from_fn(|c| {
-                [normal[(0, c)], normal[(1, c)], normal[(2, c)], 0.0]
-            }),
+            normal: std::array::from_fn(|c| [normal[(0, c)], normal[(1, c)], normal[(2, c)], 0.0]),
             color,
         }
     }
@@ -140,7 +146,12 @@ pub fn robot_instances(shapes: &[PlacedShape], out: &mut Vec<MeshInstance>) {
         let pose = &shape.body_from_shape;
         match &shape.kind {
             ShapeKind::Box { half_extents_mm } => {
-                out.push(MeshInstance::new(Primitive::Box, pose, *half_extents_mm, color));
+                out.push(MeshInstance::new(
+                    Primitive::Box,
+                    pose,
+                    *half_extents_mm,
+                    color,
+                ));
             }
             ShapeKind::Cylinder {
                 radius_mm,
@@ -212,13 +223,38 @@ fn grid(out: &mut Vec<ColorVertex>) {
         } else {
             [0.035, 0.04, 0.05, 1.0]
         };
-        line(out, Vector3::new(t, -half, 0.0), Vector3::new(t, half, 0.0), c);
-        line(out, Vector3::new(-half, t, 0.0), Vector3::new(half, t, 0.0), c);
+        line(
+            out,
+            Vector3::new(t, -half, 0.0),
+            Vector3::new(t, half, 0.0),
+            c,
+        );
+        line(
+            out,
+            Vector3::new(-half, t, 0.0),
+            Vector3::new(half, t, 0.0),
+            c,
+        );
     }
     let len = 250.0;
-    line(out, Vector3::zeros(), Vector3::new(len, 0.0, 0.0), [0.8, 0.08, 0.06, 1.0]);
-    line(out, Vector3::zeros(), Vector3::new(0.0, len, 0.0), [0.08, 0.6, 0.08, 1.0]);
-    line(out, Vector3::zeros(), Vector3::new(0.0, 0.0, len), [0.1, 0.2, 0.9, 1.0]);
+    line(
+        out,
+        Vector3::zeros(),
+        Vector3::new(len, 0.0, 0.0),
+        [0.8, 0.08, 0.06, 1.0],
+    );
+    line(
+        out,
+        Vector3::zeros(),
+        Vector3::new(0.0, len, 0.0),
+        [0.08, 0.6, 0.08, 1.0],
+    );
+    line(
+        out,
+        Vector3::zeros(),
+        Vector3::new(0.0, 0.0, len),
+        [0.1, 0.2, 0.9, 1.0],
+    );
 }
 
 /// The selected configuration, as (side, index into the arm's measurements).
@@ -289,10 +325,13 @@ pub fn build_scene(
             }
         }
         if options.show_vectors {
-            for k in 0..3 {
-                let [r, g, b] = colormap::linear(errors[k] as f32 / max);
-                let from = row.model_body_mm[k];
-                let to = from + (row.measured_body_mm[k] - from) * options.exaggeration as f64;
+            for ((error, from), measured) in errors
+                .iter()
+                .zip(row.model_body_mm)
+                .zip(row.measured_body_mm)
+            {
+                let [r, g, b] = colormap::linear(*error as f32 / max);
+                let to = from + (measured - from) * options.exaggeration as f64;
                 line(&mut scene.lines, from, to, [r, g, b, 1.0]);
             }
         }
@@ -323,16 +362,13 @@ mod tests {
     #[test]
     fn instance_scales_then_places() {
         let pose = Isometry3::translation(10.0, 20.0, 30.0);
-        let inst = MeshInstance::new(
-            Primitive::Box,
-            &pose,
-            Vector3::new(2.0, 3.0, 4.0),
-            [1.0; 4],
-        );
+        let inst = MeshInstance::new(Primitive::Box, &pose, Vector3::new(2.0, 3.0, 4.0), [1.0; 4]);
         // Corner (1, 1, 1) of the unit cube maps to (12, 23, 34).
         let m = Matrix4::from_fn(|r, c| inst.model[c][r]);
         let p = m * nalgebra::Vector4::new(1.0, 1.0, 1.0, 1.0);
-        assert!((p.x - 12.0).abs() < 1e-5 && (p.y - 23.0).abs() < 1e-5 && (p.z - 34.0).abs() < 1e-5);
+        assert!(
+            (p.x - 12.0).abs() < 1e-5 && (p.y - 23.0).abs() < 1e-5 && (p.z - 34.0).abs() < 1e-5
+        );
         // The normal matrix undoes the scale: the +x face normal stays along x.
         assert!((inst.normal[0][0] - 0.5).abs() < 1e-6);
     }
