@@ -685,14 +685,16 @@ impl WorkbenchApp {
             ui.horizontal(|ui| {
                 let can_start = !running && self.session.is_some();
                 if ui
-                    .add_enabled(can_start, egui::Button::new(RichText::new("Calibrate").strong()))
+                    .add_enabled(can_start, egui::Button::new(RichText::new("Calibrate").strong().color(Color32::WHITE))
+                            .fill(Color32::from_rgb(38, 92, 160))
+                            .min_size(egui::vec2(110.0, 26.0)))
                     .on_hover_text("Run the two-step calibration (step 1 per arm, then step 2) on a worker thread")
                     .clicked()
                 {
                     self.start_calibration(ui.ctx());
                 }
                 if ui
-                    .add_enabled(running, egui::Button::new("Cancel"))
+                    .add_enabled(running, egui::Button::new("Cancel").min_size(egui::vec2(80.0, 26.0)))
                     .on_hover_text("Stop the run; the previous result stays")
                     .clicked()
                 {
@@ -1096,7 +1098,7 @@ impl WorkbenchApp {
             .resizable(true)
             .show(ui, |ui| self.settings_panel_ui(ui));
         egui::Panel::right("table")
-            .default_size(520.0)
+            .default_size(450.0)
             .resizable(true)
             .show(ui, |ui| self.table_ui(ui));
         egui::Panel::bottom("plots")

@@ -66,7 +66,6 @@ pub fn convergence_plot_ui(ui: &mut egui::Ui, history: &[IterationRecord], stage
             last.kkt_residual
         ));
     }
-    let h = ((ui.available_height() - 2.0 * ui.spacing().item_spacing.y) * 0.5).max(60.0);
     let series = |f: &dyn Fn(&IterationRecord) -> f64| -> Vec<[f64; 2]> {
         records
             .iter()
@@ -74,42 +73,38 @@ pub fn convergence_plot_ui(ui: &mut egui::Ui, history: &[IterationRecord], stage
             .collect()
     };
     let link = egui::Id::unique(("convergence x", format!("{stage:?}")));
-    Plot::new(("objective", format!("{stage:?}")))
-        .height(h)
-        .legend(Legend::default())
-        .x_axis_label("iteration")
-        .y_axis_label("mm² (log)")
-        .y_axis_formatter(log_axis_label)
-        .y_grid_spacer(log_spacer)
-        .link_axis(link, [true, false])
-        .show(ui, |plot| {
-            plot.line(
-                Line::new("ψ = max F", series(&|r| r.psi_mm2))
-                    .color(PSI_COLOR)
-                    .width(2.5),
-            );
-            for (k, name) in ["F_a", "F_b", "F_c"].into_iter().enumerate() {
-                plot.line(Line::new(name, series(&|r| r.f_mm2[k])).color(F_COLORS[k]));
-            }
-        });
-    Plot::new(("step", format!("{stage:?}")))
-        .height(h)
-        .legend(Legend::default())
-        .x_axis_label("iteration")
-        .y_axis_label("log scale")
-        .y_axis_formatter(log_axis_label)
-        .y_grid_spacer(log_spacer)
-        .link_axis(link, [true, false])
-        .show(ui, |plot| {
-            plot.line(
-                Line::new("step norm (scaled)", series(&|r| r.step_norm))
-                    .color(Color32::from_rgb(200, 150, 240)),
-            );
-            plot.line(
-                Line::new("KKT residual", series(&|r| r.kkt_residual))
-                    .color(Color32::from_rgb(150, 210, 210)),
-            );
-        });
+    let psi = series(&|r| r.psi_mm2);
+    let f: [Vec<[f64; 2]>; 3] = std::array::from_fn(|k| series(&|r| r.f_mm2[k]));
+    let step = series(&|r| r.step_norm);
+    let kkt = series(&|r| r.kkt_residual);
+    ui.columns(2, |cols| {
+        Plot::new(("objective", format!("{stage:?}")))
+            .legend(Legend::default())
+            .x_axis_label("iteration")
+            .y_axis_label("mm² (log10)")
+            .y_axis_formatter(log_axis_label)
+            .y_grid_spacer(log_spacer)
+            .link_axis(link, [true, false])
+            .show(&mut cols[0], |plot| {
+                plot.line(Line::new("ψ = max F", psi).color(PSI_COLOR).width(2.5));
+                for (k, (name, points)) in ["F_a", "F_b", "F_c"].into_iter().zip(f).enumerate() {
+                    plot.line(Line::new(name, points).color(F_COLORS[k]));
+                }
+            });
+        Plot::new(("step", format!("{stage:?}")))
+            .legend(Legend::default())
+            .x_axis_label("iteration")
+            .y_axis_label("log10")
+            .y_axis_formatter(log_axis_label)
+            .y_grid_spacer(log_spacer)
+            .link_axis(link, [true, false])
+            .show(&mut cols[1], |plot| {
+                plot.line(
+                    Line::new("step norm (scaled)", step).color(Color32::from_rgb(200, 150, 240)),
+                );
+                plot.line(Line::new("KKT residual", kkt).color(Color32::from_rgb(150, 210, 210)));
+            });
+    });
 }
 
 /// Bin `samples` into `bins` bars over `[lo, hi]`, as fractions of all samples.

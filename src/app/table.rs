@@ -30,8 +30,8 @@ impl Column {
             Column::Id => "id",
             Column::Arm => "arm",
             Column::Split => "split",
-            Column::WorstPos => "worst |Δd| (mm)",
-            Column::WorstOri => "worst Δo (rad)",
+            Column::WorstPos => "|Δd| max (mm)",
+            Column::WorstOri => "Δo max (rad)",
             Column::Rigidity => "rigidity (mm)",
         }
     }
@@ -55,10 +55,10 @@ impl Column {
 
     fn width(self) -> f32 {
         match self {
-            Column::Id => 90.0,
-            Column::Arm => 44.0,
-            Column::Split => 40.0,
-            _ => 110.0,
+            Column::Id => 70.0,
+            Column::Arm => 40.0,
+            Column::Split => 36.0,
+            _ => 96.0,
         }
     }
 }

@@ -294,14 +294,14 @@ pub fn build_scene(
     }
 
     let max = options.color_max_mm.max(1e-6);
-    let model_color = [0.55, 0.58, 0.62, 0.9];
+    let model_color = [0.35, 0.37, 0.40, 0.8];
     for row in analysis.configs.iter().filter(|r| options.shows(r)) {
         let selected = selection == Some((row.side, row.index));
         let errors = row.point_errors_mm();
         let mean = (errors[0] + errors[1] + errors[2]) / 3.0;
         if options.show_measured {
             let [r, g, b] = colormap::linear(mean as f32 / max);
-            let alpha = if selected { 0.95 } else { 0.55 };
+            let alpha = if selected { 0.95 } else { 0.4 };
             for p in row.measured_body_mm {
                 scene.triangles.push(ColorVertex {
                     position: p.cast::<f32>().into(),
