@@ -181,7 +181,9 @@ impl ArmModel {
         self.dh
             .iter()
             .zip(q_rad)
-            .fold(Isometry3::identity(), |acc, (row, &q)| acc * row.transform(q))
+            .fold(Isometry3::identity(), |acc, (row, &q)| {
+                acc * row.transform(q)
+            })
     }
 
     /// Reflector positions (base frame, mm) and flange pose (paper eq. 3).
@@ -201,7 +203,10 @@ impl ArmModel {
     /// For standard DH the columns are, with `o_i`, `x_i`, `z_i` the origin and axes of frame i:
     /// `∂p/∂θ_i = z_{i−1} × (p − o_{i−1})`, `∂p/∂d_i = z_{i−1}`, `∂p/∂a_i = x_i`,
     /// `∂p/∂α_i = x_i × (p − o_i)`, and `∂p_k/∂t_k = R_7`.
-    pub fn reflector_jacobians(&self, q_rad: &[f64; N_JOINTS]) -> (ReflectorFk, [PointJacobian; 3]) {
+    pub fn reflector_jacobians(
+        &self,
+        q_rad: &[f64; N_JOINTS],
+    ) -> (ReflectorFk, [PointJacobian; 3]) {
         let frames = self.frames(q_rad);
         let flange = frames[N_JOINTS];
         let points_mm = self
@@ -299,7 +304,11 @@ pub fn rotation_angle_rad(r: &nalgebra::Rotation3<f64>) -> f64 {
     // Robust near 0 and π: atan2 of |sin| and cos.
     let m = r.matrix();
     let cos = ((m.trace() - 1.0) * 0.5).clamp(-1.0, 1.0);
-    let s = Vector3::new(m[(2, 1)] - m[(1, 2)], m[(0, 2)] - m[(2, 0)], m[(1, 0)] - m[(0, 1)]);
+    let s = Vector3::new(
+        m[(2, 1)] - m[(1, 2)],
+        m[(0, 2)] - m[(2, 0)],
+        m[(1, 0)] - m[(0, 1)],
+    );
     (0.5 * s.norm()).atan2(cos)
 }
 

@@ -15,7 +15,10 @@ pub enum ParamsError {
         source: std::io::Error,
     },
     #[error("{path}: {message}")]
-    Invalid { path: std::path::PathBuf, message: String },
+    Invalid {
+        path: std::path::PathBuf,
+        message: String,
+    },
 }
 
 /// Read a parameter file into a model.
