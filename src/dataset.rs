@@ -1200,3 +1200,184 @@ pub fn save_with(
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    fn random_arm(rng: &mut ChaCha8Rng, side: Side, n: usize) -> ArmData {
+        let measurements = (0..n)
+            .map(|i| Measurement {
+                // Ids that need CSV quoting must survive too.
+                id: match i {
+                    0 => "pose, \"first\"".to_string(),
+                    1 => "ü-2".to_string(),
+                    _ => format!("{side}{i}"),
+                },
+                q_rad: std::array::from_fn(|_| rng.random_range(-3.0..3.0)),
+                tracker_points_mm: std::array::from_fn(|_| {
+                    Vector3::from_fn(|_, _| rng.random_range(-3000.0..3000.0))
+                }),
+                split: if rng.random_bool(0.3) {
+                    Split::Ver
+                } else {
+                    Split::Cal
+                },
+                line: 0,
+            })
+            .collect();
+        ArmData {
+            side,
+            file: PathBuf::new(),
+            measurements,
+        }
+    }
+
+    fn random_dataset(seed: u64) -> Dataset {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        Dataset {
+            dir: PathBuf::new(),
+            robot: None,
+            tracker: TrackerSpec {
+                mpe_um: 10.0,
+                mpe_um_per_m: 1.25,
+            },
+            nominal_reflectors_mm: std::array::from_fn(|_| {
+                Vector3::from_fn(|_, _| rng.random_range(-50.0..50.0))
+            }),
+            left: random_arm(&mut rng, Side::Left, 9),
+            right: random_arm(&mut rng, Side::Right, 7),
+        }
+    }
+
+    /// Compare everything but paths and line numbers.
+    fn assert_close(a: &Dataset, b: &Dataset, tol_mm: f64, tol_rad: f64) {
+        assert_eq!(a.tracker, b.tracker);
+        for k in 0..3 {
+            assert!((a.nominal_reflectors_mm[k] - b.nominal_reflectors_mm[k]).amax() <= tol_mm);
+        }
+        for side in Side::BOTH {
+            let (x, y) = (a.arm(side), b.arm(side));
+            assert_eq!(y.side, side);
+            assert_eq!(x.measurements.len(), y.measurements.len());
+            for (m, n) in x.measurements.iter().zip(&y.measurements) {
+                assert_eq!(m.id, n.id);
+                assert_eq!(m.split, n.split);
+                for j in 0..N_JOINTS {
+                    assert!((m.q_rad[j] - n.q_rad[j]).abs() <= tol_rad);
+                }
+                for k in 0..3 {
+                    assert!((m.tracker_points_mm[k] - n.tracker_points_mm[k]).amax() <= tol_mm);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn round_trip_in_every_unit() {
+        let original = random_dataset(7);
+        for length in [LengthUnit::Mm, LengthUnit::M] {
+            for angle in [AngleUnit::Rad, AngleUnit::Deg] {
+                let units = Units { length, angle };
+                let dir = tempfile::tempdir().unwrap();
+                let out = dir.path().join("ds");
+                save(&original, &out, units).unwrap();
+                let (back, read_units) = load_with_units(&out).unwrap();
+                assert_eq!(read_units, units);
+                assert_eq!(back.dir, out);
+                assert_eq!(back.left.file, out.join("left.csv"));
+                if units == Units::MM_RAD {
+                    // No conversion: bit-exact.
+                    assert_close(&original, &back, 0.0, 0.0);
+                } else {
+                    assert_close(&original, &back, 1e-9, 1e-12);
+                }
+                // Line numbers point at the rows: comment line 1, header line 2.
+                assert_eq!(back.right.measurements[3].line, 6);
+            }
+        }
+    }
+
+    #[test]
+    fn save_refuses_to_replace_a_dataset_without_the_flag() {
+        let d = random_dataset(3);
+        let dir = tempfile::tempdir().unwrap();
+        save(&d, dir.path(), Units::MM_DEG).unwrap();
+        let before = std::fs::read(dir.path().join("left.csv")).unwrap();
+        let other = random_dataset(4);
+        let err = save(&other, dir.path(), Units::MM_DEG).unwrap_err();
+        assert!(matches!(
+            err,
+            DatasetError::Output(OutputError::Exists { .. })
+        ));
+        assert_eq!(std::fs::read(dir.path().join("left.csv")).unwrap(), before);
+        save_with(&other, dir.path(), Units::MM_DEG, Overwrite::Allow).unwrap();
+        let back = load(dir.path()).unwrap();
+        assert_close(&other, &back, 1e-9, 1e-12);
+    }
+
+    #[test]
+    fn save_refuses_unsavable_data_and_writes_nothing() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut d = random_dataset(5);
+        d.left.measurements[2].q_rad[4] = f64::NAN;
+        assert!(matches!(
+            save(&d, dir.path(), Units::MM_RAD),
+            Err(DatasetError::Content { .. })
+        ));
+        let mut d = random_dataset(5);
+        d.right.measurements[1].id = "#hidden".into();
+        assert!(matches!(
+            save(&d, dir.path(), Units::MM_RAD),
+            Err(DatasetError::Content { .. })
+        ));
+        let mut d = random_dataset(5);
+        d.right.measurements[1].id = d.right.measurements[2].id.clone();
+        assert!(matches!(
+            save(&d, dir.path(), Units::MM_RAD),
+            Err(DatasetError::Content { .. })
+        ));
+        let mut d = random_dataset(5);
+        d.left.measurements.truncate(MIN_CONFIGS - 1);
+        assert!(matches!(
+            save(&d, dir.path(), Units::MM_RAD),
+            Err(DatasetError::TooFewConfigurations { .. })
+        ));
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+    }
+
+    #[test]
+    fn robot_path_survives_a_round_trip() {
+        let dir = tempfile::tempdir().unwrap();
+        let urdf = dir.path().join("robot.urdf");
+        std::fs::write(&urdf, "<robot/>").unwrap();
+        let mut d = random_dataset(9);
+        // Outside the output directory: written as an absolute path.
+        d.robot = Some(urdf.clone());
+        let out = dir.path().join("a");
+        save(&d, &out, Units::MM_DEG).unwrap();
+        let back = load(&out).unwrap();
+        assert_eq!(
+            back.robot.unwrap().canonicalize().unwrap(),
+            urdf.canonicalize().unwrap()
+        );
+        // Inside: written relative, so the directory can move.
+        d.robot = Some(dir.path().join("robot.urdf"));
+        save_with(&d, dir.path(), Units::MM_DEG, Overwrite::Allow).unwrap();
+        let text = std::fs::read_to_string(dir.path().join(MANIFEST_FILE)).unwrap();
+        assert!(text.contains("robot = \"robot.urdf\""), "{text}");
+        assert_eq!(load(dir.path()).unwrap().robot, Some(urdf));
+    }
+
+    #[test]
+    fn line_counter_skips_comments_and_blank_lines() {
+        let text = "# c\r\n\r\nid\n# x\n\nrow\n";
+        let mut lc = LineCounter::default();
+        assert_eq!(lc.record_line(text, 0), 3);
+        assert_eq!(lc.record_line(text, 10), 6);
+        // Going backwards recounts.
+        assert_eq!(lc.record_line(text, 0), 3);
+    }
+}
