@@ -733,6 +733,15 @@ fn check_header(
         message,
     };
     let expected = format!("{},[{SPLIT_COLUMN}]", CSV_COLUMNS.join(","));
+    if header.len() == 1 {
+        let only = header.get(0).unwrap_or("");
+        if let Some(sep) = [';', '\t', ' '].into_iter().find(|&c| only.contains(c)) {
+            return Err(err(
+                only,
+                format!("fields are separated by {sep:?}; use commas, with the header {expected}"),
+            ));
+        }
+    }
     for (i, want) in CSV_COLUMNS.iter().enumerate() {
         let Some(got) = header.get(i) else {
             return Err(err(

@@ -133,8 +133,8 @@ fn valid_dataset_loads_and_converts_units() {
         .take(16)
         .map(|s| s.parse().unwrap())
         .collect();
-    for j in 0..7 {
-        assert!((m.q_rad[j] - row[j] * std::f64::consts::PI / 180.0).abs() < 1e-15);
+    for (q_rad, q_deg) in m.q_rad.iter().zip(&row[..7]) {
+        assert!((q_rad - q_deg * std::f64::consts::PI / 180.0).abs() < 1e-15);
     }
     assert_eq!(m.tracker_points_mm[1].y, row[7 + 4]);
     assert_eq!(d.left.measurements[2].split, Split::Ver);
@@ -468,6 +468,15 @@ fn csv_header_unknown_column() {
         "{err:?}"
     );
     assert_names(&err, &["left.csv:3", "a_y", "unknown"]);
+    let header = HEADER.replace(',', ";");
+    let err = Fixture::with_left(&left_with_line(3, &header))
+        .load()
+        .unwrap_err();
+    assert!(
+        matches!(err, DatasetError::Header { line: 3, .. }),
+        "{err:?}"
+    );
+    assert_names(&err, &["left.csv:3", "use commas"]);
     let header = HEADER.replace("split", "set");
     let err = Fixture::with_left(&left_with_line(3, &header))
         .load()
