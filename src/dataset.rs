@@ -484,7 +484,7 @@ fn parse_manifest(path: &Path, dir: &Path, text: &str) -> Result<Manifest, Datas
             return Err(cx.err(
                 None,
                 "format",
-                format!("missing; expected `format = \"{DATASET_FORMAT}\"` as the first line"),
+                format!("missing; expected `format = \"{DATASET_FORMAT}\"` at the top"),
             ));
         }
         Some(tag) => {
