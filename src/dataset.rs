@@ -1,7 +1,8 @@
 //! The `dualcal-dataset/1` measurement format: a directory with `dataset.toml` and one CSV per arm.
 //! See `docs/formats.md`. Everything is converted to mm and rad on load.
 
-use crate::atomic::{OutputError, Overwrite, refuse_existing, write_atomic};
+pub use crate::atomic::Overwrite;
+use crate::atomic::{OutputError, refuse_existing, write_atomic};
 use crate::kinematics::{N_JOINTS, Side};
 use nalgebra::Vector3;
 use std::path::{Path, PathBuf};

@@ -459,7 +459,14 @@ impl ParamsFile {
             path: path.to_path_buf(),
             line: e.line(),
             column: e.column(),
-            message: e.to_string(),
+            message: {
+                // serde_json appends " at line L column C"; the variant shows them already.
+                let s = e.to_string();
+                match s.rfind(" at line ") {
+                    Some(i) => s[..i].to_string(),
+                    None => s,
+                }
+            },
         };
         // Syntax first, then the format tag (so another format gets the right message), then the types.
         let value: Value = serde_json::from_slice(bytes).map_err(json_err)?;
