@@ -4,6 +4,7 @@
 //! `export`) never depend on egui or wgpu; the workbench lives in `app` behind the `gui` feature.
 #![forbid(unsafe_code)]
 
+pub mod atomic;
 pub mod dataset;
 pub mod kinematics;
 pub mod params;
