@@ -6,7 +6,7 @@
 //! Frame 0 is the arm's DH base frame, frame 7 the flange; the three reflectors `t_a, t_b, t_c` are
 //! constant points in frame 7.
 
-use nalgebra::{Isometry3, Matrix3, SMatrix, SVector, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, SMatrix, SVector, Translation3, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 use std::f64::consts::FRAC_PI_2;
 
@@ -66,18 +66,10 @@ impl DhRow {
     /// `Rz(q + theta) · Tz(d) · Tx(a) · Rx(alpha)`: frame i in frame i−1.
     pub fn transform(&self, q_rad: f64) -> Isometry3<f64> {
         let (st, ct) = (q_rad + self.theta_rad).sin_cos();
-        let (sa, ca) = self.alpha_rad.sin_cos();
-        #[rustfmt::skip]
-        let r = Matrix3::new(
-            ct, -st * ca,  st * sa,
-            st,  ct * ca, -ct * sa,
-            0.0,      sa,       ca,
-        );
+        let rotation = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), q_rad + self.theta_rad)
+            * UnitQuaternion::from_axis_angle(&Vector3::x_axis(), self.alpha_rad);
         let t = Vector3::new(self.a_mm * ct, self.a_mm * st, self.d_mm);
-        Isometry3::from_parts(
-            Translation3::from(t),
-            UnitQuaternion::from_matrix_eps(&r, 1e-15, 64, UnitQuaternion::identity()),
-        )
+        Isometry3::from_parts(Translation3::from(t), rotation)
     }
 }
 
