@@ -7,3 +7,6 @@
 pub mod dataset;
 pub mod kinematics;
 pub mod params;
+pub mod robot;
+pub mod collision;
+pub mod urdf_export;
