@@ -107,7 +107,11 @@ fn compile_shape(kind: &ShapeKind, link_from_shape: &Isometry3<f64>) -> Option<C
             Isometry3::identity(),
             h.norm(),
         ),
-        ShapeKind::Sphere { radius_mm } => (Prim::Ball(Ball::new(*radius_mm as f32)), Isometry3::identity(), *radius_mm),
+        ShapeKind::Sphere { radius_mm } => (
+            Prim::Ball(Ball::new(*radius_mm as f32)),
+            Isometry3::identity(),
+            *radius_mm,
+        ),
         ShapeKind::Cylinder {
             radius_mm,
             half_length_mm,
@@ -169,9 +173,9 @@ impl CollisionWorld {
         let adjacent = |a: usize, b: usize| {
             let (ga, gb) = (group[a], group[b]);
             ga == gb
-                || moving
-                    .iter()
-                    .any(|&(p, c)| (group[p] == ga && group[c] == gb) || (group[p] == gb && group[c] == ga))
+                || moving.iter().any(|&(p, c)| {
+                    (group[p] == ga && group[c] == gb) || (group[p] == gb && group[c] == ga)
+                })
         };
 
         let mut pairs = Vec::new();
@@ -186,7 +190,11 @@ impl CollisionWorld {
                     _ => PairKind::ArmBody,
                 };
                 if adjacent(la, lb) {
-                    excluded.push((links[a].name.clone(), links[b].name.clone(), Exclusion::Adjacent));
+                    excluded.push((
+                        links[a].name.clone(),
+                        links[b].name.clone(),
+                        Exclusion::Adjacent,
+                    ));
                     continue;
                 }
                 pairs.push(Pair { a, b, kind });
@@ -207,17 +215,27 @@ impl CollisionWorld {
     /// Drop same-arm pairs that intersect in the zero pose and in every sampled configuration.
     fn exclude_always_touching(&mut self, robot: &RobotDescription) {
         let limits = Side::BOTH.map(|s| {
-            robot
-                .joint_limits_rad(s)
-                .map(|(lo, hi)| if lo.is_finite() && hi.is_finite() && lo < hi { (lo, hi) } else { (-3.0, 3.0) })
+            robot.joint_limits_rad(s).map(|(lo, hi)| {
+                if lo.is_finite() && hi.is_finite() && lo < hi {
+                    (lo, hi)
+                } else {
+                    (-3.0, 3.0)
+                }
+            })
         });
         let mut rng = ChaCha8Rng::seed_from_u64(0x5eed_c011);
-        let mut always: Vec<bool> = self.pairs.iter().map(|p| p.kind == PairKind::SelfArm).collect();
+        let mut always: Vec<bool> = self
+            .pairs
+            .iter()
+            .map(|p| p.kind == PairKind::SelfArm)
+            .collect();
         for sample in 0..=ALWAYS_TOUCHING_SAMPLES {
             let q: [[f64; N_JOINTS]; 2] = if sample == 0 {
                 [[0.0; N_JOINTS]; 2]
             } else {
-                std::array::from_fn(|s| std::array::from_fn(|k| rng.random_range(limits[s][k].0..limits[s][k].1)))
+                std::array::from_fn(|s| {
+                    std::array::from_fn(|k| rng.random_range(limits[s][k].0..limits[s][k].1))
+                })
             };
             let placed = self.place(&q[0], &q[1]);
             for (i, p) in self.pairs.iter().enumerate() {
@@ -242,7 +260,11 @@ impl CollisionWorld {
     }
 
     /// Poses of every collision shape (per link) in the body frame.
-    fn place(&self, q_left: &[f64; N_JOINTS], q_right: &[f64; N_JOINTS]) -> Vec<Vec<(Pose, Vector3<f64>)>> {
+    fn place(
+        &self,
+        q_left: &[f64; N_JOINTS],
+        q_right: &[f64; N_JOINTS],
+    ) -> Vec<Vec<(Pose, Vector3<f64>)>> {
         let poses = self.kin.body_from_links(q_left, q_right);
         self.links
             .iter()
@@ -283,9 +305,16 @@ impl CollisionWorld {
     /// True if any link of one arm intersects (or is closer than `margin_mm` to) the other arm's
     /// links or the body, or two non-adjacent links of the same arm intersect. Joint values in
     /// chain order, rad.
-    pub fn in_collision(&self, q_left: &[f64; N_JOINTS], q_right: &[f64; N_JOINTS], margin_mm: f64) -> bool {
+    pub fn in_collision(
+        &self,
+        q_left: &[f64; N_JOINTS],
+        q_right: &[f64; N_JOINTS],
+        margin_mm: f64,
+    ) -> bool {
         let placed = self.place(q_left, q_right);
-        self.pairs.iter().any(|p| self.pair_hits(&placed, p, self.pair_margin(p, margin_mm)))
+        self.pairs
+            .iter()
+            .any(|p| self.pair_hits(&placed, p, self.pair_margin(p, margin_mm)))
     }
 
     /// Every colliding pair (link names and what kind of pair), for diagnostics and drawing.
@@ -299,7 +328,13 @@ impl CollisionWorld {
         self.pairs
             .iter()
             .filter(|p| self.pair_hits(&placed, p, self.pair_margin(p, margin_mm)))
-            .map(|p| (self.links[p.a].name.clone(), self.links[p.b].name.clone(), p.kind))
+            .map(|p| {
+                (
+                    self.links[p.a].name.clone(),
+                    self.links[p.b].name.clone(),
+                    p.kind,
+                )
+            })
             .collect()
     }
 
@@ -331,7 +366,10 @@ mod tests {
 
     /// ABB's YuMi home (synchronisation) position in chain order (axes 1, 2, 7, 3, 4, 5, 6).
     fn home() -> ([f64; N_JOINTS], [f64; N_JOINTS]) {
-        (deg([0.0, -130.0, 135.0, 30.0, 0.0, 40.0, 0.0]), deg([0.0, -130.0, -135.0, 30.0, 0.0, 40.0, 0.0]))
+        (
+            deg([0.0, -130.0, 135.0, 30.0, 0.0, 40.0, 0.0]),
+            deg([0.0, -130.0, -135.0, 30.0, 0.0, 40.0, 0.0]),
+        )
     }
 
     #[test]
@@ -344,7 +382,11 @@ mod tests {
         let x = Vector3::new(1.0, 2.0, 3.0);
         let a = iso * nalgebra::Point3::from(x);
         let b = p * Vector::new(1.0, 2.0, 3.0);
-        assert!((a.x - f64::from(b.x)).abs() < 1e-4 && (a.y - f64::from(b.y)).abs() < 1e-4 && (a.z - f64::from(b.z)).abs() < 1e-4);
+        assert!(
+            (a.x - f64::from(b.x)).abs() < 1e-4
+                && (a.y - f64::from(b.y)).abs() < 1e-4
+                && (a.z - f64::from(b.z)).abs() < 1e-4
+        );
     }
 
     #[test]
@@ -352,40 +394,94 @@ mod tests {
         let robot = RobotDescription::builtin_irb14000();
         let world = CollisionWorld::new(&robot);
         let (l, r) = home();
-        assert!(world.colliding_pairs(&l, &r, 0.0).is_empty(), "{:?}", world.colliding_pairs(&l, &r, 0.0));
+        assert!(
+            world.colliding_pairs(&l, &r, 0.0).is_empty(),
+            "{:?}",
+            world.colliding_pairs(&l, &r, 0.0)
+        );
         assert!(!world.in_collision(&l, &r, 5.0));
+        // The check can fail: a large margin reaches the body from the tucked-in home pose.
+        assert!(world.in_collision(&l, &r, 100.0));
     }
-}
-#[cfg(test)]
-mod diag {
-    use super::*;
+
     #[test]
-    fn diag_print() {
+    fn arms_driven_into_each_other_collide() {
         let robot = RobotDescription::builtin_irb14000();
         let world = CollisionWorld::new(&robot);
-        for e in world.excluded_pairs() { if e.2 == Exclusion::AlwaysTouching { println!("EXCL {e:?}"); } }
-        println!("checked {}", world.checked_pair_count());
-        let z = [0.0; N_JOINTS];
-        println!("zero {:?}", world.colliding_pairs(&z, &z, 0.0));
-        let d = |v: [f64; 7]| v.map(f64::to_radians);
-        let l = d([0.0, -130.0, 135.0, 30.0, 0.0, 40.0, 0.0]);
-        let r = d([0.0, -130.0, -135.0, 30.0, 0.0, 40.0, 0.0]);
-        println!("home {:?}", world.colliding_pairs(&l, &r, 0.0));
-        // frequency over random
-        let mut rng = ChaCha8Rng::seed_from_u64(1);
-        let lim = crate::kinematics::joint_limits_rad();
-        let mut counts: std::collections::BTreeMap<(String,String),usize> = Default::default();
-        let n = 2000; let mut any = 0;
-        let t = std::time::Instant::now();
-        for _ in 0..n {
-            let ql: [f64;7] = std::array::from_fn(|k| rng.random_range(lim[k].0..lim[k].1));
-            let qr: [f64;7] = std::array::from_fn(|k| rng.random_range(lim[k].0..lim[k].1));
-            let c = world.colliding_pairs(&ql, &qr, 0.0);
-            if !c.is_empty() { any += 1; }
-            for (a,b,_) in c { *counts.entry((a,b)).or_default() += 1; }
-        }
-        println!("{:?} per query", t.elapsed() / n);
-        println!("any {any}/{n}");
-        for (k,v) in counts { println!("{k:?} {v}"); }
+        let (home_l, home_r) = home();
+        // At q = 0 both arms reach forward and their wrists meet in front of the body.
+        let zero = [0.0; N_JOINTS];
+        // Each arm alone at zero (the other at home) is free ...
+        assert!(
+            !world.in_collision(&zero, &home_r, 0.0),
+            "{:?}",
+            world.colliding_pairs(&zero, &home_r, 0.0)
+        );
+        assert!(
+            !world.in_collision(&home_l, &zero, 0.0),
+            "{:?}",
+            world.colliding_pairs(&home_l, &zero, 0.0)
+        );
+        // ... both at zero collide, arm against arm.
+        let pairs = world.colliding_pairs(&zero, &zero, 0.0);
+        assert!(world.in_collision(&zero, &zero, 0.0));
+        assert!(
+            !pairs.is_empty() && pairs.iter().all(|p| p.2 == PairKind::InterArm),
+            "{pairs:?}"
+        );
+        assert!(
+            pairs
+                .iter()
+                .any(|(a, b, _)| a == "yumi_link_7_l" && b == "yumi_link_7_r"),
+            "{pairs:?}"
+        );
+    }
+
+    #[test]
+    fn arm_folded_into_the_body_collides() {
+        let robot = RobotDescription::builtin_irb14000();
+        let world = CollisionWorld::new(&robot);
+        let (mut l, r) = home();
+        // Swing the left shoulder (axis 1) by 60 degrees towards the body: the upper arm and the
+        // elbow go into the torso.
+        l[0] += 60f64.to_radians();
+        let pairs = world.colliding_pairs(&l, &r, 0.0);
+        assert!(world.in_collision(&l, &r, 0.0));
+        assert!(
+            !pairs.is_empty()
+                && pairs
+                    .iter()
+                    .all(|(a, _, k)| *k == PairKind::ArmBody && a == "yumi_body"),
+            "{pairs:?}"
+        );
+        // The mirror image for the right arm.
+        let (l, mut r) = home();
+        r[0] -= 60f64.to_radians();
+        let pairs = world.colliding_pairs(&l, &r, 0.0);
+        assert!(
+            !pairs.is_empty()
+                && pairs
+                    .iter()
+                    .all(|(_, b, k)| *k == PairKind::ArmBody && b.ends_with("_r")),
+            "{pairs:?}"
+        );
+    }
+
+    #[test]
+    fn adjacent_pairs_are_excluded_and_none_always_touch() {
+        let robot = RobotDescription::builtin_irb14000();
+        let world = CollisionWorld::new(&robot);
+        let ex = world.excluded_pairs();
+        assert!(ex.iter().any(|(a, b, e)| a == "yumi_body"
+            && b == "yumi_link_1_l"
+            && *e == Exclusion::Adjacent));
+        assert!(ex.iter().any(|(a, b, e)| a == "yumi_link_3_r"
+            && b == "yumi_link_4_r"
+            && *e == Exclusion::Adjacent));
+        // Our geometry keeps links i and i+2 apart: nothing is excluded as always touching.
+        assert!(ex.iter().all(|e| e.2 == Exclusion::Adjacent), "{ex:?}");
+        // 2 arms x (15 same-arm non-adjacent pairs + 6 against the body) + 49 inter-arm pairs
+        assert_eq!(world.checked_pair_count(), 2 * (15 + 6) + 49);
+        assert!(world.warnings.is_empty());
     }
 }

@@ -41,7 +41,11 @@ pub fn side_suffix(side: Side) -> &'static str {
 
 /// Name of the joint at `chain_pos` (0-based) of `side`, e.g. `yumi_joint_7_l` for chain position 2.
 pub fn arm_joint_name(side: Side, chain_pos: usize) -> String {
-    format!("yumi_joint_{}_{}", ARM_JOINT_NUMBERS[chain_pos], side_suffix(side))
+    format!(
+        "yumi_joint_{}_{}",
+        ARM_JOINT_NUMBERS[chain_pos],
+        side_suffix(side)
+    )
 }
 
 /// Name of link `k` (1-based chain position) of `side`, e.g. `yumi_link_3_r`.
@@ -231,7 +235,11 @@ pub fn isometry_from_urdf_pose(pose: &urdf_rs::Pose) -> Isometry3<f64> {
 }
 
 fn finite_pose(pose: &urdf_rs::Pose) -> bool {
-    pose.xyz.0.iter().chain(pose.rpy.0.iter()).all(|v| v.is_finite())
+    pose.xyz
+        .0
+        .iter()
+        .chain(pose.rpy.0.iter())
+        .all(|v| v.is_finite())
 }
 
 /// 1-based line of the first occurrence of `needle` in `text`.
@@ -317,12 +325,16 @@ fn compile_geometry(
         urdf_rs::Geometry::Box { size } => {
             let s = Vector3::new(size[0], size[1], size[2]) * 500.0;
             if !s.iter().all(|&v| ok(v)) {
-                warnings.push(format!("link `{link}`: box size {:?} is not positive; skipped", size.0));
+                warnings.push(format!(
+                    "link `{link}`: box size {:?} is not positive; skipped",
+                    size.0
+                ));
                 return None;
             }
             ShapeKind::Box { half_extents_mm: s }
         }
-        urdf_rs::Geometry::Cylinder { radius, length } | urdf_rs::Geometry::Capsule { radius, length } => {
+        urdf_rs::Geometry::Cylinder { radius, length }
+        | urdf_rs::Geometry::Capsule { radius, length } => {
             if !ok(*radius) || !ok(*length) {
                 warnings.push(format!(
                     "link `{link}`: cylinder/capsule radius {radius} length {length} not positive; skipped"
@@ -344,7 +356,9 @@ fn compile_geometry(
         }
         urdf_rs::Geometry::Sphere { radius } => {
             if !ok(*radius) {
-                warnings.push(format!("link `{link}`: sphere radius {radius} not positive; skipped"));
+                warnings.push(format!(
+                    "link `{link}`: sphere radius {radius} not positive; skipped"
+                ));
                 return None;
             }
             ShapeKind::Sphere {
@@ -352,7 +366,9 @@ fn compile_geometry(
             }
         }
         urdf_rs::Geometry::Mesh { filename, scale } => {
-            let scale = scale.map_or(Vector3::new(1.0, 1.0, 1.0), |s| Vector3::new(s[0], s[1], s[2]));
+            let scale = scale.map_or(Vector3::new(1.0, 1.0, 1.0), |s| {
+                Vector3::new(s[0], s[1], s[2])
+            });
             let resolved = match resolver.resolve(filename) {
                 Ok(p) => Some(p),
                 Err(why) => {
@@ -382,7 +398,9 @@ fn material_rgba(material: Option<&urdf_rs::Material>, robot: &urdf_rs::Robot) -
             .and_then(|g| g.color.as_ref())
     });
     match color {
-        Some(c) if c.rgba.0.iter().all(|v| v.is_finite()) => c.rgba.0.map(|v| v.clamp(0.0, 1.0) as f32),
+        Some(c) if c.rgba.0.iter().all(|v| v.is_finite()) => {
+            c.rgba.0.map(|v| v.clamp(0.0, 1.0) as f32)
+        }
         _ => DEFAULT_VISUAL_RGBA,
     }
 }
@@ -390,8 +408,13 @@ fn material_rgba(material: Option<&urdf_rs::Material>, robot: &urdf_rs::Robot) -
 impl RobotDescription {
     /// The built-in IRB 14000 description (`assets/irb14000.urdf`).
     pub fn builtin_irb14000() -> Self {
-        Self::from_str_inner(BUILTIN_IRB14000_URDF, None, "<built-in>", &PackageMap::new())
-            .expect("the built-in IRB 14000 URDF is valid (checked by tests)")
+        Self::from_str_inner(
+            BUILTIN_IRB14000_URDF,
+            None,
+            "<built-in>",
+            &PackageMap::new(),
+        )
+        .expect("the built-in IRB 14000 URDF is valid (checked by tests)")
     }
 
     /// Load a URDF file; `package://` meshes are looked up via `ROS_PACKAGE_PATH` and the file's
@@ -504,13 +527,19 @@ impl RobotDescription {
                 .joints
                 .iter()
                 .find(|j| j.name == name)
-                .map_or((f64::NEG_INFINITY, f64::INFINITY), |j| (j.limit.lower, j.limit.upper))
+                .map_or((f64::NEG_INFINITY, f64::INFINITY), |j| {
+                    (j.limit.lower, j.limit.upper)
+                })
         })
     }
 
     /// Pose of every link in the body frame (mm) for the given joint values (chain order, rad),
     /// in the URDF's link order. Links not connected to the body are left out.
-    pub fn link_poses(&self, q_left: &[f64; N_JOINTS], q_right: &[f64; N_JOINTS]) -> Vec<(String, Isometry3<f64>)> {
+    pub fn link_poses(
+        &self,
+        q_left: &[f64; N_JOINTS],
+        q_right: &[f64; N_JOINTS],
+    ) -> Vec<(String, Isometry3<f64>)> {
         let poses = self.kin.body_from_links(q_left, q_right);
         self.kin
             .link_names
@@ -523,7 +552,12 @@ impl RobotDescription {
     }
 
     /// All shapes of the given kind placed in the body frame (mm).
-    pub fn shapes(&self, q_left: &[f64; N_JOINTS], q_right: &[f64; N_JOINTS], which: GeometryKind) -> Vec<PlacedShape> {
+    pub fn shapes(
+        &self,
+        q_left: &[f64; N_JOINTS],
+        q_right: &[f64; N_JOINTS],
+        which: GeometryKind,
+    ) -> Vec<PlacedShape> {
         let poses = self.kin.body_from_links(q_left, q_right);
         let list = match which {
             GeometryKind::Visual => &self.kin.visual,
@@ -543,12 +577,18 @@ impl RobotDescription {
 
     /// URDF forward kinematics of `side`'s flange link in the body frame, mm (the other arm at zero).
     pub fn body_from_flange(&self, side: Side, q: &[f64; N_JOINTS]) -> Isometry3<f64> {
-        self.kin.body_from_link(self.kin.flange[side_index(side)], side, q)
+        self.kin
+            .body_from_link(self.kin.flange[side_index(side)], side, q)
     }
 }
 
 impl Kinematics {
-    fn motion(&self, joint: &KinJoint, q_left: &[f64; N_JOINTS], q_right: &[f64; N_JOINTS]) -> Isometry3<f64> {
+    fn motion(
+        &self,
+        joint: &KinJoint,
+        q_left: &[f64; N_JOINTS],
+        q_right: &[f64; N_JOINTS],
+    ) -> Isometry3<f64> {
         let q = match joint.arm {
             Some((Side::Left, k)) => q_left[k],
             Some((Side::Right, k)) => q_right[k],
@@ -559,10 +599,15 @@ impl Kinematics {
 
     /// Every link's pose in the body frame (indexed like `link_names`; unreachable links get the
     /// pose relative to their own root, and are filtered by callers).
-    pub(crate) fn body_from_links(&self, q_left: &[f64; N_JOINTS], q_right: &[f64; N_JOINTS]) -> Vec<Isometry3<f64>> {
+    pub(crate) fn body_from_links(
+        &self,
+        q_left: &[f64; N_JOINTS],
+        q_right: &[f64; N_JOINTS],
+    ) -> Vec<Isometry3<f64>> {
         let mut poses = vec![Isometry3::identity(); self.link_names.len()];
         for j in &self.joints {
-            poses[j.child] = poses[j.parent] * j.parent_from_joint * self.motion(j, q_left, q_right);
+            poses[j.child] =
+                poses[j.parent] * j.parent_from_joint * self.motion(j, q_left, q_right);
         }
         let root_from_body_inv = poses[self.body].inverse();
         for p in &mut poses {
@@ -616,8 +661,15 @@ impl Kinematics {
 fn motion_transform(motion: &Motion, q: f64) -> Isometry3<f64> {
     match motion {
         Motion::Fixed => Isometry3::identity(),
-        Motion::Revolute(axis) => Isometry3::from_parts(Translation3::identity(), UnitQuaternion::from_axis_angle(axis, q)),
-        Motion::Prismatic(axis) => Isometry3::translation(axis.x * q * 1000.0, axis.y * q * 1000.0, axis.z * q * 1000.0),
+        Motion::Revolute(axis) => Isometry3::from_parts(
+            Translation3::identity(),
+            UnitQuaternion::from_axis_angle(axis, q),
+        ),
+        Motion::Prismatic(axis) => Isometry3::translation(
+            axis.x * q * 1000.0,
+            axis.y * q * 1000.0,
+            axis.z * q * 1000.0,
+        ),
     }
 }
 
@@ -682,14 +734,24 @@ fn compile(
             let a = Vector3::new(j.axis.xyz[0], j.axis.xyz[1], j.axis.xyz[2]);
             Unit::try_new(a, 1e-12)
                 .filter(|u| u.iter().all(|v| v.is_finite()))
-                .ok_or_else(|| bad_joint(&j.name, format!("axis {:?} is not a direction", j.axis.xyz.0)))
+                .ok_or_else(|| {
+                    bad_joint(
+                        &j.name,
+                        format!("axis {:?} is not a direction", j.axis.xyz.0),
+                    )
+                })
         };
         let motion = match j.joint_type {
-            urdf_rs::JointType::Revolute | urdf_rs::JointType::Continuous => Motion::Revolute(axis()?),
+            urdf_rs::JointType::Revolute | urdf_rs::JointType::Continuous => {
+                Motion::Revolute(axis()?)
+            }
             urdf_rs::JointType::Prismatic => Motion::Prismatic(axis()?),
             urdf_rs::JointType::Fixed => Motion::Fixed,
             ref other => {
-                warnings.push(format!("joint `{}` of type {other:?} is held fixed", j.name));
+                warnings.push(format!(
+                    "joint `{}` of type {other:?} is held fixed",
+                    j.name
+                ));
                 Motion::Fixed
             }
         };
@@ -710,7 +772,10 @@ fn compile(
             let name = arm_joint_name(side, k);
             let ji = joint_pos(&name).expect("checked above");
             let j = &urdf.joints[ji];
-            if !matches!(j.joint_type, urdf_rs::JointType::Revolute | urdf_rs::JointType::Continuous) {
+            if !matches!(
+                j.joint_type,
+                urdf_rs::JointType::Revolute | urdf_rs::JointType::Continuous
+            ) {
                 return Err(bad_joint(
                     &name,
                     format!("type is {:?}, expected revolute", j.joint_type),
@@ -758,7 +823,9 @@ fn compile(
     for (ji, j) in raw.iter().enumerate() {
         children[j.parent].push(ji);
     }
-    let roots: Vec<usize> = (0..link_names.len()).filter(|&l| parent_joint_raw[l].is_none()).collect();
+    let roots: Vec<usize> = (0..link_names.len())
+        .filter(|&l| parent_joint_raw[l].is_none())
+        .collect();
     let mut order: Vec<usize> = Vec::with_capacity(raw.len());
     let mut root_of = vec![usize::MAX; link_names.len()];
     for &r in &roots {
@@ -777,14 +844,20 @@ fn compile(
             .filter(|&l| root_of[l] == usize::MAX)
             .map(|l| link_names[l].as_str())
             .collect();
-        return Err(structure(format!("kinematic loop through link(s) {}", in_loop.join(", "))));
+        return Err(structure(format!(
+            "kinematic loop through link(s) {}",
+            in_loop.join(", ")
+        )));
     }
     let mut new_index = vec![0usize; raw.len()];
     for (new, &old) in order.iter().enumerate() {
         new_index[old] = new;
     }
     let joints: Vec<KinJoint> = order.iter().map(|&o| raw[o].clone()).collect();
-    let parent_joint: Vec<Option<usize>> = parent_joint_raw.iter().map(|p| p.map(|o| new_index[o])).collect();
+    let parent_joint: Vec<Option<usize>> = parent_joint_raw
+        .iter()
+        .map(|p| p.map(|o| new_index[o]))
+        .collect();
     for side in Side::BOTH {
         for k in 0..N_JOINTS {
             let s = side_index(side);
@@ -817,7 +890,9 @@ fn compile(
     for side in Side::BOTH {
         let l1 = joints[arm_joint_idx[side_index(side)][0]].child;
         if owner[body] != Owner::Body || owner[l1] != Owner::Arm(side) {
-            return Err(structure(format!("the {side} arm is not a branch of the body link")));
+            return Err(structure(format!(
+                "the {side} arm is not a branch of the body link"
+            )));
         }
     }
 
@@ -879,14 +954,18 @@ fn compile(
     let poses = kin.body_from_links(&zero, &zero);
     for side in Side::BOTH {
         let j1 = &kin.joints[arm_joint_idx[side_index(side)][0]];
-        kin.body_from_dh_base[side_index(side)] = poses[j1.parent] * j1.parent_from_joint * joint1_from_dh_base();
+        kin.body_from_dh_base[side_index(side)] =
+            poses[j1.parent] * j1.parent_from_joint * joint1_from_dh_base();
     }
 
     // Geometry.
     for (li, link) in urdf.links.iter().enumerate() {
         for v in &link.visual {
             if !finite_pose(&v.origin) {
-                warnings.push(format!("link `{}`: a visual origin is not finite; skipped", link.name));
+                warnings.push(format!(
+                    "link `{}`: a visual origin is not finite; skipped",
+                    link.name
+                ));
                 continue;
             }
             if let Some(kind) = compile_geometry(&v.geometry, &link.name, resolver, warnings) {
@@ -900,7 +979,10 @@ fn compile(
         }
         for c in &link.collision {
             if !finite_pose(&c.origin) {
-                warnings.push(format!("link `{}`: a collision origin is not finite; skipped", link.name));
+                warnings.push(format!(
+                    "link `{}`: a collision origin is not finite; skipped",
+                    link.name
+                ));
                 continue;
             }
             // Meshes are reported once (by the visual pass) when they are the same file.
@@ -946,13 +1028,19 @@ mod tests {
             let urdf = robot.body_from_flange(side, &q);
             let dh = robot.body_from_dh_base(side) * arm.base_from_flange(&q);
             assert!((urdf.translation.vector - dh.translation.vector).norm() < 1e-9);
-            assert!(rotation_angle_rad(&(urdf.rotation.inverse() * dh.rotation).to_rotation_matrix()) < 1e-12);
+            assert!(
+                rotation_angle_rad(&(urdf.rotation.inverse() * dh.rotation).to_rotation_matrix())
+                    < 1e-12
+            );
         }
     }
 
     #[test]
     fn line_number_is_read_from_parser_message() {
-        assert_eq!(line_from_message("Parse error; Line: 12, Column: 3, Reason: x"), Some(12));
+        assert_eq!(
+            line_from_message("Parse error; Line: 12, Column: 3, Reason: x"),
+            Some(12)
+        );
         assert_eq!(line_from_message("something else"), None);
         assert_eq!(line_of("a\nb\nc", "c"), Some(3));
     }
@@ -964,8 +1052,16 @@ mod tests {
             <limit lower="-1" upper="1" effort="1" velocity="1"/></joint></robot>"#;
         let err = RobotDescription::from_str(text, Some(Path::new("x.urdf"))).unwrap_err();
         let msg = err.to_string();
-        assert!(matches!(err, RobotError::MissingJoints { ref missing, .. } if missing.len() == 13), "{msg}");
-        assert!(msg.contains("x.urdf") && msg.contains("yumi_joint_2_l") && msg.contains("yumi_joint_6_r"), "{msg}");
+        assert!(
+            matches!(err, RobotError::MissingJoints { ref missing, .. } if missing.len() == 13),
+            "{msg}"
+        );
+        assert!(
+            msg.contains("x.urdf")
+                && msg.contains("yumi_joint_2_l")
+                && msg.contains("yumi_joint_6_r"),
+            "{msg}"
+        );
         assert!(!msg.contains("yumi_joint_1_l,"), "{msg}");
     }
 

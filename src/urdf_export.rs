@@ -98,7 +98,10 @@ fn reflector_link(name: String) -> urdf_rs::Link {
     }
 }
 
-fn joint_mut<'a>(urdf: &'a mut urdf_rs::Robot, name: &str) -> Result<&'a mut urdf_rs::Joint, RobotError> {
+fn joint_mut<'a>(
+    urdf: &'a mut urdf_rs::Robot,
+    name: &str,
+) -> Result<&'a mut urdf_rs::Joint, RobotError> {
     urdf.joints
         .iter_mut()
         .find(|j| j.name == name)
@@ -112,14 +115,23 @@ fn check_finite(model: &DualArmModel) -> Result<(), RobotError> {
             [r.a_mm, r.d_mm, r.theta_rad, r.alpha_rad]
                 .iter()
                 .all(|v| v.is_finite())
-        }) && arm.reflectors_mm.iter().all(|t| t.iter().all(|v| v.is_finite()));
+        }) && arm
+            .reflectors_mm
+            .iter()
+            .all(|t| t.iter().all(|v| v.is_finite()));
         if !finite {
-            return Err(export_err(format!("the {side} arm's parameters are not all finite")));
+            return Err(export_err(format!(
+                "the {side} arm's parameters are not all finite"
+            )));
         }
     }
     let b = &model.left_base_from_right_base;
-    if !(b.translation.vector.iter().all(|v| v.is_finite()) && b.rotation.coords.iter().all(|v| v.is_finite())) {
-        return Err(export_err("the right-arm base transform is not finite".into()));
+    if !(b.translation.vector.iter().all(|v| v.is_finite())
+        && b.rotation.coords.iter().all(|v| v.is_finite()))
+    {
+        return Err(export_err(
+            "the right-arm base transform is not finite".into(),
+        ));
     }
     Ok(())
 }
@@ -127,7 +139,10 @@ fn check_finite(model: &DualArmModel) -> Result<(), RobotError> {
 /// A copy of `robot`'s URDF whose joint origins reproduce `model` (both arms' DH tables and the
 /// right-arm base) exactly, with the reflectors as fixed links of the flanges. The text is checked
 /// by loading it back before it is returned.
-pub fn calibrated_urdf(robot: &RobotDescription, model: &DualArmModel) -> Result<String, RobotError> {
+pub fn calibrated_urdf(
+    robot: &RobotDescription,
+    model: &DualArmModel,
+) -> Result<String, RobotError> {
     check_finite(model)?;
     let mut urdf = robot.urdf.clone();
     let zero = [0.0; N_JOINTS];
@@ -139,7 +154,9 @@ pub fn calibrated_urdf(robot: &RobotDescription, model: &DualArmModel) -> Result
         let dh = &model.arm(side).dh;
         for name in &names {
             let j = joint_mut(&mut urdf, name)?;
-            if (Vector3::new(j.axis.xyz[0], j.axis.xyz[1], j.axis.xyz[2]) - Vector3::z()).norm() > 1e-9 {
+            if (Vector3::new(j.axis.xyz[0], j.axis.xyz[1], j.axis.xyz[2]) - Vector3::z()).norm()
+                > 1e-9
+            {
                 return Err(export_err(format!(
                     "joint `{name}` turns about {:?}; a DH chain needs 0 0 1",
                     j.axis.xyz.0
@@ -175,7 +192,9 @@ pub fn calibrated_urdf(robot: &RobotDescription, model: &DualArmModel) -> Result
             j.origin = link7_from_flange;
         } else {
             if urdf.links.iter().any(|l| l.name == flange) {
-                return Err(export_err(format!("link `{flange}` exists but is not fixed to `{link7}`")));
+                return Err(export_err(format!(
+                    "link `{flange}` exists but is not fixed to `{link7}`"
+                )));
             }
             urdf.links.push(urdf_rs::Link {
                 name: flange.clone(),
@@ -206,7 +225,8 @@ pub fn calibrated_urdf(robot: &RobotDescription, model: &DualArmModel) -> Result
                 if !urdf.links.iter().any(|l| l.name == link) {
                     urdf.links.push(reflector_link(link.clone()));
                 }
-                urdf.joints.push(fixed_joint(format!("{link}_joint"), &flange, &link, origin));
+                urdf.joints
+                    .push(fixed_joint(format!("{link}_joint"), &flange, &link, origin));
             }
         }
     }
@@ -218,15 +238,17 @@ pub fn calibrated_urdf(robot: &RobotDescription, model: &DualArmModel) -> Result
         .get(&parent)
         .copied()
         .ok_or_else(|| export_err(format!("link `{parent}` is not connected to the body")))?;
-    let body_from_right_base = robot.body_from_dh_base(Side::Left) * model.left_base_from_right_base;
-    let parent_from_joint1 = body_from_parent.inverse() * body_from_right_base * joint1_from_dh_base().inverse();
+    let body_from_right_base =
+        robot.body_from_dh_base(Side::Left) * model.left_base_from_right_base;
+    let parent_from_joint1 =
+        body_from_parent.inverse() * body_from_right_base * joint1_from_dh_base().inverse();
     joint_mut(&mut urdf, &j1r)?.origin = urdf_pose_from_isometry(&parent_from_joint1);
 
     let body = urdf_rs::write_to_string(&urdf).map_err(|e| export_err(e.to_string()))?;
-    let from = robot
-        .source
-        .as_ref()
-        .map_or_else(|| "the built-in IRB 14000 description".to_string(), |p| p.display().to_string());
+    let from = robot.source.as_ref().map_or_else(
+        || "the built-in IRB 14000 description".to_string(),
+        |p| p.display().to_string(),
+    );
     let text = format!(
         "<?xml version=\"1.0\"?>\n<!-- Calibrated by dualcal {} from {}: joint origins reproduce the \
          calibrated DH tables; the right joint-1 origin places the right DH base at the calibrated \
@@ -259,7 +281,10 @@ mod tests {
             let q = UnitQuaternion::from_euler_angles(r, p, y).to_rotation_matrix();
             let [r2, p2, y2] = rpy_from_rotation(&q);
             let back = UnitQuaternion::from_euler_angles(r2, p2, y2).to_rotation_matrix();
-            assert!(rotation_angle_rad(&(q.inverse() * back)) < 1e-14, "{r} {p} {y}");
+            assert!(
+                rotation_angle_rad(&(q.inverse() * back)) < 1e-14,
+                "{r} {p} {y}"
+            );
         }
     }
 }
