@@ -359,17 +359,10 @@ impl CollisionWorld {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::robot::home_q_rad;
 
-    fn deg(v: [f64; N_JOINTS]) -> [f64; N_JOINTS] {
-        v.map(f64::to_radians)
-    }
-
-    /// ABB's YuMi home (synchronisation) position in chain order (axes 1, 2, 7, 3, 4, 5, 6).
     fn home() -> ([f64; N_JOINTS], [f64; N_JOINTS]) {
-        (
-            deg([0.0, -130.0, 135.0, 30.0, 0.0, 40.0, 0.0]),
-            deg([0.0, -130.0, -135.0, 30.0, 0.0, 40.0, 0.0]),
-        )
+        (home_q_rad(Side::Left), home_q_rad(Side::Right))
     }
 
     #[test]

@@ -28,6 +28,17 @@ pub const DH_BASE_BELOW_LINK1_MM: f64 = 66.0;
 /// ABB axis numbers of the joints in chain order, as they appear in the joint names.
 pub const ARM_JOINT_NUMBERS: [usize; N_JOINTS] = [1, 2, 7, 3, 4, 5, 6];
 
+/// The YuMi's tucked-in home pose (ABB's synchronisation position: axes 1–6 at 0, −130, 30, 0, 40,
+/// 0 deg, axis 7 at +135 deg left / −135 deg right) in chain order (axes 1, 2, 7, 3, 4, 5, 6), rad.
+/// Collision-free with the built-in geometry.
+pub fn home_q_rad(side: Side) -> [f64; N_JOINTS] {
+    let axis7_deg = match side {
+        Side::Left => 135.0,
+        Side::Right => -135.0,
+    };
+    [0.0, -130.0, axis7_deg, 30.0, 0.0, 40.0, 0.0].map(f64::to_radians)
+}
+
 /// Package name → package directory, for resolving `package://` mesh paths.
 pub type PackageMap = HashMap<String, PathBuf>;
 

@@ -195,11 +195,13 @@ def shape_xml(shape, indent):
     )
     g = geometry_xml(shape)
     pad = " " * indent
-    return (
+    visual = (
         f"{pad}<visual>\n{pad}  {origin}\n{pad}  <geometry>{g}</geometry>\n"
         f'{pad}  <material name="{shape["material"]}"/>\n{pad}</visual>\n'
-        f"{pad}<collision>\n{pad}  {origin}\n{pad}  <geometry>{g}</geometry>\n{pad}</collision>\n"
     )
+    if shape.get("visual_only"):
+        return visual
+    return visual + f"{pad}<collision>\n{pad}  {origin}\n{pad}  <geometry>{g}</geometry>\n{pad}</collision>\n"
 
 
 # ---------------------------------------------------------------- the robot
@@ -215,6 +217,7 @@ WRIST_R = 23.0
 WRIST_BACK = 8.0
 FLANGE_R = 18.0
 TUBE_END_GAP = {1: 0.0, 3: 0.0, 5: 24.0}
+NECK_R = 17.0
 FLANGE_THICKNESS = 6.0
 
 
@@ -241,7 +244,14 @@ def link_shapes(k, origin):
         # tube along the joint axis, from beyond this joint's hub to the next joint's hub
         z0 = 0.0 if k == 1 else HUB[k][1] / 2.0
         z1 = t[2] - HUB[k + 1][0] - TUBE_END_GAP[k]
-        return [cylinder_between([0.0, 0.0, z0], [0.0, 0.0, z1], TUBE_R[k], shell)]
+        shapes = [cylinder_between([0.0, 0.0, z0], [0.0, 0.0, z1], TUBE_R[k], shell)]
+        if TUBE_END_GAP[k] > 0.0:
+            # a slim neck up to the next hub, drawn only: the collision tube stops short so that the
+            # wrist can fold back over it (axis 5 down to -88 deg)
+            neck = cylinder_between([0.0, 0.0, z1], [t[0], t[1], t[2]], NECK_R, shell)
+            neck["visual_only"] = True
+            shapes.append(neck)
+        return shapes
     if k in (2, 4, 6):
         shapes = [hub(z, [0.0, 0.0, 1.0], HUB[k][0], HUB[k][1], dark)]
         shapes.append(cylinder_between(z, t, OFFSET_R[k], shell))
