@@ -14,7 +14,7 @@
 //! explicit package map, `ROS_PACKAGE_PATH`, or the URDF directory's ancestors; relative paths
 //! against the URDF's directory. A missing mesh is a warning and the shape is still returned.
 
-use crate::kinematics::{ArmModel, DualArmModel, IRB14000_NOMINAL_DH, N_JOINTS, Side};
+use crate::kinematics::{ArmModel, DhRow, DualArmModel, IRB14000_NOMINAL_DH, N_JOINTS, Side};
 use nalgebra::{Isometry3, Translation3, Unit, UnitQuaternion, Vector3};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -211,6 +211,8 @@ pub(crate) struct Kinematics {
     parent_joint: Vec<Option<usize>>,
     /// Link index of each arm's flange (`yumi_flange_x`, or link_7 as a fallback).
     flange: [usize; 2],
+    /// Link indices of link_1..link_7 of each arm.
+    arm_links: [[usize; N_JOINTS]; 2],
     body_from_dh_base: [Isometry3<f64>; 2],
     pub(crate) visual: Vec<LocalShape>,
     pub(crate) collision: Vec<LocalShape>,
@@ -586,6 +588,88 @@ impl RobotDescription {
             .collect()
     }
 
+    /// The dual-arm model this URDF encodes: DH rows read off the arm joints' origins (the inverse
+    /// of [`crate::urdf_export::calibrated_urdf`]), reflectors from `reflector_{a,b,c}_{l,r}` links
+    /// when present (else `reflectors_mm`), and the base transform of the DH base frames. For the
+    /// built-in URDF this is Table 3. Fails when an origin is not of DH form or an axis is not +z.
+    pub fn dh_model(&self, reflectors_mm: [Vector3<f64>; 3]) -> Result<DualArmModel, RobotError> {
+        let file = self
+            .source
+            .as_ref()
+            .map_or_else(|| "<string>".to_string(), |p| p.display().to_string());
+        let zero = [0.0; N_JOINTS];
+        let poses = self.kin.body_from_links(&zero, &zero);
+        let link_pose = |name: &str| {
+            self.kin
+                .link_names
+                .iter()
+                .position(|n| n == name)
+                .filter(|&i| self.kin.reachable[i])
+                .map(|i| poses[i])
+        };
+        let mut arms = Vec::with_capacity(2);
+        for side in Side::BOTH {
+            let names = self.arm_joint_names(side);
+            let bad = |joint: &str, problem: &str| RobotError::BadJoint {
+                file: file.clone(),
+                line: None,
+                joint: joint.to_string(),
+                problem: problem.to_string(),
+            };
+            let mut origins = Vec::with_capacity(N_JOINTS);
+            for name in &names {
+                let j = self
+                    .urdf
+                    .joints
+                    .iter()
+                    .find(|j| &j.name == name)
+                    .ok_or_else(|| bad(name, "missing"))?;
+                let axis = Vector3::new(j.axis.xyz[0], j.axis.xyz[1], j.axis.xyz[2]);
+                if (axis - Vector3::z()).norm() > 1e-9 {
+                    return Err(bad(name, "axis is not 0 0 1: no DH reading"));
+                }
+                origins.push(isometry_from_urdf_pose(&j.origin));
+            }
+            let mut dh = [IRB14000_NOMINAL_DH[0]; N_JOINTS];
+            for k in 0..N_JOINTS - 1 {
+                let origin = if k == 0 {
+                    joint1_from_dh_base().inverse() * origins[1]
+                } else {
+                    origins[k + 1]
+                };
+                dh[k] = dh_row_from_origin(&origin)
+                    .ok_or_else(|| bad(&names[k + 1], "origin is not of DH form Rz Tz Tx Rx"))?;
+            }
+            let s = side_index(side);
+            let link7 = poses[self.kin.arm_links[s][N_JOINTS - 1]];
+            let flange = poses[self.kin.flange[s]];
+            dh[N_JOINTS - 1] =
+                dh_row_from_origin(&(link7.inverse() * flange)).ok_or_else(|| {
+                    bad(
+                        &names[N_JOINTS - 1],
+                        "flange is not at a DH offset of link 7",
+                    )
+                })?;
+            let mut reflectors = reflectors_mm;
+            for (k, r) in crate::kinematics::REFLECTOR_NAMES.iter().enumerate() {
+                if let Some(p) = link_pose(&format!("reflector_{r}_{}", side_suffix(side))) {
+                    reflectors[k] = (flange.inverse() * p).translation.vector;
+                }
+            }
+            arms.push(ArmModel {
+                dh,
+                reflectors_mm: reflectors,
+            });
+        }
+        let right = arms.pop().expect("two arms");
+        let left = arms.pop().expect("two arms");
+        Ok(DualArmModel {
+            left,
+            right,
+            left_base_from_right_base: self.nominal_left_base_from_right_base(),
+        })
+    }
+
     /// URDF forward kinematics of `side`'s flange link in the body frame, mm (the other arm at zero).
     pub fn body_from_flange(&self, side: Side, q: &[f64; N_JOINTS]) -> Isometry3<f64> {
         self.kin
@@ -667,6 +751,25 @@ impl Kinematics {
         };
         chain_from_root(self.body).inverse() * chain_from_root(link)
     }
+}
+
+/// Read a DH row off a transform `Rz(θ) Tz(d) Tx(a) Rx(α)` (a joint origin at q = 0); `None` when
+/// the transform has no such form (within 1e-6 mm and 1e-9 rad).
+pub fn dh_row_from_origin(origin: &Isometry3<f64>) -> Option<DhRow> {
+    let m = origin.rotation.to_rotation_matrix().into_inner();
+    let t = origin.translation.vector;
+    let theta_rad = m[(1, 0)].atan2(m[(0, 0)]);
+    let alpha_rad = m[(2, 1)].atan2(m[(2, 2)]);
+    let row = DhRow::new(
+        t.x * theta_rad.cos() + t.y * theta_rad.sin(),
+        t.z,
+        theta_rad,
+        alpha_rad,
+    );
+    let back = row.transform(0.0);
+    let dt = (back.translation.vector - t).norm();
+    let dr = (back.rotation.inverse() * origin.rotation).angle();
+    (dt < 1e-6 && dr < 1e-9).then_some(row)
 }
 
 fn motion_transform(motion: &Motion, q: f64) -> Isometry3<f64> {
@@ -957,6 +1060,7 @@ fn compile(
         owner,
         parent_joint,
         flange,
+        arm_links,
         body_from_dh_base: [Isometry3::identity(); 2],
         visual: Vec::new(),
         collision: Vec::new(),

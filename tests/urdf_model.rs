@@ -257,6 +257,45 @@ fn calibrated_urdf_reproduces_the_model() {
     assert_eq!(raw2.joints.len(), raw.joints.len());
 }
 
+fn assert_models_close(a: &DualArmModel, b: &DualArmModel, tol: f64) {
+    for side in Side::BOTH {
+        let (va, vb) = (a.arm(side).to_vector(), b.arm(side).to_vector());
+        let worst = (va - vb).abs().max();
+        assert!(worst < tol, "{side}: {worst:e}\n{va}\n{vb}");
+    }
+    let (t, r) = pose_error(&a.left_base_from_right_base, &b.left_base_from_right_base);
+    assert!(t < tol && r < tol, "base {t:e} {r:e}");
+}
+
+#[test]
+fn dh_model_reads_the_urdf_back() {
+    let robot = RobotDescription::builtin_irb14000();
+    // The built-in URDF encodes Table 3.
+    let nominal = robot.nominal_model(reflectors());
+    assert_models_close(&robot.dh_model(reflectors()).unwrap(), &nominal, 1e-12);
+
+    // A calibrated URDF gives back the calibrated model, reflectors included.
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    let model = perturbed_model(&robot, &mut rng);
+    let back = RobotDescription::from_str(&calibrated_urdf(&robot, &model).unwrap(), None).unwrap();
+    assert_models_close(&back.dh_model(reflectors()).unwrap(), &model, 1e-9);
+    // ... which differs from the nominal one (the comparison can fail).
+    let (va, vb) = (model.left.to_vector(), nominal.left.to_vector());
+    assert!((va - vb).abs().max() > 1e-3);
+
+    // A joint origin with a y offset has no DH reading.
+    let text = BUILTIN_IRB14000_URDF.replacen(
+        "<origin xyz=\"0.0405 0 0.2515\"",
+        "<origin xyz=\"0.0405 0.01 0.2515\"",
+        1,
+    );
+    let err = RobotDescription::from_str(&text, None)
+        .unwrap()
+        .dh_model(reflectors())
+        .unwrap_err();
+    assert!(err.to_string().contains("yumi_joint_3_l"), "{err}");
+}
+
 #[test]
 fn calibrated_urdf_refuses_non_finite_parameters() {
     let robot = RobotDescription::builtin_irb14000();
