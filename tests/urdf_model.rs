@@ -427,6 +427,24 @@ fn malformed_xml_names_the_file() {
     assert!(matches!(err, RobotError::Parse { .. }), "{msg}");
     assert!(msg.contains("broken.urdf"), "{msg}");
 
+    // A syntax error deep in the file carries its line.
+    let path = dir.path().join("syntax.urdf");
+    std::fs::write(
+        &path,
+        "<robot name=\"x\">\n  <link name=\"a\"/>\n  <link name=\"b\" =/>\n</robot>\n",
+    )
+    .unwrap();
+    let err = RobotDescription::load(&path).unwrap_err();
+    match &err {
+        RobotError::Parse { file, line, .. } => {
+            assert!(file.ends_with("syntax.urdf"));
+            // the parser reports where it noticed the error: the bad line or the next one
+            assert!(matches!(line, Some(3 | 4)), "{err}");
+        }
+        other => panic!("{other}"),
+    }
+    assert!(err.to_string().contains(", line "), "{err}");
+
     // A missing file is an I/O error naming the path.
     let err = RobotDescription::load(&dir.path().join("nope.urdf")).unwrap_err();
     assert!(
