@@ -6,4 +6,5 @@
 
 pub mod dataset;
 pub mod kinematics;
+pub mod metrics;
 pub mod params;
