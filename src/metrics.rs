@@ -256,17 +256,17 @@ pub fn kabsch_rotation(
 // ------------------------------------------------------------------------------------------------------
 // Per-configuration geometry, computed once
 
-/// Everything the pair loops need about one configuration.
+/// Everything the pair loops need about one configuration, as plain arrays: the pair loops run tens of
+/// thousands of times per evaluation and plain arithmetic stays fast in unoptimised (test) builds too.
 #[derive(Clone, Copy, Debug)]
 struct ConfigGeom {
     /// Measured reflector points, tracker frame, mm.
-    measured_mm: [Vector3<f64>; 3],
-    /// Measured flange rotation (Kabsch fit), tracker frame.
-    measured_rot: Rotation3<f64>,
+    measured_mm: [[f64; 3]; 3],
     /// Model reflector points in the reference base frame, mm.
-    model_mm: [Vector3<f64>; 3],
-    /// Model flange rotation in the reference base frame.
-    model_rot: Rotation3<f64>,
+    model_mm: [[f64; 3]; 3],
+    /// `M = R_m · R_oᵀ` (row-major): the measured flange rotation (Kabsch fit, tracker frame) times the
+    /// inverse of the model's (reference base frame). See [`pair_error`].
+    measured_from_model_rot: [[f64; 3]; 3],
     fit_rms_mm: f64,
 }
 
@@ -382,14 +382,16 @@ fn arm_geometry(
                 }
             })?;
             let g = ConfigGeom {
-                measured_mm: m.tracker_points_mm,
-                measured_rot: fit.rotation,
-                model_mm,
-                model_rot,
+                measured_mm: m.tracker_points_mm.map(|p| p.into()),
+                model_mm: model_mm.map(|p| p.into()),
+                measured_from_model_rot: (fit.rotation * model_rot.transpose())
+                    .into_inner()
+                    .transpose()
+                    .into(),
                 fit_rms_mm: fit.rms_mm,
             };
-            let finite = g.model_mm.iter().all(|p| p.iter().all(|x| x.is_finite()))
-                && g.model_rot.matrix().iter().all(|x| x.is_finite());
+            let finite = model_mm.iter().all(|p| p.iter().all(|x| x.is_finite()))
+                && model_rot.matrix().iter().all(|x| x.is_finite());
             if finite {
                 Ok(g)
             } else {
@@ -406,19 +408,32 @@ fn arm_geometry(
     })
 }
 
-/// `Δd` per reflector and `Δo` of one pair (the first configuration's model and measured quantities
-/// against the second's).
+/// `Δd` per reflector and `Δo` of one pair `(i, j)` = `(a, b)`.
+///
+/// `Δo = ‖log(E)‖` with `E = (R_m,iᵀ R_m,j)ᵀ (R_o,iᵀ R_o,j) = R_m,jᵀ M_i R_o,j`, `M = R_m R_oᵀ`. The angle
+/// of a rotation is invariant under conjugation, and `R_o,j E R_o,jᵀ = M_jᵀ M_i`, so `Δo` is the angle of
+/// `M_jᵀ M_i`: one matrix product per pair.
 #[inline]
 fn pair_error(a: &ConfigGeom, b: &ConfigGeom) -> ([f64; 3], f64) {
     let dd = std::array::from_fn(|k| {
-        (a.measured_mm[k] - b.measured_mm[k]).norm() - (a.model_mm[k] - b.model_mm[k]).norm()
+        distance(&a.measured_mm[k], &b.measured_mm[k]) - distance(&a.model_mm[k], &b.model_mm[k])
     });
-    let rel_measured = a.measured_rot.transpose() * b.measured_rot;
-    let rel_model = a.model_rot.transpose() * b.model_rot;
-    (
-        dd,
-        rotation_angle_rad(&(rel_measured.transpose() * rel_model)),
-    )
+    let (mb, ma) = (&b.measured_from_model_rot, &a.measured_from_model_rot);
+    // E = M_bᵀ M_a, row-major: E[r][c] = Σ_k M_b[k][r] · M_a[k][c].
+    let e = |r: usize, c: usize| mb[0][r] * ma[0][c] + mb[1][r] * ma[1][c] + mb[2][r] * ma[2][c];
+    #[rustfmt::skip]
+    let e = Matrix3::new(
+        e(0, 0), e(0, 1), e(0, 2),
+        e(1, 0), e(1, 1), e(1, 2),
+        e(2, 0), e(2, 1), e(2, 2),
+    );
+    (dd, rotation_angle_rad(&Rotation3::from_matrix_unchecked(e)))
+}
+
+#[inline]
+fn distance(p: &[f64; 3], q: &[f64; 3]) -> f64 {
+    let (x, y, z) = (p[0] - q[0], p[1] - q[1], p[2] - q[2]);
+    (x * x + y * y + z * z).sqrt()
 }
 
 fn worst(dd: &[f64; 3]) -> f64 {
@@ -700,7 +715,7 @@ pub fn per_config(
                 let g = &own.geom[i];
                 let (rel_pos, rel_ori_rms, rel_ori_max) = against(g, &own.geom, Some(i));
                 let (col_pos, col_ori_rms, col_ori_max) = against(g, &other.geom, None);
-                let measured_sides = triangle_sides(&g.measured_mm);
+                let measured_sides = triangle_sides(&g.measured_mm.map(Vector3::from));
                 let side_errors: [f64; 3] =
                     std::array::from_fn(|k| measured_sides[k] - model_sides[k]);
                 let index = own.indices[i];
