@@ -1,8 +1,9 @@
 //! Cross-check of `dualcal::metrics::evaluate` against the independent numpy implementation in
 //! `tools/metrics_reference.py`, on small random datasets written in the `dualcal-dataset/1` format.
 //!
-//! Needs Python 3.11+ with numpy (`DUALCAL_PYTHON`, default `python3`). Without numpy the tests FAIL with a
-//! message saying so: the cross-check is part of the acceptance criteria and must not pass silently.
+//! Needs Python 3.11+ with numpy (`DUALCAL_PYTHON`, else `python3` or `/usr/bin/python3`). Without numpy
+//! the tests FAIL with a message saying so: the cross-check is part of the acceptance criteria and must not
+//! pass silently.
 
 use dualcal::dataset::{ArmData, Dataset, Measurement, Split, SplitSelect, TrackerSpec};
 use dualcal::kinematics::{
@@ -235,28 +236,45 @@ fn write_params(path: &Path, model: &DualArmModel, units: Units) {
     std::fs::write(path, serde_json::to_string_pretty(&doc).unwrap()).unwrap();
 }
 
+/// The Python to run: `DUALCAL_PYTHON` if set, else the first of `python3`, `/usr/bin/python3` that has
+/// numpy and tomllib. Panics (fails the test) with a clear message when there is none.
 fn python() -> String {
-    std::env::var("DUALCAL_PYTHON").unwrap_or_else(|_| "python3".into())
-}
-
-fn require_numpy() {
-    let py = python();
-    let out = Command::new(&py)
-        .args(["-c", "import numpy, tomllib"])
-        .output()
-        .unwrap_or_else(|e| {
-            panic!("cannot run `{py}` ({e}): the metrics cross-check needs Python 3.11+ with numpy (set DUALCAL_PYTHON)")
-        });
-    assert!(
-        out.status.success(),
-        "`{py}` lacks numpy or tomllib (Python 3.11+ with numpy is required for the metrics cross-check; \
-         install python3-numpy or set DUALCAL_PYTHON): {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    static FOUND: std::sync::OnceLock<Result<String, String>> = std::sync::OnceLock::new();
+    let found = FOUND.get_or_init(|| {
+        let candidates: Vec<String> = match std::env::var("DUALCAL_PYTHON") {
+            Ok(p) => vec![p],
+            Err(_) => vec!["python3".into(), "/usr/bin/python3".into()],
+        };
+        let mut tried = Vec::new();
+        for py in &candidates {
+            match Command::new(py)
+                .args(["-c", "import numpy, tomllib"])
+                .output()
+            {
+                Ok(out) if out.status.success() => return Ok(py.clone()),
+                Ok(out) => tried.push(format!(
+                    "`{py}`: {}",
+                    String::from_utf8_lossy(&out.stderr)
+                        .trim()
+                        .lines()
+                        .last()
+                        .unwrap_or("")
+                )),
+                Err(e) => tried.push(format!("`{py}`: {e}")),
+            }
+        }
+        Err(tried.join("; "))
+    });
+    match found {
+        Ok(py) => py.clone(),
+        Err(tried) => panic!(
+            "the metrics cross-check needs Python 3.11+ with numpy (install python3-numpy, or point \
+             DUALCAL_PYTHON at a Python that has it); tried {tried}"
+        ),
+    }
 }
 
 fn reference(dataset_dir: &Path, model_args: &[String], split: &str) -> AccuracyReport {
-    require_numpy();
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/metrics_reference.py");
     let out = Command::new(python())
         .arg(&script)
