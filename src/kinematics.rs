@@ -6,7 +6,7 @@
 //! Frame 0 is the arm's DH base frame, frame 7 the flange; the three reflectors `t_a, t_b, t_c` are
 //! constant points in frame 7.
 
-use nalgebra::{Isometry3, Matrix3, SMatrix, SVector, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, SMatrix, SVector, Translation3, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 use std::f64::consts::FRAC_PI_2;
 
@@ -66,18 +66,10 @@ impl DhRow {
     /// `Rz(q + theta) · Tz(d) · Tx(a) · Rx(alpha)`: frame i in frame i−1.
     pub fn transform(&self, q_rad: f64) -> Isometry3<f64> {
         let (st, ct) = (q_rad + self.theta_rad).sin_cos();
-        let (sa, ca) = self.alpha_rad.sin_cos();
-        #[rustfmt::skip]
-        let r = Matrix3::new(
-            ct, -st * ca,  st * sa,
-            st,  ct * ca, -ct * sa,
-            0.0,      sa,       ca,
-        );
+        let rotation = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), q_rad + self.theta_rad)
+            * UnitQuaternion::from_axis_angle(&Vector3::x_axis(), self.alpha_rad);
         let t = Vector3::new(self.a_mm * ct, self.a_mm * st, self.d_mm);
-        Isometry3::from_parts(
-            Translation3::from(t),
-            UnitQuaternion::from_matrix_eps(&r, 1e-15, 64, UnitQuaternion::identity()),
-        )
+        Isometry3::from_parts(Translation3::from(t), rotation)
     }
 }
 
@@ -181,7 +173,9 @@ impl ArmModel {
         self.dh
             .iter()
             .zip(q_rad)
-            .fold(Isometry3::identity(), |acc, (row, &q)| acc * row.transform(q))
+            .fold(Isometry3::identity(), |acc, (row, &q)| {
+                acc * row.transform(q)
+            })
     }
 
     /// Reflector positions (base frame, mm) and flange pose (paper eq. 3).
@@ -201,7 +195,10 @@ impl ArmModel {
     /// For standard DH the columns are, with `o_i`, `x_i`, `z_i` the origin and axes of frame i:
     /// `∂p/∂θ_i = z_{i−1} × (p − o_{i−1})`, `∂p/∂d_i = z_{i−1}`, `∂p/∂a_i = x_i`,
     /// `∂p/∂α_i = x_i × (p − o_i)`, and `∂p_k/∂t_k = R_7`.
-    pub fn reflector_jacobians(&self, q_rad: &[f64; N_JOINTS]) -> (ReflectorFk, [PointJacobian; 3]) {
+    pub fn reflector_jacobians(
+        &self,
+        q_rad: &[f64; N_JOINTS],
+    ) -> (ReflectorFk, [PointJacobian; 3]) {
         let frames = self.frames(q_rad);
         let flange = frames[N_JOINTS];
         let points_mm = self
@@ -299,7 +296,11 @@ pub fn rotation_angle_rad(r: &nalgebra::Rotation3<f64>) -> f64 {
     // Robust near 0 and π: atan2 of |sin| and cos.
     let m = r.matrix();
     let cos = ((m.trace() - 1.0) * 0.5).clamp(-1.0, 1.0);
-    let s = Vector3::new(m[(2, 1)] - m[(1, 2)], m[(0, 2)] - m[(2, 0)], m[(1, 0)] - m[(0, 1)]);
+    let s = Vector3::new(
+        m[(2, 1)] - m[(1, 2)],
+        m[(0, 2)] - m[(2, 0)],
+        m[(1, 0)] - m[(0, 1)],
+    );
     (0.5 * s.norm()).atan2(cos)
 }
 

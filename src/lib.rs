@@ -1,12 +1,18 @@
 //! dualcal: two-step minimax kinematic calibration of dual-arm robots from laser-tracker data.
 //!
-//! The engine modules (`kinematics`, `robot`, `dataset`, `params`, `simulate`, `metrics`, `solver`,
-//! `export`) never depend on egui or wgpu; the workbench lives in `app` behind the `gui` feature.
+//! The engine modules (`kinematics`, `robot`, `collision`, `dataset`, `params`, `simulate`, `metrics`,
+//! `solver`, `urdf_export`, `cli`) never depend on egui or wgpu; the workbench lives in `app` behind the
+//! `gui` feature.
 #![forbid(unsafe_code)]
 
 #[cfg(feature = "gui")]
 pub mod app;
+pub mod atomic;
+pub mod collision;
 pub mod dataset;
 pub mod kinematics;
+pub mod metrics;
 pub mod params;
+pub mod robot;
 pub mod solver;
+pub mod urdf_export;

@@ -8,10 +8,26 @@
 //! observers receive an event per iteration and the caller's cancel flag is polled between (and inside)
 //! iterations.
 
-use crate::dataset::{Dataset, SplitSelect};
-use crate::kinematics::{DualArmModel, Side};
+pub mod arm;
+pub mod base;
+pub mod identifiability;
+pub mod lm;
+pub mod problem;
+pub mod qp;
+pub mod sqp;
+
+use crate::dataset::{Dataset, MIN_CONFIGS, SplitSelect};
+use crate::kinematics::{DualArmModel, N_PARAMS, Side};
+use arm::ArmProblem;
+use base::BaseProblem;
+use identifiability::IdentifiabilityReport;
+use lm::LmState;
+use nalgebra::{DVector, Vector3};
+use problem::MinimaxProblem;
 use serde::{Deserialize, Serialize};
-use std::sync::atomic::AtomicBool;
+use sqp::{SqpSettings, SqpState};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
 
 /// How the QP subproblem of each SQP iteration is solved.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -112,15 +128,23 @@ pub enum Termination {
 /// Progress events delivered to an observer.
 #[derive(Clone, Debug, PartialEq)]
 pub enum CalibrationEvent {
-    StageStarted { stage: Stage, n_configs: usize },
+    StageStarted {
+        stage: Stage,
+        n_configs: usize,
+    },
     Iteration(IterationRecord),
-    StageFinished { stage: Stage, termination: Termination },
+    StageFinished {
+        stage: Stage,
+        termination: Termination,
+    },
 }
 
 /// Typed failures of a calibration.
 #[derive(Debug, thiserror::Error)]
 pub enum CalibrationError {
-    #[error("{side} arm: {found} configurations in the selected split, at least {needed} are needed (paper Table 2)")]
+    #[error(
+        "{side} arm: {found} configurations in the selected split, at least {needed} are needed (paper Table 2)"
+    )]
     TooFewConfigurations {
         side: Side,
         found: usize,
@@ -130,7 +154,9 @@ pub enum CalibrationError {
     RankDeficient { stage: Stage, detail: String },
     #[error("{stage}: non-finite value ({detail})")]
     NonFinite { stage: Stage, detail: String },
-    #[error("{stage}: not converged after {iterations} iterations (last step norm {step_norm:.3e}, ψ {psi_mm2:.6} mm²)")]
+    #[error(
+        "{stage}: not converged after {iterations} iterations (last step norm {step_norm:.3e}, ψ {psi_mm2:.6} mm²)"
+    )]
     NotConverged {
         stage: Stage,
         iterations: usize,
@@ -141,6 +167,20 @@ pub enum CalibrationError {
     Cancelled,
 }
 
+/// Summary of one stage.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct StageSummary {
+    pub stage: Stage,
+    pub n_configs: usize,
+    pub iterations: usize,
+    pub termination: Termination,
+    /// Final ψ and F_i (sums of squares over all pairs), mm².
+    pub psi_mm2: f64,
+    pub f_mm2: [f64; 3],
+    /// Initial ψ, mm².
+    pub psi_start_mm2: f64,
+}
+
 /// Result of a successful two-step calibration.
 #[derive(Clone, Debug)]
 pub struct CalibrationResult {
@@ -148,12 +188,395 @@ pub struct CalibrationResult {
     pub calibrated: DualArmModel,
     pub settings: CalibrationSettings,
     pub history: Vec<IterationRecord>,
-    pub terminations: Vec<(Stage, Termination)>,
+    pub stages: Vec<StageSummary>,
+    /// Which parameters of each arm were identified and which fixed, and why.
+    pub identifiability: Vec<(Side, IdentifiabilityReport)>,
+    /// Allowed deviation δ of the reflector triangle's sides (constraint 14, ε = δ²), mm, per arm.
+    pub side_tolerance_mm: Vec<(Side, f64)>,
     pub elapsed_secs: f64,
 }
 
+/// Either solver of a stage.
+enum Runner<P: MinimaxProblem> {
+    Sqp(SqpState<P>),
+    Lm(LmState<P>),
+}
+
+impl<P: MinimaxProblem> Runner<P> {
+    fn y(&self) -> &DVector<f64> {
+        match self {
+            Runner::Sqp(s) => &s.y,
+            Runner::Lm(s) => &s.y,
+        }
+    }
+
+    fn problem(&self) -> &P {
+        match self {
+            Runner::Sqp(s) => &s.problem,
+            Runner::Lm(s) => &s.problem,
+        }
+    }
+
+    /// One outer iteration: (f, step norm, KKT or gradient residual, termination).
+    fn step(&mut self) -> ([f64; 3], f64, f64, Option<Termination>) {
+        match self {
+            Runner::Sqp(s) => {
+                let r = s.step();
+                (r.f, r.step_norm, r.kkt_residual, r.termination)
+            }
+            Runner::Lm(s) => {
+                let r = s.step();
+                (r.f, r.step_norm, r.gradient_norm, r.termination)
+            }
+        }
+    }
+}
+
+enum StageState {
+    Arm {
+        side: Side,
+        runner: Box<Runner<ArmProblem>>,
+    },
+    Base {
+        runner: Box<Runner<BaseProblem>>,
+    },
+    Done,
+}
+
+/// Per-arm measurements of the selected split.
+struct ArmInput {
+    qs: Vec<[f64; 7]>,
+    measured: Vec<[Vector3<f64>; 3]>,
+    side_tolerance_mm: f64,
+}
+
+/// Outcome of [`Calibration::step`].
+#[derive(Debug)]
+pub enum Progress {
+    Running,
+    Finished(Box<CalibrationResult>),
+}
+
+/// A two-step calibration that advances one outer iteration per [`Calibration::step`] call, so it can
+/// run on a worker thread (see [`calibrate`]) or be stepped from a UI frame loop.
+pub struct Calibration {
+    settings: CalibrationSettings,
+    nominal: DualArmModel,
+    current: DualArmModel,
+    inputs: [ArmInput; 2],
+    state: StageState,
+    stage_iterations: usize,
+    stage_start_psi: f64,
+    history: Vec<IterationRecord>,
+    stages: Vec<StageSummary>,
+    identifiability: Vec<(Side, IdentifiabilityReport)>,
+    started: Instant,
+    pending_start: bool,
+}
+
+fn side_index(side: Side) -> usize {
+    match side {
+        Side::Left => 0,
+        Side::Right => 1,
+    }
+}
+
+impl Calibration {
+    pub fn new(
+        dataset: &Dataset,
+        nominal: &DualArmModel,
+        settings: &CalibrationSettings,
+    ) -> Result<Self, CalibrationError> {
+        let input = |side: Side| -> Result<ArmInput, CalibrationError> {
+            let ms = dataset.arm(side).select(settings.split);
+            if ms.len() < MIN_CONFIGS {
+                return Err(CalibrationError::TooFewConfigurations {
+                    side,
+                    found: ms.len(),
+                    needed: MIN_CONFIGS,
+                });
+            }
+            let qs: Vec<[f64; 7]> = ms.iter().map(|m| m.q_rad).collect();
+            let measured: Vec<[Vector3<f64>; 3]> = ms.iter().map(|m| m.tracker_points_mm).collect();
+            if qs
+                .iter()
+                .flatten()
+                .chain(measured.iter().flatten().flat_map(|v| v.iter()))
+                .any(|v| !v.is_finite())
+            {
+                return Err(CalibrationError::NonFinite {
+                    stage: Stage::Arm(side),
+                    detail: "measurement data".into(),
+                });
+            }
+            // ε of constraint (14): the tracker's MPE at the mean measuring distance, squared.
+            let mean_dist_m = measured.iter().flatten().map(|p| p.norm()).sum::<f64>()
+                / (3.0 * measured.len() as f64)
+                / 1000.0;
+            let side_tolerance_mm =
+                (dataset.tracker.mpe_um + dataset.tracker.mpe_um_per_m * mean_dist_m) / 1000.0;
+            Ok(ArmInput {
+                qs,
+                measured,
+                side_tolerance_mm,
+            })
+        };
+        let inputs = [input(Side::Left)?, input(Side::Right)?];
+        let mut cal = Self {
+            settings: settings.clone(),
+            nominal: nominal.clone(),
+            current: nominal.clone(),
+            inputs,
+            state: StageState::Done,
+            stage_iterations: 0,
+            stage_start_psi: 0.0,
+            history: Vec::new(),
+            stages: Vec::new(),
+            identifiability: Vec::new(),
+            started: Instant::now(),
+            pending_start: true,
+        };
+        cal.state = cal.start_arm(Side::Left)?;
+        Ok(cal)
+    }
+
+    fn sqp_settings(&self) -> SqpSettings {
+        SqpSettings {
+            qp: self.settings.qp,
+            step_tolerance: self.settings.step_tolerance,
+            max_qp_iterations: self.settings.max_qp_iterations,
+        }
+    }
+
+    fn start_arm(&mut self, side: Side) -> Result<StageState, CalibrationError> {
+        let stage = Stage::Arm(side);
+        let input = &self.inputs[side_index(side)];
+        let start = self.nominal.arm(side).clone();
+        let all: Vec<usize> = (0..N_PARAMS).collect();
+        let probe = ArmProblem::new(
+            input.qs.clone(),
+            &input.measured,
+            &start,
+            all,
+            DVector::from_element(N_PARAMS, 1.0),
+            input.side_tolerance_mm,
+        );
+        let rows = probe.sample_pair_jacobian(&DVector::zeros(N_PARAMS), 30_000);
+        let report = identifiability::analyse(&rows, &[true; N_PARAMS]);
+        if report.free.is_empty() {
+            return Err(CalibrationError::RankDeficient {
+                stage,
+                detail: "no parameter is identifiable from these configurations".into(),
+            });
+        }
+        let rms = arm::column_rms(&rows);
+        let scale = DVector::from_iterator(
+            report.free.len(),
+            report.free.iter().map(|&k| 1.0 / rms[k].max(1e-12)),
+        );
+        let problem = ArmProblem::new(
+            input.qs.clone(),
+            &input.measured,
+            &start,
+            report.free.clone(),
+            scale,
+            input.side_tolerance_mm,
+        );
+        self.identifiability.retain(|(s, _)| *s != side);
+        self.identifiability.push((side, report));
+        let runner = self.make_runner(problem, stage)?;
+        Ok(StageState::Arm {
+            side,
+            runner: Box::new(runner),
+        })
+    }
+
+    fn start_base(&mut self) -> Result<StageState, CalibrationError> {
+        let stage = Stage::Base;
+        let [l, r] = &self.inputs;
+        let left_mm =
+            l.qs.iter()
+                .map(|q| self.current.left.reflector_fk(q).points_mm)
+                .collect();
+        let right_mm =
+            r.qs.iter()
+                .map(|q| self.current.right.reflector_fk(q).points_mm)
+                .collect();
+        let problem = BaseProblem::new(
+            left_mm,
+            right_mm,
+            &l.measured,
+            &r.measured,
+            self.nominal.left_base_from_right_base,
+        );
+        let h = problem.gauss_newton(&DVector::zeros(6));
+        let sv = h.singular_values();
+        if sv.min() <= sv.max() * 1e-12 {
+            return Err(CalibrationError::RankDeficient {
+                stage,
+                detail: format!("collaborative Jacobian singular values {:?}", sv.as_slice()),
+            });
+        }
+        let runner = self.make_runner(problem, stage)?;
+        Ok(StageState::Base {
+            runner: Box::new(runner),
+        })
+    }
+
+    fn make_runner<P: MinimaxProblem>(
+        &mut self,
+        problem: P,
+        stage: Stage,
+    ) -> Result<Runner<P>, CalibrationError> {
+        self.stage_iterations = 0;
+        self.pending_start = true;
+        let runner = match self.settings.method {
+            Method::Minimax => {
+                Runner::Sqp(SqpState::new(problem, self.sqp_settings()).map_err(|_| {
+                    CalibrationError::NonFinite {
+                        stage,
+                        detail: "objective or gradient at the start point".into(),
+                    }
+                })?)
+            }
+            Method::LeastSquares => Runner::Lm(LmState::new(problem, self.settings.step_tolerance)),
+        };
+        let (f, _) = runner.problem().values(runner.y());
+        self.stage_start_psi = f.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+            * runner.problem().pair_count() as f64;
+        Ok(runner)
+    }
+
+    /// The stage that the next [`Calibration::step`] advances (`None` when finished).
+    pub fn stage(&self) -> Option<Stage> {
+        match &self.state {
+            StageState::Arm { side, .. } => Some(Stage::Arm(*side)),
+            StageState::Base { .. } => Some(Stage::Base),
+            StageState::Done => None,
+        }
+    }
+
+    /// The model as it stands (calibrated arms so far, current base estimate).
+    pub fn current_model(&self) -> DualArmModel {
+        let mut m = self.current.clone();
+        match &self.state {
+            StageState::Arm { side, runner } => {
+                *m.arm_mut(*side) = runner.problem().model_at(runner.y())
+            }
+            StageState::Base { runner } => {
+                m.left_base_from_right_base = runner.problem().transform_at(runner.y())
+            }
+            StageState::Done => {}
+        }
+        m
+    }
+
+    /// Advance one outer iteration, reporting to `observer`.
+    pub fn step(
+        &mut self,
+        observer: &mut dyn FnMut(&CalibrationEvent),
+    ) -> Result<Progress, CalibrationError> {
+        let Some(stage) = self.stage() else {
+            return Ok(Progress::Finished(Box::new(self.result())));
+        };
+        if self.pending_start {
+            self.pending_start = false;
+            let n_configs = match stage {
+                Stage::Arm(side) => self.inputs[side_index(side)].qs.len(),
+                Stage::Base => self.inputs[0].qs.len() * self.inputs[1].qs.len(),
+            };
+            observer(&CalibrationEvent::StageStarted { stage, n_configs });
+        }
+        let (f, step_norm, kkt, term, pairs) = match &mut self.state {
+            StageState::Arm { runner, .. } => {
+                let (f, s, k, t) = runner.step();
+                (f, s, k, t, runner.problem().pair_count())
+            }
+            StageState::Base { runner } => {
+                let (f, s, k, t) = runner.step();
+                (f, s, k, t, runner.problem().pair_count())
+            }
+            StageState::Done => unreachable!("handled above"),
+        };
+        self.stage_iterations += 1;
+        let f_mm2 = f.map(|v| v * pairs as f64);
+        let psi_mm2 = f_mm2.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        if !psi_mm2.is_finite() || !step_norm.is_finite() {
+            return Err(CalibrationError::NonFinite {
+                stage,
+                detail: format!("ψ = {psi_mm2}, step norm = {step_norm}"),
+            });
+        }
+        let record = IterationRecord {
+            stage,
+            iteration: self.stage_iterations,
+            psi_mm2,
+            f_mm2,
+            step_norm,
+            kkt_residual: kkt,
+            elapsed_secs: self.started.elapsed().as_secs_f64(),
+        };
+        observer(&CalibrationEvent::Iteration(record.clone()));
+        self.history.push(record);
+        let termination = term.or((self.stage_iterations >= self.settings.max_iterations)
+            .then_some(Termination::MaxIterations));
+        let Some(termination) = termination else {
+            return Ok(Progress::Running);
+        };
+        if termination == Termination::MaxIterations {
+            return Err(CalibrationError::NotConverged {
+                stage,
+                iterations: self.stage_iterations,
+                step_norm,
+                psi_mm2,
+            });
+        }
+        observer(&CalibrationEvent::StageFinished { stage, termination });
+        let n_configs = match stage {
+            Stage::Arm(side) => self.inputs[side_index(side)].qs.len(),
+            Stage::Base => self.inputs[0].qs.len().min(self.inputs[1].qs.len()),
+        };
+        self.stages.push(StageSummary {
+            stage,
+            n_configs,
+            iterations: self.stage_iterations,
+            termination,
+            psi_mm2,
+            f_mm2,
+            psi_start_mm2: self.stage_start_psi,
+        });
+        // Commit the stage's parameters and start the next stage.
+        self.current = self.current_model();
+        self.state = match stage {
+            Stage::Arm(Side::Left) => self.start_arm(Side::Right)?,
+            Stage::Arm(Side::Right) => self.start_base()?,
+            Stage::Base => StageState::Done,
+        };
+        Ok(match self.state {
+            StageState::Done => Progress::Finished(Box::new(self.result())),
+            _ => Progress::Running,
+        })
+    }
+
+    fn result(&self) -> CalibrationResult {
+        CalibrationResult {
+            nominal: self.nominal.clone(),
+            calibrated: self.current.clone(),
+            settings: self.settings.clone(),
+            history: self.history.clone(),
+            stages: self.stages.clone(),
+            identifiability: self.identifiability.clone(),
+            side_tolerance_mm: vec![
+                (Side::Left, self.inputs[0].side_tolerance_mm),
+                (Side::Right, self.inputs[1].side_tolerance_mm),
+            ],
+            elapsed_secs: self.started.elapsed().as_secs_f64(),
+        }
+    }
+}
+
 /// Run the two-step calibration (step 1 for each arm, then step 2), reporting to `observer` and
-/// polling `cancel`.
+/// polling `cancel` between outer iterations (each takes milliseconds on paper-size data).
 pub fn calibrate(
     dataset: &Dataset,
     nominal: &DualArmModel,
@@ -161,6 +584,13 @@ pub fn calibrate(
     observer: &mut dyn FnMut(&CalibrationEvent),
     cancel: &AtomicBool,
 ) -> Result<CalibrationResult, CalibrationError> {
-    let _ = (dataset, nominal, settings, observer, cancel);
-    Err(CalibrationError::Cancelled)
+    let mut cal = Calibration::new(dataset, nominal, settings)?;
+    loop {
+        if cancel.load(Ordering::Relaxed) {
+            return Err(CalibrationError::Cancelled);
+        }
+        if let Progress::Finished(result) = cal.step(observer)? {
+            return Ok(*result);
+        }
+    }
 }

@@ -1,0 +1,480 @@
+//! Collision checking of the two arms against each other, against the body, and against
+//! themselves, with the URDF's collision geometry (parry3d, f32).
+//!
+//! The engine stays in nalgebra f64 and mm; poses cross into parry's glam `Pose` at one seam
+//! ([`to_parry_pose`]: translation + scaled rotation axis). Shapes are in mm.
+//!
+//! Pairs that are never checked: links of the same rigid group (joined by fixed joints), adjacent
+//! links (joined by one movable joint — this includes link_1 and the body), and pairs of the same arm
+//! that touch in every one of a fixed set of sampled configurations (like MoveIt's "always in
+//! collision" pairs: on a compact arm such as the YuMi, link i and link i+2 share a short offset
+//! link and overlap by design). [`CollisionWorld::excluded_pairs`] lists them.
+
+use crate::kinematics::{N_JOINTS, Side};
+use crate::robot::{Kinematics, Owner, RobotDescription, ShapeKind};
+use nalgebra::{Isometry3, UnitQuaternion, Vector3};
+use parry3d::math::{Pose, Vector};
+use parry3d::query;
+use parry3d::shape::{Ball, Capsule, Cuboid, Cylinder, Shape};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+/// Number of sampled configurations used to find same-arm pairs that are always in contact.
+const ALWAYS_TOUCHING_SAMPLES: usize = 64;
+
+/// Why a link pair is not checked.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Exclusion {
+    /// Same rigid group or joined by one movable joint.
+    Adjacent,
+    /// Same arm, touching in every sampled configuration.
+    AlwaysTouching,
+}
+
+/// What a checked pair is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PairKind {
+    /// A link of the left arm and one of the right arm.
+    InterArm,
+    /// An arm link and a body link.
+    ArmBody,
+    /// Two non-adjacent links of the same arm.
+    SelfArm,
+}
+
+enum Prim {
+    Ball(Ball),
+    Cuboid(Cuboid),
+    Cylinder(Cylinder),
+    Capsule(Capsule),
+}
+
+impl Prim {
+    fn shape(&self) -> &dyn Shape {
+        match self {
+            Prim::Ball(s) => s,
+            Prim::Cuboid(s) => s,
+            Prim::Cylinder(s) => s,
+            Prim::Capsule(s) => s,
+        }
+    }
+}
+
+struct CollisionShape {
+    prim: Prim,
+    /// The parry shape's frame in the link frame (parry cylinders run along y: turned here).
+    link_from_shape: Isometry3<f64>,
+    /// Radius of a sphere about the shape's origin that contains it, mm.
+    bound_radius_mm: f64,
+}
+
+struct CollisionLink {
+    link: usize,
+    name: String,
+    shapes: Vec<CollisionShape>,
+}
+
+struct Pair {
+    a: usize,
+    b: usize,
+    kind: PairKind,
+}
+
+/// Collision geometry of a robot, compiled once.
+pub struct CollisionWorld {
+    kin: Kinematics,
+    links: Vec<CollisionLink>,
+    pairs: Vec<Pair>,
+    excluded: Vec<(String, String, Exclusion)>,
+    /// Collision geometry that could not be used (meshes are not loaded for collision checks).
+    pub warnings: Vec<String>,
+}
+
+/// The seam between nalgebra (f64) and parry (f32 glam): translation + scaled rotation axis.
+pub fn to_parry_pose(iso: &Isometry3<f64>) -> Pose {
+    let t = iso.translation.vector;
+    let r = iso.rotation.scaled_axis();
+    Pose::new(
+        Vector::new(t.x as f32, t.y as f32, t.z as f32),
+        Vector::new(r.x as f32, r.y as f32, r.z as f32),
+    )
+}
+
+fn compile_shape(kind: &ShapeKind, link_from_shape: &Isometry3<f64>) -> Option<CollisionShape> {
+    let (prim, extra, bound) = match kind {
+        ShapeKind::Box { half_extents_mm: h } => (
+            Prim::Cuboid(Cuboid::new(Vector::new(h.x as f32, h.y as f32, h.z as f32))),
+            Isometry3::identity(),
+            h.norm(),
+        ),
+        ShapeKind::Sphere { radius_mm } => (
+            Prim::Ball(Ball::new(*radius_mm as f32)),
+            Isometry3::identity(),
+            *radius_mm,
+        ),
+        ShapeKind::Cylinder {
+            radius_mm,
+            half_length_mm,
+        } => (
+            Prim::Cylinder(Cylinder::new(*half_length_mm as f32, *radius_mm as f32)),
+            // parry's cylinder axis is y; URDF's is z: Rx(π/2) takes y to z.
+            Isometry3::from_parts(
+                nalgebra::Translation3::identity(),
+                UnitQuaternion::from_axis_angle(&Vector3::x_axis(), std::f64::consts::FRAC_PI_2),
+            ),
+            radius_mm.hypot(*half_length_mm),
+        ),
+        ShapeKind::Capsule {
+            radius_mm,
+            half_length_mm,
+        } => (
+            Prim::Capsule(Capsule::new_z(*half_length_mm as f32, *radius_mm as f32)),
+            Isometry3::identity(),
+            radius_mm + half_length_mm,
+        ),
+        ShapeKind::Mesh { .. } => return None,
+    };
+    Some(CollisionShape {
+        prim,
+        link_from_shape: link_from_shape * extra,
+        bound_radius_mm: bound,
+    })
+}
+
+impl CollisionWorld {
+    /// Compile the collision geometry of `robot` and choose the pairs to check.
+    pub fn new(robot: &RobotDescription) -> Self {
+        let kin = robot.kin.clone();
+        let mut warnings = Vec::new();
+        let mut links: Vec<CollisionLink> = Vec::new();
+        for s in &kin.collision {
+            if !kin.reachable[s.link] {
+                continue;
+            }
+            let Some(shape) = compile_shape(&s.kind, &s.link_from_shape) else {
+                warnings.push(format!(
+                    "link `{}`: mesh collision geometry is not supported and is ignored",
+                    kin.link_names[s.link]
+                ));
+                continue;
+            };
+            match links.iter_mut().find(|l| l.link == s.link) {
+                Some(l) => l.shapes.push(shape),
+                None => links.push(CollisionLink {
+                    link: s.link,
+                    name: kin.link_names[s.link].clone(),
+                    shapes: vec![shape],
+                }),
+            }
+        }
+
+        let group = kin.rigid_groups();
+        let moving = kin.moving_joint_links();
+        let adjacent = |a: usize, b: usize| {
+            let (ga, gb) = (group[a], group[b]);
+            ga == gb
+                || moving.iter().any(|&(p, c)| {
+                    (group[p] == ga && group[c] == gb) || (group[p] == gb && group[c] == ga)
+                })
+        };
+
+        let mut pairs = Vec::new();
+        let mut excluded = Vec::new();
+        for a in 0..links.len() {
+            for b in a + 1..links.len() {
+                let (la, lb) = (links[a].link, links[b].link);
+                let kind = match (kin.owner[la], kin.owner[lb]) {
+                    (Owner::Body, Owner::Body) => continue,
+                    (Owner::Arm(x), Owner::Arm(y)) if x == y => PairKind::SelfArm,
+                    (Owner::Arm(_), Owner::Arm(_)) => PairKind::InterArm,
+                    _ => PairKind::ArmBody,
+                };
+                if adjacent(la, lb) {
+                    excluded.push((
+                        links[a].name.clone(),
+                        links[b].name.clone(),
+                        Exclusion::Adjacent,
+                    ));
+                    continue;
+                }
+                pairs.push(Pair { a, b, kind });
+            }
+        }
+
+        let mut world = Self {
+            kin,
+            links,
+            pairs,
+            excluded,
+            warnings,
+        };
+        world.exclude_always_touching(robot);
+        world
+    }
+
+    /// Drop same-arm pairs that intersect in the zero pose and in every sampled configuration.
+    fn exclude_always_touching(&mut self, robot: &RobotDescription) {
+        let limits = Side::BOTH.map(|s| {
+            robot.joint_limits_rad(s).map(|(lo, hi)| {
+                if lo.is_finite() && hi.is_finite() && lo < hi {
+                    (lo, hi)
+                } else {
+                    (-3.0, 3.0)
+                }
+            })
+        });
+        let mut rng = ChaCha8Rng::seed_from_u64(0x5eed_c011);
+        let mut always: Vec<bool> = self
+            .pairs
+            .iter()
+            .map(|p| p.kind == PairKind::SelfArm)
+            .collect();
+        for sample in 0..=ALWAYS_TOUCHING_SAMPLES {
+            let q: [[f64; N_JOINTS]; 2] = if sample == 0 {
+                [[0.0; N_JOINTS]; 2]
+            } else {
+                std::array::from_fn(|s| {
+                    std::array::from_fn(|k| rng.random_range(limits[s][k].0..limits[s][k].1))
+                })
+            };
+            let placed = self.place(&q[0], &q[1]);
+            for (i, p) in self.pairs.iter().enumerate() {
+                if always[i] && !self.pair_hits(&placed, p, 0.0) {
+                    always[i] = false;
+                }
+            }
+        }
+        let mut keep = Vec::new();
+        for (p, a) in std::mem::take(&mut self.pairs).into_iter().zip(always) {
+            if a {
+                self.excluded.push((
+                    self.links[p.a].name.clone(),
+                    self.links[p.b].name.clone(),
+                    Exclusion::AlwaysTouching,
+                ));
+            } else {
+                keep.push(p);
+            }
+        }
+        self.pairs = keep;
+    }
+
+    /// Poses of every collision shape (per link) in the body frame.
+    fn place(
+        &self,
+        q_left: &[f64; N_JOINTS],
+        q_right: &[f64; N_JOINTS],
+    ) -> Vec<Vec<(Pose, Vector3<f64>)>> {
+        let poses = self.kin.body_from_links(q_left, q_right);
+        self.links
+            .iter()
+            .map(|l| {
+                l.shapes
+                    .iter()
+                    .map(|s| {
+                        let iso = poses[l.link] * s.link_from_shape;
+                        (to_parry_pose(&iso), iso.translation.vector)
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+
+    fn pair_hits(&self, placed: &[Vec<(Pose, Vector3<f64>)>], p: &Pair, margin_mm: f64) -> bool {
+        let (la, lb) = (&self.links[p.a], &self.links[p.b]);
+        for (sa, (pose_a, ca)) in la.shapes.iter().zip(&placed[p.a]) {
+            for (sb, (pose_b, cb)) in lb.shapes.iter().zip(&placed[p.b]) {
+                if (ca - cb).norm() > sa.bound_radius_mm + sb.bound_radius_mm + margin_mm {
+                    continue;
+                }
+                let hit = if margin_mm > 0.0 {
+                    query::distance(pose_a, sa.prim.shape(), pose_b, sb.prim.shape())
+                        .is_ok_and(|d| f64::from(d.distance) < margin_mm)
+                } else {
+                    query::intersection_test(pose_a, sa.prim.shape(), pose_b, sb.prim.shape())
+                        .is_ok_and(|r| r.intersecting)
+                };
+                if hit {
+                    return true;
+                }
+            }
+        }
+        false
+    }
+
+    /// True if any link of one arm intersects (or is closer than `margin_mm` to) the other arm's
+    /// links or the body, or two non-adjacent links of the same arm intersect. Joint values in
+    /// chain order, rad.
+    pub fn in_collision(
+        &self,
+        q_left: &[f64; N_JOINTS],
+        q_right: &[f64; N_JOINTS],
+        margin_mm: f64,
+    ) -> bool {
+        let placed = self.place(q_left, q_right);
+        self.pairs
+            .iter()
+            .any(|p| self.pair_hits(&placed, p, self.pair_margin(p, margin_mm)))
+    }
+
+    /// Every colliding pair (link names and what kind of pair), for diagnostics and drawing.
+    pub fn colliding_pairs(
+        &self,
+        q_left: &[f64; N_JOINTS],
+        q_right: &[f64; N_JOINTS],
+        margin_mm: f64,
+    ) -> Vec<(String, String, PairKind)> {
+        let placed = self.place(q_left, q_right);
+        self.pairs
+            .iter()
+            .filter(|p| self.pair_hits(&placed, p, self.pair_margin(p, margin_mm)))
+            .map(|p| {
+                (
+                    self.links[p.a].name.clone(),
+                    self.links[p.b].name.clone(),
+                    p.kind,
+                )
+            })
+            .collect()
+    }
+
+    fn pair_margin(&self, p: &Pair, margin_mm: f64) -> f64 {
+        match p.kind {
+            PairKind::SelfArm => 0.0,
+            PairKind::InterArm | PairKind::ArmBody => margin_mm.max(0.0),
+        }
+    }
+
+    /// Link pairs that are never checked, and why.
+    pub fn excluded_pairs(&self) -> &[(String, String, Exclusion)] {
+        &self.excluded
+    }
+
+    /// Number of link pairs checked per query.
+    pub fn checked_pair_count(&self) -> usize {
+        self.pairs.len()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::robot::home_q_rad;
+
+    fn home() -> ([f64; N_JOINTS], [f64; N_JOINTS]) {
+        (home_q_rad(Side::Left), home_q_rad(Side::Right))
+    }
+
+    #[test]
+    fn seam_keeps_poses() {
+        let iso = Isometry3::from_parts(
+            nalgebra::Translation3::new(10.0, -20.0, 30.0),
+            UnitQuaternion::from_euler_angles(0.3, -1.2, 2.9),
+        );
+        let p = to_parry_pose(&iso);
+        let x = Vector3::new(1.0, 2.0, 3.0);
+        let a = iso * nalgebra::Point3::from(x);
+        let b = p * Vector::new(1.0, 2.0, 3.0);
+        assert!(
+            (a.x - f64::from(b.x)).abs() < 1e-4
+                && (a.y - f64::from(b.y)).abs() < 1e-4
+                && (a.z - f64::from(b.z)).abs() < 1e-4
+        );
+    }
+
+    #[test]
+    fn home_pose_is_free() {
+        let robot = RobotDescription::builtin_irb14000();
+        let world = CollisionWorld::new(&robot);
+        let (l, r) = home();
+        assert!(
+            world.colliding_pairs(&l, &r, 0.0).is_empty(),
+            "{:?}",
+            world.colliding_pairs(&l, &r, 0.0)
+        );
+        assert!(!world.in_collision(&l, &r, 5.0));
+        // The check can fail: a large margin reaches the body from the tucked-in home pose.
+        assert!(world.in_collision(&l, &r, 100.0));
+    }
+
+    #[test]
+    fn arms_driven_into_each_other_collide() {
+        let robot = RobotDescription::builtin_irb14000();
+        let world = CollisionWorld::new(&robot);
+        let (home_l, home_r) = home();
+        // At q = 0 both arms reach forward and their wrists meet in front of the body.
+        let zero = [0.0; N_JOINTS];
+        // Each arm alone at zero (the other at home) is free ...
+        assert!(
+            !world.in_collision(&zero, &home_r, 0.0),
+            "{:?}",
+            world.colliding_pairs(&zero, &home_r, 0.0)
+        );
+        assert!(
+            !world.in_collision(&home_l, &zero, 0.0),
+            "{:?}",
+            world.colliding_pairs(&home_l, &zero, 0.0)
+        );
+        // ... both at zero collide, arm against arm.
+        let pairs = world.colliding_pairs(&zero, &zero, 0.0);
+        assert!(world.in_collision(&zero, &zero, 0.0));
+        assert!(
+            !pairs.is_empty() && pairs.iter().all(|p| p.2 == PairKind::InterArm),
+            "{pairs:?}"
+        );
+        assert!(
+            pairs
+                .iter()
+                .any(|(a, b, _)| a == "yumi_link_7_l" && b == "yumi_link_7_r"),
+            "{pairs:?}"
+        );
+    }
+
+    #[test]
+    fn arm_folded_into_the_body_collides() {
+        let robot = RobotDescription::builtin_irb14000();
+        let world = CollisionWorld::new(&robot);
+        let (mut l, r) = home();
+        // Swing the left shoulder (axis 1) by 60 degrees towards the body: the upper arm and the
+        // elbow go into the torso.
+        l[0] += 60f64.to_radians();
+        let pairs = world.colliding_pairs(&l, &r, 0.0);
+        assert!(world.in_collision(&l, &r, 0.0));
+        assert!(
+            !pairs.is_empty()
+                && pairs
+                    .iter()
+                    .all(|(a, _, k)| *k == PairKind::ArmBody && a == "yumi_body"),
+            "{pairs:?}"
+        );
+        // The mirror image for the right arm.
+        let (l, mut r) = home();
+        r[0] -= 60f64.to_radians();
+        let pairs = world.colliding_pairs(&l, &r, 0.0);
+        assert!(
+            !pairs.is_empty()
+                && pairs
+                    .iter()
+                    .all(|(_, b, k)| *k == PairKind::ArmBody && b.ends_with("_r")),
+            "{pairs:?}"
+        );
+    }
+
+    #[test]
+    fn adjacent_pairs_are_excluded_and_none_always_touch() {
+        let robot = RobotDescription::builtin_irb14000();
+        let world = CollisionWorld::new(&robot);
+        let ex = world.excluded_pairs();
+        assert!(ex.iter().any(|(a, b, e)| a == "yumi_body"
+            && b == "yumi_link_1_l"
+            && *e == Exclusion::Adjacent));
+        assert!(ex.iter().any(|(a, b, e)| a == "yumi_link_3_r"
+            && b == "yumi_link_4_r"
+            && *e == Exclusion::Adjacent));
+        // Our geometry keeps links i and i+2 apart: nothing is excluded as always touching.
+        assert!(ex.iter().all(|e| e.2 == Exclusion::Adjacent), "{ex:?}");
+        // 2 arms x (15 same-arm non-adjacent pairs + 6 against the body) + 49 inter-arm pairs
+        assert_eq!(world.checked_pair_count(), 2 * (15 + 6) + 49);
+        assert!(world.warnings.is_empty());
+    }
+}

@@ -1,0 +1,450 @@
+//! Step 1 (paper §2.6): the geometric parameters and reflector coordinates of one arm from the
+//! distances between the same reflector in every pair of configurations.
+//!
+//! Δd_ij,k = |m_i,k − m_j,k| − |p_i,k(x) − p_j,k(x)| (measured minus model), F_k = Σ_{i<j} Δd²,
+//! ∇F_k = −2 Σ_{i<j} Δd u_ijᵀ (J_i,k − J_j,k) with u_ij the unit model direction (eq. 34, exact distances).
+//! The pair sum is regrouped per configuration, ∇F_k = −2 Σ_i J_i,kᵀ w_i,k with
+//! w_i,k = Σ_{j≠i} Δd_ij,k u_ij,k, so the Jacobians are computed once per configuration and iterate and
+//! no pair Jacobian is ever formed.
+
+use super::problem::{Eval, LeastSquaresSystem, MinimaxProblem};
+use crate::kinematics::{ArmModel, N_JOINTS, N_PARAMS, ParamVector, PointJacobian, ReflectorFk};
+use nalgebra::{DMatrix, DVector, SVector, Vector3};
+use rayon::prelude::*;
+
+/// Side pairs of the reflector triangle, in the order of constraints (14): ab, bc, ca.
+pub const SIDES: [(usize, usize); 3] = [(0, 1), (1, 2), (2, 0)];
+
+/// At most this many pairs are used for the Gauss–Newton start matrix, the column scaling and the
+/// identifiability analysis (a deterministic, evenly strided subset for large datasets).
+const MAX_SAMPLE_PAIRS: usize = 30_000;
+
+/// Step-1 problem of one arm.
+pub struct ArmProblem {
+    qs: Vec<[f64; N_JOINTS]>,
+    /// Measured distances per reflector, pairs i<j in row-major order.
+    measured_dist_mm: [Vec<f64>; 3],
+    n_pairs: usize,
+    x0: ParamVector,
+    free: Vec<usize>,
+    /// x = x0 + scatter(scale ∘ y).
+    scale: DVector<f64>,
+    /// Mean measured reflector-to-reflector distances (ab, bc, ca), mm.
+    mean_side_mm: [f64; 3],
+    /// Allowed deviation δ of the model triangle's sides from the measured means, mm (ε = δ²).
+    side_tolerance_mm: f64,
+}
+
+impl ArmProblem {
+    /// `measured` are tracker-frame reflector positions, one triple per configuration.
+    pub fn new(
+        qs: Vec<[f64; N_JOINTS]>,
+        measured: &[[Vector3<f64>; 3]],
+        start: &ArmModel,
+        free: Vec<usize>,
+        scale: DVector<f64>,
+        side_tolerance_mm: f64,
+    ) -> Self {
+        assert_eq!(qs.len(), measured.len());
+        assert_eq!(free.len(), scale.len());
+        let n = qs.len();
+        let n_pairs = n * n.saturating_sub(1) / 2;
+        let measured_dist_mm = std::array::from_fn(|k| {
+            let mut d = Vec::with_capacity(n_pairs);
+            for i in 0..n {
+                for j in i + 1..n {
+                    d.push((measured[i][k] - measured[j][k]).norm());
+                }
+            }
+            d
+        });
+        let mean_side_mm = SIDES.map(|(a, b)| {
+            measured.iter().map(|m| (m[a] - m[b]).norm()).sum::<f64>() / n.max(1) as f64
+        });
+        Self {
+            qs,
+            measured_dist_mm,
+            n_pairs,
+            x0: start.to_vector(),
+            free,
+            scale,
+            mean_side_mm,
+            side_tolerance_mm,
+        }
+    }
+
+    pub fn free(&self) -> &[usize] {
+        &self.free
+    }
+
+    pub fn mean_side_mm(&self) -> [f64; 3] {
+        self.mean_side_mm
+    }
+
+    /// Full parameter vector at scaled point y.
+    pub fn x_of(&self, y: &DVector<f64>) -> ParamVector {
+        let mut x = self.x0;
+        for (c, &k) in self.free.iter().enumerate() {
+            x[k] += self.scale[c] * y[c];
+        }
+        x
+    }
+
+    pub fn model_at(&self, y: &DVector<f64>) -> ArmModel {
+        ArmModel::from_vector(&self.x_of(y))
+    }
+
+    fn fk_all(&self, model: &ArmModel) -> Vec<ReflectorFk> {
+        self.qs.par_iter().map(|q| model.reflector_fk(q)).collect()
+    }
+
+    fn jac_all(&self, model: &ArmModel) -> Vec<(ReflectorFk, [PointJacobian; 3])> {
+        self.qs
+            .par_iter()
+            .map(|q| model.reflector_jacobians(q))
+            .collect()
+    }
+
+    /// F_k (sum of squares, mm²) and, optionally, the per-configuration weights w_i,k.
+    fn pair_sums(
+        &self,
+        points: &[[Vector3<f64>; 3]],
+        k: usize,
+        weights: Option<&mut [Vector3<f64>]>,
+    ) -> f64 {
+        let n = points.len();
+        let dm = &self.measured_dist_mm[k];
+        let mut sum = 0.0;
+        let mut idx = 0;
+        match weights {
+            Some(w) => {
+                for i in 0..n {
+                    let pi = points[i][k];
+                    let mut wi = Vector3::zeros();
+                    for j in i + 1..n {
+                        let v = pi - points[j][k];
+                        let dist = v.norm();
+                        let delta = dm[idx] - dist;
+                        idx += 1;
+                        sum += delta * delta;
+                        if dist > 0.0 {
+                            let t = v * (delta / dist);
+                            wi += t;
+                            w[j] -= t;
+                        }
+                    }
+                    w[i] += wi;
+                }
+            }
+            None => {
+                for i in 0..n {
+                    let pi = points[i][k];
+                    for j in i + 1..n {
+                        let delta = dm[idx] - (pi - points[j][k]).norm();
+                        idx += 1;
+                        sum += delta * delta;
+                    }
+                }
+            }
+        }
+        sum
+    }
+
+    fn constraints(&self, x: &ParamVector, with_grad: bool) -> (Vec<f64>, Vec<DVector<f64>>) {
+        let t = |r: usize| x.fixed_rows::<3>(N_PARAMS - 9 + 3 * r).into_owned();
+        let eps = self.side_tolerance_mm * self.side_tolerance_mm;
+        let mut cons = Vec::with_capacity(3);
+        let mut grads = Vec::new();
+        for (l, &(a, b)) in SIDES.iter().enumerate() {
+            let v = t(a) - t(b);
+            let len = v.norm();
+            let dev = len - self.mean_side_mm[l];
+            // c_l = (t_l² − ε)/ε ≤ 0: eq. (15), normalised so that its scale is one.
+            cons.push((dev * dev - eps) / eps);
+            if with_grad {
+                let mut gx = ParamVector::zeros();
+                if len > 0.0 {
+                    let dl = v / len * (2.0 * dev / eps);
+                    for c in 0..3 {
+                        gx[N_PARAMS - 9 + 3 * a + c] += dl[c];
+                        gx[N_PARAMS - 9 + 3 * b + c] -= dl[c];
+                    }
+                }
+                grads.push(self.restrict(&gx));
+            }
+        }
+        (cons, grads)
+    }
+
+    /// Gradient with respect to x → gradient with respect to y.
+    fn restrict(&self, gx: &ParamVector) -> DVector<f64> {
+        DVector::from_iterator(
+            self.free.len(),
+            self.free
+                .iter()
+                .enumerate()
+                .map(|(c, &k)| gx[k] * self.scale[c]),
+        )
+    }
+
+    /// Rows −u_ijᵀ(J_i,k − J_j,k) of the pair Jacobian (full 37 columns, unscaled) for an evenly
+    /// strided subset of at most `max_pairs` pairs per reflector.
+    pub fn sample_pair_jacobian(
+        &self,
+        y: &DVector<f64>,
+        max_pairs: usize,
+    ) -> Vec<SVector<f64, N_PARAMS>> {
+        let model = self.model_at(y);
+        let jac = self.jac_all(&model);
+        let stride = self.n_pairs.div_ceil(max_pairs.max(1)).max(1);
+        let n = self.qs.len();
+        let mut rows = Vec::new();
+        let mut idx = 0usize;
+        for i in 0..n {
+            for j in i + 1..n {
+                if idx % stride == 0 {
+                    for k in 0..3 {
+                        let v = jac[i].0.points_mm[k] - jac[j].0.points_mm[k];
+                        let dist = v.norm();
+                        if dist > 0.0 {
+                            let u = v / dist;
+                            let d = jac[i].1[k] - jac[j].1[k];
+                            rows.push(-(d.transpose() * u));
+                        }
+                    }
+                }
+                idx += 1;
+            }
+        }
+        rows
+    }
+
+    /// Residuals Δd of every pair and reflector at y (for reports and robust statistics).
+    pub fn residuals(&self, y: &DVector<f64>) -> [Vec<f64>; 3] {
+        let model = self.model_at(y);
+        let fk = self.fk_all(&model);
+        let n = fk.len();
+        std::array::from_fn(|k| {
+            let mut out = Vec::with_capacity(self.n_pairs);
+            let mut idx = 0;
+            for i in 0..n {
+                for j in i + 1..n {
+                    out.push(
+                        self.measured_dist_mm[k][idx]
+                            - (fk[i].points_mm[k] - fk[j].points_mm[k]).norm(),
+                    );
+                    idx += 1;
+                }
+            }
+            out
+        })
+    }
+}
+
+/// RMS of each column of the sampled pair Jacobian (the sensitivity of an RMS distance error to a
+/// unit change of each parameter).
+pub fn column_rms(rows: &[SVector<f64, N_PARAMS>]) -> SVector<f64, N_PARAMS> {
+    let mut s = SVector::<f64, N_PARAMS>::zeros();
+    for r in rows {
+        s += r.component_mul(r);
+    }
+    s.map(|v| (v / rows.len().max(1) as f64).sqrt())
+}
+
+impl MinimaxProblem for ArmProblem {
+    fn dim(&self) -> usize {
+        self.free.len()
+    }
+
+    fn pair_count(&self) -> usize {
+        self.n_pairs
+    }
+
+    fn evaluate(&self, y: &DVector<f64>) -> Eval {
+        let x = self.x_of(y);
+        let model = ArmModel::from_vector(&x);
+        let jac = self.jac_all(&model);
+        let points: Vec<[Vector3<f64>; 3]> = jac.iter().map(|(fk, _)| fk.points_mm).collect();
+        let norm = 1.0 / self.n_pairs.max(1) as f64;
+        let per_reflector: Vec<(f64, DVector<f64>)> = (0..3)
+            .into_par_iter()
+            .map(|k| {
+                let mut w = vec![Vector3::zeros(); points.len()];
+                let sum = self.pair_sums(&points, k, Some(&mut w));
+                let mut gx = ParamVector::zeros();
+                for (wi, (_, jk)) in w.iter().zip(&jac) {
+                    gx -= jk[k].transpose() * wi * 2.0;
+                }
+                (sum * norm, self.restrict(&(gx * norm)))
+            })
+            .collect();
+        let (cons, cons_grad) = self.constraints(&x, true);
+        let mut it = per_reflector.into_iter();
+        let (f0, g0) = it.next().unwrap_or_default();
+        let (f1, g1) = it.next().unwrap_or_default();
+        let (f2, g2) = it.next().unwrap_or_default();
+        Eval {
+            f: [f0, f1, f2],
+            grad: [g0, g1, g2],
+            cons,
+            cons_grad,
+        }
+    }
+
+    fn values(&self, y: &DVector<f64>) -> ([f64; 3], Vec<f64>) {
+        let x = self.x_of(y);
+        let model = ArmModel::from_vector(&x);
+        let points: Vec<[Vector3<f64>; 3]> = self
+            .fk_all(&model)
+            .into_iter()
+            .map(|f| f.points_mm)
+            .collect();
+        let norm = 1.0 / self.n_pairs.max(1) as f64;
+        let f: Vec<f64> = (0..3)
+            .into_par_iter()
+            .map(|k| self.pair_sums(&points, k, None) * norm)
+            .collect();
+        let (cons, _) = self.constraints(&x, false);
+        ([f[0], f[1], f[2]], cons)
+    }
+
+    fn gauss_newton(&self, y: &DVector<f64>) -> DMatrix<f64> {
+        let rows = self.sample_pair_jacobian(y, MAX_SAMPLE_PAIRS);
+        let m = self.free.len();
+        let mut h = DMatrix::zeros(m, m);
+        let mut r = DVector::zeros(m);
+        for row in &rows {
+            for (c, &k) in self.free.iter().enumerate() {
+                r[c] = row[k] * self.scale[c];
+            }
+            h.ger(1.0, &r, &r, 1.0);
+        }
+        // Mean over the three reflectors of 2/N Σ rrᵀ (rows hold all three reflectors).
+        h * (2.0 / (rows.len().max(1) as f64))
+    }
+
+    fn least_squares(&self, y: &DVector<f64>) -> LeastSquaresSystem {
+        let model = self.model_at(y);
+        let jac = self.jac_all(&model);
+        let m = self.free.len();
+        let n = jac.len();
+        // Accumulate per first index i in parallel, then reduce.
+        let (cost, jtj, jtr) = (0..n)
+            .into_par_iter()
+            .map(|i| {
+                let mut jtj = DMatrix::<f64>::zeros(m, m);
+                let mut jtr = DVector::<f64>::zeros(m);
+                let mut cost = 0.0;
+                let mut row = DVector::<f64>::zeros(m);
+                let base = i * n - i * (i + 1) / 2; // index of pair (i, i+1)
+                for j in i + 1..n {
+                    let idx = base + (j - i - 1);
+                    for k in 0..3 {
+                        let v = jac[i].0.points_mm[k] - jac[j].0.points_mm[k];
+                        let dist = v.norm();
+                        if dist <= 0.0 {
+                            continue;
+                        }
+                        let r = self.measured_dist_mm[k][idx] - dist;
+                        let u = v / dist;
+                        let d = (jac[i].1[k] - jac[j].1[k]).transpose() * u;
+                        for (c, &p) in self.free.iter().enumerate() {
+                            row[c] = -d[p] * self.scale[c];
+                        }
+                        jtj.ger(1.0, &row, &row, 1.0);
+                        jtr.axpy(r, &row, 1.0);
+                        cost += r * r;
+                    }
+                }
+                (cost, jtj, jtr)
+            })
+            .reduce(
+                || (0.0, DMatrix::zeros(m, m), DVector::zeros(m)),
+                |a, b| (a.0 + b.0, a.1 + b.1, a.2 + b.2),
+            );
+        LeastSquaresSystem { cost, jtj, jtr }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::kinematics::joint_limits_rad;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    fn setup(n: usize) -> ArmProblem {
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let nominal = ArmModel::nominal_irb14000([
+            Vector3::new(45.0, 0.0, 40.0),
+            Vector3::new(-25.0, 40.0, 40.0),
+            Vector3::new(-25.0, -40.0, 40.0),
+        ]);
+        let mut xt = nominal.to_vector();
+        for k in 0..N_PARAMS {
+            xt[k] += rng.random_range(-0.5..0.5)
+                * if crate::kinematics::param_is_angle(k) {
+                    0.01
+                } else {
+                    1.0
+                };
+        }
+        let truth = ArmModel::from_vector(&xt);
+        let lim = joint_limits_rad();
+        let qs: Vec<[f64; 7]> = (0..n)
+            .map(|_| std::array::from_fn(|i| rng.random_range(lim[i].0..lim[i].1)))
+            .collect();
+        let measured: Vec<_> = qs.iter().map(|q| truth.reflector_fk(q).points_mm).collect();
+        let free: Vec<usize> = (0..N_PARAMS).collect();
+        let scale = DVector::from_element(N_PARAMS, 0.7);
+        ArmProblem::new(qs, &measured, &nominal, free, scale, 0.02)
+    }
+
+    #[test]
+    fn gradient_matches_finite_differences() {
+        let p = setup(9);
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let y = DVector::from_fn(p.dim(), |_, _| rng.random_range(-0.3..0.3));
+        let e = p.evaluate(&y);
+        let h = 1e-5;
+        let f_scale = e.psi();
+        for c in 0..p.dim() {
+            let mut yp = y.clone();
+            yp[c] += h;
+            let mut ym = y.clone();
+            ym[c] -= h;
+            let (fp, cp) = p.values(&yp);
+            let (fm, cm) = p.values(&ym);
+            for k in 0..3 {
+                let fd = (fp[k] - fm[k]) / (2.0 * h);
+                let an = e.grad[k][c];
+                // Central differences: O(h²) truncation plus round-off of order f·1e-16/h.
+                let tol = 1e-6 * an.abs().max(fd.abs()) + 1e-9 * f_scale;
+                assert!((fd - an).abs() <= tol, "f{k} col {c}: {an} vs {fd}");
+            }
+            for l in 0..3 {
+                let fd = (cp[l] - cm[l]) / (2.0 * h);
+                let an = e.cons_grad[l][c];
+                assert!(
+                    (fd - an).abs() <= 1e-5 * (1.0 + an.abs().max(fd.abs())),
+                    "c{l} col {c}: {an} vs {fd}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn least_squares_system_matches_pairwise_definition() {
+        let p = setup(7);
+        let y = DVector::from_element(p.dim(), 0.1);
+        let ls = p.least_squares(&y);
+        let (f, _) = p.values(&y);
+        let total: f64 = f.iter().sum::<f64>() * p.pair_count() as f64;
+        assert!((ls.cost - total).abs() < 1e-9 * total.max(1.0));
+        // Jᵀr is ½ ∇(Σ F_k) in y (rows are ∂r/∂y): compare with the minimax gradients.
+        let e = p.evaluate(&y);
+        let g = (&e.grad[0] + &e.grad[1] + &e.grad[2]) * p.pair_count() as f64;
+        let diff = (&ls.jtr * 2.0 - g).amax();
+        assert!(diff < 1e-6 * (1.0 + ls.jtr.amax()), "{diff}");
+    }
+}

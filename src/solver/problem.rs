@@ -1,0 +1,63 @@
+//! The interface between the minimax problems of the two steps and the SQP machinery.
+
+use nalgebra::{DMatrix, DVector};
+
+/// Values and first derivatives of a minimax problem at one (scaled) point.
+///
+/// `f[i]` are the normalised objectives (the paper's `F_i` divided by the number of pairs, i.e. the
+/// mean squared distance error of reflector i, mm²); `cons` are the inequality constraints
+/// `c_l(y) ≤ 0` (normalised to order one).
+#[derive(Clone, Debug)]
+pub struct Eval {
+    pub f: [f64; 3],
+    pub grad: [DVector<f64>; 3],
+    pub cons: Vec<f64>,
+    pub cons_grad: Vec<DVector<f64>>,
+}
+
+impl Eval {
+    /// ψ = max_i f_i.
+    pub fn psi(&self) -> f64 {
+        self.f.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+    }
+
+    /// Σ_l max(0, c_l).
+    pub fn violation(&self) -> f64 {
+        self.cons.iter().map(|c| c.max(0.0)).sum()
+    }
+
+    pub fn is_finite(&self) -> bool {
+        self.f.iter().all(|v| v.is_finite())
+            && self.grad.iter().all(|g| g.iter().all(|v| v.is_finite()))
+            && self.cons.iter().all(|v| v.is_finite())
+            && self
+                .cons_grad
+                .iter()
+                .all(|g| g.iter().all(|v| v.is_finite()))
+    }
+}
+
+/// Normal equations of the least-squares fit of all distance errors (for the LM baseline).
+#[derive(Clone, Debug)]
+pub struct LeastSquaresSystem {
+    /// Σ r², mm².
+    pub cost: f64,
+    pub jtj: DMatrix<f64>,
+    pub jtr: DVector<f64>,
+}
+
+/// A minimax identification problem in scaled variables `y` (y = 0 is the start point).
+pub trait MinimaxProblem: Sync {
+    /// Number of free (scaled) variables.
+    fn dim(&self) -> usize;
+    /// Number of configuration pairs per reflector (F_i = f_i · pairs).
+    fn pair_count(&self) -> usize;
+    /// Values and gradients.
+    fn evaluate(&self, y: &DVector<f64>) -> Eval;
+    /// Values only (line search).
+    fn values(&self, y: &DVector<f64>) -> ([f64; 3], Vec<f64>);
+    /// Gauss–Newton approximation of the Hessian of the mean of the three f_i (initial BFGS matrix).
+    fn gauss_newton(&self, y: &DVector<f64>) -> DMatrix<f64>;
+    /// Normal equations of Σ_i F_i (least-squares baseline); `cost` is Σ r².
+    fn least_squares(&self, y: &DVector<f64>) -> LeastSquaresSystem;
+}

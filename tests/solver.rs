@@ -1,0 +1,385 @@
+//! The two-step minimax calibration on synthetic data built here from the kinematics alone.
+
+use dualcal::dataset::{ArmData, Dataset, Measurement, Split, SplitSelect, TrackerSpec};
+use dualcal::kinematics::{
+    ArmModel, DualArmModel, N_PARAMS, Side, joint_limits_rad, param_is_angle,
+};
+use dualcal::solver::{
+    CalibrationError, CalibrationEvent, CalibrationSettings, Method, QpMethod, Stage, Termination,
+    calibrate,
+};
+use nalgebra::{Isometry3, Vector3};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, Normal};
+use std::sync::atomic::{AtomicBool, Ordering};
+
+fn reflectors() -> [Vector3<f64>; 3] {
+    [
+        Vector3::new(45.0, 0.0, 40.0),
+        Vector3::new(-25.0, 40.0, 40.0),
+        Vector3::new(-25.0, -40.0, 40.0),
+    ]
+}
+
+fn nominal() -> DualArmModel {
+    DualArmModel {
+        left: ArmModel::nominal_irb14000(reflectors()),
+        right: ArmModel::nominal_irb14000(reflectors()),
+        left_base_from_right_base: Isometry3::new(
+            Vector3::new(61.61, -70.77, -34.14),
+            Vector3::new(1.2, 0.0, 1.3),
+        ),
+    }
+}
+
+fn perturb(rng: &mut ChaCha8Rng, arm: &ArmModel, mm: f64, rad: f64) -> ArmModel {
+    let mut v = arm.to_vector();
+    for k in 0..N_PARAMS {
+        v[k] += rng.random_range(-1.0..1.0) * if param_is_angle(k) { rad } else { mm };
+    }
+    ArmModel::from_vector(&v)
+}
+
+struct Synthetic {
+    dataset: Dataset,
+    truth: DualArmModel,
+}
+
+/// `n` configurations per arm (first `n_cal` are `cal`), tracker noise `noise_mm` per axis.
+fn synthetic(seed: u64, n: usize, n_cal: usize, noise_mm: f64) -> Synthetic {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let nom = nominal();
+    let truth = DualArmModel {
+        left: perturb(&mut rng, &nom.left, 1.0, 0.005),
+        right: perturb(&mut rng, &nom.right, 1.0, 0.005),
+        left_base_from_right_base: Isometry3::new(
+            Vector3::new(2.0, -1.5, 1.0),
+            Vector3::new(0.01, -0.02, 0.015),
+        ) * nom.left_base_from_right_base,
+    };
+    let tracker_from_left_base = Isometry3::new(
+        Vector3::new(2000.0, 300.0, -200.0),
+        Vector3::new(0.2, 0.4, 2.5),
+    );
+    let lim = joint_limits_rad();
+    let noise = Normal::new(0.0, noise_mm.max(1e-300)).unwrap();
+    let mut arm = |side: Side| {
+        let measurements = (0..n)
+            .map(|i| {
+                let q: [f64; 7] =
+                    std::array::from_fn(|j| rng.random_range(lim[j].0 * 0.9..lim[j].1 * 0.9));
+                let pts = truth.arm(side).reflector_fk(&q).points_mm;
+                let tracker_points_mm = pts.map(|p| {
+                    let p = tracker_from_left_base
+                        * truth.left_base_from(side)
+                        * nalgebra::Point3::from(p);
+                    let e = if noise_mm > 0.0 {
+                        Vector3::new(
+                            noise.sample(&mut rng),
+                            noise.sample(&mut rng),
+                            noise.sample(&mut rng),
+                        )
+                    } else {
+                        Vector3::zeros()
+                    };
+                    p.coords + e
+                });
+                Measurement {
+                    id: format!("{}{i:03}", if side == Side::Left { "L" } else { "R" }),
+                    q_rad: q,
+                    tracker_points_mm,
+                    split: if i < n_cal { Split::Cal } else { Split::Ver },
+                    line: i + 2,
+                }
+            })
+            .collect();
+        ArmData {
+            side,
+            file: format!("{side}.csv").into(),
+            measurements,
+        }
+    };
+    let left = arm(Side::Left);
+    let right = arm(Side::Right);
+    Synthetic {
+        dataset: Dataset {
+            dir: "synthetic".into(),
+            robot: None,
+            tracker: TrackerSpec::default(),
+            nominal_reflectors_mm: reflectors(),
+            left,
+            right,
+        },
+        truth,
+    }
+}
+
+fn run(
+    ds: &Dataset,
+    settings: &CalibrationSettings,
+) -> Result<dualcal::solver::CalibrationResult, CalibrationError> {
+    let cancel = AtomicBool::new(false);
+    calibrate(ds, &nominal(), settings, &mut |_| {}, &cancel)
+}
+
+/// Max over reflectors and pairs of |model distance − true distance| on fresh configurations, for the
+/// relative (per arm) and collaborative distances.
+fn max_distance_disagreement(a: &DualArmModel, b: &DualArmModel, seed: u64) -> f64 {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let lim = joint_limits_rad();
+    let qs: Vec<[f64; 7]> = (0..30)
+        .map(|_| std::array::from_fn(|j| rng.random_range(lim[j].0..lim[j].1)))
+        .collect();
+    let pts = |m: &DualArmModel, side: Side| -> Vec<[Vector3<f64>; 3]> {
+        qs.iter()
+            .map(|q| {
+                m.arm(side)
+                    .reflector_fk(q)
+                    .points_mm
+                    .map(|p| (m.left_base_from(side) * nalgebra::Point3::from(p)).coords)
+            })
+            .collect()
+    };
+    let mut worst: f64 = 0.0;
+    for (s1, s2) in [
+        (Side::Left, Side::Left),
+        (Side::Right, Side::Right),
+        (Side::Left, Side::Right),
+    ] {
+        let (a1, a2, b1, b2) = (pts(a, s1), pts(a, s2), pts(b, s1), pts(b, s2));
+        for i in 0..qs.len() {
+            for j in 0..qs.len() {
+                for k in 0..3 {
+                    let da = (a1[i][k] - a2[j][k]).norm();
+                    let db = (b1[i][k] - b2[j][k]).norm();
+                    worst = worst.max((da - db).abs());
+                }
+            }
+        }
+    }
+    worst
+}
+
+#[test]
+fn recovers_known_perturbations_from_noise_free_data() {
+    let syn = synthetic(1, 40, 40, 0.0);
+    let res = run(&syn.dataset, &CalibrationSettings::default()).expect("calibration");
+    for s in &res.stages {
+        assert_eq!(s.termination, Termination::Converged, "{s:?}");
+        assert!(s.psi_mm2 < 1e-9 * s.psi_start_mm2.max(1.0), "{s:?}");
+    }
+    // Identifiable parameters (joints 2–6 and joint 1's a, α) equal the truth.
+    for side in Side::BOTH {
+        let got = res.calibrated.arm(side).to_vector();
+        let want = syn.truth.arm(side).to_vector();
+        for k in [0usize, 3].into_iter().chain(4..24) {
+            let tol = if param_is_angle(k) { 1e-7 } else { 1e-5 };
+            assert!(
+                (got[k] - want[k]).abs() < tol,
+                "{side} {}: {} vs {}",
+                dualcal::kinematics::param_name(k),
+                got[k],
+                want[k]
+            );
+        }
+    }
+    // Relative and collaborative distances of the calibrated model equal the true ones everywhere.
+    let d = max_distance_disagreement(&res.calibrated, &syn.truth, 9);
+    assert!(d < 1e-5, "distance disagreement {d} mm");
+    let d_nom = max_distance_disagreement(&res.nominal, &syn.truth, 9);
+    assert!(
+        d_nom > 1.0,
+        "the test must start far from the truth ({d_nom} mm)"
+    );
+}
+
+#[test]
+fn identifiability_names_joint1_d_theta_and_joint7() {
+    let syn = synthetic(2, 30, 30, 0.0);
+    let res = run(&syn.dataset, &CalibrationSettings::default()).expect("calibration");
+    for (side, rep) in &res.identifiability {
+        let names: Vec<&str> = rep.fixed.iter().map(|f| f.name.as_str()).collect();
+        for want in ["d1", "theta1", "a7", "d7", "theta7", "alpha7"] {
+            assert!(
+                names.contains(&want),
+                "{side}: fixed {names:?} lacks {want}"
+            );
+        }
+        assert!(
+            rep.condition_before.is_infinite() || rep.condition_before > 1e8,
+            "{rep:?}"
+        );
+        assert!(rep.condition_after < 1e4, "{rep:?}");
+        assert!(rep.fixed.iter().all(|f| !f.reason.is_empty()));
+    }
+}
+
+#[test]
+fn noisy_data_reaches_the_noise_floor_with_both_qp_solvers() {
+    let syn = synthetic(3, 50, 40, 0.01);
+    let exact = run(&syn.dataset, &CalibrationSettings::default()).expect("exact");
+    let paper = run(
+        &syn.dataset,
+        &CalibrationSettings {
+            qp: QpMethod::Paper,
+            max_iterations: 400,
+            ..Default::default()
+        },
+    )
+    .expect("paper");
+    for (e, p) in exact.stages.iter().zip(&paper.stages) {
+        assert_eq!(e.stage, p.stage);
+        assert!(
+            p.psi_mm2 <= e.psi_mm2 * 1.01,
+            "{:?}: paper ψ {} vs exact ψ {}",
+            e.stage,
+            p.psi_mm2,
+            e.psi_mm2
+        );
+    }
+    // The calibrated model agrees with the truth to well below the nominal disagreement.
+    let d = max_distance_disagreement(&exact.calibrated, &syn.truth, 4);
+    assert!(d < 0.2, "{d}");
+}
+
+#[test]
+fn least_squares_baseline_runs() {
+    let syn = synthetic(4, 30, 30, 0.0);
+    let res = run(
+        &syn.dataset,
+        &CalibrationSettings {
+            method: Method::LeastSquares,
+            ..Default::default()
+        },
+    )
+    .expect("lsq");
+    let d = max_distance_disagreement(&res.calibrated, &syn.truth, 5);
+    assert!(d < 1e-4, "{d}");
+}
+
+#[test]
+fn events_arrive_in_order_and_cancel_stops_the_run() {
+    let syn = synthetic(5, 40, 40, 0.01);
+    let cancel = AtomicBool::new(false);
+    let mut stages = Vec::new();
+    let mut iterations = 0;
+    let res = calibrate(
+        &syn.dataset,
+        &nominal(),
+        &CalibrationSettings::default(),
+        &mut |e| match e {
+            CalibrationEvent::StageStarted { stage, .. } => stages.push(*stage),
+            CalibrationEvent::Iteration(r) => {
+                iterations += 1;
+                assert!(r.psi_mm2.is_finite() && r.step_norm.is_finite());
+            }
+            CalibrationEvent::StageFinished { .. } => {}
+        },
+        &cancel,
+    );
+    assert!(res.is_ok());
+    assert_eq!(
+        stages,
+        vec![Stage::Arm(Side::Left), Stage::Arm(Side::Right), Stage::Base]
+    );
+    assert!(iterations >= 3);
+
+    // Cancel after the second iteration: the run ends with Cancelled, no result.
+    let cancel = AtomicBool::new(false);
+    let mut seen = 0;
+    let res = calibrate(
+        &syn.dataset,
+        &nominal(),
+        &CalibrationSettings::default(),
+        &mut |e| {
+            if matches!(e, CalibrationEvent::Iteration(_)) {
+                seen += 1;
+                if seen == 2 {
+                    cancel.store(true, Ordering::Relaxed);
+                }
+            }
+        },
+        &cancel,
+    );
+    assert!(matches!(res, Err(CalibrationError::Cancelled)), "{res:?}");
+    assert_eq!(seen, 2);
+}
+
+#[test]
+fn error_paths() {
+    // Too few configurations in the split.
+    let syn = synthetic(6, 10, 3, 0.0);
+    let err = run(&syn.dataset, &CalibrationSettings::default()).unwrap_err();
+    assert!(
+        matches!(
+            err,
+            CalibrationError::TooFewConfigurations {
+                found: 3,
+                needed: 4,
+                ..
+            }
+        ),
+        "{err}"
+    );
+    assert!(err.to_string().contains("at least 4"));
+
+    // Non-finite measurements.
+    let mut syn = synthetic(7, 10, 10, 0.0);
+    syn.dataset.right.measurements[3].tracker_points_mm[1].x = f64::NAN;
+    let err = run(&syn.dataset, &CalibrationSettings::default()).unwrap_err();
+    assert!(matches!(err, CalibrationError::NonFinite { .. }), "{err}");
+
+    // Not converged within the iteration limit.
+    let syn = synthetic(8, 20, 20, 0.01);
+    let err = run(
+        &syn.dataset,
+        &CalibrationSettings {
+            max_iterations: 1,
+            ..Default::default()
+        },
+    )
+    .unwrap_err();
+    assert!(
+        matches!(err, CalibrationError::NotConverged { iterations: 1, .. }),
+        "{err}"
+    );
+
+    // Rank deficient: every configuration identical.
+    let mut syn = synthetic(9, 10, 10, 0.0);
+    let first = syn.dataset.left.measurements[0].clone();
+    for m in &mut syn.dataset.left.measurements {
+        m.q_rad = first.q_rad;
+        m.tracker_points_mm = first.tracker_points_mm;
+    }
+    let err = run(&syn.dataset, &CalibrationSettings::default()).unwrap_err();
+    assert!(
+        matches!(err, CalibrationError::RankDeficient { .. }),
+        "{err}"
+    );
+}
+
+#[test]
+fn verification_split_is_not_used_for_identification() {
+    let mut syn = synthetic(10, 30, 20, 0.0);
+    let a = run(&syn.dataset, &CalibrationSettings::default()).expect("a");
+    // Corrupting verification data must not change the calibration on the cal split.
+    for m in syn
+        .dataset
+        .left
+        .measurements
+        .iter_mut()
+        .filter(|m| m.split == Split::Ver)
+    {
+        m.tracker_points_mm[0].x += 5.0;
+    }
+    let b = run(
+        &syn.dataset,
+        &CalibrationSettings {
+            split: SplitSelect::Cal,
+            ..Default::default()
+        },
+    )
+    .expect("b");
+    assert_eq!(a.calibrated, b.calibrated);
+}
