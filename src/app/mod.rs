@@ -394,9 +394,9 @@ impl WorkbenchApp {
                     let secs = started.elapsed().as_secs_f64();
                     let terms: Vec<String> = calibrated
                         .result
-                        .terminations
+                        .stages
                         .iter()
-                        .map(|(s, t)| format!("{s}: {t:?}"))
+                        .map(|s| format!("{}: {:?} after {}", s.stage, s.termination, s.iterations))
                         .collect();
                     // The solver's own history is complete even if progress events were dropped.
                     self.history = calibrated.result.history.clone();
@@ -1049,16 +1049,44 @@ pub fn export_csv(session: &Session) -> anyhow::Result<Vec<u8>> {
 }
 
 /// The calibrated model as a `dualcal-params/1` file.
-pub fn export_params(_session: &Session, cal: &session::Calibrated) -> anyhow::Result<Vec<u8>> {
-    let file = crate::params::ParamsFile::from_model(&cal.result.calibrated);
+pub fn export_params(session: &Session, cal: &session::Calibrated) -> anyhow::Result<Vec<u8>> {
+    let mut file = crate::params::ParamsFile::from_model(&cal.result.calibrated);
+    file.method = Some(serde_json::to_value(&cal.result.settings)?);
+    file.termination = Some(serde_json::json!({
+        "stages": cal.result.stages.iter().map(|s| serde_json::json!({
+            "stage": s.stage.to_string(),
+            "termination": format!("{:?}", s.termination),
+            "iterations": s.iterations,
+            "psi_mm2": s.psi_mm2,
+            "psi_start_mm2": s.psi_start_mm2,
+        })).collect::<Vec<_>>(),
+        "elapsed_secs": cal.result.elapsed_secs,
+    }));
+    let mut fixed = crate::params::FixedParameters {
+        left: Vec::new(),
+        right: Vec::new(),
+    };
+    for (side, report) in &cal.result.identifiability {
+        let list = match side {
+            Side::Left => &mut fixed.left,
+            Side::Right => &mut fixed.right,
+        };
+        list.extend(report.fixed.iter().map(|f| crate::params::FixedParameter {
+            name: f.name.clone(),
+            reason: f.reason.clone(),
+        }));
+    }
+    file.fixed_parameters = Some(fixed);
+    file.provenance = Some(crate::params::Provenance::now(Some(&session.dataset.dir)));
     let mut text = serde_json::to_vec_pretty(&file)?;
     text.push(b'\n');
     Ok(text)
 }
 
 /// The calibrated robot description.
-pub fn export_urdf(_session: &Session, _cal: &session::Calibrated) -> anyhow::Result<Vec<u8>> {
-    anyhow::bail!("calibrated URDF export is not available in this build yet")
+pub fn export_urdf(session: &Session, cal: &session::Calibrated) -> anyhow::Result<Vec<u8>> {
+    let text = crate::urdf_export::calibrated_urdf(&session.robot, &cal.result.calibrated)?;
+    Ok(text.into_bytes())
 }
 
 impl eframe::App for WorkbenchApp {

@@ -304,7 +304,14 @@ impl Session {
         robot: RobotDescription,
         robot_source: Option<PathBuf>,
     ) -> anyhow::Result<Self> {
-        let nominal_model = robot.nominal_model(dataset.nominal_reflectors_mm);
+        // A URDF of our own (e.g. an exported calibrated one) carries its DH model; the built-in
+        // robot is Table 3.
+        let nominal_model = match &robot_source {
+            Some(_) => robot
+                .dh_model(dataset.nominal_reflectors_mm)
+                .with_context(|| "the robot description does not encode a DH model")?,
+            None => robot.nominal_model(dataset.nominal_reflectors_mm),
+        };
         let nominal = Analysis::compute(
             &dataset,
             &nominal_model,
