@@ -1,16 +1,17 @@
-//! A perceptually ordered colour map (dark blue → teal → green → yellow) for error magnitudes.
+//! An ordered colour map (blue → teal → green → yellow) for error magnitudes; its low end stays
+//! visible on the dark viewport background.
 //!
 //! Control points were chosen by hand to rise monotonically in lightness; values between them are
 //! interpolated linearly in sRGB.
 
 /// sRGB control points, evenly spaced over 0..1.
 const STOPS: [[f32; 3]; 6] = [
-    [0.267, 0.005, 0.329],
-    [0.230, 0.322, 0.546],
-    [0.128, 0.567, 0.551],
-    [0.253, 0.741, 0.448],
-    [0.648, 0.866, 0.204],
-    [0.993, 0.906, 0.144],
+    [0.30, 0.32, 0.80],
+    [0.16, 0.52, 0.80],
+    [0.10, 0.66, 0.58],
+    [0.42, 0.78, 0.34],
+    [0.78, 0.86, 0.20],
+    [0.99, 0.91, 0.15],
 ];
 
 /// Colour (sRGB, 0–1) of `t` in 0..1 (clamped).

@@ -269,7 +269,7 @@ mod tests {
         let total: f64 = h.iter().map(|(_, y)| y).sum();
         assert!((total - 1.0).abs() < 1e-12);
         // Out-of-range samples land in the end bins.
-        assert!((h[0].1 - 3.0 / 8.0).abs() < 1e-12, "{h:?}");
+        assert!((h[0].1 - 2.0 / 8.0).abs() < 1e-12, "{h:?}");
         assert!((h[3].1 - 3.0 / 8.0).abs() < 1e-12, "{h:?}");
         assert!((h[0].0 + 0.75).abs() < 1e-12);
     }
