@@ -169,3 +169,115 @@ fn viewport_snapshot() {
     harness.run_steps(3);
     harness.snapshot("viewport");
 }
+
+#[test]
+fn selecting_in_the_table_and_in_the_viewport() {
+    let mut harness = harness([1400.0, 900.0], AppLaunch::default());
+    loaded(&mut harness);
+
+    // "Select worst" picks the row with the largest |Δd| and poses that arm in it.
+    harness
+        .get_all_by_label("Select worst")
+        .next()
+        .unwrap()
+        .click();
+    harness.step();
+    let (side, index) = harness.state().selection().expect("worst selected");
+    let session = harness.state().session().unwrap();
+    let worst = session
+        .nominal
+        .configs
+        .iter()
+        .map(|r| r.worst_pos_mm)
+        .fold(0.0f64, f64::max);
+    let row = session
+        .nominal
+        .configs
+        .iter()
+        .find(|r| r.side == side && r.index == index)
+        .unwrap();
+    assert_eq!(row.worst_pos_mm, worst);
+    let side_index = dualcal::app::viewport::scene::side_index(side);
+    assert_eq!(harness.state().viewport_pose(side_index), Some(index));
+
+    // Clicking another row's id selects it.
+    // The table is sorted by |Δd| descending: the second row is on screen.
+    let order = dualcal::app::table::sorted_rows(
+        &session.nominal,
+        dualcal::app::table::TableState::default(),
+    );
+    let other = &session.nominal.configs[order[1]];
+    assert_ne!((other.side, other.index), (side, index));
+    let (other_id, other_sel) = (other.id.clone(), (other.side, other.index));
+    harness.get_by_label(&other_id).click();
+    harness.step();
+    assert_eq!(harness.state().selection(), Some(other_sel));
+
+    // Clicking a configuration in the viewport selects it (viewport alone fills the window).
+    harness.state_mut().set_panels_visible(false);
+    harness.step();
+    let (target, at) = {
+        let app = harness.state();
+        let camera = app.viewport().camera;
+        let row = app
+            .session()
+            .unwrap()
+            .nominal
+            .configs
+            .iter()
+            .find(|r| (r.side, r.index) != other_sel)
+            .unwrap();
+        let anchor = dualcal::app::viewport::scene::pick_anchor(row);
+        let [x, y] = camera.project(&anchor, 1400.0, 900.0).unwrap();
+        ((row.side, row.index), eframe::egui::pos2(x, y))
+    };
+    click_at(&mut harness, at);
+    let picked = harness
+        .state()
+        .selection()
+        .expect("a configuration was picked");
+    // The nearest configuration to the click is picked: the target or one drawn on top of it.
+    let app = harness.state();
+    let camera = app.viewport().camera;
+    let picked_row = app
+        .session()
+        .unwrap()
+        .nominal
+        .configs
+        .iter()
+        .find(|r| (r.side, r.index) == picked)
+        .unwrap();
+    let [x, y] = camera
+        .project(
+            &dualcal::app::viewport::scene::pick_anchor(picked_row),
+            1400.0,
+            900.0,
+        )
+        .unwrap();
+    let distance = (eframe::egui::pos2(x, y) - at).length();
+    assert!(
+        picked == target || distance < 14.0,
+        "picked {picked:?} {distance} points from the click"
+    );
+    assert_ne!(harness.state().selection(), Some(other_sel));
+}
+
+fn click_at(harness: &mut Harness<'_, WorkbenchApp>, pos: eframe::egui::Pos2) {
+    use eframe::egui::{Event, Modifiers, PointerButton};
+    harness.event(Event::PointerMoved(pos));
+    harness.event(Event::PointerButton {
+        pos,
+        button: PointerButton::Primary,
+        pressed: true,
+        modifiers: Modifiers::NONE,
+    });
+    harness.step();
+    harness.event(Event::PointerButton {
+        pos,
+        button: PointerButton::Primary,
+        pressed: false,
+        modifiers: Modifiers::NONE,
+    });
+    harness.step();
+    harness.step();
+}

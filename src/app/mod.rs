@@ -206,6 +206,15 @@ impl WorkbenchApp {
         &mut self.settings
     }
 
+    pub fn viewport(&self) -> &ViewportState {
+        &self.viewport
+    }
+
+    /// The measurement index arm `side_index` (0 left, 1 right) is drawn in.
+    pub fn viewport_pose(&self, side_index: usize) -> Option<usize> {
+        self.viewport.poses.get(side_index).copied().flatten()
+    }
+
     /// The viewport's camera and display options.
     pub fn viewport_mut(&mut self) -> &mut ViewportState {
         &mut self.viewport
