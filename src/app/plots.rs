@@ -142,7 +142,7 @@ pub fn accuracy_ui(ui: &mut egui::Ui, session: &Session, figure: Figure, split: 
     ui.horizontal_top(|ui| {
         // Numbers.
         ui.vertical(|ui| {
-            ui.set_width(300.0);
+            ui.set_width(270.0);
             ui.label(RichText::new(format!("{} — {split_name} split", figure.label())).strong());
             let thresholds: [String; 2] = if figure.is_position() {
                 POS_THRESHOLDS_MM.map(|t| format!("|Δd| ≤ {t} mm"))
@@ -202,60 +202,78 @@ pub fn accuracy_ui(ui: &mut egui::Ui, session: &Session, figure: Figure, split: 
             }
         });
 
-        // Histogram: symmetric range for signed Δd, from zero for Δo.
-        let extent = before_samples
-            .iter()
-            .chain(&after_samples)
-            .filter(|x| x.is_finite())
-            .fold(0.0f64, |m, x| m.max(x.abs()))
-            .max(1e-9);
-        let (lo, hi) = if figure.is_position() {
-            (-extent, extent)
+        // Before and after side by side, each on its own range (calibration shrinks the errors
+        // by orders of magnitude, so a shared axis would hide one of them).
+        let panels: Vec<(&str, &[f64], Color32)> = if after_samples.is_empty() {
+            vec![("nominal", &before_samples[..], NOMINAL_COLOR)]
         } else {
-            (0.0, extent)
+            vec![
+                ("nominal", &before_samples[..], NOMINAL_COLOR),
+                ("calibrated", &after_samples[..], CALIBRATED_COLOR),
+            ]
         };
-        let bins = 41;
-        let width = (hi - lo) / bins as f64;
-        let bars = |samples: &[f64]| -> Vec<Bar> {
-            histogram(samples, lo, hi, bins)
-                .into_iter()
-                .map(|(x, y)| Bar::new(x, 100.0 * y).width(width * 0.95))
-                .collect()
-        };
-        Plot::new(("histogram", figure.label(), k))
-            .legend(Legend::default())
-            .x_axis_label(if figure.is_position() {
-                "Δd (mm)"
-            } else {
-                "Δo (rad)"
-            })
-            .y_axis_label("% of samples")
-            .allow_scroll(false)
-            .show(ui, |plot| {
-                plot.bar_chart(
-                    BarChart::new("nominal", bars(&before_samples))
-                        .color(Color32::from_rgba_unmultiplied(230, 120, 90, 150)),
-                );
-                if !after_samples.is_empty() {
-                    plot.bar_chart(
-                        BarChart::new("calibrated", bars(&after_samples))
-                            .color(Color32::from_rgba_unmultiplied(100, 190, 235, 190)),
-                    );
-                }
-                let t = if figure.is_position() {
-                    POS_THRESHOLDS_MM.to_vec()
-                } else {
-                    ORI_THRESHOLDS_RAD.to_vec()
-                };
-                for (i, x) in t.into_iter().enumerate() {
-                    let c = Color32::from_gray(if i == 0 { 150 } else { 100 });
-                    plot.vline(VLine::new(format!("±{x}"), x).color(c));
-                    if figure.is_position() {
-                        plot.vline(VLine::new(format!("±{x}"), -x).color(c));
-                    }
-                }
-            });
+        let n = panels.len();
+        ui.columns(n, |cols| {
+            for (col, (name, samples, color)) in cols.iter_mut().zip(panels) {
+                histogram_plot_ui(col, figure, k, name, samples, color);
+            }
+        });
     });
+}
+
+const NOMINAL_COLOR: Color32 = Color32::from_rgb(230, 120, 90);
+const CALIBRATED_COLOR: Color32 = Color32::from_rgb(100, 190, 235);
+
+/// One histogram: symmetric range for signed Δd, from zero for Δo; the paper's thresholds as lines
+/// when they fall in range.
+fn histogram_plot_ui(
+    ui: &mut egui::Ui,
+    figure: Figure,
+    split: usize,
+    name: &str,
+    samples: &[f64],
+    color: Color32,
+) {
+    let extent = samples
+        .iter()
+        .filter(|x| x.is_finite())
+        .fold(0.0f64, |m, x| m.max(x.abs()))
+        .max(1e-9);
+    let (lo, hi) = if figure.is_position() {
+        (-extent, extent)
+    } else {
+        (0.0, extent)
+    };
+    let bins = 41;
+    let width = (hi - lo) / bins as f64;
+    let bars: Vec<Bar> = histogram(samples, lo, hi, bins)
+        .into_iter()
+        .map(|(x, y)| Bar::new(x, 100.0 * y).width(width * 0.95))
+        .collect();
+    Plot::new(("histogram", figure.label(), split, name.to_string()))
+        .legend(Legend::default())
+        .x_axis_label(if figure.is_position() {
+            "Δd (mm)"
+        } else {
+            "Δo (rad)"
+        })
+        .y_axis_label("% of samples")
+        .allow_scroll(false)
+        .show(ui, |plot| {
+            plot.bar_chart(BarChart::new(name, bars).color(color));
+            let t = if figure.is_position() {
+                POS_THRESHOLDS_MM.to_vec()
+            } else {
+                ORI_THRESHOLDS_RAD.to_vec()
+            };
+            for (i, x) in t.into_iter().enumerate().filter(|(_, x)| *x <= extent) {
+                let c = Color32::from_gray(if i == 0 { 150 } else { 100 });
+                plot.vline(VLine::new(format!("±{x}"), x).color(c));
+                if figure.is_position() {
+                    plot.vline(VLine::new(format!("±{x}"), -x).color(c));
+                }
+            }
+        });
 }
 
 #[cfg(test)]

@@ -268,6 +268,38 @@ impl ViewportState {
         }
 
         self.legends_ui(&painter, rect, session);
+        // Label the selected configuration where it is drawn.
+        if let (Some(session), Some((side, index))) = (session, selection) {
+            let analysis = if self.options.use_calibrated {
+                session.current()
+            } else {
+                &session.nominal
+            };
+            if let Some(row) = analysis
+                .configs
+                .iter()
+                .find(|r| r.side == side && r.index == index)
+                && let Some([x, y]) = self.camera.project_with(
+                    &view_proj,
+                    &scene::pick_anchor(row),
+                    rect.width(),
+                    rect.height(),
+                )
+            {
+                let at = Pos2::new(rect.left() + x, rect.top() + y);
+                painter.circle_stroke(at, 10.0, Stroke::new(2.0, Color32::WHITE));
+                let text = format!("{} ({side})", row.id);
+                let galley =
+                    painter.layout_no_wrap(text, egui::FontId::proportional(13.0), Color32::WHITE);
+                let pos = at + Vec2::new(13.0, -8.0);
+                painter.rect_filled(
+                    Rect::from_min_size(pos, galley.size()).expand(3.0),
+                    3.0,
+                    Color32::from_black_alpha(170),
+                );
+                painter.galley(pos, galley, Color32::WHITE);
+            }
+        }
         if let (Some(session), Some((side, index))) = (session, self.hovered_config)
             && let Some(m) = session.dataset.arm(side).measurements.get(index)
         {

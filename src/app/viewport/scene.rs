@@ -341,7 +341,7 @@ pub fn build_scene(
                 scene.instances.push(MeshInstance::new(
                     Primitive::Sphere,
                     &Isometry3::translation(p.x, p.y, p.z),
-                    Vector3::repeat(6.0),
+                    Vector3::repeat(8.0),
                     c,
                 ));
             }
