@@ -27,7 +27,7 @@ use std::path::{Path, PathBuf};
 use std::sync::mpsc::{Receiver, Sender, channel};
 use viewport::ViewportState;
 use viewport::scene::Selection;
-use worker::{CalibrationJob, WorkerMessage};
+use worker::{CalibrationJob, Outcome, WorkerMessage};
 
 /// What the window opens with.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
@@ -356,7 +356,7 @@ impl WorkbenchApp {
     }
 
     pub fn cancel_calibration(&mut self) {
-        if let Some(job) = &self.job {
+        if let Some(job) = &mut self.job {
             job.cancel();
         }
     }
@@ -382,6 +382,7 @@ impl WorkbenchApp {
             return;
         };
         let started = job.started;
+        let cancel_requested = job.cancel_requested;
         for message in job.drain() {
             match message {
                 WorkerMessage::Progress(CalibrationEvent::StageStarted { stage, .. }) => {
@@ -399,7 +400,7 @@ impl WorkbenchApp {
                     self.history.push(record);
                 }
                 WorkerMessage::Progress(CalibrationEvent::StageFinished { .. }) => {}
-                WorkerMessage::Finished(Ok(calibrated)) => {
+                WorkerMessage::Finished(Outcome::Calibrated(calibrated)) => {
                     let secs = started.elapsed().as_secs_f64();
                     let terms: Vec<String> = calibrated
                         .result
@@ -419,15 +420,18 @@ impl WorkbenchApp {
                         terms.join(", ")
                     ));
                 }
-                WorkerMessage::Finished(Err(message)) => {
-                    if message == "cancelled" {
-                        self.status = Status::Idle(
-                            "Calibration cancelled; the previous result is kept.".into(),
-                        );
-                    } else {
-                        self.status = Status::Idle("Calibration failed.".into());
-                        self.errors.push(format!("calibration: {message}"));
-                    }
+                WorkerMessage::Finished(Outcome::Cancelled) => {
+                    let latency = cancel_requested
+                        .map(|t| format!(" {:.0} ms after Cancel", t.elapsed().as_secs_f64() * 1e3))
+                        .unwrap_or_default();
+                    self.status = Status::Idle(format!(
+                        "Calibration cancelled{latency}; the previous result is kept."
+                    ));
+                }
+                WorkerMessage::Finished(Outcome::Failed(message)) => {
+                    self.status =
+                        Status::Idle("Calibration failed; the previous result is kept.".into());
+                    self.errors.push(format!("calibration: {message}"));
                 }
             }
         }

@@ -19,8 +19,18 @@ const CHANNEL_CAPACITY: usize = 512;
 /// Messages from the worker.
 pub enum WorkerMessage {
     Progress(CalibrationEvent),
-    /// The run ended: the calibrated result with its figures, or the reason it did not succeed.
-    Finished(Result<Box<Calibrated>, String>),
+    /// The run ended.
+    Finished(Outcome),
+}
+
+/// How a run ended.
+pub enum Outcome {
+    /// The calibrated model with its figures.
+    Calibrated(Box<Calibrated>),
+    /// The cancel flag stopped it.
+    Cancelled,
+    /// Why it did not succeed.
+    Failed(String),
 }
 
 /// A running calibration.
@@ -29,7 +39,9 @@ pub struct CalibrationJob {
     receiver: Receiver<WorkerMessage>,
     thread: Option<std::thread::JoinHandle<()>>,
     pub started: std::time::Instant,
-    /// Dropped progress events (the UI was behind).
+    /// When Cancel was pressed.
+    pub cancel_requested: Option<std::time::Instant>,
+    /// The final message has been received.
     pub finished: bool,
 }
 
@@ -63,12 +75,16 @@ impl CalibrationJob {
             receiver,
             thread: Some(thread),
             started: std::time::Instant::now(),
+            cancel_requested: None,
             finished: false,
         })
     }
 
-    /// Ask the solver to stop; the worker then reports `Finished(Err("cancelled"))`.
-    pub fn cancel(&self) {
+    /// Ask the solver to stop; the worker then reports `Finished(Outcome::Cancelled)`.
+    pub fn cancel(&mut self) {
+        if self.cancel_requested.is_none() {
+            self.cancel_requested = Some(std::time::Instant::now());
+        }
         self.cancel.store(true, Ordering::Relaxed);
     }
 
@@ -91,7 +107,7 @@ impl CalibrationJob {
                 Err(TryRecvError::Disconnected) => {
                     if !self.finished {
                         self.finished = true;
-                        out.push(WorkerMessage::Finished(Err(
+                        out.push(WorkerMessage::Finished(Outcome::Failed(
                             "the calibration thread stopped unexpectedly".into(),
                         )));
                     }
@@ -112,7 +128,7 @@ impl CalibrationJob {
 impl Drop for CalibrationJob {
     fn drop(&mut self) {
         // A dropped job (new dataset, app closed) stops its worker; it is not joined here.
-        self.cancel();
+        self.cancel.store(true, Ordering::Relaxed);
     }
 }
 
@@ -141,10 +157,11 @@ fn run(
     let outcome = solver::calibrate(dataset, nominal, settings, &mut observer, cancel);
     let message = match outcome {
         Ok(result) => match Analysis::compute(dataset, &result.calibrated, body_from_left_base) {
-            Ok(analysis) => Ok(Box::new(Calibrated { result, analysis })),
-            Err(e) => Err(format!("calibrated model: {e:#}")),
+            Ok(analysis) => Outcome::Calibrated(Box::new(Calibrated { result, analysis })),
+            Err(e) => Outcome::Failed(format!("calibrated model: {e:#}")),
         },
-        Err(e) => Err(e.to_string()),
+        Err(solver::CalibrationError::Cancelled) => Outcome::Cancelled,
+        Err(e) => Outcome::Failed(e.to_string()),
     };
     let _ = sender.send(WorkerMessage::Finished(message));
     repaint();
