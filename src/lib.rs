@@ -6,11 +6,13 @@
 #![forbid(unsafe_code)]
 
 pub mod atomic;
+pub mod cli;
 pub mod collision;
 pub mod dataset;
 pub mod kinematics;
 pub mod metrics;
 pub mod params;
 pub mod robot;
+pub mod simulate;
 pub mod solver;
 pub mod urdf_export;

@@ -128,9 +128,12 @@ pub enum Termination {
 /// Progress events delivered to an observer.
 #[derive(Clone, Debug, PartialEq)]
 pub enum CalibrationEvent {
+    /// A stage begins: `n_configs` configurations (both arms' for step 2) and `n_pairs` pairs per
+    /// reflector.
     StageStarted {
         stage: Stage,
         n_configs: usize,
+        n_pairs: usize,
     },
     Iteration(IterationRecord),
     StageFinished {
@@ -481,11 +484,21 @@ impl Calibration {
         };
         if self.pending_start {
             self.pending_start = false;
-            let n_configs = match stage {
-                Stage::Arm(side) => self.inputs[side_index(side)].qs.len(),
-                Stage::Base => self.inputs[0].qs.len() * self.inputs[1].qs.len(),
+            let (n_configs, n_pairs) = match stage {
+                Stage::Arm(side) => {
+                    let n = self.inputs[side_index(side)].qs.len();
+                    (n, n * n.saturating_sub(1) / 2)
+                }
+                Stage::Base => {
+                    let (l, r) = (self.inputs[0].qs.len(), self.inputs[1].qs.len());
+                    (l + r, l * r)
+                }
             };
-            observer(&CalibrationEvent::StageStarted { stage, n_configs });
+            observer(&CalibrationEvent::StageStarted {
+                stage,
+                n_configs,
+                n_pairs,
+            });
         }
         let (f, step_norm, kkt, term, pairs) = match &mut self.state {
             StageState::Arm { runner, .. } => {
@@ -534,7 +547,7 @@ impl Calibration {
         observer(&CalibrationEvent::StageFinished { stage, termination });
         let n_configs = match stage {
             Stage::Arm(side) => self.inputs[side_index(side)].qs.len(),
-            Stage::Base => self.inputs[0].qs.len().min(self.inputs[1].qs.len()),
+            Stage::Base => self.inputs[0].qs.len() + self.inputs[1].qs.len(),
         };
         self.stages.push(StageSummary {
             stage,
