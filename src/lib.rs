@@ -7,3 +7,4 @@
 pub mod dataset;
 pub mod kinematics;
 pub mod params;
+pub mod simulate;
