@@ -1190,10 +1190,10 @@ mod tests {
             let sigma = sigma_sum / ms.len() as f64;
             for i in 0..ms.len() {
                 for j in i + 1..ms.len() {
-                    for k in 0..3 {
-                        let dm = (ms[i].tracker_points_mm[k] - ms[j].tracker_points_mm[k]).norm();
-                        dd.push(dm - (model[i][k] - model[j][k]).norm());
-                    }
+                    let (pi, pj) = (&ms[i].tracker_points_mm, &ms[j].tracker_points_mm);
+                    dd.extend(
+                        (0..3).map(|k| (pi[k] - pj[k]).norm() - (model[i][k] - model[j][k]).norm()),
+                    );
                 }
             }
             let (mean, std) = mean_std(&dd);
