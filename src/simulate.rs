@@ -14,10 +14,11 @@
 //!    to the left DH base) at a distance uniform in `tracker_distance_m` from the body origin, in a
 //!    direction with azimuth uniform in `±tracker_azimuth_max_deg` about +x and elevation uniform in
 //!    `tracker_elevation_deg`; its orientation is a uniformly random rotation.
-//! 3. **Configurations** (drawn before the truth, see step 1). Commanded joint values uniform within the joint limits shrunk by
-//!    `joint_limit_margin_fraction` of each joint's range at both ends. A configuration is accepted when
-//!    the reflectors face the tracker — flange z · unit(tracker − flange origin) ≥ cos(`facing_max_angle_deg`)
-//!    — and then `!collides(side, &q)`. Both checks use the *nominal* model (the planner does not know
+//! 3. **Configurations** (drawn before the truth, see step 1). Commanded joint values uniform within
+//!    the joint limits shrunk by `joint_limit_margin_fraction` of each joint's range at both ends. A
+//!    configuration is accepted when the reflectors face the tracker —
+//!    flange z · unit(tracker − flange origin) ≥ cos(`facing_max_angle_deg`) — and then
+//!    `!collides(side, &q)` (so the closure is called only for facing configurations). Both checks use the *nominal* model (the planner does not know
 //!    the truth), so the configurations depend only on the seed, the nominal model, the tracker pose and
 //!    the closure; the error options never change them. After `max_attempts_per_config · n_configs`
 //!    attempts per arm the simulation gives up with [`SimError::NotEnoughConfigurations`].
@@ -1313,6 +1314,11 @@ mod tests {
         // The right arm saw no rejections and is unchanged.
         assert_eq!(out.dataset.right, free.dataset.right);
 
+        // Rejecting everything ends with an error after the attempt cap, not a hang.
+        let opts = SimOptions {
+            max_attempts_per_config: 20,
+            ..opts
+        };
         let all = |_: Side, _: &[f64; N_JOINTS]| true;
         let err = simulate(&opts, &nominal(), &all).unwrap_err();
         match err {
@@ -1448,7 +1454,7 @@ mod tests {
     }
 
     #[test]
-    fn compliance_vanishes_for_gravity_along_every_axis_of_a_straight_arm() {
+    fn compliance_follows_the_gravity_torque() {
         // With gravity along joint 1's axis, joint 1 carries no torque whatever the pose.
         let arm = ArmModel::nominal_irb14000(SimOptions::default_reflectors());
         let model = JointErrorModel {
