@@ -18,9 +18,9 @@
 //!    the joint limits shrunk by `joint_limit_margin_fraction` of each joint's range at both ends. A
 //!    configuration is accepted when the reflectors face the tracker —
 //!    flange z · unit(tracker − flange origin) ≥ cos(`facing_max_angle_deg`) — and then
-//!    `!collides(side, &q)` (so the closure is called only for facing configurations). Both checks use the *nominal* model (the planner does not know
-//!    the truth), so the configurations depend only on the seed, the nominal model, the tracker pose and
-//!    the closure; the error options never change them. After `max_attempts_per_config · n_configs`
+//!    `!collides(side, &q)` (so the closure is called only for facing configurations). Both checks use
+//!    the *nominal* model (the planner does not know the truth), so the configurations depend only on the
+//!    seed, the nominal model, the tracker pose and the closure; the error options never change them. After `max_attempts_per_config · n_configs`
 //!    attempts per arm the simulation gives up with [`SimError::NotEnoughConfigurations`].
 //! 4. **Measurements.** Recorded joint values are the commanded `q`. The true robot moves to
 //!    `q + δq(q)` where `δq` is the optional unmodelled joint error ([`JointErrorModel`]). Measured point
@@ -59,8 +59,9 @@ pub struct DhErrorSize {
 /// `δq_i = periodic_amplitude_mrad · 1e-3 · sin(periods_per_rev · q_i + φ_i)
 ///        + compliance_mrad_per_m · 1e-3 · τ_i`,
 /// where the phases `φ_i` are uniform in [0, 2π) (per arm and joint, reported in
-/// [`SimOutput::joint_error_phases_rad`]) and `τ_i` is a gravity-torque proxy in metres: one unit mass at
-/// each frame origin `o_i … o_7` downstream of the joint, `τ_i = z_{i−1} · Σ_{j≥i} (o_j − o_{i−1}) × ĝ / 1000`,
+/// [`SimOutput::joint_error_phases_rad`]) and `τ_i` is a gravity-torque proxy in metres: one unit mass
+/// at each frame origin `o_i … o_7` downstream of the joint,
+/// `τ_i = z_{i−1} · Σ_{j≥i} (o_j − o_{i−1}) × ĝ / 1000`,
 /// with `ĝ` the body's −z axis seen in the arm's base frame and the frames of the true model at `q`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct JointErrorModel {
