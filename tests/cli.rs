@@ -181,7 +181,18 @@ fn bad_inputs_fail_with_a_message_naming_the_file() {
     ]);
     let csv = data.join("left.csv");
     let text = std::fs::read_to_string(&csv).unwrap();
-    let broken = text.replacen(",", ",x", 5);
+    // Corrupt one field of one data row (comment lines contain commas too).
+    let broken: String = text
+        .lines()
+        .map(|l| {
+            if l.starts_with("L003,") {
+                l.replacen(',', ",x", 1)
+            } else {
+                l.to_string()
+            }
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
     std::fs::write(&csv, broken).unwrap();
     let out = dualcal(&[
         "calibrate",
