@@ -297,16 +297,9 @@ fn evaluate_cmd(a: &EvaluateArgs) -> Result<()> {
     if a.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
     } else {
-        let what = if a.nominal {
-            "nominal model".to_string()
-        } else {
-            format!(
-                "{}",
-                a.params
-                    .as_ref()
-                    .map(|p| p.display().to_string())
-                    .unwrap_or_default()
-            )
+        let what = match &a.params {
+            Some(p) => format!("parameters {}", p.display()),
+            None => "nominal model".to_string(),
         };
         println!(
             "Accuracy of the {what} on {} (split: {:?})",

@@ -201,8 +201,8 @@ pub struct CalibrationResult {
 
 /// Either solver of a stage.
 enum Runner<P: MinimaxProblem> {
-    Sqp(SqpState<P>),
-    Lm(LmState<P>),
+    Sqp(Box<SqpState<P>>),
+    Lm(Box<LmState<P>>),
 }
 
 impl<P: MinimaxProblem> Runner<P> {
@@ -434,15 +434,18 @@ impl Calibration {
         self.stage_iterations = 0;
         self.pending_start = true;
         let runner = match self.settings.method {
-            Method::Minimax => {
-                Runner::Sqp(SqpState::new(problem, self.sqp_settings()).map_err(|_| {
+            Method::Minimax => Runner::Sqp(Box::new(
+                SqpState::new(problem, self.sqp_settings()).map_err(|_| {
                     CalibrationError::NonFinite {
                         stage,
                         detail: "objective or gradient at the start point".into(),
                     }
-                })?)
-            }
-            Method::LeastSquares => Runner::Lm(LmState::new(problem, self.settings.step_tolerance)),
+                })?,
+            )),
+            Method::LeastSquares => Runner::Lm(Box::new(LmState::new(
+                problem,
+                self.settings.step_tolerance,
+            ))),
         };
         let (f, _) = runner.problem().values(runner.y());
         self.stage_start_psi = f.iter().copied().fold(f64::NEG_INFINITY, f64::max)
