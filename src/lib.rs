@@ -8,11 +8,13 @@
 #[cfg(feature = "gui")]
 pub mod app;
 pub mod atomic;
+pub mod cli;
 pub mod collision;
 pub mod dataset;
 pub mod kinematics;
 pub mod metrics;
 pub mod params;
 pub mod robot;
+pub mod simulate;
 pub mod solver;
 pub mod urdf_export;

@@ -137,10 +137,9 @@ impl ArmProblem {
                 }
             }
             None => {
-                for i in 0..n {
-                    let pi = points[i][k];
-                    for j in i + 1..n {
-                        let delta = dm[idx] - (pi - points[j][k]).norm();
+                for (i, pi) in points.iter().enumerate() {
+                    for pj in &points[i + 1..] {
+                        let delta = dm[idx] - (pi[k] - pj[k]).norm();
                         idx += 1;
                         sum += delta * delta;
                     }
@@ -202,7 +201,7 @@ impl ArmProblem {
         let mut idx = 0usize;
         for i in 0..n {
             for j in i + 1..n {
-                if idx % stride == 0 {
+                if idx.is_multiple_of(stride) {
                     for k in 0..3 {
                         let v = jac[i].0.points_mm[k] - jac[j].0.points_mm[k];
                         let dist = v.norm();

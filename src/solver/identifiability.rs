@@ -98,8 +98,8 @@ pub fn analyse(
     let condition_before = condition_number(
         &scaled
             .iter()
-            .cloned()
             .filter(|c| c.norm() > 0.0)
+            .cloned()
             .collect::<Vec<_>>(),
     )
     .max(if scaled.iter().any(|c| c.norm() == 0.0) {

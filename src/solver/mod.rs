@@ -128,9 +128,12 @@ pub enum Termination {
 /// Progress events delivered to an observer.
 #[derive(Clone, Debug, PartialEq)]
 pub enum CalibrationEvent {
+    /// A stage begins: `n_configs` configurations (both arms' for step 2) and `n_pairs` pairs per
+    /// reflector.
     StageStarted {
         stage: Stage,
         n_configs: usize,
+        n_pairs: usize,
     },
     Iteration(IterationRecord),
     StageFinished {
@@ -198,8 +201,8 @@ pub struct CalibrationResult {
 
 /// Either solver of a stage.
 enum Runner<P: MinimaxProblem> {
-    Sqp(SqpState<P>),
-    Lm(LmState<P>),
+    Sqp(Box<SqpState<P>>),
+    Lm(Box<LmState<P>>),
 }
 
 impl<P: MinimaxProblem> Runner<P> {
@@ -431,15 +434,18 @@ impl Calibration {
         self.stage_iterations = 0;
         self.pending_start = true;
         let runner = match self.settings.method {
-            Method::Minimax => {
-                Runner::Sqp(SqpState::new(problem, self.sqp_settings()).map_err(|_| {
+            Method::Minimax => Runner::Sqp(Box::new(
+                SqpState::new(problem, self.sqp_settings()).map_err(|_| {
                     CalibrationError::NonFinite {
                         stage,
                         detail: "objective or gradient at the start point".into(),
                     }
-                })?)
-            }
-            Method::LeastSquares => Runner::Lm(LmState::new(problem, self.settings.step_tolerance)),
+                })?,
+            )),
+            Method::LeastSquares => Runner::Lm(Box::new(LmState::new(
+                problem,
+                self.settings.step_tolerance,
+            ))),
         };
         let (f, _) = runner.problem().values(runner.y());
         self.stage_start_psi = f.iter().copied().fold(f64::NEG_INFINITY, f64::max)
@@ -481,11 +487,21 @@ impl Calibration {
         };
         if self.pending_start {
             self.pending_start = false;
-            let n_configs = match stage {
-                Stage::Arm(side) => self.inputs[side_index(side)].qs.len(),
-                Stage::Base => self.inputs[0].qs.len() * self.inputs[1].qs.len(),
+            let (n_configs, n_pairs) = match stage {
+                Stage::Arm(side) => {
+                    let n = self.inputs[side_index(side)].qs.len();
+                    (n, n * n.saturating_sub(1) / 2)
+                }
+                Stage::Base => {
+                    let (l, r) = (self.inputs[0].qs.len(), self.inputs[1].qs.len());
+                    (l + r, l * r)
+                }
             };
-            observer(&CalibrationEvent::StageStarted { stage, n_configs });
+            observer(&CalibrationEvent::StageStarted {
+                stage,
+                n_configs,
+                n_pairs,
+            });
         }
         let (f, step_norm, kkt, term, pairs) = match &mut self.state {
             StageState::Arm { runner, .. } => {
@@ -534,7 +550,7 @@ impl Calibration {
         observer(&CalibrationEvent::StageFinished { stage, termination });
         let n_configs = match stage {
             Stage::Arm(side) => self.inputs[side_index(side)].qs.len(),
-            Stage::Base => self.inputs[0].qs.len().min(self.inputs[1].qs.len()),
+            Stage::Base => self.inputs[0].qs.len() + self.inputs[1].qs.len(),
         };
         self.stages.push(StageSummary {
             stage,

@@ -1,0 +1,707 @@
+//! The `dualcal` command line: simulate, evaluate, calibrate, reproduce (and `gui` in the binary).
+
+use crate::atomic::Overwrite;
+use crate::collision::CollisionWorld;
+use crate::dataset::{self, Dataset, Split, SplitSelect};
+use crate::kinematics::{DualArmModel, Side};
+use crate::metrics;
+use crate::params::{FixedParameter, FixedParameters, ParamsFile, Provenance};
+use crate::robot::RobotDescription;
+use crate::simulate::{self, SimOptions, SimOutput};
+use crate::solver::{
+    self, CalibrationEvent, CalibrationResult, CalibrationSettings, Method, QpMethod,
+};
+use anyhow::{Context, Result, bail};
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::AtomicBool;
+
+/// Two-step minimax kinematic calibration of dual-arm robots from laser-tracker data.
+#[derive(Parser, Debug)]
+#[command(name = "dualcal", version, about, long_about = None)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Option<Command>,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Open the workbench (the default when no command is given).
+    Gui {
+        /// Dataset directory or its dataset.toml (default: the bundled example).
+        dataset: Option<PathBuf>,
+        /// Robot description (default: the dataset's, or the built-in IRB 14000).
+        #[arg(long)]
+        urdf: Option<PathBuf>,
+    },
+    /// Simulate a laser-tracker dataset of both arms (paper §4.1).
+    Simulate(SimulateArgs),
+    /// Accuracy of a parameter set on a dataset (paper eqs. 5–8).
+    Evaluate(EvaluateArgs),
+    /// Two-step minimax calibration (paper Algorithms I and II).
+    Calibrate(CalibrateArgs),
+    /// Reproduce the studies of the paper and of docs/solver.md on simulated data.
+    Reproduce(ReproduceArgs),
+}
+
+#[derive(Args, Debug)]
+pub struct SimulateArgs {
+    /// Output directory (created; must not already hold a dataset unless --force).
+    #[arg(long)]
+    pub out: PathBuf,
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Configurations per arm.
+    #[arg(long, default_value_t = 220)]
+    pub configs: usize,
+    /// Of which calibration configurations (the rest are verification).
+    #[arg(long, default_value_t = 120)]
+    pub cal: usize,
+    /// Amplitude of unmodelled periodic (gear) joint errors, mrad (0 = none).
+    #[arg(long, default_value_t = 0.0)]
+    pub joint_error_mrad: f64,
+    /// Unmodelled joint compliance: deflection per metre of gravity lever, mrad/m (0 = none).
+    #[arg(long, default_value_t = 0.0)]
+    pub compliance_mrad_per_m: f64,
+    /// Fraction of configurations with an outlier reflector measurement.
+    #[arg(long, default_value_t = 0.0)]
+    pub outlier_fraction: f64,
+    /// Size of an outlier displacement, mm.
+    #[arg(long, default_value_t = 1.0)]
+    pub outlier_mm: f64,
+    /// Overwrite an existing simulated dataset in --out.
+    #[arg(long)]
+    pub force: bool,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum, PartialEq, Eq)]
+pub enum SplitArg {
+    Cal,
+    Ver,
+    All,
+}
+
+impl From<SplitArg> for SplitSelect {
+    fn from(s: SplitArg) -> Self {
+        match s {
+            SplitArg::Cal => SplitSelect::Cal,
+            SplitArg::Ver => SplitSelect::Ver,
+            SplitArg::All => SplitSelect::All,
+        }
+    }
+}
+
+#[derive(Args, Debug)]
+pub struct EvaluateArgs {
+    /// Dataset directory or its dataset.toml.
+    pub dataset: PathBuf,
+    /// Parameter file (dualcal-params/1).
+    #[arg(long, conflicts_with = "nominal", required_unless_present = "nominal")]
+    pub params: Option<PathBuf>,
+    /// Use the nominal model: Table 3, the dataset's nominal reflectors and the URDF's base transform.
+    #[arg(long)]
+    pub nominal: bool,
+    #[arg(long, value_enum, default_value_t = SplitArg::All)]
+    pub split: SplitArg,
+    /// Print JSON instead of a table.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum, PartialEq, Eq)]
+pub enum MethodArg {
+    Minimax,
+    /// Ordinary least squares (Levenberg–Marquardt), for comparison.
+    Lsq,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum, PartialEq, Eq)]
+pub enum QpArg {
+    Paper,
+    Exact,
+}
+
+#[derive(Args, Debug)]
+pub struct CalibrateArgs {
+    /// Dataset directory or its dataset.toml.
+    pub dataset: PathBuf,
+    #[arg(long, value_enum, default_value_t = SplitArg::Cal)]
+    pub split: SplitArg,
+    #[arg(long, value_enum, default_value_t = MethodArg::Minimax)]
+    pub method: MethodArg,
+    #[arg(long, value_enum, default_value_t = QpArg::Exact)]
+    pub qp: QpArg,
+    /// Where to write the parameters (dualcal-params/1 JSON).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Also write a calibrated copy of the robot's URDF.
+    #[arg(long)]
+    pub urdf: Option<PathBuf>,
+    /// Outer iterations per stage.
+    #[arg(long, default_value_t = 200)]
+    pub max_iterations: usize,
+    /// Stop when the scaled parameter step is below this.
+    #[arg(long, default_value_t = 1e-8)]
+    pub tolerance: f64,
+    /// Only the summary, no per-iteration lines.
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum, PartialEq, Eq)]
+pub enum Study {
+    /// Paper Fig. 4: accuracy against the number of calibration configurations.
+    Fig4,
+    /// The paper's subgradient QP against the exact QP (docs/solver.md).
+    Qp,
+    /// Minimax against least squares with unmodelled joint errors and outliers (docs/solver.md).
+    Robustness,
+}
+
+#[derive(Args, Debug)]
+pub struct ReproduceArgs {
+    #[arg(value_enum)]
+    pub study: Study,
+    /// Simulation seed(s), comma separated.
+    #[arg(long, value_delimiter = ',', default_value = "1")]
+    pub seeds: Vec<u64>,
+    /// Calibration set sizes for fig4.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "10,20,30,40,50,60,70,80,90,100,110,120"
+    )]
+    pub sizes: Vec<usize>,
+    /// Use this dataset instead of simulating (fig4 only).
+    #[arg(long)]
+    pub dataset: Option<PathBuf>,
+}
+
+/// Run a non-GUI command.
+pub fn run(command: Command) -> Result<()> {
+    match command {
+        Command::Gui { .. } => {
+            bail!("this build of dualcal has no workbench (built without the `gui` feature)")
+        }
+        Command::Simulate(a) => simulate_cmd(&a),
+        Command::Evaluate(a) => evaluate_cmd(&a),
+        Command::Calibrate(a) => calibrate_cmd(&a),
+        Command::Reproduce(a) => reproduce_cmd(&a),
+    }
+}
+
+/// The robot a dataset refers to (its `robot` entry or the built-in IRB 14000).
+pub fn robot_for(dataset: &Dataset) -> Result<RobotDescription> {
+    match &dataset.robot {
+        Some(path) => RobotDescription::load(path)
+            .with_context(|| format!("loading the robot of {}", dataset.dir.display())),
+        None => Ok(RobotDescription::builtin_irb14000()),
+    }
+}
+
+/// The nominal model of a dataset: Table 3, its nominal reflectors, the URDF's base transform.
+pub fn nominal_for(dataset: &Dataset, robot: &RobotDescription) -> DualArmModel {
+    robot.nominal_model(dataset.nominal_reflectors_mm)
+}
+
+/// Simulation options of the CLI's defaults.
+pub fn sim_options(seed: u64, configs: usize, cal: usize) -> SimOptions {
+    SimOptions {
+        seed,
+        n_configs: configs,
+        n_cal: cal,
+        ..SimOptions::default()
+    }
+}
+
+/// Simulate with the built-in robot's collision model.
+pub fn simulate_with_robot(opts: &SimOptions, robot: &RobotDescription) -> Result<SimOutput> {
+    let nominal = robot.nominal_model(SimOptions::default_reflectors());
+    let world = CollisionWorld::new(robot);
+    // While one arm is measured the other rests in the home pose.
+    let parked = Side::BOTH.map(crate::robot::home_q_rad);
+    let collides = |side: Side, q: &[f64; 7]| match side {
+        Side::Left => world.in_collision(q, &parked[1], 5.0),
+        Side::Right => world.in_collision(&parked[0], q, 5.0),
+    };
+    let mut opts = opts.clone();
+    opts.body_from_left_base = robot.body_from_dh_base(Side::Left);
+    Ok(simulate::simulate(&opts, &nominal, &collides)?)
+}
+
+fn simulate_cmd(a: &SimulateArgs) -> Result<()> {
+    if a.cal > a.configs {
+        bail!("--cal ({}) cannot exceed --configs ({})", a.cal, a.configs);
+    }
+    if a.out.join("dataset.toml").exists() && !a.force {
+        bail!(
+            "{} already holds a dataset (dataset.toml); pass --force to replace it",
+            a.out.display()
+        );
+    }
+    let mut opts = sim_options(a.seed, a.configs, a.cal);
+    if a.joint_error_mrad > 0.0 || a.compliance_mrad_per_m > 0.0 {
+        opts.joint_error = Some(simulate::JointErrorModel {
+            periodic_amplitude_mrad: a.joint_error_mrad,
+            compliance_mrad_per_m: a.compliance_mrad_per_m,
+            ..simulate::JointErrorModel::default()
+        });
+    }
+    if a.outlier_fraction > 0.0 {
+        opts.outliers = Some(simulate::OutlierModel {
+            fraction: a.outlier_fraction,
+            magnitude_mm: a.outlier_mm,
+        });
+    }
+    let robot = RobotDescription::builtin_irb14000();
+    let out = simulate_with_robot(&opts, &robot)?;
+    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
+    let overwrite = if a.force {
+        Overwrite::Allow
+    } else {
+        Overwrite::Refuse
+    };
+    crate::atomic::refuse_existing(&[&a.out.join("truth.json")], overwrite)?;
+    dataset::save_with(&out.dataset, &a.out, dataset::Units::MM_DEG, overwrite)?;
+    let mut truth = ParamsFile::from_model(&out.truth);
+    truth.method = Some(serde_json::json!("simulation truth"));
+    truth.provenance = Some(Provenance::now(Some(&a.out)));
+    truth.write(&a.out.join("truth.json"))?;
+    println!(
+        "simulated {} configurations per arm ({} cal, {} ver), seed {}, into {}",
+        a.configs,
+        a.cal,
+        a.configs - a.cal,
+        a.seed,
+        a.out.display()
+    );
+    println!(
+        "rejected samples: {} in collision, {} not facing the tracker",
+        out.rejected_for_collision, out.rejected_for_facing
+    );
+    println!("true parameters: {}", a.out.join("truth.json").display());
+    Ok(())
+}
+
+fn load_dataset(path: &Path) -> Result<Dataset> {
+    Ok(dataset::load(path)?)
+}
+
+fn evaluate_cmd(a: &EvaluateArgs) -> Result<()> {
+    let ds = load_dataset(&a.dataset)?;
+    let model = match &a.params {
+        Some(p) => ParamsFile::read(p)?.to_model()?,
+        None => nominal_for(&ds, &robot_for(&ds)?),
+    };
+    let report = metrics::evaluate(&ds, &model, a.split.into())?;
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        let what = match &a.params {
+            Some(p) => format!("parameters {}", p.display()),
+            None => "nominal model".to_string(),
+        };
+        println!(
+            "Accuracy of the {what} on {} (split: {:?})",
+            ds.dir.display(),
+            a.split
+        );
+        println!("{}", metrics::format_table(&report));
+    }
+    Ok(())
+}
+
+fn settings_from(a: &CalibrateArgs) -> CalibrationSettings {
+    CalibrationSettings {
+        split: a.split.into(),
+        method: match a.method {
+            MethodArg::Minimax => Method::Minimax,
+            MethodArg::Lsq => Method::LeastSquares,
+        },
+        qp: match a.qp {
+            QpArg::Paper => QpMethod::Paper,
+            QpArg::Exact => QpMethod::Exact,
+        },
+        max_iterations: a.max_iterations,
+        step_tolerance: a.tolerance,
+        ..CalibrationSettings::default()
+    }
+}
+
+/// A progress line per outer iteration.
+pub fn print_event(event: &CalibrationEvent) {
+    match event {
+        CalibrationEvent::StageStarted {
+            stage,
+            n_configs,
+            n_pairs,
+        } => {
+            eprintln!("{stage}: {n_configs} configurations, {n_pairs} pairs per reflector")
+        }
+        CalibrationEvent::Iteration(r) => eprintln!(
+            "  {:>3}  ψ {:>14.6} mm²   F_a {:>12.4}  F_b {:>12.4}  F_c {:>12.4}   step {:>9.2e}   KKT {:>9.2e}   {:>7.3} s",
+            r.iteration,
+            r.psi_mm2,
+            r.f_mm2[0],
+            r.f_mm2[1],
+            r.f_mm2[2],
+            r.step_norm,
+            r.kkt_residual,
+            r.elapsed_secs
+        ),
+        CalibrationEvent::StageFinished { stage, termination } => {
+            eprintln!("{stage}: {termination:?}")
+        }
+    }
+}
+
+fn calibrate_cmd(a: &CalibrateArgs) -> Result<()> {
+    let ds = load_dataset(&a.dataset)?;
+    let dataset_files: Vec<PathBuf> = [
+        ds.dir.join("dataset.toml"),
+        ds.left.file.clone(),
+        ds.right.file.clone(),
+    ]
+    .into();
+    for out in [Some(&a.out), a.urdf.as_ref()].into_iter().flatten() {
+        crate::atomic::refuse_overwrite_input(
+            out,
+            &dataset_files
+                .iter()
+                .map(PathBuf::as_path)
+                .collect::<Vec<_>>(),
+        )?;
+    }
+    let robot = robot_for(&ds)?;
+    let nominal = nominal_for(&ds, &robot);
+    let settings = settings_from(a);
+    let cancel = AtomicBool::new(false);
+    let mut observer = |e: &CalibrationEvent| {
+        if !a.quiet {
+            print_event(e)
+        }
+    };
+    let result = solver::calibrate(&ds, &nominal, &settings, &mut observer, &cancel)?;
+    print_identifiability(&result);
+    println!("\n{}", comparison_table(&ds, &result)?);
+    let file = params_file_for(&ds, &result);
+    file.write(&a.out)?;
+    println!("parameters written to {}", a.out.display());
+    if let Some(path) = &a.urdf {
+        let text = crate::urdf_export::calibrated_urdf(&robot, &result.calibrated)?;
+        crate::atomic::write_atomic(path, text.as_bytes())
+            .with_context(|| format!("writing {}", path.display()))?;
+        println!("calibrated URDF written to {}", path.display());
+    }
+    Ok(())
+}
+
+fn print_identifiability(result: &CalibrationResult) {
+    for (side, rep) in &result.identifiability {
+        println!(
+            "\n{side} arm: {} of 37 parameters identified; condition number {:.3e} → {:.3e}",
+            rep.free.len(),
+            rep.condition_before,
+            rep.condition_after
+        );
+        for f in &rep.fixed {
+            println!("  fixed {:<8} {}", f.name, f.reason);
+        }
+    }
+    for s in &result.stages {
+        println!(
+            "{}: {:?} after {} iterations, ψ {:.6} → {:.6} mm²",
+            s.stage, s.termination, s.iterations, s.psi_start_mm2, s.psi_mm2
+        );
+    }
+    println!("total time {:.3} s", result.elapsed_secs);
+}
+
+/// The parameter file of a calibration result, with the fixed parameters, terminations and statistics.
+pub fn params_file_for(ds: &Dataset, result: &CalibrationResult) -> ParamsFile {
+    let mut file = ParamsFile::from_model(&result.calibrated);
+    file.method = Some(serde_json::json!({
+        "name": "two-step minimax calibration (paper Algorithms I and II)",
+        "objective": format!("{:?}", result.settings.method),
+        "qp": format!("{:?}", result.settings.qp),
+        "split": format!("{:?}", result.settings.split),
+        "max_iterations": result.settings.max_iterations,
+        "step_tolerance": result.settings.step_tolerance,
+    }));
+    let fixed = |side: Side| -> Vec<FixedParameter> {
+        result
+            .identifiability
+            .iter()
+            .filter(|(s, _)| *s == side)
+            .flat_map(|(_, rep)| {
+                rep.fixed.iter().map(|f| FixedParameter {
+                    name: f.name.clone(),
+                    reason: f.reason.clone(),
+                })
+            })
+            .collect()
+    };
+    file.fixed_parameters = Some(FixedParameters {
+        left: fixed(Side::Left),
+        right: fixed(Side::Right),
+    });
+    file.termination = Some(serde_json::json!(result.stages));
+    let stats = |split| metrics::evaluate(ds, &result.calibrated, split).ok();
+    let conditioning: serde_json::Map<String, serde_json::Value> = result
+        .identifiability
+        .iter()
+        .map(|(side, rep)| {
+            (
+                side.name().to_string(),
+                serde_json::json!({
+                    "identified": rep.free.len(),
+                    "condition_before": finite_or_null(rep.condition_before),
+                    "condition_after": finite_or_null(rep.condition_after),
+                }),
+            )
+        })
+        .collect();
+    file.statistics = Some(serde_json::json!({
+        "cal": stats(SplitSelect::Cal),
+        "ver": stats(SplitSelect::Ver),
+        "identifiability": conditioning,
+        "reflector_side_tolerance_mm": result.side_tolerance_mm.iter().map(|(s, t)| (s.name().to_string(), serde_json::json!(t))).collect::<serde_json::Map<_, _>>(),
+        "elapsed_secs": result.elapsed_secs,
+    }));
+    file.provenance = Some(Provenance::now(Some(&ds.dir)));
+    file
+}
+
+fn finite_or_null(v: f64) -> serde_json::Value {
+    if v.is_finite() {
+        serde_json::json!(v)
+    } else {
+        serde_json::Value::Null
+    }
+}
+
+/// Nominal vs calibrated, on the calibration and verification splits.
+pub fn comparison_table(ds: &Dataset, result: &CalibrationResult) -> Result<String> {
+    let mut out = String::new();
+    let has = |split: Split| {
+        Side::BOTH.iter().all(|s| {
+            ds.arm(*s)
+                .measurements
+                .iter()
+                .filter(|m| m.split == split)
+                .count()
+                >= 2
+        })
+    };
+    for (split, name) in [
+        (SplitSelect::Cal, "calibration"),
+        (SplitSelect::Ver, "verification"),
+    ] {
+        let s = match split {
+            SplitSelect::Cal => Split::Cal,
+            _ => Split::Ver,
+        };
+        if !has(s) {
+            continue;
+        }
+        let before = metrics::evaluate(ds, &result.nominal, split)?;
+        let after = metrics::evaluate(ds, &result.calibrated, split)?;
+        out.push_str(&format!(
+            "Accuracy on the {name} configurations (nominal → calibrated)\n"
+        ));
+        out.push_str(&metrics::format_comparison(
+            &before,
+            &after,
+            ["nominal", "calibrated"],
+        ));
+        out.push('\n');
+    }
+    Ok(out)
+}
+
+/// The unmodelled joint errors of the robustness study: 1 mrad twice-per-revolution gear error and
+/// 0.5 mrad/m compliance.
+pub fn unmodelled_joint_errors() -> simulate::JointErrorModel {
+    simulate::JointErrorModel {
+        periodic_amplitude_mrad: 1.0,
+        periods_per_rev: 2.0,
+        compliance_mrad_per_m: 0.5,
+    }
+}
+
+/// Keep the first `n` calibration configurations of each arm and all verification ones.
+pub fn with_cal_subset(ds: &Dataset, n: usize) -> Dataset {
+    let mut out = ds.clone();
+    for arm in [&mut out.left, &mut out.right] {
+        let mut kept = 0;
+        arm.measurements.retain(|m| {
+            if m.split == Split::Cal {
+                kept += 1;
+                kept <= n
+            } else {
+                true
+            }
+        });
+    }
+    out
+}
+
+fn quiet_calibrate(
+    ds: &Dataset,
+    nominal: &DualArmModel,
+    settings: &CalibrationSettings,
+) -> Result<CalibrationResult> {
+    let cancel = AtomicBool::new(false);
+    Ok(solver::calibrate(
+        ds,
+        nominal,
+        settings,
+        &mut |_| {},
+        &cancel,
+    )?)
+}
+
+fn reproduce_cmd(a: &ReproduceArgs) -> Result<()> {
+    let robot = RobotDescription::builtin_irb14000();
+    match a.study {
+        Study::Fig4 => {
+            let ds = match &a.dataset {
+                Some(p) => load_dataset(p)?,
+                None => simulate_with_robot(&sim_options(a.seeds[0], 220, 120), &robot)?.dataset,
+            };
+            let nominal = robot.nominal_model(ds.nominal_reflectors_mm);
+            println!(
+                "Paper Fig. 4: relative accuracy against the number of calibration configurations (per arm)"
+            );
+            println!(
+                "| configs | left pos RMS cal / ver (mm) | right pos RMS cal / ver (mm) | left ori RMS cal / ver (rad) | right ori RMS cal / ver (rad) |"
+            );
+            println!("|---:|---:|---:|---:|---:|");
+            for &n in &a.sizes {
+                let sub = with_cal_subset(&ds, n);
+                let res = quiet_calibrate(&sub, &nominal, &CalibrationSettings::default())
+                    .with_context(|| format!("calibrating with {n} configurations"))?;
+                let cal = metrics::evaluate(&sub, &res.calibrated, SplitSelect::Cal)?;
+                let ver = metrics::evaluate(&sub, &res.calibrated, SplitSelect::Ver)?;
+                println!(
+                    "| {n} | {:.4} / {:.4} | {:.4} / {:.4} | {:.5} / {:.5} | {:.5} / {:.5} |",
+                    cal.relative_left.pos_rms_mm,
+                    ver.relative_left.pos_rms_mm,
+                    cal.relative_right.pos_rms_mm,
+                    ver.relative_right.pos_rms_mm,
+                    cal.relative_left.ori_rms_rad,
+                    ver.relative_left.ori_rms_rad,
+                    cal.relative_right.ori_rms_rad,
+                    ver.relative_right.ori_rms_rad
+                );
+            }
+        }
+        Study::Qp => {
+            println!(
+                "Exact QP against the paper's subgradient QP (120 cal + 100 ver configurations per arm)"
+            );
+            println!(
+                "| seed | QP | iterations (L/R/base) | time (s) | ψ left (mm²) | ψ right (mm²) | ψ base (mm²) | ver pos RMS L/R/collab (mm) | ver ori RMS L/R/collab (rad) |"
+            );
+            println!("|---:|---|---|---:|---:|---:|---:|---|---|");
+            for &seed in &a.seeds {
+                let sim = simulate_with_robot(&sim_options(seed, 220, 120), &robot)?;
+                let truth_ver = metrics::evaluate(&sim.dataset, &sim.truth, SplitSelect::Ver)?;
+                println!(
+                    "| {seed} | truth | – | – | – | – | – | {:.4} / {:.4} / {:.4} | {:.5} / {:.5} / {:.5} |",
+                    truth_ver.relative_left.pos_rms_mm,
+                    truth_ver.relative_right.pos_rms_mm,
+                    truth_ver.collaborative.pos_rms_mm,
+                    truth_ver.relative_left.ori_rms_rad,
+                    truth_ver.relative_right.ori_rms_rad,
+                    truth_ver.collaborative.ori_rms_rad
+                );
+                for qp in [QpMethod::Exact, QpMethod::Paper] {
+                    let settings = CalibrationSettings {
+                        qp,
+                        max_iterations: 400,
+                        ..CalibrationSettings::default()
+                    };
+                    let res = quiet_calibrate(&sim.dataset, &sim.nominal, &settings)?;
+                    let ver = metrics::evaluate(&sim.dataset, &res.calibrated, SplitSelect::Ver)?;
+                    let it: Vec<String> = res
+                        .stages
+                        .iter()
+                        .map(|s| s.iterations.to_string())
+                        .collect();
+                    let psi: Vec<f64> = res.stages.iter().map(|s| s.psi_mm2).collect();
+                    println!(
+                        "| {seed} | {qp:?} | {} | {:.3} | {:.6} | {:.6} | {:.6} | {:.4} / {:.4} / {:.4} | {:.5} / {:.5} / {:.5} |",
+                        it.join(" / "),
+                        res.elapsed_secs,
+                        psi[0],
+                        psi[1],
+                        psi[2],
+                        ver.relative_left.pos_rms_mm,
+                        ver.relative_right.pos_rms_mm,
+                        ver.collaborative.pos_rms_mm,
+                        ver.relative_left.ori_rms_rad,
+                        ver.relative_right.ori_rms_rad,
+                        ver.collaborative.ori_rms_rad
+                    );
+                }
+            }
+        }
+        Study::Robustness => {
+            println!(
+                "Minimax (paper) against least squares (LM) on data with unmodelled errors; verification split"
+            );
+            println!(
+                "| seed | data | method | pos max L/R/collab (mm) | pos RMS L/R/collab (mm) | ori max L/R/collab (rad) |"
+            );
+            println!("|---:|---|---|---|---|---|");
+            for &seed in &a.seeds {
+                let cases: [(&str, SimOptions); 2] = [
+                    (
+                        "joint errors",
+                        SimOptions {
+                            joint_error: Some(unmodelled_joint_errors()),
+                            ..sim_options(seed, 220, 120)
+                        },
+                    ),
+                    (
+                        "joint errors + 5% outliers of 1 mm",
+                        SimOptions {
+                            joint_error: Some(unmodelled_joint_errors()),
+                            outliers: Some(simulate::OutlierModel {
+                                fraction: 0.05,
+                                magnitude_mm: 1.0,
+                            }),
+                            ..sim_options(seed, 220, 120)
+                        },
+                    ),
+                ];
+                for (name, opts) in cases {
+                    let sim = simulate_with_robot(&opts, &robot)?;
+                    for method in [Method::Minimax, Method::LeastSquares] {
+                        let settings = CalibrationSettings {
+                            method,
+                            ..CalibrationSettings::default()
+                        };
+                        let res = quiet_calibrate(&sim.dataset, &sim.nominal, &settings)?;
+                        let ver =
+                            metrics::evaluate(&sim.dataset, &res.calibrated, SplitSelect::Ver)?;
+                        println!(
+                            "| {seed} | {name} | {method:?} | {:.4} / {:.4} / {:.4} | {:.4} / {:.4} / {:.4} | {:.5} / {:.5} / {:.5} |",
+                            ver.relative_left.pos_max_mm,
+                            ver.relative_right.pos_max_mm,
+                            ver.collaborative.pos_max_mm,
+                            ver.relative_left.pos_rms_mm,
+                            ver.relative_right.pos_rms_mm,
+                            ver.collaborative.pos_rms_mm,
+                            ver.relative_left.ori_max_rad,
+                            ver.relative_right.ori_max_rad,
+                            ver.collaborative.ori_max_rad
+                        );
+                    }
+                }
+            }
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,242 @@
+//! The `dualcal` command line end to end: simulate → evaluate → calibrate → evaluate, exports, and
+//! failures with a non-zero exit and a message naming the file.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn dualcal(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_dualcal"))
+        .args(args)
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .expect("run dualcal")
+}
+
+fn ok(args: &[&str]) -> String {
+    let out = dualcal(args);
+    assert!(
+        out.status.success(),
+        "dualcal {args:?} failed:\n{}\n{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+fn json(text: &str) -> serde_json::Value {
+    serde_json::from_str(text).unwrap_or_else(|e| panic!("not JSON ({e}):\n{text}"))
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+#[test]
+fn simulate_evaluate_calibrate_evaluate() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("sim");
+    ok(&[
+        "simulate",
+        "--out",
+        s(&data),
+        "--seed",
+        "3",
+        "--configs",
+        "60",
+        "--cal",
+        "40",
+    ]);
+    assert!(data.join("dataset.toml").is_file() && data.join("truth.json").is_file());
+
+    // Refuses to overwrite without --force.
+    let again = dualcal(&[
+        "simulate",
+        "--out",
+        s(&data),
+        "--seed",
+        "4",
+        "--configs",
+        "60",
+        "--cal",
+        "40",
+    ]);
+    assert!(!again.status.success());
+    assert!(String::from_utf8_lossy(&again.stderr).contains("dataset.toml"));
+
+    let nominal = json(&ok(&[
+        "evaluate",
+        s(&data),
+        "--nominal",
+        "--split",
+        "ver",
+        "--json",
+    ]));
+    let nominal_rms = nominal["relative_left"]["pos_rms_mm"].as_f64().unwrap();
+    assert!(
+        (0.5..20.0).contains(&nominal_rms),
+        "nominal RMS {nominal_rms}"
+    );
+    for key in ["relative_left", "relative_right", "collaborative"] {
+        for field in [
+            "pos_rms_mm",
+            "pos_max_mm",
+            "ori_rms_rad",
+            "ori_max_rad",
+            "pos_within_0_3mm_frac",
+            "pos_within_0_6mm_frac",
+            "ori_within_0_005rad_frac",
+            "ori_within_0_01rad_frac",
+        ] {
+            assert!(nominal[key][field].is_number(), "{key}.{field}");
+        }
+    }
+    let table = ok(&["evaluate", s(&data), "--nominal"]);
+    assert!(
+        table.contains("collaborative") || table.contains("Collaborative"),
+        "{table}"
+    );
+
+    let params = dir.path().join("params.json");
+    let urdf = dir.path().join("calibrated.urdf");
+    let out = ok(&[
+        "calibrate",
+        s(&data),
+        "--out",
+        s(&params),
+        "--urdf",
+        s(&urdf),
+        "--quiet",
+    ]);
+    assert!(
+        out.contains("fixed"),
+        "identifiability report missing:\n{out}"
+    );
+    assert!(
+        out.contains("verification"),
+        "summary table missing:\n{out}"
+    );
+    let p = json(&std::fs::read_to_string(&params).unwrap());
+    assert_eq!(p["format"], "dualcal-params/1");
+    assert_eq!(p["arms"]["left"]["dh"].as_array().unwrap().len(), 7);
+    assert!(
+        p["fixed_parameters"]["left"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|f| f["name"] == "theta1")
+    );
+    assert!(urdf_rs::read_file(&urdf).is_ok());
+
+    let after = json(&ok(&[
+        "evaluate",
+        s(&data),
+        "--params",
+        s(&params),
+        "--split",
+        "ver",
+        "--json",
+    ]));
+    let after_rms = after["relative_left"]["pos_rms_mm"].as_f64().unwrap();
+    assert!(
+        after_rms < 0.2 * nominal_rms,
+        "calibration did not help: {nominal_rms} → {after_rms}"
+    );
+    let truth = json(&ok(&[
+        "evaluate",
+        s(&data),
+        "--params",
+        s(data.join("truth.json").as_path()),
+        "--split",
+        "ver",
+        "--json",
+    ]));
+    for key in ["relative_left", "relative_right", "collaborative"] {
+        let t = truth[key]["pos_rms_mm"].as_f64().unwrap();
+        let c = after[key]["pos_rms_mm"].as_f64().unwrap();
+        assert!(c < 1.5 * t + 0.005, "{key}: calibrated {c} vs truth {t}");
+    }
+}
+
+#[test]
+fn bad_inputs_fail_with_a_message_naming_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    // Missing dataset.
+    let out = dualcal(&["evaluate", s(&dir.path().join("nope")), "--nominal"]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("nope"));
+
+    // A dataset with a broken CSV line.
+    let data = dir.path().join("sim");
+    ok(&[
+        "simulate",
+        "--out",
+        s(&data),
+        "--seed",
+        "5",
+        "--configs",
+        "12",
+        "--cal",
+        "8",
+    ]);
+    let csv = data.join("left.csv");
+    let text = std::fs::read_to_string(&csv).unwrap();
+    // Corrupt one field of one data row (comment lines contain commas too).
+    let broken: String = text
+        .lines()
+        .map(|l| {
+            if l.starts_with("L003,") {
+                l.replacen(',', ",x", 1)
+            } else {
+                l.to_string()
+            }
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    std::fs::write(&csv, broken).unwrap();
+    let out = dualcal(&[
+        "calibrate",
+        s(&data),
+        "--out",
+        s(&dir.path().join("p.json")),
+    ]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("left.csv"), "{err}");
+    assert!(!dir.path().join("p.json").exists());
+
+    // Never overwrite an input.
+    std::fs::write(&csv, text).unwrap();
+    let before = std::fs::read(&csv).unwrap();
+    let out = dualcal(&["calibrate", s(&data), "--out", s(&csv)]);
+    assert!(!out.status.success());
+    assert_eq!(std::fs::read(&csv).unwrap(), before);
+
+    // A bad parameter file.
+    let bad = dir.path().join("bad.json");
+    std::fs::write(&bad, "{\"format\": \"dualcal-params/1\", \"arms\": 3}").unwrap();
+    let out = dualcal(&["evaluate", s(&data), "--params", s(&bad)]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("bad.json"));
+}
+
+#[test]
+fn bundled_example_is_reproducible() {
+    // The shipped example is exactly what `dualcal simulate --seed 1` writes.
+    let example = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/datasets/example");
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("ex");
+    ok(&["simulate", "--out", s(&data), "--seed", "1"]);
+    for f in ["dataset.toml", "left.csv", "right.csv", "truth.json"] {
+        let a = std::fs::read_to_string(example.join(f)).unwrap();
+        let b = std::fs::read_to_string(data.join(f)).unwrap();
+        // truth.json carries a timestamp and path in its provenance; compare the parameters only.
+        if f == "truth.json" {
+            let (a, b) = (json(&a), json(&b));
+            assert_eq!(a["arms"], b["arms"]);
+            assert_eq!(a["right_base_in_left"], b["right_base_in_left"]);
+        } else {
+            assert!(a == b, "{f} differs from a fresh simulation");
+        }
+    }
+}
