@@ -625,7 +625,7 @@ impl WorkbenchApp {
             ui.heading("Calibration");
             ui.add_enabled_ui(!running, |ui| {
                 egui::Grid::new("settings grid").num_columns(2).show(ui, |ui| {
-                    ui.label("Method").on_hover_text(
+                    let l_method = ui.label("Method").on_hover_text(
                         "Minimax: the paper's min over parameters of the max over reflectors of the summed squared distance errors.\nLeast squares: all distance errors (Levenberg–Marquardt), for comparison.",
                     );
                     egui::ComboBox::from_id_salt("method")
@@ -640,9 +640,11 @@ impl WorkbenchApp {
                                 Method::LeastSquares,
                                 "least squares",
                             );
-                        });
+                        })
+                        .response
+                        .labelled_by(l_method.id);
                     ui.end_row();
-                    ui.label("QP solver").on_hover_text(
+                    let l_qp_solver = ui.label("QP solver").on_hover_text(
                         "exact: active-set solution of each SQP subproblem.\npaper: the primal-dual subgradient method of eqs. (29)–(31) (slow, inexact).",
                     );
                     egui::ComboBox::from_id_salt("qp")
@@ -653,9 +655,11 @@ impl WorkbenchApp {
                         .show_ui(ui, |ui| {
                             ui.selectable_value(&mut self.settings.qp, QpMethod::Exact, "exact");
                             ui.selectable_value(&mut self.settings.qp, QpMethod::Paper, "paper");
-                        });
+                        })
+                        .response
+                        .labelled_by(l_qp_solver.id);
                     ui.end_row();
-                    ui.label("Split").on_hover_text(
+                    let l_split = ui.label("Split").on_hover_text(
                         "Configurations used for identification: the calibration split only, or all of them",
                     );
                     egui::ComboBox::from_id_salt("split")
@@ -667,12 +671,15 @@ impl WorkbenchApp {
                         .show_ui(ui, |ui| {
                             ui.selectable_value(&mut self.settings.split, SplitSelect::Cal, "cal");
                             ui.selectable_value(&mut self.settings.split, SplitSelect::All, "all");
-                        });
+                        })
+                        .response
+                        .labelled_by(l_split.id);
                     ui.end_row();
-                    ui.label("Iteration limit").on_hover_text("Outer SQP iterations per stage");
-                    ui.add(egui::DragValue::new(&mut self.settings.max_iterations).range(1..=10_000));
+                    let l_iteration_limit = ui.label("Iteration limit").on_hover_text("Outer SQP iterations per stage");
+                    ui.add(egui::DragValue::new(&mut self.settings.max_iterations).range(1..=10_000))
+                        .labelled_by(l_iteration_limit.id);
                     ui.end_row();
-                    ui.label("Step tolerance").on_hover_text(
+                    let l_step_tolerance = ui.label("Step tolerance").on_hover_text(
                         "Stop a stage when the scaled parameter step norm falls below this",
                     );
                     ui.add(
@@ -681,16 +688,18 @@ impl WorkbenchApp {
                             .speed(0.0)
                             .custom_formatter(|v, _| format!("{v:.1e}"))
                             .custom_parser(|s| s.trim().parse::<f64>().ok()),
-                    );
+                    )
+                    .labelled_by(l_step_tolerance.id);
                     ui.end_row();
                     if self.settings.qp == QpMethod::Paper {
-                        ui.label("QP iterations").on_hover_text(
+                        let l_qp_iterations = ui.label("QP iterations").on_hover_text(
                             "Subgradient iterations of the paper's QP solver per outer iteration",
                         );
                         ui.add(
                             egui::DragValue::new(&mut self.settings.max_qp_iterations)
                                 .range(10..=1_000_000),
-                        );
+                        )
+                        .labelled_by(l_qp_iterations.id);
                         ui.end_row();
                     }
                 });
@@ -844,6 +853,7 @@ impl WorkbenchApp {
                     }
                 }
                 PlotTab::Accuracy => {
+                    let label = ui.label("Figure:");
                     egui::ComboBox::from_id_salt("figure")
                         .selected_text(self.figure.label())
                         .width(230.0)
@@ -851,7 +861,9 @@ impl WorkbenchApp {
                             for f in Figure::ALL {
                                 ui.selectable_value(&mut self.figure, f, f.label());
                             }
-                        });
+                        })
+                        .response
+                        .labelled_by(label.id);
                     ui.selectable_value(&mut self.figure_split, Split::Cal, "cal split");
                     ui.selectable_value(&mut self.figure_split, Split::Ver, "ver split");
                 }
