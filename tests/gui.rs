@@ -64,36 +64,55 @@ fn calibrate_shows_calibrated_figures() {
         !app.is_calibrating()
     });
     let app = harness.state();
-    assert!(app.errors().is_empty(), "{:?}", app.errors());
-    let session = app.session().unwrap();
-    let calibrated = session.calibrated.as_ref().expect("a calibrated result");
-    assert!(!app.history().is_empty(), "no convergence history");
+    let (ver, worst_before, worst_after) = {
+        assert!(app.errors().is_empty(), "{:?}", app.errors());
+        let session = app.session().unwrap();
+        let calibrated = session.calibrated.as_ref().expect("a calibrated result");
+        assert!(!app.history().is_empty(), "no convergence history");
 
-    // The table now lists the calibrated model's errors, and the accuracy panel shows both columns.
-    harness.get_by_label("errors of the calibrated model");
+        // The table now lists the calibrated model's errors, and the accuracy panel shows both columns.
+        harness.get_by_label("errors of the calibrated model");
+        assert!(
+            harness
+                .query_by_label("Calibrate to see the calibrated figures.")
+                .is_none()
+        );
+        // The calibrated relative figures on the verification split are shown with 3 decimals; they
+        // must be among the labels.
+        let ver = calibrated.analysis.reports[1]
+            .as_ref()
+            .expect("verification report");
+        let rms = format!("{:.3}", ver.relative_left.pos_rms_mm);
+        assert!(
+            harness.query_all_by_label(&rms).count() >= 1,
+            "{rms} mm not shown"
+        );
+        let worst = |a: &dualcal::app::session::Analysis| {
+            a.configs
+                .iter()
+                .map(|r| r.worst_pos_mm)
+                .fold(0.0f64, f64::max)
+        };
+        (
+            ver.clone(),
+            worst(&session.nominal),
+            worst(&calibrated.analysis),
+        )
+    };
+    // The summary table (Tables 4–8 style) lists the collaborative figures of both models.
+    harness.get_by_label("Summary").click();
+    harness.step();
+    harness.get_by_label("collaborative");
+    let collab = format!("{:.3}", ver.collaborative.pos_rms_mm);
     assert!(
-        harness
-            .query_by_label("Calibrate to see the calibrated figures.")
-            .is_none()
-    );
-    // The calibrated relative figures on the verification split are shown with 3 decimals; they
-    // must be among the labels.
-    let ver = calibrated.analysis.reports[1]
-        .as_ref()
-        .expect("verification report");
-    let rms = format!("{:.3}", ver.relative_left.pos_rms_mm);
-    assert!(
-        harness.query_all_by_label(&rms).count() >= 1,
-        "{rms} mm not shown"
+        harness.query_all_by_label(&collab).count() >= 1,
+        "{collab} mm not shown"
     );
     // Calibration must have lowered the worst configuration error it shows in the table.
-    let worst = |a: &dualcal::app::session::Analysis| {
-        a.configs
-            .iter()
-            .map(|r| r.worst_pos_mm)
-            .fold(0.0f64, f64::max)
-    };
-    assert!(worst(&calibrated.analysis) < worst(&session.nominal));
+    assert!(
+        worst_after < worst_before,
+        "{worst_after} >= {worst_before} mm"
+    );
 }
 
 #[test]

@@ -67,6 +67,7 @@ pub fn run_native(opts: AppLaunch) -> anyhow::Result<()> {
 enum PlotTab {
     Convergence,
     Accuracy,
+    Summary,
 }
 
 /// What the status bar says.
@@ -845,12 +846,17 @@ impl WorkbenchApp {
         ui.horizontal(|ui| {
             ui.selectable_value(&mut self.plot_tab, PlotTab::Convergence, "Convergence");
             ui.selectable_value(&mut self.plot_tab, PlotTab::Accuracy, "Accuracy");
+            ui.selectable_value(&mut self.plot_tab, PlotTab::Summary, "Summary");
             ui.separator();
             match self.plot_tab {
                 PlotTab::Convergence => {
                     for stage in plots::STAGES {
                         ui.selectable_value(&mut self.plot_stage, stage, stage.to_string());
                     }
+                }
+                PlotTab::Summary => {
+                    ui.selectable_value(&mut self.figure_split, Split::Cal, "cal split");
+                    ui.selectable_value(&mut self.figure_split, Split::Ver, "ver split");
                 }
                 PlotTab::Accuracy => {
                     let label = ui.label("Figure:");
@@ -875,6 +881,12 @@ impl WorkbenchApp {
             PlotTab::Convergence => plots::convergence_plot_ui(ui, &self.history, self.plot_stage),
             PlotTab::Accuracy => match &self.session {
                 Some(s) => plots::accuracy_ui(ui, s, self.figure, self.figure_split),
+                None => {
+                    ui.label("No dataset.");
+                }
+            },
+            PlotTab::Summary => match &self.session {
+                Some(s) => plots::accuracy_summary_ui(ui, s, self.figure_split),
                 None => {
                     ui.label("No dataset.");
                 }

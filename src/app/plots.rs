@@ -276,6 +276,88 @@ fn histogram_plot_ui(
         });
 }
 
+/// All figures of one split at a glance, nominal against calibrated (the paper's Tables 4–8).
+pub fn accuracy_summary_ui(ui: &mut egui::Ui, session: &Session, split: Split) {
+    let k = split_index(split);
+    let reports = [
+        ("nominal", session.nominal.reports[k].as_ref()),
+        (
+            "calibrated",
+            session
+                .calibrated
+                .as_ref()
+                .and_then(|c| c.analysis.reports[k].as_ref()),
+        ),
+    ];
+    let titles = [
+        "",
+        "model",
+        "Δd RMS (mm)",
+        "Δd max (mm)",
+        "|Δd| ≤ 0.3 mm",
+        "|Δd| ≤ 0.6 mm",
+        "Δo RMS (rad)",
+        "Δo max (rad)",
+        "Δo ≤ 0.005 rad",
+        "Δo ≤ 0.01 rad",
+    ];
+    egui::ScrollArea::both().show(ui, |ui| {
+        egui::Grid::new(("accuracy summary", k))
+            .striped(true)
+            .num_columns(titles.len())
+            .spacing([14.0, 4.0])
+            .show(ui, |ui| {
+                for t in titles {
+                    ui.label(RichText::new(t).strong());
+                }
+                ui.end_row();
+                let kinds = [
+                    (
+                        "relative, left arm",
+                        Figure::RelativePosition(Side::Left),
+                        Figure::RelativeOrientation(Side::Left),
+                    ),
+                    (
+                        "relative, right arm",
+                        Figure::RelativePosition(Side::Right),
+                        Figure::RelativeOrientation(Side::Right),
+                    ),
+                    (
+                        "collaborative",
+                        Figure::CollaborativePosition,
+                        Figure::CollaborativeOrientation,
+                    ),
+                ];
+                for (name, pos, ori) in kinds {
+                    for (row, (model, report)) in reports.iter().enumerate() {
+                        ui.label(if row == 0 { name } else { "" });
+                        ui.label(*model);
+                        match report {
+                            Some(r) => {
+                                let (p_rms, p_max, p_freq) = pos.summary(r);
+                                let (o_rms, o_max, o_freq) = ori.summary(r);
+                                ui.label(format!("{p_rms:.3}"));
+                                ui.label(format!("{p_max:.3}"));
+                                ui.label(format!("{:.1} %", 100.0 * p_freq[0]));
+                                ui.label(format!("{:.1} %", 100.0 * p_freq[1]));
+                                ui.label(format!("{o_rms:.5}"));
+                                ui.label(format!("{o_max:.5}"));
+                                ui.label(format!("{:.1} %", 100.0 * o_freq[0]));
+                                ui.label(format!("{:.1} %", 100.0 * o_freq[1]));
+                            }
+                            None => {
+                                for _ in 0..8 {
+                                    ui.label("—");
+                                }
+                            }
+                        }
+                        ui.end_row();
+                    }
+                }
+            });
+    });
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

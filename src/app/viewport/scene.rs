@@ -301,7 +301,7 @@ pub fn build_scene(
         let mean = (errors[0] + errors[1] + errors[2]) / 3.0;
         if options.show_measured {
             let [r, g, b] = colormap::linear(mean as f32 / max);
-            let alpha = if selected { 0.95 } else { 0.4 };
+            let alpha = if selected { 0.95 } else { 0.3 };
             for p in row.measured_body_mm {
                 scene.triangles.push(ColorVertex {
                     position: p.cast::<f32>().into(),
