@@ -35,6 +35,10 @@ pub struct SaveRequest {
 }
 
 pub trait FileAccess {
+    /// Whether this seam can show dialogs at all; when it cannot, the app asks for a path itself.
+    fn dialogs_available(&self) -> bool {
+        true
+    }
     /// Ask the user for a file to open; the reply goes to `reply`.
     fn open(&self, kind: OpenKind, reply: Sender<FileReply>);
     /// Ask the user where to save and write the bytes; the reply goes to `reply`.
@@ -45,6 +49,19 @@ pub trait FileAccess {
 pub struct NativeFiles;
 
 impl FileAccess for NativeFiles {
+    /// On Linux, rfd needs the desktop portal (on the session D-Bus) or `zenity`; a bare X server
+    /// (e.g. Xvfb) has neither. `DUALCAL_PATH_PROMPT=1` forces the in-app path prompt.
+    fn dialogs_available(&self) -> bool {
+        if std::env::var_os("DUALCAL_PATH_PROMPT").is_some() {
+            return false;
+        }
+        if cfg!(target_os = "linux") {
+            std::env::var_os("DBUS_SESSION_BUS_ADDRESS").is_some() || on_path("zenity")
+        } else {
+            true
+        }
+    }
+
     fn open(&self, kind: OpenKind, reply: Sender<FileReply>) {
         let spawned = std::thread::Builder::new()
             .name("dualcal-open-dialog".into())
@@ -91,6 +108,11 @@ impl FileAccess for NativeFiles {
             eprintln!("dualcal: cannot start the file dialog: {e}");
         }
     }
+}
+
+fn on_path(program: &str) -> bool {
+    std::env::var_os("PATH")
+        .is_some_and(|paths| std::env::split_paths(&paths).any(|dir| dir.join(program).is_file()))
 }
 
 /// Write through a temporary file in the same directory, then rename over the target.

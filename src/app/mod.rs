@@ -80,6 +80,21 @@ enum Status {
     },
 }
 
+/// What the in-app path prompt does with the path.
+enum PromptAction {
+    Open(OpenKind),
+    Save(SaveRequest),
+}
+
+/// The in-app replacement for a file dialog.
+struct PathPrompt {
+    action: PromptAction,
+    text: String,
+    error: Option<String>,
+    /// Focus the text field on the first frame.
+    focused: bool,
+}
+
 /// A dataset being loaded on a helper thread.
 struct LoadJob {
     receiver: Receiver<Result<(Session, f64), String>>,
@@ -124,6 +139,7 @@ pub struct WorkbenchApp {
     shot_receiver: Receiver<std::sync::Arc<egui::ColorImage>>,
     urdf_override: Option<PathBuf>,
     loading: Option<LoadJob>,
+    prompt: Option<PathPrompt>,
     /// Side and bottom panels shown (off: the viewport fills the window).
     panels_visible: bool,
     /// Wakes the UI from helper threads (None before the first frame in some hosts).
@@ -168,6 +184,7 @@ impl WorkbenchApp {
             shot_receiver,
             urdf_override: launch.urdf.clone(),
             loading: None,
+            prompt: None,
             panels_visible: true,
             repaint: Some(cc.egui_ctx.clone()),
             frame_stats: std::env::var_os("DUALCAL_FRAME_STATS").map(|_| FrameStats {
@@ -496,6 +513,103 @@ impl WorkbenchApp {
         }
     }
 
+    /// Ask for a file to open: the native dialog, or the in-app path prompt without one.
+    fn open_dialog(&mut self, kind: OpenKind) {
+        if self.files.dialogs_available() {
+            self.files.open(kind, self.file_sender.clone());
+        } else {
+            let text = match (kind, &self.session) {
+                (OpenKind::Dataset, Some(s)) => s.dataset.dir.join("dataset.toml"),
+                (OpenKind::Urdf, Some(s)) => s.dataset.dir.join("robot.urdf"),
+                (_, None) => std::env::current_dir().unwrap_or_default(),
+            };
+            self.prompt = Some(PathPrompt {
+                action: PromptAction::Open(kind),
+                text: text.display().to_string(),
+                error: None,
+                focused: false,
+            });
+        }
+    }
+
+    /// Ask where to save: the native dialog, or the in-app path prompt without one.
+    fn save(&mut self, request: SaveRequest) {
+        if self.files.dialogs_available() {
+            self.files.save(request, self.file_sender.clone());
+        } else {
+            let dir = std::env::current_dir().unwrap_or_default();
+            self.prompt = Some(PathPrompt {
+                text: dir.join(&request.file_name).display().to_string(),
+                action: PromptAction::Save(request),
+                error: None,
+                focused: false,
+            });
+        }
+    }
+
+    /// The in-app path prompt (used where no native file dialog is available).
+    fn path_prompt_ui(&mut self, ctx: &egui::Context) {
+        let Some(prompt) = &mut self.prompt else {
+            return;
+        };
+        let (title, verb) = match &prompt.action {
+            PromptAction::Open(OpenKind::Dataset) => ("Open dataset", "Open"),
+            PromptAction::Open(OpenKind::Urdf) => ("Open robot description (URDF)", "Open"),
+            PromptAction::Save(r) => (r.title, "Save"),
+        };
+        let mut done = false;
+        let mut confirmed = false;
+        egui::Window::new(title)
+            .collapsible(false)
+            .resizable(false)
+            .anchor(egui::Align2::CENTER_CENTER, egui::Vec2::ZERO)
+            .show(ctx, |ui| {
+                ui.label("No file dialog is available here; type the path:");
+                let r = ui.add(
+                    egui::TextEdit::singleline(&mut prompt.text)
+                        .desired_width(520.0)
+                        .id_salt("path prompt"),
+                );
+                if !prompt.focused {
+                    r.request_focus();
+                    prompt.focused = true;
+                }
+                if r.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter)) {
+                    confirmed = true;
+                }
+                if let Some(e) = &prompt.error {
+                    ui.label(RichText::new(e).color(Color32::from_rgb(255, 110, 100)));
+                }
+                ui.horizontal(|ui| {
+                    if ui.button(verb).clicked() {
+                        confirmed = true;
+                    }
+                    if ui.button("Cancel").clicked() {
+                        done = true;
+                    }
+                });
+            });
+        if confirmed {
+            let path = PathBuf::from(prompt.text.trim());
+            match &prompt.action {
+                PromptAction::Open(kind) => {
+                    let _ = self.file_sender.send(FileReply::Open(*kind, path));
+                    done = true;
+                }
+                PromptAction::Save(request) => match files::write_atomic(&path, &request.bytes) {
+                    Ok(()) => {
+                        let _ = self.file_sender.send(FileReply::Saved(path));
+                        done = true;
+                    }
+                    Err(e) => prompt.error = Some(format!("{}: {e}", path.display())),
+                },
+            }
+        }
+        if done {
+            self.prompt = None;
+        }
+    }
+
     fn export(&mut self, what: Export, ctx: &egui::Context) {
         let Some(session) = &self.session else {
             return;
@@ -546,7 +660,7 @@ impl WorkbenchApp {
             }
         };
         match result {
-            Ok(request) => self.files.save(request, self.file_sender.clone()),
+            Ok(request) => self.save(request),
             Err(e) => self.errors.push(format!("export: {e:#}")),
         }
     }
@@ -592,7 +706,7 @@ impl WorkbenchApp {
                     .on_hover_text("Open a dualcal-dataset/1 dataset.toml (or drop one on the window)")
                     .clicked()
                 {
-                    self.files.open(OpenKind::Dataset, self.file_sender.clone());
+                    self.open_dialog(OpenKind::Dataset);
                 }
                 if ui
                     .add_enabled(self.loading.is_none(), egui::Button::new("Example"))
@@ -619,7 +733,7 @@ impl WorkbenchApp {
                 .on_hover_text("Use another robot description (URDF) for this dataset")
                 .clicked()
             {
-                self.files.open(OpenKind::Urdf, self.file_sender.clone());
+                self.open_dialog(OpenKind::Urdf);
             }
 
             ui.separator();
@@ -1138,6 +1252,7 @@ impl eframe::App for WorkbenchApp {
         if self.panels_visible {
             self.panels_ui(ui);
         }
+        self.path_prompt_ui(&ui.ctx().clone());
         egui::CentralPanel::default()
             .frame(egui::Frame::NONE)
             .show(ui, |ui| {
