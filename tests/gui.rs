@@ -94,7 +94,7 @@ fn calibrate_shows_calibrated_figures() {
                 .fold(0.0f64, f64::max)
         };
         (
-            ver.clone(),
+            *ver,
             worst(&session.nominal),
             worst(&calibrated.analysis),
         )
