@@ -103,11 +103,14 @@ struct LoadJob {
 }
 
 /// How often to print frame statistics (`DUALCAL_FRAME_STATS=1`).
-const FRAME_STATS_WINDOW: usize = 120;
+const FRAME_STATS_WINDOW: usize = 30;
 
 struct FrameStats {
     last: Option<std::time::Instant>,
+    /// Time between frames (everything: egui, our render pass, egui's, presenting).
     samples_ms: Vec<f64>,
+    /// Time spent building the UI on the CPU.
+    ui_ms: Vec<f64>,
 }
 
 /// The workbench application.
@@ -156,7 +159,14 @@ impl WorkbenchApp {
     /// Like [`new`](Self::new); `msaa = false` gives pixel-stable snapshots in tests.
     pub fn with_msaa(cc: &eframe::CreationContext<'_>, launch: AppLaunch, msaa: bool) -> Self {
         cc.egui_ctx.set_theme(egui::Theme::Dark);
-        viewport::install_gpu(cc.wgpu_render_state.as_ref(), if msaa { 4 } else { 1 });
+        // `DUALCAL_MSAA=1` turns multisampling off (software renderers), `=4` on.
+        let samples = match std::env::var("DUALCAL_MSAA").ok().as_deref() {
+            Some("1") => 1,
+            Some("4") => 4,
+            _ if msaa => 4,
+            _ => 1,
+        };
+        viewport::install_gpu(cc.wgpu_render_state.as_ref(), samples);
         let (file_sender, file_receiver) = channel();
         let (shot_sender, shot_receiver) = channel();
         let mut app = Self {
@@ -190,6 +200,7 @@ impl WorkbenchApp {
             frame_stats: std::env::var_os("DUALCAL_FRAME_STATS").map(|_| FrameStats {
                 last: None,
                 samples_ms: Vec::new(),
+                ui_ms: Vec::new(),
             }),
         };
         let dataset = launch.dataset.unwrap_or_else(bundled_example_path);
@@ -1129,10 +1140,17 @@ impl WorkbenchApp {
             s.sort_by(f64::total_cmp);
             let mean = s.iter().sum::<f64>() / s.len() as f64;
             let p95 = s[(s.len() * 95 / 100).min(s.len() - 1)];
+            let ui = std::mem::take(&mut stats.ui_ms);
+            let ui_mean = ui.iter().sum::<f64>() / ui.len().max(1) as f64;
             eprintln!(
-                "frame time over {} frames: mean {mean:.1} ms, p95 {p95:.1} ms, max {:.1} ms",
+                "frame time over {} frames: mean {mean:.1} ms, p95 {p95:.1} ms, max {:.1} ms (UI build on the CPU: mean {ui_mean:.1} ms){}",
                 s.len(),
-                s[s.len() - 1]
+                s[s.len() - 1],
+                if self.job.is_some() {
+                    " [calibrating]"
+                } else {
+                    ""
+                }
             );
         }
         ctx.request_repaint();
@@ -1249,6 +1267,7 @@ impl eframe::App for WorkbenchApp {
 
     fn ui(&mut self, ui: &mut egui::Ui, frame: &mut eframe::Frame) {
         self.record_frame_time(ui.ctx());
+        let ui_started = std::time::Instant::now();
         if self.panels_visible {
             self.panels_ui(ui);
         }
@@ -1267,6 +1286,9 @@ impl eframe::App for WorkbenchApp {
                     self.select(sel, true);
                 }
             });
+        if let Some(stats) = &mut self.frame_stats {
+            stats.ui_ms.push(ui_started.elapsed().as_secs_f64() * 1e3);
+        }
     }
 }
 

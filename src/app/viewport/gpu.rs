@@ -121,6 +121,8 @@ pub struct ViewportGpu {
     triangles: DynBuffer,
     scene_version: Option<u64>,
     targets: Option<Targets>,
+    /// What the targets currently hold (scene version, camera), to skip re-rendering an unchanged view.
+    rendered: Option<(u64, FrameUniform)>,
 }
 
 fn primitive_index(p: Primitive) -> usize {
@@ -367,6 +369,7 @@ impl ViewportGpu {
             triangles: DynBuffer::new(device, "viewport triangles", wgpu::BufferUsages::VERTEX),
             scene_version: None,
             targets: None,
+            rendered: None,
         }
     }
 
@@ -420,6 +423,7 @@ impl ViewportGpu {
             self.sample_count,
             wgpu::TextureUsages::RENDER_ATTACHMENT,
         );
+        self.rendered = None;
         self.targets = Some(Targets {
             size_px,
             msaa_view,
@@ -545,11 +549,17 @@ impl egui_wgpu::CallbackTrait for ViewportCallback {
         let Some(gpu) = callback_resources.get_mut::<ViewportGpu>() else {
             return Vec::new();
         };
+        // The offscreen image persists: render only when the scene or the camera changed.
+        let key = (self.scene.version, self.uniform);
+        if gpu.rendered == Some(key) {
+            return Vec::new();
+        }
         if gpu.scene_version != Some(self.scene.version) {
             gpu.upload_scene(device, queue, &self.scene);
         }
         queue.write_buffer(&gpu.uniform_buffer, 0, bytemuck::bytes_of(&self.uniform));
         gpu.render(egui_encoder);
+        gpu.rendered = Some(key);
         Vec::new()
     }
 
