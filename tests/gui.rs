@@ -93,11 +93,7 @@ fn calibrate_shows_calibrated_figures() {
                 .map(|r| r.worst_pos_mm)
                 .fold(0.0f64, f64::max)
         };
-        (
-            *ver,
-            worst(&session.nominal),
-            worst(&calibrated.analysis),
-        )
+        (*ver, worst(&session.nominal), worst(&calibrated.analysis))
     };
     // The summary table (Tables 4–8 style) lists the collaborative figures of both models.
     harness.get_by_label("Summary").click();
@@ -317,4 +313,53 @@ fn click_at(harness: &mut Harness<'_, WorkbenchApp>, pos: eframe::egui::Pos2) {
     });
     harness.step();
     harness.step();
+}
+
+/// Not a benchmark with a threshold: prints the time to build and render (lavapipe, no window) a
+/// 1400×900 frame with all 2 × 220 configurations' triangles and error vectors, the camera orbiting
+/// so the viewport re-renders every frame. Run with
+/// `cargo test --release --test gui frame_time -- --ignored --nocapture`.
+#[test]
+#[ignore]
+fn frame_time() {
+    let mut harness = harness([1400.0, 900.0], AppLaunch::default());
+    loaded(&mut harness);
+    type Setup = fn(&mut dualcal::app::viewport::scene::SceneOptions);
+    let variants: [(&str, bool, Setup); 4] = [
+        ("whole window", true, |_| {}),
+        ("viewport only", false, |_| {}),
+        ("viewport only, robot only", false, |o| {
+            o.show_measured = false;
+            o.show_model = false;
+            o.show_vectors = false;
+        }),
+        ("viewport only, nothing drawn", false, |o| {
+            o.show_robot = false;
+            o.show_grid = false;
+            o.show_measured = false;
+            o.show_model = false;
+            o.show_vectors = false;
+        }),
+    ];
+    for (label, panels, setup) in variants {
+        harness.state_mut().set_panels_visible(panels);
+        setup(&mut harness.state_mut().viewport_mut().options);
+        harness.run_steps(2);
+        let _ = harness.render();
+        let mut samples = Vec::new();
+        for _ in 0..40 {
+            harness.state_mut().viewport_mut().camera.orbit(5.0, 0.0);
+            let t = std::time::Instant::now();
+            harness.step();
+            harness.render().expect("render");
+            samples.push(t.elapsed().as_secs_f64() * 1e3);
+        }
+        samples.sort_by(f64::total_cmp);
+        let mean = samples.iter().sum::<f64>() / samples.len() as f64;
+        println!(
+            "{label}: mean {mean:.1} ms, median {:.1} ms, max {:.1} ms per frame (build + render + readback)",
+            samples[samples.len() / 2],
+            samples[samples.len() - 1]
+        );
+    }
 }
