@@ -27,7 +27,7 @@ fn log_axis_label(mark: egui_plot::GridMark, _range: &std::ops::RangeInclusive<f
     if (v - v.round()).abs() < 1e-9 {
         format!("1e{}", v.round() as i64)
     } else {
-        String::new()
+        format!("{:.0e}", 10f64.powf(v))
     }
 }
 
@@ -36,13 +36,25 @@ fn log_spacer(input: egui_plot::GridInput) -> Vec<egui_plot::GridMark> {
     let (lo, hi) = (lo.floor() as i64, hi.ceil() as i64);
     let span = (hi - lo).max(1);
     let step = (span / 8).max(1);
-    (lo..=hi)
+    let mut marks: Vec<egui_plot::GridMark> = (lo..=hi)
         .filter(|k| k % step == 0)
         .map(|k| egui_plot::GridMark {
             value: k as f64,
             step_size: step as f64,
         })
-        .collect()
+        .collect();
+    // Few decades in view: add 2× and 5× marks.
+    if span <= 3 {
+        for k in lo..hi {
+            for m in [2f64, 5.0] {
+                marks.push(egui_plot::GridMark {
+                    value: k as f64 + m.log10(),
+                    step_size: 0.3,
+                });
+            }
+        }
+    }
+    marks
 }
 
 /// ψ and F_a, F_b, F_c (log scale) over the iterations of `stage`, and below them the step norm and
@@ -72,7 +84,6 @@ pub fn convergence_plot_ui(ui: &mut egui::Ui, history: &[IterationRecord], stage
             .filter_map(|r| log10(f(r)).map(|y| [r.iteration as f64, y]))
             .collect()
     };
-    let link = egui::Id::unique(("convergence x", format!("{stage:?}")));
     let psi = series(&|r| r.psi_mm2);
     let f: [Vec<[f64; 2]>; 3] = std::array::from_fn(|k| series(&|r| r.f_mm2[k]));
     let step = series(&|r| r.step_norm);
@@ -81,10 +92,11 @@ pub fn convergence_plot_ui(ui: &mut egui::Ui, history: &[IterationRecord], stage
         Plot::new(("objective", format!("{stage:?}")))
             .legend(Legend::default())
             .x_axis_label("iteration")
+            .x_axis_formatter(|m, _| format!("{:.0}", m.value))
+            .set_margin_fraction(egui::vec2(0.05, 0.12))
             .y_axis_label("mm² (log10)")
             .y_axis_formatter(log_axis_label)
             .y_grid_spacer(log_spacer)
-            .link_axis(link, [true, false])
             .show(&mut cols[0], |plot| {
                 plot.line(Line::new("ψ = max F", psi).color(PSI_COLOR).width(2.5));
                 for (k, (name, points)) in ["F_a", "F_b", "F_c"].into_iter().zip(f).enumerate() {
@@ -94,10 +106,11 @@ pub fn convergence_plot_ui(ui: &mut egui::Ui, history: &[IterationRecord], stage
         Plot::new(("step", format!("{stage:?}")))
             .legend(Legend::default())
             .x_axis_label("iteration")
+            .x_axis_formatter(|m, _| format!("{:.0}", m.value))
+            .set_margin_fraction(egui::vec2(0.05, 0.12))
             .y_axis_label("log10")
             .y_axis_formatter(log_axis_label)
             .y_grid_spacer(log_spacer)
-            .link_axis(link, [true, false])
             .show(&mut cols[1], |plot| {
                 plot.line(
                     Line::new("step norm (scaled)", step).color(Color32::from_rgb(200, 150, 240)),
