@@ -22,7 +22,7 @@ use arm::ArmProblem;
 use base::BaseProblem;
 use identifiability::IdentifiabilityReport;
 use lm::LmState;
-use nalgebra::{DVector, Vector3};
+use nalgebra::{DMatrix, DVector, Vector3};
 use problem::MinimaxProblem;
 use serde::{Deserialize, Serialize};
 use sqp::{SqpSettings, SqpState};
@@ -365,18 +365,25 @@ impl Calibration {
             input.side_tolerance_mm,
         );
         let rows = probe.sample_pair_jacobian(&DVector::zeros(N_PARAMS), 30_000);
-        let report = identifiability::analyse(&rows, &[true; N_PARAMS]);
+        let (report, gram) = identifiability::analyse_with_gram(&rows, &[true; N_PARAMS]);
         if report.free.is_empty() {
             return Err(CalibrationError::RankDeficient {
                 stage,
                 detail: "no parameter is identifiable from these configurations".into(),
             });
         }
-        let rms = arm::column_rms(&rows);
+        // Scale every free parameter by its RMS sensitivity; H₀ is the Gauss–Newton matrix in those
+        // variables, 2·D·G·D with G the mean Gram matrix of the pair Jacobian.
         let scale = DVector::from_iterator(
             report.free.len(),
-            report.free.iter().map(|&k| 1.0 / rms[k].max(1e-12)),
+            report
+                .free
+                .iter()
+                .map(|&k| 1.0 / gram[(k, k)].sqrt().max(1e-12)),
         );
+        let h0 = DMatrix::from_fn(report.free.len(), report.free.len(), |i, j| {
+            2.0 * gram[(report.free[i], report.free[j])] * scale[i] * scale[j]
+        });
         let problem = ArmProblem::new(
             input.qs.clone(),
             &input.measured,
@@ -387,7 +394,7 @@ impl Calibration {
         );
         self.identifiability.retain(|(s, _)| *s != side);
         self.identifiability.push((side, report));
-        let runner = self.make_runner(problem, stage)?;
+        let runner = self.make_runner(problem, stage, Some(h0))?;
         Ok(StageState::Arm {
             side,
             runner: Box::new(runner),
@@ -420,7 +427,7 @@ impl Calibration {
                 detail: format!("collaborative Jacobian singular values {:?}", sv.as_slice()),
             });
         }
-        let runner = self.make_runner(problem, stage)?;
+        let runner = self.make_runner(problem, stage, None)?;
         Ok(StageState::Base {
             runner: Box::new(runner),
         })
@@ -430,18 +437,24 @@ impl Calibration {
         &mut self,
         problem: P,
         stage: Stage,
+        h0: Option<DMatrix<f64>>,
     ) -> Result<Runner<P>, CalibrationError> {
         self.stage_iterations = 0;
         self.pending_start = true;
         let runner = match self.settings.method {
-            Method::Minimax => Runner::Sqp(Box::new(
-                SqpState::new(problem, self.sqp_settings()).map_err(|_| {
+            Method::Minimax => {
+                let settings = self.sqp_settings();
+                let state = match h0 {
+                    Some(h0) => SqpState::with_hessian(problem, settings, h0),
+                    None => SqpState::new(problem, settings),
+                };
+                Runner::Sqp(Box::new(state.map_err(|_| {
                     CalibrationError::NonFinite {
                         stage,
                         detail: "objective or gradient at the start point".into(),
                     }
-                })?,
-            )),
+                })?))
+            }
             Method::LeastSquares => Runner::Lm(Box::new(LmState::new(
                 problem,
                 self.settings.step_tolerance,

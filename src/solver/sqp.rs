@@ -47,13 +47,24 @@ pub struct SqpState<P: MinimaxProblem> {
 pub struct NonFiniteStart;
 
 impl<P: MinimaxProblem> SqpState<P> {
+    /// Start at y = 0 with the problem's Gauss–Newton matrix as H₀.
     pub fn new(problem: P, settings: SqpSettings) -> Result<Self, NonFiniteStart> {
+        let h0 = problem.gauss_newton(&DVector::zeros(problem.dim()));
+        Self::with_hessian(problem, settings, h0)
+    }
+
+    /// Start at y = 0 with a given H₀ (e.g. a Gauss–Newton matrix computed already).
+    pub fn with_hessian(
+        problem: P,
+        settings: SqpSettings,
+        h0: DMatrix<f64>,
+    ) -> Result<Self, NonFiniteStart> {
         let y = DVector::zeros(problem.dim());
         let eval = problem.evaluate(&y);
-        if !eval.is_finite() {
+        if !eval.is_finite() || h0.nrows() != y.len() || h0.ncols() != y.len() {
             return Err(NonFiniteStart);
         }
-        let mut h = problem.gauss_newton(&y);
+        let mut h = h0;
         let m = h.nrows();
         let mean_diag = (h.trace() / m.max(1) as f64).max(1e-12);
         for i in 0..m {
