@@ -277,6 +277,9 @@ pub struct Calibration {
     pending_start: bool,
 }
 
+/// Pairs per reflector sampled for identifiability, column scaling and the start Hessian.
+const IDENTIFIABILITY_PAIRS: usize = 3000;
+
 fn side_index(side: Side) -> usize {
     match side {
         Side::Left => 0,
@@ -364,7 +367,8 @@ impl Calibration {
             DVector::from_element(N_PARAMS, 1.0),
             input.side_tolerance_mm,
         );
-        let rows = probe.sample_pair_jacobian(&DVector::zeros(N_PARAMS), 30_000);
+        // A few thousand pairs show every dependency (they are exact) and estimate the scaling well.
+        let rows = probe.sample_pair_jacobian(&DVector::zeros(N_PARAMS), IDENTIFIABILITY_PAIRS);
         let (report, gram) = identifiability::analyse_with_gram(&rows, &[true; N_PARAMS]);
         if report.free.is_empty() {
             return Err(CalibrationError::RankDeficient {

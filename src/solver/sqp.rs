@@ -172,23 +172,35 @@ impl<P: MinimaxProblem> SqpState<P> {
         if s_norm < self.settings.step_tolerance || predicted > -1e-15 * phi0.abs().max(1e-300) {
             return done(self, Termination::Converged, kkt, sol.iterations);
         }
+        // The full step is tried with values and gradients at once (it is accepted in most
+        // iterations, and its evaluation is then reused); shorter steps with values only.
+        let full = &self.y + &sol.s;
+        let full_eval = self.problem.evaluate(&full);
         let mut alpha = 1.0;
         let accepted = loop {
             let y_new = &self.y + &sol.s * alpha;
-            let (f, cons) = self.problem.values(&y_new);
+            let (f, cons) = if alpha == 1.0 {
+                (full_eval.f, full_eval.cons.clone())
+            } else {
+                self.problem.values(&y_new)
+            };
             let phi = self.merit(&f, &cons);
             if phi.is_finite() && phi <= phi0 + 1e-4 * alpha * predicted {
-                break Some(y_new);
+                break Some((y_new, alpha));
             }
             alpha *= 0.5;
             if alpha < 1e-10 {
                 break None;
             }
         };
-        let Some(y_new) = accepted else {
+        let Some((y_new, alpha)) = accepted else {
             return done(self, Termination::Stalled, kkt, sol.iterations);
         };
-        let eval_new = self.problem.evaluate(&y_new);
+        let eval_new = if alpha == 1.0 {
+            full_eval
+        } else {
+            self.problem.evaluate(&y_new)
+        };
         if !eval_new.is_finite() {
             return done(self, Termination::Stalled, kkt, sol.iterations);
         }
