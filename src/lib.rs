@@ -5,6 +5,8 @@
 //! `gui` feature.
 #![forbid(unsafe_code)]
 
+#[cfg(feature = "gui")]
+pub mod app;
 pub mod atomic;
 pub mod cli;
 pub mod collision;

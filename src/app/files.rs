@@ -1,0 +1,123 @@
+//! File access behind one seam: the native build uses rfd dialogs on helper threads and atomic
+//! writes; a browser build can replace [`FileAccess`] with downloads and `<input type=file>`.
+//! Replies arrive on a channel the app drains each frame, so the UI never waits on a dialog.
+
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+use std::sync::mpsc::Sender;
+
+/// What the user wants to open.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum OpenKind {
+    /// A `dataset.toml` (or its directory).
+    Dataset,
+    /// A robot description.
+    Urdf,
+}
+
+/// The answer to a request.
+#[derive(Debug)]
+pub enum FileReply {
+    Open(OpenKind, PathBuf),
+    Saved(PathBuf),
+    Failed(String),
+    /// The user closed the dialog.
+    Cancelled,
+}
+
+/// A file to save: suggested name, filter and contents.
+pub struct SaveRequest {
+    pub title: &'static str,
+    pub file_name: String,
+    pub filter_name: &'static str,
+    pub extensions: &'static [&'static str],
+    pub bytes: Vec<u8>,
+}
+
+pub trait FileAccess {
+    /// Ask the user for a file to open; the reply goes to `reply`.
+    fn open(&self, kind: OpenKind, reply: Sender<FileReply>);
+    /// Ask the user where to save and write the bytes; the reply goes to `reply`.
+    fn save(&self, request: SaveRequest, reply: Sender<FileReply>);
+}
+
+/// Native dialogs (rfd) run on a helper thread; writes are atomic.
+pub struct NativeFiles;
+
+impl FileAccess for NativeFiles {
+    fn open(&self, kind: OpenKind, reply: Sender<FileReply>) {
+        let spawned = std::thread::Builder::new()
+            .name("dualcal-open-dialog".into())
+            .spawn(move || {
+                let dialog = rfd::FileDialog::new();
+                let picked = match kind {
+                    OpenKind::Dataset => dialog
+                        .set_title("Open dataset (dataset.toml)")
+                        .add_filter("dualcal dataset", &["toml"])
+                        .pick_file(),
+                    OpenKind::Urdf => dialog
+                        .set_title("Open robot description (URDF)")
+                        .add_filter("URDF", &["urdf", "xml"])
+                        .pick_file(),
+                };
+                let _ = reply.send(match picked {
+                    Some(path) => FileReply::Open(kind, path),
+                    None => FileReply::Cancelled,
+                });
+            });
+        if let Err(e) = spawned {
+            eprintln!("dualcal: cannot start the file dialog: {e}");
+        }
+    }
+
+    fn save(&self, request: SaveRequest, reply: Sender<FileReply>) {
+        let spawned = std::thread::Builder::new()
+            .name("dualcal-save-dialog".into())
+            .spawn(move || {
+                let picked = rfd::FileDialog::new()
+                    .set_title(request.title)
+                    .set_file_name(&request.file_name)
+                    .add_filter(request.filter_name, request.extensions)
+                    .save_file();
+                let _ = reply.send(match picked {
+                    Some(path) => match write_atomic(&path, &request.bytes) {
+                        Ok(()) => FileReply::Saved(path),
+                        Err(e) => FileReply::Failed(format!("{}: {e}", path.display())),
+                    },
+                    None => FileReply::Cancelled,
+                });
+            });
+        if let Err(e) = spawned {
+            eprintln!("dualcal: cannot start the file dialog: {e}");
+        }
+    }
+}
+
+/// Write through a temporary file in the same directory, then rename over the target.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    let mut tmp = tempfile::NamedTempFile::new_in(dir)?;
+    tmp.write_all(bytes)?;
+    tmp.as_file().sync_all()?;
+    tmp.persist(path).map_err(|e| e.error)?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn atomic_write_replaces_the_whole_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("out.csv");
+        write_atomic(&path, b"first, longer content").unwrap();
+        write_atomic(&path, b"second").unwrap();
+        assert_eq!(std::fs::read(&path).unwrap(), b"second");
+        // No temporary files are left behind.
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+}

@@ -1,0 +1,1162 @@
+//! The workbench: an egui/eframe app to load a dataset, calibrate, inspect every configuration in 3D
+//! and export the result.
+//!
+//! Layout: settings on the left, the 3D viewport in the centre, the per-configuration table on the
+//! right, convergence and accuracy plots below, a status bar at the bottom. The engine runs on a
+//! worker thread ([`worker`]); file dialogs go through the [`files::FileAccess`] seam.
+
+pub mod colormap;
+pub mod files;
+pub mod plots;
+pub mod registration;
+pub mod session;
+pub mod table;
+pub mod viewport;
+pub mod worker;
+
+use crate::dataset::{Split, SplitSelect};
+use crate::kinematics::Side;
+use crate::solver::{
+    CalibrationEvent, CalibrationSettings, IterationRecord, Method, QpMethod, Stage,
+};
+use anyhow::Context as _;
+use eframe::egui::{self, Color32, RichText};
+use files::{FileAccess, FileReply, NativeFiles, OpenKind, SaveRequest};
+use session::{Figure, Session};
+use std::path::{Path, PathBuf};
+use std::sync::mpsc::{Receiver, Sender, channel};
+use viewport::ViewportState;
+use viewport::scene::Selection;
+use worker::{CalibrationJob, Outcome, WorkerMessage};
+
+/// What the window opens with.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct AppLaunch {
+    /// Dataset directory or `dataset.toml`; `None` opens the bundled example.
+    pub dataset: Option<PathBuf>,
+    /// Robot description overriding the dataset's; `None` uses the dataset's or the built-in one.
+    pub urdf: Option<PathBuf>,
+}
+
+/// The bundled example dataset (in the source tree).
+pub fn bundled_example_path() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/datasets/example")
+}
+
+/// Open the workbench window (blocks until it is closed).
+pub fn run_native(opts: AppLaunch) -> anyhow::Result<()> {
+    let options = eframe::NativeOptions {
+        viewport: egui::ViewportBuilder::default()
+            .with_title("dualcal workbench")
+            .with_inner_size([1400.0, 900.0])
+            .with_min_inner_size([900.0, 600.0])
+            .with_drag_and_drop(true),
+        renderer: eframe::Renderer::Wgpu,
+        ..Default::default()
+    };
+    eframe::run_native(
+        "dualcal workbench",
+        options,
+        Box::new(move |cc| Ok(Box::new(WorkbenchApp::new(cc, opts)))),
+    )
+    .map_err(|e| anyhow::anyhow!("cannot open the workbench window: {e}"))
+}
+
+/// Tabs of the bottom area.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum PlotTab {
+    Convergence,
+    Accuracy,
+}
+
+/// What the status bar says.
+#[derive(Clone, Debug, PartialEq)]
+enum Status {
+    Idle(String),
+    Running {
+        stage: Option<Stage>,
+        iteration: usize,
+    },
+}
+
+/// A dataset being loaded on a helper thread.
+struct LoadJob {
+    receiver: Receiver<Result<(Session, f64), String>>,
+    /// The robot override to restore if loading fails (when the load was a URDF change).
+    previous_override: Option<Option<PathBuf>>,
+}
+
+/// How often to print frame statistics (`DUALCAL_FRAME_STATS=1`).
+const FRAME_STATS_WINDOW: usize = 120;
+
+struct FrameStats {
+    last: Option<std::time::Instant>,
+    samples_ms: Vec<f64>,
+}
+
+/// The workbench application.
+pub struct WorkbenchApp {
+    session: Option<Session>,
+    /// Bumped whenever the session or its models change (the viewport rebuilds its scene).
+    generation: u64,
+    settings: CalibrationSettings,
+    job: Option<CalibrationJob>,
+    /// Iterations of the current (or last) run.
+    history: Vec<IterationRecord>,
+    status: Status,
+    errors: Vec<String>,
+    selection: Selection,
+    scroll_table_to_selection: bool,
+    viewport: ViewportState,
+    table: table::TableState,
+    plot_tab: PlotTab,
+    plot_stage: Stage,
+    figure: Figure,
+    figure_split: Split,
+    files: Box<dyn FileAccess>,
+    file_sender: Sender<FileReply>,
+    file_receiver: Receiver<FileReply>,
+    /// Rect of the plot area, for "Export plots as PNG".
+    plot_rect: Option<egui::Rect>,
+    screenshot_pending: bool,
+    shot_sender: Sender<std::sync::Arc<egui::ColorImage>>,
+    shot_receiver: Receiver<std::sync::Arc<egui::ColorImage>>,
+    urdf_override: Option<PathBuf>,
+    loading: Option<LoadJob>,
+    /// Side and bottom panels shown (off: the viewport fills the window).
+    panels_visible: bool,
+    /// Wakes the UI from helper threads (None before the first frame in some hosts).
+    repaint: Option<egui::Context>,
+    frame_stats: Option<FrameStats>,
+}
+
+impl WorkbenchApp {
+    /// The app as `dualcal gui` opens it (4× MSAA in the viewport).
+    pub fn new(cc: &eframe::CreationContext<'_>, launch: AppLaunch) -> Self {
+        Self::with_msaa(cc, launch, true)
+    }
+
+    /// Like [`new`](Self::new); `msaa = false` gives pixel-stable snapshots in tests.
+    pub fn with_msaa(cc: &eframe::CreationContext<'_>, launch: AppLaunch, msaa: bool) -> Self {
+        cc.egui_ctx.set_theme(egui::Theme::Dark);
+        viewport::install_gpu(cc.wgpu_render_state.as_ref(), if msaa { 4 } else { 1 });
+        let (file_sender, file_receiver) = channel();
+        let (shot_sender, shot_receiver) = channel();
+        let mut app = Self {
+            session: None,
+            generation: 0,
+            settings: CalibrationSettings::default(),
+            job: None,
+            history: Vec::new(),
+            status: Status::Idle("Ready.".into()),
+            errors: Vec::new(),
+            selection: None,
+            scroll_table_to_selection: false,
+            viewport: ViewportState::default(),
+            table: table::TableState::default(),
+            plot_tab: PlotTab::Convergence,
+            plot_stage: Stage::Arm(Side::Left),
+            figure: Figure::RelativePosition(Side::Left),
+            figure_split: Split::Ver,
+            files: Box::new(NativeFiles),
+            file_sender,
+            file_receiver,
+            plot_rect: None,
+            screenshot_pending: false,
+            shot_sender,
+            shot_receiver,
+            urdf_override: launch.urdf.clone(),
+            loading: None,
+            panels_visible: true,
+            repaint: Some(cc.egui_ctx.clone()),
+            frame_stats: std::env::var_os("DUALCAL_FRAME_STATS").map(|_| FrameStats {
+                last: None,
+                samples_ms: Vec::new(),
+            }),
+        };
+        let dataset = launch.dataset.unwrap_or_else(bundled_example_path);
+        app.open_dataset(&dataset);
+        app
+    }
+
+    // ---- state access (tests, embedding) -------------------------------------------------------
+
+    pub fn session(&self) -> Option<&Session> {
+        self.session.as_ref()
+    }
+
+    pub fn is_calibrating(&self) -> bool {
+        self.job.is_some()
+    }
+
+    /// Error messages currently shown.
+    pub fn errors(&self) -> &[String] {
+        &self.errors
+    }
+
+    pub fn selection(&self) -> Selection {
+        self.selection
+    }
+
+    pub fn history(&self) -> &[IterationRecord] {
+        &self.history
+    }
+
+    pub fn settings_mut(&mut self) -> &mut CalibrationSettings {
+        &mut self.settings
+    }
+
+    pub fn viewport(&self) -> &ViewportState {
+        &self.viewport
+    }
+
+    /// The measurement index arm `side_index` (0 left, 1 right) is drawn in.
+    pub fn viewport_pose(&self, side_index: usize) -> Option<usize> {
+        self.viewport.poses.get(side_index).copied().flatten()
+    }
+
+    /// The viewport's camera and display options.
+    pub fn viewport_mut(&mut self) -> &mut ViewportState {
+        &mut self.viewport
+    }
+
+    /// Show or hide everything but the viewport (for snapshots and presentations).
+    pub fn set_panels_visible(&mut self, visible: bool) {
+        self.panels_visible = visible;
+    }
+
+    /// Replace the file-dialog seam (a browser build, or tests).
+    pub fn set_file_access(&mut self, files: Box<dyn FileAccess>) {
+        self.files = files;
+    }
+
+    // ---- actions -------------------------------------------------------------------------------
+
+    /// Load a dataset on a helper thread; on failure the error is shown and the current session
+    /// stays.
+    pub fn open_dataset(&mut self, path: &Path) {
+        self.start_load(path, None);
+    }
+
+    /// Use another robot description for the current dataset (and later ones).
+    pub fn open_urdf(&mut self, path: &Path) {
+        let previous = self.urdf_override.replace(path.to_path_buf());
+        if let Some(dir) = self.session.as_ref().map(|s| s.dataset.dir.clone()) {
+            self.start_load(&dir, Some(previous));
+        }
+    }
+
+    fn start_load(&mut self, path: &Path, previous_override: Option<Option<PathBuf>>) {
+        let (sender, receiver) = channel();
+        let dataset = path.to_path_buf();
+        let urdf = self.urdf_override.clone();
+        let repaint = self.repaint.clone();
+        let spawned = std::thread::Builder::new()
+            .name("dualcal-load".into())
+            .spawn(move || {
+                let started = std::time::Instant::now();
+                let result = Session::load(&dataset, urdf.as_deref())
+                    .with_context(|| format!("cannot open dataset {}", dataset.display()))
+                    .map(|s| (s, started.elapsed().as_secs_f64()))
+                    .map_err(|e| format!("{e:#}"));
+                let _ = sender.send(result);
+                if let Some(ctx) = repaint {
+                    ctx.request_repaint();
+                }
+            });
+        match spawned {
+            Ok(_) => {
+                self.status = Status::Idle(format!("Loading {}…", path.display()));
+                self.loading = Some(LoadJob {
+                    receiver,
+                    previous_override,
+                });
+            }
+            Err(e) => self.errors.push(format!("cannot start loading: {e}")),
+        }
+    }
+
+    /// Whether a dataset is being loaded.
+    pub fn is_loading(&self) -> bool {
+        self.loading.is_some()
+    }
+
+    fn poll_loading(&mut self) {
+        let Some(job) = &self.loading else {
+            return;
+        };
+        let result = match job.receiver.try_recv() {
+            Ok(r) => r,
+            Err(std::sync::mpsc::TryRecvError::Empty) => return,
+            Err(std::sync::mpsc::TryRecvError::Disconnected) => {
+                Err("the loading thread stopped unexpectedly".into())
+            }
+        };
+        let Some(job) = self.loading.take() else {
+            return;
+        };
+        match result {
+            Ok((session, secs)) => {
+                self.job = None;
+                self.history.clear();
+                self.selection = None;
+                self.viewport.poses = [Some(0), Some(0)];
+                self.viewport.auto_scale(&session);
+                let d = &session.dataset;
+                self.status = Status::Idle(format!(
+                    "Loaded {} ({} left + {} right configurations) in {secs:.2} s.",
+                    d.dir.display(),
+                    d.left.measurements.len(),
+                    d.right.measurements.len(),
+                ));
+                self.errors
+                    .extend(session.robot.warnings.iter().map(|w| format!("robot: {w}")));
+                self.session = Some(session);
+                self.generation += 1;
+            }
+            Err(e) => {
+                if let Some(previous) = job.previous_override {
+                    self.urdf_override = previous;
+                }
+                self.status = Status::Idle("Loading failed; the previous dataset stays.".into());
+                self.errors.push(e);
+            }
+        }
+    }
+
+    /// Start a calibration of the current session with the current settings.
+    pub fn start_calibration(&mut self, ctx: &egui::Context) {
+        if self.job.is_some() {
+            return;
+        }
+        let Some(session) = &self.session else {
+            self.errors.push("Open a dataset first.".into());
+            return;
+        };
+        let ctx = ctx.clone();
+        match CalibrationJob::spawn(
+            session.dataset.clone(),
+            session.nominal.model.clone(),
+            self.settings.clone(),
+            session.body_from_left_base(),
+            move || ctx.request_repaint(),
+        ) {
+            Ok(job) => {
+                self.history.clear();
+                self.status = Status::Running {
+                    stage: None,
+                    iteration: 0,
+                };
+                self.job = Some(job);
+            }
+            Err(e) => self
+                .errors
+                .push(format!("cannot start the calibration thread: {e}")),
+        }
+    }
+
+    pub fn cancel_calibration(&mut self) {
+        if let Some(job) = &mut self.job {
+            job.cancel();
+        }
+    }
+
+    fn select(&mut self, selection: Selection, from_viewport: bool) {
+        self.selection = selection;
+        if let Some((side, index)) = selection {
+            self.viewport.poses[viewport::scene::side_index(side)] = Some(index);
+        }
+        self.scroll_table_to_selection = from_viewport;
+    }
+
+    /// Select the configuration with the worst |Δd| of the current model.
+    pub fn select_worst(&mut self) {
+        if let Some(session) = &self.session {
+            let worst = table::worst(session.current());
+            self.select(worst, true);
+        }
+    }
+
+    fn poll_worker(&mut self) {
+        let Some(job) = &mut self.job else {
+            return;
+        };
+        let started = job.started;
+        let cancel_requested = job.cancel_requested;
+        for message in job.drain() {
+            match message {
+                WorkerMessage::Progress(CalibrationEvent::StageStarted { stage, .. }) => {
+                    self.status = Status::Running {
+                        stage: Some(stage),
+                        iteration: 0,
+                    };
+                    self.plot_stage = stage;
+                }
+                WorkerMessage::Progress(CalibrationEvent::Iteration(record)) => {
+                    self.status = Status::Running {
+                        stage: Some(record.stage),
+                        iteration: record.iteration,
+                    };
+                    self.history.push(record);
+                }
+                WorkerMessage::Progress(CalibrationEvent::StageFinished { .. }) => {}
+                WorkerMessage::Finished(Outcome::Calibrated(calibrated)) => {
+                    let secs = started.elapsed().as_secs_f64();
+                    let terms: Vec<String> = calibrated
+                        .result
+                        .stages
+                        .iter()
+                        .map(|s| format!("{}: {:?} after {}", s.stage, s.termination, s.iterations))
+                        .collect();
+                    // The solver's own history is complete even if progress events were dropped.
+                    self.history = calibrated.result.history.clone();
+                    if let Some(session) = &mut self.session {
+                        session.calibrated = Some(*calibrated);
+                        self.viewport.auto_scale(session);
+                    }
+                    self.generation += 1;
+                    self.status = Status::Idle(format!(
+                        "Calibration done in {secs:.1} s ({}).",
+                        terms.join(", ")
+                    ));
+                }
+                WorkerMessage::Finished(Outcome::Cancelled) => {
+                    let latency = cancel_requested
+                        .map(|t| format!(" {:.0} ms after Cancel", t.elapsed().as_secs_f64() * 1e3))
+                        .unwrap_or_default();
+                    self.status = Status::Idle(format!(
+                        "Calibration cancelled{latency}; the previous result is kept."
+                    ));
+                }
+                WorkerMessage::Finished(Outcome::Failed(message)) => {
+                    self.status =
+                        Status::Idle("Calibration failed; the previous result is kept.".into());
+                    self.errors.push(format!("calibration: {message}"));
+                }
+            }
+        }
+        if self.job.as_ref().is_some_and(|j| j.finished) {
+            self.job = None;
+        }
+    }
+
+    fn poll_files(&mut self, ctx: &egui::Context) {
+        while let Ok(reply) = self.file_receiver.try_recv() {
+            match reply {
+                FileReply::Open(OpenKind::Dataset, path) => self.open_dataset(&path),
+                FileReply::Open(OpenKind::Urdf, path) => self.open_urdf(&path),
+                FileReply::Saved(path) => {
+                    self.status = Status::Idle(format!("Saved {}.", path.display()));
+                }
+                FileReply::Failed(e) => self.errors.push(format!("save failed: {e}")),
+                FileReply::Cancelled => {}
+            }
+        }
+        // Drag and drop: a URDF replaces the robot, anything else is taken as a dataset.
+        let dropped: Vec<PathBuf> = ctx.input(|i| {
+            i.raw
+                .dropped_files
+                .iter()
+                .map(|f| f.path().to_path_buf())
+                .collect()
+        });
+        for path in dropped {
+            let is_urdf = path
+                .extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case("urdf"));
+            if is_urdf {
+                self.open_urdf(&path);
+            } else {
+                self.open_dataset(&path);
+            }
+        }
+        // A requested screenshot of the plots.
+        if self.screenshot_pending
+            && let Ok(image) = self.shot_receiver.try_recv()
+        {
+            self.screenshot_pending = false;
+            let ppp = ctx.pixels_per_point();
+            let region = self
+                .plot_rect
+                .map_or_else(|| (*image).clone(), |r| image.region(&r, Some(ppp)));
+            match encode_png(&region) {
+                Ok(bytes) => self.files.save(
+                    SaveRequest {
+                        title: "Export plots as PNG",
+                        file_name: "dualcal-plots.png".into(),
+                        filter_name: "PNG image",
+                        extensions: &["png"],
+                        bytes,
+                    },
+                    self.file_sender.clone(),
+                ),
+                Err(e) => self.errors.push(format!("plot export: {e}")),
+            }
+        }
+    }
+
+    fn export(&mut self, what: Export, ctx: &egui::Context) {
+        let Some(session) = &self.session else {
+            return;
+        };
+        let result: anyhow::Result<SaveRequest> = match what {
+            Export::Params => {
+                let Some(cal) = &session.calibrated else {
+                    return;
+                };
+                export_params(session, cal).map(|bytes| SaveRequest {
+                    title: "Export parameters (dualcal-params/1)",
+                    file_name: "params.json".into(),
+                    filter_name: "JSON",
+                    extensions: &["json"],
+                    bytes,
+                })
+            }
+            Export::Urdf => {
+                let Some(cal) = &session.calibrated else {
+                    return;
+                };
+                export_urdf(session, cal).map(|bytes| SaveRequest {
+                    title: "Export calibrated URDF",
+                    file_name: "calibrated.urdf".into(),
+                    filter_name: "URDF",
+                    extensions: &["urdf"],
+                    bytes,
+                })
+            }
+            Export::Csv => export_csv(session).map(|bytes| SaveRequest {
+                title: "Export per-configuration errors (CSV)",
+                file_name: "configurations.csv".into(),
+                filter_name: "CSV",
+                extensions: &["csv"],
+                bytes,
+            }),
+            Export::PlotPng => {
+                self.screenshot_pending = true;
+                let sender = self.shot_sender.clone();
+                let repaint = ctx.clone();
+                ctx.send_viewport_cmd(egui::ViewportCommand::Screenshot(
+                    egui::ScreenshotCallback::new(move |image| {
+                        let _ = sender.send(image);
+                        repaint.request_repaint();
+                    }),
+                ));
+                return;
+            }
+        };
+        match result {
+            Ok(request) => self.files.save(request, self.file_sender.clone()),
+            Err(e) => self.errors.push(format!("export: {e:#}")),
+        }
+    }
+
+    // ---- panels --------------------------------------------------------------------------------
+
+    fn settings_panel_ui(&mut self, ui: &mut egui::Ui) {
+        let running = self.job.is_some();
+        egui::ScrollArea::vertical().show(ui, |ui| {
+            ui.heading("Dataset");
+            match &self.session {
+                Some(s) => {
+                    let d = &s.dataset;
+                    let count = |side: Side, split: SplitSelect| d.arm(side).select(split).len();
+                    ui.label(
+                        RichText::new(
+                            d.dir
+                                .file_name()
+                                .map_or_else(|| d.dir.display().to_string(), |n| n.to_string_lossy().into()),
+                        )
+                        .strong(),
+                    )
+                    .on_hover_text(d.dir.display().to_string());
+                    ui.label(format!(
+                        "left: {} cal + {} ver\nright: {} cal + {} ver",
+                        count(Side::Left, SplitSelect::Cal),
+                        count(Side::Left, SplitSelect::Ver),
+                        count(Side::Right, SplitSelect::Cal),
+                        count(Side::Right, SplitSelect::Ver),
+                    ));
+                    ui.label(format!(
+                        "tracker MPE {} µm + {} µm/m",
+                        d.tracker.mpe_um, d.tracker.mpe_um_per_m
+                    ));
+                }
+                None => {
+                    ui.label("none loaded");
+                }
+            }
+            ui.horizontal(|ui| {
+                if ui
+                    .button("Open dataset…")
+                    .on_hover_text("Open a dualcal-dataset/1 dataset.toml (or drop one on the window)")
+                    .clicked()
+                {
+                    self.files.open(OpenKind::Dataset, self.file_sender.clone());
+                }
+                if ui
+                    .add_enabled(self.loading.is_none(), egui::Button::new("Example"))
+                    .on_hover_text("Open the bundled simulated example dataset")
+                    .clicked()
+                {
+                    self.open_dataset(&bundled_example_path());
+                }
+            });
+
+            ui.separator();
+            ui.heading("Robot");
+            let robot_label = self
+                .session
+                .as_ref()
+                .and_then(|s| s.robot_source.as_ref())
+                .map_or_else(
+                    || "built-in IRB 14000".to_string(),
+                    |p| p.file_name().map_or_else(|| p.display().to_string(), |n| n.to_string_lossy().into()),
+                );
+            ui.label(robot_label);
+            if ui
+                .button("Open URDF…")
+                .on_hover_text("Use another robot description (URDF) for this dataset")
+                .clicked()
+            {
+                self.files.open(OpenKind::Urdf, self.file_sender.clone());
+            }
+
+            ui.separator();
+            ui.heading("Calibration");
+            ui.add_enabled_ui(!running, |ui| {
+                egui::Grid::new("settings grid").num_columns(2).show(ui, |ui| {
+                    let l_method = ui.label("Method").on_hover_text(
+                        "Minimax: the paper's min over parameters of the max over reflectors of the summed squared distance errors.\nLeast squares: all distance errors (Levenberg–Marquardt), for comparison.",
+                    );
+                    egui::ComboBox::from_id_salt("method")
+                        .selected_text(match self.settings.method {
+                            Method::Minimax => "minimax",
+                            Method::LeastSquares => "least squares",
+                        })
+                        .show_ui(ui, |ui| {
+                            ui.selectable_value(&mut self.settings.method, Method::Minimax, "minimax");
+                            ui.selectable_value(
+                                &mut self.settings.method,
+                                Method::LeastSquares,
+                                "least squares",
+                            );
+                        })
+                        .response
+                        .labelled_by(l_method.id);
+                    ui.end_row();
+                    let l_qp_solver = ui.label("QP solver").on_hover_text(
+                        "exact: active-set solution of each SQP subproblem.\npaper: the primal-dual subgradient method of eqs. (29)–(31) (slow, inexact).",
+                    );
+                    egui::ComboBox::from_id_salt("qp")
+                        .selected_text(match self.settings.qp {
+                            QpMethod::Exact => "exact",
+                            QpMethod::Paper => "paper",
+                        })
+                        .show_ui(ui, |ui| {
+                            ui.selectable_value(&mut self.settings.qp, QpMethod::Exact, "exact");
+                            ui.selectable_value(&mut self.settings.qp, QpMethod::Paper, "paper");
+                        })
+                        .response
+                        .labelled_by(l_qp_solver.id);
+                    ui.end_row();
+                    let l_split = ui.label("Split").on_hover_text(
+                        "Configurations used for identification: the calibration split only, or all of them",
+                    );
+                    egui::ComboBox::from_id_salt("split")
+                        .selected_text(match self.settings.split {
+                            SplitSelect::Cal => "cal",
+                            SplitSelect::Ver => "ver",
+                            SplitSelect::All => "all",
+                        })
+                        .show_ui(ui, |ui| {
+                            ui.selectable_value(&mut self.settings.split, SplitSelect::Cal, "cal");
+                            ui.selectable_value(&mut self.settings.split, SplitSelect::All, "all");
+                        })
+                        .response
+                        .labelled_by(l_split.id);
+                    ui.end_row();
+                    let l_iteration_limit = ui.label("Iteration limit").on_hover_text("Outer SQP iterations per stage");
+                    ui.add(egui::DragValue::new(&mut self.settings.max_iterations).range(1..=10_000))
+                        .labelled_by(l_iteration_limit.id);
+                    ui.end_row();
+                    let l_step_tolerance = ui.label("Step tolerance").on_hover_text(
+                        "Stop a stage when the scaled parameter step norm falls below this",
+                    );
+                    ui.add(
+                        egui::DragValue::new(&mut self.settings.step_tolerance)
+                            .range(1e-14..=1e-2)
+                            .speed(0.0)
+                            .custom_formatter(|v, _| format!("{v:.1e}"))
+                            .custom_parser(|s| s.trim().parse::<f64>().ok()),
+                    )
+                    .labelled_by(l_step_tolerance.id);
+                    ui.end_row();
+                    if self.settings.qp == QpMethod::Paper {
+                        let l_qp_iterations = ui.label("QP iterations").on_hover_text(
+                            "Subgradient iterations of the paper's QP solver per outer iteration",
+                        );
+                        ui.add(
+                            egui::DragValue::new(&mut self.settings.max_qp_iterations)
+                                .range(10..=1_000_000),
+                        )
+                        .labelled_by(l_qp_iterations.id);
+                        ui.end_row();
+                    }
+                });
+            });
+            ui.horizontal(|ui| {
+                let can_start = !running && self.session.is_some();
+                if ui
+                    .add_enabled(can_start, egui::Button::new(RichText::new("Calibrate").strong().color(Color32::WHITE))
+                            .fill(Color32::from_rgb(38, 92, 160))
+                            .min_size(egui::vec2(110.0, 26.0)))
+                    .on_hover_text("Run the two-step calibration (step 1 per arm, then step 2) on a worker thread")
+                    .clicked()
+                {
+                    self.start_calibration(ui.ctx());
+                }
+                if ui
+                    .add_enabled(running, egui::Button::new("Cancel").min_size(egui::vec2(80.0, 26.0)))
+                    .on_hover_text("Stop the run; the previous result stays")
+                    .clicked()
+                {
+                    self.cancel_calibration();
+                }
+            });
+
+            ui.separator();
+            ui.heading("Export");
+            let has_cal = self.session.as_ref().is_some_and(|s| s.calibrated.is_some());
+            let ctx = ui.ctx().clone();
+            ui.add_enabled_ui(has_cal, |ui| {
+                if ui
+                    .button("Parameters (JSON)…")
+                    .on_hover_text("dualcal-params/1 file of the calibrated model")
+                    .on_disabled_hover_text("Calibrate first")
+                    .clicked()
+                {
+                    self.export(Export::Params, &ctx);
+                }
+                if ui
+                    .button("Calibrated URDF…")
+                    .on_hover_text("A copy of the robot description whose joints reproduce the calibrated model")
+                    .on_disabled_hover_text("Calibrate first")
+                    .clicked()
+                {
+                    self.export(Export::Urdf, &ctx);
+                }
+            });
+            ui.add_enabled_ui(self.session.is_some(), |ui| {
+                if ui
+                    .button("Configuration errors (CSV)…")
+                    .on_hover_text("Per-configuration errors of the current model")
+                    .clicked()
+                {
+                    self.export(Export::Csv, &ctx);
+                }
+                if ui
+                    .button("Plots (PNG)…")
+                    .on_hover_text("The plot area as shown")
+                    .clicked()
+                {
+                    self.export(Export::PlotPng, &ctx);
+                }
+            });
+
+            ui.separator();
+            self.view_options_ui(ui);
+        });
+    }
+
+    fn view_options_ui(&mut self, ui: &mut egui::Ui) {
+        ui.heading("View");
+        let has_cal = self
+            .session
+            .as_ref()
+            .is_some_and(|s| s.calibrated.is_some());
+        let o = &mut self.viewport.options;
+        ui.horizontal_wrapped(|ui| {
+            ui.checkbox(&mut o.show_robot, "robot");
+            ui.checkbox(&mut o.show_grid, "grid");
+            ui.checkbox(&mut o.show_measured, "measured")
+                .on_hover_text("Measured reflector triangles (tracker points registered to the robot), coloured by error");
+            ui.checkbox(&mut o.show_model, "model")
+                .on_hover_text("Model reflector triangles (forward kinematics)");
+            ui.checkbox(&mut o.show_vectors, "error vectors")
+                .on_hover_text("From each model point towards the measured one, exaggerated");
+        });
+        ui.horizontal(|ui| {
+            ui.checkbox(&mut o.show_cal, "cal");
+            ui.checkbox(&mut o.show_ver, "ver");
+            ui.checkbox(&mut o.show_arm[0], "left");
+            ui.checkbox(&mut o.show_arm[1], "right");
+        });
+        ui.horizontal(|ui| {
+            ui.label("Model:");
+            ui.selectable_value(&mut o.use_calibrated, false, "nominal");
+            ui.add_enabled_ui(has_cal, |ui| {
+                ui.selectable_value(&mut o.use_calibrated, true, "calibrated")
+                    .on_disabled_hover_text("Calibrate first");
+            });
+        });
+        ui.checkbox(&mut self.viewport.auto_scale, "auto scale")
+            .on_hover_text("Set the vector exaggeration and colour range from the current errors whenever a model is loaded or calibrated");
+        let o = &mut self.viewport.options;
+        ui.add(
+            egui::Slider::new(&mut o.exaggeration, 1.0..=5000.0)
+                .logarithmic(true)
+                .text("× vectors"),
+        )
+        .on_hover_text("Error vectors are drawn this many times their true length");
+        ui.add(
+            egui::Slider::new(&mut o.color_max_mm, 0.05..=20.0)
+                .logarithmic(true)
+                .text("mm colour max"),
+        )
+        .on_hover_text("Error at the top of the colour bar, mm");
+        ui.horizontal(|ui| {
+            if ui
+                .button("Reset view")
+                .on_hover_text("Also: double-click the viewport")
+                .clicked()
+            {
+                self.viewport.camera = viewport::camera::OrbitCamera::default();
+            }
+            if ui
+                .button("Select worst")
+                .on_hover_text(
+                    "Select the configuration with the largest |Δd| of the current model",
+                )
+                .clicked()
+            {
+                self.select_worst();
+            }
+        });
+        ui.label(
+            RichText::new(
+                "drag: orbit · right/middle or shift-drag: pan · wheel: zoom · click: select",
+            )
+            .small()
+            .color(Color32::GRAY),
+        );
+    }
+
+    fn plots_ui(&mut self, ui: &mut egui::Ui) {
+        ui.horizontal(|ui| {
+            ui.selectable_value(&mut self.plot_tab, PlotTab::Convergence, "Convergence");
+            ui.selectable_value(&mut self.plot_tab, PlotTab::Accuracy, "Accuracy");
+            ui.separator();
+            match self.plot_tab {
+                PlotTab::Convergence => {
+                    for stage in plots::STAGES {
+                        ui.selectable_value(&mut self.plot_stage, stage, stage.to_string());
+                    }
+                }
+                PlotTab::Accuracy => {
+                    let label = ui.label("Figure:");
+                    egui::ComboBox::from_id_salt("figure")
+                        .selected_text(self.figure.label())
+                        .width(230.0)
+                        .show_ui(ui, |ui| {
+                            for f in Figure::ALL {
+                                ui.selectable_value(&mut self.figure, f, f.label());
+                            }
+                        })
+                        .response
+                        .labelled_by(label.id);
+                    ui.selectable_value(&mut self.figure_split, Split::Cal, "cal split");
+                    ui.selectable_value(&mut self.figure_split, Split::Ver, "ver split");
+                }
+            }
+        });
+        let rect = ui.available_rect_before_wrap();
+        self.plot_rect = Some(rect);
+        match self.plot_tab {
+            PlotTab::Convergence => plots::convergence_plot_ui(ui, &self.history, self.plot_stage),
+            PlotTab::Accuracy => match &self.session {
+                Some(s) => plots::accuracy_ui(ui, s, self.figure, self.figure_split),
+                None => {
+                    ui.label("No dataset.");
+                }
+            },
+        }
+    }
+
+    fn table_ui(&mut self, ui: &mut egui::Ui) {
+        ui.horizontal(|ui| {
+            ui.heading("Configurations");
+            if ui
+                .button("Select worst")
+                .on_hover_text("Select the configuration with the largest |Δd|")
+                .clicked()
+            {
+                self.select_worst();
+            }
+        });
+        let Some(session) = &self.session else {
+            ui.label("No dataset.");
+            return;
+        };
+        let label = if session.calibrated.is_some() {
+            "errors of the calibrated model"
+        } else {
+            "errors of the nominal model"
+        };
+        ui.label(RichText::new(label).small().color(Color32::GRAY));
+        if let Some((side, index)) = self.selection
+            && let Some(row) = session
+                .current()
+                .configs
+                .iter()
+                .find(|r| r.side == side && r.index == index)
+        {
+            let e = row.point_errors_mm();
+            ui.label(format!(
+                "selected: {} ({} arm, {}), point errors a/b/c = {:.3} / {:.3} / {:.3} mm",
+                row.id,
+                side,
+                if row.split == Split::Cal {
+                    "cal"
+                } else {
+                    "ver"
+                },
+                e[0],
+                e[1],
+                e[2]
+            ));
+        }
+        let clicked = table::config_table_ui(
+            ui,
+            session.current(),
+            &mut self.table,
+            self.selection,
+            self.scroll_table_to_selection,
+        );
+        self.scroll_table_to_selection = false;
+        if let Some(sel) = clicked {
+            self.select(sel, false);
+        }
+    }
+
+    fn status_bar_ui(&mut self, ui: &mut egui::Ui) {
+        let mut dismiss = None;
+        for (k, e) in self.errors.iter().enumerate() {
+            ui.horizontal(|ui| {
+                if ui.small_button("×").on_hover_text("Dismiss").clicked() {
+                    dismiss = Some(k);
+                }
+                ui.label(RichText::new(e).color(Color32::from_rgb(255, 110, 100)));
+            });
+        }
+        if let Some(k) = dismiss {
+            self.errors.remove(k);
+        }
+        ui.horizontal(|ui| {
+            match &self.status {
+                Status::Idle(text) => {
+                    if self.loading.is_some() {
+                        ui.spinner();
+                    }
+                    ui.label(text);
+                }
+                Status::Running { stage, iteration } => {
+                    ui.spinner();
+                    let elapsed = self.job.as_ref().map_or(0.0, |j| j.started.elapsed().as_secs_f64());
+                    let cancelling = self.job.as_ref().is_some_and(|j| j.is_cancelling());
+                    ui.label(match stage {
+                        Some(stage) => format!(
+                            "Calibrating: {stage}, iteration {iteration} ({elapsed:.1} s){}",
+                            if cancelling { " — cancelling…" } else { "" }
+                        ),
+                        None => "Calibrating: starting…".into(),
+                    });
+                }
+            }
+            if let Some(session) = &self.session {
+                ui.with_layout(egui::Layout::right_to_left(egui::Align::Center), |ui| {
+                    ui.label(
+                        RichText::new(format!(
+                            "registration RMS {:.3} mm",
+                            session.current().registration_rms_mm
+                        ))
+                        .color(Color32::GRAY),
+                    )
+                    .on_hover_text(
+                        "RMS residual of the best-fit tracker-to-robot transform used to draw the measured points",
+                    );
+                });
+            }
+        });
+    }
+
+    fn record_frame_time(&mut self, ctx: &egui::Context) {
+        let Some(stats) = &mut self.frame_stats else {
+            return;
+        };
+        let now = std::time::Instant::now();
+        if let Some(last) = stats.last {
+            stats.samples_ms.push((now - last).as_secs_f64() * 1e3);
+        }
+        stats.last = Some(now);
+        if stats.samples_ms.len() >= FRAME_STATS_WINDOW {
+            let mut s = std::mem::take(&mut stats.samples_ms);
+            s.sort_by(f64::total_cmp);
+            let mean = s.iter().sum::<f64>() / s.len() as f64;
+            let p95 = s[(s.len() * 95 / 100).min(s.len() - 1)];
+            eprintln!(
+                "frame time over {} frames: mean {mean:.1} ms, p95 {p95:.1} ms, max {:.1} ms",
+                s.len(),
+                s[s.len() - 1]
+            );
+        }
+        ctx.request_repaint();
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Export {
+    Params,
+    Urdf,
+    Csv,
+    PlotPng,
+}
+
+fn encode_png(image: &egui::ColorImage) -> anyhow::Result<Vec<u8>> {
+    let [w, h] = image.size;
+    let mut rgba = Vec::with_capacity(w * h * 4);
+    for c in &image.pixels {
+        rgba.extend_from_slice(&c.to_array());
+    }
+    let buffer = image::RgbaImage::from_raw(w as u32, h as u32, rgba)
+        .context("screenshot has an inconsistent size")?;
+    let mut bytes = Vec::new();
+    buffer.write_to(
+        &mut std::io::Cursor::new(&mut bytes),
+        image::ImageFormat::Png,
+    )?;
+    Ok(bytes)
+}
+
+/// Per-configuration errors of the current model as CSV.
+pub fn export_csv(session: &Session) -> anyhow::Result<Vec<u8>> {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    w.write_record([
+        "id",
+        "arm",
+        "split",
+        "worst_pos_mm",
+        "worst_ori_rad",
+        "rigidity_mm",
+        "point_error_a_mm",
+        "point_error_b_mm",
+        "point_error_c_mm",
+    ])?;
+    for row in &session.current().configs {
+        let e = row.point_errors_mm();
+        w.write_record([
+            row.id.clone(),
+            row.side.name().to_string(),
+            if row.split == Split::Cal {
+                "cal"
+            } else {
+                "ver"
+            }
+            .to_string(),
+            format!("{:.6}", row.worst_pos_mm),
+            format!("{:.8}", row.worst_ori_rad),
+            format!("{:.6}", row.rigidity_mm),
+            format!("{:.6}", e[0]),
+            format!("{:.6}", e[1]),
+            format!("{:.6}", e[2]),
+        ])?;
+    }
+    w.into_inner().context("CSV buffer")
+}
+
+/// The calibrated model as a `dualcal-params/1` file.
+pub fn export_params(session: &Session, cal: &session::Calibrated) -> anyhow::Result<Vec<u8>> {
+    let mut file = crate::params::ParamsFile::from_model(&cal.result.calibrated);
+    file.method = Some(serde_json::to_value(&cal.result.settings)?);
+    file.termination = Some(serde_json::json!({
+        "stages": cal.result.stages.iter().map(|s| serde_json::json!({
+            "stage": s.stage.to_string(),
+            "termination": format!("{:?}", s.termination),
+            "iterations": s.iterations,
+            "psi_mm2": s.psi_mm2,
+            "psi_start_mm2": s.psi_start_mm2,
+        })).collect::<Vec<_>>(),
+        "elapsed_secs": cal.result.elapsed_secs,
+    }));
+    let mut fixed = crate::params::FixedParameters {
+        left: Vec::new(),
+        right: Vec::new(),
+    };
+    for (side, report) in &cal.result.identifiability {
+        let list = match side {
+            Side::Left => &mut fixed.left,
+            Side::Right => &mut fixed.right,
+        };
+        list.extend(report.fixed.iter().map(|f| crate::params::FixedParameter {
+            name: f.name.clone(),
+            reason: f.reason.clone(),
+        }));
+    }
+    file.fixed_parameters = Some(fixed);
+    file.provenance = Some(crate::params::Provenance::now(Some(&session.dataset.dir)));
+    let mut text = serde_json::to_vec_pretty(&file)?;
+    text.push(b'\n');
+    Ok(text)
+}
+
+/// The calibrated robot description.
+pub fn export_urdf(session: &Session, cal: &session::Calibrated) -> anyhow::Result<Vec<u8>> {
+    let text = crate::urdf_export::calibrated_urdf(&session.robot, &cal.result.calibrated)?;
+    Ok(text.into_bytes())
+}
+
+impl eframe::App for WorkbenchApp {
+    fn logic(&mut self, ctx: &egui::Context, _frame: &mut eframe::Frame) {
+        self.poll_loading();
+        self.poll_worker();
+        self.poll_files(ctx);
+    }
+
+    fn ui(&mut self, ui: &mut egui::Ui, frame: &mut eframe::Frame) {
+        self.record_frame_time(ui.ctx());
+        if self.panels_visible {
+            self.panels_ui(ui);
+        }
+        egui::CentralPanel::default()
+            .frame(egui::Frame::NONE)
+            .show(ui, |ui| {
+                let response = self.viewport.ui(
+                    ui,
+                    frame,
+                    self.session.as_ref(),
+                    self.generation,
+                    self.selection,
+                );
+                if let Some(sel) = response.clicked {
+                    self.select(sel, true);
+                }
+            });
+    }
+}
+
+impl WorkbenchApp {
+    fn panels_ui(&mut self, ui: &mut egui::Ui) {
+        egui::Panel::bottom("status bar").show(ui, |ui| self.status_bar_ui(ui));
+        egui::Panel::left("settings")
+            .default_size(270.0)
+            .resizable(true)
+            .show(ui, |ui| self.settings_panel_ui(ui));
+        egui::Panel::right("table")
+            .default_size(450.0)
+            .resizable(true)
+            .show(ui, |ui| self.table_ui(ui));
+        egui::Panel::bottom("plots")
+            .default_size(300.0)
+            .resizable(true)
+            .show(ui, |ui| self.plots_ui(ui));
+    }
+}

@@ -1,0 +1,294 @@
+//! Convergence curves and accuracy histograms (egui_plot).
+
+use crate::app::session::{Figure, PairSet, Session, split_index};
+use crate::dataset::Split;
+use crate::kinematics::Side;
+use crate::metrics::{ORI_THRESHOLDS_RAD, POS_THRESHOLDS_MM};
+use crate::solver::{IterationRecord, Stage};
+use eframe::egui::{self, Color32, RichText};
+use egui_plot::{Bar, BarChart, Legend, Line, Plot, VLine};
+
+pub const STAGES: [Stage; 3] = [Stage::Arm(Side::Left), Stage::Arm(Side::Right), Stage::Base];
+
+const F_COLORS: [Color32; 3] = [
+    Color32::from_rgb(230, 120, 90),
+    Color32::from_rgb(110, 190, 110),
+    Color32::from_rgb(100, 160, 235),
+];
+const PSI_COLOR: Color32 = Color32::from_rgb(240, 220, 120);
+
+fn log10(x: f64) -> Option<f64> {
+    (x.is_finite() && x > 0.0).then(|| x.log10())
+}
+
+/// `10^k` axis labels for a log10 axis.
+fn log_axis_label(mark: egui_plot::GridMark, _range: &std::ops::RangeInclusive<f64>) -> String {
+    let v = mark.value;
+    if (v - v.round()).abs() < 1e-9 {
+        format!("1e{}", v.round() as i64)
+    } else {
+        String::new()
+    }
+}
+
+fn log_spacer(input: egui_plot::GridInput) -> Vec<egui_plot::GridMark> {
+    let (lo, hi) = input.bounds;
+    let (lo, hi) = (lo.floor() as i64, hi.ceil() as i64);
+    let span = (hi - lo).max(1);
+    let step = (span / 8).max(1);
+    (lo..=hi)
+        .filter(|k| k % step == 0)
+        .map(|k| egui_plot::GridMark {
+            value: k as f64,
+            step_size: step as f64,
+        })
+        .collect()
+}
+
+/// ψ and F_a, F_b, F_c (log scale) over the iterations of `stage`, and below them the step norm and
+/// KKT residual.
+pub fn convergence_plot_ui(ui: &mut egui::Ui, history: &[IterationRecord], stage: Stage) {
+    let records: Vec<&IterationRecord> = history.iter().filter(|r| r.stage == stage).collect();
+    if records.is_empty() {
+        ui.label(
+            RichText::new(format!("{stage}: no iterations yet — press Calibrate."))
+                .color(Color32::GRAY),
+        );
+    } else if let Some(last) = records.last() {
+        ui.label(format!(
+            "{stage}: iteration {}, ψ = {:.6} mm², F = [{:.4}, {:.4}, {:.4}] mm², step {:.2e}, KKT {:.2e}",
+            last.iteration,
+            last.psi_mm2,
+            last.f_mm2[0],
+            last.f_mm2[1],
+            last.f_mm2[2],
+            last.step_norm,
+            last.kkt_residual
+        ));
+    }
+    let series = |f: &dyn Fn(&IterationRecord) -> f64| -> Vec<[f64; 2]> {
+        records
+            .iter()
+            .filter_map(|r| log10(f(r)).map(|y| [r.iteration as f64, y]))
+            .collect()
+    };
+    let link = egui::Id::unique(("convergence x", format!("{stage:?}")));
+    let psi = series(&|r| r.psi_mm2);
+    let f: [Vec<[f64; 2]>; 3] = std::array::from_fn(|k| series(&|r| r.f_mm2[k]));
+    let step = series(&|r| r.step_norm);
+    let kkt = series(&|r| r.kkt_residual);
+    ui.columns(2, |cols| {
+        Plot::new(("objective", format!("{stage:?}")))
+            .legend(Legend::default())
+            .x_axis_label("iteration")
+            .y_axis_label("mm² (log10)")
+            .y_axis_formatter(log_axis_label)
+            .y_grid_spacer(log_spacer)
+            .link_axis(link, [true, false])
+            .show(&mut cols[0], |plot| {
+                plot.line(Line::new("ψ = max F", psi).color(PSI_COLOR).width(2.5));
+                for (k, (name, points)) in ["F_a", "F_b", "F_c"].into_iter().zip(f).enumerate() {
+                    plot.line(Line::new(name, points).color(F_COLORS[k]));
+                }
+            });
+        Plot::new(("step", format!("{stage:?}")))
+            .legend(Legend::default())
+            .x_axis_label("iteration")
+            .y_axis_label("log10")
+            .y_axis_formatter(log_axis_label)
+            .y_grid_spacer(log_spacer)
+            .link_axis(link, [true, false])
+            .show(&mut cols[1], |plot| {
+                plot.line(
+                    Line::new("step norm (scaled)", step).color(Color32::from_rgb(200, 150, 240)),
+                );
+                plot.line(Line::new("KKT residual", kkt).color(Color32::from_rgb(150, 210, 210)));
+            });
+    });
+}
+
+/// Bin `samples` into `bins` bars over `[lo, hi]`, as fractions of all samples.
+pub fn histogram(samples: &[f64], lo: f64, hi: f64, bins: usize) -> Vec<(f64, f64)> {
+    let bins = bins.max(1);
+    let width = (hi - lo) / bins as f64;
+    let mut counts = vec![0usize; bins];
+    for &s in samples.iter().filter(|s| s.is_finite()) {
+        let k = ((s - lo) / width).floor();
+        let k = (k.max(0.0) as usize).min(bins - 1);
+        counts[k] += 1;
+    }
+    let n = samples.len().max(1) as f64;
+    counts
+        .into_iter()
+        .enumerate()
+        .map(|(k, c)| (lo + (k as f64 + 0.5) * width, c as f64 / n))
+        .collect()
+}
+
+/// Histograms of one figure before (nominal) and after (calibrated) on one split, with the
+/// Tables 4–8 style numbers beside them.
+pub fn accuracy_ui(ui: &mut egui::Ui, session: &Session, figure: Figure, split: Split) {
+    let k = split_index(split);
+    let before: &PairSet = &session.nominal.pairs[k];
+    let after = session.calibrated.as_ref().map(|c| &c.analysis.pairs[k]);
+    let before_samples = before.samples(figure);
+    let after_samples = after.map(|p| p.samples(figure)).unwrap_or_default();
+    let unit = if figure.is_position() { "mm" } else { "rad" };
+    let split_name = match split {
+        Split::Cal => "calibration",
+        Split::Ver => "verification",
+    };
+
+    ui.horizontal_top(|ui| {
+        // Numbers.
+        ui.vertical(|ui| {
+            ui.set_width(270.0);
+            ui.label(RichText::new(format!("{} — {split_name} split", figure.label())).strong());
+            let thresholds: [String; 2] = if figure.is_position() {
+                POS_THRESHOLDS_MM.map(|t| format!("|Δd| ≤ {t} mm"))
+            } else {
+                ORI_THRESHOLDS_RAD.map(|t| format!("Δo ≤ {t} rad"))
+            };
+            egui::Grid::new(("accuracy numbers", figure.label(), k))
+                .striped(true)
+                .num_columns(3)
+                .show(ui, |ui| {
+                    ui.label("");
+                    ui.label("nominal");
+                    ui.label("calibrated");
+                    ui.end_row();
+                    let reports = [
+                        session.nominal.reports[k].as_ref(),
+                        session
+                            .calibrated
+                            .as_ref()
+                            .and_then(|c| c.analysis.reports[k].as_ref()),
+                    ];
+                    let summaries = reports.map(|r| r.map(|r| figure.summary(r)));
+                    let cell = |ui: &mut egui::Ui, v: Option<String>| {
+                        ui.label(v.unwrap_or_else(|| "—".into()));
+                    };
+                    let digits = if figure.is_position() { 3 } else { 5 };
+                    ui.label(format!("RMS ({unit})"));
+                    for s in summaries {
+                        cell(ui, s.map(|s| format!("{:.digits$}", s.0)));
+                    }
+                    ui.end_row();
+                    ui.label(format!("max ({unit})"));
+                    for s in summaries {
+                        cell(ui, s.map(|s| format!("{:.digits$}", s.1)));
+                    }
+                    ui.end_row();
+                    for (t, label) in thresholds.iter().enumerate() {
+                        ui.label(label);
+                        for s in summaries {
+                            cell(ui, s.map(|s| format!("{:.1} %", 100.0 * s.2[t])));
+                        }
+                        ui.end_row();
+                    }
+                    ui.label("pairs");
+                    ui.label(format!("{}", before.of(figure.pair_kind()).len()));
+                    ui.label(
+                        after
+                            .map(|a| format!("{}", a.of(figure.pair_kind()).len()))
+                            .unwrap_or_else(|| "—".into()),
+                    );
+                    ui.end_row();
+                });
+            if after.is_none() {
+                ui.label(
+                    RichText::new("Calibrate to see the calibrated figures.").color(Color32::GRAY),
+                );
+            }
+        });
+
+        // Before and after side by side, each on its own range (calibration shrinks the errors
+        // by orders of magnitude, so a shared axis would hide one of them).
+        let panels: Vec<(&str, &[f64], Color32)> = if after_samples.is_empty() {
+            vec![("nominal", &before_samples[..], NOMINAL_COLOR)]
+        } else {
+            vec![
+                ("nominal", &before_samples[..], NOMINAL_COLOR),
+                ("calibrated", &after_samples[..], CALIBRATED_COLOR),
+            ]
+        };
+        let n = panels.len();
+        ui.columns(n, |cols| {
+            for (col, (name, samples, color)) in cols.iter_mut().zip(panels) {
+                histogram_plot_ui(col, figure, k, name, samples, color);
+            }
+        });
+    });
+}
+
+const NOMINAL_COLOR: Color32 = Color32::from_rgb(230, 120, 90);
+const CALIBRATED_COLOR: Color32 = Color32::from_rgb(100, 190, 235);
+
+/// One histogram: symmetric range for signed Δd, from zero for Δo; the paper's thresholds as lines
+/// when they fall in range.
+fn histogram_plot_ui(
+    ui: &mut egui::Ui,
+    figure: Figure,
+    split: usize,
+    name: &str,
+    samples: &[f64],
+    color: Color32,
+) {
+    let extent = samples
+        .iter()
+        .filter(|x| x.is_finite())
+        .fold(0.0f64, |m, x| m.max(x.abs()))
+        .max(1e-9);
+    let (lo, hi) = if figure.is_position() {
+        (-extent, extent)
+    } else {
+        (0.0, extent)
+    };
+    let bins = 41;
+    let width = (hi - lo) / bins as f64;
+    let bars: Vec<Bar> = histogram(samples, lo, hi, bins)
+        .into_iter()
+        .map(|(x, y)| Bar::new(x, 100.0 * y).width(width * 0.95))
+        .collect();
+    Plot::new(("histogram", figure.label(), split, name.to_string()))
+        .legend(Legend::default())
+        .x_axis_label(if figure.is_position() {
+            "Δd (mm)"
+        } else {
+            "Δo (rad)"
+        })
+        .y_axis_label("% of samples")
+        .allow_scroll(false)
+        .show(ui, |plot| {
+            plot.bar_chart(BarChart::new(name, bars).color(color));
+            let t = if figure.is_position() {
+                POS_THRESHOLDS_MM.to_vec()
+            } else {
+                ORI_THRESHOLDS_RAD.to_vec()
+            };
+            for (i, x) in t.into_iter().enumerate().filter(|(_, x)| *x <= extent) {
+                let c = Color32::from_gray(if i == 0 { 150 } else { 100 });
+                plot.vline(VLine::new(format!("±{x}"), x).color(c));
+                if figure.is_position() {
+                    plot.vline(VLine::new(format!("±{x}"), -x).color(c));
+                }
+            }
+        });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn histogram_counts_every_sample_once() {
+        let samples = [-1.0, -0.5, 0.0, 0.49, 0.5, 1.0, 7.0, -7.0];
+        let h = histogram(&samples, -1.0, 1.0, 4);
+        let total: f64 = h.iter().map(|(_, y)| y).sum();
+        assert!((total - 1.0).abs() < 1e-12);
+        // Out-of-range samples land in the end bins.
+        assert!((h[0].1 - 2.0 / 8.0).abs() < 1e-12, "{h:?}");
+        assert!((h[3].1 - 3.0 / 8.0).abs() < 1e-12, "{h:?}");
+        assert!((h[0].0 + 0.75).abs() < 1e-12);
+    }
+}

@@ -1,0 +1,420 @@
+//! The 3D viewport: camera interaction, picking, legends, and the hand-off to the wgpu pipeline.
+
+pub mod camera;
+pub mod gpu;
+pub mod scene;
+
+use crate::app::colormap;
+use crate::app::session::Session;
+use camera::OrbitCamera;
+use eframe::egui::{self, Color32, Pos2, Rect, Sense, Stroke, Vec2};
+use eframe::egui_wgpu::{self, wgpu};
+use gpu::{FrameUniform, ViewportCallback, ViewportGpu};
+use scene::{SceneData, SceneOptions, Selection};
+use std::sync::Arc;
+
+/// Picking radius around a configuration's anchor, points.
+const PICK_RADIUS_POINTS: f32 = 14.0;
+
+/// Create the viewport's GPU resources once; call from `WorkbenchApp::new`.
+/// Returns false when the app does not run on wgpu (the viewport then shows a note).
+pub fn install_gpu(render_state: Option<&egui_wgpu::RenderState>, sample_count: u32) -> bool {
+    let Some(rs) = render_state else {
+        return false;
+    };
+    let gpu = ViewportGpu::new(&rs.device, sample_count);
+    rs.renderer.write().callback_resources.insert(gpu);
+    true
+}
+
+/// View state of the viewport (camera, display options, cached scene).
+pub struct ViewportState {
+    pub camera: OrbitCamera,
+    pub options: SceneOptions,
+    /// Measurement index each arm is drawn in.
+    pub poses: [Option<usize>; 2],
+    scene: Arc<SceneData>,
+    scene_key: Option<SceneKey>,
+    version: u64,
+    texture: Option<egui::TextureId>,
+    /// Choose exaggeration and colour range from the errors when a model arrives.
+    pub auto_scale: bool,
+    /// The configuration under the pointer.
+    pub hovered_config: Option<(crate::kinematics::Side, usize)>,
+}
+
+/// What the cached scene was built from.
+#[derive(Clone, Debug, PartialEq)]
+struct SceneKey {
+    session_generation: u64,
+    options: SceneOptions,
+    poses: [Option<usize>; 2],
+    selection: Selection,
+}
+
+impl Default for ViewportState {
+    fn default() -> Self {
+        Self {
+            camera: OrbitCamera::default(),
+            options: SceneOptions::default(),
+            poses: [Some(0), Some(0)],
+            scene: Arc::new(SceneData::default()),
+            scene_key: None,
+            version: 0,
+            texture: None,
+            hovered_config: None,
+            auto_scale: true,
+        }
+    }
+}
+
+/// What the user did in the viewport this frame.
+#[derive(Default)]
+pub struct ViewportResponse {
+    /// A configuration was clicked (or empty space: `Some(None)` clears the selection).
+    pub clicked: Option<Selection>,
+}
+
+impl ViewportState {
+    /// With auto scale on: draw the 95th-percentile point error as about 60 mm and put it at the
+    /// top of the colour bar.
+    pub fn auto_scale(&mut self, session: &Session) {
+        if !self.auto_scale {
+            return;
+        }
+        let analysis = if self.options.use_calibrated {
+            session.current()
+        } else {
+            &session.nominal
+        };
+        let mut errors: Vec<f64> = analysis
+            .configs
+            .iter()
+            .flat_map(|r| r.point_errors_mm())
+            .filter(|e| e.is_finite())
+            .collect();
+        if errors.is_empty() {
+            return;
+        }
+        errors.sort_by(f64::total_cmp);
+        let p95 = errors[(errors.len() * 95 / 100).min(errors.len() - 1)];
+        if p95 > 0.0 {
+            self.options.exaggeration = nice_round(60.0 / p95).clamp(1.0, 5000.0) as f32;
+            self.options.color_max_mm = nice_round(p95).clamp(0.01, 20.0) as f32;
+        }
+    }
+
+    /// Draw the viewport into the remaining space of `ui`. `generation` identifies the session's
+    /// content (bump it when the session or its models change).
+    pub fn ui(
+        &mut self,
+        ui: &mut egui::Ui,
+        frame: &eframe::Frame,
+        session: Option<&Session>,
+        generation: u64,
+        selection: Selection,
+    ) -> ViewportResponse {
+        let mut out = ViewportResponse::default();
+        let (rect, response) = ui.allocate_exact_size(ui.available_size(), Sense::click_and_drag());
+        if rect.width() < 2.0 || rect.height() < 2.0 {
+            return out;
+        }
+
+        // Camera interaction.
+        let shift = ui.input(|i| i.modifiers.shift);
+        if response.dragged_by(egui::PointerButton::Primary) && !shift {
+            let d = response.drag_delta();
+            self.camera.orbit(d.x, d.y);
+        } else if response.dragged_by(egui::PointerButton::Secondary)
+            || response.dragged_by(egui::PointerButton::Middle)
+            || (response.dragged_by(egui::PointerButton::Primary) && shift)
+        {
+            let d = response.drag_delta();
+            self.camera.pan(d.x, d.y, rect.height());
+        }
+        if response.hovered() {
+            let scroll = ui.input(|i| i.smooth_scroll_delta.y);
+            if scroll != 0.0 {
+                self.camera.zoom((-scroll * 0.002).exp());
+            }
+        }
+        if response.double_clicked() {
+            self.camera = OrbitCamera::default();
+        }
+
+        // Scene (rebuilt only when something it depends on changed).
+        if let Some(session) = session {
+            let key = SceneKey {
+                session_generation: generation,
+                options: self.options.clone(),
+                poses: self.poses,
+                selection,
+            };
+            if self.scene_key.as_ref() != Some(&key) {
+                self.version += 1;
+                self.scene = Arc::new(scene::build_scene(
+                    session,
+                    &self.options,
+                    self.poses,
+                    selection,
+                    self.version,
+                ));
+                self.scene_key = Some(key);
+            }
+        }
+
+        // Picking on the CPU: nearest projected configuration anchor.
+        let aspect = rect.width() / rect.height();
+        let view_proj = self.camera.view_proj(aspect);
+        self.hovered_config = None;
+        if let Some(session) = session {
+            let analysis = if self.options.use_calibrated {
+                session.current()
+            } else {
+                &session.nominal
+            };
+            let pointer = response.hover_pos();
+            let pick = |pos: Pos2| {
+                let mut best: Option<(f32, (crate::kinematics::Side, usize))> = None;
+                for row in analysis.configs.iter().filter(|r| self.options.shows(r)) {
+                    let anchor = scene::pick_anchor(row);
+                    if let Some([x, y]) =
+                        self.camera
+                            .project_with(&view_proj, &anchor, rect.width(), rect.height())
+                    {
+                        let d = (Pos2::new(rect.left() + x, rect.top() + y) - pos).length();
+                        if d < PICK_RADIUS_POINTS && best.is_none_or(|(bd, _)| d < bd) {
+                            best = Some((d, (row.side, row.index)));
+                        }
+                    }
+                }
+                best.map(|(_, s)| s)
+            };
+            if let Some(pos) = pointer {
+                self.hovered_config = pick(pos);
+            }
+            if response.clicked()
+                && let Some(pos) = response.interact_pointer_pos()
+            {
+                out.clicked = Some(pick(pos));
+            }
+        }
+
+        // Offscreen target sized in physical pixels, drawn by egui as an image.
+        let ppp = ui.ctx().pixels_per_point();
+        let size_px = [
+            (rect.width() * ppp).round().max(1.0) as u32,
+            (rect.height() * ppp).round().max(1.0) as u32,
+        ];
+        let painter = ui.painter_at(rect);
+        let Some(rs) = frame.wgpu_render_state() else {
+            painter.rect_filled(rect, 0.0, Color32::from_gray(20));
+            painter.text(
+                rect.center(),
+                egui::Align2::CENTER_CENTER,
+                "The 3D viewport needs the wgpu renderer.",
+                egui::FontId::proportional(14.0),
+                Color32::LIGHT_GRAY,
+            );
+            return out;
+        };
+        {
+            let mut renderer = rs.renderer.write();
+            let new_view = renderer
+                .callback_resources
+                .get_mut::<ViewportGpu>()
+                .and_then(|gpu| gpu.ensure_targets(&rs.device, size_px));
+            if let Some(view) = new_view {
+                match self.texture {
+                    Some(id) => renderer.update_egui_texture_from_wgpu_texture(
+                        &rs.device,
+                        &view,
+                        wgpu::FilterMode::Linear,
+                        id,
+                    ),
+                    None => {
+                        self.texture = Some(renderer.register_native_texture(
+                            &rs.device,
+                            &view,
+                            wgpu::FilterMode::Linear,
+                        ));
+                    }
+                }
+            }
+        }
+        let eye = self.camera.eye_mm();
+        let to_eye = (eye - self.camera.target_mm).normalize();
+        // Head light, a little above and to the side of the view direction.
+        let light = (to_eye + nalgebra::Vector3::new(0.0, 0.0, 0.6)).normalize();
+        let uniform = FrameUniform {
+            view_proj: view_proj.as_slice().try_into().unwrap_or([0.0; 16]),
+            light_dir: [light.x, light.y, light.z, 0.28],
+            eye: [eye.x, eye.y, eye.z, 1.0],
+        };
+        painter.add(egui_wgpu::Callback::new_paint_callback(
+            rect,
+            ViewportCallback {
+                scene: self.scene.clone(),
+                uniform,
+            },
+        ));
+        if let Some(id) = self.texture {
+            painter.image(
+                id,
+                rect,
+                Rect::from_min_max(Pos2::ZERO, Pos2::new(1.0, 1.0)),
+                Color32::WHITE,
+            );
+        }
+
+        self.legends_ui(&painter, rect, session);
+        // Label the selected configuration where it is drawn.
+        if let (Some(session), Some((side, index))) = (session, selection) {
+            let analysis = if self.options.use_calibrated {
+                session.current()
+            } else {
+                &session.nominal
+            };
+            if let Some(row) = analysis
+                .configs
+                .iter()
+                .find(|r| r.side == side && r.index == index)
+                && let Some([x, y]) = self.camera.project_with(
+                    &view_proj,
+                    &scene::pick_anchor(row),
+                    rect.width(),
+                    rect.height(),
+                )
+            {
+                let at = Pos2::new(rect.left() + x, rect.top() + y);
+                painter.circle_stroke(at, 10.0, Stroke::new(2.0, Color32::WHITE));
+                let text = format!("{} ({side})", row.id);
+                let galley =
+                    painter.layout_no_wrap(text, egui::FontId::proportional(13.0), Color32::WHITE);
+                let pos = at + Vec2::new(13.0, -8.0);
+                painter.rect_filled(
+                    Rect::from_min_size(pos, galley.size()).expand(3.0),
+                    3.0,
+                    Color32::from_black_alpha(170),
+                );
+                painter.galley(pos, galley, Color32::WHITE);
+            }
+        }
+        if let (Some(session), Some((side, index))) = (session, self.hovered_config)
+            && let Some(m) = session.dataset.arm(side).measurements.get(index)
+        {
+            response
+                .clone()
+                .on_hover_text_at_pointer(format!("{} ({side} arm) — click to select", m.id));
+        }
+        out
+    }
+
+    /// Colour bar and exaggeration legend in the bottom-left corner.
+    fn legends_ui(&self, painter: &egui::Painter, rect: Rect, session: Option<&Session>) {
+        let font = egui::FontId::proportional(12.0);
+        let text_color = Color32::from_gray(220);
+        let bar_w = 180.0;
+        let bar_h = 12.0;
+        let origin = Pos2::new(rect.left() + 14.0, rect.bottom() - 48.0);
+        let bar = Rect::from_min_size(origin, Vec2::new(bar_w, bar_h));
+        let bg = Rect::from_min_max(
+            Pos2::new(bar.left() - 8.0, bar.top() - 22.0),
+            Pos2::new(bar.right() + 70.0, bar.bottom() + 34.0),
+        );
+        painter.rect_filled(bg, 4.0, Color32::from_black_alpha(150));
+        let mut mesh = egui::Mesh::default();
+        let n = 32;
+        for k in 0..=n {
+            let t = k as f32 / n as f32;
+            let x = bar.left() + t * bar_w;
+            let c = colormap::color32(t);
+            mesh.colored_vertex(Pos2::new(x, bar.top()), c);
+            mesh.colored_vertex(Pos2::new(x, bar.bottom()), c);
+            if k > 0 {
+                let i = 2 * k as u32;
+                mesh.add_triangle(i - 2, i - 1, i);
+                mesh.add_triangle(i - 1, i + 1, i);
+            }
+        }
+        painter.add(egui::Shape::mesh(mesh));
+        painter.text(
+            Pos2::new(bar.left(), bar.top() - 4.0),
+            egui::Align2::LEFT_BOTTOM,
+            "point error after registration",
+            font.clone(),
+            text_color,
+        );
+        painter.text(
+            Pos2::new(bar.left(), bar.bottom() + 3.0),
+            egui::Align2::LEFT_TOP,
+            "0 mm",
+            font.clone(),
+            text_color,
+        );
+        painter.text(
+            Pos2::new(bar.right(), bar.bottom() + 3.0),
+            egui::Align2::RIGHT_TOP,
+            format!("≥ {:.2} mm", self.options.color_max_mm),
+            font.clone(),
+            text_color,
+        );
+        painter.text(
+            Pos2::new(bar.left(), bar.bottom() + 18.0),
+            egui::Align2::LEFT_TOP,
+            format!(
+                "error vectors ×{:.0} (1 mm drawn as {:.0} mm)",
+                self.options.exaggeration, self.options.exaggeration
+            ),
+            font.clone(),
+            text_color,
+        );
+        if session.is_none() {
+            painter.text(
+                rect.center(),
+                egui::Align2::CENTER_CENTER,
+                "No dataset loaded — open one or drop a dataset.toml here",
+                egui::FontId::proportional(16.0),
+                text_color,
+            );
+        }
+        painter.rect_stroke(
+            rect,
+            0.0,
+            Stroke::new(1.0, Color32::from_gray(40)),
+            egui::StrokeKind::Inside,
+        );
+    }
+}
+
+/// Round to 1, 2 or 5 times a power of ten.
+fn nice_round(x: f64) -> f64 {
+    if !(x.is_finite() && x > 0.0) {
+        return 1.0;
+    }
+    let p = 10f64.powf(x.log10().floor());
+    let m = x / p;
+    let m = if m < 1.5 {
+        1.0
+    } else if m < 3.5 {
+        2.0
+    } else if m < 7.5 {
+        5.0
+    } else {
+        10.0
+    };
+    m * p
+}
+
+#[cfg(test)]
+mod tests {
+    use super::nice_round;
+
+    #[test]
+    fn nice_round_picks_1_2_5() {
+        assert!((nice_round(0.031) - 0.02).abs() < 1e-12);
+        assert_eq!(nice_round(42.0), 50.0);
+        assert_eq!(nice_round(1.2), 1.0);
+        assert_eq!(nice_round(f64::NAN), 1.0);
+    }
+}

@@ -1,0 +1,375 @@
+//! What the viewport draws, built on the CPU: mesh instances for the robot, coloured line and
+//! triangle vertices for the grid, axes, reflector triangles and error vectors. Rebuilt only when the
+//! data or the display options change.
+
+use crate::app::colormap;
+use crate::app::session::{ConfigRow, Session};
+use crate::kinematics::{N_JOINTS, Side};
+use crate::robot::{GeometryKind, PlacedShape, ShapeKind};
+use nalgebra::{Isometry3, Matrix3, Matrix4, Vector3};
+
+/// A unit primitive the mesh pipeline instances.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Primitive {
+    /// Cube [-1, 1]³.
+    Box,
+    /// Radius 1, z from -1 to 1.
+    Cylinder,
+    /// Radius 1.
+    Sphere,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MeshInstance {
+    pub primitive: Primitive,
+    /// Unit primitive → body frame (mm), columns.
+    pub model: [[f32; 4]; 4],
+    /// Normal matrix columns (xyz, w unused).
+    pub normal: [[f32; 4]; 3],
+    /// Linear RGBA.
+    pub color: [f32; 4],
+}
+
+impl MeshInstance {
+    /// A primitive scaled per axis, then placed by `body_from_shape`.
+    pub fn new(
+        primitive: Primitive,
+        body_from_shape: &Isometry3<f64>,
+        scale: Vector3<f64>,
+        color: [f32; 4],
+    ) -> Self {
+        let iso: Matrix4<f32> = body_from_shape.to_homogeneous().cast();
+        let s: Vector3<f32> = scale.cast();
+        let model = iso * Matrix4::new_nonuniform_scaling(&s);
+        let rot: Matrix3<f32> = body_from_shape
+            .rotation
+            .to_rotation_matrix()
+            .matrix()
+            .cast();
+        let inv = Vector3::new(
+            1.0 / s.x.max(1e-6),
+            1.0 / s.y.max(1e-6),
+            1.0 / s.z.max(1e-6),
+        );
+        let normal = rot * Matrix3::from_diagonal(&inv);
+        Self {
+            primitive,
+            model: std::array::from_fn(|c| std::array::from_fn(|r| model[(r, c)])),
+            normal: std::array::from_fn(|c| [normal[(0, c)], normal[(1, c)], normal[(2, c)], 0.0]),
+            color,
+        }
+    }
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct ColorVertex {
+    pub position: [f32; 3],
+    /// Linear RGBA.
+    pub color: [f32; 4],
+}
+
+/// Everything uploaded to the GPU; `version` changes whenever the content does.
+#[derive(Clone, Debug, Default)]
+pub struct SceneData {
+    pub version: u64,
+    pub instances: Vec<MeshInstance>,
+    pub lines: Vec<ColorVertex>,
+    pub triangles: Vec<ColorVertex>,
+}
+
+/// Display options that change the scene.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SceneOptions {
+    pub show_robot: bool,
+    pub show_grid: bool,
+    pub show_measured: bool,
+    pub show_model: bool,
+    pub show_vectors: bool,
+    /// Draw configurations of these splits.
+    pub show_cal: bool,
+    pub show_ver: bool,
+    /// Draw configurations of these arms.
+    pub show_arm: [bool; 2],
+    /// Error vectors are drawn this many times their length.
+    pub exaggeration: f32,
+    /// Error (mm) at the top of the colour scale.
+    pub color_max_mm: f32,
+    /// Draw the calibrated model (if any) rather than the nominal one.
+    pub use_calibrated: bool,
+}
+
+impl Default for SceneOptions {
+    fn default() -> Self {
+        Self {
+            show_robot: true,
+            show_grid: true,
+            show_measured: true,
+            show_model: true,
+            show_vectors: true,
+            show_cal: true,
+            show_ver: true,
+            show_arm: [true, true],
+            exaggeration: 50.0,
+            color_max_mm: 2.0,
+            use_calibrated: true,
+        }
+    }
+}
+
+impl SceneOptions {
+    pub fn shows(&self, row: &ConfigRow) -> bool {
+        let split_ok = match row.split {
+            crate::dataset::Split::Cal => self.show_cal,
+            crate::dataset::Split::Ver => self.show_ver,
+        };
+        split_ok && self.show_arm[side_index(row.side)]
+    }
+}
+
+pub fn side_index(side: Side) -> usize {
+    match side {
+        Side::Left => 0,
+        Side::Right => 1,
+    }
+}
+
+fn srgb_linear(rgb: [u8; 3], alpha: f32) -> [f32; 4] {
+    let [r, g, b] = rgb.map(|c| colormap::srgb_to_linear(c as f32 / 255.0));
+    [r, g, b, alpha]
+}
+
+/// Convert the robot's shapes to mesh instances. Meshes (not drawable here) become small boxes.
+pub fn robot_instances(shapes: &[PlacedShape], out: &mut Vec<MeshInstance>) {
+    for shape in shapes {
+        let color = shape.rgba;
+        let pose = &shape.body_from_shape;
+        match &shape.kind {
+            ShapeKind::Box { half_extents_mm } => {
+                out.push(MeshInstance::new(
+                    Primitive::Box,
+                    pose,
+                    *half_extents_mm,
+                    color,
+                ));
+            }
+            ShapeKind::Cylinder {
+                radius_mm,
+                half_length_mm,
+            } => out.push(MeshInstance::new(
+                Primitive::Cylinder,
+                pose,
+                Vector3::new(*radius_mm, *radius_mm, *half_length_mm),
+                color,
+            )),
+            ShapeKind::Capsule {
+                radius_mm,
+                half_length_mm,
+            } => {
+                out.push(MeshInstance::new(
+                    Primitive::Cylinder,
+                    pose,
+                    Vector3::new(*radius_mm, *radius_mm, *half_length_mm),
+                    color,
+                ));
+                for z in [-half_length_mm, *half_length_mm] {
+                    let end = pose * Isometry3::translation(0.0, 0.0, z);
+                    out.push(MeshInstance::new(
+                        Primitive::Sphere,
+                        &end,
+                        Vector3::repeat(*radius_mm),
+                        color,
+                    ));
+                }
+            }
+            ShapeKind::Sphere { radius_mm } => out.push(MeshInstance::new(
+                Primitive::Sphere,
+                pose,
+                Vector3::repeat(*radius_mm),
+                color,
+            )),
+            ShapeKind::Mesh { .. } => out.push(MeshInstance::new(
+                Primitive::Box,
+                pose,
+                Vector3::repeat(20.0),
+                [0.8, 0.3, 0.8, 1.0],
+            )),
+        }
+    }
+}
+
+fn line(out: &mut Vec<ColorVertex>, a: Vector3<f64>, b: Vector3<f64>, color: [f32; 4]) {
+    let a: Vector3<f32> = a.cast();
+    let b: Vector3<f32> = b.cast();
+    out.push(ColorVertex {
+        position: a.into(),
+        color,
+    });
+    out.push(ColorVertex {
+        position: b.into(),
+        color,
+    });
+}
+
+fn grid(out: &mut Vec<ColorVertex>) {
+    let half = 1000.0;
+    let step = 100.0;
+    let n = (2.0 * half / step) as i32;
+    for k in 0..=n {
+        let t = -half + k as f64 * step;
+        let major = k % 5 == 0;
+        let c = if major {
+            [0.09, 0.10, 0.12, 1.0]
+        } else {
+            [0.035, 0.04, 0.05, 1.0]
+        };
+        line(
+            out,
+            Vector3::new(t, -half, 0.0),
+            Vector3::new(t, half, 0.0),
+            c,
+        );
+        line(
+            out,
+            Vector3::new(-half, t, 0.0),
+            Vector3::new(half, t, 0.0),
+            c,
+        );
+    }
+    let len = 250.0;
+    line(
+        out,
+        Vector3::zeros(),
+        Vector3::new(len, 0.0, 0.0),
+        [0.8, 0.08, 0.06, 1.0],
+    );
+    line(
+        out,
+        Vector3::zeros(),
+        Vector3::new(0.0, len, 0.0),
+        [0.08, 0.6, 0.08, 1.0],
+    );
+    line(
+        out,
+        Vector3::zeros(),
+        Vector3::new(0.0, 0.0, len),
+        [0.1, 0.2, 0.9, 1.0],
+    );
+}
+
+/// The selected configuration, as (side, index into the arm's measurements).
+pub type Selection = Option<(Side, usize)>;
+
+/// Build the whole scene. `poses` holds the measurement index each arm is drawn in.
+pub fn build_scene(
+    session: &Session,
+    options: &SceneOptions,
+    poses: [Option<usize>; 2],
+    selection: Selection,
+    version: u64,
+) -> SceneData {
+    let mut scene = SceneData {
+        version,
+        ..Default::default()
+    };
+    let analysis = if options.use_calibrated {
+        session.current()
+    } else {
+        &session.nominal
+    };
+
+    if options.show_robot {
+        let q = |side: Side| -> [f64; N_JOINTS] {
+            poses[side_index(side)]
+                .and_then(|i| session.dataset.arm(side).measurements.get(i))
+                .map_or([0.0; N_JOINTS], |m| m.q_rad)
+        };
+        let shapes = session
+            .robot
+            .shapes(&q(Side::Left), &q(Side::Right), GeometryKind::Visual);
+        robot_instances(&shapes, &mut scene.instances);
+    }
+    if options.show_grid {
+        grid(&mut scene.lines);
+    }
+
+    let max = options.color_max_mm.max(1e-6);
+    let model_color = [0.35, 0.37, 0.40, 0.8];
+    for row in analysis.configs.iter().filter(|r| options.shows(r)) {
+        let selected = selection == Some((row.side, row.index));
+        let errors = row.point_errors_mm();
+        let mean = (errors[0] + errors[1] + errors[2]) / 3.0;
+        if options.show_measured {
+            let [r, g, b] = colormap::linear(mean as f32 / max);
+            let alpha = if selected { 0.95 } else { 0.4 };
+            for p in row.measured_body_mm {
+                scene.triangles.push(ColorVertex {
+                    position: p.cast::<f32>().into(),
+                    color: [r, g, b, alpha],
+                });
+            }
+        }
+        if options.show_model {
+            let c = if selected {
+                [1.0, 1.0, 1.0, 1.0]
+            } else {
+                model_color
+            };
+            for k in 0..3 {
+                line(
+                    &mut scene.lines,
+                    row.model_body_mm[k],
+                    row.model_body_mm[(k + 1) % 3],
+                    c,
+                );
+            }
+        }
+        if options.show_vectors {
+            for ((error, from), measured) in errors
+                .iter()
+                .zip(row.model_body_mm)
+                .zip(row.measured_body_mm)
+            {
+                let [r, g, b] = colormap::linear(*error as f32 / max);
+                let to = from + (measured - from) * options.exaggeration as f64;
+                line(&mut scene.lines, from, to, [r, g, b, 1.0]);
+            }
+        }
+        if selected {
+            let c = srgb_linear([255, 255, 255], 1.0);
+            for p in row.measured_body_mm {
+                scene.instances.push(MeshInstance::new(
+                    Primitive::Sphere,
+                    &Isometry3::translation(p.x, p.y, p.z),
+                    Vector3::repeat(8.0),
+                    c,
+                ));
+            }
+        }
+    }
+    scene
+}
+
+/// Screen-space anchor of a configuration for picking: its measured triangle's centroid.
+pub fn pick_anchor(row: &ConfigRow) -> Vector3<f32> {
+    ((row.measured_body_mm[0] + row.measured_body_mm[1] + row.measured_body_mm[2]) / 3.0).cast()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn instance_scales_then_places() {
+        let pose = Isometry3::translation(10.0, 20.0, 30.0);
+        let inst = MeshInstance::new(Primitive::Box, &pose, Vector3::new(2.0, 3.0, 4.0), [1.0; 4]);
+        // Corner (1, 1, 1) of the unit cube maps to (12, 23, 34).
+        let m = Matrix4::from_fn(|r, c| inst.model[c][r]);
+        let p = m * nalgebra::Vector4::new(1.0, 1.0, 1.0, 1.0);
+        assert!(
+            (p.x - 12.0).abs() < 1e-5 && (p.y - 23.0).abs() < 1e-5 && (p.z - 34.0).abs() < 1e-5
+        );
+        // The normal matrix undoes the scale: the +x face normal stays along x.
+        assert!((inst.normal[0][0] - 0.5).abs() < 1e-6);
+    }
+}

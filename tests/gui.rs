@@ -1,0 +1,301 @@
+//! The workbench driven headlessly with egui_kittest on wgpu (Mesa lavapipe, no window, no GPU):
+//! start on the bundled example, calibrate, cancel, open a broken dataset, snapshot the viewport.
+//! (Set `XDG_RUNTIME_DIR` to a mode-700 directory to silence a harmless warning; `.ci/run` does.)
+#![cfg(feature = "gui")]
+
+use dualcal::app::{AppLaunch, WorkbenchApp};
+use egui_kittest::Harness;
+use egui_kittest::kittest::Queryable;
+
+/// Frame caps: generous, so a slow machine passes; they only stop a hung test.
+const MAX_LOAD_FRAMES: usize = 20_000;
+const MAX_RUN_FRAMES: usize = 200_000;
+
+fn harness(size: [f32; 2], launch: AppLaunch) -> Harness<'static, WorkbenchApp> {
+    Harness::builder()
+        .with_size(eframe::egui::Vec2::new(size[0], size[1]))
+        .wgpu()
+        .build_eframe(move |cc| WorkbenchApp::with_msaa(cc, launch, false))
+}
+
+/// Step frames until `done` holds (or the cap is hit, which fails the test).
+fn step_until(
+    harness: &mut Harness<'_, WorkbenchApp>,
+    max_frames: usize,
+    what: &str,
+    done: impl Fn(&WorkbenchApp) -> bool,
+) {
+    for _ in 0..max_frames {
+        if done(harness.state()) {
+            // One more frame so the UI shows the new state.
+            harness.step();
+            return;
+        }
+        harness.step();
+        std::thread::sleep(std::time::Duration::from_millis(2));
+    }
+    panic!("{what}: not reached within {max_frames} frames");
+}
+
+fn loaded(harness: &mut Harness<'_, WorkbenchApp>) {
+    step_until(harness, MAX_LOAD_FRAMES, "loading the example", |app| {
+        !app.is_loading()
+    });
+    assert!(
+        harness.state().session().is_some(),
+        "example not loaded: {:?}",
+        harness.state().errors()
+    );
+}
+
+#[test]
+fn calibrate_shows_calibrated_figures() {
+    let mut harness = harness([1400.0, 900.0], AppLaunch::default());
+    loaded(&mut harness);
+    harness.get_by_label("errors of the nominal model");
+    harness.get_by_label("Accuracy").click();
+    harness.step();
+    harness.get_by_label("Calibrate to see the calibrated figures.");
+
+    harness.get_by_label("Calibrate").click();
+    harness.step();
+    assert!(harness.state().is_calibrating());
+    step_until(&mut harness, MAX_RUN_FRAMES, "calibration result", |app| {
+        !app.is_calibrating()
+    });
+    let app = harness.state();
+    assert!(app.errors().is_empty(), "{:?}", app.errors());
+    let session = app.session().unwrap();
+    let calibrated = session.calibrated.as_ref().expect("a calibrated result");
+    assert!(!app.history().is_empty(), "no convergence history");
+
+    // The table now lists the calibrated model's errors, and the accuracy panel shows both columns.
+    harness.get_by_label("errors of the calibrated model");
+    assert!(
+        harness
+            .query_by_label("Calibrate to see the calibrated figures.")
+            .is_none()
+    );
+    // The calibrated relative figures on the verification split are shown with 3 decimals; they
+    // must be among the labels.
+    let ver = calibrated.analysis.reports[1]
+        .as_ref()
+        .expect("verification report");
+    let rms = format!("{:.3}", ver.relative_left.pos_rms_mm);
+    assert!(
+        harness.query_all_by_label(&rms).count() >= 1,
+        "{rms} mm not shown"
+    );
+    // Calibration must have lowered the worst configuration error it shows in the table.
+    let worst = |a: &dualcal::app::session::Analysis| {
+        a.configs
+            .iter()
+            .map(|r| r.worst_pos_mm)
+            .fold(0.0f64, f64::max)
+    };
+    assert!(worst(&calibrated.analysis) < worst(&session.nominal));
+}
+
+#[test]
+fn cancel_stops_the_run_and_keeps_the_previous_state() {
+    let mut harness = harness([1400.0, 900.0], AppLaunch::default());
+    loaded(&mut harness);
+    // The paper's subgradient QP with a huge iteration budget: a run far longer than the test.
+    {
+        let settings = harness.state_mut().settings_mut();
+        settings.qp = dualcal::solver::QpMethod::Paper;
+        settings.max_qp_iterations = 100_000_000;
+    }
+    // Let the settings panel lay out the new row before clicking by position.
+    harness.run_steps(2);
+    harness.get_by_label("Calibrate").click();
+    harness.step();
+    assert!(
+        harness.state().is_calibrating(),
+        "{:?}",
+        harness.state().errors()
+    );
+    harness.get_by_label("Cancel").click();
+    step_until(&mut harness, MAX_RUN_FRAMES, "cancellation", |app| {
+        !app.is_calibrating()
+    });
+    let app = harness.state();
+    assert!(
+        app.session().unwrap().calibrated.is_none(),
+        "a cancelled run must not replace the current result"
+    );
+    assert!(app.errors().is_empty(), "{:?}", app.errors());
+    harness.get_by_label_contains("cancelled");
+    harness.get_by_label("errors of the nominal model");
+}
+
+#[test]
+fn a_broken_dataset_shows_its_error_and_keeps_the_last_good_one() {
+    let mut harness = harness([1400.0, 900.0], AppLaunch::default());
+    loaded(&mut harness);
+    let before = harness.state().session().unwrap().dataset.dir.clone();
+
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("dataset.toml"),
+        "format = \"dualcal-dataset/1\"\n[units]\nlength = \"furlong\"\nangle = \"deg\"\n",
+    )
+    .unwrap();
+    harness.state_mut().open_dataset(dir.path());
+    step_until(
+        &mut harness,
+        MAX_LOAD_FRAMES,
+        "loading the broken dataset",
+        |app| !app.is_loading(),
+    );
+    let app = harness.state();
+    assert_eq!(app.errors().len(), 1, "{:?}", app.errors());
+    assert!(
+        app.errors()[0].contains("dataset.toml"),
+        "{:?}",
+        app.errors()
+    );
+    assert_eq!(app.session().unwrap().dataset.dir, before);
+    harness.get_by_label_contains("cannot open dataset");
+    harness.get_by_label_contains("previous dataset stays");
+
+    // Idle, the UI settles (no endless repaints) and every widget has an accessible name.
+    harness.run();
+
+    // The error can be dismissed.
+    harness.get_by_label("×").click();
+    harness.step();
+    assert!(harness.state().errors().is_empty());
+}
+
+#[test]
+fn viewport_snapshot() {
+    let mut harness = harness([400.0, 280.0], AppLaunch::default());
+    loaded(&mut harness);
+    {
+        let app = harness.state_mut();
+        app.set_panels_visible(false);
+        let view = app.viewport_mut();
+        view.camera = dualcal::app::viewport::camera::OrbitCamera::default();
+        view.auto_scale = false;
+        // One arm's calibration configurations keep the picture readable.
+        view.options.show_arm = [true, false];
+        view.options.show_ver = false;
+        view.options.exaggeration = 5.0;
+        view.options.color_max_mm = 10.0;
+    }
+    harness.run_steps(3);
+    harness.snapshot("viewport");
+}
+
+#[test]
+fn selecting_in_the_table_and_in_the_viewport() {
+    let mut harness = harness([1400.0, 900.0], AppLaunch::default());
+    loaded(&mut harness);
+
+    // "Select worst" picks the row with the largest |Δd| and poses that arm in it.
+    harness
+        .get_all_by_label("Select worst")
+        .next()
+        .unwrap()
+        .click();
+    harness.step();
+    let (side, index) = harness.state().selection().expect("worst selected");
+    let session = harness.state().session().unwrap();
+    let worst = session
+        .nominal
+        .configs
+        .iter()
+        .map(|r| r.worst_pos_mm)
+        .fold(0.0f64, f64::max);
+    let row = session
+        .nominal
+        .configs
+        .iter()
+        .find(|r| r.side == side && r.index == index)
+        .unwrap();
+    assert_eq!(row.worst_pos_mm, worst);
+    let side_index = dualcal::app::viewport::scene::side_index(side);
+    assert_eq!(harness.state().viewport_pose(side_index), Some(index));
+
+    // Clicking another row's id selects it.
+    // The table is sorted by |Δd| descending: the second row is on screen.
+    let order = dualcal::app::table::sorted_rows(
+        &session.nominal,
+        dualcal::app::table::TableState::default(),
+    );
+    let other = &session.nominal.configs[order[1]];
+    assert_ne!((other.side, other.index), (side, index));
+    let (other_id, other_sel) = (other.id.clone(), (other.side, other.index));
+    harness.get_by_label(&other_id).click();
+    harness.step();
+    assert_eq!(harness.state().selection(), Some(other_sel));
+
+    // Clicking a configuration in the viewport selects it (viewport alone fills the window).
+    harness.state_mut().set_panels_visible(false);
+    harness.step();
+    let (target, at) = {
+        let app = harness.state();
+        let camera = app.viewport().camera;
+        let row = app
+            .session()
+            .unwrap()
+            .nominal
+            .configs
+            .iter()
+            .find(|r| (r.side, r.index) != other_sel)
+            .unwrap();
+        let anchor = dualcal::app::viewport::scene::pick_anchor(row);
+        let [x, y] = camera.project(&anchor, 1400.0, 900.0).unwrap();
+        ((row.side, row.index), eframe::egui::pos2(x, y))
+    };
+    click_at(&mut harness, at);
+    let picked = harness
+        .state()
+        .selection()
+        .expect("a configuration was picked");
+    // The nearest configuration to the click is picked: the target or one drawn on top of it.
+    let app = harness.state();
+    let camera = app.viewport().camera;
+    let picked_row = app
+        .session()
+        .unwrap()
+        .nominal
+        .configs
+        .iter()
+        .find(|r| (r.side, r.index) == picked)
+        .unwrap();
+    let [x, y] = camera
+        .project(
+            &dualcal::app::viewport::scene::pick_anchor(picked_row),
+            1400.0,
+            900.0,
+        )
+        .unwrap();
+    let distance = (eframe::egui::pos2(x, y) - at).length();
+    assert!(
+        picked == target || distance < 14.0,
+        "picked {picked:?} {distance} points from the click"
+    );
+    assert_ne!(harness.state().selection(), Some(other_sel));
+}
+
+fn click_at(harness: &mut Harness<'_, WorkbenchApp>, pos: eframe::egui::Pos2) {
+    use eframe::egui::{Event, Modifiers, PointerButton};
+    harness.event(Event::PointerMoved(pos));
+    harness.event(Event::PointerButton {
+        pos,
+        button: PointerButton::Primary,
+        pressed: true,
+        modifiers: Modifiers::NONE,
+    });
+    harness.step();
+    harness.event(Event::PointerButton {
+        pos,
+        button: PointerButton::Primary,
+        pressed: false,
+        modifiers: Modifiers::NONE,
+    });
+    harness.step();
+    harness.step();
+}
