@@ -221,10 +221,10 @@ impl<P: MinimaxProblem> Runner<P> {
     }
 
     /// One outer iteration: (f, step norm, KKT or gradient residual, termination).
-    fn step(&mut self) -> ([f64; 3], f64, f64, Option<Termination>) {
+    fn step(&mut self, stop: &dyn Fn() -> bool) -> ([f64; 3], f64, f64, Option<Termination>) {
         match self {
             Runner::Sqp(s) => {
-                let r = s.step();
+                let r = s.step_with_stop(stop);
                 (r.f, r.step_norm, r.kkt_residual, r.termination)
             }
             Runner::Lm(s) => {
@@ -499,6 +499,19 @@ impl Calibration {
         &mut self,
         observer: &mut dyn FnMut(&CalibrationEvent),
     ) -> Result<Progress, CalibrationError> {
+        self.step_cancellable(observer, &AtomicBool::new(false))
+    }
+
+    /// [`Calibration::step`], polling `cancel` inside long iterations (the paper's QP solver) too.
+    pub fn step_cancellable(
+        &mut self,
+        observer: &mut dyn FnMut(&CalibrationEvent),
+        cancel: &AtomicBool,
+    ) -> Result<Progress, CalibrationError> {
+        if cancel.load(Ordering::Relaxed) {
+            return Err(CalibrationError::Cancelled);
+        }
+        let stop = || cancel.load(Ordering::Relaxed);
         let Some(stage) = self.stage() else {
             return Ok(Progress::Finished(Box::new(self.result())));
         };
@@ -522,15 +535,18 @@ impl Calibration {
         }
         let (f, step_norm, kkt, term, pairs) = match &mut self.state {
             StageState::Arm { runner, .. } => {
-                let (f, s, k, t) = runner.step();
+                let (f, s, k, t) = runner.step(&stop);
                 (f, s, k, t, runner.problem().pair_count())
             }
             StageState::Base { runner } => {
-                let (f, s, k, t) = runner.step();
+                let (f, s, k, t) = runner.step(&stop);
                 (f, s, k, t, runner.problem().pair_count())
             }
             StageState::Done => unreachable!("handled above"),
         };
+        if term == Some(Termination::Cancelled) {
+            return Err(CalibrationError::Cancelled);
+        }
         self.stage_iterations += 1;
         let f_mm2 = f.map(|v| v * pairs as f64);
         let psi_mm2 = f_mm2.iter().copied().fold(f64::NEG_INFINITY, f64::max);
@@ -609,7 +625,8 @@ impl Calibration {
 }
 
 /// Run the two-step calibration (step 1 for each arm, then step 2), reporting to `observer` and
-/// polling `cancel` between outer iterations (each takes milliseconds on paper-size data).
+/// polling `cancel` between outer iterations (each takes milliseconds on paper-size data) and inside
+/// the paper's QP solver (every 256 subgradient iterations).
 pub fn calibrate(
     dataset: &Dataset,
     nominal: &DualArmModel,
@@ -619,10 +636,7 @@ pub fn calibrate(
 ) -> Result<CalibrationResult, CalibrationError> {
     let mut cal = Calibration::new(dataset, nominal, settings)?;
     loop {
-        if cancel.load(Ordering::Relaxed) {
-            return Err(CalibrationError::Cancelled);
-        }
-        if let Progress::Finished(result) = cal.step(observer)? {
+        if let Progress::Finished(result) = cal.step_cancellable(observer, cancel)? {
             return Ok(*result);
         }
     }

@@ -107,7 +107,7 @@ impl<P: MinimaxProblem> SqpState<P> {
     }
 
     /// Solve this iterate's QP.
-    fn solve_qp(&self) -> Result<QpSolution, Termination> {
+    fn solve_qp(&self, stop: &dyn Fn() -> bool) -> Result<QpSolution, Termination> {
         let psi = self.eval.psi();
         let m = self.problem.dim();
         let p = 3 + self.eval.cons.len();
@@ -141,12 +141,19 @@ impl<P: MinimaxProblem> SqpState<P> {
                     warm_nu: self.last_nu.clone(),
                     gamma_cap: None,
                 },
+                stop,
             ),
         })
     }
 
     /// One outer iteration: QP, line search, BFGS update.
     pub fn step(&mut self) -> SqpStep {
+        self.step_with_stop(&|| false)
+    }
+
+    /// [`SqpState::step`], polling `stop` inside long QP solves; a stop ends the iteration with
+    /// [`Termination::Cancelled`] and leaves the iterate unchanged.
+    pub fn step_with_stop(&mut self, stop: &dyn Fn() -> bool) -> SqpStep {
         self.iterations += 1;
         let done = |state: &Self, term: Termination, kkt: f64, qp_it: usize| SqpStep {
             f: state.eval.f,
@@ -156,10 +163,13 @@ impl<P: MinimaxProblem> SqpState<P> {
             qp_iterations: qp_it,
             termination: Some(term),
         };
-        let sol = match self.solve_qp() {
+        let sol = match self.solve_qp(stop) {
             Ok(sol) => sol,
             Err(term) => return done(self, term, f64::NAN, 0),
         };
+        if stop() {
+            return done(self, Termination::Cancelled, f64::NAN, sol.iterations);
+        }
         let kkt = self.first_order_residual(&sol.nu);
         // Penalty large enough for the constraint multipliers.
         let max_mu = sol.nu.iter().skip(3).copied().fold(0.0, f64::max);
