@@ -199,6 +199,33 @@ pub struct CalibrationResult {
     pub elapsed_secs: f64,
 }
 
+impl CalibrationResult {
+    /// Per-pair residuals of the calibrated model on the identification split: every relative pair of
+    /// `side` (`Some`) or every collaborative left × right pair (`None`), with the signed Δd per reflector
+    /// and Δo (computed on demand: at 1000 configurations per arm these are 500 000 pairs).
+    pub fn pair_residuals(
+        &self,
+        dataset: &Dataset,
+        side: Option<Side>,
+    ) -> Result<Vec<crate::metrics::PairError>, crate::metrics::MetricsError> {
+        let kind = match side {
+            Some(side) => crate::metrics::PairKind::Relative(side),
+            None => crate::metrics::PairKind::Collaborative,
+        };
+        crate::metrics::pairs(dataset, &self.calibrated, self.settings.split, kind)
+    }
+
+    /// Per-configuration residuals of the calibrated model on the given split (worst |Δd| involving each
+    /// configuration, its orientation errors and its reflector-triangle rigidity).
+    pub fn config_residuals(
+        &self,
+        dataset: &Dataset,
+        split: SplitSelect,
+    ) -> Result<Vec<crate::metrics::ConfigError>, crate::metrics::MetricsError> {
+        crate::metrics::per_config(dataset, &self.calibrated, split)
+    }
+}
+
 /// Either solver of a stage.
 enum Runner<P: MinimaxProblem> {
     Sqp(Box<SqpState<P>>),
