@@ -33,6 +33,37 @@ fn bench(c: &mut Criterion) {
         });
     }
     group.finish();
+
+    // Cancel latency: a run inside a practically endless paper-QP solve is cancelled; the time from
+    // setting the flag to `calibrate` returning is measured.
+    let sim = simulate_with_robot(&sim_options(7, 220, 120), &robot).expect("simulation");
+    let settings = CalibrationSettings {
+        qp: dualcal::solver::QpMethod::Paper,
+        max_qp_iterations: usize::MAX,
+        ..CalibrationSettings::default()
+    };
+    c.bench_function("cancel_latency_inside_paper_qp", |b| {
+        b.iter_custom(|iters| {
+            let mut total = std::time::Duration::ZERO;
+            for _ in 0..iters {
+                let cancel = std::sync::Arc::new(AtomicBool::new(false));
+                let flag = cancel.clone();
+                let (ds, nominal, settings) =
+                    (sim.dataset.clone(), sim.nominal.clone(), settings.clone());
+                let worker = std::thread::spawn(move || {
+                    let r = calibrate(&ds, &nominal, &settings, &mut |_| {}, &flag);
+                    (std::time::Instant::now(), r.is_err())
+                });
+                std::thread::sleep(std::time::Duration::from_millis(20));
+                let asked = std::time::Instant::now();
+                cancel.store(true, std::sync::atomic::Ordering::Relaxed);
+                let (returned, cancelled) = worker.join().expect("worker");
+                assert!(cancelled);
+                total += returned.saturating_duration_since(asked);
+            }
+            total
+        })
+    });
 }
 
 criterion_group!(benches, bench);

@@ -482,3 +482,43 @@ fn comparison_detects_a_different_model() {
     let result = std::panic::catch_unwind(|| assert_agree(&rust, &reference, "different"));
     assert!(result.is_err(), "a 2 mm change of a2 went unnoticed");
 }
+
+/// Issue 2's acceptance through the command line itself: `dualcal evaluate --nominal --json` on the
+/// bundled example (and on the verification split) agrees with the independent implementation, given the
+/// same nominal base (derived from the URDF).
+#[test]
+fn cli_evaluate_nominal_json_agrees_with_reference() {
+    let example = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/datasets/example");
+    let base =
+        dualcal::robot::RobotDescription::builtin_irb14000().nominal_left_base_from_right_base();
+    let t = base.translation.vector;
+    let r = base.rotation.to_rotation_matrix().into_inner();
+    let mut args = vec!["--nominal".to_string(), "--base-translation".into()];
+    args.extend(t.iter().map(|v| format!("{v:.15}")));
+    args.push("--base-rotation".into());
+    for i in 0..3 {
+        for j in 0..3 {
+            args.push(format!("{:.15}", r[(i, j)]));
+        }
+    }
+    for split in ["all", "ver"] {
+        let out = Command::new(env!("CARGO_BIN_EXE_dualcal"))
+            .arg("evaluate")
+            .arg(&example)
+            .args(["--nominal", "--json", "--split", split])
+            .output()
+            .expect("run dualcal");
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let cli: AccuracyReport = serde_json::from_slice(&out.stdout).expect("JSON report");
+        let reference = reference(&example, &args, split);
+        assert_agree(
+            &cli,
+            &reference,
+            &format!("dualcal evaluate --nominal --json --split {split}"),
+        );
+    }
+}

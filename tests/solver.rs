@@ -383,3 +383,30 @@ fn verification_split_is_not_used_for_identification() {
     .expect("b");
     assert_eq!(a.calibrated, b.calibrated);
 }
+
+#[test]
+fn cancel_interrupts_a_long_paper_qp_solve() {
+    // One paper QP with a practically endless iteration budget: only the polling inside the QP solver
+    // can end this run. (The 120 s bound only turns a hang into a failure; it is not a speed check —
+    // `cargo bench --bench calibration` measures the latency.)
+    let syn = synthetic(11, 30, 30, 0.01);
+    let cancel = std::sync::Arc::new(AtomicBool::new(false));
+    let (tx, rx) = std::sync::mpsc::channel();
+    let flag = cancel.clone();
+    let worker = std::thread::spawn(move || {
+        let settings = CalibrationSettings {
+            qp: QpMethod::Paper,
+            max_qp_iterations: usize::MAX,
+            ..Default::default()
+        };
+        let res = calibrate(&syn.dataset, &nominal(), &settings, &mut |_| {}, &flag);
+        tx.send(res.map(|_| ())).ok();
+    });
+    std::thread::sleep(std::time::Duration::from_millis(200));
+    cancel.store(true, Ordering::Relaxed);
+    let res = rx
+        .recv_timeout(std::time::Duration::from_secs(120))
+        .expect("the run did not stop");
+    assert!(matches!(res, Err(CalibrationError::Cancelled)), "{res:?}");
+    worker.join().unwrap();
+}

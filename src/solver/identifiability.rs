@@ -78,12 +78,31 @@ fn condition_number(cols: &[DVector<f64>]) -> f64 {
 
 /// Analyse sampled Jacobian rows (full 37 columns, unscaled). `allowed` restricts which parameters may
 /// be free at all (e.g. the user fixed some).
+///
+/// The rows are reduced once by a thin QR, `M = Q R`: `R` (37 × 37) has the same column norms, inner
+/// products and singular values as `M`, so all the work below is on 37-vectors whatever the number of
+/// pairs.
 pub fn analyse(
     rows: &[SVector<f64, N_PARAMS>],
     allowed: &[bool; N_PARAMS],
 ) -> IdentifiabilityReport {
-    let n = rows.len();
-    let column = |k: usize| DVector::from_iterator(n, rows.iter().map(|r| r[k]));
+    analyse_with_gram(rows, allowed).0
+}
+
+/// [`analyse`], also returning the mean Gram matrix `MᵀM / rows` of the unscaled rows (whose diagonal is
+/// the squared RMS sensitivity of each parameter and which is the Gauss–Newton matrix up to a factor 2).
+pub fn analyse_with_gram(
+    rows: &[SVector<f64, N_PARAMS>],
+    allowed: &[bool; N_PARAMS],
+) -> (IdentifiabilityReport, DMatrix<f64>) {
+    let n = rows.len().max(1);
+    let mut m = DMatrix::<f64>::zeros(rows.len().max(N_PARAMS), N_PARAMS);
+    for (i, r) in rows.iter().enumerate() {
+        m.row_mut(i).copy_from(&r.transpose());
+    }
+    let r = m.qr().r(); // N_PARAMS × N_PARAMS
+    let gram = r.transpose() * &r / n as f64;
+    let column = |k: usize| r.column(k).into_owned();
     let norms: Vec<f64> = (0..N_PARAMS).map(|k| column(k).norm()).collect();
     let max_norm = norms.iter().copied().fold(0.0, f64::max).max(1e-300);
     let scaled: Vec<DVector<f64>> = (0..N_PARAMS)
@@ -91,23 +110,17 @@ pub fn analyse(
             if norms[k] > 1e-12 * max_norm {
                 column(k) / norms[k]
             } else {
-                DVector::zeros(n)
+                DVector::zeros(N_PARAMS)
             }
         })
         .collect();
-    let condition_before = condition_number(
-        &scaled
-            .iter()
-            .filter(|c| c.norm() > 0.0)
-            .cloned()
-            .collect::<Vec<_>>(),
-    )
-    .max(if scaled.iter().any(|c| c.norm() == 0.0) {
+    let has_zero = scaled.iter().any(|c| c.norm() == 0.0);
+    let nonzero: Vec<DVector<f64>> = scaled.iter().filter(|c| c.norm() > 0.0).cloned().collect();
+    let condition_before = if has_zero {
         f64::INFINITY
     } else {
-        0.0
-    });
-
+        condition_number(&nonzero)
+    };
     let mut basis: Vec<DVector<f64>> = Vec::new();
     let mut kept: Vec<usize> = Vec::new();
     let mut fixed = Vec::new();
@@ -174,10 +187,13 @@ pub fn analyse(
     fixed.sort_by_key(|f| f.index);
     let condition_after =
         condition_number(&kept.iter().map(|&k| scaled[k].clone()).collect::<Vec<_>>());
-    IdentifiabilityReport {
-        free: kept,
-        fixed,
-        condition_before,
-        condition_after,
-    }
+    (
+        IdentifiabilityReport {
+            free: kept,
+            fixed,
+            condition_before,
+            condition_after,
+        },
+        gram,
+    )
 }

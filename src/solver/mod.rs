@@ -22,7 +22,7 @@ use arm::ArmProblem;
 use base::BaseProblem;
 use identifiability::IdentifiabilityReport;
 use lm::LmState;
-use nalgebra::{DVector, Vector3};
+use nalgebra::{DMatrix, DVector, Vector3};
 use problem::MinimaxProblem;
 use serde::{Deserialize, Serialize};
 use sqp::{SqpSettings, SqpState};
@@ -199,6 +199,33 @@ pub struct CalibrationResult {
     pub elapsed_secs: f64,
 }
 
+impl CalibrationResult {
+    /// Per-pair residuals of the calibrated model on the identification split: every relative pair of
+    /// `side` (`Some`) or every collaborative left × right pair (`None`), with the signed Δd per reflector
+    /// and Δo (computed on demand: at 1000 configurations per arm these are 500 000 pairs).
+    pub fn pair_residuals(
+        &self,
+        dataset: &Dataset,
+        side: Option<Side>,
+    ) -> Result<Vec<crate::metrics::PairError>, crate::metrics::MetricsError> {
+        let kind = match side {
+            Some(side) => crate::metrics::PairKind::Relative(side),
+            None => crate::metrics::PairKind::Collaborative,
+        };
+        crate::metrics::pairs(dataset, &self.calibrated, self.settings.split, kind)
+    }
+
+    /// Per-configuration residuals of the calibrated model on the given split (worst |Δd| involving each
+    /// configuration, its orientation errors and its reflector-triangle rigidity).
+    pub fn config_residuals(
+        &self,
+        dataset: &Dataset,
+        split: SplitSelect,
+    ) -> Result<Vec<crate::metrics::ConfigError>, crate::metrics::MetricsError> {
+        crate::metrics::per_config(dataset, &self.calibrated, split)
+    }
+}
+
 /// Either solver of a stage.
 enum Runner<P: MinimaxProblem> {
     Sqp(Box<SqpState<P>>),
@@ -221,10 +248,10 @@ impl<P: MinimaxProblem> Runner<P> {
     }
 
     /// One outer iteration: (f, step norm, KKT or gradient residual, termination).
-    fn step(&mut self) -> ([f64; 3], f64, f64, Option<Termination>) {
+    fn step(&mut self, stop: &dyn Fn() -> bool) -> ([f64; 3], f64, f64, Option<Termination>) {
         match self {
             Runner::Sqp(s) => {
-                let r = s.step();
+                let r = s.step_with_stop(stop);
                 (r.f, r.step_norm, r.kkt_residual, r.termination)
             }
             Runner::Lm(s) => {
@@ -276,6 +303,9 @@ pub struct Calibration {
     started: Instant,
     pending_start: bool,
 }
+
+/// Pairs per reflector sampled for identifiability, column scaling and the start Hessian.
+const IDENTIFIABILITY_PAIRS: usize = 3000;
 
 fn side_index(side: Side) -> usize {
     match side {
@@ -364,19 +394,27 @@ impl Calibration {
             DVector::from_element(N_PARAMS, 1.0),
             input.side_tolerance_mm,
         );
-        let rows = probe.sample_pair_jacobian(&DVector::zeros(N_PARAMS), 30_000);
-        let report = identifiability::analyse(&rows, &[true; N_PARAMS]);
+        // A few thousand pairs show every dependency (they are exact) and estimate the scaling well.
+        let rows = probe.sample_pair_jacobian(&DVector::zeros(N_PARAMS), IDENTIFIABILITY_PAIRS);
+        let (report, gram) = identifiability::analyse_with_gram(&rows, &[true; N_PARAMS]);
         if report.free.is_empty() {
             return Err(CalibrationError::RankDeficient {
                 stage,
                 detail: "no parameter is identifiable from these configurations".into(),
             });
         }
-        let rms = arm::column_rms(&rows);
+        // Scale every free parameter by its RMS sensitivity; H₀ is the Gauss–Newton matrix in those
+        // variables, 2·D·G·D with G the mean Gram matrix of the pair Jacobian.
         let scale = DVector::from_iterator(
             report.free.len(),
-            report.free.iter().map(|&k| 1.0 / rms[k].max(1e-12)),
+            report
+                .free
+                .iter()
+                .map(|&k| 1.0 / gram[(k, k)].sqrt().max(1e-12)),
         );
+        let h0 = DMatrix::from_fn(report.free.len(), report.free.len(), |i, j| {
+            2.0 * gram[(report.free[i], report.free[j])] * scale[i] * scale[j]
+        });
         let problem = ArmProblem::new(
             input.qs.clone(),
             &input.measured,
@@ -387,7 +425,7 @@ impl Calibration {
         );
         self.identifiability.retain(|(s, _)| *s != side);
         self.identifiability.push((side, report));
-        let runner = self.make_runner(problem, stage)?;
+        let runner = self.make_runner(problem, stage, Some(h0))?;
         Ok(StageState::Arm {
             side,
             runner: Box::new(runner),
@@ -420,7 +458,7 @@ impl Calibration {
                 detail: format!("collaborative Jacobian singular values {:?}", sv.as_slice()),
             });
         }
-        let runner = self.make_runner(problem, stage)?;
+        let runner = self.make_runner(problem, stage, None)?;
         Ok(StageState::Base {
             runner: Box::new(runner),
         })
@@ -430,18 +468,24 @@ impl Calibration {
         &mut self,
         problem: P,
         stage: Stage,
+        h0: Option<DMatrix<f64>>,
     ) -> Result<Runner<P>, CalibrationError> {
         self.stage_iterations = 0;
         self.pending_start = true;
         let runner = match self.settings.method {
-            Method::Minimax => Runner::Sqp(Box::new(
-                SqpState::new(problem, self.sqp_settings()).map_err(|_| {
+            Method::Minimax => {
+                let settings = self.sqp_settings();
+                let state = match h0 {
+                    Some(h0) => SqpState::with_hessian(problem, settings, h0),
+                    None => SqpState::new(problem, settings),
+                };
+                Runner::Sqp(Box::new(state.map_err(|_| {
                     CalibrationError::NonFinite {
                         stage,
                         detail: "objective or gradient at the start point".into(),
                     }
-                })?,
-            )),
+                })?))
+            }
             Method::LeastSquares => Runner::Lm(Box::new(LmState::new(
                 problem,
                 self.settings.step_tolerance,
@@ -482,6 +526,19 @@ impl Calibration {
         &mut self,
         observer: &mut dyn FnMut(&CalibrationEvent),
     ) -> Result<Progress, CalibrationError> {
+        self.step_cancellable(observer, &AtomicBool::new(false))
+    }
+
+    /// [`Calibration::step`], polling `cancel` inside long iterations (the paper's QP solver) too.
+    pub fn step_cancellable(
+        &mut self,
+        observer: &mut dyn FnMut(&CalibrationEvent),
+        cancel: &AtomicBool,
+    ) -> Result<Progress, CalibrationError> {
+        if cancel.load(Ordering::Relaxed) {
+            return Err(CalibrationError::Cancelled);
+        }
+        let stop = || cancel.load(Ordering::Relaxed);
         let Some(stage) = self.stage() else {
             return Ok(Progress::Finished(Box::new(self.result())));
         };
@@ -505,15 +562,18 @@ impl Calibration {
         }
         let (f, step_norm, kkt, term, pairs) = match &mut self.state {
             StageState::Arm { runner, .. } => {
-                let (f, s, k, t) = runner.step();
+                let (f, s, k, t) = runner.step(&stop);
                 (f, s, k, t, runner.problem().pair_count())
             }
             StageState::Base { runner } => {
-                let (f, s, k, t) = runner.step();
+                let (f, s, k, t) = runner.step(&stop);
                 (f, s, k, t, runner.problem().pair_count())
             }
             StageState::Done => unreachable!("handled above"),
         };
+        if term == Some(Termination::Cancelled) {
+            return Err(CalibrationError::Cancelled);
+        }
         self.stage_iterations += 1;
         let f_mm2 = f.map(|v| v * pairs as f64);
         let psi_mm2 = f_mm2.iter().copied().fold(f64::NEG_INFINITY, f64::max);
@@ -592,7 +652,8 @@ impl Calibration {
 }
 
 /// Run the two-step calibration (step 1 for each arm, then step 2), reporting to `observer` and
-/// polling `cancel` between outer iterations (each takes milliseconds on paper-size data).
+/// polling `cancel` between outer iterations (each takes milliseconds on paper-size data) and inside
+/// the paper's QP solver (every 256 subgradient iterations).
 pub fn calibrate(
     dataset: &Dataset,
     nominal: &DualArmModel,
@@ -602,10 +663,7 @@ pub fn calibrate(
 ) -> Result<CalibrationResult, CalibrationError> {
     let mut cal = Calibration::new(dataset, nominal, settings)?;
     loop {
-        if cancel.load(Ordering::Relaxed) {
-            return Err(CalibrationError::Cancelled);
-        }
-        if let Progress::Finished(result) = cal.step(observer)? {
+        if let Progress::Finished(result) = cal.step_cancellable(observer, cancel)? {
             return Ok(*result);
         }
     }

@@ -161,7 +161,8 @@ pub struct SubgradientSettings {
 /// projected onto `ν ≥ 0` after each step (the paper writes the projection as `(·)⁺`). The answer is the
 /// iterate with the smallest KKT residual, or — when better — the primal recovered from the ergodic
 /// average ν̄ of the multipliers over the second half of the run, `s = −H⁻¹Aᵀν̄`.
-pub fn solve_paper(qp: &Qp, settings: SubgradientSettings) -> QpSolution {
+/// `stop` is polled every 256 iterations; when it says yes the best answer so far is returned.
+pub fn solve_paper(qp: &Qp, settings: SubgradientSettings, stop: &dyn Fn() -> bool) -> QpSolution {
     let p = qp.b.len();
     let m = qp.h.nrows();
     let l = qp.h_chol.l();
@@ -186,7 +187,7 @@ pub fn solve_paper(qp: &Qp, settings: SubgradientSettings) -> QpSolution {
         b: &b_w,
         n_obj: qp.n_obj,
     };
-    let (w, nu, iterations) = subgradient(&scaled, &settings);
+    let (w, nu, iterations) = subgradient(&scaled, &settings, stop);
     // Back to s = √σ L⁻ᵀ w.
     let s = l
         .transpose()
@@ -205,7 +206,11 @@ pub fn solve_paper(qp: &Qp, settings: SubgradientSettings) -> QpSolution {
 }
 
 /// The iteration z ← z − γ_p T/‖T‖ on a QP; returns (s, ν, iterations).
-fn subgradient(qp: &Qp, settings: &SubgradientSettings) -> (DVector<f64>, DVector<f64>, usize) {
+fn subgradient(
+    qp: &Qp,
+    settings: &SubgradientSettings,
+    stop: &dyn Fn() -> bool,
+) -> (DVector<f64>, DVector<f64>, usize) {
     let p = qp.b.len();
     let m = qp.h.nrows();
     // γ₀, the scale of s: the length of the Newton step of the Lagrangian at the start multipliers
@@ -235,6 +240,9 @@ fn subgradient(qp: &Qp, settings: &SubgradientSettings) -> (DVector<f64>, DVecto
     let mut nu_sum = DVector::zeros(p);
     let mut nu_count = 0usize;
     for it in 0..settings.max_iterations {
+        if it % 256 == 255 && stop() {
+            break;
+        }
         iterations = it + 1;
         // T = [H s + Aᵀν ; 1 − eᵀν ; −(b + A s − e τ)]
         let ts = qp.h * &s + qp.a.transpose() * &nu;
@@ -362,6 +370,7 @@ mod tests {
                 warm_nu: None,
                 gamma_cap: None,
             },
+            &|| false,
         );
         let obj = |s: &DVector<f64>| 0.5 * s.dot(&(&h * s)) + qp.tau_for(s);
         let gap = (obj(&paper.s) - obj(&exact.s)).abs();

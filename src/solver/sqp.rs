@@ -47,13 +47,24 @@ pub struct SqpState<P: MinimaxProblem> {
 pub struct NonFiniteStart;
 
 impl<P: MinimaxProblem> SqpState<P> {
+    /// Start at y = 0 with the problem's Gauss–Newton matrix as H₀.
     pub fn new(problem: P, settings: SqpSettings) -> Result<Self, NonFiniteStart> {
+        let h0 = problem.gauss_newton(&DVector::zeros(problem.dim()));
+        Self::with_hessian(problem, settings, h0)
+    }
+
+    /// Start at y = 0 with a given H₀ (e.g. a Gauss–Newton matrix computed already).
+    pub fn with_hessian(
+        problem: P,
+        settings: SqpSettings,
+        h0: DMatrix<f64>,
+    ) -> Result<Self, NonFiniteStart> {
         let y = DVector::zeros(problem.dim());
         let eval = problem.evaluate(&y);
-        if !eval.is_finite() {
+        if !eval.is_finite() || h0.nrows() != y.len() || h0.ncols() != y.len() {
             return Err(NonFiniteStart);
         }
-        let mut h = problem.gauss_newton(&y);
+        let mut h = h0;
         let m = h.nrows();
         let mean_diag = (h.trace() / m.max(1) as f64).max(1e-12);
         for i in 0..m {
@@ -96,7 +107,7 @@ impl<P: MinimaxProblem> SqpState<P> {
     }
 
     /// Solve this iterate's QP.
-    fn solve_qp(&self) -> Result<QpSolution, Termination> {
+    fn solve_qp(&self, stop: &dyn Fn() -> bool) -> Result<QpSolution, Termination> {
         let psi = self.eval.psi();
         let m = self.problem.dim();
         let p = 3 + self.eval.cons.len();
@@ -130,12 +141,19 @@ impl<P: MinimaxProblem> SqpState<P> {
                     warm_nu: self.last_nu.clone(),
                     gamma_cap: None,
                 },
+                stop,
             ),
         })
     }
 
     /// One outer iteration: QP, line search, BFGS update.
     pub fn step(&mut self) -> SqpStep {
+        self.step_with_stop(&|| false)
+    }
+
+    /// [`SqpState::step`], polling `stop` inside long QP solves; a stop ends the iteration with
+    /// [`Termination::Cancelled`] and leaves the iterate unchanged.
+    pub fn step_with_stop(&mut self, stop: &dyn Fn() -> bool) -> SqpStep {
         self.iterations += 1;
         let done = |state: &Self, term: Termination, kkt: f64, qp_it: usize| SqpStep {
             f: state.eval.f,
@@ -145,10 +163,13 @@ impl<P: MinimaxProblem> SqpState<P> {
             qp_iterations: qp_it,
             termination: Some(term),
         };
-        let sol = match self.solve_qp() {
+        let sol = match self.solve_qp(stop) {
             Ok(sol) => sol,
             Err(term) => return done(self, term, f64::NAN, 0),
         };
+        if stop() {
+            return done(self, Termination::Cancelled, f64::NAN, sol.iterations);
+        }
         let kkt = self.first_order_residual(&sol.nu);
         // Penalty large enough for the constraint multipliers.
         let max_mu = sol.nu.iter().skip(3).copied().fold(0.0, f64::max);
@@ -161,23 +182,35 @@ impl<P: MinimaxProblem> SqpState<P> {
         if s_norm < self.settings.step_tolerance || predicted > -1e-15 * phi0.abs().max(1e-300) {
             return done(self, Termination::Converged, kkt, sol.iterations);
         }
+        // The full step is tried with values and gradients at once (it is accepted in most
+        // iterations, and its evaluation is then reused); shorter steps with values only.
+        let full = &self.y + &sol.s;
+        let full_eval = self.problem.evaluate(&full);
         let mut alpha = 1.0;
         let accepted = loop {
             let y_new = &self.y + &sol.s * alpha;
-            let (f, cons) = self.problem.values(&y_new);
+            let (f, cons) = if alpha == 1.0 {
+                (full_eval.f, full_eval.cons.clone())
+            } else {
+                self.problem.values(&y_new)
+            };
             let phi = self.merit(&f, &cons);
             if phi.is_finite() && phi <= phi0 + 1e-4 * alpha * predicted {
-                break Some(y_new);
+                break Some((y_new, alpha));
             }
             alpha *= 0.5;
             if alpha < 1e-10 {
                 break None;
             }
         };
-        let Some(y_new) = accepted else {
+        let Some((y_new, alpha)) = accepted else {
             return done(self, Termination::Stalled, kkt, sol.iterations);
         };
-        let eval_new = self.problem.evaluate(&y_new);
+        let eval_new = if alpha == 1.0 {
+            full_eval
+        } else {
+            self.problem.evaluate(&y_new)
+        };
         if !eval_new.is_finite() {
             return done(self, Termination::Stalled, kkt, sol.iterations);
         }
