@@ -338,3 +338,60 @@ impl Session {
         self.robot.body_from_dh_base(Side::Left)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn example() -> PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/datasets/example")
+    }
+
+    /// With the true parameters the registered measured points land on the model's (up to the
+    /// tracker noise); with the nominal ones they do not. This checks the whole drawing chain:
+    /// tracker → left base (registration) → body frame.
+    #[test]
+    fn registration_of_the_example_matches_the_truth_to_the_noise() {
+        let session = Session::load(&example(), None).unwrap();
+        let truth = crate::params::read_model(&example().join("truth.json")).unwrap();
+        let analysis =
+            Analysis::compute(&session.dataset, &truth, &session.body_from_left_base()).unwrap();
+        assert!(
+            analysis.registration_rms_mm < 0.05,
+            "registration RMS with the truth {} mm",
+            analysis.registration_rms_mm
+        );
+        assert!(
+            session.nominal.registration_rms_mm > 10.0 * analysis.registration_rms_mm,
+            "nominal {} mm vs truth {} mm",
+            session.nominal.registration_rms_mm,
+            analysis.registration_rms_mm
+        );
+        let worst_point = analysis
+            .configs
+            .iter()
+            .flat_map(|r| r.point_errors_mm())
+            .fold(0.0f64, f64::max);
+        assert!(worst_point < 0.2, "worst point error with the truth {worst_point} mm");
+        // Every configuration of both arms is listed once, in dataset order.
+        let n = session.dataset.left.measurements.len() + session.dataset.right.measurements.len();
+        assert_eq!(analysis.configs.len(), n);
+        assert_eq!(analysis.configs[0].id, session.dataset.left.measurements[0].id);
+        // The model points sit where the robot's flange is drawn (body frame, not a base frame).
+        let row = &analysis.configs[0];
+        let flange = session
+            .robot
+            .body_from_flange(Side::Left, &session.dataset.left.measurements[0].q_rad);
+        let centroid = (row.model_body_mm[0] + row.model_body_mm[1] + row.model_body_mm[2]) / 3.0;
+        let d = (centroid - flange.translation.vector).norm();
+        assert!(d < 150.0, "reflectors {d} mm from the drawn flange");
+    }
+
+    #[test]
+    fn a_missing_dataset_is_an_error_naming_it() {
+        let err = Session::load(Path::new("/nonexistent/dataset"), None)
+            .err()
+            .expect("error");
+        assert!(format!("{err:#}").contains("/nonexistent/dataset"), "{err:#}");
+    }
+}
