@@ -935,11 +935,53 @@ impl WorkbenchApp {
         )
         .on_hover_text("Error vectors are drawn this many times their true length");
         ui.add(
-            egui::Slider::new(&mut o.color_max_mm, 0.05..=20.0)
+            egui::Slider::new(&mut o.color_max_mm, 0.005..=50.0)
                 .logarithmic(true)
                 .text("mm colour max"),
         )
         .on_hover_text("Error at the top of the colour bar, mm");
+        // The pose each arm is drawn in: a configuration (follows the selection) or home.
+        if let Some(session) = &self.session {
+            for (k, side) in Side::BOTH.into_iter().enumerate() {
+                let measurements = &session.dataset.arm(side).measurements;
+                if measurements.is_empty() {
+                    continue;
+                }
+                ui.horizontal(|ui| {
+                    let label = ui.label(format!("{side} arm pose:"));
+                    let pose = &mut self.viewport.poses[k];
+                    let mut index = pose.unwrap_or(0);
+                    let r = ui
+                        .add(
+                            egui::DragValue::new(&mut index)
+                                .range(0..=measurements.len() - 1)
+                                .custom_formatter(|v, _| {
+                                    measurements
+                                        .get(v as usize)
+                                        .map_or_else(String::new, |m| m.id.clone())
+                                })
+                                .custom_parser(|t| {
+                                    measurements
+                                        .iter()
+                                        .position(|m| m.id == t.trim())
+                                        .map(|i| i as f64)
+                                }),
+                        )
+                        .labelled_by(label.id)
+                        .on_hover_text("Drag or type a configuration id; selecting a configuration also poses its arm");
+                    if r.changed() {
+                        *pose = Some(index);
+                    }
+                    if ui
+                        .selectable_label(pose.is_none(), "home")
+                        .on_hover_text("ABB's synchronisation pose")
+                        .clicked()
+                    {
+                        *pose = None;
+                    }
+                });
+            }
+        }
         ui.horizontal(|ui| {
             if ui
                 .button("Reset view")

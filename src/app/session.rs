@@ -372,11 +372,17 @@ mod tests {
             .iter()
             .flat_map(|r| r.point_errors_mm())
             .fold(0.0f64, f64::max);
-        assert!(worst_point < 0.2, "worst point error with the truth {worst_point} mm");
+        assert!(
+            worst_point < 0.2,
+            "worst point error with the truth {worst_point} mm"
+        );
         // Every configuration of both arms is listed once, in dataset order.
         let n = session.dataset.left.measurements.len() + session.dataset.right.measurements.len();
         assert_eq!(analysis.configs.len(), n);
-        assert_eq!(analysis.configs[0].id, session.dataset.left.measurements[0].id);
+        assert_eq!(
+            analysis.configs[0].id,
+            session.dataset.left.measurements[0].id
+        );
         // The model points sit where the robot's flange is drawn (body frame, not a base frame).
         let row = &analysis.configs[0];
         let flange = session
@@ -392,6 +398,9 @@ mod tests {
         let err = Session::load(Path::new("/nonexistent/dataset"), None)
             .err()
             .expect("error");
-        assert!(format!("{err:#}").contains("/nonexistent/dataset"), "{err:#}");
+        assert!(
+            format!("{err:#}").contains("/nonexistent/dataset"),
+            "{err:#}"
+        );
     }
 }

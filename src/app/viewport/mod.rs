@@ -31,7 +31,7 @@ pub fn install_gpu(render_state: Option<&egui_wgpu::RenderState>, sample_count: 
 pub struct ViewportState {
     pub camera: OrbitCamera,
     pub options: SceneOptions,
-    /// Measurement index each arm is drawn in.
+    /// Measurement index each arm is drawn in (`None`: home pose).
     pub poses: [Option<usize>; 2],
     scene: Arc<SceneData>,
     scene_key: Option<SceneKey>,

@@ -282,7 +282,7 @@ pub fn build_scene(
         let q = |side: Side| -> [f64; N_JOINTS] {
             poses[side_index(side)]
                 .and_then(|i| session.dataset.arm(side).measurements.get(i))
-                .map_or([0.0; N_JOINTS], |m| m.q_rad)
+                .map_or_else(|| crate::robot::home_q_rad(side), |m| m.q_rad)
         };
         let shapes = session
             .robot
