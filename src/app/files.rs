@@ -2,7 +2,6 @@
 //! writes; a browser build can replace [`FileAccess`] with downloads and `<input type=file>`.
 //! Replies arrive on a channel the app drains each frame, so the UI never waits on a dialog.
 
-use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::sync::mpsc::Sender;
 
@@ -115,17 +114,10 @@ fn on_path(program: &str) -> bool {
         .is_some_and(|paths| std::env::split_paths(&paths).any(|dir| dir.join(program).is_file()))
 }
 
-/// Write through a temporary file in the same directory, then rename over the target.
+/// Write through a temporary file in the same directory, then rename over the target (ordinary
+/// file permissions).
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d,
-        _ => Path::new("."),
-    };
-    let mut tmp = tempfile::NamedTempFile::new_in(dir)?;
-    tmp.write_all(bytes)?;
-    tmp.as_file().sync_all()?;
-    tmp.persist(path).map_err(|e| e.error)?;
-    Ok(())
+    crate::atomic::write_atomic(path, bytes)
 }
 
 #[cfg(test)]

@@ -499,7 +499,11 @@ impl WorkbenchApp {
                 self.open_dataset(&path);
             }
         }
-        // A requested screenshot of the plots.
+        // A requested screenshot of the plots. Keep polling while it is pending: the callback fires
+        // mid-paint, when a repaint request from it can be lost.
+        if self.screenshot_pending {
+            ctx.request_repaint_after(std::time::Duration::from_millis(50));
+        }
         if self.screenshot_pending
             && let Ok(image) = self.shot_receiver.try_recv()
         {
@@ -509,16 +513,13 @@ impl WorkbenchApp {
                 .plot_rect
                 .map_or_else(|| (*image).clone(), |r| image.region(&r, Some(ppp)));
             match encode_png(&region) {
-                Ok(bytes) => self.files.save(
-                    SaveRequest {
-                        title: "Export plots as PNG",
-                        file_name: "dualcal-plots.png".into(),
-                        filter_name: "PNG image",
-                        extensions: &["png"],
-                        bytes,
-                    },
-                    self.file_sender.clone(),
-                ),
+                Ok(bytes) => self.save(SaveRequest {
+                    title: "Export plots as PNG",
+                    file_name: "dualcal-plots.png".into(),
+                    filter_name: "PNG image",
+                    extensions: &["png"],
+                    bytes,
+                }),
                 Err(e) => self.errors.push(format!("plot export: {e}")),
             }
         }
@@ -667,6 +668,8 @@ impl WorkbenchApp {
                         repaint.request_repaint();
                     }),
                 ));
+                // The screenshot is taken when the next frame is painted.
+                ctx.request_repaint();
                 return;
             }
         };
