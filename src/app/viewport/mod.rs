@@ -76,8 +76,8 @@ pub struct ViewportResponse {
 }
 
 impl ViewportState {
-    /// With auto scale on: draw the 95th-percentile point error as about 60 mm and put it at the
-    /// top of the colour bar.
+    /// With auto scale on: draw the 95th-percentile point error as about 60 mm and put about 1.5
+    /// times it at the top of the colour bar.
     pub fn auto_scale(&mut self, session: &Session) {
         if !self.auto_scale {
             return;
@@ -100,7 +100,7 @@ impl ViewportState {
         let p95 = errors[(errors.len() * 95 / 100).min(errors.len() - 1)];
         if p95 > 0.0 {
             self.options.exaggeration = nice_round(60.0 / p95).clamp(1.0, 5000.0) as f32;
-            self.options.color_max_mm = nice_round(p95).clamp(0.01, 20.0) as f32;
+            self.options.color_max_mm = nice_round(1.5 * p95).clamp(0.005, 50.0) as f32;
         }
     }
 
