@@ -57,6 +57,27 @@ fn log_spacer(input: egui_plot::GridInput) -> Vec<egui_plot::GridMark> {
     marks
 }
 
+/// Iteration axis: integer marks about a third of the range apart (1, 2, 5 × 10^k), so their
+/// labels have room.
+fn iteration_spacer(input: egui_plot::GridInput) -> Vec<egui_plot::GridMark> {
+    let (lo, hi) = input.bounds;
+    let raw = ((hi - lo) / 3.0).max(1.0);
+    let p = 10f64.powf(raw.log10().floor());
+    let step = [1.0, 2.0, 5.0, 10.0]
+        .into_iter()
+        .map(|m| m * p)
+        .find(|s| *s >= raw)
+        .unwrap_or(10.0 * p);
+    let first = (lo / step).ceil() as i64;
+    let last = (hi / step).floor() as i64;
+    (first..=last)
+        .map(|k| egui_plot::GridMark {
+            value: k as f64 * step,
+            step_size: step,
+        })
+        .collect()
+}
+
 /// ψ and F_a, F_b, F_c (log scale) over the iterations of `stage`, and below them the step norm and
 /// KKT residual.
 pub fn convergence_plot_ui(ui: &mut egui::Ui, history: &[IterationRecord], stage: Stage) {
@@ -93,6 +114,7 @@ pub fn convergence_plot_ui(ui: &mut egui::Ui, history: &[IterationRecord], stage
             .legend(Legend::default())
             .x_axis_label("iteration")
             .x_axis_formatter(|m, _| format!("{:.0}", m.value))
+            .x_grid_spacer(iteration_spacer)
             .set_margin_fraction(egui::vec2(0.05, 0.12))
             .y_axis_label("mm² (log10)")
             .y_axis_formatter(log_axis_label)
@@ -107,6 +129,7 @@ pub fn convergence_plot_ui(ui: &mut egui::Ui, history: &[IterationRecord], stage
             .legend(Legend::default())
             .x_axis_label("iteration")
             .x_axis_formatter(|m, _| format!("{:.0}", m.value))
+            .x_grid_spacer(iteration_spacer)
             .set_margin_fraction(egui::vec2(0.05, 0.12))
             .y_axis_label("log10")
             .y_axis_formatter(log_axis_label)
@@ -374,6 +397,23 @@ pub fn accuracy_summary_ui(ui: &mut egui::Ui, session: &Session, split: Split) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn iteration_marks_are_whole_and_spaced_about_a_third_of_the_range() {
+        for (lo, hi) in [(0.0, 7.0), (-0.5, 100.5), (0.0, 2.0), (3.0, 1234.0)] {
+            let marks = iteration_spacer(egui_plot::GridInput {
+                bounds: (lo, hi),
+                base_step_size: 1.0,
+            });
+            assert!(!marks.is_empty(), "{lo}..{hi}");
+            for m in &marks {
+                assert!(m.value >= lo && m.value <= hi);
+                assert_eq!(m.value, m.value.round());
+                assert!(m.step_size >= (hi - lo) / 3.0 - 1e-9 || m.step_size == 1.0);
+                assert!(m.step_size <= (hi - lo) / 1.0 + 1.0);
+            }
+        }
+    }
 
     #[test]
     fn histogram_counts_every_sample_once() {
