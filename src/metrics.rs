@@ -190,8 +190,11 @@ fn split_name(split: SplitSelect) -> &'static str {
 pub struct KabschFit {
     pub rotation: Rotation3<f64>,
     pub translation_mm: Vector3<f64>,
-    /// RMS of the residuals `|measured − (R·model + t)|` over the three points, mm.
+    /// RMS of the residuals `|measured − (R·model + t)|` over the points, mm.
     pub rms_mm: f64,
+    /// Singular values of the centred cross-covariance, in decreasing order; two (near) zeros mean the
+    /// points are collinear and the rotation about their line is undetermined.
+    pub singular_values: Vector3<f64>,
 }
 
 impl KabschFit {
@@ -202,6 +205,18 @@ impl KabschFit {
             UnitQuaternion::from_rotation_matrix(&self.rotation),
         )
     }
+
+    /// Are the points (nearly) collinear, so that the rotation is not determined?
+    pub fn is_degenerate(&self) -> bool {
+        let largest = self.singular_values.max();
+        largest <= 0.0
+            || self
+                .singular_values
+                .iter()
+                .filter(|&&x| x <= largest * 1e-12)
+                .count()
+                >= 2
+    }
 }
 
 /// Least-squares proper rotation and translation taking `model_pts` onto `measured_pts` (Kabsch, via SVD,
@@ -210,9 +225,21 @@ pub fn kabsch_fit(
     model_pts: &[Vector3<f64>; 3],
     measured_pts: &[Vector3<f64>; 3],
 ) -> Option<KabschFit> {
-    let centroid = |p: &[Vector3<f64>; 3]| (p[0] + p[1] + p[2]) / 3.0;
-    let cm = centroid(model_pts);
-    let cq = centroid(measured_pts);
+    kabsch_fit_points(model_pts, measured_pts)
+}
+
+/// [`kabsch_fit`] over any number of point pairs. `None` for no or unequal numbers of points, or
+/// non-finite input.
+pub fn kabsch_fit_points(
+    model_pts: &[Vector3<f64>],
+    measured_pts: &[Vector3<f64>],
+) -> Option<KabschFit> {
+    if model_pts.is_empty() || model_pts.len() != measured_pts.len() {
+        return None;
+    }
+    let n = model_pts.len() as f64;
+    let cm = model_pts.iter().sum::<Vector3<f64>>() / n;
+    let cq = measured_pts.iter().sum::<Vector3<f64>>() / n;
     let mut h = Matrix3::zeros();
     for (p, q) in model_pts.iter().zip(measured_pts) {
         h += (p - cm) * (q - cq).transpose();
@@ -220,16 +247,14 @@ pub fn kabsch_fit(
     if !h.iter().all(|x| x.is_finite()) {
         return None;
     }
-    let svd = h.try_svd_unordered(true, true, f64::EPSILON, 1000)?;
+    let svd = h.try_svd(true, true, f64::EPSILON, 1000)?;
     let (u, v_t) = (svd.u?, svd.v_t?);
     let v = v_t.transpose();
-    // Flip the direction of least variance if the plain solution is a reflection.
+    // Flip the direction of least variance (singular values are sorted, largest first) if the plain
+    // solution is a reflection.
     let mut d = Matrix3::identity();
     if (v * u.transpose()).determinant() < 0.0 {
-        let smallest = (0..3)
-            .min_by(|&a, &b| svd.singular_values[a].total_cmp(&svd.singular_values[b]))
-            .unwrap_or(2);
-        d[(smallest, smallest)] = -1.0;
+        d[(2, 2)] = -1.0;
     }
     let rotation = Rotation3::from_matrix_unchecked(v * d * u.transpose());
     let translation_mm = cq - rotation * cm;
@@ -241,7 +266,8 @@ pub fn kabsch_fit(
     Some(KabschFit {
         rotation,
         translation_mm,
-        rms_mm: (sum_sq / 3.0).sqrt(),
+        rms_mm: (sum_sq / n).sqrt(),
+        singular_values: svd.singular_values,
     })
 }
 

@@ -4,45 +4,17 @@
 //! The calibration itself never needs this (it works on distances); the viewport does, to draw the
 //! measured triangles next to the model's.
 
-use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Vector3};
 
 /// Least-squares rigid transform `to_from_from` with `to ≈ T · from` over all point pairs
-/// (Kabsch/Umeyama without scale, `det R = +1`). `None` with fewer than 3 pairs, non-finite input
-/// or (nearly) collinear points.
+/// (Kabsch/Umeyama without scale, `det R = +1`, [`crate::metrics::kabsch_fit_points`]). `None` with fewer
+/// than 3 pairs, non-finite input or (nearly) collinear points.
 pub fn best_fit_rigid(from: &[Vector3<f64>], to: &[Vector3<f64>]) -> Option<Isometry3<f64>> {
     if from.len() != to.len() || from.len() < 3 {
         return None;
     }
-    let n = from.len() as f64;
-    let cf = from.iter().sum::<Vector3<f64>>() / n;
-    let ct = to.iter().sum::<Vector3<f64>>() / n;
-    let mut h = Matrix3::zeros();
-    for (p, q) in from.iter().zip(to) {
-        h += (p - cf) * (q - ct).transpose();
-    }
-    if !h.iter().all(|x| x.is_finite()) {
-        return None;
-    }
-    let svd = h.try_svd(true, true, 1e-15, 1000)?;
-    // Two vanishing singular values: all points on a line, the rotation about it is undetermined.
-    let s = svd.singular_values;
-    let largest = s.max();
-    if largest <= 0.0 || s.iter().filter(|&&x| x <= largest * 1e-12).count() >= 2 {
-        return None;
-    }
-    let (u, v_t) = (svd.u?, svd.v_t?);
-    let v = v_t.transpose();
-    let mut d = Matrix3::identity();
-    if (v * u.transpose()).determinant() < 0.0 {
-        // Singular values are sorted in decreasing order: flip the smallest direction.
-        d[(2, 2)] = -1.0;
-    }
-    let rotation = Rotation3::from_matrix_unchecked(v * d * u.transpose());
-    let translation = ct - rotation * cf;
-    Some(Isometry3::from_parts(
-        Translation3::from(translation),
-        UnitQuaternion::from_rotation_matrix(&rotation),
-    ))
+    let fit = crate::metrics::kabsch_fit_points(from, to)?;
+    (!fit.is_degenerate()).then(|| fit.isometry())
 }
 
 #[cfg(test)]
