@@ -159,11 +159,16 @@ impl WorkbenchApp {
     /// Like [`new`](Self::new); `msaa = false` gives pixel-stable snapshots in tests.
     pub fn with_msaa(cc: &eframe::CreationContext<'_>, launch: AppLaunch, msaa: bool) -> Self {
         cc.egui_ctx.set_theme(egui::Theme::Dark);
-        // `DUALCAL_MSAA=1` turns multisampling off (software renderers), `=4` on.
+        // 4× MSAA, except on a software renderer (lavapipe, llvmpipe) where it costs more than it
+        // gives; `DUALCAL_MSAA=1` / `=4` override.
+        let software = cc
+            .wgpu_render_state
+            .as_ref()
+            .is_some_and(|rs| rs.adapter.get_info().device_type == eframe::wgpu::DeviceType::Cpu);
         let samples = match std::env::var("DUALCAL_MSAA").ok().as_deref() {
             Some("1") => 1,
             Some("4") => 4,
-            _ if msaa => 4,
+            _ if msaa && !software => 4,
             _ => 1,
         };
         viewport::install_gpu(cc.wgpu_render_state.as_ref(), samples);
