@@ -109,3 +109,74 @@ pub fn export_urdf(session: &Session, cal: &session::Calibrated) -> anyhow::Resu
     let text = crate::urdf_export::calibrated_urdf(&session.robot, &cal.result.calibrated)?;
     Ok(text.into_bytes())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::app::session::{Analysis, Calibrated};
+    use crate::solver::{self, CalibrationSettings};
+    use std::path::Path;
+    use std::sync::atomic::AtomicBool;
+
+    fn calibrated_example() -> (Session, Calibrated) {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/datasets/example");
+        let session = Session::load(&dir, None).unwrap();
+        let result = solver::calibrate(
+            &session.dataset,
+            &session.nominal.model,
+            &CalibrationSettings::default(),
+            &mut |_| {},
+            &AtomicBool::new(false),
+        )
+        .unwrap();
+        let analysis = Analysis::compute(
+            &session.dataset,
+            &result.calibrated,
+            &session.body_from_left_base(),
+        )
+        .unwrap();
+        (session, Calibrated { result, analysis })
+    }
+
+    fn max_dh_difference(
+        a: &crate::kinematics::DualArmModel,
+        b: &crate::kinematics::DualArmModel,
+    ) -> f64 {
+        Side::BOTH
+            .iter()
+            .flat_map(|&s| {
+                a.arm(s).dh.iter().zip(&b.arm(s).dh).flat_map(|(x, y)| {
+                    [
+                        (x.a_mm - y.a_mm).abs(),
+                        (x.d_mm - y.d_mm).abs(),
+                        (x.theta_rad - y.theta_rad).abs(),
+                        (x.alpha_rad - y.alpha_rad).abs(),
+                    ]
+                })
+            })
+            .fold(0.0, f64::max)
+    }
+
+    #[test]
+    fn exports_read_back_as_the_calibrated_model() {
+        let (session, cal) = calibrated_example();
+
+        let json = export_params(&session, &cal).unwrap();
+        let file = crate::params::ParamsFile::parse(Path::new("params.json"), &json).unwrap();
+        let model = file.to_model().unwrap();
+        assert!(max_dh_difference(&model, &cal.result.calibrated) < 1e-9);
+        assert!(file.termination.is_some() && file.method.is_some());
+
+        let urdf = String::from_utf8(export_urdf(&session, &cal).unwrap()).unwrap();
+        let robot = crate::robot::RobotDescription::from_str(&urdf, None).unwrap();
+        let back = robot
+            .dh_model(session.dataset.nominal_reflectors_mm)
+            .unwrap();
+        assert!(max_dh_difference(&back, &cal.result.calibrated) < 1e-6);
+
+        let csv = String::from_utf8(export_csv(&session).unwrap()).unwrap();
+        let n = session.dataset.left.measurements.len() + session.dataset.right.measurements.len();
+        assert_eq!(csv.lines().count(), n + 1);
+        assert!(csv.starts_with("id,arm,split,worst_pos_mm"));
+    }
+}
