@@ -363,3 +363,65 @@ fn frame_time() {
         );
     }
 }
+
+/// A file dropped on the window, as the windowing layer would hand it over.
+#[derive(Debug)]
+struct Dropped(std::path::PathBuf);
+
+impl eframe::egui::DroppedFile for Dropped {
+    fn path(&self) -> &std::path::Path {
+        &self.0
+    }
+
+    fn bytes(&self) -> Result<Vec<u8>, String> {
+        std::fs::read(&self.0).map_err(|e| e.to_string())
+    }
+}
+
+#[test]
+fn dropping_a_dataset_opens_it() {
+    let mut harness = harness([1400.0, 900.0], AppLaunch::default());
+    loaded(&mut harness);
+    // A copy of the example with only its first 10 configurations per arm.
+    let example = dualcal::app::bundled_example_path();
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::copy(
+        example.join("dataset.toml"),
+        dir.path().join("dataset.toml"),
+    )
+    .unwrap();
+    for arm in ["left.csv", "right.csv"] {
+        let text = std::fs::read_to_string(example.join(arm)).unwrap();
+        let mut rows = 0;
+        let kept: Vec<&str> = text
+            .lines()
+            .filter(|line| {
+                let data = !line.starts_with('#') && !line.starts_with("id,");
+                if data {
+                    rows += 1;
+                }
+                !data || rows <= 10
+            })
+            .collect();
+        std::fs::write(dir.path().join(arm), kept.join("\n") + "\n").unwrap();
+    }
+    harness
+        .input_mut()
+        .dropped_files
+        .push(std::sync::Arc::new(Dropped(
+            dir.path().join("dataset.toml"),
+        )));
+    harness.step();
+    step_until(
+        &mut harness,
+        MAX_LOAD_FRAMES,
+        "loading the dropped dataset",
+        |app| !app.is_loading(),
+    );
+    let app = harness.state();
+    assert!(app.errors().is_empty(), "{:?}", app.errors());
+    let session = app.session().unwrap();
+    assert_eq!(session.dataset.left.measurements.len(), 10);
+    assert_eq!(session.dataset.right.measurements.len(), 10);
+    harness.get_by_label_contains("10 left + 10 right configurations");
+}

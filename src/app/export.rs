@@ -1,0 +1,182 @@
+//! Export: parameter file, calibrated URDF, per-configuration CSV and plot PNG contents. Where the
+//! bytes go is the file seam's business ([`super::files`]).
+
+use super::session::{self, Session};
+use crate::dataset::Split;
+use crate::kinematics::Side;
+use anyhow::Context as _;
+use eframe::egui;
+
+/// What to export.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Export {
+    Params,
+    Urdf,
+    Csv,
+    PlotPng,
+}
+
+/// A screenshot region as PNG bytes.
+pub fn encode_png(image: &egui::ColorImage) -> anyhow::Result<Vec<u8>> {
+    let [w, h] = image.size;
+    let mut rgba = Vec::with_capacity(w * h * 4);
+    for c in &image.pixels {
+        rgba.extend_from_slice(&c.to_array());
+    }
+    let buffer = image::RgbaImage::from_raw(w as u32, h as u32, rgba)
+        .context("screenshot has an inconsistent size")?;
+    let mut bytes = Vec::new();
+    buffer.write_to(
+        &mut std::io::Cursor::new(&mut bytes),
+        image::ImageFormat::Png,
+    )?;
+    Ok(bytes)
+}
+
+/// Per-configuration errors of the current model as CSV.
+pub fn export_csv(session: &Session) -> anyhow::Result<Vec<u8>> {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    w.write_record([
+        "id",
+        "arm",
+        "split",
+        "worst_pos_mm",
+        "worst_ori_rad",
+        "rigidity_mm",
+        "point_error_a_mm",
+        "point_error_b_mm",
+        "point_error_c_mm",
+    ])?;
+    for row in &session.current().configs {
+        let e = row.point_errors_mm();
+        w.write_record([
+            row.id.clone(),
+            row.side.name().to_string(),
+            if row.split == Split::Cal {
+                "cal"
+            } else {
+                "ver"
+            }
+            .to_string(),
+            format!("{:.6}", row.worst_pos_mm),
+            format!("{:.8}", row.worst_ori_rad),
+            format!("{:.6}", row.rigidity_mm),
+            format!("{:.6}", e[0]),
+            format!("{:.6}", e[1]),
+            format!("{:.6}", e[2]),
+        ])?;
+    }
+    w.into_inner().context("CSV buffer")
+}
+
+/// The calibrated model as a `dualcal-params/1` file.
+pub fn export_params(session: &Session, cal: &session::Calibrated) -> anyhow::Result<Vec<u8>> {
+    let mut file = crate::params::ParamsFile::from_model(&cal.result.calibrated);
+    file.method = Some(serde_json::to_value(&cal.result.settings)?);
+    file.termination = Some(serde_json::json!({
+        "stages": cal.result.stages.iter().map(|s| serde_json::json!({
+            "stage": s.stage.to_string(),
+            "termination": format!("{:?}", s.termination),
+            "iterations": s.iterations,
+            "psi_mm2": s.psi_mm2,
+            "psi_start_mm2": s.psi_start_mm2,
+        })).collect::<Vec<_>>(),
+        "elapsed_secs": cal.result.elapsed_secs,
+    }));
+    let mut fixed = crate::params::FixedParameters {
+        left: Vec::new(),
+        right: Vec::new(),
+    };
+    for (side, report) in &cal.result.identifiability {
+        let list = match side {
+            Side::Left => &mut fixed.left,
+            Side::Right => &mut fixed.right,
+        };
+        list.extend(report.fixed.iter().map(|f| crate::params::FixedParameter {
+            name: f.name.clone(),
+            reason: f.reason.clone(),
+        }));
+    }
+    file.fixed_parameters = Some(fixed);
+    file.provenance = Some(crate::params::Provenance::now(Some(&session.dataset.dir)));
+    let mut text = serde_json::to_vec_pretty(&file)?;
+    text.push(b'\n');
+    Ok(text)
+}
+
+/// The calibrated robot description.
+pub fn export_urdf(session: &Session, cal: &session::Calibrated) -> anyhow::Result<Vec<u8>> {
+    let text = crate::urdf_export::calibrated_urdf(&session.robot, &cal.result.calibrated)?;
+    Ok(text.into_bytes())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::app::session::{Analysis, Calibrated};
+    use crate::solver::{self, CalibrationSettings};
+    use std::path::Path;
+    use std::sync::atomic::AtomicBool;
+
+    fn calibrated_example() -> (Session, Calibrated) {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/datasets/example");
+        let session = Session::load(&dir, None).unwrap();
+        let result = solver::calibrate(
+            &session.dataset,
+            &session.nominal.model,
+            &CalibrationSettings::default(),
+            &mut |_| {},
+            &AtomicBool::new(false),
+        )
+        .unwrap();
+        let analysis = Analysis::compute(
+            &session.dataset,
+            &result.calibrated,
+            &session.body_from_left_base(),
+        )
+        .unwrap();
+        (session, Calibrated { result, analysis })
+    }
+
+    fn max_dh_difference(
+        a: &crate::kinematics::DualArmModel,
+        b: &crate::kinematics::DualArmModel,
+    ) -> f64 {
+        Side::BOTH
+            .iter()
+            .flat_map(|&s| {
+                a.arm(s).dh.iter().zip(&b.arm(s).dh).flat_map(|(x, y)| {
+                    [
+                        (x.a_mm - y.a_mm).abs(),
+                        (x.d_mm - y.d_mm).abs(),
+                        (x.theta_rad - y.theta_rad).abs(),
+                        (x.alpha_rad - y.alpha_rad).abs(),
+                    ]
+                })
+            })
+            .fold(0.0, f64::max)
+    }
+
+    #[test]
+    fn exports_read_back_as_the_calibrated_model() {
+        let (session, cal) = calibrated_example();
+
+        let json = export_params(&session, &cal).unwrap();
+        let file = crate::params::ParamsFile::parse(Path::new("params.json"), &json).unwrap();
+        let model = file.to_model().unwrap();
+        assert!(max_dh_difference(&model, &cal.result.calibrated) < 1e-9);
+        assert!(file.termination.is_some() && file.method.is_some());
+
+        let urdf = String::from_utf8(export_urdf(&session, &cal).unwrap()).unwrap();
+        let robot = crate::robot::RobotDescription::from_str(&urdf, None).unwrap();
+        let back = robot
+            .dh_model(session.dataset.nominal_reflectors_mm)
+            .unwrap();
+        assert!(max_dh_difference(&back, &cal.result.calibrated) < 1e-6);
+
+        let csv = String::from_utf8(export_csv(&session).unwrap()).unwrap();
+        let n = session.dataset.left.measurements.len() + session.dataset.right.measurements.len();
+        assert_eq!(csv.lines().count(), n + 1);
+        assert!(csv.starts_with("id,arm,split,worst_pos_mm"));
+    }
+}
