@@ -46,7 +46,8 @@ pub struct ViewportState {
 /// What the cached scene was built from.
 #[derive(Clone, Debug, PartialEq)]
 struct SceneKey {
-    session_generation: u64,
+    /// `None`: no session (the built-in robot alone is drawn).
+    session_generation: Option<u64>,
     options: SceneOptions,
     poses: [Option<usize>; 2],
     selection: Selection,
@@ -142,25 +143,25 @@ impl ViewportState {
             self.camera = OrbitCamera::default();
         }
 
-        // Scene (rebuilt only when something it depends on changed).
-        if let Some(session) = session {
-            let key = SceneKey {
-                session_generation: generation,
-                options: self.options.clone(),
-                poses: self.poses,
-                selection,
-            };
-            if self.scene_key.as_ref() != Some(&key) {
-                self.version += 1;
-                self.scene = Arc::new(scene::build_scene(
-                    session,
-                    &self.options,
-                    self.poses,
-                    selection,
-                    self.version,
-                ));
-                self.scene_key = Some(key);
-            }
+        // Scene (rebuilt only when something it depends on changed). Without a dataset the built-in
+        // robot is drawn in its home pose, so the window never opens on an empty view.
+        let key = SceneKey {
+            session_generation: session.map(|_| generation),
+            options: self.options.clone(),
+            poses: self.poses,
+            selection,
+        };
+        if self.scene_key.as_ref() != Some(&key) {
+            self.version += 1;
+            self.scene = Arc::new(match session {
+                Some(session) => {
+                    scene::build_scene(session, &self.options, self.poses, selection, self.version)
+                }
+                None => {
+                    scene::build_robot_scene(scene::builtin_robot(), &self.options, self.version)
+                }
+            });
+            self.scene_key = Some(key);
         }
 
         // Picking on the CPU: nearest projected configuration anchor.
@@ -371,7 +372,7 @@ impl ViewportState {
         );
         if session.is_none() {
             painter.text(
-                rect.center(),
+                Pos2::new(rect.center().x, rect.top() + rect.height() * 0.8),
                 egui::Align2::CENTER_CENTER,
                 "No dataset loaded — open one or drop a dataset.toml here",
                 egui::FontId::proportional(16.0),

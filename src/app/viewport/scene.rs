@@ -260,6 +260,36 @@ fn grid(out: &mut Vec<ColorVertex>) {
 /// The selected configuration, as (side, index into the arm's measurements).
 pub type Selection = Option<(Side, usize)>;
 
+/// The built-in IRB 14000, created once (drawn while no dataset is loaded).
+pub fn builtin_robot() -> &'static crate::robot::RobotDescription {
+    static ROBOT: std::sync::OnceLock<crate::robot::RobotDescription> = std::sync::OnceLock::new();
+    ROBOT.get_or_init(crate::robot::RobotDescription::builtin_irb14000)
+}
+
+/// The robot alone, both arms in the home pose, and the grid.
+pub fn build_robot_scene(
+    robot: &crate::robot::RobotDescription,
+    options: &SceneOptions,
+    version: u64,
+) -> SceneData {
+    let mut scene = SceneData {
+        version,
+        ..Default::default()
+    };
+    if options.show_robot {
+        let shapes = robot.shapes(
+            &crate::robot::home_q_rad(Side::Left),
+            &crate::robot::home_q_rad(Side::Right),
+            GeometryKind::Visual,
+        );
+        robot_instances(&shapes, &mut scene.instances);
+    }
+    if options.show_grid {
+        grid(&mut scene.lines);
+    }
+    scene
+}
+
 /// Build the whole scene. `poses` holds the measurement index each arm is drawn in.
 pub fn build_scene(
     session: &Session,
@@ -357,6 +387,33 @@ pub fn pick_anchor(row: &ConfigRow) -> Vector3<f32> {
 
 #[cfg(test)]
 mod tests {
+
+    #[test]
+    fn without_a_dataset_the_robot_alone_is_drawn() {
+        let options = SceneOptions::default();
+        let scene = build_robot_scene(builtin_robot(), &options, 1);
+        let shapes = builtin_robot().shapes(
+            &crate::robot::home_q_rad(Side::Left),
+            &crate::robot::home_q_rad(Side::Right),
+            GeometryKind::Visual,
+        );
+        assert!(!shapes.is_empty());
+        assert!(!scene.instances.is_empty(), "no robot drawn");
+        assert!(
+            scene.triangles.is_empty(),
+            "no reflector triangles without data"
+        );
+        let hidden = build_robot_scene(
+            builtin_robot(),
+            &SceneOptions {
+                show_robot: false,
+                ..options
+            },
+            2,
+        );
+        assert!(hidden.instances.is_empty());
+    }
+
     use super::*;
 
     #[test]
