@@ -5,7 +5,7 @@ use crate::collision::CollisionWorld;
 use crate::dataset::{self, Dataset, Split, SplitSelect};
 use crate::kinematics::{DualArmModel, Side};
 use crate::metrics;
-use crate::params::{FixedParameter, FixedParameters, ParamsFile, Provenance};
+use crate::params::{ParamsFile, Provenance};
 use crate::robot::RobotDescription;
 use crate::simulate::{self, SimOptions, SimOutput};
 use crate::solver::{
@@ -388,7 +388,7 @@ fn calibrate_cmd(a: &CalibrateArgs) -> Result<()> {
     let result = solver::calibrate(&ds, &nominal, &settings, &mut observer, &cancel)?;
     print_identifiability(&result);
     println!("\n{}", comparison_table(&ds, &result)?);
-    let file = params_file_for(&ds, &result);
+    let file = result.params_file(&ds);
     file.write(&a.out)?;
     println!("parameters written to {}", a.out.display());
     if let Some(path) = &a.urdf {
@@ -419,69 +419,6 @@ fn print_identifiability(result: &CalibrationResult) {
         );
     }
     println!("total time {:.3} s", result.elapsed_secs);
-}
-
-/// The parameter file of a calibration result, with the fixed parameters, terminations and statistics.
-pub fn params_file_for(ds: &Dataset, result: &CalibrationResult) -> ParamsFile {
-    let mut file = ParamsFile::from_model(&result.calibrated);
-    file.method = Some(serde_json::json!({
-        "name": "two-step minimax calibration (paper Algorithms I and II)",
-        "objective": format!("{:?}", result.settings.method),
-        "qp": format!("{:?}", result.settings.qp),
-        "split": format!("{:?}", result.settings.split),
-        "max_iterations": result.settings.max_iterations,
-        "step_tolerance": result.settings.step_tolerance,
-    }));
-    let fixed = |side: Side| -> Vec<FixedParameter> {
-        result
-            .identifiability
-            .iter()
-            .filter(|(s, _)| *s == side)
-            .flat_map(|(_, rep)| {
-                rep.fixed.iter().map(|f| FixedParameter {
-                    name: f.name.clone(),
-                    reason: f.reason.clone(),
-                })
-            })
-            .collect()
-    };
-    file.fixed_parameters = Some(FixedParameters {
-        left: fixed(Side::Left),
-        right: fixed(Side::Right),
-    });
-    file.termination = Some(serde_json::json!(result.stages));
-    let stats = |split| metrics::evaluate(ds, &result.calibrated, split).ok();
-    let conditioning: serde_json::Map<String, serde_json::Value> = result
-        .identifiability
-        .iter()
-        .map(|(side, rep)| {
-            (
-                side.name().to_string(),
-                serde_json::json!({
-                    "identified": rep.free.len(),
-                    "condition_before": finite_or_null(rep.condition_before),
-                    "condition_after": finite_or_null(rep.condition_after),
-                }),
-            )
-        })
-        .collect();
-    file.statistics = Some(serde_json::json!({
-        "cal": stats(SplitSelect::Cal),
-        "ver": stats(SplitSelect::Ver),
-        "identifiability": conditioning,
-        "reflector_side_tolerance_mm": result.side_tolerance_mm.iter().map(|(s, t)| (s.name().to_string(), serde_json::json!(t))).collect::<serde_json::Map<_, _>>(),
-        "elapsed_secs": result.elapsed_secs,
-    }));
-    file.provenance = Some(Provenance::now(Some(&ds.dir)));
-    file
-}
-
-fn finite_or_null(v: f64) -> serde_json::Value {
-    if v.is_finite() {
-        serde_json::json!(v)
-    } else {
-        serde_json::Value::Null
-    }
 }
 
 /// Nominal vs calibrated, on the calibration and verification splits.

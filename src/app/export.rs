@@ -3,7 +3,6 @@
 
 use super::session::{self, Session};
 use crate::dataset::Split;
-use crate::kinematics::Side;
 use anyhow::Context as _;
 use eframe::egui;
 
@@ -69,36 +68,9 @@ pub fn export_csv(session: &Session) -> anyhow::Result<Vec<u8>> {
     w.into_inner().context("CSV buffer")
 }
 
-/// The calibrated model as a `dualcal-params/1` file.
+/// The calibrated model as a `dualcal-params/1` file (the same file `dualcal calibrate --out` writes).
 pub fn export_params(session: &Session, cal: &session::Calibrated) -> anyhow::Result<Vec<u8>> {
-    let mut file = crate::params::ParamsFile::from_model(&cal.result.calibrated);
-    file.method = Some(serde_json::to_value(&cal.result.settings)?);
-    file.termination = Some(serde_json::json!({
-        "stages": cal.result.stages.iter().map(|s| serde_json::json!({
-            "stage": s.stage.to_string(),
-            "termination": format!("{:?}", s.termination),
-            "iterations": s.iterations,
-            "psi_mm2": s.psi_mm2,
-            "psi_start_mm2": s.psi_start_mm2,
-        })).collect::<Vec<_>>(),
-        "elapsed_secs": cal.result.elapsed_secs,
-    }));
-    let mut fixed = crate::params::FixedParameters {
-        left: Vec::new(),
-        right: Vec::new(),
-    };
-    for (side, report) in &cal.result.identifiability {
-        let list = match side {
-            Side::Left => &mut fixed.left,
-            Side::Right => &mut fixed.right,
-        };
-        list.extend(report.fixed.iter().map(|f| crate::params::FixedParameter {
-            name: f.name.clone(),
-            reason: f.reason.clone(),
-        }));
-    }
-    file.fixed_parameters = Some(fixed);
-    file.provenance = Some(crate::params::Provenance::now(Some(&session.dataset.dir)));
+    let file = cal.result.params_file(&session.dataset);
     let mut text = serde_json::to_vec_pretty(&file)?;
     text.push(b'\n');
     Ok(text)
@@ -114,6 +86,7 @@ pub fn export_urdf(session: &Session, cal: &session::Calibrated) -> anyhow::Resu
 mod tests {
     use super::*;
     use crate::app::session::{Analysis, Calibrated};
+    use crate::kinematics::Side;
     use crate::solver::{self, CalibrationSettings};
     use std::path::Path;
     use std::sync::atomic::AtomicBool;

@@ -73,6 +73,15 @@ impl ArmProblem {
         }
     }
 
+    /// The same problem (data, start point, constraints) with another set of free parameters and their
+    /// scales — no recomputation of the measured distances.
+    pub fn with_free(mut self, free: Vec<usize>, scale: DVector<f64>) -> Self {
+        assert_eq!(free.len(), scale.len());
+        self.free = free;
+        self.scale = scale;
+        self
+    }
+
     pub fn free(&self) -> &[usize] {
         &self.free
     }

@@ -215,6 +215,75 @@ impl CalibrationResult {
         crate::metrics::pairs(dataset, &self.calibrated, self.settings.split, kind)
     }
 
+    /// The `dualcal-params/1` file of this result: the calibrated model plus method, fixed parameters
+    /// and why, per-stage termination, accuracy on the cal and ver splits of `dataset`, conditioning and
+    /// provenance. The command line and the workbench both export this.
+    pub fn params_file(&self, dataset: &Dataset) -> crate::params::ParamsFile {
+        use crate::params::{FixedParameter, FixedParameters, ParamsFile, Provenance};
+        let finite_or_null = |v: f64| {
+            if v.is_finite() {
+                serde_json::json!(v)
+            } else {
+                serde_json::Value::Null
+            }
+        };
+        let mut file = ParamsFile::from_model(&self.calibrated);
+        file.method = Some(serde_json::json!({
+            "name": "two-step minimax calibration (paper Algorithms I and II)",
+            "objective": format!("{:?}", self.settings.method),
+            "qp": format!("{:?}", self.settings.qp),
+            "split": format!("{:?}", self.settings.split),
+            "max_iterations": self.settings.max_iterations,
+            "step_tolerance": self.settings.step_tolerance,
+        }));
+        let fixed = |side: Side| -> Vec<FixedParameter> {
+            self.identifiability
+                .iter()
+                .filter(|(s, _)| *s == side)
+                .flat_map(|(_, rep)| {
+                    rep.fixed.iter().map(|f| FixedParameter {
+                        name: f.name.clone(),
+                        reason: f.reason.clone(),
+                    })
+                })
+                .collect()
+        };
+        file.fixed_parameters = Some(FixedParameters {
+            left: fixed(Side::Left),
+            right: fixed(Side::Right),
+        });
+        file.termination = Some(serde_json::json!(self.stages));
+        let stats = |split| crate::metrics::evaluate(dataset, &self.calibrated, split).ok();
+        let conditioning: serde_json::Map<String, serde_json::Value> = self
+            .identifiability
+            .iter()
+            .map(|(side, rep)| {
+                (
+                    side.name().to_string(),
+                    serde_json::json!({
+                        "identified": rep.free.len(),
+                        "condition_before": finite_or_null(rep.condition_before),
+                        "condition_after": finite_or_null(rep.condition_after),
+                    }),
+                )
+            })
+            .collect();
+        let tolerances: serde_json::Map<String, serde_json::Value> = self
+            .side_tolerance_mm
+            .iter()
+            .map(|(s, t)| (s.name().to_string(), serde_json::json!(t)))
+            .collect();
+        file.statistics = Some(serde_json::json!({
+            "cal": stats(SplitSelect::Cal),
+            "ver": stats(SplitSelect::Ver),
+            "identifiability": conditioning,
+            "reflector_side_tolerance_mm": tolerances,
+            "elapsed_secs": self.elapsed_secs,
+        }));
+        file.provenance = Some(Provenance::now(Some(&dataset.dir)));
+        file
+    }
+
     /// Per-configuration residuals of the calibrated model on the given split (worst |Δd| involving each
     /// configuration, its orientation errors and its reflector-triangle rigidity).
     pub fn config_residuals(
@@ -415,14 +484,7 @@ impl Calibration {
         let h0 = DMatrix::from_fn(report.free.len(), report.free.len(), |i, j| {
             2.0 * gram[(report.free[i], report.free[j])] * scale[i] * scale[j]
         });
-        let problem = ArmProblem::new(
-            input.qs.clone(),
-            &input.measured,
-            &start,
-            report.free.clone(),
-            scale,
-            input.side_tolerance_mm,
-        );
+        let problem = probe.with_free(report.free.clone(), scale);
         self.identifiability.retain(|(s, _)| *s != side);
         self.identifiability.push((side, report));
         let runner = self.make_runner(problem, stage, Some(h0))?;
