@@ -143,6 +143,9 @@ pub struct CalibrateArgs {
     /// Stop when the scaled parameter step is below this.
     #[arg(long, default_value_t = 1e-8)]
     pub tolerance: f64,
+    /// Also stop when ψ fell by less than this (relative) over the last five iterations; 0 disables.
+    #[arg(long, default_value_t = crate::solver::sqp::PROGRESS_RTOL)]
+    pub progress_tolerance: f64,
     /// Only the summary, no per-iteration lines.
     #[arg(long, short)]
     pub quiet: bool,
@@ -179,6 +182,32 @@ pub struct ReproduceArgs {
     /// residual of ~0.4 mm after calibration (fig4 and qp).
     #[arg(long)]
     pub unmodelled: bool,
+    /// With --unmodelled (implied; all studies): amplitude of the periodic (gear) joint error, mrad,
+    /// instead of 1.
+    #[arg(long)]
+    pub joint_error_mrad: Option<f64>,
+    /// With --unmodelled (implied; all studies): joint compliance, mrad/m, instead of 0.5.
+    #[arg(long)]
+    pub compliance_mrad_per_m: Option<f64>,
+}
+
+impl ReproduceArgs {
+    /// The unmodelled joint errors of the study, if any.
+    fn joint_errors(&self) -> Option<simulate::JointErrorModel> {
+        let custom = self.joint_error_mrad.is_some() || self.compliance_mrad_per_m.is_some();
+        (self.unmodelled || custom).then(|| {
+            let default = unmodelled_joint_errors();
+            simulate::JointErrorModel {
+                periodic_amplitude_mrad: self
+                    .joint_error_mrad
+                    .unwrap_or(default.periodic_amplitude_mrad),
+                compliance_mrad_per_m: self
+                    .compliance_mrad_per_m
+                    .unwrap_or(default.compliance_mrad_per_m),
+                ..default
+            }
+        })
+    }
 }
 
 /// Run a non-GUI command.
@@ -328,6 +357,7 @@ fn settings_from(a: &CalibrateArgs) -> CalibrationSettings {
         },
         max_iterations: a.max_iterations,
         step_tolerance: a.tolerance,
+        progress_tolerance: a.progress_tolerance,
         ..CalibrationSettings::default()
     }
 }
@@ -343,18 +373,21 @@ pub fn print_event(event: &CalibrationEvent) {
             eprintln!("{stage}: {n_configs} configurations, {n_pairs} pairs per reflector")
         }
         CalibrationEvent::Iteration(r) => eprintln!(
-            "  {:>3}  ψ {:>14.6} mm²   F_a {:>12.4}  F_b {:>12.4}  F_c {:>12.4}   step {:>9.2e}   KKT {:>9.2e}   {:>7.3} s",
+            "  {:>3}  ψ {:>14.6} mm²   F_a {:>12.4}  F_b {:>12.4}  F_c {:>12.4}   λ {:.2}/{:.2}/{:.2}   step {:>9.2e}   KKT {:>9.2e}   {:>7.3} s",
             r.iteration,
             r.psi_mm2,
             r.f_mm2[0],
             r.f_mm2[1],
             r.f_mm2[2],
+            r.lambda[0],
+            r.lambda[1],
+            r.lambda[2],
             r.step_norm,
             r.kkt_residual,
             r.elapsed_secs
         ),
         CalibrationEvent::StageFinished { stage, termination } => {
-            eprintln!("{stage}: {termination:?}")
+            eprintln!("{stage}: {termination}")
         }
     }
 }
@@ -414,9 +447,22 @@ fn print_identifiability(result: &CalibrationResult) {
     }
     for s in &result.stages {
         println!(
-            "{}: {:?} after {} iterations, ψ {:.6} → {:.6} mm²",
+            "{}: {} after {} iterations, ψ {:.6} → {:.6} mm²",
             s.stage, s.termination, s.iterations, s.psi_start_mm2, s.psi_mm2
         );
+        if !s.termination.is_converged() {
+            eprintln!(
+                "warning: {} stopped where the exact QP still predicts a decrease of ψ by more than \
+                 {:.0e} of itself; the parameters are usable but not optimal{}",
+                s.stage,
+                solver::sqp::STATIONARY_RTOL,
+                if result.settings.qp == QpMethod::Paper {
+                    " (the paper's subgradient QP is inexact: try --qp exact)"
+                } else {
+                    ""
+                }
+            );
+        }
     }
     println!("total time {:.3} s", result.elapsed_secs);
 }
@@ -505,7 +551,7 @@ fn quiet_calibrate(
 /// The simulation of a study: the paper's protocol, with unmodelled joint errors if asked.
 fn study_options(a: &ReproduceArgs, seed: u64) -> SimOptions {
     SimOptions {
-        joint_error: a.unmodelled.then(unmodelled_joint_errors),
+        joint_error: a.joint_errors(),
         ..sim_options(seed, 220, 120)
     }
 }
@@ -550,14 +596,14 @@ fn reproduce_cmd(a: &ReproduceArgs) -> Result<()> {
                 "Exact QP against the paper's subgradient QP (120 cal + 100 ver configurations per arm)"
             );
             println!(
-                "| seed | QP | iterations (L/R/base) | time (s) | ψ left (mm²) | ψ right (mm²) | ψ base (mm²) | ver pos RMS L/R/collab (mm) | ver ori RMS L/R/collab (rad) |"
+                "| seed | QP | iterations (L/R/base) | stop (L/R/base) | time (s) | ψ left (mm²) | ψ right (mm²) | ψ base (mm²) | ver pos RMS L/R/collab (mm) | ver ori RMS L/R/collab (rad) |"
             );
-            println!("|---:|---|---|---:|---:|---:|---:|---|---|");
+            println!("|---:|---|---|---|---:|---:|---:|---:|---|---|");
             for &seed in &a.seeds {
                 let sim = simulate_with_robot(&study_options(a, seed), &robot)?;
                 let truth_ver = metrics::evaluate(&sim.dataset, &sim.truth, SplitSelect::Ver)?;
                 println!(
-                    "| {seed} | truth | – | – | – | – | – | {:.4} / {:.4} / {:.4} | {:.5} / {:.5} / {:.5} |",
+                    "| {seed} | truth | – | – | – | – | – | – | {:.4} / {:.4} / {:.4} | {:.5} / {:.5} / {:.5} |",
                     truth_ver.relative_left.pos_rms_mm,
                     truth_ver.relative_right.pos_rms_mm,
                     truth_ver.collaborative.pos_rms_mm,
@@ -579,9 +625,15 @@ fn reproduce_cmd(a: &ReproduceArgs) -> Result<()> {
                         .map(|s| s.iterations.to_string())
                         .collect();
                     let psi: Vec<f64> = res.stages.iter().map(|s| s.psi_mm2).collect();
+                    let stops: Vec<String> = res
+                        .stages
+                        .iter()
+                        .map(|s| format!("{:?}", s.termination))
+                        .collect();
                     println!(
-                        "| {seed} | {qp:?} | {} | {:.3} | {:.6} | {:.6} | {:.6} | {:.4} / {:.4} / {:.4} | {:.5} / {:.5} / {:.5} |",
+                        "| {seed} | {qp:?} | {} | {} | {:.3} | {:.6} | {:.6} | {:.6} | {:.4} / {:.4} / {:.4} | {:.5} / {:.5} / {:.5} |",
                         it.join(" / "),
+                        stops.join(" / "),
                         res.elapsed_secs,
                         psi[0],
                         psi[1],
@@ -596,93 +648,127 @@ fn reproduce_cmd(a: &ReproduceArgs) -> Result<()> {
                 }
             }
         }
-        Study::Robustness => {
-            println!(
-                "Minimax (paper) against least squares (LM) on data with unmodelled errors; verification split"
-            );
-            println!(
-                "| seed | data | method | pos max L/R/collab (mm) | pos RMS L/R/collab (mm) | ori max L/R/collab (rad) |"
-            );
-            println!("|---:|---|---|---|---|---|");
-            let case_names = ["joint errors", "joint errors + 5% outliers of 1 mm"];
-            // Per case: (minimax / LM) ratios of the three max position and three max orientation errors.
-            let mut ratios: [Vec<[f64; 6]>; 2] = [Vec::new(), Vec::new()];
-            for &seed in &a.seeds {
-                for (c, name) in case_names.iter().enumerate() {
-                    let opts = SimOptions {
-                        joint_error: Some(unmodelled_joint_errors()),
-                        outliers: (c == 1).then_some(simulate::OutlierModel {
-                            fraction: 0.05,
-                            magnitude_mm: 1.0,
-                        }),
-                        ..sim_options(seed, 220, 120)
-                    };
-                    let sim = simulate_with_robot(&opts, &robot)?;
-                    let mut maxima = Vec::new();
-                    for method in [Method::Minimax, Method::LeastSquares] {
-                        let settings = CalibrationSettings {
-                            method,
-                            ..CalibrationSettings::default()
-                        };
-                        let res = quiet_calibrate(&sim.dataset, &sim.nominal, &settings)?;
-                        let ver =
-                            metrics::evaluate(&sim.dataset, &res.calibrated, SplitSelect::Ver)?;
-                        println!(
-                            "| {seed} | {name} | {method:?} | {:.4} / {:.4} / {:.4} | {:.4} / {:.4} / {:.4} | {:.5} / {:.5} / {:.5} |",
-                            ver.relative_left.pos_max_mm,
-                            ver.relative_right.pos_max_mm,
-                            ver.collaborative.pos_max_mm,
-                            ver.relative_left.pos_rms_mm,
-                            ver.relative_right.pos_rms_mm,
-                            ver.collaborative.pos_rms_mm,
-                            ver.relative_left.ori_max_rad,
-                            ver.relative_right.ori_max_rad,
-                            ver.collaborative.ori_max_rad
-                        );
-                        maxima.push([
-                            ver.relative_left.pos_max_mm,
-                            ver.relative_right.pos_max_mm,
-                            ver.collaborative.pos_max_mm,
-                            ver.relative_left.ori_max_rad,
-                            ver.relative_right.ori_max_rad,
-                            ver.collaborative.ori_max_rad,
-                        ]);
-                    }
-                    ratios[c].push(std::array::from_fn(|k| maxima[0][k] / maxima[1][k]));
-                }
-            }
-            println!();
-            println!(
-                "Summary over {} seed(s): worst-case (max) verification error of minimax relative to least squares",
-                a.seeds.len()
-            );
-            println!(
-                "| data | indicator | mean ratio minimax/LM (L / R / collab) | minimax smaller or equal in |"
-            );
-            println!("|---|---|---|---:|");
-            for (c, name) in case_names.iter().enumerate() {
-                for (label, off) in [("position max", 0), ("orientation max", 3)] {
-                    let n = ratios[c].len().max(1) as f64;
-                    let mean: Vec<String> = (0..3)
-                        .map(|k| {
-                            format!(
-                                "{:.3}",
-                                ratios[c].iter().map(|r| r[off + k]).sum::<f64>() / n
-                            )
-                        })
-                        .collect();
-                    let wins = ratios[c]
+        Study::Robustness => robustness_study(a, &robot)?,
+    }
+    Ok(())
+}
+
+/// Minimax against least squares on data the model cannot explain: per seed, once with unmodelled joint
+/// errors and once more with 5% outliers; prints a table per run and a summary of ratios.
+fn robustness_study(a: &ReproduceArgs, robot: &RobotDescription) -> Result<()> {
+    let joint_errors = a.joint_errors().unwrap_or_else(unmodelled_joint_errors);
+    println!(
+        "Minimax (paper) against least squares (LM) on data with unmodelled errors \
+         (gear {} mrad, {} per revolution; compliance {} mrad/m); verification split unless marked cal",
+        joint_errors.periodic_amplitude_mrad,
+        joint_errors.periods_per_rev,
+        joint_errors.compliance_mrad_per_m
+    );
+    println!(
+        "| seed | data | method | pos max L/R/collab (mm) | pos RMS L/R/collab (mm) | ori max L/R/collab (rad) | ori RMS L/R/collab (rad) | final λ_a/λ_b/λ_c left; right |"
+    );
+    println!("|---:|---|---|---|---|---|---|---|");
+    let case_names = ["joint errors", "joint errors + 5% outliers of 1 mm"];
+    // The indicators compared, each for left / right / collaborative.
+    type Pick = fn(&metrics::AccuracyStats) -> f64;
+    let worst_reflector: Pick = |s| {
+        s.pos_rms_per_reflector_mm
+            .iter()
+            .copied()
+            .fold(0.0, f64::max)
+    };
+    let indicators: [(&str, bool, Pick); 5] = [
+        ("position max", false, |s| s.pos_max_mm),
+        ("orientation max", false, |s| s.ori_max_rad),
+        ("orientation RMS", false, |s| s.ori_rms_rad),
+        ("worst reflector's position RMS", false, worst_reflector),
+        (
+            "worst reflector's position RMS (cal)",
+            true,
+            worst_reflector,
+        ),
+    ];
+    // ratios[case][run][indicator][L/R/collab] = minimax / LM
+    let mut ratios: [Vec<Vec<[f64; 3]>>; 2] = [Vec::new(), Vec::new()];
+    for &seed in &a.seeds {
+        for (c, name) in case_names.iter().enumerate() {
+            let opts = SimOptions {
+                joint_error: Some(joint_errors),
+                outliers: (c == 1).then_some(simulate::OutlierModel {
+                    fraction: 0.05,
+                    magnitude_mm: 1.0,
+                }),
+                ..sim_options(seed, 220, 120)
+            };
+            let sim = simulate_with_robot(&opts, robot)?;
+            let mut values = Vec::new();
+            for method in [Method::Minimax, Method::LeastSquares] {
+                let settings = CalibrationSettings {
+                    method,
+                    ..CalibrationSettings::default()
+                };
+                let res = quiet_calibrate(&sim.dataset, &sim.nominal, &settings)?;
+                let ver = metrics::evaluate(&sim.dataset, &res.calibrated, SplitSelect::Ver)?;
+                let cal = metrics::evaluate(&sim.dataset, &res.calibrated, SplitSelect::Cal)?;
+                let three = |r: &metrics::AccuracyReport, pick: Pick| {
+                    [r.relative_left, r.relative_right, r.collaborative].map(|s| pick(&s))
+                };
+                let f = |v: [f64; 3], digits: usize| v.map(|x| format!("{x:.digits$}")).join(" / ");
+                let final_lambda = |side: Side| {
+                    res.history
                         .iter()
-                        .flat_map(|r| r[off..off + 3].iter())
-                        .filter(|&&x| x <= 1.0)
-                        .count();
-                    println!(
-                        "| {name} | {label} | {} | {wins} of {} |",
-                        mean.join(" / "),
-                        3 * ratios[c].len()
-                    );
-                }
+                        .rfind(|r| r.stage == solver::Stage::Arm(side))
+                        .map_or_else(|| "–".to_owned(), |r| f(r.lambda, 2).replace(" / ", "/"))
+                };
+                println!(
+                    "| {seed} | {name} | {method:?} | {} | {} | {} | {} | {}; {} |",
+                    f(three(&ver, |s| s.pos_max_mm), 4),
+                    f(three(&ver, |s| s.pos_rms_mm), 4),
+                    f(three(&ver, |s| s.ori_max_rad), 5),
+                    f(three(&ver, |s| s.ori_rms_rad), 5),
+                    final_lambda(Side::Left),
+                    final_lambda(Side::Right),
+                );
+                values.push(
+                    indicators
+                        .iter()
+                        .map(|&(_, on_cal, pick)| three(if on_cal { &cal } else { &ver }, pick))
+                        .collect::<Vec<_>>(),
+                );
             }
+            ratios[c].push(
+                (0..indicators.len())
+                    .map(|i| std::array::from_fn(|k| values[0][i][k] / values[1][i][k]))
+                    .collect(),
+            );
+        }
+    }
+    println!();
+    println!(
+        "Summary over {} seed(s): minimax relative to least squares (below 1: minimax smaller)",
+        a.seeds.len()
+    );
+    println!(
+        "| data | indicator | mean ratio minimax/LM (L / R / collab) | minimax smaller or equal in |"
+    );
+    println!("|---|---|---|---:|");
+    for (c, name) in case_names.iter().enumerate() {
+        for (i, (label, _, _)) in indicators.iter().enumerate() {
+            let runs = &ratios[c];
+            let n = runs.len().max(1) as f64;
+            let mean: Vec<String> = (0..3)
+                .map(|k| format!("{:.3}", runs.iter().map(|r| r[i][k]).sum::<f64>() / n))
+                .collect();
+            let wins = runs
+                .iter()
+                .flat_map(|r| r[i].iter())
+                .filter(|&&x| x <= 1.0)
+                .count();
+            println!(
+                "| {name} | {label} | {} | {wins} of {} |",
+                mean.join(" / "),
+                3 * runs.len()
+            );
         }
     }
     Ok(())

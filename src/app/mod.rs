@@ -443,7 +443,7 @@ impl WorkbenchApp {
                         .result
                         .stages
                         .iter()
-                        .map(|s| format!("{}: {:?} after {}", s.stage, s.termination, s.iterations))
+                        .map(|s| format!("{}: {} after {}", s.stage, s.termination, s.iterations))
                         .collect();
                     // The solver's own history is complete even if progress events were dropped.
                     self.history = calibrated.result.history.clone();

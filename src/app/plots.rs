@@ -89,12 +89,15 @@ pub fn convergence_plot_ui(ui: &mut egui::Ui, history: &[IterationRecord], stage
         );
     } else if let Some(last) = records.last() {
         ui.label(format!(
-            "{stage}: iteration {}, ψ = {:.6} mm², F = [{:.4}, {:.4}, {:.4}] mm², step {:.2e}, KKT {:.2e}",
+            "{stage}: iteration {}, ψ = {:.6} mm², F = [{:.4}, {:.4}, {:.4}] mm², weights λ = [{:.2}, {:.2}, {:.2}], step {:.2e}, KKT {:.2e}",
             last.iteration,
             last.psi_mm2,
             last.f_mm2[0],
             last.f_mm2[1],
             last.f_mm2[2],
+            last.lambda[0],
+            last.lambda[1],
+            last.lambda[2],
             last.step_norm,
             last.kkt_residual
         ));

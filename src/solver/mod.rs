@@ -62,8 +62,16 @@ pub struct CalibrationSettings {
     pub max_iterations: usize,
     /// Stop when the scaled parameter step norm falls below this.
     pub step_tolerance: f64,
+    /// Also stop (as converged) when ψ fell by less than this, relative, over the last five outer
+    /// iterations; 0 disables the rule and leaves only the step-norm test.
+    #[serde(default = "default_progress_tolerance")]
+    pub progress_tolerance: f64,
     /// Iterations of the paper's subgradient QP solver per outer iteration.
     pub max_qp_iterations: usize,
+}
+
+fn default_progress_tolerance() -> f64 {
+    sqp::PROGRESS_RTOL
 }
 
 impl Default for CalibrationSettings {
@@ -74,6 +82,7 @@ impl Default for CalibrationSettings {
             qp: QpMethod::Exact,
             max_iterations: 100,
             step_tolerance: 1e-8,
+            progress_tolerance: default_progress_tolerance(),
             max_qp_iterations: 2000,
         }
     }
@@ -86,6 +95,25 @@ pub enum Stage {
     Arm(Side),
     /// Step 2: right-arm base in the left-arm base frame.
     Base,
+}
+
+impl Termination {
+    /// Whether the stage ended at a stationary point of its problem (to working precision).
+    pub fn is_converged(self) -> bool {
+        matches!(self, Termination::Converged | Termination::NoProgress)
+    }
+}
+
+impl std::fmt::Display for Termination {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Termination::Converged => "converged",
+            Termination::NoProgress => "converged (ψ stationary)",
+            Termination::Stalled => "stalled above the optimum",
+            Termination::MaxIterations => "iteration limit reached",
+            Termination::Cancelled => "cancelled",
+        })
+    }
 }
 
 impl std::fmt::Display for Stage {
@@ -110,17 +138,30 @@ pub struct IterationRecord {
     pub step_norm: f64,
     /// KKT residual of the QP solution.
     pub kkt_residual: f64,
+    /// Multipliers λ_a, λ_b, λ_c of the three reflectors' rows in this iteration's QP (summing to one):
+    /// how much each reflector's F_k weighs in the step. The least-squares method weighs them equally.
+    /// NaN when the iteration solved no QP.
+    #[serde(default = "nan3")]
+    pub lambda: [f64; 3],
     /// Time since the start of the whole run.
     pub elapsed_secs: f64,
+}
+
+fn nan3() -> [f64; 3] {
+    [f64::NAN; 3]
 }
 
 /// Why a stage stopped.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum Termination {
-    /// Step norm below the tolerance.
+    /// Step norm below the tolerance, or no descent left: a KKT point.
     Converged,
-    /// No further decrease of the merit function was possible.
+    /// No further decrease of the merit function was possible, away from a KKT point.
     Stalled,
+    /// The merit function changed by less than 1e-8 (relative) over the last 5 iterations: converged
+    /// to working precision while the step norm is still above the tolerance (typically at a kink of
+    /// the max where one active F_i has a vanishing multiplier, where SQP steps shrink only slowly).
+    NoProgress,
     MaxIterations,
     Cancelled,
 }
@@ -235,6 +276,7 @@ impl CalibrationResult {
             "split": format!("{:?}", self.settings.split),
             "max_iterations": self.settings.max_iterations,
             "step_tolerance": self.settings.step_tolerance,
+            "progress_tolerance": self.settings.progress_tolerance,
         }));
         let fixed = |side: Side| -> Vec<FixedParameter> {
             self.identifiability
@@ -316,19 +358,41 @@ impl<P: MinimaxProblem> Runner<P> {
         }
     }
 
-    /// One outer iteration: (f, step norm, KKT or gradient residual, termination).
-    fn step(&mut self, stop: &dyn Fn() -> bool) -> ([f64; 3], f64, f64, Option<Termination>) {
+    /// One outer iteration.
+    fn step(&mut self, stop: &dyn Fn() -> bool) -> RunnerStep {
         match self {
             Runner::Sqp(s) => {
                 let r = s.step_with_stop(stop);
-                (r.f, r.step_norm, r.kkt_residual, r.termination)
+                RunnerStep {
+                    f: r.f,
+                    step_norm: r.step_norm,
+                    residual: r.kkt_residual,
+                    lambda: r.lambda,
+                    termination: r.termination,
+                }
             }
             Runner::Lm(s) => {
                 let r = s.step();
-                (r.f, r.step_norm, r.gradient_norm, r.termination)
+                RunnerStep {
+                    f: r.f,
+                    step_norm: r.step_norm,
+                    residual: r.gradient_norm,
+                    lambda: [1.0 / 3.0; 3],
+                    termination: r.termination,
+                }
             }
         }
     }
+}
+
+/// What one outer iteration of either method reports.
+struct RunnerStep {
+    f: [f64; 3],
+    step_norm: f64,
+    /// KKT residual (SQP) or gradient norm (LM).
+    residual: f64,
+    lambda: [f64; 3],
+    termination: Option<Termination>,
 }
 
 enum StageState {
@@ -446,6 +510,7 @@ impl Calibration {
         SqpSettings {
             qp: self.settings.qp,
             step_tolerance: self.settings.step_tolerance,
+            progress_tolerance: self.settings.progress_tolerance,
             max_qp_iterations: self.settings.max_qp_iterations,
         }
     }
@@ -622,17 +687,12 @@ impl Calibration {
                 n_pairs,
             });
         }
-        let (f, step_norm, kkt, term, pairs) = match &mut self.state {
-            StageState::Arm { runner, .. } => {
-                let (f, s, k, t) = runner.step(&stop);
-                (f, s, k, t, runner.problem().pair_count())
-            }
-            StageState::Base { runner } => {
-                let (f, s, k, t) = runner.step(&stop);
-                (f, s, k, t, runner.problem().pair_count())
-            }
+        let (r, pairs) = match &mut self.state {
+            StageState::Arm { runner, .. } => (runner.step(&stop), runner.problem().pair_count()),
+            StageState::Base { runner } => (runner.step(&stop), runner.problem().pair_count()),
             StageState::Done => unreachable!("handled above"),
         };
+        let (f, step_norm, term) = (r.f, r.step_norm, r.termination);
         if term == Some(Termination::Cancelled) {
             return Err(CalibrationError::Cancelled);
         }
@@ -651,7 +711,8 @@ impl Calibration {
             psi_mm2,
             f_mm2,
             step_norm,
-            kkt_residual: kkt,
+            kkt_residual: r.residual,
+            lambda: r.lambda,
             elapsed_secs: self.started.elapsed().as_secs_f64(),
         };
         observer(&CalibrationEvent::Iteration(record.clone()));

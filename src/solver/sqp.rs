@@ -12,6 +12,8 @@ use nalgebra::{DMatrix, DVector};
 pub struct SqpSettings {
     pub qp: QpMethod,
     pub step_tolerance: f64,
+    /// See [`PROGRESS_RTOL`]; 0 disables the no-progress rule.
+    pub progress_tolerance: f64,
     pub max_qp_iterations: usize,
 }
 
@@ -22,6 +24,9 @@ pub struct SqpStep {
     pub psi: f64,
     pub step_norm: f64,
     pub kkt_residual: f64,
+    /// Multipliers λ_a, λ_b, λ_c of the three objective rows in this iteration's QP (they sum to one;
+    /// at a minimax optimum ψ is stationary for the λ-weighted sum of the F_k). NaN if no QP was solved.
+    pub lambda: [f64; 3],
     pub qp_iterations: usize,
     /// `Some` when the loop should stop.
     pub termination: Option<Termination>,
@@ -40,6 +45,27 @@ pub struct SqpState<P: MinimaxProblem> {
     /// Multipliers and step length of the previous iteration (warm start of the paper's QP solver).
     last_nu: Option<DVector<f64>>,
     last_step_norm: Option<f64>,
+    /// (ψ, constraint violation) after each accepted step, for the no-progress rule (the merit
+    /// function is recomputed with the current penalty, which may have grown since).
+    merit_history: Vec<(f64, f64)>,
+}
+
+/// Outer iterations over which the no-progress rule looks back.
+pub const PROGRESS_WINDOW: usize = 5;
+/// Default of the no-progress rule: the stage has converged to working precision when the merit
+/// function fell by less than this (relative) over the last [`PROGRESS_WINDOW`] iterations. A sum of
+/// squares that changes by 1e-8 changes the RMS distance error by 5e-9 of itself, nanometres at most.
+pub const PROGRESS_RTOL: f64 = 1e-8;
+/// A stage that stops counts as converged if the exact QP at its final iterate predicts a decrease of
+/// the merit function below this (relative); otherwise it has stalled above the optimum.
+pub const STATIONARY_RTOL: f64 = 1e-4;
+/// ... or below this absolute amount (the merit is a mean over pairs in mm²: 1e-12 mm² is a nanometre
+/// RMS), which matters on noise-free data where ψ itself is at the rounding level.
+pub const STATIONARY_ABS_MM2: f64 = 1e-12;
+
+/// The multipliers of the three objective rows of a QP solution.
+fn objective_multipliers(sol: &QpSolution) -> [f64; 3] {
+    std::array::from_fn(|i| sol.nu[i])
 }
 
 /// Non-finite values in the problem at the start point.
@@ -83,6 +109,7 @@ impl<P: MinimaxProblem> SqpState<P> {
             iterations: 0,
             last_nu: None,
             last_step_norm: None,
+            merit_history: Vec::new(),
         })
     }
 
@@ -106,8 +133,8 @@ impl<P: MinimaxProblem> SqpState<P> {
         g
     }
 
-    /// Solve this iterate's QP.
-    fn solve_qp(&self, stop: &dyn Fn() -> bool) -> Result<QpSolution, Termination> {
+    /// Rows `A` and constants `b` of this iterate's epigraph QP (objective rows first).
+    fn qp_rows(&self) -> (DMatrix<f64>, DVector<f64>) {
         let psi = self.eval.psi();
         let m = self.problem.dim();
         let p = 3 + self.eval.cons.len();
@@ -121,6 +148,13 @@ impl<P: MinimaxProblem> SqpState<P> {
             a.row_mut(3 + l).copy_from(&g.transpose());
             b[3 + l] = *c;
         }
+        (a, b)
+    }
+
+    /// Solve this iterate's QP. `retry` asks the paper's solver for a cold start (λ⁰ = 0, as the paper
+    /// starts) with four times the iteration budget.
+    fn solve_qp(&self, stop: &dyn Fn() -> bool, retry: bool) -> Result<QpSolution, Termination> {
+        let (a, b) = self.qp_rows();
         let Some(chol) = self.h.clone().cholesky() else {
             return Err(Termination::Stalled);
         };
@@ -136,9 +170,13 @@ impl<P: MinimaxProblem> SqpState<P> {
             QpMethod::Paper => solve_paper(
                 &qp,
                 SubgradientSettings {
-                    max_iterations: self.settings.max_qp_iterations,
+                    max_iterations: self.settings.max_qp_iterations.saturating_mul(if retry {
+                        4
+                    } else {
+                        1
+                    }),
                     tolerance: 1e-12,
-                    warm_nu: self.last_nu.clone(),
+                    warm_nu: if retry { None } else { self.last_nu.clone() },
                     gamma_cap: None,
                 },
                 stop,
@@ -154,33 +192,85 @@ impl<P: MinimaxProblem> SqpState<P> {
     /// [`SqpState::step`], polling `stop` inside long QP solves; a stop ends the iteration with
     /// [`Termination::Cancelled`] and leaves the iterate unchanged.
     pub fn step_with_stop(&mut self, stop: &dyn Fn() -> bool) -> SqpStep {
+        let mut step = self.iterate(stop);
+        // Whatever ended the stage, it counts as converged only if the exact QP at the final iterate
+        // predicts no meaningful decrease; a stop above the optimum is reported as `Stalled`.
+        if let Some(
+            term @ (Termination::Converged | Termination::NoProgress | Termination::Stalled),
+        ) = step.termination
+        {
+            step.termination = Some(match (term, self.is_stationary()) {
+                (Termination::Stalled, true) => Termination::Converged,
+                (_, false) => Termination::Stalled,
+                (term, true) => term,
+            });
+        }
+        step
+    }
+
+    /// Whether the exact solution of the current iterate's QP predicts a decrease of the merit
+    /// function below [`STATIONARY_RTOL`] (relative) or [`STATIONARY_ABS_MM2`]: a first-order
+    /// stationary point to working precision.
+    fn is_stationary(&self) -> bool {
+        let Some(chol) = self.h.clone().cholesky() else {
+            return false;
+        };
+        let (a, b) = self.qp_rows();
+        let exact = solve_exact(&Qp {
+            h: &self.h,
+            h_chol: &chol,
+            a: &a,
+            b: &b,
+            n_obj: 3,
+        });
+        let phi = self.merit(&self.eval.f, &self.eval.cons);
+        self.predicted_change(&exact) > -(STATIONARY_RTOL * phi.abs() + STATIONARY_ABS_MM2)
+    }
+
+    fn iterate(&mut self, stop: &dyn Fn() -> bool) -> SqpStep {
         self.iterations += 1;
-        let done = |state: &Self, term: Termination, kkt: f64, qp_it: usize| SqpStep {
+        let done = |state: &Self, term: Termination, kkt: f64, sol: Option<&QpSolution>| SqpStep {
             f: state.eval.f,
             psi: state.eval.psi(),
             step_norm: 0.0,
             kkt_residual: kkt,
-            qp_iterations: qp_it,
+            lambda: sol.map_or([f64::NAN; 3], objective_multipliers),
+            qp_iterations: sol.map_or(0, |s| s.iterations),
             termination: Some(term),
         };
-        let sol = match self.solve_qp(stop) {
+        let mut sol = match self.solve_qp(stop, false) {
             Ok(sol) => sol,
-            Err(term) => return done(self, term, f64::NAN, 0),
+            Err(term) => return done(self, term, f64::NAN, None),
         };
         if stop() {
-            return done(self, Termination::Cancelled, f64::NAN, sol.iterations);
+            return done(self, Termination::Cancelled, f64::NAN, Some(&sol));
+        }
+        let phi0 = self.merit(&self.eval.f, &self.eval.cons);
+        let negligible = |predicted: f64| predicted > -1e-15 * phi0.abs().max(1e-300);
+        if negligible(self.predicted_change(&sol)) && self.settings.qp == QpMethod::Paper {
+            // The subgradient method is inexact: an answer that is no descent direction says little
+            // about the iterate. Solve again from the paper's cold start with a larger budget (whether
+            // a final stop is a stationary point is decided by `is_stationary`).
+            let used = sol.iterations;
+            if let Ok(again) = self.solve_qp(stop, true)
+                && again.tau < sol.tau
+            {
+                sol = again;
+            }
+            sol.iterations += used;
+            if stop() {
+                return done(self, Termination::Cancelled, f64::NAN, Some(&sol));
+            }
         }
         let kkt = self.first_order_residual(&sol.nu);
         // Penalty large enough for the constraint multipliers.
         let max_mu = sol.nu.iter().skip(3).copied().fold(0.0, f64::max);
         self.rho = self.rho.max(1.5 * max_mu + 1e-9);
-
-        let phi0 = self.merit(&self.eval.f, &self.eval.cons);
         // Predicted change of the merit function along s (linear model).
-        let predicted = sol.tau - self.rho * self.eval.violation();
+        let predicted = self.predicted_change(&sol);
         let s_norm = sol.s.norm();
-        if s_norm < self.settings.step_tolerance || predicted > -1e-15 * phi0.abs().max(1e-300) {
-            return done(self, Termination::Converged, kkt, sol.iterations);
+        if s_norm < self.settings.step_tolerance || negligible(predicted) {
+            return done(self, Termination::Converged, kkt, Some(&sol));
         }
         // The full step is tried with values and gradients at once (it is accepted in most
         // iterations, and its evaluation is then reused); shorter steps with values only.
@@ -204,7 +294,7 @@ impl<P: MinimaxProblem> SqpState<P> {
             }
         };
         let Some((y_new, alpha)) = accepted else {
-            return done(self, Termination::Stalled, kkt, sol.iterations);
+            return done(self, Termination::Stalled, kkt, Some(&sol));
         };
         let eval_new = if alpha == 1.0 {
             full_eval
@@ -212,7 +302,7 @@ impl<P: MinimaxProblem> SqpState<P> {
             self.problem.evaluate(&y_new)
         };
         if !eval_new.is_finite() {
-            return done(self, Termination::Stalled, kkt, sol.iterations);
+            return done(self, Termination::Stalled, kkt, Some(&sol));
         }
         // BFGS on the Lagrangian with Powell's damping (keeps H positive definite).
         let step = &y_new - &self.y;
@@ -240,16 +330,36 @@ impl<P: MinimaxProblem> SqpState<P> {
         self.last_step_norm = Some(step_norm);
         self.y = y_new;
         self.eval = eval_new;
-        let termination =
-            (step_norm < self.settings.step_tolerance).then_some(Termination::Converged);
+        self.merit_history
+            .push((self.eval.psi(), self.eval.violation()));
+        let n = self.merit_history.len();
+        let no_progress = self.settings.progress_tolerance > 0.0 && n > PROGRESS_WINDOW && {
+            let merit = |(psi, violation): (f64, f64)| psi + self.rho * violation;
+            let now = merit(self.merit_history[n - 1]);
+            let before = merit(self.merit_history[n - 1 - PROGRESS_WINDOW]);
+            before - now <= self.settings.progress_tolerance * now.abs()
+        };
+        let termination = if step_norm < self.settings.step_tolerance {
+            Some(Termination::Converged)
+        } else if no_progress {
+            Some(Termination::NoProgress)
+        } else {
+            None
+        };
         SqpStep {
             f: self.eval.f,
             psi: self.eval.psi(),
             step_norm,
             kkt_residual: kkt,
+            lambda: objective_multipliers(&sol),
             qp_iterations: sol.iterations,
             termination,
         }
+    }
+
+    /// Change of the merit function along the QP step that the linear model predicts.
+    fn predicted_change(&self, sol: &QpSolution) -> f64 {
+        sol.tau - self.rho * self.eval.violation()
     }
 
     /// First-order optimality residual of the minimax problem at the current iterate for multipliers ν:

@@ -1,0 +1,116 @@
+//! How stages end on data the model cannot explain (unmodelled joint compliance and gear errors):
+//! SQP near a kink of the max where one active F_i has a vanishing multiplier, and the paper's inexact
+//! subgradient QP. A stage may only report convergence at the optimum.
+
+use dualcal::cli::{sim_options, simulate_with_robot, unmodelled_joint_errors};
+use dualcal::kinematics::Side;
+use dualcal::robot::RobotDescription;
+use dualcal::simulate::{JointErrorModel, SimOptions, SimOutput};
+use dualcal::solver::{
+    CalibrationResult, CalibrationSettings, QpMethod, Stage, StageSummary, Termination, calibrate,
+};
+use std::sync::atomic::AtomicBool;
+
+fn simulate(seed: u64, gear_mrad: f64, compliance_mrad_per_m: f64) -> SimOutput {
+    let joint_error = JointErrorModel {
+        periodic_amplitude_mrad: gear_mrad,
+        compliance_mrad_per_m,
+        ..unmodelled_joint_errors()
+    };
+    let opts = SimOptions {
+        joint_error: Some(joint_error),
+        ..sim_options(seed, 220, 120)
+    };
+    simulate_with_robot(&opts, &RobotDescription::builtin_irb14000()).expect("simulation")
+}
+
+fn run(sim: &SimOutput, settings: CalibrationSettings) -> CalibrationResult {
+    calibrate(
+        &sim.dataset,
+        &sim.nominal,
+        &settings,
+        &mut |_| {},
+        &AtomicBool::new(false),
+    )
+    .expect("calibration")
+}
+
+fn stage(r: &CalibrationResult, side: Side) -> &StageSummary {
+    r.stages
+        .iter()
+        .find(|s| s.stage == Stage::Arm(side))
+        .expect("stage")
+}
+
+/// Seed 4 with joint compliance only: the left arm's optimum is a kink where F_c is active with a
+/// multiplier of ~1e-4. SQP steps there shrink only slowly (the full step is rejected because the
+/// Lagrangian does not see F_c's curvature); with the step-norm rule alone the default 100 iterations
+/// ran out (`NotConverged` at ψ 239.59172, step norm 5.5e-6). The no-progress rule must end the stage
+/// as converged, at the optimum that the step-norm rule reaches with a tenfold budget.
+#[test]
+fn a_kink_with_a_vanishing_multiplier_converges_within_the_default_budget() {
+    let sim = simulate(4, 0.0, 0.5);
+    let fast = run(&sim, CalibrationSettings::default());
+    let slow = run(
+        &sim,
+        CalibrationSettings {
+            progress_tolerance: 0.0,
+            max_iterations: 1000,
+            ..Default::default()
+        },
+    );
+    let (f, s) = (stage(&fast, Side::Left), stage(&slow, Side::Left));
+    assert!(f.termination.is_converged(), "{f:?}");
+    assert!(f.iterations < 100, "{f:?}");
+    assert!(s.iterations > f.iterations, "{s:?} vs {f:?}");
+    assert!(
+        f.psi_mm2 <= s.psi_mm2 * (1.0 + 1e-6),
+        "no-progress stop at ψ {} vs {} after {} iterations",
+        f.psi_mm2,
+        s.psi_mm2,
+        s.iterations
+    );
+}
+
+/// The paper's subgradient QP is inexact; a step-1 stage run with it may end above the optimum, but
+/// then it must say so (`Stalled`), never `Converged`. Cases where it stalled 0.01–2% above the exact
+/// QP's optimum before this rule existed (and was reported as converged).
+#[test]
+fn the_paper_qp_reports_convergence_only_at_the_optimum() {
+    let mut stalled = 0;
+    for (seed, gear, compliance) in [(4, 0.0, 0.5), (6, 3.0, 0.0), (6, 0.0, 2.0), (6, 1.0, 0.5)] {
+        let sim = simulate(seed, gear, compliance);
+        let exact = run(&sim, CalibrationSettings::default());
+        let paper = run(
+            &sim,
+            CalibrationSettings {
+                qp: QpMethod::Paper,
+                ..Default::default()
+            },
+        );
+        for side in Side::BOTH {
+            let (e, p) = (stage(&exact, side), stage(&paper, side));
+            assert!(e.termination.is_converged(), "{e:?}");
+            let gap = p.psi_mm2 / e.psi_mm2 - 1.0;
+            if p.termination.is_converged() {
+                assert!(
+                    gap < 1e-3,
+                    "seed {seed} {side}: paper QP says {} at ψ {} but the optimum is {}",
+                    p.termination,
+                    p.psi_mm2,
+                    e.psi_mm2
+                );
+            } else {
+                assert_eq!(p.termination, Termination::Stalled, "{p:?}");
+                assert!(
+                    gap > 0.0,
+                    "seed {seed} {side}: stalled below the optimum? {p:?} {e:?}"
+                );
+                stalled += 1;
+            }
+        }
+    }
+    // The cases were chosen because the paper QP stops short on some of them: the test must exercise
+    // the `Stalled` path.
+    assert!(stalled > 0);
+}
