@@ -16,6 +16,22 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 
+/// `println!` for command output that a closed pipe (`dualcal … | head`) ends quietly, as Unix tools
+/// do, instead of panicking: the process exits with 141 (128 + SIGPIPE). Any other write error (a full
+/// disk behind a redirection) is reported and exits with 1.
+macro_rules! outln {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        if let Err(err) = writeln!(std::io::stdout(), $($arg)*) {
+            if err.kind() == std::io::ErrorKind::BrokenPipe {
+                std::process::exit(141);
+            }
+            eprintln!("error: writing to standard output: {err}");
+            std::process::exit(1);
+        }
+    }};
+}
+
 /// Two-step minimax kinematic calibration of dual-arm robots from laser-tracker data.
 #[derive(Parser, Debug)]
 #[command(name = "dualcal", version, about, long_about = None)]
@@ -300,7 +316,7 @@ fn simulate_cmd(a: &SimulateArgs) -> Result<()> {
     truth.method = Some(serde_json::json!("simulation truth"));
     truth.provenance = Some(Provenance::now(Some(&a.out)));
     truth.write(&a.out.join("truth.json"))?;
-    println!(
+    outln!(
         "simulated {} configurations per arm ({} cal, {} ver), seed {}, into {}",
         a.configs,
         a.cal,
@@ -308,11 +324,12 @@ fn simulate_cmd(a: &SimulateArgs) -> Result<()> {
         a.seed,
         a.out.display()
     );
-    println!(
+    outln!(
         "rejected samples: {} in collision, {} not facing the tracker",
-        out.rejected_for_collision, out.rejected_for_facing
+        out.rejected_for_collision,
+        out.rejected_for_facing
     );
-    println!("true parameters: {}", a.out.join("truth.json").display());
+    outln!("true parameters: {}", a.out.join("truth.json").display());
     Ok(())
 }
 
@@ -328,18 +345,18 @@ fn evaluate_cmd(a: &EvaluateArgs) -> Result<()> {
     };
     let report = metrics::evaluate(&ds, &model, a.split.into())?;
     if a.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
+        outln!("{}", serde_json::to_string_pretty(&report)?);
     } else {
         let what = match &a.params {
             Some(p) => format!("parameters {}", p.display()),
             None => "nominal model".to_string(),
         };
-        println!(
+        outln!(
             "Accuracy of the {what} on {} (split: {:?})",
             ds.dir.display(),
             a.split
         );
-        println!("{}", metrics::format_table(&report));
+        outln!("{}", metrics::format_table(&report));
     }
     Ok(())
 }
@@ -420,35 +437,39 @@ fn calibrate_cmd(a: &CalibrateArgs) -> Result<()> {
     };
     let result = solver::calibrate(&ds, &nominal, &settings, &mut observer, &cancel)?;
     print_identifiability(&result);
-    println!("\n{}", comparison_table(&ds, &result)?);
+    outln!("\n{}", comparison_table(&ds, &result)?);
     let file = result.params_file(&ds);
     file.write(&a.out)?;
-    println!("parameters written to {}", a.out.display());
+    outln!("parameters written to {}", a.out.display());
     if let Some(path) = &a.urdf {
         let text = crate::urdf_export::calibrated_urdf(&robot, &result.calibrated)?;
         crate::atomic::write_atomic(path, text.as_bytes())
             .with_context(|| format!("writing {}", path.display()))?;
-        println!("calibrated URDF written to {}", path.display());
+        outln!("calibrated URDF written to {}", path.display());
     }
     Ok(())
 }
 
 fn print_identifiability(result: &CalibrationResult) {
     for (side, rep) in &result.identifiability {
-        println!(
+        outln!(
             "\n{side} arm: {} of 37 parameters identified; condition number {:.3e} → {:.3e}",
             rep.free.len(),
             rep.condition_before,
             rep.condition_after
         );
         for f in &rep.fixed {
-            println!("  fixed {:<8} {}", f.name, f.reason);
+            outln!("  fixed {:<8} {}", f.name, f.reason);
         }
     }
     for s in &result.stages {
-        println!(
+        outln!(
             "{}: {} after {} iterations, ψ {:.6} → {:.6} mm²",
-            s.stage, s.termination, s.iterations, s.psi_start_mm2, s.psi_mm2
+            s.stage,
+            s.termination,
+            s.iterations,
+            s.psi_start_mm2,
+            s.psi_mm2
         );
         if !s.termination.is_converged() {
             eprintln!(
@@ -464,7 +485,7 @@ fn print_identifiability(result: &CalibrationResult) {
             );
         }
     }
-    println!("total time {:.3} s", result.elapsed_secs);
+    outln!("total time {:.3} s", result.elapsed_secs);
 }
 
 /// Nominal vs calibrated, on the calibration and verification splits.
@@ -565,20 +586,20 @@ fn reproduce_cmd(a: &ReproduceArgs) -> Result<()> {
                 None => simulate_with_robot(&study_options(a, a.seeds[0]), &robot)?.dataset,
             };
             let nominal = robot.nominal_model(ds.nominal_reflectors_mm);
-            println!(
+            outln!(
                 "Paper Fig. 4: relative accuracy against the number of calibration configurations (per arm)"
             );
-            println!(
+            outln!(
                 "| configs | left pos RMS cal / ver (mm) | right pos RMS cal / ver (mm) | left ori RMS cal / ver (rad) | right ori RMS cal / ver (rad) |"
             );
-            println!("|---:|---:|---:|---:|---:|");
+            outln!("|---:|---:|---:|---:|---:|");
             for &n in &a.sizes {
                 let sub = with_cal_subset(&ds, n);
                 let res = quiet_calibrate(&sub, &nominal, &CalibrationSettings::default())
                     .with_context(|| format!("calibrating with {n} configurations"))?;
                 let cal = metrics::evaluate(&sub, &res.calibrated, SplitSelect::Cal)?;
                 let ver = metrics::evaluate(&sub, &res.calibrated, SplitSelect::Ver)?;
-                println!(
+                outln!(
                     "| {n} | {:.4} / {:.4} | {:.4} / {:.4} | {:.5} / {:.5} | {:.5} / {:.5} |",
                     cal.relative_left.pos_rms_mm,
                     ver.relative_left.pos_rms_mm,
@@ -592,17 +613,17 @@ fn reproduce_cmd(a: &ReproduceArgs) -> Result<()> {
             }
         }
         Study::Qp => {
-            println!(
+            outln!(
                 "Exact QP against the paper's subgradient QP (120 cal + 100 ver configurations per arm)"
             );
-            println!(
+            outln!(
                 "| seed | QP | iterations (L/R/base) | stop (L/R/base) | time (s) | ψ left (mm²) | ψ right (mm²) | ψ base (mm²) | ver pos RMS L/R/collab (mm) | ver ori RMS L/R/collab (rad) |"
             );
-            println!("|---:|---|---|---|---:|---:|---:|---:|---|---|");
+            outln!("|---:|---|---|---|---:|---:|---:|---:|---|---|");
             for &seed in &a.seeds {
                 let sim = simulate_with_robot(&study_options(a, seed), &robot)?;
                 let truth_ver = metrics::evaluate(&sim.dataset, &sim.truth, SplitSelect::Ver)?;
-                println!(
+                outln!(
                     "| {seed} | truth | – | – | – | – | – | – | {:.4} / {:.4} / {:.4} | {:.5} / {:.5} / {:.5} |",
                     truth_ver.relative_left.pos_rms_mm,
                     truth_ver.relative_right.pos_rms_mm,
@@ -630,7 +651,7 @@ fn reproduce_cmd(a: &ReproduceArgs) -> Result<()> {
                         .iter()
                         .map(|s| format!("{:?}", s.termination))
                         .collect();
-                    println!(
+                    outln!(
                         "| {seed} | {qp:?} | {} | {} | {:.3} | {:.6} | {:.6} | {:.6} | {:.4} / {:.4} / {:.4} | {:.5} / {:.5} / {:.5} |",
                         it.join(" / "),
                         stops.join(" / "),
@@ -657,17 +678,17 @@ fn reproduce_cmd(a: &ReproduceArgs) -> Result<()> {
 /// errors and once more with 5% outliers; prints a table per run and a summary of ratios.
 fn robustness_study(a: &ReproduceArgs, robot: &RobotDescription) -> Result<()> {
     let joint_errors = a.joint_errors().unwrap_or_else(unmodelled_joint_errors);
-    println!(
+    outln!(
         "Minimax (paper) against least squares (LM) on data with unmodelled errors \
          (gear {} mrad, {} per revolution; compliance {} mrad/m); verification split unless marked cal",
         joint_errors.periodic_amplitude_mrad,
         joint_errors.periods_per_rev,
         joint_errors.compliance_mrad_per_m
     );
-    println!(
+    outln!(
         "| seed | data | method | pos max L/R/collab (mm) | pos RMS L/R/collab (mm) | ori max L/R/collab (rad) | ori RMS L/R/collab (rad) | final λ_a/λ_b/λ_c left; right |"
     );
-    println!("|---:|---|---|---|---|---|---|---|");
+    outln!("|---:|---|---|---|---|---|---|---|");
     let case_names = ["joint errors", "joint errors + 5% outliers of 1 mm"];
     // The indicators compared, each for left / right / collaborative.
     type Pick = fn(&metrics::AccuracyStats) -> f64;
@@ -720,7 +741,7 @@ fn robustness_study(a: &ReproduceArgs, robot: &RobotDescription) -> Result<()> {
                         .rfind(|r| r.stage == solver::Stage::Arm(side))
                         .map_or_else(|| "–".to_owned(), |r| f(r.lambda, 2).replace(" / ", "/"))
                 };
-                println!(
+                outln!(
                     "| {seed} | {name} | {method:?} | {} | {} | {} | {} | {}; {} |",
                     f(three(&ver, |s| s.pos_max_mm), 4),
                     f(three(&ver, |s| s.pos_rms_mm), 4),
@@ -743,15 +764,15 @@ fn robustness_study(a: &ReproduceArgs, robot: &RobotDescription) -> Result<()> {
             );
         }
     }
-    println!();
-    println!(
+    outln!("");
+    outln!(
         "Summary over {} seed(s): minimax relative to least squares (below 1: minimax smaller)",
         a.seeds.len()
     );
-    println!(
+    outln!(
         "| data | indicator | mean ratio minimax/LM (L / R / collab) | minimax smaller or equal in |"
     );
-    println!("|---|---|---|---:|");
+    outln!("|---|---|---|---:|");
     for (c, name) in case_names.iter().enumerate() {
         for (i, (label, _, _)) in indicators.iter().enumerate() {
             let runs = &ratios[c];
@@ -764,7 +785,7 @@ fn robustness_study(a: &ReproduceArgs, robot: &RobotDescription) -> Result<()> {
                 .flat_map(|r| r[i].iter())
                 .filter(|&&x| x <= 1.0)
                 .count();
-            println!(
+            outln!(
                 "| {name} | {label} | {} | {wins} of {} |",
                 mean.join(" / "),
                 3 * runs.len()

@@ -240,3 +240,23 @@ fn bundled_example_is_reproducible() {
         }
     }
 }
+
+/// `dualcal … | head`: a reader that goes away ends the command quietly (exit 141, like a Unix tool
+/// killed by SIGPIPE), not with a panic.
+#[test]
+fn a_closed_output_pipe_ends_the_command_without_a_panic() {
+    let example = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/datasets/example");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_dualcal"))
+        .args(["evaluate", s(&example), "--nominal", "--split", "all"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("run dualcal");
+    // Close the read end before the process can have written anything (it still has to load the
+    // dataset): its first write fails with EPIPE.
+    drop(child.stdout.take());
+    let out = child.wait_with_output().expect("wait");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert_eq!(out.status.code(), Some(141), "{stderr}");
+}
