@@ -425,3 +425,35 @@ fn dropping_a_dataset_opens_it() {
     assert_eq!(session.dataset.right.measurements.len(), 10);
     harness.get_by_label_contains("10 left + 10 right configurations");
 }
+
+/// The "Model:" toggle shows what is drawn: before any calibration the nominal model (the calibrated
+/// choice is disabled and not selected); once a calibration exists, the calibrated one.
+#[test]
+fn the_model_toggle_shows_the_drawn_model() {
+    use egui_kittest::kittest::NodeT;
+    let toggled = |harness: &Harness<'_, WorkbenchApp>, label: &str| {
+        format!(
+            "{:?}",
+            harness.get_by_label(label).accesskit_node().toggled()
+        )
+    };
+    let mut harness = harness([1400.0, 900.0], AppLaunch::default());
+    loaded(&mut harness);
+    assert_eq!(toggled(&harness, "nominal"), "Some(True)");
+    assert_eq!(toggled(&harness, "calibrated"), "Some(False)");
+
+    harness.get_by_label("Calibrate").click();
+    harness.step();
+    step_until(&mut harness, MAX_RUN_FRAMES, "calibration result", |app| {
+        !app.is_calibrating()
+    });
+    assert_eq!(toggled(&harness, "nominal"), "Some(False)");
+    assert_eq!(toggled(&harness, "calibrated"), "Some(True)");
+
+    harness.get_by_label("nominal").click();
+    // The click is handled while that frame is drawn; the next one shows it.
+    harness.step();
+    harness.step();
+    assert_eq!(toggled(&harness, "nominal"), "Some(True)");
+    assert_eq!(toggled(&harness, "calibrated"), "Some(False)");
+}

@@ -445,6 +445,18 @@ impl WorkbenchApp {
                         .iter()
                         .map(|s| format!("{}: {} after {}", s.stage, s.termination, s.iterations))
                         .collect();
+                    let stalled = calibrated
+                        .result
+                        .stages
+                        .iter()
+                        .any(|s| !s.termination.is_converged());
+                    let advice = if !stalled {
+                        ""
+                    } else if calibrated.result.settings.qp == QpMethod::Paper {
+                        " Warning: a stage stopped above its optimum (the paper's QP is inexact; try the exact one)."
+                    } else {
+                        " Warning: a stage stopped above its optimum."
+                    };
                     // The solver's own history is complete even if progress events were dropped.
                     self.history = calibrated.result.history.clone();
                     if let Some(session) = &mut self.session {
@@ -453,7 +465,7 @@ impl WorkbenchApp {
                     }
                     self.generation += 1;
                     self.status = Status::Idle(format!(
-                        "Calibration done in {secs:.1} s ({}).",
+                        "Calibration done in {secs:.1} s ({}).{advice}",
                         terms.join(", ")
                     ));
                 }

@@ -261,10 +261,23 @@ impl WorkbenchApp {
         });
         ui.horizontal(|ui| {
             ui.label("Model:");
-            ui.selectable_value(&mut o.use_calibrated, false, "nominal");
+            // What is drawn: the calibrated model only once one exists (the preference is kept, so a
+            // finished calibration switches the view to it).
+            let showing_calibrated = o.use_calibrated && has_cal;
+            if ui
+                .selectable_label(!showing_calibrated, "nominal")
+                .clicked()
+            {
+                o.use_calibrated = false;
+            }
             ui.add_enabled_ui(has_cal, |ui| {
-                ui.selectable_value(&mut o.use_calibrated, true, "calibrated")
-                    .on_disabled_hover_text("Calibrate first");
+                if ui
+                    .selectable_label(showing_calibrated, "calibrated")
+                    .on_disabled_hover_text("Calibrate first")
+                    .clicked()
+                {
+                    o.use_calibrated = true;
+                }
             });
         });
         ui.checkbox(&mut self.viewport.auto_scale, "auto scale")
