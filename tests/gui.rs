@@ -457,3 +457,24 @@ fn the_model_toggle_shows_the_drawn_model() {
     assert_eq!(toggled(&harness, "nominal"), "Some(True)");
     assert_eq!(toggled(&harness, "calibrated"), "Some(False)");
 }
+
+/// The example is compiled into the binary: unpacked into a cache directory it is the same dataset
+/// as the source tree's, and a second unpack reuses the directory.
+#[test]
+fn the_compiled_in_example_unpacks_to_the_same_dataset() {
+    let cache = tempfile::tempdir().expect("temp dir");
+    let unpacked = dualcal::app::unpack_example(cache.path()).expect("unpack");
+    assert!(unpacked.starts_with(cache.path()));
+    let source = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/datasets/example");
+    let a = dualcal::dataset::load(&source).expect("source example");
+    let b = dualcal::dataset::load(&unpacked).expect("unpacked example");
+    for (x, y) in [(&a.left, &b.left), (&a.right, &b.right)] {
+        assert_eq!(x.measurements, y.measurements);
+    }
+    assert_eq!(a.nominal_reflectors_mm, b.nominal_reflectors_mm);
+    assert_eq!(a.tracker, b.tracker);
+    assert_eq!(
+        dualcal::app::unpack_example(cache.path()).expect("again"),
+        unpacked
+    );
+}

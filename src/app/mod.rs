@@ -41,9 +41,62 @@ pub struct AppLaunch {
     pub urdf: Option<PathBuf>,
 }
 
-/// The bundled example dataset (in the source tree).
+/// The bundled example dataset, compiled into the binary (it is ours: `dualcal simulate --seed 1`).
+const EXAMPLE_FILES: [(&str, &[u8]); 4] = [
+    (
+        "dataset.toml",
+        include_bytes!("../../assets/datasets/example/dataset.toml"),
+    ),
+    (
+        "left.csv",
+        include_bytes!("../../assets/datasets/example/left.csv"),
+    ),
+    (
+        "right.csv",
+        include_bytes!("../../assets/datasets/example/right.csv"),
+    ),
+    (
+        "truth.json",
+        include_bytes!("../../assets/datasets/example/truth.json"),
+    ),
+];
+
+/// The bundled example dataset: in the source tree when the binary runs from it (`cargo run`), else a
+/// copy of the compiled-in files in the user's cache directory (`$XDG_CACHE_HOME/dualcal` or
+/// `~/.cache/dualcal`), so an installed or moved binary opens it too.
 pub fn bundled_example_path() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/datasets/example")
+    let source = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/datasets/example");
+    if source.join("dataset.toml").is_file() {
+        return source;
+    }
+    let cache_root = std::env::var_os("XDG_CACHE_HOME")
+        .filter(|v| !v.is_empty())
+        .map(PathBuf::from)
+        .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".cache")))
+        .unwrap_or_else(std::env::temp_dir);
+    // If the copy cannot be written, the source path is returned and opening it reports the error.
+    unpack_example(&cache_root.join("dualcal")).unwrap_or(source)
+}
+
+/// Write the compiled-in example into `root/example-<content hash>` (files already there are left
+/// alone: the directory name changes with the content) and return that directory.
+pub fn unpack_example(root: &Path) -> std::io::Result<PathBuf> {
+    // FNV-1a over names and contents: a stable name for this version of the example.
+    let mut hash: u64 = 0xcbf2_9ce4_8422_2325;
+    for (name, bytes) in EXAMPLE_FILES {
+        for &b in name.as_bytes().iter().chain(bytes) {
+            hash = (hash ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3);
+        }
+    }
+    let dir = root.join(format!("example-{hash:016x}"));
+    std::fs::create_dir_all(&dir)?;
+    for (name, bytes) in EXAMPLE_FILES {
+        let path = dir.join(name);
+        if !path.exists() {
+            crate::atomic::write_atomic(&path, bytes)?;
+        }
+    }
+    Ok(dir)
 }
 
 /// Open the workbench window (blocks until it is closed).
