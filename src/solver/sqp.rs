@@ -52,6 +52,9 @@ pub struct SqpState<P: MinimaxProblem> {
 
 /// Outer iterations over which the no-progress rule looks back.
 pub const PROGRESS_WINDOW: usize = 5;
+/// The largest multiple of the iteration budget the paper's QP solver gets when its answer is no
+/// descent direction away from a stationary point.
+pub const MAX_RETRY_FACTOR: usize = 64;
 /// Default of the no-progress rule: the stage has converged to working precision when the merit
 /// function fell by less than this (relative) over the last [`PROGRESS_WINDOW`] iterations. A sum of
 /// squares that changes by 1e-8 changes the RMS distance error by 5e-9 of itself, nanometres at most.
@@ -151,9 +154,9 @@ impl<P: MinimaxProblem> SqpState<P> {
         (a, b)
     }
 
-    /// Solve this iterate's QP. `retry` asks the paper's solver for a cold start (λ⁰ = 0, as the paper
-    /// starts) with four times the iteration budget.
-    fn solve_qp(&self, stop: &dyn Fn() -> bool, retry: bool) -> Result<QpSolution, Termination> {
+    /// Solve this iterate's QP. A `retry` factor above 1 asks the paper's solver for a cold start
+    /// (λ⁰ = 0, as the paper starts) with that many times the iteration budget.
+    fn solve_qp(&self, stop: &dyn Fn() -> bool, retry: usize) -> Result<QpSolution, Termination> {
         let (a, b) = self.qp_rows();
         let Some(chol) = self.h.clone().cholesky() else {
             return Err(Termination::Stalled);
@@ -170,13 +173,13 @@ impl<P: MinimaxProblem> SqpState<P> {
             QpMethod::Paper => solve_paper(
                 &qp,
                 SubgradientSettings {
-                    max_iterations: self.settings.max_qp_iterations.saturating_mul(if retry {
-                        4
-                    } else {
-                        1
-                    }),
+                    max_iterations: self.settings.max_qp_iterations.saturating_mul(retry),
                     tolerance: 1e-12,
-                    warm_nu: if retry { None } else { self.last_nu.clone() },
+                    warm_nu: if retry > 1 {
+                        None
+                    } else {
+                        self.last_nu.clone()
+                    },
                     gamma_cap: None,
                 },
                 stop,
@@ -238,7 +241,7 @@ impl<P: MinimaxProblem> SqpState<P> {
             qp_iterations: sol.map_or(0, |s| s.iterations),
             termination: Some(term),
         };
-        let mut sol = match self.solve_qp(stop, false) {
+        let mut sol = match self.solve_qp(stop, 1) {
             Ok(sol) => sol,
             Err(term) => return done(self, term, f64::NAN, None),
         };
@@ -249,18 +252,30 @@ impl<P: MinimaxProblem> SqpState<P> {
         let negligible = |predicted: f64| predicted > -1e-15 * phi0.abs().max(1e-300);
         if negligible(self.predicted_change(&sol)) && self.settings.qp == QpMethod::Paper {
             // The subgradient method is inexact: an answer that is no descent direction says little
-            // about the iterate. Solve again from the paper's cold start with a larger budget (whether
-            // a final stop is a stationary point is decided by `is_stationary`).
-            let used = sol.iterations;
-            if let Ok(again) = self.solve_qp(stop, true)
-                && again.tau < sol.tau
-            {
-                sol = again;
+            // about the iterate. Solve again from the paper's cold start with 4, then 16, then 64
+            // times the budget, as long as no descent is found and the exact QP says one exists (it
+            // only decides whether to keep going; the step is the subgradient method's).
+            let mut used = sol.iterations;
+            let mut factor = 4;
+            loop {
+                if let Ok(again) = self.solve_qp(stop, factor) {
+                    used += again.iterations;
+                    if again.tau < sol.tau {
+                        sol = again;
+                    }
+                }
+                if stop() {
+                    return done(self, Termination::Cancelled, f64::NAN, Some(&sol));
+                }
+                if !negligible(self.predicted_change(&sol))
+                    || factor >= MAX_RETRY_FACTOR
+                    || self.is_stationary()
+                {
+                    break;
+                }
+                factor *= 4;
             }
-            sol.iterations += used;
-            if stop() {
-                return done(self, Termination::Cancelled, f64::NAN, Some(&sol));
-            }
+            sol.iterations = used;
         }
         let kkt = self.first_order_residual(&sol.nu);
         // Penalty large enough for the constraint multipliers.
