@@ -471,19 +471,9 @@ fn print_identifiability(result: &CalibrationResult) {
             s.psi_start_mm2,
             s.psi_mm2
         );
-        if !s.termination.is_converged() {
-            eprintln!(
-                "warning: {} stopped where the exact QP still predicts a decrease of ψ by more than \
-                 {:.0e} of itself; the parameters are usable but not optimal{}",
-                s.stage,
-                solver::sqp::STATIONARY_RTOL,
-                if result.settings.qp == QpMethod::Paper {
-                    " (the paper's subgradient QP is inexact: try --qp exact)"
-                } else {
-                    ""
-                }
-            );
-        }
+    }
+    for warning in result.stall_warnings() {
+        eprintln!("warning: {warning}");
     }
     outln!("total time {:.3} s", result.elapsed_secs);
 }

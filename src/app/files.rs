@@ -2,7 +2,7 @@
 //! writes; a browser build can replace [`FileAccess`] with downloads and `<input type=file>`.
 //! Replies arrive on a channel the app drains each frame, so the UI never waits on a dialog.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::mpsc::Sender;
 
 /// What the user wants to open.
@@ -96,7 +96,7 @@ impl FileAccess for NativeFiles {
                     .add_filter(request.filter_name, request.extensions)
                     .save_file();
                 let _ = reply.send(match picked {
-                    Some(path) => match write_atomic(&path, &request.bytes) {
+                    Some(path) => match crate::atomic::write_atomic(&path, &request.bytes) {
                         Ok(()) => FileReply::Saved(path),
                         Err(e) => FileReply::Failed(format!("{}: {e}", path.display())),
                     },
@@ -112,26 +112,4 @@ impl FileAccess for NativeFiles {
 fn on_path(program: &str) -> bool {
     std::env::var_os("PATH")
         .is_some_and(|paths| std::env::split_paths(&paths).any(|dir| dir.join(program).is_file()))
-}
-
-/// Write through a temporary file in the same directory, then rename over the target (ordinary
-/// file permissions).
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    crate::atomic::write_atomic(path, bytes)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn atomic_write_replaces_the_whole_file() {
-        let dir = tempfile::tempdir().unwrap();
-        let path = dir.path().join("out.csv");
-        write_atomic(&path, b"first, longer content").unwrap();
-        write_atomic(&path, b"second").unwrap();
-        assert_eq!(std::fs::read(&path).unwrap(), b"second");
-        // No temporary files are left behind.
-        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
-    }
 }

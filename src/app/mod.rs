@@ -81,14 +81,11 @@ pub fn bundled_example_path() -> PathBuf {
 /// Write the compiled-in example into `root/example-<content hash>` (files already there are left
 /// alone: the directory name changes with the content) and return that directory.
 pub fn unpack_example(root: &Path) -> std::io::Result<PathBuf> {
-    // FNV-1a over names and contents: a stable name for this version of the example.
-    let mut hash: u64 = 0xcbf2_9ce4_8422_2325;
-    for (name, bytes) in EXAMPLE_FILES {
-        for &b in name.as_bytes().iter().chain(bytes) {
-            hash = (hash ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3);
-        }
-    }
-    let dir = root.join(format!("example-{hash:016x}"));
+    use std::hash::{Hash, Hasher};
+    // A name for this version of the example (a new toolchain may rename it: then it is unpacked again).
+    let mut hasher = std::hash::DefaultHasher::new();
+    EXAMPLE_FILES.hash(&mut hasher);
+    let dir = root.join(format!("example-{:016x}", hasher.finish()));
     std::fs::create_dir_all(&dir)?;
     for (name, bytes) in EXAMPLE_FILES {
         let path = dir.join(name);
@@ -498,18 +495,12 @@ impl WorkbenchApp {
                         .iter()
                         .map(|s| format!("{}: {} after {}", s.stage, s.termination, s.iterations))
                         .collect();
-                    let stalled = calibrated
+                    let advice: String = calibrated
                         .result
-                        .stages
+                        .stall_warnings()
                         .iter()
-                        .any(|s| !s.termination.is_converged());
-                    let advice = if !stalled {
-                        ""
-                    } else if calibrated.result.settings.qp == QpMethod::Paper {
-                        " Warning: a stage stopped above its optimum (the paper's QP is inexact; try the exact one)."
-                    } else {
-                        " Warning: a stage stopped above its optimum."
-                    };
+                        .map(|w| format!(" Warning: {w}."))
+                        .collect();
                     // The solver's own history is complete even if progress events were dropped.
                     self.history = calibrated.result.history.clone();
                     if let Some(session) = &mut self.session {
@@ -681,13 +672,15 @@ impl WorkbenchApp {
                     let _ = self.file_sender.send(FileReply::Open(*kind, path));
                     done = true;
                 }
-                PromptAction::Save(request) => match files::write_atomic(&path, &request.bytes) {
-                    Ok(()) => {
-                        let _ = self.file_sender.send(FileReply::Saved(path));
-                        done = true;
+                PromptAction::Save(request) => {
+                    match crate::atomic::write_atomic(&path, &request.bytes) {
+                        Ok(()) => {
+                            let _ = self.file_sender.send(FileReply::Saved(path));
+                            done = true;
+                        }
+                        Err(e) => prompt.error = Some(format!("{}: {e}", path.display())),
                     }
-                    Err(e) => prompt.error = Some(format!("{}: {e}", path.display())),
-                },
+                }
             }
         }
         if done {

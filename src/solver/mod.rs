@@ -256,6 +256,28 @@ impl CalibrationResult {
         crate::metrics::pairs(dataset, &self.calibrated, self.settings.split, kind)
     }
 
+    /// One warning per stage that stopped above its optimum (`Stalled`); empty when all converged.
+    /// The command line and the workbench both show these.
+    pub fn stall_warnings(&self) -> Vec<String> {
+        self.stages
+            .iter()
+            .filter(|s| !s.termination.is_converged())
+            .map(|s| {
+                format!(
+                    "{} stopped where the exact QP still predicts a decrease of ψ by more than {:.0e} \
+                     of itself; the parameters are usable but not optimal{}",
+                    s.stage,
+                    sqp::STATIONARY_RTOL,
+                    if self.settings.qp == QpMethod::Paper {
+                        " (the paper's subgradient QP is inexact: try the exact QP)"
+                    } else {
+                        ""
+                    }
+                )
+            })
+            .collect()
+    }
+
     /// The `dualcal-params/1` file of this result: the calibrated model plus method, fixed parameters
     /// and why, per-stage termination, accuracy on the cal and ver splits of `dataset`, conditioning and
     /// provenance. The command line and the workbench both export this.
