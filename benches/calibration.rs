@@ -1,12 +1,13 @@
-//! Speed of the full two-step calibration (issue 3 sets the targets: paper size, 2 × 120 configurations,
-//! in tens of milliseconds; 1000 configurations per arm in about a second).
+//! Speed of the full two-step calibration (targets: paper size, 2 × 120 configurations, in tens of
+//! milliseconds; 1000 configurations per arm in about a second).
 //!
 //! `cargo bench --bench calibration`
 use criterion::{Criterion, criterion_group, criterion_main};
-use dualcal::cli::{sim_options, simulate_with_robot, with_cal_subset};
 use dualcal::robot::RobotDescription;
-use dualcal::solver::{CalibrationSettings, calibrate};
+use dualcal::simulate::{paper_options, simulate_with_robot};
+use dualcal::solver::{CalibrationSettings, Calibrator, Termination};
 use std::hint::black_box;
+use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 
 fn bench(c: &mut Criterion) {
@@ -14,20 +15,16 @@ fn bench(c: &mut Criterion) {
     let mut group = c.benchmark_group("two_step_calibration");
     group.sample_size(10);
     for (configs, cal) in [(220usize, 120usize), (1100, 1000)] {
-        let sim = simulate_with_robot(&sim_options(7, configs, cal), &robot).expect("simulation");
-        let ds = with_cal_subset(&sim.dataset, cal);
+        let sim = simulate_with_robot(&paper_options(7, configs, cal), &robot).expect("simulation");
+        let ds = sim.dataset.with_cal_subset(cal);
         let settings = CalibrationSettings::default();
         group.bench_function(format!("{cal}_configs_per_arm"), |b| {
             b.iter(|| {
-                let cancel = AtomicBool::new(false);
-                let r = calibrate(
-                    black_box(&ds),
-                    &sim.nominal,
-                    &settings,
-                    &mut |_| {},
-                    &cancel,
-                )
-                .expect("calibration");
+                let r = Calibrator::new(black_box(&ds), &sim.nominal)
+                    .settings(settings.clone())
+                    .run()
+                    .expect("calibration");
+                assert!(r.is_converged());
                 black_box(r.calibrated)
             })
         });
@@ -35,8 +32,8 @@ fn bench(c: &mut Criterion) {
     group.finish();
 
     // Cancel latency: a run inside a practically endless paper-QP solve is cancelled; the time from
-    // setting the flag to `calibrate` returning is measured.
-    let sim = simulate_with_robot(&sim_options(7, 220, 120), &robot).expect("simulation");
+    // setting the flag to the run returning is measured.
+    let sim = simulate_with_robot(&paper_options(7, 220, 120), &robot).expect("simulation");
     let settings = CalibrationSettings {
         qp: dualcal::solver::QpMethod::Paper,
         max_qp_iterations: usize::MAX,
@@ -46,13 +43,21 @@ fn bench(c: &mut Criterion) {
         b.iter_custom(|iters| {
             let mut total = std::time::Duration::ZERO;
             for _ in 0..iters {
-                let cancel = std::sync::Arc::new(AtomicBool::new(false));
+                let cancel = Arc::new(AtomicBool::new(false));
                 let flag = cancel.clone();
                 let (ds, nominal, settings) =
                     (sim.dataset.clone(), sim.nominal.clone(), settings.clone());
                 let worker = std::thread::spawn(move || {
-                    let r = calibrate(&ds, &nominal, &settings, &mut |_| {}, &flag);
-                    (std::time::Instant::now(), r.is_err())
+                    let r = Calibrator::new(&ds, &nominal)
+                        .settings(settings)
+                        .cancel(flag)
+                        .run()
+                        .expect("calibration");
+                    let cancelled = r
+                        .stages
+                        .last()
+                        .is_some_and(|s| s.termination == Termination::Cancelled);
+                    (std::time::Instant::now(), cancelled)
                 });
                 std::thread::sleep(std::time::Duration::from_millis(20));
                 let asked = std::time::Instant::now();

@@ -10,8 +10,9 @@
 //! collision" pairs: on a compact arm such as the YuMi, link i and link i+2 share a short offset
 //! link and overlap by design). [`CollisionWorld::excluded_pairs`] lists them.
 
-use crate::kinematics::{N_JOINTS, Side};
+use crate::kinematics::N_JOINTS;
 use crate::robot::{Kinematics, Owner, RobotDescription, ShapeKind};
+use crate::side::Side;
 use nalgebra::{Isometry3, UnitQuaternion, Vector3};
 use parry3d::math::{Pose, Vector};
 use parry3d::query;

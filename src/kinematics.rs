@@ -6,6 +6,7 @@
 //! Frame 0 is the arm's DH base frame, frame 7 the flange; the three reflectors `t_a, t_b, t_c` are
 //! constant points in frame 7.
 
+use crate::side::{PerSide, Side};
 use nalgebra::{Isometry3, SMatrix, SVector, Translation3, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 use std::f64::consts::FRAC_PI_2;
@@ -237,24 +238,17 @@ impl ArmModel {
 /// The geometric model of the whole dual-arm robot: both arms and the right-arm base in the left-arm base.
 #[derive(Clone, Debug, PartialEq)]
 pub struct DualArmModel {
-    pub left: ArmModel,
-    pub right: ArmModel,
+    pub arms: PerSide<ArmModel>,
     pub left_base_from_right_base: Isometry3<f64>,
 }
 
 impl DualArmModel {
     pub fn arm(&self, side: Side) -> &ArmModel {
-        match side {
-            Side::Left => &self.left,
-            Side::Right => &self.right,
-        }
+        &self.arms[side]
     }
 
     pub fn arm_mut(&mut self, side: Side) -> &mut ArmModel {
-        match side {
-            Side::Left => &mut self.left,
-            Side::Right => &mut self.right,
-        }
+        &mut self.arms[side]
     }
 
     /// Transform taking points of `side`'s base frame into the left-arm base frame.
@@ -263,31 +257,6 @@ impl DualArmModel {
             Side::Left => Isometry3::identity(),
             Side::Right => self.left_base_from_right_base,
         }
-    }
-}
-
-/// Which arm.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, PartialOrd, Ord)]
-#[serde(rename_all = "lowercase")]
-pub enum Side {
-    Left,
-    Right,
-}
-
-impl Side {
-    pub const BOTH: [Side; 2] = [Side::Left, Side::Right];
-
-    pub fn name(self) -> &'static str {
-        match self {
-            Side::Left => "left",
-            Side::Right => "right",
-        }
-    }
-}
-
-impl std::fmt::Display for Side {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
     }
 }
 

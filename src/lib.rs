@@ -5,6 +5,7 @@
 //! `gui` feature.
 #![forbid(unsafe_code)]
 
+pub mod analysis;
 #[cfg(feature = "gui")]
 pub mod app;
 pub mod atomic;
@@ -15,6 +16,7 @@ pub mod kinematics;
 pub mod metrics;
 pub mod params;
 pub mod robot;
+pub mod side;
 pub mod simulate;
 pub mod solver;
 pub mod urdf_export;

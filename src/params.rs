@@ -6,7 +6,11 @@
 //! [`ParamsFile::to_model`] validates it and converts to the in-memory [`DualArmModel`] in mm and rad.
 
 use crate::atomic::write_atomic;
+use crate::dataset::{Dataset, Split};
 use crate::kinematics::{ArmModel, DhRow, DualArmModel, N_JOINTS, N_PARAMS, param_name};
+use crate::metrics::AccuracyReport;
+use crate::side::{PerSide, Side};
+use crate::solver::CalibrationResult;
 use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
@@ -128,11 +132,8 @@ pub struct ArmParams {
     pub reflectors: ReflectorsEntry,
 }
 
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct ArmsParams {
-    pub left: ArmParams,
-    pub right: ArmParams,
-}
+/// Both arms, under the keys `left` and `right`.
+pub type ArmsParams = PerSide<ArmParams>;
 
 /// The right-arm DH base frame in the left-arm DH base frame (`left_base_from_right_base`): a point
 /// `p_right` maps to `rotation · p_right + translation`. `rotation` is row-major.
@@ -242,6 +243,10 @@ pub struct ParamsFile {
     /// Accuracy figures and the like (free form).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub statistics: Option<Value>,
+    /// `false` when the calibration that wrote the file did not converge (a stage hit the iteration
+    /// limit, was cancelled or stalled; `termination` says which); absent otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub converged: Option<bool>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub provenance: Option<Provenance>,
     /// Fields this version does not know; kept for round trips.
@@ -346,10 +351,7 @@ impl ParamsFile {
         ParamsFile {
             format: PARAMS_FORMAT.to_string(),
             units: ParamsUnits::default(),
-            arms: ArmsParams {
-                left: arm_params(&model.left),
-                right: arm_params(&model.right),
-            },
+            arms: model.arms.as_ref().map(|_, arm| arm_params(arm)),
             right_base_in_left: BaseTransform {
                 translation: [t.x, t.y, t.z],
                 rotation: [0, 1, 2].map(|i| [m[(i, 0)], m[(i, 1)], m[(i, 2)]]),
@@ -358,6 +360,7 @@ impl ParamsFile {
             fixed_parameters: None,
             termination: None,
             statistics: None,
+            converged: None,
             provenance: None,
             extra: Default::default(),
         }
@@ -397,8 +400,10 @@ impl ParamsFile {
                 ));
             }
         };
-        let left = arm_model("left", &self.arms.left, mm_per_unit, rad_per_unit)?;
-        let right = arm_model("right", &self.arms.right, mm_per_unit, rad_per_unit)?;
+        let arms = self
+            .arms
+            .as_ref()
+            .try_map(|side, arm| arm_model(side.name(), arm, mm_per_unit, rad_per_unit))?;
 
         let b = &self.right_base_in_left;
         finite("right_base_in_left.translation", &b.translation)?;
@@ -437,8 +442,7 @@ impl ParamsFile {
         }
 
         Ok(DualArmModel {
-            left,
-            right,
+            arms,
             left_base_from_right_base: Isometry3::from_parts(translation, rotation),
         })
     }
@@ -504,16 +508,114 @@ impl ParamsFile {
     }
 }
 
+/// The `method` record of a calibration's parameter file.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct MethodRecord {
+    pub name: String,
+    /// `Minimax` or `LeastSquares`.
+    pub objective: String,
+    /// `Exact` or `Paper`.
+    pub qp: String,
+    /// `Cal`, `Ver` or `All`: the configurations used for identification.
+    pub split: String,
+    pub max_iterations: usize,
+    pub step_tolerance: f64,
+    pub progress_tolerance: f64,
+}
+
+/// Conditioning of one arm's identification (`statistics.identifiability.<arm>`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ConditioningRecord {
+    /// Number of identified (free) parameters.
+    pub identified: usize,
+    /// Condition number of the scaled Jacobian with every parameter; `null` when infinite.
+    pub condition_before: Option<f64>,
+    /// ... with the fixed parameters removed; `null` when infinite.
+    pub condition_after: Option<f64>,
+}
+
+/// The `statistics` record of a calibration's parameter file.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct StatisticsRecord {
+    /// Accuracy of the calibrated model on the calibration configurations (`null` if there are too few).
+    pub cal: Option<AccuracyReport>,
+    /// ... on the verification configurations.
+    pub ver: Option<AccuracyReport>,
+    /// Per arm; `null` for an arm whose stage did not run.
+    pub identifiability: PerSide<Option<ConditioningRecord>>,
+    /// Allowed deviation of the reflector triangle's sides (constraint 14), mm.
+    pub reflector_side_tolerance_mm: PerSide<f64>,
+    pub elapsed_secs: f64,
+}
+
+/// `Some(v)` for a finite `v` (JSON has no infinity).
+fn finite_or_none(v: f64) -> Option<f64> {
+    v.is_finite().then_some(v)
+}
+
+/// A record as the file's free-form JSON value.
+fn record(value: &impl Serialize) -> Option<Value> {
+    serde_json::to_value(value).ok()
+}
+
+impl ParamsFile {
+    /// The file of a calibration: the calibrated model plus method, fixed parameters and why, per-stage
+    /// termination, accuracy on the cal and ver splits of `dataset`, conditioning and provenance, and
+    /// `converged: false` when the run did not converge. The command line and the workbench both
+    /// export this.
+    pub fn from_calibration(result: &CalibrationResult, dataset: &Dataset) -> ParamsFile {
+        let settings = &result.settings;
+        let mut file = ParamsFile::from_model(&result.calibrated);
+        file.method = record(&MethodRecord {
+            name: "two-step minimax calibration (paper Algorithms I and II)".into(),
+            objective: format!("{:?}", settings.method),
+            qp: format!("{:?}", settings.qp),
+            split: format!("{:?}", settings.split),
+            max_iterations: settings.max_iterations,
+            step_tolerance: settings.step_tolerance,
+            progress_tolerance: settings.progress_tolerance,
+        });
+        let fixed = |side: Side| -> Vec<FixedParameter> {
+            result.identifiability[side]
+                .iter()
+                .flat_map(|rep| {
+                    rep.fixed.iter().map(|f| FixedParameter {
+                        name: f.name.clone(),
+                        reason: f.reason.clone(),
+                    })
+                })
+                .collect()
+        };
+        file.fixed_parameters = Some(FixedParameters {
+            left: fixed(Side::Left),
+            right: fixed(Side::Right),
+        });
+        file.termination = record(&result.stages);
+        let accuracy = |split| crate::metrics::evaluate(dataset, &result.calibrated, split).ok();
+        file.statistics = record(&StatisticsRecord {
+            cal: accuracy(Split::Cal),
+            ver: accuracy(Split::Ver),
+            identifiability: result.identifiability.as_ref().map(|_, rep| {
+                rep.as_ref().map(|rep| ConditioningRecord {
+                    identified: rep.free.len(),
+                    condition_before: finite_or_none(rep.condition_before),
+                    condition_after: finite_or_none(rep.condition_after),
+                })
+            }),
+            reflector_side_tolerance_mm: result.side_tolerance_mm,
+            elapsed_secs: result.elapsed_secs,
+        });
+        file.converged = (!result.is_converged()).then_some(false);
+        file.provenance = Some(Provenance::now(Some(&dataset.dir)));
+        file
+    }
+}
+
 /// Read a parameter file into a model (mm, rad).
 pub fn read_model(path: &Path) -> Result<DualArmModel, ParamsError> {
     ParamsFile::read(path)?
         .to_model()
         .map_err(|e| e.in_file(path))
-}
-
-/// Same as [`read_model`] (kept for callers of the first skeleton).
-pub fn read(path: &Path) -> Result<DualArmModel, ParamsError> {
-    read_model(path)
 }
 
 /// Write a model as a parameter file without the optional fields.

@@ -13,10 +13,11 @@
 //! The XML is written by urdf-rs's writer (shortest round-trip float formatting, i.e. full
 //! precision); everything else in the URDF (geometry, meshes, limits, other links) is kept.
 
-use crate::kinematics::{DualArmModel, N_JOINTS, REFLECTOR_NAMES, Side};
+use crate::kinematics::{DualArmModel, N_JOINTS, REFLECTOR_NAMES};
 use crate::robot::{
     RobotDescription, RobotError, arm_link_name, flange_link_name, joint1_from_dh_base, side_suffix,
 };
+use crate::side::Side;
 use nalgebra::{Isometry3, Matrix3, Rotation3, Vector3};
 
 /// Radius of the sphere drawn for a reflector, m (a 0.5" SMR).

@@ -1,14 +1,15 @@
-//! Issue 3's acceptance on the paper-size simulation (§4.1: 120 calibration + 100 verification
+//! The solver's acceptance on the paper-size simulation (§4.1: 120 calibration + 100 verification
 //! configurations per arm, geometric errors only): the calibrated model's verification accuracy is within
 //! 10% of what the true parameters give (the measurement-noise floor), for the default QP; and the paper's
 //! subgradient QP reaches the same optimum (ψ within 1%).
 
-use dualcal::cli::{sim_options, simulate_with_robot};
-use dualcal::dataset::SplitSelect;
+mod common;
+
+use dualcal::dataset::Split;
 use dualcal::metrics::{AccuracyReport, AccuracyStats, evaluate};
 use dualcal::robot::RobotDescription;
-use dualcal::solver::{CalibrationResult, CalibrationSettings, QpMethod, calibrate};
-use std::sync::atomic::AtomicBool;
+use dualcal::simulate::{paper_options, simulate_with_robot};
+use dualcal::solver::{CalibrationResult, CalibrationSettings, QpMethod};
 
 fn run(
     ds: &dualcal::dataset::Dataset,
@@ -20,7 +21,7 @@ fn run(
         max_iterations: 400,
         ..CalibrationSettings::default()
     };
-    calibrate(ds, nominal, &settings, &mut |_| {}, &AtomicBool::new(false)).expect("calibration")
+    common::calibrate(ds, nominal, &settings)
 }
 
 fn stats(r: &AccuracyReport) -> [(&'static str, &AccuracyStats); 3] {
@@ -35,11 +36,11 @@ fn stats(r: &AccuracyReport) -> [(&'static str, &AccuracyStats); 3] {
 fn paper_size_simulation_reaches_the_noise_floor() {
     let robot = RobotDescription::builtin_irb14000();
     for seed in [1u64, 2] {
-        let sim = simulate_with_robot(&sim_options(seed, 220, 120), &robot).expect("simulation");
-        let truth = evaluate(&sim.dataset, &sim.truth, SplitSelect::Ver).unwrap();
-        let nominal = evaluate(&sim.dataset, &sim.nominal, SplitSelect::Ver).unwrap();
+        let sim = simulate_with_robot(&paper_options(seed, 220, 120), &robot).expect("simulation");
+        let truth = evaluate(&sim.dataset, &sim.truth, Split::Ver).unwrap();
+        let nominal = evaluate(&sim.dataset, &sim.nominal, Split::Ver).unwrap();
         let exact = run(&sim.dataset, &sim.nominal, QpMethod::Exact);
-        let cal = evaluate(&sim.dataset, &exact.calibrated, SplitSelect::Ver).unwrap();
+        let cal = evaluate(&sim.dataset, &exact.calibrated, Split::Ver).unwrap();
         for ((name, t), ((_, c), (_, n))) in stats(&truth)
             .into_iter()
             .zip(stats(&cal).into_iter().zip(stats(&nominal)))

@@ -117,9 +117,9 @@ fn assert_names(err: &DatasetError, parts: &[&str]) {
 fn valid_dataset_loads_and_converts_units() {
     let f = Fixture::valid();
     let d = f.load().unwrap();
-    assert_eq!(d.left.measurements.len(), 6);
-    assert_eq!(d.right.measurements.len(), 5);
-    let m = &d.left.measurements[0];
+    assert_eq!(d.arms.left.measurements.len(), 6);
+    assert_eq!(d.arms.right.measurements.len(), 5);
+    let m = &d.arms.left.measurements[0];
     assert_eq!(m.line, 4);
     assert_eq!(m.id, "c0");
     // Recompute the first row from the CSV text independently.
@@ -137,7 +137,7 @@ fn valid_dataset_loads_and_converts_units() {
         assert!((q_rad - q_deg * std::f64::consts::PI / 180.0).abs() < 1e-15);
     }
     assert_eq!(m.tracker_points_mm[1].y, row[7 + 4]);
-    assert_eq!(d.left.measurements[2].split, Split::Ver);
+    assert_eq!(d.arms.left.measurements[2].split, Split::Ver);
     assert_eq!(d.tracker.mpe_um, 16.0);
     assert_eq!(d.nominal_reflectors_mm[2].z, 40.0);
     assert_eq!(d.robot, None);
@@ -161,8 +161,8 @@ fn metres_are_converted_to_mm_and_manifest_path_is_accepted() {
         .take(16)
         .map(|s| s.parse().unwrap())
         .collect();
-    assert_eq!(d.left.measurements[0].q_rad[0], row[0]);
-    assert!((d.left.measurements[0].tracker_points_mm[0].x - row[7] * 1000.0).abs() < 1e-9);
+    assert_eq!(d.arms.left.measurements[0].q_rad[0], row[0]);
+    assert!((d.arms.left.measurements[0].tracker_points_mm[0].x - row[7] * 1000.0).abs() < 1e-9);
 }
 
 #[test]
@@ -170,8 +170,8 @@ fn byte_order_mark_and_crlf_are_accepted() {
     let left = format!("\u{feff}{}", csv_text(6, 1).replace('\n', "\r\n"));
     let f = Fixture::new(&format!("\u{feff}{MANIFEST}"), &left, &csv_text(5, 2));
     let d = f.load().unwrap();
-    assert_eq!(d.left.measurements.len(), 6);
-    assert_eq!(d.left.measurements[5].line, 9);
+    assert_eq!(d.arms.left.measurements.len(), 6);
+    assert_eq!(d.arms.left.measurements[5].line, 9);
 }
 
 #[test]
@@ -198,7 +198,13 @@ fn split_column_is_optional_and_defaults_to_cal() {
         .collect::<Vec<_>>()
         .join("\n");
     let d = Fixture::with_left(&text).load().unwrap();
-    assert!(d.left.measurements.iter().all(|m| m.split == Split::Cal));
+    assert!(
+        d.arms
+            .left
+            .measurements
+            .iter()
+            .all(|m| m.split == Split::Cal)
+    );
 }
 
 // ---------------------------------------------------------------------------------------------------

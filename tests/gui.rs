@@ -79,7 +79,10 @@ fn calibrate_shows_calibrated_figures() {
         );
         // The calibrated relative figures on the verification split are shown with 3 decimals; they
         // must be among the labels.
-        let ver = calibrated.analysis.reports[1]
+        let ver = calibrated
+            .analysis
+            .ver
+            .report
             .as_ref()
             .expect("verification report");
         let rms = format!("{:.3}", ver.relative_left.pos_rms_mm);
@@ -87,7 +90,7 @@ fn calibrate_shows_calibrated_figures() {
             harness.query_all_by_label(&rms).count() >= 1,
             "{rms} mm not shown"
         );
-        let worst = |a: &dualcal::app::session::Analysis| {
+        let worst = |a: &dualcal::analysis::Analysis| {
             a.configs
                 .iter()
                 .map(|r| r.worst_pos_mm)
@@ -227,7 +230,7 @@ fn selecting_in_the_table_and_in_the_viewport() {
         .nominal
         .configs
         .iter()
-        .find(|r| r.side == side && r.index == index)
+        .find(|r| r.config.side == side && r.config.index == index)
         .unwrap();
     assert_eq!(row.worst_pos_mm, worst);
     let side_index = dualcal::app::viewport::scene::side_index(side);
@@ -240,8 +243,8 @@ fn selecting_in_the_table_and_in_the_viewport() {
         dualcal::app::table::TableState::default(),
     );
     let other = &session.nominal.configs[order[1]];
-    assert_ne!((other.side, other.index), (side, index));
-    let (other_id, other_sel) = (other.id.clone(), (other.side, other.index));
+    assert_ne!((other.config.side, other.config.index), (side, index));
+    let (other_id, other_sel) = (other.id.clone(), (other.config.side, other.config.index));
     harness.get_by_label(&other_id).click();
     harness.step();
     assert_eq!(harness.state().selection(), Some(other_sel));
@@ -258,11 +261,14 @@ fn selecting_in_the_table_and_in_the_viewport() {
             .nominal
             .configs
             .iter()
-            .find(|r| (r.side, r.index) != other_sel)
+            .find(|r| (r.config.side, r.config.index) != other_sel)
             .unwrap();
         let anchor = dualcal::app::viewport::scene::pick_anchor(row);
         let [x, y] = camera.project(&anchor, 1400.0, 900.0).unwrap();
-        ((row.side, row.index), eframe::egui::pos2(x, y))
+        (
+            (row.config.side, row.config.index),
+            eframe::egui::pos2(x, y),
+        )
     };
     click_at(&mut harness, at);
     let picked = harness
@@ -278,7 +284,7 @@ fn selecting_in_the_table_and_in_the_viewport() {
         .nominal
         .configs
         .iter()
-        .find(|r| (r.side, r.index) == picked)
+        .find(|r| (r.config.side, r.config.index) == picked)
         .unwrap();
     let [x, y] = camera
         .project(
@@ -421,8 +427,8 @@ fn dropping_a_dataset_opens_it() {
     let app = harness.state();
     assert!(app.errors().is_empty(), "{:?}", app.errors());
     let session = app.session().unwrap();
-    assert_eq!(session.dataset.left.measurements.len(), 10);
-    assert_eq!(session.dataset.right.measurements.len(), 10);
+    assert_eq!(session.dataset.arms.left.measurements.len(), 10);
+    assert_eq!(session.dataset.arms.right.measurements.len(), 10);
     harness.get_by_label_contains("10 left + 10 right configurations");
 }
 
@@ -468,7 +474,7 @@ fn the_compiled_in_example_unpacks_to_the_same_dataset() {
     let source = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/datasets/example");
     let a = dualcal::dataset::load(&source).expect("source example");
     let b = dualcal::dataset::load(&unpacked).expect("unpacked example");
-    for (x, y) in [(&a.left, &b.left), (&a.right, &b.right)] {
+    for (x, y) in [(&a.arms.left, &b.arms.left), (&a.arms.right, &b.arms.right)] {
         assert_eq!(x.measurements, y.measurements);
     }
     assert_eq!(a.nominal_reflectors_mm, b.nominal_reflectors_mm);

@@ -5,11 +5,13 @@
 //! the tests FAIL with a message saying so: the cross-check is part of the acceptance criteria and must not
 //! pass silently.
 
-use dualcal::dataset::{ArmData, Dataset, Measurement, Split, SplitSelect, TrackerSpec};
+use dualcal::dataset::{ArmData, Dataset, Measurement, Split, TrackerSpec};
 use dualcal::kinematics::{
-    ArmModel, DualArmModel, N_JOINTS, N_PARAMS, Side, joint_limits_rad, param_is_angle,
+    ArmModel, DualArmModel, N_JOINTS, N_PARAMS, joint_limits_rad, param_is_angle,
 };
 use dualcal::metrics::{AccuracyReport, AccuracyStats, evaluate};
+use dualcal::side::PerSide;
+use dualcal::side::Side;
 use nalgebra::{Isometry3, Matrix3, Translation3, UnitQuaternion, Vector3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -25,7 +27,7 @@ fn nominal_reflectors() -> [Vector3<f64>; 3] {
     ]
 }
 
-/// The right-arm base in the left-arm base quoted in issue 2, made exactly orthonormal.
+/// The right-arm base in the left-arm base of the public YuMi body layout, made exactly orthonormal.
 fn nominal_base() -> Isometry3<f64> {
     #[rustfmt::skip]
     let r = Matrix3::new(
@@ -41,8 +43,10 @@ fn nominal_base() -> Isometry3<f64> {
 
 fn nominal_model() -> DualArmModel {
     DualArmModel {
-        left: ArmModel::nominal_irb14000(nominal_reflectors()),
-        right: ArmModel::nominal_irb14000(nominal_reflectors()),
+        arms: PerSide::new(
+            ArmModel::nominal_irb14000(nominal_reflectors()),
+            ArmModel::nominal_irb14000(nominal_reflectors()),
+        ),
         left_base_from_right_base: nominal_base(),
     }
 }
@@ -64,8 +68,10 @@ fn perturb(rng: &mut ChaCha8Rng, m: &DualArmModel, size: f64) -> DualArmModel {
     let dt = Vector3::from_fn(|_, _| rng.random_range(-1.0..1.0)) * size;
     let dr = Vector3::from_fn(|_, _| rng.random_range(-0.003..0.003)) * size;
     DualArmModel {
-        left: perturb_arm(rng, &m.left, size),
-        right: perturb_arm(rng, &m.right, size),
+        arms: PerSide::new(
+            perturb_arm(rng, &m.arms.left, size),
+            perturb_arm(rng, &m.arms.right, size),
+        ),
         left_base_from_right_base: Isometry3::from_parts(
             Translation3::from(dt),
             UnitQuaternion::from_scaled_axis(dr),
@@ -124,8 +130,7 @@ fn simulate(truth: &DualArmModel, n: [usize; 2], noise_mm: f64, seed: u64) -> Da
         robot: None,
         tracker: TrackerSpec::default(),
         nominal_reflectors_mm: nominal_reflectors(),
-        left,
-        right,
+        arms: PerSide::new(left, right),
     }
 }
 
@@ -177,7 +182,7 @@ fn write_dataset(dir: &Path, ds: &Dataset, units: Units) {
         v(&r[2])
     );
     std::fs::write(dir.join("dataset.toml"), toml).unwrap();
-    for arm in [&ds.left, &ds.right] {
+    for arm in [&ds.arms.left, &ds.arms.right] {
         let mut csv = String::from("# simulated for the metrics cross-check\n");
         csv.push_str("id,q1,q2,q3,q4,q5,q6,q7,ax,ay,az,bx,by,bz,cx,cy,cz,split\n");
         for m in &arm.measurements {
@@ -193,6 +198,7 @@ fn write_dataset(dir: &Path, ds: &Dataset, units: Units) {
             csv.push_str(match m.split {
                 Split::Cal => ",cal\n",
                 Split::Ver => ",ver\n",
+                Split::All => unreachable!("a measurement is cal or ver"),
             });
         }
         std::fs::write(dir.join(format!("{}.csv", arm.side.name())), csv).unwrap();
@@ -227,7 +233,7 @@ fn write_params(path: &Path, model: &DualArmModel, units: Units) {
     let doc = serde_json::json!({
         "format": "dualcal-params/1",
         "units": {"length": lu, "angle": au},
-        "arms": {"left": arm(&model.left), "right": arm(&model.right)},
+        "arms": {"left": arm(&model.arms.left), "right": arm(&model.arms.right)},
         "right_base_in_left": {
             "translation": [units.length(tr.x), units.length(tr.y), units.length(tr.z)],
             "rotation": rot
@@ -402,7 +408,7 @@ fn loaded_dataset_agrees_with_reference() {
         let loaded = dualcal::dataset::load(c.dir.path()).expect("load the written dataset");
         for (name, model) in models(&c, seed + 10) {
             let args = params_args(&c, name, &model, units);
-            for (split, sel) in [("all", SplitSelect::All), ("cal", SplitSelect::Cal)] {
+            for (split, sel) in [("all", Split::All), ("cal", Split::Cal)] {
                 let rust = evaluate(&loaded, &model, sel).unwrap();
                 let reference = reference(c.dir.path(), &args, split);
                 assert_nontrivial(&rust);
@@ -425,7 +431,7 @@ fn in_memory_dataset_agrees_with_reference() {
         let mut freq_seen = false;
         for (name, model) in models(&c, seed + 10) {
             let args = params_args(&c, name, &model, units);
-            for (split, sel) in [("all", SplitSelect::All), ("ver", SplitSelect::Ver)] {
+            for (split, sel) in [("all", Split::All), ("ver", Split::Ver)] {
                 let rust = evaluate(&c.dataset, &model, sel).unwrap();
                 let reference = reference(c.dir.path(), &args, split);
                 assert_nontrivial(&rust);
@@ -463,7 +469,7 @@ fn nominal_mode_agrees_with_reference() {
             args.push(r.matrix()[(i, j)].to_string());
         }
     }
-    let rust = evaluate(&c.dataset, &model, SplitSelect::All).unwrap();
+    let rust = evaluate(&c.dataset, &model, Split::All).unwrap();
     let reference = reference(c.dir.path(), &args, "all");
     assert_nontrivial(&rust);
     assert_agree(&rust, &reference, "nominal");
@@ -475,9 +481,9 @@ fn comparison_detects_a_different_model() {
     let c = case(6, [10, 10], Units::MmDeg);
     let model = nominal_model();
     let mut other = model.clone();
-    other.left.dh[1].a_mm += 2.0;
+    other.arms.left.dh[1].a_mm += 2.0;
     let args = params_args(&c, "other", &other, Units::MmDeg);
-    let rust = evaluate(&c.dataset, &model, SplitSelect::All).unwrap();
+    let rust = evaluate(&c.dataset, &model, Split::All).unwrap();
     let reference = reference(c.dir.path(), &args, "all");
     let result = std::panic::catch_unwind(|| assert_agree(&rust, &reference, "different"));
     assert!(result.is_err(), "a 2 mm change of a2 went unnoticed");

@@ -2,6 +2,7 @@
 
 use dualcal::kinematics::{ArmModel, DualArmModel, IRB14000_NOMINAL_DH, N_PARAMS, ParamVector};
 use dualcal::params::{self, FixedParameter, FixedParameters, ParamsError, ParamsFile, Provenance};
+use dualcal::side::PerSide;
 use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion, Vector3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -25,16 +26,15 @@ fn random_model(seed: u64) -> DualArmModel {
     let rotation = UnitQuaternion::from_scaled_axis(axis * 4.0);
     let translation = Translation3::new(61.61, -70.77, -34.14);
     DualArmModel {
-        left,
-        right,
+        arms: PerSide::new(left, right),
         left_base_from_right_base: Isometry3::from_parts(translation, rotation),
     }
 }
 
 fn max_model_diff(a: &DualArmModel, b: &DualArmModel) -> (f64, f64, f64) {
-    let arms = (a.left.to_vector() - b.left.to_vector())
+    let arms = (a.arms.left.to_vector() - b.arms.left.to_vector())
         .amax()
-        .max((a.right.to_vector() - b.right.to_vector()).amax());
+        .max((a.arms.right.to_vector() - b.arms.right.to_vector()).amax());
     let ra = a.left_base_from_right_base.rotation.to_rotation_matrix();
     let rb = b.left_base_from_right_base.rotation.to_rotation_matrix();
     let rot = (ra.matrix() - rb.matrix()).amax();
@@ -335,7 +335,7 @@ fn unknown_fixed_parameter_name_is_refused() {
 fn non_finite_values_are_never_written() {
     let dir = tempfile::tempdir().unwrap();
     let mut model = random_model(11);
-    model.right.dh[4].theta_rad = f64::NAN;
+    model.arms.right.dh[4].theta_rad = f64::NAN;
     let p = dir.path().join("bad.json");
     let e = params::write_model(&model, &p).unwrap_err();
     assert!(
@@ -348,13 +348,15 @@ fn non_finite_values_are_never_written() {
 #[test]
 fn nominal_irb14000_table_survives() {
     let model = DualArmModel {
-        left: ArmModel::nominal_irb14000([Vector3::zeros(); 3]),
-        right: ArmModel::nominal_irb14000([Vector3::zeros(); 3]),
+        arms: PerSide::new(
+            ArmModel::nominal_irb14000([Vector3::zeros(); 3]),
+            ArmModel::nominal_irb14000([Vector3::zeros(); 3]),
+        ),
         left_base_from_right_base: Isometry3::from_parts(
             Translation3::new(1.0, 2.0, 3.0),
             UnitQuaternion::from_rotation_matrix(&Rotation3::from_euler_angles(0.1, 0.2, 0.3)),
         ),
     };
     let back = ParamsFile::from_model(&model).to_model().unwrap();
-    assert_eq!(back.left.dh, IRB14000_NOMINAL_DH);
+    assert_eq!(back.arms.left.dh, IRB14000_NOMINAL_DH);
 }

@@ -1,17 +1,17 @@
 //! The two-step minimax calibration on synthetic data built here from the kinematics alone.
 
-use dualcal::dataset::{ArmData, Dataset, Measurement, Split, SplitSelect, TrackerSpec};
-use dualcal::kinematics::{
-    ArmModel, DualArmModel, N_PARAMS, Side, joint_limits_rad, param_is_angle,
-};
+use dualcal::dataset::{ArmData, Dataset, Measurement, Split, TrackerSpec};
+use dualcal::kinematics::{ArmModel, DualArmModel, N_PARAMS, joint_limits_rad, param_is_angle};
+use dualcal::side::{PerSide, Side};
 use dualcal::solver::{
-    CalibrationError, CalibrationEvent, CalibrationSettings, Method, QpMethod, Stage, Termination,
-    calibrate,
+    CalibrationError, CalibrationEvent, CalibrationSettings, Calibrator, Method, QpMethod, Stage,
+    Termination,
 };
 use nalgebra::{Isometry3, Vector3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
+use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 fn reflectors() -> [Vector3<f64>; 3] {
@@ -24,8 +24,10 @@ fn reflectors() -> [Vector3<f64>; 3] {
 
 fn nominal() -> DualArmModel {
     DualArmModel {
-        left: ArmModel::nominal_irb14000(reflectors()),
-        right: ArmModel::nominal_irb14000(reflectors()),
+        arms: PerSide::new(
+            ArmModel::nominal_irb14000(reflectors()),
+            ArmModel::nominal_irb14000(reflectors()),
+        ),
         left_base_from_right_base: Isometry3::new(
             Vector3::new(61.61, -70.77, -34.14),
             Vector3::new(1.2, 0.0, 1.3),
@@ -51,8 +53,10 @@ fn synthetic(seed: u64, n: usize, n_cal: usize, noise_mm: f64) -> Synthetic {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let nom = nominal();
     let truth = DualArmModel {
-        left: perturb(&mut rng, &nom.left, 1.0, 0.005),
-        right: perturb(&mut rng, &nom.right, 1.0, 0.005),
+        arms: PerSide::new(
+            perturb(&mut rng, &nom.arms.left, 1.0, 0.005),
+            perturb(&mut rng, &nom.arms.right, 1.0, 0.005),
+        ),
         left_base_from_right_base: Isometry3::new(
             Vector3::new(2.0, -1.5, 1.0),
             Vector3::new(0.01, -0.02, 0.015),
@@ -108,8 +112,7 @@ fn synthetic(seed: u64, n: usize, n_cal: usize, noise_mm: f64) -> Synthetic {
             robot: None,
             tracker: TrackerSpec::default(),
             nominal_reflectors_mm: reflectors(),
-            left,
-            right,
+            arms: PerSide::new(left, right),
         },
         truth,
     }
@@ -119,8 +122,9 @@ fn run(
     ds: &Dataset,
     settings: &CalibrationSettings,
 ) -> Result<dualcal::solver::CalibrationResult, CalibrationError> {
-    let cancel = AtomicBool::new(false);
-    calibrate(ds, &nominal(), settings, &mut |_| {}, &cancel)
+    Calibrator::new(ds, &nominal())
+        .settings(settings.clone())
+        .run()
 }
 
 /// Max over reflectors and pairs of |model distance − true distance| on fresh configurations, for the
@@ -198,7 +202,8 @@ fn recovers_known_perturbations_from_noise_free_data() {
 fn identifiability_names_joint1_d_theta_and_joint7() {
     let syn = synthetic(2, 30, 30, 0.0);
     let res = run(&syn.dataset, &CalibrationSettings::default()).expect("calibration");
-    for (side, rep) in &res.identifiability {
+    for (side, rep) in res.identifiability.iter() {
+        let rep = rep.as_ref().expect("every arm stage ran");
         let names: Vec<&str> = rep.fixed.iter().map(|f| f.name.as_str()).collect();
         for want in ["d1", "theta1", "a7", "d7", "theta7", "alpha7"] {
             assert!(
@@ -261,49 +266,56 @@ fn least_squares_baseline_runs() {
 #[test]
 fn events_arrive_in_order_and_cancel_stops_the_run() {
     let syn = synthetic(5, 40, 40, 0.01);
-    let cancel = AtomicBool::new(false);
     let mut stages = Vec::new();
     let mut iterations = 0;
-    let res = calibrate(
-        &syn.dataset,
-        &nominal(),
-        &CalibrationSettings::default(),
-        &mut |e| match e {
-            CalibrationEvent::StageStarted { stage, .. } => stages.push(*stage),
-            CalibrationEvent::Iteration(r) => {
-                iterations += 1;
-                assert!(r.psi_mm2.is_finite() && r.step_norm.is_finite());
-            }
-            CalibrationEvent::StageFinished { .. } => {}
-        },
-        &cancel,
-    );
-    assert!(res.is_ok());
+    let nominal = nominal();
+    let mut observer = |e: &CalibrationEvent| match e {
+        CalibrationEvent::StageStarted { stage, .. } => stages.push(*stage),
+        CalibrationEvent::Iteration(r) => {
+            iterations += 1;
+            assert!(r.psi_mm2.is_finite() && r.step_norm.is_finite());
+        }
+        CalibrationEvent::StageFinished { .. } => {}
+    };
+    let res = Calibrator::new(&syn.dataset, &nominal)
+        .observer(&mut observer)
+        .run();
+    assert!(res.is_ok_and(|r| r.is_converged()));
     assert_eq!(
         stages,
         vec![Stage::Arm(Side::Left), Stage::Arm(Side::Right), Stage::Base]
     );
     assert!(iterations >= 3);
 
-    // Cancel after the second iteration: the run ends with Cancelled, no result.
-    let cancel = AtomicBool::new(false);
+    // Cancel after the second iteration: the run ends with the left arm's stage cancelled after two
+    // iterations, the model it reached and no further stages.
+    let cancel = Arc::new(AtomicBool::new(false));
     let mut seen = 0;
-    let res = calibrate(
-        &syn.dataset,
-        &nominal(),
-        &CalibrationSettings::default(),
-        &mut |e| {
-            if matches!(e, CalibrationEvent::Iteration(_)) {
-                seen += 1;
-                if seen == 2 {
-                    cancel.store(true, Ordering::Relaxed);
-                }
+    let flag = cancel.clone();
+    let mut observer = |e: &CalibrationEvent| {
+        if matches!(e, CalibrationEvent::Iteration(_)) {
+            seen += 1;
+            if seen == 2 {
+                flag.store(true, Ordering::Relaxed);
             }
-        },
-        &cancel,
-    );
-    assert!(matches!(res, Err(CalibrationError::Cancelled)), "{res:?}");
+        }
+    };
+    let res = Calibrator::new(&syn.dataset, &nominal)
+        .observer(&mut observer)
+        .cancel(cancel)
+        .run()
+        .expect("a cancelled run returns its result");
     assert_eq!(seen, 2);
+    assert!(!res.is_converged());
+    assert_eq!(res.stages.len(), 1, "{:?}", res.stages);
+    assert_eq!(res.stages[0].termination, Termination::Cancelled);
+    assert_eq!(res.stages[0].iterations, 2);
+    assert_eq!(res.history.len(), 2);
+    assert_ne!(
+        res.calibrated.arms.left, nominal.arms.left,
+        "the model reached is kept"
+    );
+    assert_eq!(res.calibrated.arms.right, nominal.arms.right);
 }
 
 #[test]
@@ -326,29 +338,36 @@ fn error_paths() {
 
     // Non-finite measurements.
     let mut syn = synthetic(7, 10, 10, 0.0);
-    syn.dataset.right.measurements[3].tracker_points_mm[1].x = f64::NAN;
+    syn.dataset.arms.right.measurements[3].tracker_points_mm[1].x = f64::NAN;
     let err = run(&syn.dataset, &CalibrationSettings::default()).unwrap_err();
     assert!(matches!(err, CalibrationError::NonFinite { .. }), "{err}");
 
-    // Not converged within the iteration limit.
+    // Not converged within the iteration limit: a result, not an error, whose stages say so.
     let syn = synthetic(8, 20, 20, 0.01);
-    let err = run(
+    let res = run(
         &syn.dataset,
         &CalibrationSettings {
             max_iterations: 1,
             ..Default::default()
         },
     )
-    .unwrap_err();
-    assert!(
-        matches!(err, CalibrationError::NotConverged { iterations: 1, .. }),
-        "{err}"
-    );
+    .expect("an iteration limit is not an error");
+    assert!(!res.is_converged());
+    assert_eq!(res.stages.len(), 3);
+    for s in &res.stages {
+        assert_eq!(
+            (s.iterations, s.termination),
+            (1, Termination::MaxIterations),
+            "{s:?}"
+        );
+    }
+    assert_eq!(res.history.len(), 3);
+    assert_eq!(res.warnings().len(), 3);
 
     // Rank deficient: every configuration identical.
     let mut syn = synthetic(9, 10, 10, 0.0);
-    let first = syn.dataset.left.measurements[0].clone();
-    for m in &mut syn.dataset.left.measurements {
+    let first = syn.dataset.arms.left.measurements[0].clone();
+    for m in &mut syn.dataset.arms.left.measurements {
         m.q_rad = first.q_rad;
         m.tracker_points_mm = first.tracker_points_mm;
     }
@@ -366,6 +385,7 @@ fn verification_split_is_not_used_for_identification() {
     // Corrupting verification data must not change the calibration on the cal split.
     for m in syn
         .dataset
+        .arms
         .left
         .measurements
         .iter_mut()
@@ -376,7 +396,7 @@ fn verification_split_is_not_used_for_identification() {
     let b = run(
         &syn.dataset,
         &CalibrationSettings {
-            split: SplitSelect::Cal,
+            split: Split::Cal,
             ..Default::default()
         },
     )
@@ -399,14 +419,23 @@ fn cancel_interrupts_a_long_paper_qp_solve() {
             max_qp_iterations: usize::MAX,
             ..Default::default()
         };
-        let res = calibrate(&syn.dataset, &nominal(), &settings, &mut |_| {}, &flag);
-        tx.send(res.map(|_| ())).ok();
+        let res = Calibrator::new(&syn.dataset, &nominal())
+            .settings(settings)
+            .cancel(flag)
+            .run();
+        tx.send(res).ok();
     });
     std::thread::sleep(std::time::Duration::from_millis(200));
     cancel.store(true, Ordering::Relaxed);
     let res = rx
         .recv_timeout(std::time::Duration::from_secs(120))
         .expect("the run did not stop");
-    assert!(matches!(res, Err(CalibrationError::Cancelled)), "{res:?}");
+    let res = res.expect("a cancelled run returns its result");
+    assert_eq!(
+        res.stages.last().map(|s| s.termination),
+        Some(Termination::Cancelled),
+        "{:?}",
+        res.stages
+    );
     worker.join().unwrap();
 }

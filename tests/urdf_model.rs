@@ -3,12 +3,14 @@
 
 use dualcal::collision::CollisionWorld;
 use dualcal::kinematics::{
-    ArmModel, DualArmModel, N_JOINTS, N_PARAMS, Side, joint_limits_rad, param_is_angle,
+    ArmModel, DualArmModel, N_JOINTS, N_PARAMS, joint_limits_rad, param_is_angle,
     rotation_angle_rad,
 };
 use dualcal::robot::{
     BUILTIN_IRB14000_URDF, GeometryKind, PackageMap, RobotDescription, RobotError, ShapeKind,
 };
+use dualcal::side::PerSide;
+use dualcal::side::Side;
 use dualcal::urdf_export::calibrated_urdf;
 use nalgebra::{Isometry3, Matrix3, Translation3, UnitQuaternion, Vector3};
 use rand::{Rng, SeedableRng};
@@ -129,7 +131,7 @@ fn derived_base_transform_matches_the_public_layout() {
     // And the nominal model carries it.
     let model = robot.nominal_model(reflectors());
     assert_eq!(model.left_base_from_right_base, b);
-    assert_eq!(model.left.reflectors_mm, reflectors());
+    assert_eq!(model.arms.left.reflectors_mm, reflectors());
 }
 
 #[test]
@@ -177,8 +179,10 @@ fn perturbed_model(robot: &RobotDescription, rng: &mut ChaCha8Rng) -> DualArmMod
         )),
     );
     DualArmModel {
-        left: perturb(&nominal.left, rng),
-        right: perturb(&nominal.right, rng),
+        arms: PerSide::new(
+            perturb(&nominal.arms.left, rng),
+            perturb(&nominal.arms.right, rng),
+        ),
         left_base_from_right_base: nominal.left_base_from_right_base * db,
     }
 }
@@ -280,7 +284,7 @@ fn dh_model_reads_the_urdf_back() {
     let back = RobotDescription::from_str(&calibrated_urdf(&robot, &model).unwrap(), None).unwrap();
     assert_models_close(&back.dh_model(reflectors()).unwrap(), &model, 1e-9);
     // ... which differs from the nominal one (the comparison can fail).
-    let (va, vb) = (model.left.to_vector(), nominal.left.to_vector());
+    let (va, vb) = (model.arms.left.to_vector(), nominal.arms.left.to_vector());
     assert!((va - vb).abs().max() > 1e-3);
 
     // A joint origin with a y offset has no DH reading.
@@ -300,7 +304,7 @@ fn dh_model_reads_the_urdf_back() {
 fn calibrated_urdf_refuses_non_finite_parameters() {
     let robot = RobotDescription::builtin_irb14000();
     let mut model = robot.nominal_model(reflectors());
-    model.right.dh[3].a_mm = f64::NAN;
+    model.arms.right.dh[3].a_mm = f64::NAN;
     let err = calibrated_urdf(&robot, &model).unwrap_err();
     assert!(matches!(err, RobotError::Export { .. }), "{err}");
 }

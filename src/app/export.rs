@@ -50,7 +50,7 @@ pub fn export_csv(session: &Session) -> anyhow::Result<Vec<u8>> {
         let e = row.point_errors_mm();
         w.write_record([
             row.id.clone(),
-            row.side.name().to_string(),
+            row.config.side.name().to_string(),
             if row.split == Split::Cal {
                 "cal"
             } else {
@@ -70,7 +70,7 @@ pub fn export_csv(session: &Session) -> anyhow::Result<Vec<u8>> {
 
 /// The calibrated model as a `dualcal-params/1` file (the same file `dualcal calibrate --out` writes).
 pub fn export_params(session: &Session, cal: &session::Calibrated) -> anyhow::Result<Vec<u8>> {
-    let file = cal.result.params_file(&session.dataset);
+    let file = crate::params::ParamsFile::from_calibration(&cal.result, &session.dataset);
     let mut text = serde_json::to_vec_pretty(&file)?;
     text.push(b'\n');
     Ok(text)
@@ -85,23 +85,19 @@ pub fn export_urdf(session: &Session, cal: &session::Calibrated) -> anyhow::Resu
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::app::session::{Analysis, Calibrated};
-    use crate::kinematics::Side;
-    use crate::solver::{self, CalibrationSettings};
+    use crate::analysis::Analysis;
+    use crate::app::session::Calibrated;
+    use crate::side::Side;
+    use crate::solver::Calibrator;
     use std::path::Path;
-    use std::sync::atomic::AtomicBool;
 
     fn calibrated_example() -> (Session, Calibrated) {
         let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/datasets/example");
         let session = Session::load(&dir, None).unwrap();
-        let result = solver::calibrate(
-            &session.dataset,
-            &session.nominal.model,
-            &CalibrationSettings::default(),
-            &mut |_| {},
-            &AtomicBool::new(false),
-        )
-        .unwrap();
+        let result = Calibrator::new(&session.dataset, &session.nominal.model)
+            .run()
+            .unwrap();
+        assert!(result.is_converged());
         let analysis = Analysis::compute(
             &session.dataset,
             &result.calibrated,
@@ -148,7 +144,8 @@ mod tests {
         assert!(max_dh_difference(&back, &cal.result.calibrated) < 1e-6);
 
         let csv = String::from_utf8(export_csv(&session).unwrap()).unwrap();
-        let n = session.dataset.left.measurements.len() + session.dataset.right.measurements.len();
+        let n = session.dataset.arms.left.measurements.len()
+            + session.dataset.arms.right.measurements.len();
         assert_eq!(csv.lines().count(), n + 1);
         assert!(csv.starts_with("id,arm,split,worst_pos_mm"));
     }

@@ -10,14 +10,14 @@ pub mod export;
 pub mod files;
 mod panels;
 pub mod plots;
-pub mod registration;
 pub mod session;
 pub mod table;
 pub mod viewport;
 pub mod worker;
 
-use crate::dataset::{Split, SplitSelect};
-use crate::kinematics::Side;
+use crate::analysis::Indicator;
+use crate::dataset::Split;
+use crate::side::Side;
 use crate::solver::{
     CalibrationEvent, CalibrationSettings, IterationRecord, Method, QpMethod, Stage,
 };
@@ -25,7 +25,7 @@ use anyhow::Context as _;
 use eframe::egui::{self, Color32, RichText};
 use export::{Export, encode_png, export_csv, export_params, export_urdf};
 use files::{FileAccess, FileReply, NativeFiles, OpenKind, SaveRequest};
-use session::{Figure, Session};
+use session::Session;
 use std::path::{Path, PathBuf};
 use std::sync::mpsc::{Receiver, Sender, channel};
 use viewport::ViewportState;
@@ -183,7 +183,7 @@ pub struct WorkbenchApp {
     table: table::TableState,
     plot_tab: PlotTab,
     plot_stage: Stage,
-    figure: Figure,
+    figure: Indicator,
     figure_split: Split,
     files: Box<dyn FileAccess>,
     file_sender: Sender<FileReply>,
@@ -241,7 +241,7 @@ impl WorkbenchApp {
             table: table::TableState::default(),
             plot_tab: PlotTab::Convergence,
             plot_stage: Stage::Arm(Side::Left),
-            figure: Figure::RelativePosition(Side::Left),
+            figure: Indicator::RelativePosition(Side::Left),
             figure_split: Split::Ver,
             files: Box::new(NativeFiles),
             file_sender,
@@ -393,8 +393,8 @@ impl WorkbenchApp {
                 self.status = Status::Idle(format!(
                     "Loaded {} ({} left + {} right configurations) in {secs:.2} s.",
                     d.dir.display(),
-                    d.left.measurements.len(),
-                    d.right.measurements.len(),
+                    d.arms.left.measurements.len(),
+                    d.arms.right.measurements.len(),
                 ));
                 self.errors
                     .extend(session.robot.warnings.iter().map(|w| format!("robot: {w}")));
@@ -497,7 +497,7 @@ impl WorkbenchApp {
                         .collect();
                     let advice: String = calibrated
                         .result
-                        .stall_warnings()
+                        .warnings()
                         .iter()
                         .map(|w| format!(" Warning: {w}."))
                         .collect();

@@ -27,7 +27,7 @@ impl WorkbenchApp {
             match &self.session {
                 Some(s) => {
                     let d = &s.dataset;
-                    let count = |side: Side, split: SplitSelect| d.arm(side).select(split).len();
+                    let count = |side: Side, split: Split| d.arm(side).select(split).len();
                     ui.label(
                         RichText::new(
                             d.dir
@@ -39,10 +39,10 @@ impl WorkbenchApp {
                     .on_hover_text(d.dir.display().to_string());
                     ui.label(format!(
                         "left: {} cal + {} ver\nright: {} cal + {} ver",
-                        count(Side::Left, SplitSelect::Cal),
-                        count(Side::Left, SplitSelect::Ver),
-                        count(Side::Right, SplitSelect::Cal),
-                        count(Side::Right, SplitSelect::Ver),
+                        count(Side::Left, Split::Cal),
+                        count(Side::Left, Split::Ver),
+                        count(Side::Right, Split::Cal),
+                        count(Side::Right, Split::Ver),
                     ));
                     ui.label(format!(
                         "tracker MPE {} µm + {} µm/m",
@@ -131,14 +131,10 @@ impl WorkbenchApp {
                         "Configurations used for identification: the calibration split only, or all of them",
                     );
                     egui::ComboBox::from_id_salt("split")
-                        .selected_text(match self.settings.split {
-                            SplitSelect::Cal => "cal",
-                            SplitSelect::Ver => "ver",
-                            SplitSelect::All => "all",
-                        })
+                        .selected_text(self.settings.split.name())
                         .show_ui(ui, |ui| {
-                            ui.selectable_value(&mut self.settings.split, SplitSelect::Cal, "cal");
-                            ui.selectable_value(&mut self.settings.split, SplitSelect::All, "all");
+                            ui.selectable_value(&mut self.settings.split, Split::Cal, "cal");
+                            ui.selectable_value(&mut self.settings.split, Split::All, "all");
                         })
                         .response
                         .labelled_by(l_split.id);
@@ -386,7 +382,7 @@ impl WorkbenchApp {
                         .selected_text(self.figure.label())
                         .width(230.0)
                         .show_ui(ui, |ui| {
-                            for f in Figure::ALL {
+                            for f in Indicator::ALL {
                                 ui.selectable_value(&mut self.figure, f, f.label());
                             }
                         })
@@ -442,7 +438,7 @@ impl WorkbenchApp {
                 .current()
                 .configs
                 .iter()
-                .find(|r| r.side == side && r.index == index)
+                .find(|r| r.config.side == side && r.config.index == index)
         {
             let e = row.point_errors_mm();
             ui.label(format!(

@@ -1,14 +1,15 @@
 //! Convergence curves and accuracy histograms (egui_plot).
 
-use crate::app::session::{Figure, PairSet, Session, split_index};
+use crate::analysis::{Analysis, Indicator, SplitFigures};
+use crate::app::session::Session;
 use crate::dataset::Split;
-use crate::kinematics::Side;
-use crate::metrics::{ORI_THRESHOLDS_RAD, POS_THRESHOLDS_MM};
+use crate::metrics::{AccuracyReport, ORI_THRESHOLDS_RAD, POS_THRESHOLDS_MM};
+use crate::side::Side;
 use crate::solver::{IterationRecord, Stage};
 use eframe::egui::{self, Color32, RichText};
 use egui_plot::{Bar, BarChart, Legend, Line, Plot, VLine};
 
-pub const STAGES: [Stage; 3] = [Stage::Arm(Side::Left), Stage::Arm(Side::Right), Stage::Base];
+pub use crate::solver::STAGES;
 
 const F_COLORS: [Color32; 3] = [
     Color32::from_rgb(230, 120, 90),
@@ -89,15 +90,16 @@ pub fn convergence_plot_ui(ui: &mut egui::Ui, history: &[IterationRecord], stage
         );
     } else if let Some(last) = records.last() {
         ui.label(format!(
-            "{stage}: iteration {}, ψ = {:.6} mm², F = [{:.4}, {:.4}, {:.4}] mm², weights λ = [{:.2}, {:.2}, {:.2}], step {:.2e}, KKT {:.2e}",
+            "{stage}: iteration {}, ψ = {:.6} mm², F = [{:.4}, {:.4}, {:.4}] mm², {}step {:.2e}, KKT {:.2e}",
             last.iteration,
             last.psi_mm2,
             last.f_mm2[0],
             last.f_mm2[1],
             last.f_mm2[2],
-            last.lambda[0],
-            last.lambda[1],
-            last.lambda[2],
+            last.lambda.map_or(String::new(), |l| format!(
+                "weights λ = [{:.2}, {:.2}, {:.2}], ",
+                l[0], l[1], l[2]
+            )),
             last.step_norm,
             last.kkt_residual
         ));
@@ -166,16 +168,19 @@ pub fn histogram(samples: &[f64], lo: f64, hi: f64, bins: usize) -> Vec<(f64, f6
 
 /// Histograms of one figure before (nominal) and after (calibrated) on one split, with the
 /// Tables 4–8 style numbers beside them.
-pub fn accuracy_ui(ui: &mut egui::Ui, session: &Session, figure: Figure, split: Split) {
-    let k = split_index(split);
-    let before: &PairSet = &session.nominal.pairs[k];
-    let after = session.calibrated.as_ref().map(|c| &c.analysis.pairs[k]);
-    let before_samples = before.samples(figure);
-    let after_samples = after.map(|p| p.samples(figure)).unwrap_or_default();
+pub fn accuracy_ui(ui: &mut egui::Ui, session: &Session, figure: Indicator, split: Split) {
+    let before = session.nominal.figures(split);
+    let after = session
+        .calibrated
+        .as_ref()
+        .and_then(|c| c.analysis.figures(split));
+    let samples = |f: Option<&SplitFigures>| f.map(|f| f.pairs.samples(figure)).unwrap_or_default();
+    let (before_samples, after_samples) = (samples(before), samples(after));
     let unit = if figure.is_position() { "mm" } else { "rad" };
     let split_name = match split {
         Split::Cal => "calibration",
         Split::Ver => "verification",
+        Split::All => "every",
     };
 
     ui.horizontal_top(|ui| {
@@ -188,7 +193,7 @@ pub fn accuracy_ui(ui: &mut egui::Ui, session: &Session, figure: Figure, split: 
             } else {
                 ORI_THRESHOLDS_RAD.map(|t| format!("Δo ≤ {t} rad"))
             };
-            egui::Grid::new(("accuracy numbers", figure.label(), k))
+            egui::Grid::new(("accuracy numbers", figure.label(), split))
                 .striped(true)
                 .num_columns(3)
                 .show(ui, |ui| {
@@ -197,11 +202,8 @@ pub fn accuracy_ui(ui: &mut egui::Ui, session: &Session, figure: Figure, split: 
                     ui.label("calibrated");
                     ui.end_row();
                     let reports = [
-                        session.nominal.reports[k].as_ref(),
-                        session
-                            .calibrated
-                            .as_ref()
-                            .and_then(|c| c.analysis.reports[k].as_ref()),
+                        before.and_then(|f| f.report.as_ref()),
+                        after.and_then(|f| f.report.as_ref()),
                     ];
                     let summaries = reports.map(|r| r.map(|r| figure.summary(r)));
                     let cell = |ui: &mut egui::Ui, v: Option<String>| {
@@ -226,12 +228,12 @@ pub fn accuracy_ui(ui: &mut egui::Ui, session: &Session, figure: Figure, split: 
                         ui.end_row();
                     }
                     ui.label("pairs");
-                    ui.label(format!("{}", before.of(figure.pair_kind()).len()));
-                    ui.label(
-                        after
-                            .map(|a| format!("{}", a.of(figure.pair_kind()).len()))
-                            .unwrap_or_else(|| "—".into()),
-                    );
+                    for f in [before, after] {
+                        ui.label(f.map_or_else(
+                            || "—".into(),
+                            |f| format!("{}", f.pairs.of(figure.pair_kind()).len()),
+                        ));
+                    }
                     ui.end_row();
                 });
             if after.is_none() {
@@ -254,7 +256,7 @@ pub fn accuracy_ui(ui: &mut egui::Ui, session: &Session, figure: Figure, split: 
         let n = panels.len();
         ui.columns(n, |cols| {
             for (col, (name, samples, color)) in cols.iter_mut().zip(panels) {
-                histogram_plot_ui(col, figure, k, name, samples, color);
+                histogram_plot_ui(col, figure, split, name, samples, color);
             }
         });
     });
@@ -267,8 +269,8 @@ const CALIBRATED_COLOR: Color32 = Color32::from_rgb(100, 190, 235);
 /// when they fall in range.
 fn histogram_plot_ui(
     ui: &mut egui::Ui,
-    figure: Figure,
-    split: usize,
+    figure: Indicator,
+    split: Split,
     name: &str,
     samples: &[f64],
     color: Color32,
@@ -317,15 +319,17 @@ fn histogram_plot_ui(
 
 /// All figures of one split at a glance, nominal against calibrated (the paper's Tables 4–8).
 pub fn accuracy_summary_ui(ui: &mut egui::Ui, session: &Session, split: Split) {
-    let k = split_index(split);
+    fn report(a: &Analysis, split: Split) -> Option<&AccuracyReport> {
+        a.figures(split).and_then(|f| f.report.as_ref())
+    }
     let reports = [
-        ("nominal", session.nominal.reports[k].as_ref()),
+        ("nominal", report(&session.nominal, split)),
         (
             "calibrated",
             session
                 .calibrated
                 .as_ref()
-                .and_then(|c| c.analysis.reports[k].as_ref()),
+                .and_then(|c| report(&c.analysis, split)),
         ),
     ];
     let titles = [
@@ -341,7 +345,7 @@ pub fn accuracy_summary_ui(ui: &mut egui::Ui, session: &Session, split: Split) {
         "Δo ≤ 0.01 rad",
     ];
     egui::ScrollArea::both().show(ui, |ui| {
-        egui::Grid::new(("accuracy summary", k))
+        egui::Grid::new(("accuracy summary", split))
             .striped(true)
             .num_columns(titles.len())
             .spacing([14.0, 4.0])
@@ -353,18 +357,18 @@ pub fn accuracy_summary_ui(ui: &mut egui::Ui, session: &Session, split: Split) {
                 let kinds = [
                     (
                         "relative, left arm",
-                        Figure::RelativePosition(Side::Left),
-                        Figure::RelativeOrientation(Side::Left),
+                        Indicator::RelativePosition(Side::Left),
+                        Indicator::RelativeOrientation(Side::Left),
                     ),
                     (
                         "relative, right arm",
-                        Figure::RelativePosition(Side::Right),
-                        Figure::RelativeOrientation(Side::Right),
+                        Indicator::RelativePosition(Side::Right),
+                        Indicator::RelativeOrientation(Side::Right),
                     ),
                     (
                         "collaborative",
-                        Figure::CollaborativePosition,
-                        Figure::CollaborativeOrientation,
+                        Indicator::CollaborativePosition,
+                        Indicator::CollaborativeOrientation,
                     ),
                 ];
                 for (name, pos, ori) in kinds {

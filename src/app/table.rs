@@ -1,6 +1,6 @@
 //! The per-configuration table: sortable by every column, rows select in 3D.
 
-use crate::app::session::{Analysis, ConfigRow};
+use crate::analysis::{Analysis, ConfigRow};
 use crate::app::viewport::scene::Selection;
 use crate::dataset::Split;
 use eframe::egui::{self, Color32, RichText, Sense};
@@ -82,7 +82,7 @@ impl Default for TableState {
 fn compare(a: &ConfigRow, b: &ConfigRow, column: Column) -> std::cmp::Ordering {
     match column {
         Column::Id => a.id.cmp(&b.id),
-        Column::Arm => a.side.name().cmp(b.side.name()),
+        Column::Arm => a.config.side.name().cmp(b.config.side.name()),
         Column::Split => (a.split == Split::Ver).cmp(&(b.split == Split::Ver)),
         Column::WorstPos => a.worst_pos_mm.total_cmp(&b.worst_pos_mm),
         Column::WorstOri => a.worst_ori_rad.total_cmp(&b.worst_ori_rad),
@@ -108,7 +108,7 @@ pub fn worst(analysis: &Analysis) -> Selection {
         .iter()
         .filter(|r| r.worst_pos_mm.is_finite())
         .max_by(|a, b| a.worst_pos_mm.total_cmp(&b.worst_pos_mm))
-        .map(|r| (r.side, r.index))
+        .map(|r| (r.config.side, r.config.index))
 }
 
 fn cell(ui: &mut egui::Ui, width: f32, text: RichText) {
@@ -165,9 +165,13 @@ pub fn config_table_ui(
         .auto_shrink([false, false])
         .id_salt("config table");
     if scroll_to_selection
-        && let Some(pos) = order
-            .iter()
-            .position(|&i| selection == Some((analysis.configs[i].side, analysis.configs[i].index)))
+        && let Some(pos) = order.iter().position(|&i| {
+            selection
+                == Some((
+                    analysis.configs[i].config.side,
+                    analysis.configs[i].config.index,
+                ))
+        })
     {
         let spacing = ui.spacing().item_spacing.y;
         scroll =
@@ -176,7 +180,7 @@ pub fn config_table_ui(
     scroll.show_rows(ui, row_height, order.len(), |ui, range| {
         for &i in &order[range] {
             let row = &analysis.configs[i];
-            let selected = selection == Some((row.side, row.index));
+            let selected = selection == Some((row.config.side, row.config.index));
             let response = ui
                 .horizontal(|ui| {
                     ui.set_height(row_height);
@@ -192,15 +196,12 @@ pub fn config_table_ui(
                         }
                     };
                     cell(ui, Column::Id.width(), strong(row.id.clone()));
-                    cell(ui, Column::Arm.width(), strong(row.side.name().into()));
                     cell(
                         ui,
-                        Column::Split.width(),
-                        strong(match row.split {
-                            Split::Cal => "cal".into(),
-                            Split::Ver => "ver".into(),
-                        }),
+                        Column::Arm.width(),
+                        strong(row.config.side.name().into()),
                     );
+                    cell(ui, Column::Split.width(), strong(row.split.name().into()));
                     cell(
                         ui,
                         Column::WorstPos.width(),
@@ -227,7 +228,7 @@ pub fn config_table_ui(
             }
             let r = ui.interact(response.rect, egui::Id::unique(("row", i)), Sense::click());
             if r.clicked() {
-                clicked = Some(Some((row.side, row.index)));
+                clicked = Some(Some((row.config.side, row.config.index)));
             }
         }
     });

@@ -1,13 +1,18 @@
-//! The calibration worker: `solver::calibrate` on its own thread, progress through a bounded channel.
+//! The calibration worker: a [`CalibrationRun`] stepped on its own thread, progress through a bounded
+//! channel.
 //!
 //! Iteration events are sent with `try_send` and dropped when the UI is behind (the curves only lose
 //! points); the final message is always delivered. Cancel is an `Arc<AtomicBool>` the solver polls.
 //! The UI drains the channel once per frame and never blocks on it.
 
-use super::session::{Analysis, Calibrated};
+use super::session::Calibrated;
+use crate::analysis::Analysis;
 use crate::dataset::Dataset;
 use crate::kinematics::DualArmModel;
-use crate::solver::{self, CalibrationEvent, CalibrationSettings};
+use crate::solver::{
+    CalibrationEvent, CalibrationRun, CalibrationSettings, Calibrator, IterationRecord, Observer,
+    Progress, Stage, StageSummary, Termination,
+};
 use nalgebra::Isometry3;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -65,7 +70,7 @@ impl CalibrationJob {
                     &nominal,
                     &settings,
                     &body_from_left_base,
-                    &flag,
+                    flag,
                     &sender,
                     &repaint,
                 )
@@ -132,35 +137,85 @@ impl Drop for CalibrationJob {
     }
 }
 
+/// Forwards the run's events to the UI: stage boundaries always (they are few: wait for room),
+/// iterations when there is room (the curves only lose points).
+struct ChannelObserver<'a> {
+    sender: &'a SyncSender<WorkerMessage>,
+    repaint: &'a dyn Fn(),
+}
+
+impl ChannelObserver<'_> {
+    fn send(&self, event: CalibrationEvent) {
+        let message = WorkerMessage::Progress(event);
+        if matches!(
+            message,
+            WorkerMessage::Progress(CalibrationEvent::Iteration(_))
+        ) {
+            match self.sender.try_send(message) {
+                Ok(()) | Err(TrySendError::Full(_)) | Err(TrySendError::Disconnected(_)) => {}
+            }
+        } else {
+            let _ = self.sender.send(message);
+        }
+        (self.repaint)();
+    }
+}
+
+impl Observer for ChannelObserver<'_> {
+    fn stage_started(&mut self, stage: Stage, n_configs: usize, n_pairs: usize) {
+        self.send(CalibrationEvent::StageStarted {
+            stage,
+            n_configs,
+            n_pairs,
+        });
+    }
+
+    fn iteration(&mut self, record: &IterationRecord, _run: &CalibrationRun) {
+        self.send(CalibrationEvent::Iteration(record.clone()));
+    }
+
+    fn stage_finished(&mut self, summary: &StageSummary, _run: &CalibrationRun) {
+        self.send(CalibrationEvent::StageFinished {
+            stage: summary.stage,
+            termination: summary.termination,
+        });
+    }
+}
+
 fn run(
     dataset: &Dataset,
     nominal: &DualArmModel,
     settings: &CalibrationSettings,
     body_from_left_base: &Isometry3<f64>,
-    cancel: &AtomicBool,
+    cancel: Arc<AtomicBool>,
     sender: &SyncSender<WorkerMessage>,
     repaint: &dyn Fn(),
 ) {
-    let mut observer = |event: &CalibrationEvent| {
-        let important = !matches!(event, CalibrationEvent::Iteration(_));
-        let message = WorkerMessage::Progress(event.clone());
-        if important {
-            // Stage boundaries are few; wait for room rather than lose them.
-            let _ = sender.send(message);
-        } else {
-            match sender.try_send(message) {
-                Ok(()) | Err(TrySendError::Full(_)) | Err(TrySendError::Disconnected(_)) => {}
+    let mut observer = ChannelObserver { sender, repaint };
+    let outcome = Calibrator::new(dataset, nominal)
+        .settings(settings.clone())
+        .cancel(cancel)
+        .start()
+        .and_then(|mut run| {
+            loop {
+                if let Progress::Finished(result) = run.step(&mut [&mut observer])? {
+                    break Ok(*result);
+                }
             }
-        }
-        repaint();
-    };
-    let outcome = solver::calibrate(dataset, nominal, settings, &mut observer, cancel);
+        });
     let message = match outcome {
+        Ok(result)
+            if result
+                .stages
+                .iter()
+                .any(|s| s.termination == Termination::Cancelled) =>
+        {
+            Outcome::Cancelled
+        }
         Ok(result) => match Analysis::compute(dataset, &result.calibrated, body_from_left_base) {
             Ok(analysis) => Outcome::Calibrated(Box::new(Calibrated { result, analysis })),
             Err(e) => Outcome::Failed(format!("calibrated model: {e:#}")),
         },
-        Err(solver::CalibrationError::Cancelled) => Outcome::Cancelled,
         Err(e) => Outcome::Failed(e.to_string()),
     };
     let _ = sender.send(WorkerMessage::Finished(message));

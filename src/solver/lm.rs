@@ -5,6 +5,10 @@ use super::Termination;
 use super::problem::MinimaxProblem;
 use nalgebra::DVector;
 
+/// A failed damping search counts as convergence when the Gauss–Newton step predicts a decrease of
+/// the cost below this (relative): a stationary point to working precision.
+pub const STATIONARY_RTOL: f64 = 1e-10;
+
 pub struct LmState<P: MinimaxProblem> {
     pub problem: P,
     pub y: DVector<f64>,
@@ -37,7 +41,8 @@ impl<P: MinimaxProblem> LmState<P> {
         }
     }
 
-    pub fn step(&mut self) -> LmStep {
+    /// One Levenberg–Marquardt iteration.
+    pub fn next_iter(&mut self) -> LmStep {
         self.iterations += 1;
         let sys = self.problem.least_squares(&self.y);
         let gradient_norm = sys.jtr.amax();
@@ -70,12 +75,24 @@ impl<P: MinimaxProblem> LmState<P> {
             }
             self.lambda *= 4.0;
         }
+        // No damping found a decrease. That is convergence only if the Gauss–Newton model itself
+        // predicts no meaningful decrease (a stationary point to working precision); otherwise the
+        // iteration is stuck above the optimum.
         let (f, _) = self.problem.values(&self.y);
+        let predicted = sys.jtj.clone().cholesky().map_or(f64::INFINITY, |chol| {
+            let delta = chol.solve(&sys.jtr);
+            sys.jtr.dot(&delta)
+        });
+        let stationary = predicted.is_finite() && predicted <= STATIONARY_RTOL * self.cost.abs();
         LmStep {
             f,
             step_norm: 0.0,
             gradient_norm,
-            termination: Some(Termination::Converged),
+            termination: Some(if stationary {
+                Termination::Converged
+            } else {
+                Termination::Stalled
+            }),
         }
     }
 }

@@ -1,6 +1,7 @@
 //! The interface between the minimax problems of the two steps and the SQP machinery.
 
-use nalgebra::{DMatrix, DVector};
+use crate::kinematics::ArmModel;
+use nalgebra::{DMatrix, DVector, Isometry3};
 
 /// Values and first derivatives of a minimax problem at one (scaled) point.
 ///
@@ -46,8 +47,18 @@ pub struct LeastSquaresSystem {
     pub jtr: DVector<f64>,
 }
 
+/// What a stage identifies: one arm's model (step 1) or the right-arm base in the left-arm base
+/// (step 2).
+#[derive(Clone, Debug, PartialEq)]
+pub enum StageParams {
+    Arm(Box<ArmModel>),
+    Base(Isometry3<f64>),
+}
+
 /// A minimax identification problem in scaled variables `y` (y = 0 is the start point).
-pub trait MinimaxProblem: Sync {
+pub trait MinimaxProblem: Send + Sync {
+    /// The stage's parameters at scaled point y.
+    fn params_at(&self, y: &DVector<f64>) -> StageParams;
     /// Number of free (scaled) variables.
     fn dim(&self) -> usize;
     /// Number of configuration pairs per reflector (F_i = f_i · pairs).
@@ -56,8 +67,6 @@ pub trait MinimaxProblem: Sync {
     fn evaluate(&self, y: &DVector<f64>) -> Eval;
     /// Values only (line search).
     fn values(&self, y: &DVector<f64>) -> ([f64; 3], Vec<f64>);
-    /// Gauss–Newton approximation of the Hessian of the mean of the three f_i (initial BFGS matrix).
-    fn gauss_newton(&self, y: &DVector<f64>) -> DMatrix<f64>;
     /// Normal equations of Σ_i F_i (least-squares baseline); `cost` is Σ r².
     fn least_squares(&self, y: &DVector<f64>) -> LeastSquaresSystem;
 }

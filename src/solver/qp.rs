@@ -147,8 +147,6 @@ pub struct SubgradientSettings {
     pub tolerance: f64,
     /// Start multipliers (the previous outer iteration's); `None` starts from λ⁰ = 0 as the paper does.
     pub warm_nu: Option<DVector<f64>>,
-    /// Upper bound of the step scale γ₀ (e.g. a multiple of the previous outer step's length).
-    pub gamma_cap: Option<f64>,
 }
 
 /// The paper's primal-dual subgradient method (eqs. 29–31, Algorithm I's inner loop).
@@ -223,10 +221,7 @@ fn subgradient(
         _ => qp.a.row(worst).transpose(),
     };
     let newton = qp.h_chol.solve(&direction);
-    let gamma0 = settings
-        .gamma_cap
-        .map_or(newton.norm(), |cap| newton.norm().min(cap))
-        .max(1e-12);
+    let gamma0 = newton.norm().max(1e-12);
     let p0 = 50.0;
     let mut s = DVector::zeros(m);
     let mut nu = match &settings.warm_nu {
@@ -368,7 +363,6 @@ mod tests {
                 max_iterations: 20_000,
                 tolerance: 1e-10,
                 warm_nu: None,
-                gamma_cap: None,
             },
             &|| false,
         );

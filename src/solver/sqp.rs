@@ -1,6 +1,6 @@
 //! Algorithm I/II's outer loop: sequential quadratic programming on the minimax problem with a BFGS
 //! Hessian of the Lagrangian, an ℓ1 merit line search and a parameter-step stopping rule. One call of
-//! [`SqpState::step`] is one outer iteration.
+//! [`SqpState::next_iter`] is one outer iteration.
 
 use super::problem::{Eval, MinimaxProblem};
 use super::qp::{Qp, QpSolution, SubgradientSettings, solve_exact, solve_paper};
@@ -32,7 +32,7 @@ pub struct SqpStep {
     pub termination: Option<Termination>,
 }
 
-/// The state of an SQP run; advance it with [`SqpState::step`].
+/// The state of an SQP run; advance it with [`SqpState::next_iter`].
 pub struct SqpState<P: MinimaxProblem> {
     pub problem: P,
     pub y: DVector<f64>,
@@ -42,9 +42,8 @@ pub struct SqpState<P: MinimaxProblem> {
     rho: f64,
     settings: SqpSettings,
     pub iterations: usize,
-    /// Multipliers and step length of the previous iteration (warm start of the paper's QP solver).
+    /// Multipliers of the previous iteration (warm start of the paper's QP solver).
     last_nu: Option<DVector<f64>>,
-    last_step_norm: Option<f64>,
     /// (ψ, constraint violation) after each accepted step, for the no-progress rule (the merit
     /// function is recomputed with the current penalty, which may have grown since).
     merit_history: Vec<(f64, f64)>,
@@ -66,6 +65,11 @@ pub const STATIONARY_RTOL: f64 = 1e-4;
 /// RMS), which matters on noise-free data where ψ itself is at the rounding level.
 pub const STATIONARY_ABS_MM2: f64 = 1e-12;
 
+/// Is a predicted change of the merit function negligible against its value `phi0`?
+fn negligible(predicted: f64, phi0: f64) -> bool {
+    predicted > -1e-15 * phi0.abs().max(1e-300)
+}
+
 /// The multipliers of the three objective rows of a QP solution.
 fn objective_multipliers(sol: &QpSolution) -> [f64; 3] {
     std::array::from_fn(|i| sol.nu[i])
@@ -76,14 +80,8 @@ fn objective_multipliers(sol: &QpSolution) -> [f64; 3] {
 pub struct NonFiniteStart;
 
 impl<P: MinimaxProblem> SqpState<P> {
-    /// Start at y = 0 with the problem's Gauss–Newton matrix as H₀.
-    pub fn new(problem: P, settings: SqpSettings) -> Result<Self, NonFiniteStart> {
-        let h0 = problem.gauss_newton(&DVector::zeros(problem.dim()));
-        Self::with_hessian(problem, settings, h0)
-    }
-
-    /// Start at y = 0 with a given H₀ (e.g. a Gauss–Newton matrix computed already).
-    pub fn with_hessian(
+    /// Start at y = 0 with the initial BFGS matrix H₀ (typically the problem's Gauss–Newton matrix).
+    pub fn new(
         problem: P,
         settings: SqpSettings,
         h0: DMatrix<f64>,
@@ -111,7 +109,6 @@ impl<P: MinimaxProblem> SqpState<P> {
             settings,
             iterations: 0,
             last_nu: None,
-            last_step_norm: None,
             merit_history: Vec::new(),
         })
     }
@@ -180,21 +177,15 @@ impl<P: MinimaxProblem> SqpState<P> {
                     } else {
                         self.last_nu.clone()
                     },
-                    gamma_cap: None,
                 },
                 stop,
             ),
         })
     }
 
-    /// One outer iteration: QP, line search, BFGS update.
-    pub fn step(&mut self) -> SqpStep {
-        self.step_with_stop(&|| false)
-    }
-
-    /// [`SqpState::step`], polling `stop` inside long QP solves; a stop ends the iteration with
-    /// [`Termination::Cancelled`] and leaves the iterate unchanged.
-    pub fn step_with_stop(&mut self, stop: &dyn Fn() -> bool) -> SqpStep {
+    /// One outer iteration — QP, line search, BFGS update — polling `stop` inside long QP solves; a
+    /// stop ends the iteration with [`Termination::Cancelled`] and leaves the iterate unchanged.
+    pub fn next_iter(&mut self, stop: &dyn Fn() -> bool) -> SqpStep {
         let mut step = self.iterate(stop);
         // Whatever ended the stage, it counts as converged only if the exact QP at the final iterate
         // predicts no meaningful decrease; a stop above the optimum is reported as `Stalled`.
@@ -230,69 +221,116 @@ impl<P: MinimaxProblem> SqpState<P> {
         self.predicted_change(&exact) > -(STATIONARY_RTOL * phi.abs() + STATIONARY_ABS_MM2)
     }
 
-    fn iterate(&mut self, stop: &dyn Fn() -> bool) -> SqpStep {
-        self.iterations += 1;
-        let done = |state: &Self, term: Termination, kkt: f64, sol: Option<&QpSolution>| SqpStep {
-            f: state.eval.f,
-            psi: state.eval.psi(),
+    /// A stopped iteration: the iterate unchanged, `term` as its termination.
+    fn done(&self, term: Termination, kkt: f64, sol: Option<&QpSolution>) -> SqpStep {
+        SqpStep {
+            f: self.eval.f,
+            psi: self.eval.psi(),
             step_norm: 0.0,
             kkt_residual: kkt,
             lambda: sol.map_or([f64::NAN; 3], objective_multipliers),
             qp_iterations: sol.map_or(0, |s| s.iterations),
             termination: Some(term),
-        };
-        let mut sol = match self.solve_qp(stop, 1) {
+        }
+    }
+
+    fn iterate(&mut self, stop: &dyn Fn() -> bool) -> SqpStep {
+        self.iterations += 1;
+        let sol = match self.solve_qp_with_retries(stop) {
             Ok(sol) => sol,
-            Err(term) => return done(self, term, f64::NAN, None),
+            Err((term, sol)) => return self.done(term, f64::NAN, sol.as_ref()),
         };
-        if stop() {
-            return done(self, Termination::Cancelled, f64::NAN, Some(&sol));
-        }
         let phi0 = self.merit(&self.eval.f, &self.eval.cons);
-        let negligible = |predicted: f64| predicted > -1e-15 * phi0.abs().max(1e-300);
-        if negligible(self.predicted_change(&sol)) && self.settings.qp == QpMethod::Paper {
-            // The subgradient method is inexact: an answer that is no descent direction says little
-            // about the iterate. Solve again from the paper's cold start with 4, then 16, then 64
-            // times the budget, as long as no descent is found and the exact QP says one exists (it
-            // only decides whether to keep going; the step is the subgradient method's).
-            let mut used = sol.iterations;
-            let mut factor = 4;
-            loop {
-                if let Ok(again) = self.solve_qp(stop, factor) {
-                    used += again.iterations;
-                    if again.tau < sol.tau {
-                        sol = again;
-                    }
-                }
-                if stop() {
-                    return done(self, Termination::Cancelled, f64::NAN, Some(&sol));
-                }
-                if !negligible(self.predicted_change(&sol))
-                    || factor >= MAX_RETRY_FACTOR
-                    || self.is_stationary()
-                {
-                    break;
-                }
-                factor *= 4;
-            }
-            sol.iterations = used;
-        }
         let kkt = self.first_order_residual(&sol.nu);
         // Penalty large enough for the constraint multipliers.
         let max_mu = sol.nu.iter().skip(3).copied().fold(0.0, f64::max);
         self.rho = self.rho.max(1.5 * max_mu + 1e-9);
         // Predicted change of the merit function along s (linear model).
         let predicted = self.predicted_change(&sol);
-        let s_norm = sol.s.norm();
-        if s_norm < self.settings.step_tolerance || negligible(predicted) {
-            return done(self, Termination::Converged, kkt, Some(&sol));
+        if sol.s.norm() < self.settings.step_tolerance || negligible(predicted, phi0) {
+            return self.done(Termination::Converged, kkt, Some(&sol));
         }
-        // The full step is tried with values and gradients at once (it is accepted in most
-        // iterations, and its evaluation is then reused); shorter steps with values only.
+        let Some((y_new, eval_new)) = self.line_search(&sol, phi0, predicted) else {
+            return self.done(Termination::Stalled, kkt, Some(&sol));
+        };
+        self.bfgs_update(&y_new, &eval_new, &sol.nu);
+        let step_norm = (&y_new - &self.y).norm();
+        self.last_nu = Some(sol.nu.clone());
+        self.y = y_new;
+        self.eval = eval_new;
+        self.merit_history
+            .push((self.eval.psi(), self.eval.violation()));
+        let termination = if step_norm < self.settings.step_tolerance {
+            Some(Termination::Converged)
+        } else if self.no_progress() {
+            Some(Termination::NoProgress)
+        } else {
+            None
+        };
+        SqpStep {
+            f: self.eval.f,
+            psi: self.eval.psi(),
+            step_norm,
+            kkt_residual: kkt,
+            lambda: objective_multipliers(&sol),
+            qp_iterations: sol.iterations,
+            termination,
+        }
+    }
+
+    /// This iterate's QP. The subgradient method is inexact: an answer that is no descent direction
+    /// says little about the iterate, so it is solved again from the paper's cold start with 4, then
+    /// 16, then 64 times the budget, as long as no descent is found and the exact QP says one exists
+    /// (it only decides whether to keep going; the step is the subgradient method's).
+    fn solve_qp_with_retries(
+        &self,
+        stop: &dyn Fn() -> bool,
+    ) -> Result<QpSolution, (Termination, Option<QpSolution>)> {
+        let mut sol = self.solve_qp(stop, 1).map_err(|term| (term, None))?;
+        if stop() {
+            return Err((Termination::Cancelled, Some(sol)));
+        }
+        let phi0 = self.merit(&self.eval.f, &self.eval.cons);
+        if !negligible(self.predicted_change(&sol), phi0) || self.settings.qp != QpMethod::Paper {
+            return Ok(sol);
+        }
+        let mut used = sol.iterations;
+        let mut factor = 4;
+        loop {
+            if let Ok(again) = self.solve_qp(stop, factor) {
+                used += again.iterations;
+                if again.tau < sol.tau {
+                    sol = again;
+                }
+            }
+            if stop() {
+                return Err((Termination::Cancelled, Some(sol)));
+            }
+            if !negligible(self.predicted_change(&sol), phi0)
+                || factor >= MAX_RETRY_FACTOR
+                || self.is_stationary()
+            {
+                break;
+            }
+            factor *= 4;
+        }
+        sol.iterations = used;
+        Ok(sol)
+    }
+
+    /// Backtracking (Armijo) line search on the ℓ1 merit function along the QP step. The full step is
+    /// tried with values and gradients at once (it is accepted in most iterations, and its evaluation
+    /// is then reused); shorter steps with values only. `None` when no step decreases the merit.
+    fn line_search(
+        &self,
+        sol: &QpSolution,
+        phi0: f64,
+        predicted: f64,
+    ) -> Option<(DVector<f64>, Eval)> {
         let full = &self.y + &sol.s;
         let full_eval = self.problem.evaluate(&full);
         let mut alpha = 1.0;
-        let accepted = loop {
+        let (y_new, alpha) = loop {
             let y_new = &self.y + &sol.s * alpha;
             let (f, cons) = if alpha == 1.0 {
                 (full_eval.f, full_eval.cons.clone())
@@ -301,28 +339,25 @@ impl<P: MinimaxProblem> SqpState<P> {
             };
             let phi = self.merit(&f, &cons);
             if phi.is_finite() && phi <= phi0 + 1e-4 * alpha * predicted {
-                break Some((y_new, alpha));
+                break (y_new, alpha);
             }
             alpha *= 0.5;
             if alpha < 1e-10 {
-                break None;
+                return None;
             }
-        };
-        let Some((y_new, alpha)) = accepted else {
-            return done(self, Termination::Stalled, kkt, Some(&sol));
         };
         let eval_new = if alpha == 1.0 {
             full_eval
         } else {
             self.problem.evaluate(&y_new)
         };
-        if !eval_new.is_finite() {
-            return done(self, Termination::Stalled, kkt, Some(&sol));
-        }
-        // BFGS on the Lagrangian with Powell's damping (keeps H positive definite).
-        let step = &y_new - &self.y;
-        let q = Self::lagrangian_gradient(&eval_new, &sol.nu)
-            - Self::lagrangian_gradient(&self.eval, &sol.nu);
+        eval_new.is_finite().then_some((y_new, eval_new))
+    }
+
+    /// BFGS on the Lagrangian with Powell's damping (keeps H positive definite).
+    fn bfgs_update(&mut self, y_new: &DVector<f64>, eval_new: &Eval, nu: &DVector<f64>) {
+        let step = y_new - &self.y;
+        let q = Self::lagrangian_gradient(eval_new, nu) - Self::lagrangian_gradient(&self.eval, nu);
         let hs = &self.h * &step;
         let shs = step.dot(&hs);
         let sq = step.dot(&q);
@@ -340,35 +375,18 @@ impl<P: MinimaxProblem> SqpState<P> {
                 self.h = (&self.h + self.h.transpose()) * 0.5;
             }
         }
-        let step_norm = step.norm();
-        self.last_nu = Some(sol.nu.clone());
-        self.last_step_norm = Some(step_norm);
-        self.y = y_new;
-        self.eval = eval_new;
-        self.merit_history
-            .push((self.eval.psi(), self.eval.violation()));
+    }
+
+    /// The no-progress rule: the merit fell by less than the progress tolerance (relative) over the
+    /// last [`PROGRESS_WINDOW`] accepted steps (recomputed with the current penalty, which may have
+    /// grown since).
+    fn no_progress(&self) -> bool {
         let n = self.merit_history.len();
-        let no_progress = self.settings.progress_tolerance > 0.0 && n > PROGRESS_WINDOW && {
+        self.settings.progress_tolerance > 0.0 && n > PROGRESS_WINDOW && {
             let merit = |(psi, violation): (f64, f64)| psi + self.rho * violation;
             let now = merit(self.merit_history[n - 1]);
             let before = merit(self.merit_history[n - 1 - PROGRESS_WINDOW]);
             before - now <= self.settings.progress_tolerance * now.abs()
-        };
-        let termination = if step_norm < self.settings.step_tolerance {
-            Some(Termination::Converged)
-        } else if no_progress {
-            Some(Termination::NoProgress)
-        } else {
-            None
-        };
-        SqpStep {
-            f: self.eval.f,
-            psi: self.eval.psi(),
-            step_norm,
-            kkt_residual: kkt,
-            lambda: objective_multipliers(&sol),
-            qp_iterations: sol.iterations,
-            termination,
         }
     }
 

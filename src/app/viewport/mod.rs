@@ -40,7 +40,7 @@ pub struct ViewportState {
     /// Choose exaggeration and colour range from the errors when a model arrives.
     pub auto_scale: bool,
     /// The configuration under the pointer.
-    pub hovered_config: Option<(crate::kinematics::Side, usize)>,
+    pub hovered_config: Option<(crate::side::Side, usize)>,
 }
 
 /// What the cached scene was built from.
@@ -176,7 +176,7 @@ impl ViewportState {
             };
             let pointer = response.hover_pos();
             let pick = |pos: Pos2| {
-                let mut best: Option<(f32, (crate::kinematics::Side, usize))> = None;
+                let mut best: Option<(f32, (crate::side::Side, usize))> = None;
                 for row in analysis.configs.iter().filter(|r| self.options.shows(r)) {
                     let anchor = scene::pick_anchor(row);
                     if let Some([x, y]) =
@@ -185,7 +185,7 @@ impl ViewportState {
                     {
                         let d = (Pos2::new(rect.left() + x, rect.top() + y) - pos).length();
                         if d < PICK_RADIUS_POINTS && best.is_none_or(|(bd, _)| d < bd) {
-                            best = Some((d, (row.side, row.index)));
+                            best = Some((d, (row.config.side, row.config.index)));
                         }
                     }
                 }
@@ -279,7 +279,7 @@ impl ViewportState {
             if let Some(row) = analysis
                 .configs
                 .iter()
-                .find(|r| r.side == side && r.index == index)
+                .find(|r| r.config.side == side && r.config.index == index)
                 && let Some([x, y]) = self.camera.project_with(
                     &view_proj,
                     &scene::pick_anchor(row),

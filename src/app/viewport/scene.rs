@@ -2,10 +2,12 @@
 //! triangle vertices for the grid, axes, reflector triangles and error vectors. Rebuilt only when the
 //! data or the display options change.
 
+use crate::analysis::ConfigRow;
 use crate::app::colormap;
-use crate::app::session::{ConfigRow, Session};
-use crate::kinematics::{N_JOINTS, Side};
+use crate::app::session::Session;
+use crate::kinematics::N_JOINTS;
 use crate::robot::{GeometryKind, PlacedShape, ShapeKind};
+use crate::side::Side;
 use nalgebra::{Isometry3, Matrix3, Matrix4, Vector3};
 
 /// A unit primitive the mesh pipeline instances.
@@ -122,8 +124,9 @@ impl SceneOptions {
         let split_ok = match row.split {
             crate::dataset::Split::Cal => self.show_cal,
             crate::dataset::Split::Ver => self.show_ver,
+            crate::dataset::Split::All => self.show_cal || self.show_ver,
         };
-        split_ok && self.show_arm[side_index(row.side)]
+        split_ok && self.show_arm[side_index(row.config.side)]
     }
 }
 
@@ -326,7 +329,7 @@ pub fn build_scene(
     let max = options.color_max_mm.max(1e-6);
     let model_color = [0.35, 0.37, 0.40, 0.8];
     for row in analysis.configs.iter().filter(|r| options.shows(r)) {
-        let selected = selection == Some((row.side, row.index));
+        let selected = selection == Some((row.config.side, row.config.index));
         let errors = row.point_errors_mm();
         let mean = (errors[0] + errors[1] + errors[2]) / 3.0;
         if options.show_measured {

@@ -4,7 +4,7 @@
 //! `B(y) = (Exp(ω)·R₀, p₀ + δp)` with `y = (ω/s_rot, δp/s_trans)`; Δd_lr,k = |m_L,l,k − m_R,r,k| −
 //! |p_L,l,k − (R p_R,r,k + p)|.
 
-use super::problem::{Eval, LeastSquaresSystem, MinimaxProblem};
+use super::problem::{Eval, LeastSquaresSystem, MinimaxProblem, StageParams};
 use nalgebra::{
     DMatrix, DVector, Isometry3, Rotation3, SVector, Translation3, UnitQuaternion, Vector3,
 };
@@ -53,6 +53,17 @@ impl BaseProblem {
             if d > 1e-12 { 1.0 / d } else { 1.0 }
         });
         p
+    }
+
+    /// Gauss–Newton approximation of the Hessian of the mean of the three f_i (the initial BFGS
+    /// matrix and the column scaling).
+    pub fn gauss_newton(&self, y: &DVector<f64>) -> DMatrix<f64> {
+        let mut h = nalgebra::SMatrix::<f64, 6, 6>::zeros();
+        for k in 0..3 {
+            self.for_each_row(y, k, |_, row| h += row * row.transpose());
+        }
+        let h = h * (2.0 / (3.0 * self.n_pairs().max(1) as f64));
+        DMatrix::from_column_slice(6, 6, h.as_slice())
     }
 
     /// The transform at scaled point y.
@@ -161,13 +172,8 @@ impl MinimaxProblem for BaseProblem {
         (e.f, e.cons)
     }
 
-    fn gauss_newton(&self, y: &DVector<f64>) -> DMatrix<f64> {
-        let mut h = nalgebra::SMatrix::<f64, 6, 6>::zeros();
-        for k in 0..3 {
-            self.for_each_row(y, k, |_, row| h += row * row.transpose());
-        }
-        let h = h * (2.0 / (3.0 * self.n_pairs().max(1) as f64));
-        DMatrix::from_column_slice(6, 6, h.as_slice())
+    fn params_at(&self, y: &DVector<f64>) -> StageParams {
+        StageParams::Base(self.transform_at(y))
     }
 
     fn least_squares(&self, y: &DVector<f64>) -> LeastSquaresSystem {

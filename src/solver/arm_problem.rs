@@ -7,17 +7,13 @@
 //! w_i,k = Σ_{j≠i} Δd_ij,k u_ij,k, so the Jacobians are computed once per configuration and iterate and
 //! no pair Jacobian is ever formed.
 
-use super::problem::{Eval, LeastSquaresSystem, MinimaxProblem};
+use super::problem::{Eval, LeastSquaresSystem, MinimaxProblem, StageParams};
 use crate::kinematics::{ArmModel, N_JOINTS, N_PARAMS, ParamVector, PointJacobian, ReflectorFk};
 use nalgebra::{DMatrix, DVector, SVector, Vector3};
 use rayon::prelude::*;
 
 /// Side pairs of the reflector triangle, in the order of constraints (14): ab, bc, ca.
 pub const SIDES: [(usize, usize); 3] = [(0, 1), (1, 2), (2, 0)];
-
-/// At most this many pairs are used for the Gauss–Newton start matrix, the column scaling and the
-/// identifiability analysis (a deterministic, evenly strided subset for large datasets).
-const MAX_SAMPLE_PAIRS: usize = 30_000;
 
 /// Step-1 problem of one arm.
 pub struct ArmProblem {
@@ -85,11 +81,6 @@ impl ArmProblem {
     pub fn free(&self) -> &[usize] {
         &self.free
     }
-
-    pub fn mean_side_mm(&self) -> [f64; 3] {
-        self.mean_side_mm
-    }
-
     /// Full parameter vector at scaled point y.
     pub fn x_of(&self, y: &DVector<f64>) -> ParamVector {
         let mut x = self.x0;
@@ -226,40 +217,13 @@ impl ArmProblem {
         }
         rows
     }
-
-    /// Residuals Δd of every pair and reflector at y (for reports and robust statistics).
-    pub fn residuals(&self, y: &DVector<f64>) -> [Vec<f64>; 3] {
-        let model = self.model_at(y);
-        let fk = self.fk_all(&model);
-        let n = fk.len();
-        std::array::from_fn(|k| {
-            let mut out = Vec::with_capacity(self.n_pairs);
-            let mut idx = 0;
-            for i in 0..n {
-                for j in i + 1..n {
-                    out.push(
-                        self.measured_dist_mm[k][idx]
-                            - (fk[i].points_mm[k] - fk[j].points_mm[k]).norm(),
-                    );
-                    idx += 1;
-                }
-            }
-            out
-        })
-    }
-}
-
-/// RMS of each column of the sampled pair Jacobian (the sensitivity of an RMS distance error to a
-/// unit change of each parameter).
-pub fn column_rms(rows: &[SVector<f64, N_PARAMS>]) -> SVector<f64, N_PARAMS> {
-    let mut s = SVector::<f64, N_PARAMS>::zeros();
-    for r in rows {
-        s += r.component_mul(r);
-    }
-    s.map(|v| (v / rows.len().max(1) as f64).sqrt())
 }
 
 impl MinimaxProblem for ArmProblem {
+    fn params_at(&self, y: &DVector<f64>) -> StageParams {
+        StageParams::Arm(Box::new(self.model_at(y)))
+    }
+
     fn dim(&self) -> usize {
         self.free.len()
     }
@@ -315,22 +279,6 @@ impl MinimaxProblem for ArmProblem {
         let (cons, _) = self.constraints(&x, false);
         ([f[0], f[1], f[2]], cons)
     }
-
-    fn gauss_newton(&self, y: &DVector<f64>) -> DMatrix<f64> {
-        let rows = self.sample_pair_jacobian(y, MAX_SAMPLE_PAIRS);
-        let m = self.free.len();
-        let mut h = DMatrix::zeros(m, m);
-        let mut r = DVector::zeros(m);
-        for row in &rows {
-            for (c, &k) in self.free.iter().enumerate() {
-                r[c] = row[k] * self.scale[c];
-            }
-            h.ger(1.0, &r, &r, 1.0);
-        }
-        // Mean over the three reflectors of 2/N Σ rrᵀ (rows hold all three reflectors).
-        h * (2.0 / (rows.len().max(1) as f64))
-    }
-
     fn least_squares(&self, y: &DVector<f64>) -> LeastSquaresSystem {
         let model = self.model_at(y);
         let jac = self.jac_all(&model);

@@ -1,0 +1,457 @@
+//! The `dualcal` command line: simulate, evaluate, calibrate, reproduce (and `gui` in the binary).
+
+use crate::atomic::Overwrite;
+use crate::dataset::{self, Dataset, Split};
+use crate::metrics;
+use crate::params::{ParamsFile, Provenance};
+use crate::robot::RobotDescription;
+use crate::side::Side;
+use crate::simulate;
+use crate::solver::{
+    CalibrationEvent, CalibrationResult, CalibrationSettings, Calibrator, Method, QpMethod,
+};
+use anyhow::{Context, Result, bail};
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use std::path::{Path, PathBuf};
+
+/// `println!` for command output that a closed pipe (`dualcal … | head`) ends quietly, as Unix tools
+/// do, instead of panicking: the process exits with 141 (128 + SIGPIPE). Any other write error (a full
+/// disk behind a redirection) is reported and exits with 1.
+macro_rules! outln {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        if let Err(err) = writeln!(std::io::stdout(), $($arg)*) {
+            if err.kind() == std::io::ErrorKind::BrokenPipe {
+                std::process::exit(141);
+            }
+            eprintln!("error: writing to standard output: {err}");
+            std::process::exit(1);
+        }
+    }};
+}
+
+mod reproduce;
+
+/// Two-step minimax kinematic calibration of dual-arm robots from laser-tracker data.
+#[derive(Parser, Debug)]
+#[command(name = "dualcal", version, about, long_about = None)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Option<Command>,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Open the workbench (the default when no command is given).
+    Gui {
+        /// Dataset directory or its dataset.toml (default: the bundled example).
+        dataset: Option<PathBuf>,
+        /// Robot description (default: the dataset's, or the built-in IRB 14000).
+        #[arg(long)]
+        urdf: Option<PathBuf>,
+    },
+    /// Simulate a laser-tracker dataset of both arms (paper §4.1).
+    Simulate(SimulateArgs),
+    /// Accuracy of a parameter set on a dataset (paper eqs. 5–8).
+    Evaluate(EvaluateArgs),
+    /// Two-step minimax calibration (paper Algorithms I and II).
+    Calibrate(CalibrateArgs),
+    /// Reproduce the studies of the paper and of docs/solver.md on simulated data.
+    Reproduce(ReproduceArgs),
+}
+
+#[derive(Args, Debug)]
+pub struct SimulateArgs {
+    /// Output directory (created; must not already hold a dataset unless --force).
+    #[arg(long)]
+    pub out: PathBuf,
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Configurations per arm.
+    #[arg(long, default_value_t = 220)]
+    pub configs: usize,
+    /// Of which calibration configurations (the rest are verification).
+    #[arg(long, default_value_t = 120)]
+    pub cal: usize,
+    /// Amplitude of unmodelled periodic (gear) joint errors, mrad (0 = none).
+    #[arg(long, default_value_t = 0.0)]
+    pub joint_error_mrad: f64,
+    /// Unmodelled joint compliance: deflection per metre of gravity lever, mrad/m (0 = none).
+    #[arg(long, default_value_t = 0.0)]
+    pub compliance_mrad_per_m: f64,
+    /// Fraction of configurations with an outlier reflector measurement.
+    #[arg(long, default_value_t = 0.0)]
+    pub outlier_fraction: f64,
+    /// Size of an outlier displacement, mm.
+    #[arg(long, default_value_t = 1.0)]
+    pub outlier_mm: f64,
+    /// Overwrite an existing simulated dataset in --out.
+    #[arg(long)]
+    pub force: bool,
+}
+
+#[derive(Args, Debug)]
+pub struct EvaluateArgs {
+    /// Dataset directory or its dataset.toml.
+    pub dataset: PathBuf,
+    /// Parameter file (dualcal-params/1).
+    #[arg(long, conflicts_with = "nominal", required_unless_present = "nominal")]
+    pub params: Option<PathBuf>,
+    /// Use the nominal model: Table 3, the dataset's nominal reflectors and the URDF's base transform.
+    #[arg(long)]
+    pub nominal: bool,
+    #[arg(long, value_enum, default_value_t = Split::All)]
+    pub split: Split,
+    /// Print JSON instead of a table.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Args, Debug)]
+pub struct CalibrateArgs {
+    /// Dataset directory or its dataset.toml.
+    pub dataset: PathBuf,
+    #[arg(long, value_enum, default_value_t = Split::Cal)]
+    pub split: Split,
+    #[arg(long, value_enum, default_value_t = Method::Minimax)]
+    pub method: Method,
+    #[arg(long, value_enum, default_value_t = QpMethod::Exact)]
+    pub qp: QpMethod,
+    /// Where to write the parameters (dualcal-params/1 JSON).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Also write a calibrated copy of the robot's URDF.
+    #[arg(long)]
+    pub urdf: Option<PathBuf>,
+    /// Outer iterations per stage.
+    #[arg(long, default_value_t = 200)]
+    pub max_iterations: usize,
+    /// Stop when the scaled parameter step is below this.
+    #[arg(long, default_value_t = 1e-8)]
+    pub tolerance: f64,
+    /// Also stop when ψ fell by less than this (relative) over the last five iterations; 0 disables.
+    #[arg(long, default_value_t = crate::solver::sqp::PROGRESS_RTOL)]
+    pub progress_tolerance: f64,
+    /// Only the summary, no per-iteration lines.
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum, PartialEq, Eq)]
+pub enum Study {
+    /// Paper Fig. 4: accuracy against the number of calibration configurations.
+    Fig4,
+    /// The paper's subgradient QP against the exact QP (docs/solver.md).
+    Qp,
+    /// Minimax against least squares with unmodelled joint errors and outliers (docs/solver.md).
+    Robustness,
+}
+
+#[derive(Args, Debug)]
+pub struct ReproduceArgs {
+    #[arg(value_enum)]
+    pub study: Study,
+    /// Simulation seed(s), comma separated.
+    #[arg(long, value_delimiter = ',', default_value = "1")]
+    pub seeds: Vec<u64>,
+    /// Calibration set sizes for fig4.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "10,20,30,40,50,60,70,80,90,100,110,120"
+    )]
+    pub sizes: Vec<usize>,
+    /// Use this dataset instead of simulating (fig4 only).
+    #[arg(long)]
+    pub dataset: Option<PathBuf>,
+    /// Simulate with unmodelled joint errors (1 mrad gear error, 0.5 mrad/m compliance) — a paper-like
+    /// residual of ~0.4 mm after calibration (fig4 and qp).
+    #[arg(long)]
+    pub unmodelled: bool,
+    /// With --unmodelled (implied; all studies): amplitude of the periodic (gear) joint error, mrad,
+    /// instead of 1.
+    #[arg(long)]
+    pub joint_error_mrad: Option<f64>,
+    /// With --unmodelled (implied; all studies): joint compliance, mrad/m, instead of 0.5.
+    #[arg(long)]
+    pub compliance_mrad_per_m: Option<f64>,
+}
+
+impl ReproduceArgs {
+    /// The unmodelled joint errors of the study, if any.
+    pub(crate) fn joint_errors(&self) -> Option<simulate::JointErrorModel> {
+        let custom = self.joint_error_mrad.is_some() || self.compliance_mrad_per_m.is_some();
+        (self.unmodelled || custom).then(|| {
+            let default = simulate::unmodelled_joint_errors();
+            simulate::JointErrorModel {
+                periodic_amplitude_mrad: self
+                    .joint_error_mrad
+                    .unwrap_or(default.periodic_amplitude_mrad),
+                compliance_mrad_per_m: self
+                    .compliance_mrad_per_m
+                    .unwrap_or(default.compliance_mrad_per_m),
+                ..default
+            }
+        })
+    }
+}
+
+/// Run a non-GUI command.
+pub fn run(command: Command) -> Result<()> {
+    match command {
+        Command::Gui { .. } => {
+            bail!("this build of dualcal has no workbench (built without the `gui` feature)")
+        }
+        Command::Simulate(a) => simulate_cmd(&a),
+        Command::Evaluate(a) => evaluate_cmd(&a),
+        Command::Calibrate(a) => calibrate_cmd(&a),
+        Command::Reproduce(a) => reproduce::run(&a),
+    }
+}
+
+fn simulate_cmd(a: &SimulateArgs) -> Result<()> {
+    if a.cal > a.configs {
+        bail!("--cal ({}) cannot exceed --configs ({})", a.cal, a.configs);
+    }
+    if a.out.join("dataset.toml").exists() && !a.force {
+        bail!(
+            "{} already holds a dataset (dataset.toml); pass --force to replace it",
+            a.out.display()
+        );
+    }
+    let mut opts = simulate::paper_options(a.seed, a.configs, a.cal);
+    if a.joint_error_mrad > 0.0 || a.compliance_mrad_per_m > 0.0 {
+        opts.joint_error = Some(simulate::JointErrorModel {
+            periodic_amplitude_mrad: a.joint_error_mrad,
+            compliance_mrad_per_m: a.compliance_mrad_per_m,
+            ..simulate::JointErrorModel::default()
+        });
+    }
+    if a.outlier_fraction > 0.0 {
+        opts.outliers = Some(simulate::OutlierModel {
+            fraction: a.outlier_fraction,
+            magnitude_mm: a.outlier_mm,
+        });
+    }
+    let robot = RobotDescription::builtin_irb14000();
+    let out = simulate::simulate_with_robot(&opts, &robot)?;
+    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
+    let overwrite = if a.force {
+        Overwrite::Allow
+    } else {
+        Overwrite::Refuse
+    };
+    crate::atomic::refuse_existing(&[&a.out.join("truth.json")], overwrite)?;
+    dataset::save_with(&out.dataset, &a.out, dataset::Units::MM_DEG, overwrite)?;
+    let mut truth = ParamsFile::from_model(&out.truth);
+    truth.method = Some(serde_json::json!("simulation truth"));
+    truth.provenance = Some(Provenance::now(Some(&a.out)));
+    truth.write(&a.out.join("truth.json"))?;
+    outln!(
+        "simulated {} configurations per arm ({} cal, {} ver), seed {}, into {}",
+        a.configs,
+        a.cal,
+        a.configs - a.cal,
+        a.seed,
+        a.out.display()
+    );
+    outln!(
+        "rejected samples: {} in collision, {} not facing the tracker",
+        out.rejected_for_collision,
+        out.rejected_for_facing
+    );
+    outln!("true parameters: {}", a.out.join("truth.json").display());
+    Ok(())
+}
+
+pub(crate) fn load_dataset(path: &Path) -> Result<Dataset> {
+    Ok(dataset::load(path)?)
+}
+
+fn evaluate_cmd(a: &EvaluateArgs) -> Result<()> {
+    let ds = load_dataset(&a.dataset)?;
+    let model = match &a.params {
+        Some(p) => ParamsFile::read(p)?.to_model()?,
+        None => RobotDescription::for_dataset(&ds)
+            .with_context(|| format!("loading the robot of {}", ds.dir.display()))?
+            .nominal_model(ds.nominal_reflectors_mm),
+    };
+    let report = metrics::evaluate(&ds, &model, a.split)?;
+    if a.json {
+        outln!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        let what = match &a.params {
+            Some(p) => format!("parameters {}", p.display()),
+            None => "nominal model".to_string(),
+        };
+        outln!(
+            "Accuracy of the {what} on {} (split: {:?})",
+            ds.dir.display(),
+            a.split
+        );
+        outln!("{}", metrics::format_table(&report));
+    }
+    Ok(())
+}
+
+fn settings_from(a: &CalibrateArgs) -> CalibrationSettings {
+    CalibrationSettings {
+        split: a.split,
+        method: a.method,
+        qp: a.qp,
+        max_iterations: a.max_iterations,
+        step_tolerance: a.tolerance,
+        progress_tolerance: a.progress_tolerance,
+        ..CalibrationSettings::default()
+    }
+}
+
+/// A progress line per outer iteration.
+pub fn print_event(event: &CalibrationEvent) {
+    match event {
+        CalibrationEvent::StageStarted {
+            stage,
+            n_configs,
+            n_pairs,
+        } => {
+            eprintln!("{stage}: {n_configs} configurations, {n_pairs} pairs per reflector")
+        }
+        CalibrationEvent::Iteration(r) => {
+            let lambda = match r.lambda {
+                Some(l) => format!("λ {:.2}/{:.2}/{:.2}", l[0], l[1], l[2]),
+                None => format!("{:14}", "λ –"),
+            };
+            eprintln!(
+                "  {:>3}  ψ {:>14.6} mm²   F_a {:>12.4}  F_b {:>12.4}  F_c {:>12.4}   {lambda}   step {:>9.2e}   KKT {:>9.2e}   {:>7.3} s",
+                r.iteration,
+                r.psi_mm2,
+                r.f_mm2[0],
+                r.f_mm2[1],
+                r.f_mm2[2],
+                r.step_norm,
+                r.kkt_residual,
+                r.elapsed_secs
+            )
+        }
+        CalibrationEvent::StageFinished { stage, termination } => {
+            eprintln!("{stage}: {termination}")
+        }
+    }
+}
+
+/// A calibration that ran but did not converge (a stage hit the iteration limit, stalled or was
+/// cancelled). The command exits with [`NotConverged::EXIT_CODE`] after printing its summary and
+/// writing the requested files, marked `"converged": false`.
+#[derive(Debug, thiserror::Error)]
+#[error("the calibration did not converge ({0}); the parameters written are those reached")]
+pub struct NotConverged(pub String);
+
+impl NotConverged {
+    /// Exit status of a run that did not converge (1 is for errors).
+    pub const EXIT_CODE: u8 = 2;
+}
+
+fn calibrate_cmd(a: &CalibrateArgs) -> Result<()> {
+    let ds = load_dataset(&a.dataset)?;
+    let inputs = ds.files();
+    for out in [Some(&a.out), a.urdf.as_ref()].into_iter().flatten() {
+        crate::atomic::refuse_overwrite_input(
+            out,
+            &inputs.iter().map(PathBuf::as_path).collect::<Vec<_>>(),
+        )?;
+    }
+    let robot = RobotDescription::for_dataset(&ds)
+        .with_context(|| format!("loading the robot of {}", ds.dir.display()))?;
+    let nominal = robot.nominal_model(ds.nominal_reflectors_mm);
+    let mut progress = |e: &CalibrationEvent| {
+        if !a.quiet {
+            print_event(e)
+        }
+    };
+    let result = Calibrator::new(&ds, &nominal)
+        .settings(settings_from(a))
+        .observer(&mut progress)
+        .run()?;
+    print_identifiability(&result);
+    outln!("\n{}", comparison_table(&ds, &result)?);
+    ParamsFile::from_calibration(&result, &ds).write(&a.out)?;
+    outln!("parameters written to {}", a.out.display());
+    if let Some(path) = &a.urdf {
+        let text = crate::urdf_export::calibrated_urdf(&robot, &result.calibrated)?;
+        crate::atomic::write_atomic(path, text.as_bytes())
+            .with_context(|| format!("writing {}", path.display()))?;
+        outln!("calibrated URDF written to {}", path.display());
+    }
+    if !result.is_converged() {
+        let how: Vec<String> = result
+            .stages
+            .iter()
+            .filter(|s| !s.termination.is_converged())
+            .map(|s| format!("{}: {}", s.stage, s.termination))
+            .collect();
+        return Err(NotConverged(how.join("; ")).into());
+    }
+    Ok(())
+}
+
+fn print_identifiability(result: &CalibrationResult) {
+    for (side, rep) in result.identifiability.iter() {
+        let Some(rep) = rep else { continue };
+        outln!(
+            "\n{side} arm: {} of {} parameters identified; condition number {:.3e} → {:.3e}",
+            rep.free.len(),
+            crate::kinematics::N_PARAMS,
+            rep.condition_before,
+            rep.condition_after
+        );
+        for f in &rep.fixed {
+            outln!("  fixed {:<8} {}", f.name, f.reason);
+        }
+    }
+    for s in &result.stages {
+        outln!(
+            "{}: {} after {} iterations, ψ {:.6} → {:.6} mm²",
+            s.stage,
+            s.termination,
+            s.iterations,
+            s.psi_start_mm2,
+            s.psi_mm2
+        );
+    }
+    for warning in result.warnings() {
+        eprintln!("warning: {warning}");
+    }
+    outln!("total time {:.3} s", result.elapsed_secs);
+}
+
+/// Nominal vs calibrated, on the calibration and verification splits.
+pub fn comparison_table(ds: &Dataset, result: &CalibrationResult) -> Result<String> {
+    let mut out = String::new();
+    let has = |split: Split| {
+        Side::BOTH.iter().all(|s| {
+            ds.arm(*s)
+                .measurements
+                .iter()
+                .filter(|m| m.split == split)
+                .count()
+                >= 2
+        })
+    };
+    for (split, name) in [(Split::Cal, "calibration"), (Split::Ver, "verification")] {
+        if !has(split) {
+            continue;
+        }
+        let before = metrics::evaluate(ds, &result.nominal, split)?;
+        let after = metrics::evaluate(ds, &result.calibrated, split)?;
+        out.push_str(&format!(
+            "Accuracy on the {name} configurations (nominal → calibrated)\n"
+        ));
+        out.push_str(&metrics::format_comparison(
+            &before,
+            &after,
+            ["nominal", "calibrated"],
+        ));
+        out.push('\n');
+    }
+    Ok(out)
+}

@@ -1,0 +1,269 @@
+//! `dualcal reproduce`: the studies of the paper and of docs/solver.md on simulated data.
+
+use super::{ReproduceArgs, Study, load_dataset};
+use crate::dataset::{Dataset, Split};
+use crate::kinematics::DualArmModel;
+use crate::metrics;
+use crate::robot::RobotDescription;
+use crate::side::Side;
+use crate::simulate::{self, SimOptions};
+use crate::solver::{
+    self, CalibrationResult, CalibrationSettings, Calibrator, Method, QpMethod, Termination,
+};
+use anyhow::{Context, Result, bail};
+
+/// Calibrate without progress output. A stage that hits the iteration limit fails the study (its
+/// figures would not be those of the method); a stall is reported in the tables.
+fn quiet_calibrate(
+    ds: &Dataset,
+    nominal: &DualArmModel,
+    settings: &CalibrationSettings,
+) -> Result<CalibrationResult> {
+    let result = Calibrator::new(ds, nominal)
+        .settings(settings.clone())
+        .run()?;
+    if let Some(s) = result
+        .stages
+        .iter()
+        .find(|s| s.termination == Termination::MaxIterations)
+    {
+        bail!(
+            "{}: not converged after {} iterations (ψ {:.6} mm²)",
+            s.stage,
+            s.iterations,
+            s.psi_mm2
+        );
+    }
+    Ok(result)
+}
+
+/// The simulation of a study: the paper's protocol, with unmodelled joint errors if asked.
+fn study_options(a: &ReproduceArgs, seed: u64) -> SimOptions {
+    SimOptions {
+        joint_error: a.joint_errors(),
+        ..simulate::paper_options(seed, 220, 120)
+    }
+}
+
+pub(crate) fn run(a: &ReproduceArgs) -> Result<()> {
+    let robot = RobotDescription::builtin_irb14000();
+    match a.study {
+        Study::Fig4 => {
+            let ds = match &a.dataset {
+                Some(p) => load_dataset(p)?,
+                None => {
+                    simulate::simulate_with_robot(&study_options(a, a.seeds[0]), &robot)?.dataset
+                }
+            };
+            let nominal = robot.nominal_model(ds.nominal_reflectors_mm);
+            outln!(
+                "Paper Fig. 4: relative accuracy against the number of calibration configurations (per arm)"
+            );
+            outln!(
+                "| configs | left pos RMS cal / ver (mm) | right pos RMS cal / ver (mm) | left ori RMS cal / ver (rad) | right ori RMS cal / ver (rad) |"
+            );
+            outln!("|---:|---:|---:|---:|---:|");
+            for &n in &a.sizes {
+                let sub = ds.with_cal_subset(n);
+                let res = quiet_calibrate(&sub, &nominal, &CalibrationSettings::default())
+                    .with_context(|| format!("calibrating with {n} configurations"))?;
+                let cal = metrics::evaluate(&sub, &res.calibrated, Split::Cal)?;
+                let ver = metrics::evaluate(&sub, &res.calibrated, Split::Ver)?;
+                outln!(
+                    "| {n} | {:.4} / {:.4} | {:.4} / {:.4} | {:.5} / {:.5} | {:.5} / {:.5} |",
+                    cal.relative_left.pos_rms_mm,
+                    ver.relative_left.pos_rms_mm,
+                    cal.relative_right.pos_rms_mm,
+                    ver.relative_right.pos_rms_mm,
+                    cal.relative_left.ori_rms_rad,
+                    ver.relative_left.ori_rms_rad,
+                    cal.relative_right.ori_rms_rad,
+                    ver.relative_right.ori_rms_rad
+                );
+            }
+        }
+        Study::Qp => {
+            outln!(
+                "Exact QP against the paper's subgradient QP (120 cal + 100 ver configurations per arm)"
+            );
+            outln!(
+                "| seed | QP | iterations (L/R/base) | stop (L/R/base) | time (s) | ψ left (mm²) | ψ right (mm²) | ψ base (mm²) | ver pos RMS L/R/collab (mm) | ver ori RMS L/R/collab (rad) |"
+            );
+            outln!("|---:|---|---|---|---:|---:|---:|---:|---|---|");
+            for &seed in &a.seeds {
+                let sim = simulate::simulate_with_robot(&study_options(a, seed), &robot)?;
+                let truth_ver = metrics::evaluate(&sim.dataset, &sim.truth, Split::Ver)?;
+                outln!(
+                    "| {seed} | truth | – | – | – | – | – | – | {:.4} / {:.4} / {:.4} | {:.5} / {:.5} / {:.5} |",
+                    truth_ver.relative_left.pos_rms_mm,
+                    truth_ver.relative_right.pos_rms_mm,
+                    truth_ver.collaborative.pos_rms_mm,
+                    truth_ver.relative_left.ori_rms_rad,
+                    truth_ver.relative_right.ori_rms_rad,
+                    truth_ver.collaborative.ori_rms_rad
+                );
+                for qp in [QpMethod::Exact, QpMethod::Paper] {
+                    let settings = CalibrationSettings {
+                        qp,
+                        max_iterations: 400,
+                        ..CalibrationSettings::default()
+                    };
+                    let res = quiet_calibrate(&sim.dataset, &sim.nominal, &settings)?;
+                    let ver = metrics::evaluate(&sim.dataset, &res.calibrated, Split::Ver)?;
+                    let it: Vec<String> = res
+                        .stages
+                        .iter()
+                        .map(|s| s.iterations.to_string())
+                        .collect();
+                    let psi: Vec<f64> = res.stages.iter().map(|s| s.psi_mm2).collect();
+                    let stops: Vec<String> = res
+                        .stages
+                        .iter()
+                        .map(|s| format!("{:?}", s.termination))
+                        .collect();
+                    outln!(
+                        "| {seed} | {qp:?} | {} | {} | {:.3} | {:.6} | {:.6} | {:.6} | {:.4} / {:.4} / {:.4} | {:.5} / {:.5} / {:.5} |",
+                        it.join(" / "),
+                        stops.join(" / "),
+                        res.elapsed_secs,
+                        psi[0],
+                        psi[1],
+                        psi[2],
+                        ver.relative_left.pos_rms_mm,
+                        ver.relative_right.pos_rms_mm,
+                        ver.collaborative.pos_rms_mm,
+                        ver.relative_left.ori_rms_rad,
+                        ver.relative_right.ori_rms_rad,
+                        ver.collaborative.ori_rms_rad
+                    );
+                }
+            }
+        }
+        Study::Robustness => robustness_study(a, &robot)?,
+    }
+    Ok(())
+}
+
+/// Minimax against least squares on data the model cannot explain: per seed, once with unmodelled joint
+/// errors and once more with 5% outliers; prints a table per run and a summary of ratios.
+fn robustness_study(a: &ReproduceArgs, robot: &RobotDescription) -> Result<()> {
+    let joint_errors = a
+        .joint_errors()
+        .unwrap_or_else(simulate::unmodelled_joint_errors);
+    outln!(
+        "Minimax (paper) against least squares (LM) on data with unmodelled errors \
+         (gear {} mrad, {} per revolution; compliance {} mrad/m); verification split unless marked cal",
+        joint_errors.periodic_amplitude_mrad,
+        joint_errors.periods_per_rev,
+        joint_errors.compliance_mrad_per_m
+    );
+    outln!(
+        "| seed | data | method | pos max L/R/collab (mm) | pos RMS L/R/collab (mm) | ori max L/R/collab (rad) | ori RMS L/R/collab (rad) | final λ_a/λ_b/λ_c left; right |"
+    );
+    outln!("|---:|---|---|---|---|---|---|---|");
+    let case_names = ["joint errors", "joint errors + 5% outliers of 1 mm"];
+    // The indicators compared, each for left / right / collaborative.
+    type Pick = fn(&metrics::AccuracyStats) -> f64;
+    let worst_reflector: Pick = |s| {
+        s.pos_rms_per_reflector_mm
+            .iter()
+            .copied()
+            .fold(0.0, f64::max)
+    };
+    let indicators: [(&str, bool, Pick); 5] = [
+        ("position max", false, |s| s.pos_max_mm),
+        ("orientation max", false, |s| s.ori_max_rad),
+        ("orientation RMS", false, |s| s.ori_rms_rad),
+        ("worst reflector's position RMS", false, worst_reflector),
+        (
+            "worst reflector's position RMS (cal)",
+            true,
+            worst_reflector,
+        ),
+    ];
+    // ratios[case][run][indicator][L/R/collab] = minimax / LM
+    let mut ratios: [Vec<Vec<[f64; 3]>>; 2] = [Vec::new(), Vec::new()];
+    for &seed in &a.seeds {
+        for (c, name) in case_names.iter().enumerate() {
+            let opts = SimOptions {
+                joint_error: Some(joint_errors),
+                outliers: (c == 1).then_some(simulate::OutlierModel {
+                    fraction: 0.05,
+                    magnitude_mm: 1.0,
+                }),
+                ..simulate::paper_options(seed, 220, 120)
+            };
+            let sim = simulate::simulate_with_robot(&opts, robot)?;
+            let mut values = Vec::new();
+            for method in [Method::Minimax, Method::LeastSquares] {
+                let settings = CalibrationSettings {
+                    method,
+                    ..CalibrationSettings::default()
+                };
+                let res = quiet_calibrate(&sim.dataset, &sim.nominal, &settings)?;
+                let ver = metrics::evaluate(&sim.dataset, &res.calibrated, Split::Ver)?;
+                let cal = metrics::evaluate(&sim.dataset, &res.calibrated, Split::Cal)?;
+                let three = |r: &metrics::AccuracyReport, pick: Pick| {
+                    [r.relative_left, r.relative_right, r.collaborative].map(|s| pick(&s))
+                };
+                let f = |v: [f64; 3], digits: usize| v.map(|x| format!("{x:.digits$}")).join(" / ");
+                let final_lambda = |side: Side| {
+                    res.history
+                        .iter()
+                        .rfind(|r| r.stage == solver::Stage::Arm(side))
+                        .and_then(|r| r.lambda)
+                        .map_or_else(|| "–".to_owned(), |l| f(l, 2).replace(" / ", "/"))
+                };
+                outln!(
+                    "| {seed} | {name} | {method:?} | {} | {} | {} | {} | {}; {} |",
+                    f(three(&ver, |s| s.pos_max_mm), 4),
+                    f(three(&ver, |s| s.pos_rms_mm), 4),
+                    f(three(&ver, |s| s.ori_max_rad), 5),
+                    f(three(&ver, |s| s.ori_rms_rad), 5),
+                    final_lambda(Side::Left),
+                    final_lambda(Side::Right),
+                );
+                values.push(
+                    indicators
+                        .iter()
+                        .map(|&(_, on_cal, pick)| three(if on_cal { &cal } else { &ver }, pick))
+                        .collect::<Vec<_>>(),
+                );
+            }
+            ratios[c].push(
+                (0..indicators.len())
+                    .map(|i| std::array::from_fn(|k| values[0][i][k] / values[1][i][k]))
+                    .collect(),
+            );
+        }
+    }
+    outln!("");
+    outln!(
+        "Summary over {} seed(s): minimax relative to least squares (below 1: minimax smaller)",
+        a.seeds.len()
+    );
+    outln!(
+        "| data | indicator | mean ratio minimax/LM (L / R / collab) | minimax smaller or equal in |"
+    );
+    outln!("|---|---|---|---:|");
+    for (c, name) in case_names.iter().enumerate() {
+        for (i, (label, _, _)) in indicators.iter().enumerate() {
+            let runs = &ratios[c];
+            let n = runs.len().max(1) as f64;
+            let mean: Vec<String> = (0..3)
+                .map(|k| format!("{:.3}", runs.iter().map(|r| r[i][k]).sum::<f64>() / n))
+                .collect();
+            let wins = runs
+                .iter()
+                .flat_map(|r| r[i].iter())
+                .filter(|&&x| x <= 1.0)
+                .count();
+            outln!(
+                "| {name} | {label} | {} | {wins} of {} |",
+                mean.join(" / "),
+                3 * runs.len()
+            );
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,285 @@
+//! One arm's CSV file.
+
+use super::error::{DatasetError, read_text};
+use super::units::Units;
+use super::{CSV_COLUMNS, MIN_CONFIGS, Measurement, SPLIT_COLUMN, Split};
+use crate::kinematics::N_JOINTS;
+use crate::side::Side;
+use nalgebra::Vector3;
+use std::path::Path;
+
+/// Check the header; returns whether it has the `split` column.
+fn check_header(
+    path: &Path,
+    line: usize,
+    header: &csv::StringRecord,
+) -> Result<bool, DatasetError> {
+    let err = |field: &str, message: String| DatasetError::Header {
+        path: path.to_path_buf(),
+        line,
+        field: field.to_string(),
+        message,
+    };
+    let expected = format!("{},[{SPLIT_COLUMN}]", CSV_COLUMNS.join(","));
+    if header.len() == 1 {
+        let only = header.get(0).unwrap_or("");
+        if let Some(sep) = [';', '\t', ' '].into_iter().find(|&c| only.contains(c)) {
+            return Err(err(
+                only,
+                format!("fields are separated by {sep:?}; use commas, with the header {expected}"),
+            ));
+        }
+    }
+    for (i, want) in CSV_COLUMNS.iter().enumerate() {
+        let Some(got) = header.get(i) else {
+            return Err(err(
+                want,
+                format!("missing column `{want}`; the header must be {expected}"),
+            ));
+        };
+        if got != *want {
+            let message = if CSV_COLUMNS.contains(&got) || got == SPLIT_COLUMN {
+                format!(
+                    "column `{got}` is in position {}, where `{want}` belongs; the header must be {expected} in this order",
+                    i + 1
+                )
+            } else {
+                format!(
+                    "unknown column `{got}` in position {}, where `{want}` belongs; the header must be {expected}",
+                    i + 1
+                )
+            };
+            return Err(err(got, message));
+        }
+    }
+    match header.len() {
+        17 => Ok(false),
+        18 if header.get(17) == Some(SPLIT_COLUMN) => Ok(true),
+        _ => {
+            let got = header.get(17).unwrap_or("");
+            Err(err(
+                got,
+                format!(
+                    "unknown column `{got}` in position 18; only `{SPLIT_COLUMN}` may follow `cz` (header {expected})"
+                ),
+            ))
+        }
+    }
+}
+
+fn parse_number(path: &Path, line: usize, field: &str, s: &str) -> Result<f64, DatasetError> {
+    let err = |message: String| DatasetError::Field {
+        path: path.to_path_buf(),
+        line,
+        field: field.to_string(),
+        message,
+    };
+    if s.is_empty() {
+        return Err(err("empty value; expected a number".into()));
+    }
+    let x: f64 = s
+        .parse()
+        .map_err(|_| err(format!("`{s}` is not a number")))?;
+    if !x.is_finite() {
+        return Err(err(format!("`{s}` is not a finite number")));
+    }
+    Ok(x)
+}
+
+/// Finds the 1-based line of CSV records from the byte offset where the reader started each record.
+#[derive(Default)]
+struct LineCounter {
+    /// A byte offset and the line it is on.
+    offset: usize,
+    line: usize,
+}
+
+impl LineCounter {
+    /// Line of the first byte of the record read from `start` on: blank lines and `#` comment lines are
+    /// skipped as the CSV reader skips them.
+    fn record_line(&mut self, text: &str, start: usize) -> usize {
+        let bytes = text.as_bytes();
+        let mut i = start.min(bytes.len());
+        loop {
+            match bytes.get(i) {
+                Some(b'\r' | b'\n') => i += 1,
+                Some(b'#') => match bytes[i..].iter().position(|&b| b == b'\n') {
+                    Some(k) => i += k + 1,
+                    None => {
+                        i = bytes.len();
+                        break;
+                    }
+                },
+                _ => break,
+            }
+        }
+        if i < self.offset || self.line == 0 {
+            self.offset = 0;
+            self.line = 1;
+        }
+        self.line += bytes[self.offset..i]
+            .iter()
+            .filter(|&&b| b == b'\n')
+            .count();
+        self.offset = i;
+        self.line
+    }
+}
+
+/// Read one arm's CSV into measurements in mm and rad.
+pub(super) fn read_arm(
+    path: &Path,
+    side: Side,
+    units: Units,
+) -> Result<Vec<Measurement>, DatasetError> {
+    let text = read_text(path)?;
+    let mut reader = csv::ReaderBuilder::new()
+        .has_headers(false)
+        .comment(Some(b'#'))
+        .flexible(false)
+        .trim(csv::Trim::All)
+        .from_reader(text.as_bytes());
+    // csv's positions point just past the previous record (before skipped comment and blank lines),
+    // so the line of a record is found by skipping those from there.
+    let mut lines = LineCounter::default();
+    let mut line_at = |pos: Option<&csv::Position>, fallback: usize| match pos {
+        Some(p) => lines.record_line(&text, usize::try_from(p.byte()).unwrap_or(usize::MAX)),
+        None => fallback,
+    };
+    let map_csv_err = |e: csv::Error, line: usize| -> DatasetError {
+        match e.kind() {
+            csv::ErrorKind::UnequalLengths {
+                expected_len, len, ..
+            } => DatasetError::FieldCount {
+                path: path.to_path_buf(),
+                line,
+                expected: usize::try_from(*expected_len).unwrap_or(usize::MAX),
+                found: usize::try_from(*len).unwrap_or(usize::MAX),
+            },
+            _ => DatasetError::Content {
+                path: path.to_path_buf(),
+                message: format!("line {line}: {e}"),
+            },
+        }
+    };
+
+    let mut records = reader.records();
+    let end_line = text.lines().count() + 1;
+    let header = match records.next() {
+        None => {
+            return Err(DatasetError::Header {
+                path: path.to_path_buf(),
+                line: end_line,
+                field: "id".into(),
+                message: format!(
+                    "missing header; expected {},[{SPLIT_COLUMN}] after any `#` comment lines",
+                    CSV_COLUMNS.join(",")
+                ),
+            });
+        }
+        Some(Ok(r)) => r,
+        Some(Err(e)) => {
+            let line = line_at(e.position(), 1);
+            return Err(map_csv_err(e, line));
+        }
+    };
+    let header_line = line_at(header.position(), 1);
+    let has_split = check_header(path, header_line, &header)?;
+
+    let mut out = Vec::new();
+    let mut first_line_of_id: std::collections::HashMap<String, usize> = Default::default();
+    let mut last_line = header_line;
+    for rec in records {
+        let rec = match rec {
+            Ok(r) => r,
+            Err(e) => {
+                let line = line_at(e.position(), last_line + 1);
+                return Err(map_csv_err(e, line));
+            }
+        };
+        let line = line_at(rec.position(), last_line + 1);
+        last_line = line;
+        let field = |i: usize| rec.get(i).unwrap_or("");
+        let id = field(0);
+        if id.is_empty() {
+            return Err(DatasetError::Field {
+                path: path.to_path_buf(),
+                line,
+                field: "id".into(),
+                message: "empty id; every row needs a unique id".into(),
+            });
+        }
+        if let Some(&first_line) = first_line_of_id.get(id) {
+            return Err(DatasetError::DuplicateId {
+                path: path.to_path_buf(),
+                line,
+                id: id.to_string(),
+                first_line,
+            });
+        }
+        first_line_of_id.insert(id.to_string(), line);
+        let mut q_rad = [0.0; N_JOINTS];
+        for (j, q) in q_rad.iter_mut().enumerate() {
+            let col = 1 + j;
+            *q = units
+                .angle
+                .to_rad(parse_number(path, line, CSV_COLUMNS[col], field(col))?);
+        }
+        let mut tracker_points_mm = [Vector3::zeros(); 3];
+        for (k, p) in tracker_points_mm.iter_mut().enumerate() {
+            for c in 0..3 {
+                let col = 8 + 3 * k + c;
+                p[c] = units
+                    .length
+                    .to_mm(parse_number(path, line, CSV_COLUMNS[col], field(col))?);
+            }
+        }
+        let split = if has_split {
+            match field(17) {
+                "cal" => Split::Cal,
+                "ver" => Split::Ver,
+                other => {
+                    return Err(DatasetError::Field {
+                        path: path.to_path_buf(),
+                        line,
+                        field: SPLIT_COLUMN.into(),
+                        message: format!("unknown split `{other}`; expected `cal` or `ver`"),
+                    });
+                }
+            }
+        } else {
+            Split::Cal
+        };
+        out.push(Measurement {
+            id: id.to_string(),
+            q_rad,
+            tracker_points_mm,
+            split,
+            line,
+        });
+    }
+    if out.len() < MIN_CONFIGS {
+        return Err(DatasetError::TooFewConfigurations {
+            path: path.to_path_buf(),
+            side,
+            found: out.len(),
+            min: MIN_CONFIGS,
+        });
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn line_counter_skips_comments_and_blank_lines() {
+        let text = "# c\r\n\r\nid\n# x\n\nrow\n";
+        let mut lc = LineCounter::default();
+        assert_eq!(lc.record_line(text, 0), 3);
+        assert_eq!(lc.record_line(text, 10), 6);
+        // Going backwards recounts.
+        assert_eq!(lc.record_line(text, 0), 3);
+    }
+}

@@ -1,0 +1,370 @@
+//! `dataset.toml`: the manifest.
+
+use super::error::{DatasetError, line_col};
+use super::units::{AngleUnit, LengthUnit, Units};
+use super::{DATASET_FORMAT, TrackerSpec};
+use crate::side::{PerSide, Side};
+use nalgebra::Vector3;
+use std::path::{Path, PathBuf};
+use toml::Spanned;
+
+#[derive(serde::Deserialize)]
+struct RawFormatOnly {
+    format: Option<Spanned<toml::Value>>,
+}
+
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawManifest {
+    #[allow(dead_code)]
+    format: Option<toml::Value>,
+    #[allow(dead_code)]
+    description: Option<String>,
+    robot: Option<Spanned<String>>,
+    units: Option<Spanned<RawUnits>>,
+    tracker: Option<Spanned<RawTracker>>,
+    reflectors: Option<Spanned<RawReflectors>>,
+    arms: Option<Vec<Spanned<RawArm>>>,
+}
+
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawUnits {
+    length: Option<Spanned<String>>,
+    angle: Option<Spanned<String>>,
+}
+
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawTracker {
+    mpe_um: Option<Spanned<f64>>,
+    mpe_um_per_m: Option<Spanned<f64>>,
+}
+
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawReflectors {
+    a: Option<Spanned<toml::Value>>,
+    b: Option<Spanned<toml::Value>>,
+    c: Option<Spanned<toml::Value>>,
+}
+
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawArm {
+    name: Option<Spanned<String>>,
+    file: Option<Spanned<String>>,
+}
+
+/// What `dataset.toml` says, validated and in mm.
+pub(super) struct Manifest {
+    pub units: Units,
+    pub robot: Option<PathBuf>,
+    pub tracker: TrackerSpec,
+    pub reflectors_mm: [Vector3<f64>; 3],
+    /// CSV path of each arm.
+    pub files: PerSide<PathBuf>,
+}
+
+struct ManifestCtx<'a> {
+    path: &'a Path,
+    text: &'a str,
+}
+
+impl ManifestCtx<'_> {
+    fn line_of(&self, span: std::ops::Range<usize>) -> usize {
+        line_col(self.text, span.start).0
+    }
+
+    fn err(&self, line: Option<usize>, field: &str, message: impl Into<String>) -> DatasetError {
+        DatasetError::Manifest {
+            path: self.path.to_path_buf(),
+            line,
+            field: field.to_string(),
+            message: message.into(),
+        }
+    }
+
+    fn toml_err(&self, e: &toml::de::Error) -> DatasetError {
+        let (line, text) = match e.span() {
+            Some(span) => {
+                let (l, _, t) = line_col(self.text, span.start);
+                (Some(l), t)
+            }
+            None => (None, String::new()),
+        };
+        DatasetError::Toml {
+            path: self.path.to_path_buf(),
+            line,
+            text,
+            message: e.message().trim().to_string(),
+        }
+    }
+}
+
+/// Parse and validate `dataset.toml` (`path`, in directory `dir`, with contents `text`).
+pub(super) fn parse(path: &Path, dir: &Path, text: &str) -> Result<Manifest, DatasetError> {
+    let cx = ManifestCtx { path, text };
+    // Syntax errors and the format tag first, so that a file of another format gets the right message.
+    let head: RawFormatOnly = toml::from_str(text).map_err(|e| cx.toml_err(&e))?;
+    check_format(&cx, head.format)?;
+    let raw: RawManifest = toml::from_str(text).map_err(|e| cx.toml_err(&e))?;
+    let units = parse_units(&cx, raw.units)?;
+    let robot = parse_robot(&cx, dir, raw.robot)?;
+    let tracker = match raw.tracker {
+        None => TrackerSpec::default(),
+        Some(t) => parse_tracker(&cx, t)?,
+    };
+    let reflectors_mm = parse_reflectors(&cx, raw.reflectors, units.length)?;
+    let files = parse_arms(&cx, dir, raw.arms.unwrap_or_default())?;
+    Ok(Manifest {
+        units,
+        robot,
+        tracker,
+        reflectors_mm,
+        files,
+    })
+}
+
+fn check_format(cx: &ManifestCtx, tag: Option<Spanned<toml::Value>>) -> Result<(), DatasetError> {
+    let Some(tag) = tag else {
+        return Err(cx.err(
+            None,
+            "format",
+            format!("missing; expected `format = \"{DATASET_FORMAT}\"` at the top"),
+        ));
+    };
+    match tag.get_ref() {
+        toml::Value::String(s) if s == DATASET_FORMAT => Ok(()),
+        other => Err(cx.err(
+            Some(cx.line_of(tag.span())),
+            "format",
+            format!("unknown format tag {other}; expected \"{DATASET_FORMAT}\""),
+        )),
+    }
+}
+
+/// `[units]`: `length = "mm" | "m"`, `angle = "deg" | "rad"`.
+fn parse_units(cx: &ManifestCtx, raw: Option<Spanned<RawUnits>>) -> Result<Units, DatasetError> {
+    let Some(units_t) = raw else {
+        return Err(cx.err(
+            None,
+            "units",
+            "missing [units] table; expected length = \"mm\" | \"m\" and angle = \"deg\" | \"rad\"",
+        ));
+    };
+    let units_line = Some(cx.line_of(units_t.span()));
+    let units_t = units_t.into_inner();
+    let length = match units_t.length {
+        None => {
+            return Err(cx.err(
+                units_line,
+                "units.length",
+                "missing; expected \"mm\" or \"m\"",
+            ));
+        }
+        Some(s) => LengthUnit::parse(s.get_ref()).ok_or_else(|| {
+            cx.err(
+                Some(cx.line_of(s.span())),
+                "units.length",
+                format!(
+                    "unknown length unit \"{}\"; expected \"mm\" or \"m\"",
+                    s.get_ref()
+                ),
+            )
+        })?,
+    };
+    let angle = match units_t.angle {
+        None => {
+            return Err(cx.err(
+                units_line,
+                "units.angle",
+                "missing; expected \"deg\" or \"rad\"",
+            ));
+        }
+        Some(s) => AngleUnit::parse(s.get_ref()).ok_or_else(|| {
+            cx.err(
+                Some(cx.line_of(s.span())),
+                "units.angle",
+                format!(
+                    "unknown angle unit \"{}\"; expected \"deg\" or \"rad\"",
+                    s.get_ref()
+                ),
+            )
+        })?,
+    };
+    Ok(Units { length, angle })
+}
+
+/// `robot`: a robot description relative to the dataset directory (absent: the built-in IRB 14000).
+fn parse_robot(
+    cx: &ManifestCtx,
+    dir: &Path,
+    raw: Option<Spanned<String>>,
+) -> Result<Option<PathBuf>, DatasetError> {
+    let Some(r) = raw else {
+        return Ok(None);
+    };
+    let line = Some(cx.line_of(r.span()));
+    if r.get_ref().trim().is_empty() {
+        return Err(cx.err(
+            line,
+            "robot",
+            "empty path; leave `robot` out for the built-in IRB 14000",
+        ));
+    }
+    let p = dir.join(r.get_ref());
+    if !p.is_file() {
+        return Err(cx.err(
+            line,
+            "robot",
+            format!(
+                "robot description {} not found (paths are relative to the dataset directory)",
+                p.display()
+            ),
+        ));
+    }
+    Ok(Some(p))
+}
+
+/// `[tracker]`: `mpe_um` and `mpe_um_per_m`, both finite and non-negative.
+fn parse_tracker(cx: &ManifestCtx, t: Spanned<RawTracker>) -> Result<TrackerSpec, DatasetError> {
+    let line = Some(cx.line_of(t.span()));
+    let t = t.into_inner();
+    let get = |v: Option<Spanned<f64>>, name: &str| -> Result<f64, DatasetError> {
+        let field = format!("tracker.{name}");
+        match v {
+            None => Err(cx.err(line, &field, "missing; expected a number of micrometres")),
+            Some(v) => {
+                let x = *v.get_ref();
+                if x.is_finite() && x >= 0.0 {
+                    Ok(x)
+                } else {
+                    Err(cx.err(
+                        Some(cx.line_of(v.span())),
+                        &field,
+                        format!("{x} is not a finite, non-negative number of micrometres"),
+                    ))
+                }
+            }
+        }
+    };
+    Ok(TrackerSpec {
+        mpe_um: get(t.mpe_um, "mpe_um")?,
+        mpe_um_per_m: get(t.mpe_um_per_m, "mpe_um_per_m")?,
+    })
+}
+
+/// `[reflectors]`: the nominal flange coordinates `a`, `b`, `c`, converted to mm.
+fn parse_reflectors(
+    cx: &ManifestCtx,
+    raw: Option<Spanned<RawReflectors>>,
+    length: LengthUnit,
+) -> Result<[Vector3<f64>; 3], DatasetError> {
+    let Some(refl) = raw else {
+        return Err(cx.err(
+            None,
+            "reflectors",
+            "missing [reflectors] table with the nominal flange coordinates a, b, c",
+        ));
+    };
+    let refl_line = Some(cx.line_of(refl.span()));
+    let refl = refl.into_inner();
+    let mut reflectors_mm = [Vector3::zeros(); 3];
+    for (k, v) in [refl.a, refl.b, refl.c].into_iter().enumerate() {
+        let field = format!("reflectors.{}", crate::kinematics::REFLECTOR_NAMES[k]);
+        let expected = format!("expected 3 numbers [x, y, z] in {}", length.name());
+        let Some(v) = v else {
+            return Err(cx.err(refl_line, &field, format!("missing; {expected}")));
+        };
+        let line = Some(cx.line_of(v.span()));
+        let bad = |found: &str| cx.err(line, &field, format!("{expected}, found {found}"));
+        let toml::Value::Array(items) = v.get_ref() else {
+            return Err(bad(&v.get_ref().to_string()));
+        };
+        if items.len() != 3 {
+            return Err(bad(&format!("{} values", items.len())));
+        }
+        for (c, item) in items.iter().enumerate() {
+            let x = match item {
+                toml::Value::Float(x) => *x,
+                toml::Value::Integer(i) => *i as f64,
+                other => return Err(bad(&format!("{other}"))),
+            };
+            if !x.is_finite() {
+                return Err(bad(&format!("{x}")));
+            }
+            reflectors_mm[k][c] = length.to_mm(x);
+        }
+    }
+    Ok(reflectors_mm)
+}
+
+/// `[[arms]]`: one entry per arm with its `name` (`left`/`right`) and CSV `file`.
+fn parse_arms(
+    cx: &ManifestCtx,
+    dir: &Path,
+    arms: Vec<Spanned<RawArm>>,
+) -> Result<PerSide<PathBuf>, DatasetError> {
+    let mut files: PerSide<Option<PathBuf>> = PerSide::default();
+    let mut arm_lines: PerSide<usize> = PerSide::default();
+    for arm in arms {
+        let line = cx.line_of(arm.span());
+        let arm = arm.into_inner();
+        let Some(name) = arm.name else {
+            return Err(cx.err(
+                Some(line),
+                "arms.name",
+                "missing; expected \"left\" or \"right\"",
+            ));
+        };
+        let name_line = cx.line_of(name.span());
+        let side = match name.get_ref().as_str() {
+            "left" => Side::Left,
+            "right" => Side::Right,
+            other => {
+                return Err(cx.err(
+                    Some(name_line),
+                    "arms.name",
+                    format!("unknown arm \"{other}\"; expected \"left\" or \"right\""),
+                ));
+            }
+        };
+        if files[side].is_some() {
+            return Err(cx.err(
+                Some(name_line),
+                "arms.name",
+                format!(
+                    "duplicate arm \"{}\" (already listed on line {})",
+                    name.get_ref(),
+                    arm_lines[side]
+                ),
+            ));
+        }
+        let Some(file) = arm.file else {
+            return Err(cx.err(
+                Some(line),
+                "arms.file",
+                "missing; expected the CSV file name",
+            ));
+        };
+        if file.get_ref().trim().is_empty() {
+            return Err(cx.err(
+                Some(cx.line_of(file.span())),
+                "arms.file",
+                "empty file name",
+            ));
+        }
+        files[side] = Some(dir.join(file.get_ref()));
+        arm_lines[side] = name_line;
+    }
+    files.try_map(|side, file| {
+        file.ok_or_else(|| {
+            cx.err(
+                None,
+                "arms",
+                format!("missing [[arms]] entry with name = \"{side}\"; both arms are needed"),
+            )
+        })
+    })
+}

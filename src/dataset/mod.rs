@@ -1,0 +1,384 @@
+//! The `dualcal-dataset/1` measurement format: a directory with `dataset.toml` and one CSV per arm.
+//! See `docs/formats.md`. Everything is converted to mm and rad on load.
+
+mod csv;
+mod error;
+mod manifest;
+mod save;
+mod units;
+
+pub use crate::atomic::Overwrite;
+use crate::kinematics::N_JOINTS;
+use crate::side::{PerSide, Side};
+pub use error::DatasetError;
+use error::read_text;
+use nalgebra::Vector3;
+pub use save::{save, save_with};
+use std::path::{Path, PathBuf};
+pub use units::{AngleUnit, LengthUnit, Units};
+
+/// The format tag written in `dataset.toml`.
+pub const DATASET_FORMAT: &str = "dualcal-dataset/1";
+/// Minimum number of configurations per arm in a dataset, and for a calibration (paper Table 2: 4
+/// configurations make the truss rigid).
+pub const MIN_CONFIGS: usize = 4;
+
+/// The calibration or verification configurations, or all of them: a measurement's `split` is
+/// `Cal` or `Ver`; an operation selects `Cal`, `Ver` or `All`.
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    PartialEq,
+    Eq,
+    Hash,
+    Default,
+    serde::Serialize,
+    serde::Deserialize,
+    clap::ValueEnum,
+)]
+#[serde(rename_all = "lowercase")]
+pub enum Split {
+    Cal,
+    Ver,
+    #[default]
+    All,
+}
+
+impl Split {
+    /// Whether a measurement of split `row` belongs to this selection.
+    pub fn contains(self, row: Split) -> bool {
+        self == Split::All || self == row
+    }
+
+    /// The name used in files and on the command line (`cal`, `ver`, `all`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Split::Cal => "cal",
+            Split::Ver => "ver",
+            Split::All => "all",
+        }
+    }
+}
+
+/// One measured configuration of one arm.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Measurement {
+    pub id: String,
+    /// Joint values in chain order, rad.
+    pub q_rad: [f64; N_JOINTS],
+    /// Measured reflector positions a, b, c in the tracker frame, mm.
+    pub tracker_points_mm: [Vector3<f64>; 3],
+    /// `Cal` or `Ver` (never `All`); rows without a split column are `Cal`.
+    pub split: Split,
+    /// 1-based line number in the CSV (for messages).
+    pub line: usize,
+}
+
+/// The tracker's maximum permissible error `mpe_um + mpe_um_per_m · distance`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TrackerSpec {
+    pub mpe_um: f64,
+    pub mpe_um_per_m: f64,
+}
+
+impl Default for TrackerSpec {
+    /// FARO Vantage, as in the paper: 16 µm + 0.8 µm/m.
+    fn default() -> Self {
+        Self {
+            mpe_um: 16.0,
+            mpe_um_per_m: 0.8,
+        }
+    }
+}
+
+/// One arm's measurements.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ArmData {
+    pub side: Side,
+    pub file: PathBuf,
+    pub measurements: Vec<Measurement>,
+}
+
+impl ArmData {
+    pub fn select(&self, split: Split) -> Vec<&Measurement> {
+        self.measurements
+            .iter()
+            .filter(|m| split.contains(m.split))
+            .collect()
+    }
+}
+
+/// A loaded dataset.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Dataset {
+    /// Directory the dataset was loaded from.
+    pub dir: PathBuf,
+    /// Robot description (resolved path), or `None` for the built-in IRB 14000.
+    pub robot: Option<PathBuf>,
+    pub tracker: TrackerSpec,
+    /// Nominal reflector coordinates in the flange frame, mm.
+    pub nominal_reflectors_mm: [Vector3<f64>; 3],
+    pub arms: PerSide<ArmData>,
+}
+
+impl Dataset {
+    pub fn arm(&self, side: Side) -> &ArmData {
+        &self.arms[side]
+    }
+
+    /// The same dataset with only the first `n` calibration configurations of each arm (all
+    /// verification configurations are kept).
+    pub fn with_cal_subset(&self, n: usize) -> Dataset {
+        let mut out = self.clone();
+        for (_, arm) in out.arms.iter_mut() {
+            let mut kept = 0;
+            arm.measurements.retain(|m| {
+                if m.split == Split::Cal {
+                    kept += 1;
+                    kept <= n
+                } else {
+                    true
+                }
+            });
+        }
+        out
+    }
+
+    /// The files the dataset was read from: the manifest and both CSVs.
+    pub fn files(&self) -> [PathBuf; 3] {
+        [
+            self.dir.join(MANIFEST_FILE),
+            self.arms.left.file.clone(),
+            self.arms.right.file.clone(),
+        ]
+    }
+}
+
+/// Expected CSV columns, in order (`split` is optional and last).
+pub const CSV_COLUMNS: [&str; 17] = [
+    "id", "q1", "q2", "q3", "q4", "q5", "q6", "q7", "ax", "ay", "az", "bx", "by", "bz", "cx", "cy",
+    "cz",
+];
+/// The optional last CSV column.
+pub const SPLIT_COLUMN: &str = "split";
+
+/// Resolve a dataset path (its directory or its manifest) into (directory, manifest path).
+fn resolve(path: &Path) -> (PathBuf, PathBuf) {
+    if path.is_dir() {
+        (path.to_path_buf(), path.join(MANIFEST_FILE))
+    } else {
+        let dir = match path.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        (dir, path.to_path_buf())
+    }
+}
+
+/// The manifest's file name inside a dataset directory.
+pub const MANIFEST_FILE: &str = "dataset.toml";
+
+/// Load a dataset from its directory or from the path of its `dataset.toml`.
+pub fn load(path: &Path) -> Result<Dataset, DatasetError> {
+    load_with_units(path).map(|(d, _)| d)
+}
+
+/// Like [`load`], also returning the units the files were written in (to save back in the same units).
+pub fn load_with_units(path: &Path) -> Result<(Dataset, Units), DatasetError> {
+    let (dir, manifest_path) = resolve(path);
+    let text = read_text(&manifest_path)?;
+    let m = manifest::parse(&manifest_path, &dir, &text)?;
+    let arms = m.files.try_map(|side, file| {
+        let measurements = csv::read_arm(&file, side, m.units)?;
+        Ok::<_, DatasetError>(ArmData {
+            side,
+            file,
+            measurements,
+        })
+    })?;
+    Ok((
+        Dataset {
+            dir,
+            robot: m.robot,
+            tracker: m.tracker,
+            nominal_reflectors_mm: m.reflectors_mm,
+            arms,
+        },
+        m.units,
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::atomic::OutputError;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    fn random_arm(rng: &mut ChaCha8Rng, side: Side, n: usize) -> ArmData {
+        let measurements = (0..n)
+            .map(|i| Measurement {
+                // Ids that need CSV quoting must survive too.
+                id: match i {
+                    0 => "pose, \"first\"".to_string(),
+                    1 => "ü-2".to_string(),
+                    _ => format!("{side}{i}"),
+                },
+                q_rad: std::array::from_fn(|_| rng.random_range(-3.0..3.0)),
+                tracker_points_mm: std::array::from_fn(|_| {
+                    Vector3::from_fn(|_, _| rng.random_range(-3000.0..3000.0))
+                }),
+                split: if rng.random_bool(0.3) {
+                    Split::Ver
+                } else {
+                    Split::Cal
+                },
+                line: 0,
+            })
+            .collect();
+        ArmData {
+            side,
+            file: PathBuf::new(),
+            measurements,
+        }
+    }
+
+    fn random_dataset(seed: u64) -> Dataset {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        Dataset {
+            dir: PathBuf::new(),
+            robot: None,
+            tracker: TrackerSpec {
+                mpe_um: 10.0,
+                mpe_um_per_m: 1.25,
+            },
+            nominal_reflectors_mm: std::array::from_fn(|_| {
+                Vector3::from_fn(|_, _| rng.random_range(-50.0..50.0))
+            }),
+            arms: PerSide::new(
+                random_arm(&mut rng, Side::Left, 9),
+                random_arm(&mut rng, Side::Right, 7),
+            ),
+        }
+    }
+
+    /// Compare everything but paths and line numbers.
+    fn assert_close(a: &Dataset, b: &Dataset, tol_mm: f64, tol_rad: f64) {
+        assert_eq!(a.tracker, b.tracker);
+        for k in 0..3 {
+            assert!((a.nominal_reflectors_mm[k] - b.nominal_reflectors_mm[k]).amax() <= tol_mm);
+        }
+        for side in Side::BOTH {
+            let (x, y) = (a.arm(side), b.arm(side));
+            assert_eq!(y.side, side);
+            assert_eq!(x.measurements.len(), y.measurements.len());
+            for (m, n) in x.measurements.iter().zip(&y.measurements) {
+                assert_eq!(m.id, n.id);
+                assert_eq!(m.split, n.split);
+                for j in 0..N_JOINTS {
+                    assert!((m.q_rad[j] - n.q_rad[j]).abs() <= tol_rad);
+                }
+                for k in 0..3 {
+                    assert!((m.tracker_points_mm[k] - n.tracker_points_mm[k]).amax() <= tol_mm);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn round_trip_in_every_unit() {
+        let original = random_dataset(7);
+        for length in [LengthUnit::Mm, LengthUnit::M] {
+            for angle in [AngleUnit::Rad, AngleUnit::Deg] {
+                let units = Units { length, angle };
+                let dir = tempfile::tempdir().unwrap();
+                let out = dir.path().join("ds");
+                save(&original, &out, units).unwrap();
+                let (back, read_units) = load_with_units(&out).unwrap();
+                assert_eq!(read_units, units);
+                assert_eq!(back.dir, out);
+                assert_eq!(back.arms.left.file, out.join("left.csv"));
+                if units == Units::MM_RAD {
+                    // No conversion: bit-exact.
+                    assert_close(&original, &back, 0.0, 0.0);
+                } else {
+                    assert_close(&original, &back, 1e-9, 1e-12);
+                }
+                // Line numbers point at the rows: comment line 1, header line 2.
+                assert_eq!(back.arms.right.measurements[3].line, 6);
+            }
+        }
+    }
+
+    #[test]
+    fn save_refuses_to_replace_a_dataset_without_the_flag() {
+        let d = random_dataset(3);
+        let dir = tempfile::tempdir().unwrap();
+        save(&d, dir.path(), Units::MM_DEG).unwrap();
+        let before = std::fs::read(dir.path().join("left.csv")).unwrap();
+        let other = random_dataset(4);
+        let err = save(&other, dir.path(), Units::MM_DEG).unwrap_err();
+        assert!(matches!(
+            err,
+            DatasetError::Output(OutputError::Exists { .. })
+        ));
+        assert_eq!(std::fs::read(dir.path().join("left.csv")).unwrap(), before);
+        save_with(&other, dir.path(), Units::MM_DEG, Overwrite::Allow).unwrap();
+        let back = load(dir.path()).unwrap();
+        assert_close(&other, &back, 1e-9, 1e-12);
+    }
+
+    #[test]
+    fn save_refuses_unsavable_data_and_writes_nothing() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut d = random_dataset(5);
+        d.arms.left.measurements[2].q_rad[4] = f64::NAN;
+        assert!(matches!(
+            save(&d, dir.path(), Units::MM_RAD),
+            Err(DatasetError::Content { .. })
+        ));
+        let mut d = random_dataset(5);
+        d.arms.right.measurements[1].id = "#hidden".into();
+        assert!(matches!(
+            save(&d, dir.path(), Units::MM_RAD),
+            Err(DatasetError::Content { .. })
+        ));
+        let mut d = random_dataset(5);
+        d.arms.right.measurements[1].id = d.arms.right.measurements[2].id.clone();
+        assert!(matches!(
+            save(&d, dir.path(), Units::MM_RAD),
+            Err(DatasetError::Content { .. })
+        ));
+        let mut d = random_dataset(5);
+        d.arms.left.measurements.truncate(MIN_CONFIGS - 1);
+        assert!(matches!(
+            save(&d, dir.path(), Units::MM_RAD),
+            Err(DatasetError::TooFewConfigurations { .. })
+        ));
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+    }
+
+    #[test]
+    fn robot_path_survives_a_round_trip() {
+        let dir = tempfile::tempdir().unwrap();
+        let urdf = dir.path().join("robot.urdf");
+        std::fs::write(&urdf, "<robot/>").unwrap();
+        let mut d = random_dataset(9);
+        // Outside the output directory: written as an absolute path.
+        d.robot = Some(urdf.clone());
+        let out = dir.path().join("a");
+        save(&d, &out, Units::MM_DEG).unwrap();
+        let back = load(&out).unwrap();
+        assert_eq!(
+            back.robot.unwrap().canonicalize().unwrap(),
+            urdf.canonicalize().unwrap()
+        );
+        // Inside: written relative, so the directory can move.
+        d.robot = Some(dir.path().join("robot.urdf"));
+        save_with(&d, dir.path(), Units::MM_DEG, Overwrite::Allow).unwrap();
+        let text = std::fs::read_to_string(dir.path().join(MANIFEST_FILE)).unwrap();
+        assert!(text.contains("robot = \"robot.urdf\""), "{text}");
+        assert_eq!(load(dir.path()).unwrap().robot, Some(urdf));
+    }
+}

@@ -1,0 +1,354 @@
+//! Per-configuration geometry, computed once, and the pair loops that combine it.
+
+use super::kabsch::kabsch_fit;
+use super::{
+    AccuracyStats, MIN_METRIC_CONFIGS, MetricsError, ORI_THRESHOLDS_RAD, POS_THRESHOLDS_MM,
+};
+use crate::dataset::{ArmData, Dataset, Measurement, Split};
+use crate::kinematics::{ArmModel, DualArmModel, REFLECTOR_NAMES, rotation_angle_rad};
+use crate::side::Side;
+use nalgebra::{Isometry3, Matrix3, Rotation3, Vector3};
+use rayon::prelude::*;
+
+/// Everything the pair loops need about one configuration, as plain arrays: the pair loops run tens of
+/// thousands of times per evaluation and plain arithmetic stays fast in unoptimised (test) builds too.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct ConfigGeom {
+    /// Measured reflector points, tracker frame, mm.
+    pub(super) measured_mm: [[f64; 3]; 3],
+    /// Model reflector points in the reference base frame, mm.
+    pub(super) model_mm: [[f64; 3]; 3],
+    /// `M = R_m · R_oᵀ` (row-major): the measured flange rotation (Kabsch fit, tracker frame) times the
+    /// inverse of the model's (reference base frame). See [`pair_residual`].
+    pub(super) measured_from_model_rot: [[f64; 3]; 3],
+    pub(super) fit_rms_mm: f64,
+}
+
+/// One arm's selected configurations: indices into `ArmData::measurements` and their geometry.
+pub(super) struct ArmGeom {
+    pub(super) side: Side,
+    pub(super) indices: Vec<usize>,
+    pub(super) geom: Vec<ConfigGeom>,
+}
+
+fn check_model_arm(side: Side, arm: &ArmModel) -> Result<(), MetricsError> {
+    for (i, row) in arm.dh.iter().enumerate() {
+        for (name, v) in [
+            ("a", row.a_mm),
+            ("d", row.d_mm),
+            ("theta", row.theta_rad),
+            ("alpha", row.alpha_rad),
+        ] {
+            if !v.is_finite() {
+                return Err(MetricsError::NonFiniteModel {
+                    field: format!("{side} arm DH {name}{}", i + 1),
+                });
+            }
+        }
+    }
+    for (k, t) in arm.reflectors_mm.iter().enumerate() {
+        if !t.iter().all(|x| x.is_finite()) {
+            return Err(MetricsError::NonFiniteModel {
+                field: format!("{side} arm reflector t_{}", REFLECTOR_NAMES[k]),
+            });
+        }
+    }
+    let t = &arm.reflectors_mm;
+    let (ab, ac) = (t[1] - t[0], t[2] - t[0]);
+    let longest = ab.norm().max(ac.norm()).max((t[2] - t[1]).norm());
+    if ab.cross(&ac).norm() <= 1e-9 * longest * longest {
+        return Err(MetricsError::DegenerateReflectors { side });
+    }
+    Ok(())
+}
+
+fn check_base(b: &Isometry3<f64>) -> Result<(), MetricsError> {
+    let finite = b.translation.vector.iter().all(|x| x.is_finite())
+        && b.rotation.coords.iter().all(|x| x.is_finite());
+    if finite {
+        Ok(())
+    } else {
+        Err(MetricsError::NonFiniteModel {
+            field: "left_base_from_right_base".into(),
+        })
+    }
+}
+
+fn check_measurement(side: Side, m: &Measurement) -> Result<(), MetricsError> {
+    let bad = |field: String| MetricsError::NonFiniteMeasurement {
+        side,
+        id: m.id.clone(),
+        line: m.line,
+        field,
+    };
+    if let Some(j) = m.q_rad.iter().position(|q| !q.is_finite()) {
+        return Err(bad(format!("q{}", j + 1)));
+    }
+    for (k, p) in m.tracker_points_mm.iter().enumerate() {
+        if let Some(c) = p.iter().position(|x| !x.is_finite()) {
+            return Err(bad(format!("{}{}", REFLECTOR_NAMES[k], ["x", "y", "z"][c])));
+        }
+    }
+    Ok(())
+}
+
+/// Geometry of one arm's selected configurations, model quantities expressed in the frame
+/// `reference_from_base` maps to (the left-arm base for collaborative use; any frame for relative use,
+/// which is invariant under a common rigid motion).
+pub(super) fn arm_geometry(
+    data: &ArmData,
+    side: Side,
+    arm: &ArmModel,
+    reference_from_base: &Isometry3<f64>,
+    split: Split,
+) -> Result<ArmGeom, MetricsError> {
+    check_model_arm(side, arm)?;
+    let selected: Vec<(usize, &Measurement)> = data
+        .measurements
+        .iter()
+        .enumerate()
+        .filter(|(_, m)| split.contains(m.split))
+        .collect();
+    if selected.len() < MIN_METRIC_CONFIGS {
+        return Err(MetricsError::TooFewConfigurations {
+            side,
+            split,
+            found: selected.len(),
+            min: MIN_METRIC_CONFIGS,
+        });
+    }
+    for (_, m) in &selected {
+        check_measurement(side, m)?;
+    }
+    let reference_rot = reference_from_base.rotation.to_rotation_matrix();
+    let geom = selected
+        .par_iter()
+        .map(|(_, m)| {
+            let fk = arm.reflector_fk(&m.q_rad);
+            let model_mm = fk
+                .points_mm
+                .map(|p| reference_from_base.transform_point(&p.into()).coords);
+            let model_rot = reference_rot * fk.base_from_flange.rotation.to_rotation_matrix();
+            let fit = kabsch_fit(&arm.reflectors_mm, &m.tracker_points_mm).ok_or_else(|| {
+                MetricsError::FitFailed {
+                    side,
+                    id: m.id.clone(),
+                }
+            })?;
+            let g = ConfigGeom {
+                measured_mm: m.tracker_points_mm.map(|p| p.into()),
+                model_mm: model_mm.map(|p| p.into()),
+                measured_from_model_rot: (fit.rotation * model_rot.transpose())
+                    .into_inner()
+                    .transpose()
+                    .into(),
+                fit_rms_mm: fit.rms_mm,
+            };
+            let finite = model_mm.iter().all(|p| p.iter().all(|x| x.is_finite()))
+                && model_rot.matrix().iter().all(|x| x.is_finite());
+            if finite {
+                Ok(g)
+            } else {
+                Err(MetricsError::NonFiniteResult {
+                    what: format!("forward kinematics of {side} configuration `{}`", m.id),
+                })
+            }
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok(ArmGeom {
+        side,
+        indices: selected.iter().map(|(i, _)| *i).collect(),
+        geom,
+    })
+}
+
+/// `Δd` per reflector and `Δo` of one pair `(i, j)` = `(a, b)`.
+///
+/// `Δo = ‖log(E)‖` with `E = (R_m,iᵀ R_m,j)ᵀ (R_o,iᵀ R_o,j) = R_m,jᵀ M_i R_o,j`, `M = R_m R_oᵀ`. The angle
+/// of a rotation is invariant under conjugation, and `R_o,j E R_o,jᵀ = M_jᵀ M_i`, so `Δo` is the angle of
+/// `M_jᵀ M_i`: one matrix product per pair.
+#[inline]
+pub(super) fn pair_residual(a: &ConfigGeom, b: &ConfigGeom) -> ([f64; 3], f64) {
+    let dd = std::array::from_fn(|k| {
+        distance(&a.measured_mm[k], &b.measured_mm[k]) - distance(&a.model_mm[k], &b.model_mm[k])
+    });
+    let (mb, ma) = (&b.measured_from_model_rot, &a.measured_from_model_rot);
+    // E = M_bᵀ M_a, row-major: E[r][c] = Σ_k M_b[k][r] · M_a[k][c].
+    let e = |r: usize, c: usize| mb[0][r] * ma[0][c] + mb[1][r] * ma[1][c] + mb[2][r] * ma[2][c];
+    #[rustfmt::skip]
+    let e = Matrix3::new(
+        e(0, 0), e(0, 1), e(0, 2),
+        e(1, 0), e(1, 1), e(1, 2),
+        e(2, 0), e(2, 1), e(2, 2),
+    );
+    (dd, rotation_angle_rad(&Rotation3::from_matrix_unchecked(e)))
+}
+
+#[inline]
+fn distance(p: &[f64; 3], q: &[f64; 3]) -> f64 {
+    let (x, y, z) = (p[0] - q[0], p[1] - q[1], p[2] - q[2]);
+    (x * x + y * y + z * z).sqrt()
+}
+
+pub(super) fn worst(dd: &[f64; 3]) -> f64 {
+    dd.iter()
+        .copied()
+        .fold(0.0, |w, d| if d.abs() > w.abs() { d } else { w })
+}
+
+/// Running sums for [`AccuracyStats`]; mergeable for parallel reduction.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct Accumulator {
+    n: usize,
+    pos_sum_sq: [f64; 3],
+    pos_max: f64,
+    pos_within: [usize; 2],
+    ori_sum_sq: f64,
+    ori_max: f64,
+    ori_within: [usize; 2],
+}
+
+impl Accumulator {
+    #[inline]
+    fn add(&mut self, dd: &[f64; 3], ori: f64) {
+        self.n += 1;
+        let mut w = 0.0f64;
+        for (s, d) in self.pos_sum_sq.iter_mut().zip(dd) {
+            *s += d * d;
+            w = w.max(d.abs());
+        }
+        self.pos_max = self.pos_max.max(w);
+        self.ori_sum_sq += ori * ori;
+        self.ori_max = self.ori_max.max(ori);
+        for t in 0..2 {
+            self.pos_within[t] += usize::from(w <= POS_THRESHOLDS_MM[t]);
+            self.ori_within[t] += usize::from(ori <= ORI_THRESHOLDS_RAD[t]);
+        }
+    }
+
+    fn merge(mut self, o: Self) -> Self {
+        self.n += o.n;
+        for k in 0..3 {
+            self.pos_sum_sq[k] += o.pos_sum_sq[k];
+        }
+        self.pos_max = self.pos_max.max(o.pos_max);
+        self.ori_sum_sq += o.ori_sum_sq;
+        self.ori_max = self.ori_max.max(o.ori_max);
+        for t in 0..2 {
+            self.pos_within[t] += o.pos_within[t];
+            self.ori_within[t] += o.ori_within[t];
+        }
+        self
+    }
+
+    pub(super) fn finish(
+        self,
+        n_configs: usize,
+        what: &str,
+    ) -> Result<AccuracyStats, MetricsError> {
+        let n = self.n.max(1) as f64;
+        let per = self.pos_sum_sq.map(|s| (s / n).sqrt());
+        let frac = |c: usize| c as f64 / n;
+        let stats = AccuracyStats {
+            pos_rms_mm: per.iter().copied().fold(0.0, f64::max),
+            pos_rms_per_reflector_mm: per,
+            pos_max_mm: self.pos_max,
+            ori_rms_rad: (self.ori_sum_sq / n).sqrt(),
+            ori_max_rad: self.ori_max,
+            pos_within_0_3mm_frac: frac(self.pos_within[0]),
+            pos_within_0_6mm_frac: frac(self.pos_within[1]),
+            ori_within_0_005rad_frac: frac(self.ori_within[0]),
+            ori_within_0_01rad_frac: frac(self.ori_within[1]),
+            n_configs,
+            n_pairs: self.n,
+        };
+        // `f64::max` ignores NaN, so a NaN pair shows up only in the sums.
+        let finite = per.iter().all(|x| x.is_finite())
+            && stats.pos_max_mm.is_finite()
+            && stats.ori_rms_rad.is_finite();
+        if finite {
+            Ok(stats)
+        } else {
+            Err(MetricsError::NonFiniteResult {
+                what: format!("the {what} accuracy"),
+            })
+        }
+    }
+}
+
+pub(super) fn relative_accumulate(g: &[ConfigGeom]) -> Accumulator {
+    (0..g.len())
+        .into_par_iter()
+        .fold(Accumulator::default, |mut acc, i| {
+            for b in &g[i + 1..] {
+                let (dd, o) = pair_residual(&g[i], b);
+                acc.add(&dd, o);
+            }
+            acc
+        })
+        .reduce(Accumulator::default, Accumulator::merge)
+}
+
+pub(super) fn collaborative_accumulate(left: &[ConfigGeom], right: &[ConfigGeom]) -> Accumulator {
+    left.par_iter()
+        .fold(Accumulator::default, |mut acc, l| {
+            for r in right {
+                let (dd, o) = pair_residual(l, r);
+                acc.add(&dd, o);
+            }
+            acc
+        })
+        .reduce(Accumulator::default, Accumulator::merge)
+}
+
+/// Both arms' geometry with the model expressed in the left-arm base frame.
+pub(super) fn both_arms(
+    dataset: &Dataset,
+    model: &DualArmModel,
+    split: Split,
+) -> Result<(ArmGeom, ArmGeom), MetricsError> {
+    check_base(&model.left_base_from_right_base)?;
+    let left = arm_geometry(
+        dataset.arm(Side::Left),
+        Side::Left,
+        model.arm(Side::Left),
+        &Isometry3::identity(),
+        split,
+    )?;
+    let right = arm_geometry(
+        dataset.arm(Side::Right),
+        Side::Right,
+        model.arm(Side::Right),
+        &model.left_base_from_right_base,
+        split,
+    )?;
+    Ok((left, right))
+}
+
+/// Worst `|Δd|`, RMS and max `Δo` of one configuration against a set of others.
+pub(super) fn against(
+    g: &ConfigGeom,
+    others: &[ConfigGeom],
+    skip: Option<usize>,
+) -> (f64, f64, f64) {
+    let (mut pos_max, mut ori_sum_sq, mut ori_max, mut n) = (0.0f64, 0.0, 0.0f64, 0usize);
+    for (j, o) in others.iter().enumerate() {
+        if Some(j) == skip {
+            continue;
+        }
+        let (dd, ori) = pair_residual(g, o);
+        pos_max = dd.iter().fold(pos_max, |m, d| m.max(d.abs()));
+        ori_sum_sq += ori * ori;
+        ori_max = ori_max.max(ori);
+        n += 1;
+    }
+    (pos_max, (ori_sum_sq / n.max(1) as f64).sqrt(), ori_max)
+}
+
+pub(super) fn triangle_sides(p: &[Vector3<f64>; 3]) -> [f64; 3] {
+    [
+        (p[0] - p[1]).norm(),
+        (p[1] - p[2]).norm(),
+        (p[2] - p[0]).norm(),
+    ]
+}

@@ -1,0 +1,117 @@
+//! Steps 2 and 3 of the protocol: the tracker's place and the configurations that face it.
+
+use super::{STREAM_TRACKER, SimError, SimOptions, gauss, rng_for, stream_configs};
+use crate::kinematics::{ArmModel, N_JOINTS, joint_limits_rad};
+use crate::side::Side;
+use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
+use rand::Rng;
+
+/// The tracker pose relative to the left-arm base (see the module documentation).
+pub(super) fn place_tracker(opts: &SimOptions) -> Isometry3<f64> {
+    let mut rng = rng_for(opts.seed, STREAM_TRACKER);
+    let (lo, hi) = opts.tracker_distance_m;
+    let dist_mm = 1000.0
+        * if lo < hi {
+            rng.random_range(lo..hi)
+        } else {
+            lo
+        };
+    let az = opts.tracker_azimuth_max_deg.to_radians();
+    let az = if az > 0.0 {
+        rng.random_range(-az..az)
+    } else {
+        0.0
+    };
+    let (elo, ehi) = opts.tracker_elevation_deg;
+    let el = if elo < ehi {
+        rng.random_range(elo..ehi)
+    } else {
+        elo
+    }
+    .to_radians();
+    let dir = Vector3::new(el.cos() * az.cos(), el.cos() * az.sin(), el.sin());
+    let position_in_body = dir * dist_mm;
+    // Uniform random rotation: a normalised 4-D Gaussian is uniform on the unit quaternions.
+    let q = nalgebra::Quaternion::new(
+        gauss(&mut rng),
+        gauss(&mut rng),
+        gauss(&mut rng),
+        gauss(&mut rng),
+    );
+    let tracker_rotation = UnitQuaternion::from_quaternion(q);
+    let tracker_from_body = Isometry3::from_parts(Translation3::identity(), tracker_rotation)
+        * Translation3::from(-position_in_body);
+    tracker_from_body * opts.body_from_left_base
+}
+
+/// Do the reflectors of `arm` at `q` face a tracker at `tracker_in_base_mm`?
+fn faces(
+    arm: &ArmModel,
+    q: &[f64; N_JOINTS],
+    tracker_in_base_mm: &Point3<f64>,
+    cos_max: f64,
+) -> bool {
+    let flange = arm.base_from_flange(q);
+    let z = flange.rotation * Vector3::z();
+    let to_tracker = tracker_in_base_mm - Point3::from(flange.translation.vector);
+    let n = to_tracker.norm();
+    n > 0.0 && z.dot(&to_tracker) >= cos_max * n
+}
+
+pub(super) struct Accepted {
+    pub configs: Vec<[f64; N_JOINTS]>,
+    pub attempts: usize,
+    pub rejected_for_facing: usize,
+    pub rejected_for_collision: usize,
+}
+
+pub(super) fn sample_configurations(
+    opts: &SimOptions,
+    side: Side,
+    nominal_arm: &ArmModel,
+    tracker_in_base_mm: &Point3<f64>,
+    collides: &dyn Fn(Side, &[f64; N_JOINTS]) -> bool,
+) -> Result<Accepted, SimError> {
+    let mut rng = rng_for(opts.seed, stream_configs(side));
+    let limits = joint_limits_rad().map(|(lo, hi)| {
+        let margin = opts.joint_limit_margin_fraction * (hi - lo);
+        (lo + margin, hi - margin)
+    });
+    let cos_max = opts.facing_max_angle_deg.to_radians().cos();
+    let max_attempts = opts.max_attempts_per_config.saturating_mul(opts.n_configs);
+    let mut out = Accepted {
+        configs: Vec::with_capacity(opts.n_configs),
+        attempts: 0,
+        rejected_for_facing: 0,
+        rejected_for_collision: 0,
+    };
+    while out.configs.len() < opts.n_configs {
+        if out.attempts >= max_attempts {
+            return Err(SimError::NotEnoughConfigurations {
+                side,
+                accepted: out.configs.len(),
+                wanted: opts.n_configs,
+                attempts: out.attempts,
+                rejected_for_facing: out.rejected_for_facing,
+                rejected_for_collision: out.rejected_for_collision,
+            });
+        }
+        out.attempts += 1;
+        let q: [f64; N_JOINTS] = std::array::from_fn(|i| {
+            let (lo, hi) = limits[i];
+            if lo < hi {
+                rng.random_range(lo..hi)
+            } else {
+                lo
+            }
+        });
+        if !faces(nominal_arm, &q, tracker_in_base_mm, cos_max) {
+            out.rejected_for_facing += 1;
+        } else if collides(side, &q) {
+            out.rejected_for_collision += 1;
+        } else {
+            out.configs.push(q);
+        }
+    }
+    Ok(out)
+}

@@ -1,0 +1,108 @@
+//! What a calibration run returns, however it ended.
+
+use super::identifiability::IdentifiabilityReport;
+use super::{CalibrationSettings, IterationRecord, QpMethod, Stage, StageSummary, Termination};
+use crate::dataset::{Dataset, Split};
+use crate::kinematics::DualArmModel;
+use crate::metrics::{ConfigResiduals, MetricsError, PairKind, PairResiduals};
+use crate::side::{PerSide, Side};
+
+/// The stages of a two-step calibration, in the order they run.
+pub const STAGES: [Stage; 3] = [Stage::Arm(Side::Left), Stage::Arm(Side::Right), Stage::Base];
+
+/// The outcome of a calibration run: the model reached, the history and, per stage, why it ended.
+/// A run that hit the iteration limit or was cancelled returns one too ([`CalibrationResult::is_converged`]
+/// tells).
+#[derive(Clone, Debug)]
+pub struct CalibrationResult {
+    pub nominal: DualArmModel,
+    /// The model reached: the stages that ran, at their final iterates; the nominal values for the
+    /// parts of stages that did not run.
+    pub calibrated: DualArmModel,
+    pub settings: CalibrationSettings,
+    pub history: Vec<IterationRecord>,
+    /// The stages that ran (left arm, right arm, base), each with its termination.
+    pub stages: Vec<StageSummary>,
+    /// Which parameters of each arm were identified and which fixed, and why (`None` for an arm whose
+    /// stage did not start).
+    pub identifiability: PerSide<Option<IdentifiabilityReport>>,
+    /// Allowed deviation δ of the reflector triangle's sides (constraint 14, ε = δ²), mm, per arm.
+    pub side_tolerance_mm: PerSide<f64>,
+    pub elapsed_secs: f64,
+}
+
+impl CalibrationResult {
+    /// Did every stage run and converge?
+    pub fn is_converged(&self) -> bool {
+        self.stages.len() == STAGES.len()
+            && self.stages.iter().all(|s| s.termination.is_converged())
+    }
+
+    /// The summary of `stage`, if it ran.
+    pub fn stage(&self, stage: Stage) -> Option<&StageSummary> {
+        self.stages.iter().find(|s| s.stage == stage)
+    }
+
+    /// One warning per stage that did not converge, and one for each stage that did not run; empty
+    /// when the run converged. The command line and the workbench both show these.
+    pub fn warnings(&self) -> Vec<String> {
+        let mut out: Vec<String> = self
+            .stages
+            .iter()
+            .filter(|s| !s.termination.is_converged())
+            .map(|s| match s.termination {
+                Termination::MaxIterations => format!(
+                    "{} stopped at the iteration limit ({} iterations) before converging; the \
+                     parameters are those reached (raise the iteration limit to continue)",
+                    s.stage, s.iterations
+                ),
+                Termination::Cancelled => format!(
+                    "{} was cancelled after {} iterations; the parameters are those reached",
+                    s.stage, s.iterations
+                ),
+                _ => format!(
+                    "{} stopped where the exact QP still predicts a decrease of ψ by more than {:.0e} \
+                     of itself; the parameters are usable but not optimal{}",
+                    s.stage,
+                    super::sqp::STATIONARY_RTOL,
+                    if self.settings.qp == QpMethod::Paper {
+                        " (the paper's subgradient QP is inexact: try the exact QP)"
+                    } else {
+                        ""
+                    }
+                ),
+            })
+            .collect();
+        for stage in STAGES {
+            if self.stage(stage).is_none() {
+                out.push(format!("{stage} did not run; its parameters are nominal"));
+            }
+        }
+        out
+    }
+
+    /// Per-pair residuals of the calibrated model on the identification split: every relative pair of
+    /// `side` (`Some`) or every collaborative left × right pair (`None`), with the signed Δd per reflector
+    /// and Δo (computed on demand: at 1000 configurations per arm these are 500 000 pairs).
+    pub fn pair_residuals(
+        &self,
+        dataset: &Dataset,
+        side: Option<Side>,
+    ) -> Result<Vec<PairResiduals>, MetricsError> {
+        let kind = match side {
+            Some(side) => PairKind::Relative(side),
+            None => PairKind::Collaborative,
+        };
+        crate::metrics::pairs(dataset, &self.calibrated, self.settings.split, kind)
+    }
+
+    /// Per-configuration residuals of the calibrated model on the given split (worst |Δd| involving each
+    /// configuration, its orientation errors and its reflector-triangle rigidity).
+    pub fn config_residuals(
+        &self,
+        dataset: &Dataset,
+        split: Split,
+    ) -> Result<Vec<ConfigResiduals>, MetricsError> {
+        crate::metrics::per_config(dataset, &self.calibrated, split)
+    }
+}

@@ -1,0 +1,513 @@
+//! The executor: [`Calibrator`] sets a run up, [`CalibrationRun`] runs the stages in turn — step 1 for
+//! the left arm, step 1 for the right arm, step 2 — one outer iteration per [`CalibrationRun::step`],
+//! reporting to [`Observer`]s and polling the cancel flag.
+
+use super::arm_problem::ArmProblem;
+use super::base_problem::BaseProblem;
+use super::identifiability::{self, IdentifiabilityReport};
+use super::lm::LmState;
+use super::problem::{MinimaxProblem, StageParams};
+use super::result::CalibrationResult;
+use super::sqp::{SqpSettings, SqpState};
+use super::stage::StageSolver;
+use super::{
+    CalibrationError, CalibrationEvent, CalibrationSettings, IterationRecord, Method, Stage,
+    StageSummary, Termination,
+};
+use crate::dataset::{Dataset, MIN_CONFIGS};
+use crate::kinematics::{DualArmModel, N_JOINTS, N_PARAMS};
+use crate::side::{PerSide, Side};
+use nalgebra::{DMatrix, DVector, Vector3};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+
+/// Pairs per reflector sampled for identifiability, column scaling and the start Hessian.
+pub const IDENTIFIABILITY_PAIRS: usize = 3000;
+
+/// Watches a run. Every method defaults to doing nothing; a closure over [`CalibrationEvent`] is an
+/// observer too. The command line's progress lines, the workbench's live curves and the tests are
+/// observers.
+pub trait Observer {
+    /// A stage begins: `n_configs` configurations (both arms' for step 2) and `n_pairs` pairs per
+    /// reflector.
+    fn stage_started(&mut self, _stage: Stage, _n_configs: usize, _n_pairs: usize) {}
+    /// An outer iteration finished; `run` shows the model as it stands
+    /// ([`CalibrationRun::current_model`]).
+    fn iteration(&mut self, _record: &IterationRecord, _run: &CalibrationRun) {}
+    /// A stage ended (converged or not); `run` holds the model with this stage's parameters.
+    fn stage_finished(&mut self, _summary: &StageSummary, _run: &CalibrationRun) {}
+}
+
+impl<F: FnMut(&CalibrationEvent)> Observer for F {
+    fn stage_started(&mut self, stage: Stage, n_configs: usize, n_pairs: usize) {
+        self(&CalibrationEvent::StageStarted {
+            stage,
+            n_configs,
+            n_pairs,
+        });
+    }
+
+    fn iteration(&mut self, record: &IterationRecord, _run: &CalibrationRun) {
+        self(&CalibrationEvent::Iteration(record.clone()));
+    }
+
+    fn stage_finished(&mut self, summary: &StageSummary, _run: &CalibrationRun) {
+        self(&CalibrationEvent::StageFinished {
+            stage: summary.stage,
+            termination: summary.termination,
+        });
+    }
+}
+
+/// Sets up and runs a calibration:
+/// `Calibrator::new(&dataset, &nominal).settings(s).observer(&mut o).cancel(flag).run()`.
+pub struct Calibrator<'a> {
+    dataset: &'a Dataset,
+    nominal: &'a DualArmModel,
+    settings: CalibrationSettings,
+    observers: Vec<&'a mut dyn Observer>,
+    cancel: Arc<AtomicBool>,
+}
+
+impl<'a> Calibrator<'a> {
+    /// A calibration of `nominal` on `dataset` with the default settings.
+    pub fn new(dataset: &'a Dataset, nominal: &'a DualArmModel) -> Self {
+        Self {
+            dataset,
+            nominal,
+            settings: CalibrationSettings::default(),
+            observers: Vec::new(),
+            cancel: Arc::new(AtomicBool::new(false)),
+        }
+    }
+
+    pub fn settings(mut self, settings: CalibrationSettings) -> Self {
+        self.settings = settings;
+        self
+    }
+
+    /// Add an observer (several may watch one run).
+    pub fn observer(mut self, observer: &'a mut dyn Observer) -> Self {
+        self.observers.push(observer);
+        self
+    }
+
+    /// A flag another thread sets to cancel the run; it is polled between outer iterations (each takes
+    /// milliseconds on paper-size data) and inside the paper's QP solver (every 256 iterations).
+    pub fn cancel(mut self, flag: Arc<AtomicBool>) -> Self {
+        self.cancel = flag;
+        self
+    }
+
+    /// Run every stage to its end. A run that hits the iteration limit or is cancelled returns its
+    /// result too; `Err` is for input the calibration cannot use.
+    pub fn run(mut self) -> Result<CalibrationResult, CalibrationError> {
+        let mut observers = std::mem::take(&mut self.observers);
+        let mut run = self.start()?;
+        loop {
+            if let Progress::Finished(result) = run.step(&mut observers)? {
+                return Ok(*result);
+            }
+        }
+    }
+
+    /// The run, to be advanced by the caller one outer iteration per [`CalibrationRun::step`] (a UI
+    /// frame loop, or the browser, where there are no threads). Observers given to the calibrator are
+    /// not used: pass them to each step.
+    pub fn start(self) -> Result<CalibrationRun, CalibrationError> {
+        CalibrationRun::new(self.dataset, self.nominal, self.settings, self.cancel)
+    }
+}
+
+/// Outcome of [`CalibrationRun::step`].
+#[derive(Debug)]
+pub enum Progress {
+    Running,
+    Finished(Box<CalibrationResult>),
+}
+
+/// Per-arm measurements of the selected split.
+struct ArmInput {
+    qs: Vec<[f64; N_JOINTS]>,
+    measured: Vec<[Vector3<f64>; 3]>,
+    side_tolerance_mm: f64,
+}
+
+/// The stage being solved.
+struct ActiveStage {
+    stage: Stage,
+    solver: Box<dyn StageSolver>,
+    iterations: usize,
+    start_psi_mm2: f64,
+    /// `StageStarted` is reported by the first step of the stage.
+    announced: bool,
+}
+
+/// A two-step calibration in progress: the executor of the stages. Advance it with
+/// [`CalibrationRun::step`] until it reports [`Progress::Finished`].
+pub struct CalibrationRun {
+    settings: CalibrationSettings,
+    nominal: DualArmModel,
+    /// The model with the parameters of the finished stages.
+    committed: DualArmModel,
+    inputs: PerSide<ArmInput>,
+    active: Option<ActiveStage>,
+    history: Vec<IterationRecord>,
+    stages: Vec<StageSummary>,
+    identifiability: PerSide<Option<IdentifiabilityReport>>,
+    cancel: Arc<AtomicBool>,
+    started: Instant,
+}
+
+impl CalibrationRun {
+    fn new(
+        dataset: &Dataset,
+        nominal: &DualArmModel,
+        settings: CalibrationSettings,
+        cancel: Arc<AtomicBool>,
+    ) -> Result<Self, CalibrationError> {
+        let inputs = PerSide::try_from_fn(|side| arm_input(dataset, side, &settings))?;
+        let mut run = Self {
+            settings,
+            nominal: nominal.clone(),
+            committed: nominal.clone(),
+            inputs,
+            active: None,
+            history: Vec::new(),
+            stages: Vec::new(),
+            identifiability: PerSide::default(),
+            cancel,
+            started: Instant::now(),
+        };
+        run.active = Some(run.start_stage(Stage::Arm(Side::Left))?);
+        Ok(run)
+    }
+
+    /// The flag that cancels this run (set it from anywhere; the next step ends the run).
+    pub fn cancel_flag(&self) -> Arc<AtomicBool> {
+        self.cancel.clone()
+    }
+
+    /// Cancel the run: the next [`CalibrationRun::step`] ends it with the model reached.
+    pub fn cancel(&self) {
+        self.cancel.store(true, Ordering::Relaxed);
+    }
+
+    /// The stage that the next step advances (`None` when finished).
+    pub fn stage(&self) -> Option<Stage> {
+        self.active.as_ref().map(|a| a.stage)
+    }
+
+    /// Outer iterations done in the current stage.
+    pub fn stage_iterations(&self) -> usize {
+        self.active.as_ref().map_or(0, |a| a.iterations)
+    }
+
+    /// The iterations so far, all stages.
+    pub fn history(&self) -> &[IterationRecord] {
+        &self.history
+    }
+
+    /// The model as it stands: the finished stages' parameters and the current stage's iterate.
+    pub fn current_model(&self) -> DualArmModel {
+        let mut model = self.committed.clone();
+        if let Some(active) = &self.active {
+            apply(&mut model, active.stage, active.solver.current());
+        }
+        model
+    }
+
+    /// Advance one outer iteration of the current stage, reporting to `observers`. When a stage ends
+    /// the next one is set up; when the last ends — or the run is cancelled — the result is returned.
+    pub fn step(
+        &mut self,
+        observers: &mut [&mut dyn Observer],
+    ) -> Result<Progress, CalibrationError> {
+        let Some(mut active) = self.active.take() else {
+            return Ok(Progress::Finished(Box::new(self.result())));
+        };
+        if !active.announced {
+            active.announced = true;
+            let (n_configs, n_pairs) = self.stage_size(active.stage);
+            for o in observers.iter_mut() {
+                o.stage_started(active.stage, n_configs, n_pairs);
+            }
+        }
+        let cancel = self.cancel.clone();
+        let stop = move || cancel.load(Ordering::Relaxed);
+        let state = if stop() {
+            None
+        } else {
+            Some(active.solver.next_iter(&stop))
+        };
+        let termination = match state {
+            None => Some(Termination::Cancelled),
+            Some(state) if state.termination == Some(Termination::Cancelled) => {
+                Some(Termination::Cancelled)
+            }
+            Some(state) => {
+                active.iterations += 1;
+                let psi_mm2 = max3(state.f_mm2);
+                if !psi_mm2.is_finite() || !state.step_norm.is_finite() {
+                    return Err(CalibrationError::NonFinite {
+                        stage: active.stage,
+                        detail: format!("ψ = {psi_mm2}, step norm = {}", state.step_norm),
+                    });
+                }
+                let record = IterationRecord {
+                    stage: active.stage,
+                    iteration: active.iterations,
+                    psi_mm2,
+                    f_mm2: state.f_mm2,
+                    step_norm: state.step_norm,
+                    kkt_residual: state.residual,
+                    lambda: state.lambda,
+                    elapsed_secs: self.started.elapsed().as_secs_f64(),
+                };
+                self.history.push(record.clone());
+                self.active = Some(active);
+                for o in observers.iter_mut() {
+                    o.iteration(&record, self);
+                }
+                active = self.active.take().expect("put back above");
+                state
+                    .termination
+                    .or((active.iterations >= self.settings.max_iterations)
+                        .then_some(Termination::MaxIterations))
+            }
+        };
+        let Some(termination) = termination else {
+            self.active = Some(active);
+            return Ok(Progress::Running);
+        };
+        self.finish_stage(active, termination, observers)
+    }
+
+    /// Commit a finished stage, report it, and start the next one (none after a cancel).
+    fn finish_stage(
+        &mut self,
+        active: ActiveStage,
+        termination: Termination,
+        observers: &mut [&mut dyn Observer],
+    ) -> Result<Progress, CalibrationError> {
+        let f_mm2 = active.solver.objectives_mm2();
+        apply(&mut self.committed, active.stage, active.solver.current());
+        let summary = StageSummary {
+            stage: active.stage,
+            n_configs: self.stage_size(active.stage).0,
+            iterations: active.iterations,
+            termination,
+            psi_mm2: max3(f_mm2),
+            f_mm2,
+            psi_start_mm2: active.start_psi_mm2,
+        };
+        self.stages.push(summary.clone());
+        for o in observers.iter_mut() {
+            o.stage_finished(&summary, self);
+        }
+        let next = match active.stage {
+            _ if termination == Termination::Cancelled => None,
+            Stage::Arm(Side::Left) => Some(Stage::Arm(Side::Right)),
+            Stage::Arm(Side::Right) => Some(Stage::Base),
+            Stage::Base => None,
+        };
+        match next {
+            Some(stage) => {
+                self.active = Some(self.start_stage(stage)?);
+                Ok(Progress::Running)
+            }
+            None => Ok(Progress::Finished(Box::new(self.result()))),
+        }
+    }
+
+    /// (configurations, pairs per reflector) of a stage.
+    fn stage_size(&self, stage: Stage) -> (usize, usize) {
+        match stage {
+            Stage::Arm(side) => {
+                let n = self.inputs[side].qs.len();
+                (n, n * n.saturating_sub(1) / 2)
+            }
+            Stage::Base => {
+                let (l, r) = (self.inputs.left.qs.len(), self.inputs.right.qs.len());
+                (l + r, l * r)
+            }
+        }
+    }
+
+    fn sqp_settings(&self) -> SqpSettings {
+        SqpSettings {
+            qp: self.settings.qp,
+            step_tolerance: self.settings.step_tolerance,
+            progress_tolerance: self.settings.progress_tolerance,
+            max_qp_iterations: self.settings.max_qp_iterations,
+        }
+    }
+
+    fn start_stage(&mut self, stage: Stage) -> Result<ActiveStage, CalibrationError> {
+        let solver = match stage {
+            Stage::Arm(side) => self.arm_solver(side)?,
+            Stage::Base => self.base_solver()?,
+        };
+        Ok(ActiveStage {
+            stage,
+            start_psi_mm2: max3(solver.objectives_mm2()),
+            solver,
+            iterations: 0,
+            announced: false,
+        })
+    }
+
+    /// Step 1 of `side`: identifiability at the nominal model, column scaling, and the solver of the
+    /// chosen method on the identifiable parameters.
+    fn arm_solver(&mut self, side: Side) -> Result<Box<dyn StageSolver>, CalibrationError> {
+        let stage = Stage::Arm(side);
+        let input = &self.inputs[side];
+        let probe = ArmProblem::new(
+            input.qs.clone(),
+            &input.measured,
+            self.nominal.arm(side),
+            (0..N_PARAMS).collect(),
+            DVector::from_element(N_PARAMS, 1.0),
+            input.side_tolerance_mm,
+        );
+        // A few thousand pairs show every dependency (they are exact) and estimate the scaling well.
+        let rows = probe.sample_pair_jacobian(&DVector::zeros(N_PARAMS), IDENTIFIABILITY_PAIRS);
+        let (report, gram) = identifiability::analyse_with_gram(&rows, &[true; N_PARAMS]);
+        if report.free.is_empty() {
+            return Err(CalibrationError::RankDeficient {
+                stage,
+                detail: "no parameter is identifiable from these configurations".into(),
+            });
+        }
+        // Scale every free parameter by its RMS sensitivity; H₀ is the Gauss–Newton matrix in those
+        // variables, 2·D·G·D with G the mean Gram matrix of the pair Jacobian.
+        let scale = DVector::from_iterator(
+            report.free.len(),
+            report
+                .free
+                .iter()
+                .map(|&k| 1.0 / gram[(k, k)].sqrt().max(1e-12)),
+        );
+        let h0 = DMatrix::from_fn(report.free.len(), report.free.len(), |i, j| {
+            2.0 * gram[(report.free[i], report.free[j])] * scale[i] * scale[j]
+        });
+        let problem = probe.with_free(report.free.clone(), scale);
+        self.identifiability[side] = Some(report);
+        self.solver(problem, stage, h0)
+    }
+
+    /// Step 2: the right-arm base from the collaborative distances, with step 1's arms.
+    fn base_solver(&mut self) -> Result<Box<dyn StageSolver>, CalibrationError> {
+        let stage = Stage::Base;
+        let model_points = |side: Side| -> Vec<[Vector3<f64>; 3]> {
+            self.inputs[side]
+                .qs
+                .iter()
+                .map(|q| self.committed.arm(side).reflector_fk(q).points_mm)
+                .collect()
+        };
+        let problem = BaseProblem::new(
+            model_points(Side::Left),
+            model_points(Side::Right),
+            &self.inputs.left.measured,
+            &self.inputs.right.measured,
+            self.nominal.left_base_from_right_base,
+        );
+        let h0 = problem.gauss_newton(&DVector::zeros(6));
+        let sv = h0.singular_values();
+        if sv.min() <= sv.max() * 1e-12 {
+            return Err(CalibrationError::RankDeficient {
+                stage,
+                detail: format!("collaborative Jacobian singular values {:?}", sv.as_slice()),
+            });
+        }
+        self.solver(problem, stage, h0)
+    }
+
+    /// The stage solver of the configured method on `problem`.
+    fn solver<P: MinimaxProblem + 'static>(
+        &self,
+        problem: P,
+        stage: Stage,
+        h0: DMatrix<f64>,
+    ) -> Result<Box<dyn StageSolver>, CalibrationError> {
+        Ok(match self.settings.method {
+            Method::Minimax => Box::new(SqpState::new(problem, self.sqp_settings(), h0).map_err(
+                |_| CalibrationError::NonFinite {
+                    stage,
+                    detail: "objective or gradient at the start point".into(),
+                },
+            )?),
+            Method::LeastSquares => Box::new(LmState::new(problem, self.settings.step_tolerance)),
+        })
+    }
+
+    fn result(&self) -> CalibrationResult {
+        CalibrationResult {
+            nominal: self.nominal.clone(),
+            calibrated: self.committed.clone(),
+            settings: self.settings.clone(),
+            history: self.history.clone(),
+            stages: self.stages.clone(),
+            identifiability: self.identifiability.clone(),
+            side_tolerance_mm: self.inputs.as_ref().map(|_, i| i.side_tolerance_mm),
+            elapsed_secs: self.started.elapsed().as_secs_f64(),
+        }
+    }
+}
+
+/// The selected split of one arm, checked.
+fn arm_input(
+    dataset: &Dataset,
+    side: Side,
+    settings: &CalibrationSettings,
+) -> Result<ArmInput, CalibrationError> {
+    let ms = dataset.arm(side).select(settings.split);
+    if ms.len() < MIN_CONFIGS {
+        return Err(CalibrationError::TooFewConfigurations {
+            side,
+            found: ms.len(),
+            needed: MIN_CONFIGS,
+        });
+    }
+    let qs: Vec<[f64; N_JOINTS]> = ms.iter().map(|m| m.q_rad).collect();
+    let measured: Vec<[Vector3<f64>; 3]> = ms.iter().map(|m| m.tracker_points_mm).collect();
+    if qs
+        .iter()
+        .flatten()
+        .chain(measured.iter().flatten().flat_map(|v| v.iter()))
+        .any(|v| !v.is_finite())
+    {
+        return Err(CalibrationError::NonFinite {
+            stage: Stage::Arm(side),
+            detail: "measurement data".into(),
+        });
+    }
+    // ε of constraint (14): the tracker's MPE at the mean measuring distance, squared.
+    let mean_dist_m = measured.iter().flatten().map(|p| p.norm()).sum::<f64>()
+        / (3.0 * measured.len() as f64)
+        / 1000.0;
+    let side_tolerance_mm =
+        (dataset.tracker.mpe_um + dataset.tracker.mpe_um_per_m * mean_dist_m) / 1000.0;
+    Ok(ArmInput {
+        qs,
+        measured,
+        side_tolerance_mm,
+    })
+}
+
+/// Put a stage's parameters into `model`.
+fn apply(model: &mut DualArmModel, stage: Stage, params: StageParams) {
+    match (stage, params) {
+        (Stage::Arm(side), StageParams::Arm(arm)) => *model.arm_mut(side) = *arm,
+        (_, StageParams::Base(base)) => model.left_base_from_right_base = base,
+        (Stage::Base, StageParams::Arm(_)) => {
+            debug_assert!(false, "step 2 identifies the base, not an arm")
+        }
+    }
+}
+
+fn max3(f: [f64; 3]) -> f64 {
+    f.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+}

@@ -1,0 +1,101 @@
+//! The stage-solver interface: one outer iteration at a time, whatever the method (argmin's
+//! `Solver::next_iter`). [`super::CalibrationRun`] is the one executor that drives it.
+
+use super::Termination;
+use super::lm::LmState;
+use super::problem::{MinimaxProblem, StageParams};
+use super::sqp::SqpState;
+
+/// What one outer iteration reports.
+#[derive(Clone, Debug, PartialEq)]
+pub struct IterState {
+    /// F_a, F_b, F_c at the new iterate: sums of squared distance errors over all pairs, mm².
+    pub f_mm2: [f64; 3],
+    /// Norm of the scaled parameter step taken.
+    pub step_norm: f64,
+    /// First-order optimality residual: the KKT residual of the minimax problem (SQP) or the largest
+    /// gradient component (least squares).
+    pub residual: f64,
+    /// The reflectors' weights λ_a, λ_b, λ_c in this iteration (SQP: the QP multipliers of the three
+    /// objective rows); `None` for methods that have none.
+    pub lambda: Option<[f64; 3]>,
+    /// `Some` when the stage is over.
+    pub termination: Option<Termination>,
+}
+
+/// One stage's iterative solver (SQP with the exact or the paper's QP, Levenberg–Marquardt, …) on its
+/// problem. Implementations keep their own state between calls.
+pub trait StageSolver: Send {
+    /// One outer iteration. `stop` is polled inside long iterations; when it answers yes the iteration
+    /// ends with [`Termination::Cancelled`] and the iterate is left as it was.
+    fn next_iter(&mut self, stop: &dyn Fn() -> bool) -> IterState;
+    /// The stage's parameters at the current iterate.
+    fn current(&self) -> StageParams;
+    /// F_a, F_b, F_c at the current iterate, mm² (sums over all pairs).
+    fn objectives_mm2(&self) -> [f64; 3];
+    /// Configuration pairs per reflector.
+    fn pair_count(&self) -> usize;
+}
+
+impl<P: MinimaxProblem> StageSolver for SqpState<P> {
+    fn next_iter(&mut self, stop: &dyn Fn() -> bool) -> IterState {
+        let step = SqpState::next_iter(self, stop);
+        let pairs = self.problem.pair_count() as f64;
+        IterState {
+            f_mm2: step.f.map(|v| v * pairs),
+            step_norm: step.step_norm,
+            residual: step.kkt_residual,
+            lambda: Some(step.lambda),
+            termination: step.termination,
+        }
+    }
+
+    fn current(&self) -> StageParams {
+        self.problem.params_at(&self.y)
+    }
+
+    fn objectives_mm2(&self) -> [f64; 3] {
+        let pairs = self.problem.pair_count() as f64;
+        self.eval().f.map(|v| v * pairs)
+    }
+
+    fn pair_count(&self) -> usize {
+        self.problem.pair_count()
+    }
+}
+
+impl<P: MinimaxProblem> StageSolver for LmState<P> {
+    fn next_iter(&mut self, stop: &dyn Fn() -> bool) -> IterState {
+        if stop() {
+            return IterState {
+                f_mm2: self.objectives_mm2(),
+                step_norm: 0.0,
+                residual: f64::NAN,
+                lambda: None,
+                termination: Some(Termination::Cancelled),
+            };
+        }
+        let step = LmState::next_iter(self);
+        let pairs = self.problem.pair_count() as f64;
+        IterState {
+            f_mm2: step.f.map(|v| v * pairs),
+            step_norm: step.step_norm,
+            residual: step.gradient_norm,
+            lambda: None,
+            termination: step.termination,
+        }
+    }
+
+    fn current(&self) -> StageParams {
+        self.problem.params_at(&self.y)
+    }
+
+    fn objectives_mm2(&self) -> [f64; 3] {
+        let pairs = self.problem.pair_count() as f64;
+        self.problem.values(&self.y).0.map(|v| v * pairs)
+    }
+
+    fn pair_count(&self) -> usize {
+        self.problem.pair_count()
+    }
+}
