@@ -137,6 +137,94 @@ fn check_finite(model: &DualArmModel) -> Result<(), RobotError> {
     Ok(())
 }
 
+/// One arm's joint origins (chain positions 2..7) from its DH table, its flange and its reflectors.
+fn write_arm(
+    robot: &RobotDescription,
+    model: &DualArmModel,
+    side: Side,
+    urdf: &mut urdf_rs::Robot,
+) -> Result<(), RobotError> {
+    let names = robot.arm_joint_names(side);
+    let dh = &model.arm(side).dh;
+    for name in &names {
+        let j = joint_mut(urdf, name)?;
+        if (Vector3::new(j.axis.xyz[0], j.axis.xyz[1], j.axis.xyz[2]) - Vector3::z()).norm() > 1e-9
+        {
+            return Err(export_err(format!(
+                "joint `{name}` turns about {:?}; a DH chain needs 0 0 1",
+                j.axis.xyz.0
+            )));
+        }
+    }
+    // Joint origins of chain positions 2..7.
+    for k in 1..N_JOINTS {
+        let origin = if k == 1 {
+            joint1_from_dh_base() * dh[0].transform(0.0)
+        } else {
+            dh[k - 1].transform(0.0)
+        };
+        joint_mut(urdf, &names[k])?.origin = urdf_pose_from_isometry(&origin);
+    }
+
+    // The flange: a fixed child of link_7 at DH row 7.
+    let link7 = arm_link_name(side, N_JOINTS);
+    let link7_from_flange = urdf_pose_from_isometry(&dh[N_JOINTS - 1].transform(0.0));
+    let flange = flange_link_name(side);
+    if robot.flange_link(side) == flange {
+        let j = urdf
+            .joints
+            .iter_mut()
+            .find(|j| j.child.link == flange)
+            .ok_or_else(|| export_err(format!("no joint carries `{flange}`")))?;
+        if j.parent.link != link7 {
+            return Err(export_err(format!(
+                "`{flange}` hangs from `{}`, not directly from `{link7}`",
+                j.parent.link
+            )));
+        }
+        j.origin = link7_from_flange;
+    } else {
+        if urdf.links.iter().any(|l| l.name == flange) {
+            return Err(export_err(format!(
+                "link `{flange}` exists but is not fixed to `{link7}`"
+            )));
+        }
+        urdf.links.push(urdf_rs::Link {
+            name: flange.clone(),
+            inertial: urdf_rs::Inertial::default(),
+            visual: Vec::new(),
+            collision: Vec::new(),
+        });
+        urdf.joints.push(fixed_joint(
+            format!("yumi_flange_joint_{}", side_suffix(side)),
+            &link7,
+            &flange,
+            link7_from_flange,
+        ));
+    }
+
+    // Reflectors: fixed links of the flange.
+    for (r, t) in REFLECTOR_NAMES.iter().zip(&model.arm(side).reflectors_mm) {
+        let link = format!("reflector_{r}_{}", side_suffix(side));
+        let origin = urdf_rs::Pose {
+            xyz: urdf_rs::Vec3([t.x / 1000.0, t.y / 1000.0, t.z / 1000.0]),
+            rpy: urdf_rs::Vec3([0.0; 3]),
+        };
+        if let Some(j) = urdf.joints.iter_mut().find(|j| j.child.link == link) {
+            j.parent.link = flange.clone();
+            j.joint_type = urdf_rs::JointType::Fixed;
+            j.origin = origin;
+        } else {
+            if !urdf.links.iter().any(|l| l.name == link) {
+                urdf.links.push(reflector_link(link.clone()));
+            }
+            urdf.joints
+                .push(fixed_joint(format!("{link}_joint"), &flange, &link, origin));
+        }
+    }
+    Ok(())
+}
+
 /// A copy of `robot`'s URDF whose joint origins reproduce `model` (both arms' DH tables and the
 /// right-arm base) exactly, with the reflectors as fixed links of the flanges. The text is checked
 /// by loading it back before it is returned.
@@ -151,85 +239,7 @@ pub fn calibrated_urdf(
         robot.link_poses(&zero, &zero).into_iter().collect();
 
     for side in Side::BOTH {
-        let names = robot.arm_joint_names(side);
-        let dh = &model.arm(side).dh;
-        for name in &names {
-            let j = joint_mut(&mut urdf, name)?;
-            if (Vector3::new(j.axis.xyz[0], j.axis.xyz[1], j.axis.xyz[2]) - Vector3::z()).norm()
-                > 1e-9
-            {
-                return Err(export_err(format!(
-                    "joint `{name}` turns about {:?}; a DH chain needs 0 0 1",
-                    j.axis.xyz.0
-                )));
-            }
-        }
-        // Joint origins of chain positions 2..7.
-        for k in 1..N_JOINTS {
-            let origin = if k == 1 {
-                joint1_from_dh_base() * dh[0].transform(0.0)
-            } else {
-                dh[k - 1].transform(0.0)
-            };
-            joint_mut(&mut urdf, &names[k])?.origin = urdf_pose_from_isometry(&origin);
-        }
-
-        // The flange: a fixed child of link_7 at DH row 7.
-        let link7 = arm_link_name(side, N_JOINTS);
-        let link7_from_flange = urdf_pose_from_isometry(&dh[N_JOINTS - 1].transform(0.0));
-        let flange = flange_link_name(side);
-        if robot.flange_link(side) == flange {
-            let j = urdf
-                .joints
-                .iter_mut()
-                .find(|j| j.child.link == flange)
-                .ok_or_else(|| export_err(format!("no joint carries `{flange}`")))?;
-            if j.parent.link != link7 {
-                return Err(export_err(format!(
-                    "`{flange}` hangs from `{}`, not directly from `{link7}`",
-                    j.parent.link
-                )));
-            }
-            j.origin = link7_from_flange;
-        } else {
-            if urdf.links.iter().any(|l| l.name == flange) {
-                return Err(export_err(format!(
-                    "link `{flange}` exists but is not fixed to `{link7}`"
-                )));
-            }
-            urdf.links.push(urdf_rs::Link {
-                name: flange.clone(),
-                inertial: urdf_rs::Inertial::default(),
-                visual: Vec::new(),
-                collision: Vec::new(),
-            });
-            urdf.joints.push(fixed_joint(
-                format!("yumi_flange_joint_{}", side_suffix(side)),
-                &link7,
-                &flange,
-                link7_from_flange,
-            ));
-        }
-
-        // Reflectors: fixed links of the flange.
-        for (r, t) in REFLECTOR_NAMES.iter().zip(&model.arm(side).reflectors_mm) {
-            let link = format!("reflector_{r}_{}", side_suffix(side));
-            let origin = urdf_rs::Pose {
-                xyz: urdf_rs::Vec3([t.x / 1000.0, t.y / 1000.0, t.z / 1000.0]),
-                rpy: urdf_rs::Vec3([0.0; 3]),
-            };
-            if let Some(j) = urdf.joints.iter_mut().find(|j| j.child.link == link) {
-                j.parent.link = flange.clone();
-                j.joint_type = urdf_rs::JointType::Fixed;
-                j.origin = origin;
-            } else {
-                if !urdf.links.iter().any(|l| l.name == link) {
-                    urdf.links.push(reflector_link(link.clone()));
-                }
-                urdf.joints
-                    .push(fixed_joint(format!("{link}_joint"), &flange, &link, origin));
-            }
-        }
+        write_arm(robot, model, side, &mut urdf)?;
     }
 
     // The right joint-1 origin: right DH base = left DH base · left_base_from_right_base.

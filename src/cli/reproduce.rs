@@ -237,17 +237,31 @@ fn robustness_study(a: &ReproduceArgs, robot: &RobotDescription) -> Result<()> {
             );
         }
     }
+    let labels: Vec<&str> = indicators.iter().map(|(label, _, _)| *label).collect();
+    print_ratio_summary(a.seeds.len(), &case_names, &labels, &ratios);
+    Ok(())
+}
+
+/// The robustness study's summary: per data case and indicator, the mean ratio minimax / least squares
+/// over the runs and how often minimax was smaller or equal. `ratios[case][run][indicator]` holds
+/// left / right / collaborative.
+fn print_ratio_summary(
+    n_seeds: usize,
+    case_names: &[&str],
+    labels: &[&str],
+    ratios: &[Vec<Vec<[f64; 3]>>],
+) {
     outln!("");
     outln!(
         "Summary over {} seed(s): minimax relative to least squares (below 1: minimax smaller)",
-        a.seeds.len()
+        n_seeds
     );
     outln!(
         "| data | indicator | mean ratio minimax/LM (L / R / collab) | minimax smaller or equal in |"
     );
     outln!("|---|---|---|---:|");
     for (c, name) in case_names.iter().enumerate() {
-        for (i, (label, _, _)) in indicators.iter().enumerate() {
+        for (i, label) in labels.iter().enumerate() {
             let runs = &ratios[c];
             let n = runs.len().max(1) as f64;
             let mean: Vec<String> = (0..3)
@@ -265,5 +279,4 @@ fn robustness_study(a: &ReproduceArgs, robot: &RobotDescription) -> Result<()> {
             );
         }
     }
-    Ok(())
 }

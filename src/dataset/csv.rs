@@ -126,6 +126,74 @@ impl LineCounter {
     }
 }
 
+/// A CSV reader error as a dataset error at `line`.
+fn csv_error(path: &Path, e: csv::Error, line: usize) -> DatasetError {
+    match e.kind() {
+        csv::ErrorKind::UnequalLengths {
+            expected_len, len, ..
+        } => DatasetError::FieldCount {
+            path: path.to_path_buf(),
+            line,
+            expected: usize::try_from(*expected_len).unwrap_or(usize::MAX),
+            found: usize::try_from(*len).unwrap_or(usize::MAX),
+        },
+        _ => DatasetError::Content {
+            path: path.to_path_buf(),
+            message: format!("line {line}: {e}"),
+        },
+    }
+}
+
+/// One data row (its id already checked) in mm and rad.
+fn parse_row(
+    path: &Path,
+    line: usize,
+    rec: &csv::StringRecord,
+    has_split: bool,
+    units: Units,
+) -> Result<Measurement, DatasetError> {
+    let field = |i: usize| rec.get(i).unwrap_or("");
+    let mut q_rad = [0.0; N_JOINTS];
+    for (j, q) in q_rad.iter_mut().enumerate() {
+        let col = 1 + j;
+        *q = units
+            .angle
+            .to_rad(parse_number(path, line, CSV_COLUMNS[col], field(col))?);
+    }
+    let mut tracker_points_mm = [Vector3::zeros(); 3];
+    for (k, p) in tracker_points_mm.iter_mut().enumerate() {
+        for c in 0..3 {
+            let col = 8 + 3 * k + c;
+            p[c] = units
+                .length
+                .to_mm(parse_number(path, line, CSV_COLUMNS[col], field(col))?);
+        }
+    }
+    let split = if has_split {
+        match field(17) {
+            "cal" => Split::Cal,
+            "ver" => Split::Ver,
+            other => {
+                return Err(DatasetError::Field {
+                    path: path.to_path_buf(),
+                    line,
+                    field: SPLIT_COLUMN.into(),
+                    message: format!("unknown split `{other}`; expected `cal` or `ver`"),
+                });
+            }
+        }
+    } else {
+        Split::Cal
+    };
+    Ok(Measurement {
+        id: field(0).to_string(),
+        q_rad,
+        tracker_points_mm,
+        split,
+        line,
+    })
+}
+
 /// Read one arm's CSV into measurements in mm and rad.
 pub(super) fn read_arm(
     path: &Path,
@@ -146,22 +214,7 @@ pub(super) fn read_arm(
         Some(p) => lines.record_line(&text, usize::try_from(p.byte()).unwrap_or(usize::MAX)),
         None => fallback,
     };
-    let map_csv_err = |e: csv::Error, line: usize| -> DatasetError {
-        match e.kind() {
-            csv::ErrorKind::UnequalLengths {
-                expected_len, len, ..
-            } => DatasetError::FieldCount {
-                path: path.to_path_buf(),
-                line,
-                expected: usize::try_from(*expected_len).unwrap_or(usize::MAX),
-                found: usize::try_from(*len).unwrap_or(usize::MAX),
-            },
-            _ => DatasetError::Content {
-                path: path.to_path_buf(),
-                message: format!("line {line}: {e}"),
-            },
-        }
-    };
+    let map_csv_err = |e: csv::Error, line: usize| csv_error(path, e, line);
 
     let mut records = reader.records();
     let end_line = text.lines().count() + 1;
@@ -199,8 +252,7 @@ pub(super) fn read_arm(
         };
         let line = line_at(rec.position(), last_line + 1);
         last_line = line;
-        let field = |i: usize| rec.get(i).unwrap_or("");
-        let id = field(0);
+        let id = rec.get(0).unwrap_or("");
         if id.is_empty() {
             return Err(DatasetError::Field {
                 path: path.to_path_buf(),
@@ -218,45 +270,7 @@ pub(super) fn read_arm(
             });
         }
         first_line_of_id.insert(id.to_string(), line);
-        let mut q_rad = [0.0; N_JOINTS];
-        for (j, q) in q_rad.iter_mut().enumerate() {
-            let col = 1 + j;
-            *q = units
-                .angle
-                .to_rad(parse_number(path, line, CSV_COLUMNS[col], field(col))?);
-        }
-        let mut tracker_points_mm = [Vector3::zeros(); 3];
-        for (k, p) in tracker_points_mm.iter_mut().enumerate() {
-            for c in 0..3 {
-                let col = 8 + 3 * k + c;
-                p[c] = units
-                    .length
-                    .to_mm(parse_number(path, line, CSV_COLUMNS[col], field(col))?);
-            }
-        }
-        let split = if has_split {
-            match field(17) {
-                "cal" => Split::Cal,
-                "ver" => Split::Ver,
-                other => {
-                    return Err(DatasetError::Field {
-                        path: path.to_path_buf(),
-                        line,
-                        field: SPLIT_COLUMN.into(),
-                        message: format!("unknown split `{other}`; expected `cal` or `ver`"),
-                    });
-                }
-            }
-        } else {
-            Split::Cal
-        };
-        out.push(Measurement {
-            id: id.to_string(),
-            q_rad,
-            tracker_points_mm,
-            split,
-            line,
-        });
+        out.push(parse_row(path, line, &rec, has_split, units)?);
     }
     if out.len() < MIN_CONFIGS {
         return Err(DatasetError::TooFewConfigurations {

@@ -38,6 +38,21 @@ pub struct QpSolution {
     pub iterations: usize,
 }
 
+impl QpSolution {
+    /// The solution with step `s` and multipliers `nu`, its τ and KKT residual computed on `qp`.
+    fn new(qp: &Qp, s: DVector<f64>, nu: DVector<f64>, iterations: usize) -> Self {
+        let tau = qp.tau_for(&s);
+        let kkt_residual = qp.kkt_residual(&s, tau, &nu);
+        Self {
+            s,
+            tau,
+            nu,
+            kkt_residual,
+            iterations,
+        }
+    }
+}
+
 impl Qp<'_> {
     fn e(&self, j: usize) -> f64 {
         if j < self.n_obj { 1.0 } else { 0.0 }
@@ -128,15 +143,7 @@ pub fn solve_exact(qp: &Qp) -> QpSolution {
     });
     let s = -(&hinv_at * &nu);
     debug_assert_eq!(s.len(), m);
-    let tau = qp.tau_for(&s);
-    let kkt_residual = qp.kkt_residual(&s, tau, &nu);
-    QpSolution {
-        s,
-        tau,
-        nu,
-        kkt_residual,
-        iterations: 1usize << p,
-    }
+    QpSolution::new(qp, s, nu, 1usize << p)
 }
 
 /// Settings of the paper's subgradient solver.
@@ -192,15 +199,7 @@ pub fn solve_paper(qp: &Qp, settings: SubgradientSettings, stop: &dyn Fn() -> bo
         .solve_upper_triangular(&(w * sigma.sqrt()))
         .unwrap_or_else(|| DVector::zeros(m));
     debug_assert_eq!(nu.len(), p);
-    let tau = qp.tau_for(&s);
-    let kkt_residual = qp.kkt_residual(&s, tau, &nu);
-    QpSolution {
-        s,
-        tau,
-        nu,
-        kkt_residual,
-        iterations,
-    }
+    QpSolution::new(qp, s, nu, iterations)
 }
 
 /// The iteration z ← z − γ_p T/‖T‖ on a QP; returns (s, ν, iterations).
