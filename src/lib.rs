@@ -19,4 +19,5 @@ pub mod robot;
 pub mod side;
 pub mod simulate;
 pub mod solver;
+pub mod textfile;
 pub mod urdf_export;

@@ -2,9 +2,10 @@
 
 use super::error::{DatasetError, read_text};
 use super::units::Units;
-use super::{CSV_COLUMNS, MIN_CONFIGS, Measurement, SPLIT_COLUMN, Split};
+use super::{CSV_COLUMNS, MIN_CONFIGS, Measurement, SPLIT_COLUMN, Split, validate};
 use crate::kinematics::N_JOINTS;
 use crate::side::Side;
+use crate::textfile::excerpt;
 use nalgebra::Vector3;
 use std::path::Path;
 
@@ -22,7 +23,7 @@ fn check_header(
     };
     let expected = format!("{},[{SPLIT_COLUMN}]", CSV_COLUMNS.join(","));
     if header.len() == 1 {
-        let only = header.get(0).unwrap_or("");
+        let only = &excerpt(header.get(0).unwrap_or(""));
         if let Some(sep) = [';', '\t', ' '].into_iter().find(|&c| only.contains(c)) {
             return Err(err(
                 only,
@@ -38,7 +39,8 @@ fn check_header(
             ));
         };
         if got != *want {
-            let message = if CSV_COLUMNS.contains(&got) || got == SPLIT_COLUMN {
+            let got = &excerpt(got);
+            let message = if CSV_COLUMNS.contains(&got.as_str()) || got == SPLIT_COLUMN {
                 format!(
                     "column `{got}` is in position {}, where `{want}` belongs; the header must be {expected} in this order",
                     i + 1
@@ -56,7 +58,7 @@ fn check_header(
         17 => Ok(false),
         18 if header.get(17) == Some(SPLIT_COLUMN) => Ok(true),
         _ => {
-            let got = header.get(17).unwrap_or("");
+            let got = &excerpt(header.get(17).unwrap_or(""));
             Err(err(
                 got,
                 format!(
@@ -79,9 +81,9 @@ fn parse_number(path: &Path, line: usize, field: &str, s: &str) -> Result<f64, D
     }
     let x: f64 = s
         .parse()
-        .map_err(|_| err(format!("`{s}` is not a number")))?;
+        .map_err(|_| err(format!("`{}` is not a number", excerpt(s))))?;
     if !x.is_finite() {
-        return Err(err(format!("`{s}` is not a finite number")));
+        return Err(err(format!("`{}` is not a finite number", excerpt(s))));
     }
     Ok(x)
 }
@@ -126,8 +128,15 @@ impl LineCounter {
     }
 }
 
-/// A CSV reader error as a dataset error at `line`.
-fn csv_error(path: &Path, e: csv::Error, line: usize) -> DatasetError {
+/// A CSV reader error as a dataset error at `line`; `last_line` is the file's last line with content
+/// and `ends_open` whether the file ends without a line end (a row cut off there was truncated).
+fn csv_error(
+    path: &Path,
+    e: csv::Error,
+    line: usize,
+    last_line: usize,
+    ends_open: bool,
+) -> DatasetError {
     match e.kind() {
         csv::ErrorKind::UnequalLengths {
             expected_len, len, ..
@@ -136,6 +145,7 @@ fn csv_error(path: &Path, e: csv::Error, line: usize) -> DatasetError {
             line,
             expected: usize::try_from(*expected_len).unwrap_or(usize::MAX),
             found: usize::try_from(*len).unwrap_or(usize::MAX),
+            truncated: ends_open && line == last_line && len < expected_len,
         },
         _ => DatasetError::Content {
             path: path.to_path_buf(),
@@ -153,20 +163,32 @@ fn parse_row(
     units: Units,
 ) -> Result<Measurement, DatasetError> {
     let field = |i: usize| rec.get(i).unwrap_or("");
+    let field_err = |name: &str, message: String| DatasetError::Field {
+        path: path.to_path_buf(),
+        line,
+        field: name.to_string(),
+        message,
+    };
     let mut q_rad = [0.0; N_JOINTS];
     for (j, q) in q_rad.iter_mut().enumerate() {
         let col = 1 + j;
+        let text = field(col);
         *q = units
             .angle
-            .to_rad(parse_number(path, line, CSV_COLUMNS[col], field(col))?);
+            .to_rad(parse_number(path, line, CSV_COLUMNS[col], text)?);
+        validate::joint_magnitude(text, *q)
+            .map_err(|message| field_err(CSV_COLUMNS[col], message))?;
     }
     let mut tracker_points_mm = [Vector3::zeros(); 3];
     for (k, p) in tracker_points_mm.iter_mut().enumerate() {
         for c in 0..3 {
             let col = 8 + 3 * k + c;
+            let text = field(col);
             p[c] = units
                 .length
-                .to_mm(parse_number(path, line, CSV_COLUMNS[col], field(col))?);
+                .to_mm(parse_number(path, line, CSV_COLUMNS[col], text)?);
+            validate::coordinate_magnitude(text, p[c])
+                .map_err(|message| field_err(CSV_COLUMNS[col], message))?;
         }
     }
     let split = if has_split {
@@ -178,7 +200,10 @@ fn parse_row(
                     path: path.to_path_buf(),
                     line,
                     field: SPLIT_COLUMN.into(),
-                    message: format!("unknown split `{other}`; expected `cal` or `ver`"),
+                    message: format!(
+                        "unknown split `{}`; expected `cal` or `ver`",
+                        excerpt(other)
+                    ),
                 });
             }
         }
@@ -199,6 +224,7 @@ pub(super) fn read_arm(
     path: &Path,
     side: Side,
     units: Units,
+    nominal_reflectors_mm: &[Vector3<f64>; 3],
 ) -> Result<Vec<Measurement>, DatasetError> {
     let text = read_text(path)?;
     let mut reader = csv::ReaderBuilder::new()
@@ -214,7 +240,10 @@ pub(super) fn read_arm(
         Some(p) => lines.record_line(&text, usize::try_from(p.byte()).unwrap_or(usize::MAX)),
         None => fallback,
     };
-    let map_csv_err = |e: csv::Error, line: usize| csv_error(path, e, line);
+    let content_lines = text.trim_end().lines().count();
+    let ends_open = !text.is_empty() && !text.ends_with('\n');
+    let map_csv_err =
+        |e: csv::Error, line: usize| csv_error(path, e, line, content_lines, ends_open);
 
     let mut records = reader.records();
     let end_line = text.lines().count() + 1;
@@ -225,7 +254,12 @@ pub(super) fn read_arm(
                 line: end_line,
                 field: "id".into(),
                 message: format!(
-                    "missing header; expected {},[{SPLIT_COLUMN}] after any `#` comment lines",
+                    "missing header{}; expected {},[{SPLIT_COLUMN}] after any `#` comment lines",
+                    if text.trim().is_empty() {
+                        " (the file is empty)"
+                    } else {
+                        ""
+                    },
                     CSV_COLUMNS.join(",")
                 ),
             });
@@ -265,7 +299,7 @@ pub(super) fn read_arm(
             return Err(DatasetError::DuplicateId {
                 path: path.to_path_buf(),
                 line,
-                id: id.to_string(),
+                id: excerpt(id),
                 first_line,
             });
         }
@@ -280,6 +314,7 @@ pub(super) fn read_arm(
             min: MIN_CONFIGS,
         });
     }
+    validate::check_arm(path, &out, units.length, nominal_reflectors_mm)?;
     Ok(out)
 }
 

@@ -4,6 +4,7 @@ use super::error::{DatasetError, line_col};
 use super::units::{AngleUnit, LengthUnit, Units};
 use super::{DATASET_FORMAT, TrackerSpec};
 use crate::side::{PerSide, Side};
+use crate::textfile::excerpt;
 use nalgebra::Vector3;
 use std::path::{Path, PathBuf};
 use toml::Spanned;
@@ -97,7 +98,8 @@ impl ManifestCtx<'_> {
             path: self.path.to_path_buf(),
             line,
             text,
-            message: e.message().trim().to_string(),
+            // The parser's message may quote the input: keep it short.
+            message: crate::textfile::excerpt_n(e.message().trim(), 200),
         }
     }
 }
@@ -139,7 +141,10 @@ fn check_format(cx: &ManifestCtx, tag: Option<Spanned<toml::Value>>) -> Result<(
         other => Err(cx.err(
             Some(cx.line_of(tag.span())),
             "format",
-            format!("unknown format tag {other}; expected \"{DATASET_FORMAT}\""),
+            format!(
+                "unknown format tag {}; expected \"{DATASET_FORMAT}\"",
+                excerpt(&other.to_string())
+            ),
         )),
     }
 }
@@ -169,7 +174,7 @@ fn parse_units(cx: &ManifestCtx, raw: Option<Spanned<RawUnits>>) -> Result<Units
                 "units.length",
                 format!(
                     "unknown length unit \"{}\"; expected \"mm\" or \"m\"",
-                    s.get_ref()
+                    excerpt(s.get_ref())
                 ),
             )
         })?,
@@ -188,7 +193,7 @@ fn parse_units(cx: &ManifestCtx, raw: Option<Spanned<RawUnits>>) -> Result<Units
                 "units.angle",
                 format!(
                     "unknown angle unit \"{}\"; expected \"deg\" or \"rad\"",
-                    s.get_ref()
+                    excerpt(s.get_ref())
                 ),
             )
         })?,
@@ -278,7 +283,13 @@ fn parse_reflectors(
             return Err(cx.err(refl_line, &field, format!("missing; {expected}")));
         };
         let line = Some(cx.line_of(v.span()));
-        let bad = |found: &str| cx.err(line, &field, format!("{expected}, found {found}"));
+        let bad = |found: &str| {
+            cx.err(
+                line,
+                &field,
+                format!("{expected}, found {}", excerpt(found)),
+            )
+        };
         let toml::Value::Array(items) = v.get_ref() else {
             return Err(bad(&v.get_ref().to_string()));
         };
@@ -296,6 +307,9 @@ fn parse_reflectors(
             }
             reflectors_mm[k][c] = length.to_mm(x);
         }
+    }
+    if let Err(message) = super::validate::nominal_triangle(&reflectors_mm, length) {
+        return Err(cx.err(refl_line, "reflectors", message));
     }
     Ok(reflectors_mm)
 }
@@ -326,7 +340,10 @@ fn parse_arms(
                 return Err(cx.err(
                     Some(name_line),
                     "arms.name",
-                    format!("unknown arm \"{other}\"; expected \"left\" or \"right\""),
+                    format!(
+                        "unknown arm \"{}\"; expected \"left\" or \"right\"",
+                        excerpt(other)
+                    ),
                 ));
             }
         };
@@ -355,7 +372,9 @@ fn parse_arms(
                 "empty file name",
             ));
         }
-        files[side] = Some(dir.join(file.get_ref()));
+        let path = super::validate::data_file_in(dir, file.get_ref())
+            .map_err(|message| cx.err(Some(cx.line_of(file.span())), "arms.file", message))?;
+        files[side] = Some(path);
         arm_lines[side] = name_line;
     }
     files.try_map(|side, file| {

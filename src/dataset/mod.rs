@@ -6,6 +6,7 @@ mod error;
 mod manifest;
 mod save;
 mod units;
+mod validate;
 
 pub use crate::atomic::Overwrite;
 use crate::kinematics::N_JOINTS;
@@ -16,6 +17,9 @@ use nalgebra::Vector3;
 pub use save::{save, save_with};
 use std::path::{Path, PathBuf};
 pub use units::{AngleUnit, LengthUnit, Units};
+pub use validate::{
+    JOINT_LIMIT_TOLERANCE_RAD, MAX_COORDINATE_MM, MAX_JOINT_RAD, check_joint_limits,
+};
 
 /// The format tag written in `dataset.toml`.
 pub const DATASET_FORMAT: &str = "dualcal-dataset/1";
@@ -190,13 +194,14 @@ pub fn load_with_units(path: &Path) -> Result<(Dataset, Units), DatasetError> {
     let text = read_text(&manifest_path)?;
     let m = manifest::parse(&manifest_path, &dir, &text)?;
     let arms = m.files.try_map(|side, file| {
-        let measurements = csv::read_arm(&file, side, m.units)?;
+        let measurements = csv::read_arm(&file, side, m.units, &m.reflectors_mm)?;
         Ok::<_, DatasetError>(ArmData {
             side,
             file,
             measurements,
         })
     })?;
+    validate::check_both(&arms)?;
     Ok((
         Dataset {
             dir,
@@ -226,9 +231,15 @@ mod tests {
                     _ => format!("{side}{i}"),
                 },
                 q_rad: std::array::from_fn(|_| rng.random_range(-3.0..3.0)),
-                tracker_points_mm: std::array::from_fn(|_| {
-                    Vector3::from_fn(|_, _| rng.random_range(-3000.0..3000.0))
-                }),
+                // The nominal triangle turned and placed at random.
+                tracker_points_mm: {
+                    let turn =
+                        nalgebra::UnitQuaternion::from_scaled_axis(Vector3::from_fn(|_, _| {
+                            rng.random_range(-3.0..3.0)
+                        }));
+                    let centre = Vector3::from_fn(|_, _| rng.random_range(-3000.0..3000.0));
+                    crate::simulate::SimOptions::default_reflectors().map(|p| turn * p + centre)
+                },
                 split: if rng.random_bool(0.3) {
                     Split::Ver
                 } else {
@@ -253,9 +264,8 @@ mod tests {
                 mpe_um: 10.0,
                 mpe_um_per_m: 1.25,
             },
-            nominal_reflectors_mm: std::array::from_fn(|_| {
-                Vector3::from_fn(|_, _| rng.random_range(-50.0..50.0))
-            }),
+            nominal_reflectors_mm: crate::simulate::SimOptions::default_reflectors()
+                .map(|p| p + Vector3::from_fn(|_, _| rng.random_range(-5.0..5.0))),
             arms: PerSide::new(
                 random_arm(&mut rng, Side::Left, 9),
                 random_arm(&mut rng, Side::Right, 7),
