@@ -43,6 +43,12 @@ pub enum ParamsError {
         #[source]
         source: std::io::Error,
     },
+    /// Not UTF-8 text (UTF-16, binary data, bad bytes) or too large.
+    #[error("{path}: {problem}")]
+    Text {
+        path: PathBuf,
+        problem: crate::textfile::TextProblem,
+    },
     /// Not valid JSON, or a field has the wrong type or is missing.
     #[error("{path}:{line}:{column}: {message}")]
     Json {
@@ -285,6 +291,24 @@ fn finite(field: &str, values: &[f64]) -> Result<(), ParamsError> {
     }
 }
 
+/// Largest plausible |DH length| and |base translation|, mm (100 m).
+pub const MAX_LENGTH_MM: f64 = 100_000.0;
+/// Largest plausible |DH angle|, rad (a few turns; offsets are normally within ±π).
+pub const MAX_ANGLE_RAD: f64 = 100.0;
+/// Largest plausible distance of a reflector from the flange origin, mm.
+pub const MAX_REFLECTOR_MM: f64 = 10_000.0;
+
+/// Values (already in mm or rad) within ±`max`: an absurd magnitude is a unit or export error.
+fn plausible(field: &str, values: &[f64], max: f64, unit: &str) -> Result<(), ParamsError> {
+    match values.iter().find(|x| x.abs() > max) {
+        Some(x) => Err(invalid(
+            field,
+            format!("{x:e} {unit} is not a plausible value (|value| ≤ {max} {unit}); wrong unit?"),
+        )),
+        None => Ok(()),
+    }
+}
+
 fn arm_model(
     side: &str,
     arm: &ArmParams,
@@ -310,6 +334,19 @@ fn arm_model(
         ] {
             finite(&format!("arms.{side}.dh[{i}].{name}"), &[v])?;
         }
+        for (name, v, per_unit, max, unit) in [
+            ("a", e.a, mm_per_unit, MAX_LENGTH_MM, "mm"),
+            ("d", e.d, mm_per_unit, MAX_LENGTH_MM, "mm"),
+            ("theta", e.theta, rad_per_unit, MAX_ANGLE_RAD, "rad"),
+            ("alpha", e.alpha, rad_per_unit, MAX_ANGLE_RAD, "rad"),
+        ] {
+            plausible(
+                &format!("arms.{side}.dh[{i}].{name}"),
+                &[v * per_unit],
+                max,
+                unit,
+            )?;
+        }
         *row = DhRow::new(
             e.a * mm_per_unit,
             e.d * mm_per_unit,
@@ -322,6 +359,12 @@ fn arm_model(
     for (k, (name, v)) in [("a", r.a), ("b", r.b), ("c", r.c)].into_iter().enumerate() {
         finite(&format!("arms.{side}.reflectors.{name}"), &v)?;
         reflectors_mm[k] = Vector3::from(v) * mm_per_unit;
+        plausible(
+            &format!("arms.{side}.reflectors.{name}"),
+            &[reflectors_mm[k].norm()],
+            MAX_REFLECTOR_MM,
+            "mm",
+        )?;
     }
     Ok(ArmModel { dh, reflectors_mm })
 }
@@ -421,6 +464,12 @@ impl ParamsFile {
         }
         let rotation = UnitQuaternion::from_rotation_matrix(&nearest_rotation(&m));
         let translation = Translation3::from(Vector3::from(b.translation) * mm_per_unit);
+        plausible(
+            "right_base_in_left.translation",
+            translation.vector.as_slice(),
+            MAX_LENGTH_MM,
+            "mm",
+        )?;
 
         if let Some(fixed) = &self.fixed_parameters {
             let names: Vec<String> = (0..N_PARAMS).map(param_name).collect();
@@ -449,12 +498,18 @@ impl ParamsFile {
 
     /// Parse a parameter file. JSON syntax and type errors carry the line and column.
     pub fn read(path: &Path) -> Result<ParamsFile, ParamsError> {
-        let bytes = std::fs::read(path).map_err(|source| ParamsError::Io {
-            path: path.to_path_buf(),
-            source,
+        use crate::textfile::ReadError;
+        let text = crate::textfile::read(path).map_err(|e| match e {
+            ReadError::Io(source) => ParamsError::Io {
+                path: path.to_path_buf(),
+                source,
+            },
+            ReadError::Text(problem) => ParamsError::Text {
+                path: path.to_path_buf(),
+                problem,
+            },
         })?;
-        let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(&bytes);
-        Self::parse(path, bytes)
+        Self::parse(path, text.as_bytes())
     }
 
     /// Parse parameter-file text; `path` is only used in messages.
@@ -464,14 +519,24 @@ impl ParamsFile {
             line: e.line(),
             column: e.column(),
             message: {
-                // serde_json appends " at line L column C"; the variant shows them already.
+                // serde_json appends " at line L column C"; the variant shows them already. Its
+                // message may quote the input: keep it short.
                 let s = e.to_string();
-                match s.rfind(" at line ") {
+                let s = match s.rfind(" at line ") {
                     Some(i) => s[..i].to_string(),
                     None => s,
-                }
+                };
+                crate::textfile::excerpt_n(&s, 200)
             },
         };
+        if bytes.iter().all(u8::is_ascii_whitespace) {
+            return Err(ParamsError::Json {
+                path: path.to_path_buf(),
+                line: 1,
+                column: 1,
+                message: "the file is empty; expected a dualcal-params/1 JSON object".into(),
+            });
+        }
         // Syntax first, then the format tag (so another format gets the right message), then the types.
         let value: Value = serde_json::from_slice(bytes).map_err(json_err)?;
         match value.get("format") {
@@ -479,7 +544,10 @@ impl ParamsFile {
             Some(other) => {
                 return Err(ParamsError::Format {
                     path: path.to_path_buf(),
-                    message: format!("unknown format tag {other}; expected \"{PARAMS_FORMAT}\""),
+                    message: format!(
+                        "unknown format tag {}; expected \"{PARAMS_FORMAT}\"",
+                        crate::textfile::excerpt(&other.to_string())
+                    ),
                 });
             }
             None => {

@@ -301,9 +301,12 @@ fn deg_rad(x_rad: f64) -> String {
     format!("{:.2}° ({x_rad:.4} rad)", x_rad.to_degrees())
 }
 
+/// Is every value within its limits? A joint whose limits are not a proper range — missing (a
+/// continuous joint has none), NaN, or `lower >= upper` — is not checked.
 fn within(q: &[f64], limits: &[(f64, f64)]) -> bool {
     q.iter().zip(limits).all(|(&v, &(lo, hi))| {
-        v >= lo - JOINT_LIMIT_TOLERANCE_RAD && v <= hi + JOINT_LIMIT_TOLERANCE_RAD
+        let proper = lo < hi; // false for NaN too
+        !proper || (v >= lo - JOINT_LIMIT_TOLERANCE_RAD && v <= hi + JOINT_LIMIT_TOLERANCE_RAD)
     })
 }
 
@@ -319,7 +322,7 @@ fn first_violation(arm: &ArmData, limits: &[(f64, f64)]) -> Option<(usize, usize
 }
 
 /// Joint values against the robot description's limits (rad, per arm in the CSV's column order; a
-/// bound may be infinite): the first value outside its limits by more than
+/// bound may be infinite, and a joint without a proper range is not checked): the first value outside its limits by more than
 /// [`JOINT_LIMIT_TOLERANCE_RAD`] is refused, with the number of others and a likely cause — two columns
 /// swapped in that row, degrees in a file declared in radians, or the columns in ABB axis order.
 pub fn check_joint_limits(

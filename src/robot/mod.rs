@@ -52,6 +52,12 @@ pub enum RobotError {
         #[source]
         source: std::io::Error,
     },
+    /// Not UTF-8 text (UTF-16, binary data, bad bytes) or too large.
+    #[error("{}: {problem}", .path.display())]
+    Text {
+        path: PathBuf,
+        problem: crate::textfile::TextProblem,
+    },
     #[error("{file}{}: not a valid URDF: {message}", at_line(.line))]
     Parse {
         file: String,
@@ -193,9 +199,15 @@ impl RobotDescription {
 
     /// Load a URDF file with an explicit package map for `package://` mesh paths (tried first).
     pub fn load_with_packages(path: &Path, packages: &PackageMap) -> Result<Self, RobotError> {
-        let text = std::fs::read_to_string(path).map_err(|source| RobotError::Io {
-            path: path.to_path_buf(),
-            source,
+        let text = crate::textfile::read(path).map_err(|e| match e {
+            crate::textfile::ReadError::Io(source) => RobotError::Io {
+                path: path.to_path_buf(),
+                source,
+            },
+            crate::textfile::ReadError::Text(problem) => RobotError::Text {
+                path: path.to_path_buf(),
+                problem,
+            },
         })?;
         Self::from_str_with_packages(&text, Some(path), packages)
     }
@@ -223,7 +235,8 @@ impl RobotDescription {
         packages: &PackageMap,
     ) -> Result<Self, RobotError> {
         let urdf = urdf_rs::read_from_string(text).map_err(|e| {
-            let message = e.to_string();
+            // The parser's message may quote the input: keep it short.
+            let message = crate::textfile::excerpt_n(&e.to_string(), 200);
             RobotError::Parse {
                 file: file.to_string(),
                 line: line_from_message(&message),
