@@ -353,12 +353,19 @@ impl NotConverged {
 
 fn calibrate_cmd(a: &CalibrateArgs) -> Result<()> {
     let ds = load_dataset(&a.dataset)?;
-    let inputs = ds.files();
+    // Never write over an input: the dataset's files, its robot description, or one output over the
+    // other.
+    let mut inputs: Vec<PathBuf> = ds.files().to_vec();
+    inputs.extend(ds.robot.clone());
     for out in [Some(&a.out), a.urdf.as_ref()].into_iter().flatten() {
         crate::atomic::refuse_overwrite_input(
             out,
             &inputs.iter().map(PathBuf::as_path).collect::<Vec<_>>(),
         )?;
+    }
+    if let Some(urdf) = &a.urdf {
+        crate::atomic::refuse_overwrite_input(urdf, &[&a.out])
+            .context("--urdf and --out name the same file")?;
     }
     let robot = RobotDescription::for_dataset(&ds)
         .with_context(|| format!("loading the robot of {}", ds.dir.display()))?;
