@@ -589,6 +589,16 @@ pub struct MethodRecord {
     pub max_iterations: usize,
     pub step_tolerance: f64,
     pub progress_tolerance: f64,
+    /// Configurations left out of the identification (`--exclude`, `--auto-exclude`, the workbench).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub excluded: Vec<ConfigRef>,
+}
+
+/// A configuration by arm and id, as in the dataset's CSV.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct ConfigRef {
+    pub arm: Side,
+    pub id: String,
 }
 
 /// Conditioning of one arm's identification (`statistics.identifiability.<arm>`).
@@ -642,6 +652,17 @@ impl ParamsFile {
             max_iterations: settings.max_iterations,
             step_tolerance: settings.step_tolerance,
             progress_tolerance: settings.progress_tolerance,
+            excluded: settings
+                .exclude
+                .iter()
+                .filter_map(|c| {
+                    let m = dataset.arm(c.side).measurements.get(c.index)?;
+                    Some(ConfigRef {
+                        arm: c.side,
+                        id: m.id.clone(),
+                    })
+                })
+                .collect(),
         });
         let fixed = |side: Side| -> Vec<FixedParameter> {
             result.identifiability[side]
