@@ -15,6 +15,7 @@ pub mod dataset;
 pub mod kinematics;
 pub mod metrics;
 pub mod params;
+pub mod quality;
 pub mod robot;
 pub mod side;
 pub mod simulate;

@@ -255,6 +255,10 @@ pub struct ParamsFile {
     pub converged: Option<bool>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub provenance: Option<Provenance>,
+    /// Suspect configurations and the ones left out (free form; dualcal writes a
+    /// `quality::QualityRecord`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub quality: Option<Value>,
     /// Fields this version does not know; kept for round trips.
     #[serde(flatten)]
     pub extra: serde_json::Map<String, Value>,
@@ -405,6 +409,7 @@ impl ParamsFile {
             statistics: None,
             converged: None,
             provenance: None,
+            quality: None,
             extra: Default::default(),
         }
     }
@@ -680,7 +685,9 @@ impl ParamsFile {
             right: fixed(Side::Right),
         });
         file.termination = record(&result.stages);
-        let accuracy = |split| crate::metrics::evaluate(dataset, &result.calibrated, split).ok();
+        // The figures leave the excluded configurations out, as the solver did.
+        let kept = dataset.excluding(&settings.exclude);
+        let accuracy = |split| crate::metrics::evaluate(&kept, &result.calibrated, split).ok();
         file.statistics = record(&StatisticsRecord {
             cal: accuracy(Split::Cal),
             ver: accuracy(Split::Ver),

@@ -4,8 +4,9 @@ use crate::atomic::Overwrite;
 use crate::dataset::{self, Dataset, Split};
 use crate::metrics;
 use crate::params::{ParamsFile, Provenance};
+use crate::quality;
 use crate::robot::RobotDescription;
-use crate::side::Side;
+use crate::side::{ConfigId, Side};
 use crate::simulate;
 use crate::solver::{
     CalibrationEvent, CalibrationResult, CalibrationSettings, Calibrator, Method, QpMethod,
@@ -30,6 +31,7 @@ macro_rules! outln {
     }};
 }
 
+mod outlier_study;
 mod reproduce;
 
 /// Two-step minimax kinematic calibration of dual-arm robots from laser-tracker data.
@@ -85,6 +87,15 @@ pub struct SimulateArgs {
     /// Size of an outlier displacement, mm.
     #[arg(long, default_value_t = 1.0)]
     pub outlier_mm: f64,
+    /// Fraction of configurations with a reflector misread by 0.5–5 mm (gross errors, docs/reliability.md).
+    #[arg(long, default_value_t = 0.0)]
+    pub misread_fraction: f64,
+    /// Fraction of configurations with two reflector labels swapped.
+    #[arg(long, default_value_t = 0.0)]
+    pub swapped_labels_fraction: f64,
+    /// Fraction of configurations replaced by a configuration of the other arm.
+    #[arg(long, default_value_t = 0.0)]
+    pub other_arm_fraction: f64,
     /// Overwrite an existing simulated dataset in --out.
     #[arg(long)]
     pub force: bool,
@@ -135,6 +146,14 @@ pub struct CalibrateArgs {
     /// Only the summary, no per-iteration lines.
     #[arg(long, short)]
     pub quiet: bool,
+    /// Leave these configurations out (ids, comma separated; `left:ID` or `right:ID` where both arms
+    /// have the id). Also left out of the accuracy tables.
+    #[arg(long, value_delimiter = ',')]
+    pub exclude: Vec<String>,
+    /// Leave out the configurations the screening flags, by the documented rule (docs/reliability.md):
+    /// flags before fitting, then after each fit, at most 10% of an arm.
+    #[arg(long)]
+    pub auto_exclude: bool,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum, PartialEq, Eq)]
@@ -145,6 +164,9 @@ pub enum Study {
     Qp,
     /// Minimax against least squares with unmodelled joint errors and outliers (docs/solver.md).
     Robustness,
+    /// Gross errors (misread reflectors, swapped labels, rows of the other arm): detection, false
+    /// alarms, accuracy with and without exclusion (docs/reliability.md).
+    Outliers,
 }
 
 #[derive(Args, Debug)]
@@ -175,6 +197,15 @@ pub struct ReproduceArgs {
     /// With --unmodelled (implied; all studies): joint compliance, mrad/m, instead of 0.5.
     #[arg(long)]
     pub compliance_mrad_per_m: Option<f64>,
+    /// Outliers study: fraction of each arm's configurations with a misread reflector (default 0.03).
+    #[arg(long)]
+    pub misread_fraction: Option<f64>,
+    /// Outliers study: fraction with two reflector labels swapped (default 0.01).
+    #[arg(long)]
+    pub swapped_labels_fraction: Option<f64>,
+    /// Outliers study: fraction replaced by a row of the other arm (default 0.01).
+    #[arg(long)]
+    pub other_arm_fraction: Option<f64>,
 }
 
 impl ReproduceArgs {
@@ -233,6 +264,14 @@ fn simulate_cmd(a: &SimulateArgs) -> Result<()> {
             magnitude_mm: a.outlier_mm,
         });
     }
+    if a.misread_fraction > 0.0 || a.swapped_labels_fraction > 0.0 || a.other_arm_fraction > 0.0 {
+        opts.gross_errors = Some(simulate::GrossErrorModel {
+            misread_fraction: a.misread_fraction,
+            swapped_labels_fraction: a.swapped_labels_fraction,
+            other_arm_fraction: a.other_arm_fraction,
+            ..simulate::GrossErrorModel::study()
+        });
+    }
     let robot = RobotDescription::builtin_irb14000();
     let out = simulate::simulate_with_robot(&opts, &robot)?;
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
@@ -261,6 +300,14 @@ fn simulate_cmd(a: &SimulateArgs) -> Result<()> {
         out.rejected_for_facing
     );
     outln!("true parameters: {}", a.out.join("truth.json").display());
+    for r in &out.gross_errors {
+        outln!(
+            "gross error: {} arm `{}`: {:?}",
+            r.config.side,
+            r.id,
+            r.error
+        );
+    }
     Ok(())
 }
 
@@ -268,13 +315,68 @@ pub(crate) fn load_dataset(path: &Path) -> Result<Dataset> {
     Ok(dataset::load(path)?)
 }
 
+/// A dataset with its robot: loaded, and its joint values checked against the robot's limits.
+fn load_with_robot(path: &Path) -> Result<(Dataset, RobotDescription)> {
+    let ds = load_dataset(path)?;
+    let robot = RobotDescription::for_dataset(&ds)
+        .with_context(|| format!("loading the robot of {}", ds.dir.display()))?;
+    let limits = crate::side::PerSide::from_fn(|s| robot.joint_limits_rad(s).to_vec());
+    dataset::check_joint_limits(&ds, &limits)?;
+    Ok((ds, robot))
+}
+
+/// Print a screening's whole-file findings as warnings; `Err` with the errors among them.
+fn report_findings(screening: &quality::Screening) -> Result<()> {
+    for f in &screening.findings {
+        if f.severity == quality::Severity::Warning {
+            eprintln!("warning: {f}");
+        }
+    }
+    let errors: Vec<String> = screening
+        .findings
+        .iter()
+        .filter(|f| f.severity == quality::Severity::Error)
+        .map(|f| f.message.clone())
+        .collect();
+    if errors.is_empty() {
+        Ok(())
+    } else {
+        bail!("{}", errors.join("\nerror: "))
+    }
+}
+
+/// The suspect configurations, one line each (most severe flag first).
+fn print_flags(title: &str, screening: &quality::Screening, excluded: &[ConfigId]) {
+    let worst = screening.worst_per_config();
+    if worst.is_empty() {
+        return;
+    }
+    outln!("\n{title} ({}):", worst.len());
+    for f in &worst {
+        let mark = if excluded.contains(&f.config) {
+            "excluded"
+        } else {
+            "kept"
+        };
+        outln!(
+            "  {:<5} {:<10} line {:<5} {:<3} {:<14} {:>9.3} mm  {:<8}  {}",
+            f.config.side.name(),
+            crate::textfile::excerpt(&f.id),
+            f.line,
+            f.split.name(),
+            f.kind.label(),
+            f.size_mm,
+            mark,
+            f.reason
+        );
+    }
+}
+
 fn evaluate_cmd(a: &EvaluateArgs) -> Result<()> {
-    let ds = load_dataset(&a.dataset)?;
+    let (ds, robot) = load_with_robot(&a.dataset)?;
     let model = match &a.params {
         Some(p) => ParamsFile::read(p)?.to_model()?,
-        None => RobotDescription::for_dataset(&ds)
-            .with_context(|| format!("loading the robot of {}", ds.dir.display()))?
-            .nominal_model(ds.nominal_reflectors_mm),
+        None => robot.nominal_model(ds.nominal_reflectors_mm),
     };
     let report = metrics::evaluate(&ds, &model, a.split)?;
     if a.json {
@@ -352,7 +454,7 @@ impl NotConverged {
 }
 
 fn calibrate_cmd(a: &CalibrateArgs) -> Result<()> {
-    let ds = load_dataset(&a.dataset)?;
+    let (ds, robot) = load_with_robot(&a.dataset)?;
     // Never write over an input: the dataset's files, its robot description, or one output over the
     // other.
     let mut inputs: Vec<PathBuf> = ds.files().to_vec();
@@ -367,21 +469,91 @@ fn calibrate_cmd(a: &CalibrateArgs) -> Result<()> {
         crate::atomic::refuse_overwrite_input(urdf, &[&a.out])
             .context("--urdf and --out name the same file")?;
     }
-    let robot = RobotDescription::for_dataset(&ds)
-        .with_context(|| format!("loading the robot of {}", ds.dir.display()))?;
     let nominal = robot.nominal_model(ds.nominal_reflectors_mm);
-    let mut progress = |e: &CalibrationEvent| {
-        if !a.quiet {
-            print_event(e)
+    let mut settings = settings_from(a);
+    for spec in &a.exclude {
+        let config = ds
+            .config_by_id(spec.trim())
+            .map_err(|e| anyhow::anyhow!("--exclude: {e}"))?;
+        if !settings.exclude.contains(&config) {
+            settings.exclude.push(config);
         }
+    }
+    let screen_settings = quality::ScreenSettings::default();
+    let before = quality::screen(&ds, &nominal, &screen_settings);
+    report_findings(&before)?;
+    let (result, after) = if a.auto_exclude {
+        if !a.quiet {
+            eprintln!(
+                "--auto-exclude: screening, fitting and screening again (progress not shown)"
+            );
+        }
+        let auto = quality::auto_exclude(&ds, &nominal, &settings, &screen_settings)?;
+        outln!(
+            "--auto-exclude: {} configuration(s) left out after {} fit(s){}",
+            auto.excluded.len(),
+            auto.rounds,
+            if auto.excluded.is_empty() { "" } else { ":" }
+        );
+        for f in &auto.excluded {
+            outln!("  {f}");
+        }
+        if let Some(why) = &auto.stopped {
+            eprintln!("warning: --auto-exclude stopped: {why}");
+        }
+        (auto.result, auto.screening)
+    } else {
+        print_flags(
+            "Suspect configurations before fitting (nominal model)",
+            &before,
+            &settings.exclude,
+        );
+        let mut progress = |e: &CalibrationEvent| {
+            if !a.quiet {
+                print_event(e)
+            }
+        };
+        let result = Calibrator::new(&ds, &nominal)
+            .settings(settings)
+            .observer(&mut progress)
+            .run()?;
+        let after = quality::screen_result(&ds, &result, &screen_settings);
+        (result, after)
     };
-    let result = Calibrator::new(&ds, &nominal)
-        .settings(settings_from(a))
-        .observer(&mut progress)
-        .run()?;
     print_identifiability(&result);
-    outln!("\n{}", comparison_table(&ds, &result)?);
-    ParamsFile::from_calibration(&result, &ds).write(&a.out)?;
+    let excluded = &result.settings.exclude;
+    outln!("\n{}", comparison_table(&ds.excluding(excluded), &result)?);
+    print_flags(
+        "Suspect configurations with the calibrated model",
+        &after,
+        excluded,
+    );
+    let suspects_kept: Vec<String> = after
+        .worst_per_config()
+        .iter()
+        .filter(|f| !excluded.contains(&f.config))
+        .map(|f| f.id.clone())
+        .collect();
+    if !suspects_kept.is_empty() {
+        let shown = suspects_kept.len().min(10);
+        eprintln!(
+            "warning: {} suspect configuration(s) were used for the calibration; the minimax fit is \
+             steered by its worst point: look at them, then --exclude {}{} or --auto-exclude",
+            suspects_kept.len(),
+            suspects_kept[..shown].join(","),
+            if shown < suspects_kept.len() {
+                ",…"
+            } else {
+                ""
+            }
+        );
+    }
+    for f in &after.findings {
+        eprintln!("warning: {f}");
+    }
+    let mut file = ParamsFile::from_calibration(&result, &ds);
+    file.quality = serde_json::to_value(quality::QualityRecord::new(&ds, &after, excluded)).ok();
+    file.write(&a.out)?;
     outln!("parameters written to {}", a.out.display());
     if let Some(path) = &a.urdf {
         let text = crate::urdf_export::calibrated_urdf(&robot, &result.calibrated)?;

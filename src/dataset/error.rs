@@ -4,6 +4,11 @@ use crate::atomic::OutputError;
 use crate::side::Side;
 use std::path::{Path, PathBuf};
 
+/// An angle in degrees and radians.
+fn deg_rad(x_rad: f64) -> String {
+    format!("{:.2}° ({x_rad:.4} rad)", x_rad.to_degrees())
+}
+
 /// `path:line` or `path` when the line is unknown.
 fn at(path: &Path, line: &Option<usize>) -> String {
     match line {
@@ -118,17 +123,17 @@ pub enum DatasetError {
     UnitMismatch { path: PathBuf, message: String },
     /// A joint value outside the robot's joint limits.
     #[error(
-        "{path}:{line}: field `{field}`: {value} is outside the joint's limits [{lower}, {upper}] of the \
-         robot description{hint}"
+        "{path}:{line}: field `{field}`: {} is outside the joint's limits [{}, {}] of the robot \
+         description{hint}",
+        deg_rad(*.value_rad), deg_rad(*.lower_rad), deg_rad(*.upper_rad)
     )]
     JointLimit {
         path: PathBuf,
         line: usize,
         field: String,
-        /// The value and the limits, in degrees and radians.
-        value: String,
-        lower: String,
-        upper: String,
+        value_rad: f64,
+        lower_rad: f64,
+        upper_rad: f64,
         /// More values out of range in this file, a likely cause (swapped columns, unit), or nothing.
         hint: String,
     },

@@ -10,7 +10,7 @@ mod validate;
 
 pub use crate::atomic::Overwrite;
 use crate::kinematics::N_JOINTS;
-use crate::side::{PerSide, Side};
+use crate::side::{ConfigId, PerSide, Side};
 pub use error::DatasetError;
 use error::read_text;
 use nalgebra::Vector3;
@@ -147,6 +147,54 @@ impl Dataset {
             });
         }
         out
+    }
+
+    /// The same dataset without the configurations `exclude` (indices into this dataset's arms; the
+    /// result's indices are renumbered). For accuracy figures without suspect measurements; a
+    /// calibration leaves configurations out with `CalibrationSettings::exclude` instead, which keeps
+    /// the indices.
+    pub fn excluding(&self, exclude: &[ConfigId]) -> Dataset {
+        let mut out = self.clone();
+        for (side, arm) in out.arms.iter_mut() {
+            let mut index = 0;
+            arm.measurements.retain(|_| {
+                let keep = !exclude.contains(&ConfigId::new(side, index));
+                index += 1;
+                keep
+            });
+        }
+        out
+    }
+
+    /// The configuration with id `spec` (unique across both arms), or `left:ID` / `right:ID`.
+    pub fn config_by_id(&self, spec: &str) -> Result<ConfigId, String> {
+        let (sides, id): (Vec<Side>, &str) = match spec.split_once(':') {
+            Some(("left", id)) => (vec![Side::Left], id),
+            Some(("right", id)) => (vec![Side::Right], id),
+            _ => (Side::BOTH.to_vec(), spec),
+        };
+        let found: Vec<ConfigId> = sides
+            .iter()
+            .filter_map(|&side| {
+                let index = self
+                    .arm(side)
+                    .measurements
+                    .iter()
+                    .position(|m| m.id == id)?;
+                Some(ConfigId::new(side, index))
+            })
+            .collect();
+        match found.as_slice() {
+            [one] => Ok(*one),
+            [] => Err(format!(
+                "no configuration with id `{}`",
+                crate::textfile::excerpt(id)
+            )),
+            _ => Err(format!(
+                "both arms have a configuration `{}`: write left:{0} or right:{0}",
+                crate::textfile::excerpt(id)
+            )),
+        }
     }
 
     /// The files the dataset was read from: the manifest and both CSVs.

@@ -297,10 +297,6 @@ pub(super) fn check_both(arms: &PerSide<ArmData>) -> Result<(), DatasetError> {
     Ok(())
 }
 
-fn deg_rad(x_rad: f64) -> String {
-    format!("{:.2}° ({x_rad:.4} rad)", x_rad.to_degrees())
-}
-
 /// Is every value within its limits? A joint whose limits are not a proper range — missing (a
 /// continuous joint has none), NaN, or `lower >= upper` — is not checked.
 fn within(q: &[f64], limits: &[(f64, f64)]) -> bool {
@@ -413,9 +409,9 @@ pub fn check_joint_limits(
             path: arm.file.clone(),
             line: m.line,
             field: format!("q{}", j + 1),
-            value: deg_rad(m.q_rad[j]),
-            lower: deg_rad(lo),
-            upper: deg_rad(hi),
+            value_rad: m.q_rad[j],
+            lower_rad: lo,
+            upper_rad: hi,
             hint: hints.iter().map(|h| format!("; {h}")).collect(),
         });
     }
