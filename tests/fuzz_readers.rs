@@ -348,7 +348,10 @@ fn mutate_once(rng: &mut ChaCha8Rng, bytes: &mut Vec<u8>, target: Target, other:
                     4 => format!("{:e}", 10f64.powi(rng.random_range(-320..320))),
                     _ => format!("{}", value.to_degrees()),
                 };
-                bytes.splice(s..e, new.into_bytes());
+                // Offsets are those of the (lossy) text: replace the whole file by it.
+                let mut text = text;
+                text.replace_range(s..e, &new);
+                *bytes = text.into_bytes();
             }
         }
         // Whole file: truncate, CRLF, BOM, UTF-16, splice from another file.

@@ -57,6 +57,15 @@ fn check_header(
     match header.len() {
         17 => Ok(false),
         18 if header.get(17) == Some(SPLIT_COLUMN) => Ok(true),
+        n if n > 18 && header.get(17) == Some(SPLIT_COLUMN) => {
+            let got = &excerpt(header.get(18).unwrap_or(""));
+            Err(err(
+                got,
+                format!(
+                    "unknown column `{got}` in position 19; nothing may follow `{SPLIT_COLUMN}` (header {expected})"
+                ),
+            ))
+        }
         _ => {
             let got = &excerpt(header.get(17).unwrap_or(""));
             Err(err(
