@@ -23,11 +23,11 @@ pub const BASE_MAX_SHIFT_MM: f64 = 20.0;
 pub const BASE_MAX_TURN_RAD: f64 = 0.035;
 /// A tracker that moved within one arm's rows: mean squared distance error across the change point
 /// this many times that within either part …
-pub const MOVED_RATIO: f64 = 10.0;
+pub const MOVED_RATIO: f64 = 4.0;
 /// … and above this many times the tracker's MPE (RMS).
 pub const MOVED_MIN_MPE: f64 = 5.0;
 /// Each part of a change point has at least this many configurations.
-pub const MOVED_MIN_PART: usize = 5;
+pub const MOVED_MIN_PART: usize = 10;
 /// A reinterpretation of a row's joint values (reordered, converted).
 type JointMap = Box<dyn Fn(&[f64]) -> Vec<f64>>;
 
@@ -210,7 +210,11 @@ pub fn tracker_moved(
     _settings: &ScreenSettings,
 ) -> Option<Finding> {
     let all = &dataset.arm(side).measurements;
-    let rows: Vec<usize> = (0..all.len()).filter(|i| !suspects.contains(i)).collect();
+    // Many suspects are no outliers: they may be what a moved tracker did; keep them then.
+    let few = suspects.len() * 10 <= all.len();
+    let rows: Vec<usize> = (0..all.len())
+        .filter(|i| !(few && suspects.contains(i)))
+        .collect();
     let n = rows.len();
     if n < 2 * MOVED_MIN_PART {
         return None;

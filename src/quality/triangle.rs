@@ -70,6 +70,11 @@ pub fn flags(dataset: &Dataset, side: Side, settings: &ScreenSettings) -> Vec<Fl
     let Some((reference, threshold)) = reference(dataset, side, settings) else {
         return Vec::new();
     };
+    // The other arm's triangle: a row of the other arm fits it (when the arms' reflector triangles
+    // differ measurably).
+    let other = self::reference(dataset, side.other(), settings).filter(|(other, t)| {
+        (0..3).any(|k| (other[k] - reference[k]).abs() > 2.0 * threshold.max(*t))
+    });
     let mut out = Vec::new();
     for (index, m) in dataset.arm(side).measurements.iter().enumerate() {
         let p = &m.tracker_points_mm;
@@ -105,6 +110,21 @@ pub fn flags(dataset: &Dataset, side: Side, settings: &ScreenSettings) -> Vec<Fl
                 ),
             ));
             continue;
+        }
+        if let Some((other_ref, other_threshold)) = &other {
+            let (fit, _) = deviation(p, other_ref);
+            if fit <= *other_threshold {
+                out.push(flag(
+                    FlagKind::OtherArm,
+                    None,
+                    format!(
+                        "its reflector triangle is the {} arm's (within {fit:.3} mm), not this arm's \
+                         (off by {size:.3} mm): a row of the other arm's file?",
+                        side.other()
+                    ),
+                ));
+                continue;
+            }
         }
         // A single misread reflector changes the two sides that meet at it; the third side (the
         // one with the smallest deviation) is opposite it.
