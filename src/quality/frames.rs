@@ -10,13 +10,15 @@ use crate::side::Side;
 use nalgebra::{Point3, Vector3};
 
 /// The nominal model of a robot that matches its description is within a few millimetres of the
-/// measured distances (the paper's IRB 14000: 2.5 and 5.6 mm RMS); beyond this RMS, mm, the data and
-/// the description do not belong together (joint order or unit, wrong robot, wrong arm).
-pub const NOMINAL_MAX_RMS_MM: f64 = 50.0;
-/// Before fitting, collaborative distance errors this many times the worse arm's relative ones …
+/// measured distances (the paper's IRB 14000: 2.5 and 5.6 mm RMS); when the typical pair error (the
+/// median over pairs of the worst reflector's |Δd|) exceeds this, mm, the data and the description do
+/// not belong together (joint order or unit, wrong robot, wrong arm).
+pub const NOMINAL_MAX_TYPICAL_MM: f64 = 25.0;
+/// Before fitting, typical collaborative distance errors this many times the worse arm's relative
+/// ones …
 pub const FRAME_RATIO: f64 = 5.0;
-/// … and above this RMS, mm, say the two arms were not measured in one tracker frame.
-pub const FRAME_MIN_RMS_MM: f64 = 20.0;
+/// … and above this, mm, say the two arms were not measured in one tracker frame.
+pub const FRAME_MIN_TYPICAL_MM: f64 = 10.0;
 /// A calibrated right-arm base further than this from the robot description's, mm …
 pub const BASE_MAX_SHIFT_MM: f64 = 20.0;
 /// … or turned by more than this, rad (2°), says the same after fitting.
@@ -34,9 +36,10 @@ type JointMap = Box<dyn Fn(&[f64]) -> Vec<f64>>;
 /// Pairs sampled for the whole-file RMS figures.
 const SAMPLE_PAIRS: usize = 20_000;
 
-/// RMS of the worst-reflector distance error over a sample of pairs of two point sets (model points
-/// `pa`, `pb` mapped by `b_from` into `pa`'s frame), mm.
-fn rms(
+/// The typical distance error of a set of pairs: the median over a sample of pairs of the
+/// worst-reflector |Δd| (model points `pa`, `pb` in one frame), mm. A median, so that a few gross
+/// outliers (a swapped label is 80 mm off) do not make a good robot look wrong.
+fn typical(
     ma: &[[Vector3<f64>; 3]],
     pa: &[[Vector3<f64>; 3]],
     mb: &[[Vector3<f64>; 3]],
@@ -50,21 +53,24 @@ fn rms(
         na * nb
     };
     let stride = total.div_ceil(SAMPLE_PAIRS).max(1);
-    let (mut sum, mut count, mut idx) = (0.0, 0usize, 0usize);
+    let mut worst = Vec::with_capacity(total / stride + 1);
+    let mut idx = 0usize;
     for i in 0..na {
         let start = if same { i + 1 } else { 0 };
         for j in start..nb {
             if idx.is_multiple_of(stride) {
-                let worst = (0..3)
-                    .map(|k| ((ma[i][k] - mb[j][k]).norm() - (pa[i][k] - pb[j][k]).norm()).abs())
-                    .fold(0.0, f64::max);
-                sum += worst * worst;
-                count += 1;
+                worst.push(
+                    (0..3)
+                        .map(|k| {
+                            ((ma[i][k] - mb[j][k]).norm() - (pa[i][k] - pb[j][k]).norm()).abs()
+                        })
+                        .fold(0.0, f64::max),
+                );
             }
             idx += 1;
         }
     }
-    (sum / count.max(1) as f64).sqrt()
+    median(&worst)
 }
 
 fn points(
@@ -103,8 +109,8 @@ pub fn nominal_findings(dataset: &Dataset, nominal: &DualArmModel) -> Vec<Findin
         let arm = nominal.arm(side);
         let m = measured(side);
         let p = points(dataset, arm, side, <[f64]>::to_vec);
-        relative[s] = rms(&m, &p, &m, &p, true);
-        if relative[s] > NOMINAL_MAX_RMS_MM {
+        relative[s] = typical(&m, &p, &m, &p, true);
+        if relative[s] > NOMINAL_MAX_TYPICAL_MM {
             let file = dataset.arm(side).file.display();
             let candidates: [(&str, JointMap); 3] = [
                 (
@@ -130,7 +136,7 @@ pub fn nominal_findings(dataset: &Dataset, nominal: &DualArmModel) -> Vec<Findin
                 .into_iter()
                 .find(|(_, map)| {
                     let p = points(dataset, arm, side, map);
-                    rms(&m, &p, &m, &p, true) < NOMINAL_MAX_RMS_MM
+                    typical(&m, &p, &m, &p, true) < NOMINAL_MAX_TYPICAL_MM
                 })
                 .map_or_else(
                     || {
@@ -145,8 +151,8 @@ pub fn nominal_findings(dataset: &Dataset, nominal: &DualArmModel) -> Vec<Findin
                 side: Some(side),
                 message: format!(
                     "{file}: the robot description's nominal model disagrees with the {side} arm's \
-                     measured distances by {:.1} mm RMS (a robot that matches its description is \
-                     within a few mm): {hint}",
+                     measured distances by {:.1} mm (median over pairs; a robot that matches its \
+                     description is within a few mm): {hint}",
                     relative[s]
                 ),
             });
@@ -160,15 +166,16 @@ pub fn nominal_findings(dataset: &Dataset, nominal: &DualArmModel) -> Vec<Findin
             .iter()
             .map(|p| p.map(|x| (b * Point3::from(x)).coords))
             .collect();
-        let collaborative = rms(&ml, &model_pts[0], &mr, &pr, false);
+        let collaborative = typical(&ml, &model_pts[0], &mr, &pr, false);
         let worse = relative[0].max(relative[1]);
-        if collaborative > (FRAME_RATIO * worse).max(FRAME_MIN_RMS_MM) {
+        if collaborative > (FRAME_RATIO * worse).max(FRAME_MIN_TYPICAL_MM) {
             out.push(Finding {
                 severity: Severity::Warning,
                 side: None,
                 message: format!(
                     "the distances between the two arms' reflectors miss the nominal model by \
-                     {collaborative:.1} mm RMS, those within each arm by {worse:.1} mm: were both \
+                     {collaborative:.1} mm, those within each arm by {worse:.1} mm (medians over \
+                     pairs): were both \
                      arms measured from one tracker position? dualcal relies on one tracker frame \
                      for the base (step 2); each arm's own calibration is not affected"
                 ),
