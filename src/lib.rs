@@ -1,8 +1,8 @@
 //! dualcal: two-step minimax kinematic calibration of dual-arm robots from laser-tracker data.
 //!
-//! The engine modules (`kinematics`, `robot`, `collision`, `dataset`, `params`, `simulate`, `metrics`,
-//! `solver`, `urdf_export`, `cli`) never depend on egui or wgpu; the workbench lives in `app` behind the
-//! `gui` feature.
+//! The engine modules (`kinematics`, `robot`, `collision`, `dataset`, `params`, `textfile`, `simulate`,
+//! `metrics`, `quality`, `solver`, `urdf_export`, `cli`) never depend on egui or wgpu; the workbench
+//! lives in `app` behind the `gui` feature.
 #![forbid(unsafe_code)]
 
 pub mod analysis;
