@@ -1082,3 +1082,14 @@ fn joint_values_outside_the_robots_limits_are_refused_after_loading() {
     }
     dataset::check_joint_limits(&ds, &limits).unwrap();
 }
+
+#[test]
+fn implausible_tracker_mpe_is_refused() {
+    let manifest = MANIFEST.replace("mpe_um_per_m = 0.8", "mpe_um_per_m = 8e5");
+    let err = Fixture::with_manifest(&manifest).load().unwrap_err();
+    assert!(
+        matches!(err, DatasetError::Manifest { line: Some(8), ref field, .. } if field == "tracker.mpe_um_per_m"),
+        "{err:?}"
+    );
+    assert_names(&err, &["dataset.toml:8", "plausible"]);
+}

@@ -242,14 +242,25 @@ fn parse_tracker(cx: &ManifestCtx, t: Spanned<RawTracker>) -> Result<TrackerSpec
             None => Err(cx.err(line, &field, "missing; expected a number of micrometres")),
             Some(v) => {
                 let x = *v.get_ref();
-                if x.is_finite() && x >= 0.0 {
-                    Ok(x)
-                } else {
+                if !(x.is_finite() && x >= 0.0) {
                     Err(cx.err(
                         Some(cx.line_of(v.span())),
                         &field,
                         format!("{x} is not a finite, non-negative number of micrometres"),
                     ))
+                } else if x > super::validate::MAX_MPE_UM {
+                    Err(cx.err(
+                        Some(cx.line_of(v.span())),
+                        &field,
+                        format!(
+                            "{x} µm is not a plausible tracker MPE (at most {} µm: laser trackers \
+                             measure to tens of micrometres); the values are micrometres whatever \
+                             [units] says",
+                            super::validate::MAX_MPE_UM
+                        ),
+                    ))
+                } else {
+                    Ok(x)
                 }
             }
         }

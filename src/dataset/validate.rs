@@ -15,6 +15,9 @@ use std::path::{Component, Path, PathBuf};
 
 /// Largest accepted |coordinate| of a measured point, mm: 200 m, beyond the range of any laser tracker.
 pub const MAX_COORDINATE_MM: f64 = 200_000.0;
+/// Largest accepted tracker MPE term (`mpe_um`, `mpe_um_per_m`), µm: laser trackers measure to tens of
+/// micrometres; 10 mm is no tracker (or the value is in another unit).
+pub const MAX_MPE_UM: f64 = 10_000.0;
 /// Largest accepted |joint value|, rad (about 16 turns): anything larger is not a joint reading.
 pub const MAX_JOINT_RAD: f64 = 100.0;
 /// How far a joint value may lie outside the robot description's limits before it is refused, rad
