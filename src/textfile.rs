@@ -132,6 +132,63 @@ pub fn read(path: &Path) -> Result<String, ReadError> {
     Ok(decode(&bytes)?)
 }
 
+/// Deepest element nesting accepted in an XML file (a URDF nests about 4 deep): a parser that recurses
+/// per level would overflow its stack on a file nested hundreds of thousands deep.
+pub const MAX_XML_DEPTH: usize = 256;
+
+/// The first line at which `text`'s XML elements nest deeper than [`MAX_XML_DEPTH`], if any. A cheap
+/// scan (comments, CDATA, processing instructions, declarations and quoted attribute values are
+/// skipped; a malformed file is left to the parser).
+pub fn xml_too_deep(text: &str) -> Option<usize> {
+    let b = text.as_bytes();
+    let find = |from: usize, pat: &[u8]| -> usize {
+        b.get(from..)
+            .and_then(|rest| rest.windows(pat.len()).position(|w| w == pat))
+            .map_or(b.len(), |k| from + k + pat.len())
+    };
+    let (mut i, mut depth) = (0usize, 0usize);
+    while i < b.len() {
+        if b[i] != b'<' {
+            i += 1;
+            continue;
+        }
+        let rest = &b[i..];
+        if rest.starts_with(b"<!--") {
+            i = find(i + 4, b"-->");
+        } else if rest.starts_with(b"<![CDATA[") {
+            i = find(i + 9, b"]]>");
+        } else if rest.starts_with(b"<?") {
+            i = find(i + 2, b"?>");
+        } else if rest.starts_with(b"<!") {
+            i = find(i + 2, b">");
+        } else if rest.starts_with(b"</") {
+            depth = depth.saturating_sub(1);
+            i = find(i + 2, b">");
+        } else {
+            // An opening tag: find its end outside quoted attribute values.
+            let mut j = i + 1;
+            let mut quote = None;
+            while j < b.len() {
+                match (quote, b[j]) {
+                    (None, q @ (b'"' | b'\'')) => quote = Some(q),
+                    (Some(q), c) if c == q => quote = None,
+                    (None, b'>') => break,
+                    _ => {}
+                }
+                j += 1;
+            }
+            if j < b.len() && b[j - 1] != b'/' {
+                depth += 1;
+                if depth > MAX_XML_DEPTH {
+                    return Some(line_at(b, i));
+                }
+            }
+            i = j + 1;
+        }
+    }
+    None
+}
+
 /// A short, printable excerpt of file content for a message: at most [`EXCERPT_CHARS`] characters,
 /// control characters escaped, `…` when cut.
 pub fn excerpt(s: &str) -> String {
@@ -207,6 +264,17 @@ mod tests {
             let err = read(Path::new(p)).unwrap_err();
             assert!(matches!(err, ReadError::Io(_)), "{p}: {err:?}");
         }
+    }
+
+    #[test]
+    fn xml_nesting_depth() {
+        let ok = "<robot name=\"r\"><!-- <a><a> --><link name='x>'><visual/></link>\
+                  <![CDATA[<a><a>]]><?pi <a>?></robot>";
+        assert_eq!(xml_too_deep(ok), None);
+        let deep = format!("<r>\n{}{}</r>", "<a>".repeat(300), "</a>".repeat(300));
+        assert_eq!(xml_too_deep(&deep), Some(2));
+        let flat = "<a/>".repeat(10_000);
+        assert_eq!(xml_too_deep(&flat), None);
     }
 
     #[test]

@@ -712,3 +712,53 @@ fn regressions_do_not_panic() {
     }
     eprintln!("replayed {replayed} regression inputs");
 }
+
+/// Inputs nested hundreds of thousands deep are refused, not a stack overflow (which no `catch_unwind`
+/// can catch): the URDF parser recursed per element until `textfile::xml_too_deep` guarded it; the TOML
+/// and JSON parsers have recursion limits of their own.
+#[test]
+fn deep_nesting_is_refused_not_a_stack_overflow() {
+    let n = 200_000;
+    let c = corpus(10);
+    let work = c.dir.path().join("valid");
+    let deep_xml = format!(
+        "<robot name=\"r\">{}{}</robot>",
+        "<a>".repeat(n),
+        "</a>".repeat(n)
+    );
+    assert_eq!(
+        feed(Target::Urdf, &work, deep_xml.as_bytes(), &c.nominal),
+        Ok(false)
+    );
+    let deep_json = format!(
+        "{{\"format\": \"dualcal-params/1\", \"x\": {}{}}}",
+        "[".repeat(n),
+        "]".repeat(n)
+    );
+    assert_eq!(
+        feed(Target::ParamsJson, &work, deep_json.as_bytes(), &c.nominal),
+        Ok(false)
+    );
+    for deep_toml in [
+        format!(
+            "format = \"dualcal-dataset/1\"\nx = {}{}\n",
+            "[".repeat(n),
+            "]".repeat(n)
+        ),
+        format!(
+            "format = \"dualcal-dataset/1\"\nx = {}1{}\n",
+            "{a=".repeat(n),
+            "}".repeat(n)
+        ),
+    ] {
+        assert_eq!(
+            feed(
+                Target::DatasetManifest,
+                &work,
+                deep_toml.as_bytes(),
+                &c.nominal
+            ),
+            Ok(false)
+        );
+    }
+}

@@ -234,6 +234,17 @@ impl RobotDescription {
         file: &str,
         packages: &PackageMap,
     ) -> Result<Self, RobotError> {
+        // The XML parser recurses per element: refuse absurd nesting before it overflows its stack.
+        if let Some(line) = crate::textfile::xml_too_deep(text) {
+            return Err(RobotError::Parse {
+                file: file.to_string(),
+                line: Some(line),
+                message: format!(
+                    "elements nest more than {} deep",
+                    crate::textfile::MAX_XML_DEPTH
+                ),
+            });
+        }
         let urdf = urdf_rs::read_from_string(text).map_err(|e| {
             // The parser's message may quote the input: keep it short.
             let message = crate::textfile::excerpt_n(&e.to_string(), 200);
