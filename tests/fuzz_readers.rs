@@ -12,8 +12,9 @@
 //! ```
 //!
 //! with `<target>` one of `dataset_manifest`, `dataset_csv`, `params_json`, `urdf`, `pipeline`;
-//! `DUALCAL_FUZZ_SEED` picks the random stream (default: the clock, printed). docs/reliability.md
-//! records the runs.
+//! `DUALCAL_FUZZ_SEED` picks the random stream (default: the clock, printed). A long run writes each
+//! input to `target/fuzz-crashers/<target>-last.bin` before feeding it, so that an abort (a stack
+//! overflow cannot be caught) leaves the culprit behind. docs/reliability.md records the runs.
 
 use dualcal::dataset::{self, Units};
 use dualcal::kinematics::DualArmModel;
@@ -266,7 +267,19 @@ fn mutate_once(rng: &mut ChaCha8Rng, bytes: &mut Vec<u8>, target: Target, other:
     } else {
         rng.random_range(0..=len)
     };
-    match rng.random_range(0..14) {
+    match rng.random_range(0..15) {
+        // A token repeated many times (deep nesting, huge lines).
+        14 => {
+            let tokens = target.tokens();
+            let t = tokens[rng.random_range(0..tokens.len())];
+            let n = if rng.random_range(0..20) == 0 {
+                200_000
+            } else {
+                rng.random_range(2..2000)
+            };
+            let rep = t.repeat(n);
+            bytes.splice(pos..pos, rep);
+        }
         // Byte edits.
         0 if len > 0 => {
             let end = (pos + rng.random_range(1..16)).min(len);
@@ -570,6 +583,11 @@ fn fuzz(target: Target) {
             mutate(&mut rng, original, target, other)
         };
         tally.inputs += 1;
+        // A stack overflow aborts the process before it can be caught: the input is on disk first.
+        if secs.is_some() {
+            std::fs::create_dir_all(&crashers).unwrap();
+            std::fs::write(crashers.join(format!("{}-last.bin", target.name())), &input).unwrap();
+        }
         match feed(target, &work, &input, &c.nominal) {
             Ok(accepted) => tally.refused += usize::from(!accepted),
             Err(why) => {
