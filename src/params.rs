@@ -424,7 +424,7 @@ impl ParamsFile {
                 "format",
                 format!(
                     "unknown format tag \"{}\"; expected \"{PARAMS_FORMAT}\"",
-                    self.format
+                    crate::textfile::excerpt(&self.format)
                 ),
             ));
         }
@@ -434,7 +434,10 @@ impl ParamsFile {
             other => {
                 return Err(invalid(
                     "units.length",
-                    format!("unknown length unit \"{other}\"; expected \"mm\" or \"m\""),
+                    format!(
+                        "unknown length unit \"{}\"; expected \"mm\" or \"m\"",
+                        crate::textfile::excerpt(other)
+                    ),
                 ));
             }
         };
@@ -444,7 +447,10 @@ impl ParamsFile {
             other => {
                 return Err(invalid(
                     "units.angle",
-                    format!("unknown angle unit \"{other}\"; expected \"rad\" or \"deg\""),
+                    format!(
+                        "unknown angle unit \"{}\"; expected \"rad\" or \"deg\"",
+                        crate::textfile::excerpt(other)
+                    ),
                 ));
             }
         };
@@ -485,7 +491,7 @@ impl ParamsFile {
                             format!("fixed_parameters.{side}[{i}].name"),
                             format!(
                                 "unknown parameter `{}`; expected one of {} … {}",
-                                f.name,
+                                crate::textfile::excerpt(&f.name),
                                 names[0],
                                 names[N_PARAMS - 1]
                             ),

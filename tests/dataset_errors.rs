@@ -1093,3 +1093,37 @@ fn implausible_tracker_mpe_is_refused() {
     );
     assert_names(&err, &["dataset.toml:8", "plausible"]);
 }
+
+/// Found by fuzzing: text of the file that ends up in a message (a path in the manifest, an id, a
+/// URDF link name) is bounded, so no message quotes kilobytes.
+#[test]
+fn long_paths_and_ids_are_refused_with_a_short_message() {
+    let long = "x".repeat(2000);
+    let manifest = MANIFEST.replace("file = \"left.csv\"", &format!("file = \"{long}.csv\""));
+    let err = Fixture::with_manifest(&manifest).load().unwrap_err();
+    assert!(
+        matches!(err, DatasetError::Manifest { ref field, .. } if field == "arms.file"),
+        "{err:?}"
+    );
+    assert!(err.to_string().len() < 300, "{err}");
+    let manifest = MANIFEST.replace("[units]", &format!("robot = \"a/{long}\"\n[units]"));
+    let err = Fixture::with_manifest(&manifest).load().unwrap_err();
+    assert!(err.to_string().len() < 300, "{err}");
+    let manifest = MANIFEST.replace("file = \"left.csv\"", "file = \"left\\n.csv\"");
+    assert_names(
+        &Fixture::with_manifest(&manifest).load().unwrap_err(),
+        &["control character"],
+    );
+    let err = Fixture::with_left(&left_with_field(5, 0, &"i".repeat(500)))
+        .load()
+        .unwrap_err();
+    assert!(
+        matches!(err, DatasetError::Field { line: 5, ref field, .. } if field == "id"),
+        "{err:?}"
+    );
+    assert!(err.to_string().len() < 300, "{err}");
+    let err = Fixture::with_left(&left_with_field(6, 0, "\"c\tx\""))
+        .load()
+        .unwrap_err();
+    assert_names(&err, &["left.csv:6", "control character"]);
+}

@@ -304,6 +304,14 @@ pub(super) fn read_arm(
                 message: "empty id; every row needs a unique id".into(),
             });
         }
+        if let Err(message) = validate::usable_id(id) {
+            return Err(DatasetError::Field {
+                path: path.to_path_buf(),
+                line,
+                field: "id".into(),
+                message,
+            });
+        }
         if let Some(&first_line) = first_line_of_id.get(id) {
             return Err(DatasetError::DuplicateId {
                 path: path.to_path_buf(),

@@ -218,6 +218,7 @@ fn parse_robot(
             "empty path; leave `robot` out for the built-in IRB 14000",
         ));
     }
+    super::validate::usable_path(r.get_ref()).map_err(|m| cx.err(line, "robot", m))?;
     let p = dir.join(r.get_ref());
     if !p.is_file() {
         return Err(cx.err(

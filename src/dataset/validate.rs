@@ -34,9 +34,53 @@ pub const MIN_NOMINAL_SIDE_MM: f64 = 1.0;
 /// … and its reflectors must lie within this distance of the flange origin, mm.
 pub const MAX_NOMINAL_REFLECTOR_MM: f64 = 2000.0;
 
+/// Longest path accepted in the manifest, characters (and 255 bytes per component, as file systems
+/// allow): the path is quoted in messages.
+pub const MAX_PATH_CHARS: usize = 1024;
+/// Longest configuration id, characters: ids are labels, quoted in reports.
+pub const MAX_ID_CHARS: usize = 128;
+
+/// A path written in the manifest is one line of printable characters of usable length. `Err` is the
+/// message.
+pub(super) fn usable_path(path: &str) -> Result<(), String> {
+    let bad = |why: &str| format!("`{}` {why}", excerpt(path));
+    if path.chars().count() > MAX_PATH_CHARS {
+        return Err(bad(&format!(
+            "is not a usable path ({} characters; at most {MAX_PATH_CHARS})",
+            path.chars().count()
+        )));
+    }
+    if path.split(['/', '\\']).any(|c| c.len() > 255) {
+        return Err(bad("has a file or directory name longer than 255 bytes"));
+    }
+    if path.chars().any(char::is_control) {
+        return Err(bad("contains a control character (a line break, a tab, …)"));
+    }
+    Ok(())
+}
+
+/// A configuration id read from a CSV: at most [`MAX_ID_CHARS`] characters, no control characters.
+pub(super) fn usable_id(id: &str) -> Result<(), String> {
+    if id.chars().count() > MAX_ID_CHARS {
+        return Err(format!(
+            "id `{}` is {} characters long; ids are labels of at most {MAX_ID_CHARS}",
+            excerpt(id),
+            id.chars().count()
+        ));
+    }
+    if id.chars().any(char::is_control) {
+        return Err(format!(
+            "id `{}` contains a control character (a line break, a tab, …)",
+            excerpt(id)
+        ));
+    }
+    Ok(())
+}
+
 /// Resolve the data file `file` named in the manifest of `dir`: it must be a relative path that stays
 /// inside the dataset directory, also after following links. `Err` is the message.
 pub(super) fn data_file_in(dir: &Path, file: &str) -> Result<PathBuf, String> {
+    usable_path(file)?;
     let rel = Path::new(file);
     let outside = |why: &str| {
         format!(

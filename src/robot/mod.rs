@@ -83,6 +83,41 @@ pub enum RobotError {
     Export { message: String },
 }
 
+impl RobotError {
+    /// The same error with the text taken from the file (names, problems) cut to a short excerpt: a
+    /// garbled URDF must not produce a message of kilobytes.
+    fn shortened(self) -> Self {
+        let cut = |s: String| crate::textfile::excerpt_n(&s, 200);
+        match self {
+            RobotError::BadJoint {
+                file,
+                line,
+                joint,
+                problem,
+            } => RobotError::BadJoint {
+                file,
+                line,
+                joint: crate::textfile::excerpt(&joint),
+                problem: cut(problem),
+            },
+            RobotError::Structure { file, message } => RobotError::Structure {
+                file,
+                message: cut(message),
+            },
+            RobotError::Parse {
+                file,
+                line,
+                message,
+            } => RobotError::Parse {
+                file,
+                line,
+                message: cut(message),
+            },
+            other => other,
+        }
+    }
+}
+
 /// Which geometry of a link.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum GeometryKind {
@@ -268,7 +303,8 @@ impl RobotDescription {
                 .unwrap_or_default(),
         };
         let mut warnings = Vec::new();
-        let kin = tree::compile(&urdf, text, file, &resolver, &mut warnings)?;
+        let kin = tree::compile(&urdf, text, file, &resolver, &mut warnings)
+            .map_err(RobotError::shortened)?;
         Ok(Self {
             urdf,
             source: source.map(Path::to_path_buf),
