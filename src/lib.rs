@@ -1,7 +1,7 @@
 //! dualcal: two-step minimax kinematic calibration of dual-arm robots from laser-tracker data.
 //!
-//! The engine modules (`kinematics`, `robot`, `collision`, `dataset`, `params`, `simulate`, `metrics`,
-//! `solver`, `urdf_export`, `cli`) never depend on egui or wgpu; the workbench lives in `app` behind the
+//! The engine modules (`kinematics`, `robot`, `meshes`, `collision`, `dataset`, `params`, `simulate`,
+//! `metrics`, `solver`, `urdf_export`, `cli`) never depend on egui or wgpu; the workbench lives in `app` behind the
 //! `gui` feature.
 #![forbid(unsafe_code)]
 
@@ -13,6 +13,7 @@ pub mod cli;
 pub mod collision;
 pub mod dataset;
 pub mod kinematics;
+pub mod meshes;
 pub mod metrics;
 pub mod params;
 pub mod robot;
@@ -20,3 +21,8 @@ pub mod side;
 pub mod simulate;
 pub mod solver;
 pub mod urdf_export;
+
+/// Robot descriptions and mesh files the tests write (shared with the integration tests).
+#[cfg(test)]
+#[path = "../tests/fixtures/robots.rs"]
+pub(crate) mod test_robots;

@@ -61,7 +61,7 @@ fn perturb_arm(rng: &mut ChaCha8Rng, arm: &ArmModel, size: f64) -> ArmModel {
                 rng.random_range(-0.6..0.6)
             };
     }
-    ArmModel::from_vector(&v)
+    arm.with_vector(&v)
 }
 
 fn perturb(rng: &mut ChaCha8Rng, m: &DualArmModel, size: f64) -> DualArmModel {
@@ -110,7 +110,7 @@ fn simulate(truth: &DualArmModel, n: [usize; 2], noise_mm: f64, seed: u64) -> Da
                 });
                 Measurement {
                     id: format!("{}-{i}", &side.name()[..1]),
-                    q_rad,
+                    q_rad: q_rad.to_vec(),
                     tracker_points_mm,
                     split: if i % 4 == 3 { Split::Ver } else { Split::Cal },
                     line: 0,
@@ -119,6 +119,7 @@ fn simulate(truth: &DualArmModel, n: [usize; 2], noise_mm: f64, seed: u64) -> Da
             .collect();
         ArmData {
             side,
+            links: None,
             file: PathBuf::from(format!("{}.csv", side.name())),
             measurements,
         }
@@ -187,7 +188,7 @@ fn write_dataset(dir: &Path, ds: &Dataset, units: Units) {
         csv.push_str("id,q1,q2,q3,q4,q5,q6,q7,ax,ay,az,bx,by,bz,cx,cy,cz,split\n");
         for m in &arm.measurements {
             csv.push_str(&m.id);
-            for q in m.q_rad {
+            for &q in &m.q_rad {
                 let _ = write!(csv, ",{}", units.angle(q));
             }
             for p in &m.tracker_points_mm {
@@ -209,15 +210,17 @@ fn write_dataset(dir: &Path, ds: &Dataset, units: Units) {
 fn write_params(path: &Path, model: &DualArmModel, units: Units) {
     let (lu, au) = units.names();
     let arm = |a: &ArmModel| {
-        let dh: Vec<_> =
-            a.dh.iter()
-                .map(|r| {
-                    serde_json::json!({
-                        "a": units.length(r.a_mm), "d": units.length(r.d_mm),
-                        "theta": units.angle(r.theta_rad), "alpha": units.angle(r.alpha_rad)
-                    })
+        let dh: Vec<_> = a
+            .dh()
+            .unwrap()
+            .iter()
+            .map(|r| {
+                serde_json::json!({
+                    "a": units.length(r.a_mm), "d": units.length(r.d_mm),
+                    "theta": units.angle(r.theta_rad), "alpha": units.angle(r.alpha_rad)
                 })
-                .collect();
+            })
+            .collect();
         let t = |k: usize| {
             let p = a.reflectors_mm[k];
             vec![units.length(p.x), units.length(p.y), units.length(p.z)]
@@ -481,7 +484,7 @@ fn comparison_detects_a_different_model() {
     let c = case(6, [10, 10], Units::MmDeg);
     let model = nominal_model();
     let mut other = model.clone();
-    other.arms.left.dh[1].a_mm += 2.0;
+    other.arms.left.dh_mut().unwrap()[1].a_mm += 2.0;
     let args = params_args(&c, "other", &other, Units::MmDeg);
     let rust = evaluate(&c.dataset, &model, Split::All).unwrap();
     let reference = reference(c.dir.path(), &args, "all");

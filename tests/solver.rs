@@ -40,7 +40,7 @@ fn perturb(rng: &mut ChaCha8Rng, arm: &ArmModel, mm: f64, rad: f64) -> ArmModel 
     for k in 0..N_PARAMS {
         v[k] += rng.random_range(-1.0..1.0) * if param_is_angle(k) { rad } else { mm };
     }
-    ArmModel::from_vector(&v)
+    arm.with_vector(&v)
 }
 
 struct Synthetic {
@@ -91,7 +91,7 @@ fn synthetic(seed: u64, n: usize, n_cal: usize, noise_mm: f64) -> Synthetic {
                 });
                 Measurement {
                     id: format!("{}{i:03}", if side == Side::Left { "L" } else { "R" }),
-                    q_rad: q,
+                    q_rad: q.to_vec(),
                     tracker_points_mm,
                     split: if i < n_cal { Split::Cal } else { Split::Ver },
                     line: i + 2,
@@ -101,6 +101,7 @@ fn synthetic(seed: u64, n: usize, n_cal: usize, noise_mm: f64) -> Synthetic {
         ArmData {
             side,
             file: format!("{side}.csv").into(),
+            links: None,
             measurements,
         }
     };
@@ -368,7 +369,7 @@ fn error_paths() {
     let mut syn = synthetic(9, 10, 10, 0.0);
     let first = syn.dataset.arms.left.measurements[0].clone();
     for m in &mut syn.dataset.arms.left.measurements {
-        m.q_rad = first.q_rad;
+        m.q_rad = first.q_rad.clone();
         m.tracker_points_mm = first.tracker_points_mm;
     }
     let err = run(&syn.dataset, &CalibrationSettings::default()).unwrap_err();

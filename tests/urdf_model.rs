@@ -164,7 +164,7 @@ fn perturbed_model(robot: &RobotDescription, rng: &mut ChaCha8Rng) -> DualArmMod
                 rng.random_range(-1.0..1.0)
             };
         }
-        ArmModel::from_vector(&v)
+        arm.with_vector(&v)
     };
     let db = Isometry3::from_parts(
         Translation3::new(
@@ -207,8 +207,12 @@ fn calibrated_urdf_reproduces_the_model() {
         &robot.body_from_dh_base(Side::Left),
     );
     assert!(t < 1e-9 && r < 1e-12, "{t} {r}");
+    // Loaded from text, the description is the URDF's own chains; its DH reading is the model.
     let (t, r) = pose_error(
-        &back.nominal_left_base_from_right_base(),
+        &back
+            .dh_model(reflectors())
+            .unwrap()
+            .left_base_from_right_base,
         &model.left_base_from_right_base,
     );
     assert!(t < 1e-6 && r < 1e-9, "{t} {r}");
@@ -254,8 +258,19 @@ fn calibrated_urdf_reproduces_the_model() {
         }
     }
 
-    // Exporting again from the calibrated URDF updates the reflectors instead of duplicating them.
-    let again = calibrated_urdf(&back, &model).unwrap();
+    // Exporting again from the calibrated URDF (now the user's own description, a URDF chain per
+    // arm) updates the reflectors instead of duplicating them.
+    let again_model = back.nominal_model(reflectors());
+    for (a, b) in again_model
+        .arms
+        .left
+        .reflectors_mm
+        .iter()
+        .zip(&model.arms.left.reflectors_mm)
+    {
+        assert!((a - b).norm() < 1e-9);
+    }
+    let again = calibrated_urdf(&back, &again_model).unwrap();
     let raw2 = urdf_rs::read_from_string(&again).unwrap();
     assert_eq!(raw2.links.len(), raw.links.len());
     assert_eq!(raw2.joints.len(), raw.joints.len());
@@ -264,7 +279,7 @@ fn calibrated_urdf_reproduces_the_model() {
 fn assert_models_close(a: &DualArmModel, b: &DualArmModel, tol: f64) {
     for side in Side::BOTH {
         let (va, vb) = (a.arm(side).to_vector(), b.arm(side).to_vector());
-        let worst = (va - vb).abs().max();
+        let worst = (&va - &vb).abs().max();
         assert!(worst < tol, "{side}: {worst:e}\n{va}\n{vb}");
     }
     let (t, r) = pose_error(&a.left_base_from_right_base, &b.left_base_from_right_base);
@@ -304,7 +319,7 @@ fn dh_model_reads_the_urdf_back() {
 fn calibrated_urdf_refuses_non_finite_parameters() {
     let robot = RobotDescription::builtin_irb14000();
     let mut model = robot.nominal_model(reflectors());
-    model.arms.right.dh[3].a_mm = f64::NAN;
+    model.arms.right.dh_mut().unwrap()[3].a_mm = f64::NAN;
     let err = calibrated_urdf(&robot, &model).unwrap_err();
     assert!(matches!(err, RobotError::Export { .. }), "{err}");
 }
@@ -456,15 +471,30 @@ fn malformed_xml_names_the_file() {
         "{err}"
     );
 
-    // Well-formed XML that is not a YuMi names the missing joints.
+    // Well-formed XML without the YuMi names asks which chains the arms are.
     let path = dir.path().join("other.urdf");
     std::fs::write(&path, "<robot name=\"other\"><link name=\"base\"/></robot>").unwrap();
     let err = RobotDescription::load(&path).unwrap_err();
     let msg = err.to_string();
+    assert!(matches!(err, RobotError::NoArms { .. }), "{msg}");
+    assert!(
+        msg.contains("other.urdf") && msg.contains("base_link") && msg.contains("tip_link"),
+        "{msg}"
+    );
+    // An incomplete YuMi names the missing joints.
+    let path = dir.path().join("half.urdf");
+    std::fs::write(
+        &path,
+        "<robot name=\"half\"><link name=\"a\"/><link name=\"b\"/><joint name=\"yumi_joint_1_l\" \
+         type=\"revolute\"><parent link=\"a\"/><child link=\"b\"/></joint></robot>",
+    )
+    .unwrap();
+    let err = RobotDescription::load(&path).unwrap_err();
+    let msg = err.to_string();
     assert!(matches!(err, RobotError::MissingJoints { .. }), "{msg}");
     assert!(
-        msg.contains("other.urdf")
-            && msg.contains("yumi_joint_1_l")
+        msg.contains("half.urdf")
+            && msg.contains("yumi_joint_2_l")
             && msg.contains("yumi_joint_6_r"),
         "{msg}"
     );

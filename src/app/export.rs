@@ -114,7 +114,8 @@ mod tests {
         Side::BOTH
             .iter()
             .flat_map(|&s| {
-                a.arm(s).dh.iter().zip(&b.arm(s).dh).flat_map(|(x, y)| {
+                let (a, b) = (a.arm(s).dh().unwrap(), b.arm(s).dh().unwrap());
+                a.iter().zip(b).flat_map(|(x, y)| {
                     [
                         (x.a_mm - y.a_mm).abs(),
                         (x.d_mm - y.d_mm).abs(),

@@ -38,10 +38,11 @@ impl Session {
         let robot_path = urdf
             .map(Path::to_path_buf)
             .or_else(|| dataset.robot.clone());
-        let robot = match &robot_path {
-            Some(p) => RobotDescription::load(p)?,
-            None => RobotDescription::builtin_irb14000(),
-        };
+        let robot = RobotDescription::for_dataset_with(
+            &dataset,
+            robot_path.as_deref(),
+            &Default::default(),
+        )?;
         Self::new(dataset, robot, robot_path)
     }
 
@@ -50,18 +51,14 @@ impl Session {
         robot: RobotDescription,
         robot_source: Option<PathBuf>,
     ) -> anyhow::Result<Self> {
-        // A URDF of our own (e.g. an exported calibrated one) carries its DH model; the built-in
-        // robot is Table 3.
-        let nominal_model = match &robot_source {
-            Some(_) => robot
-                .dh_model(dataset.nominal_reflectors_mm)
-                .with_context(|| "the robot description does not encode a DH model")?,
-            None => robot.nominal_model(dataset.nominal_reflectors_mm),
-        };
+        // The description's own model: Table 3 for the built-in robot, the URDF's chains otherwise
+        // (the same nominal model as `dualcal calibrate` and `evaluate --nominal`).
+        robot.check_dataset(&dataset)?;
+        let nominal_model = robot.nominal_model(dataset.nominal_reflectors_mm);
         let nominal = Analysis::compute(
             &dataset,
             &nominal_model,
-            &robot.body_from_dh_base(Side::Left),
+            &robot.body_from_arm_base(Side::Left),
         )
         .context("nominal accuracy")?;
         Ok(Self {
@@ -81,7 +78,7 @@ impl Session {
     }
 
     pub fn body_from_left_base(&self) -> Isometry3<f64> {
-        self.robot.body_from_dh_base(Side::Left)
+        self.robot.body_from_arm_base(Side::Left)
     }
 }
 

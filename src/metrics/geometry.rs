@@ -32,26 +32,10 @@ pub(super) struct ArmGeom {
 }
 
 fn check_model_arm(side: Side, arm: &ArmModel) -> Result<(), MetricsError> {
-    for (i, row) in arm.dh.iter().enumerate() {
-        for (name, v) in [
-            ("a", row.a_mm),
-            ("d", row.d_mm),
-            ("theta", row.theta_rad),
-            ("alpha", row.alpha_rad),
-        ] {
-            if !v.is_finite() {
-                return Err(MetricsError::NonFiniteModel {
-                    field: format!("{side} arm DH {name}{}", i + 1),
-                });
-            }
-        }
-    }
-    for (k, t) in arm.reflectors_mm.iter().enumerate() {
-        if !t.iter().all(|x| x.is_finite()) {
-            return Err(MetricsError::NonFiniteModel {
-                field: format!("{side} arm reflector t_{}", REFLECTOR_NAMES[k]),
-            });
-        }
+    if let Some(name) = arm.first_non_finite() {
+        return Err(MetricsError::NonFiniteModel {
+            field: format!("{side} arm {name}"),
+        });
     }
     let t = &arm.reflectors_mm;
     let (ab, ac) = (t[1] - t[0], t[2] - t[0]);
@@ -74,7 +58,15 @@ fn check_base(b: &Isometry3<f64>) -> Result<(), MetricsError> {
     }
 }
 
-fn check_measurement(side: Side, m: &Measurement) -> Result<(), MetricsError> {
+fn check_measurement(side: Side, m: &Measurement, joints: usize) -> Result<(), MetricsError> {
+    if m.q_rad.len() != joints {
+        return Err(MetricsError::JointCount {
+            side,
+            id: m.id.clone(),
+            found: m.q_rad.len(),
+            expected: joints,
+        });
+    }
     let bad = |field: String| MetricsError::NonFiniteMeasurement {
         side,
         id: m.id.clone(),
@@ -118,7 +110,7 @@ pub(super) fn arm_geometry(
         });
     }
     for (_, m) in &selected {
-        check_measurement(side, m)?;
+        check_measurement(side, m, arm.joint_count())?;
     }
     let reference_rot = reference_from_base.rotation.to_rotation_matrix();
     let geom = selected

@@ -176,6 +176,15 @@ pub enum MetricsError {
     #[error("model: {field} is not finite")]
     NonFiniteModel { field: String },
     #[error(
+        "{side} arm, configuration `{id}`: {found} joint values, the model's arm has {expected} joints"
+    )]
+    JointCount {
+        side: Side,
+        id: String,
+        found: usize,
+        expected: usize,
+    },
+    #[error(
         "model: the {side} arm's reflectors t_a, t_b, t_c are (nearly) collinear, no flange rotation can be fitted"
     )]
     DegenerateReflectors { side: Side },

@@ -42,7 +42,8 @@ fn random_isometry(rng: &mut ChaCha8Rng, scale_mm: f64) -> Isometry3<f64> {
 }
 
 fn perturbed_arm(rng: &mut ChaCha8Rng, size: f64) -> ArmModel {
-    let mut v = ArmModel::nominal_irb14000(nominal_reflectors()).to_vector();
+    let nominal = ArmModel::nominal_irb14000(nominal_reflectors());
+    let mut v = nominal.to_vector();
     for k in 0..N_PARAMS {
         v[k] += size
             * if param_is_angle(k) {
@@ -51,7 +52,7 @@ fn perturbed_arm(rng: &mut ChaCha8Rng, size: f64) -> ArmModel {
                 rng.random_range(-0.5..0.5)
             };
     }
-    ArmModel::from_vector(&v)
+    nominal.with_vector(&v)
 }
 
 fn random_q(rng: &mut ChaCha8Rng) -> [f64; N_JOINTS] {
@@ -81,7 +82,7 @@ fn simulate(
                 });
                 Measurement {
                     id: format!("{}{i:03}", side.name()),
-                    q_rad,
+                    q_rad: q_rad.to_vec(),
                     tracker_points_mm,
                     split: if i % 3 == 2 { Split::Ver } else { Split::Cal },
                     line: i + 2,
@@ -91,6 +92,7 @@ fn simulate(
         ArmData {
             side,
             file: PathBuf::from(format!("{}.csv", side.name())),
+            links: None,
             measurements,
         }
     };
@@ -212,7 +214,9 @@ fn base_translation_error_gives_the_expected_collaborative_error() {
     // the left base and the right base sits 300 mm along x. Every measured left-right distance is
     // 300 mm for every reflector.
     let zero_arm = ArmModel {
-        dh: [DhRow::new(0.0, 0.0, 0.0, 0.0); N_JOINTS],
+        kinematics: crate::kinematics::ArmKinematics::Dh(
+            [DhRow::new(0.0, 0.0, 0.0, 0.0); N_JOINTS],
+        ),
         reflectors_mm: nominal_reflectors(),
     };
     let truth = DualArmModel {
@@ -222,7 +226,7 @@ fn base_translation_error_gives_the_expected_collaborative_error() {
     let mut ds = simulate(&truth, &Isometry3::identity(), [3, 4], 0.0, 5);
     for (arm, offset) in [(&mut ds.arms.left, 0.0), (&mut ds.arms.right, 300.0)] {
         for m in &mut arm.measurements {
-            m.q_rad = [0.0; N_JOINTS];
+            m.q_rad = vec![0.0; N_JOINTS];
             m.tracker_points_mm = nominal_reflectors().map(|t| t + Vector3::x() * offset);
         }
     }
@@ -541,9 +545,24 @@ fn bad_input_is_an_error_not_a_panic() {
     ));
 
     let mut m = truth.clone();
-    m.arms.right.dh[3].alpha_rad = f64::NAN;
+    m.arms.right.dh_mut().unwrap()[3].alpha_rad = f64::NAN;
     let e = evaluate(&ds, &m, Split::All).unwrap_err();
     assert!(e.to_string().contains("alpha4"), "{e}");
+    // A model of another joint count is refused, naming the configuration.
+    let mut short = ds.clone();
+    short.arms.left.measurements[1].q_rad.pop();
+    let e = evaluate(&short, &truth, Split::All).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            MetricsError::JointCount {
+                found: 6,
+                expected: 7,
+                ..
+            }
+        ),
+        "{e}"
+    );
 
     let mut m = truth.clone();
     m.left_base_from_right_base.translation.vector.x = f64::NAN;
@@ -561,8 +580,8 @@ fn bad_input_is_an_error_not_a_panic() {
     ));
 
     let mut m = truth.clone();
-    m.arms.left.dh[0].d_mm = 1e308;
-    m.arms.left.dh[2].d_mm = 1e308;
+    m.arms.left.dh_mut().unwrap()[0].d_mm = 1e308;
+    m.arms.left.dh_mut().unwrap()[2].d_mm = 1e308;
     assert!(evaluate(&ds, &m, Split::All).is_err());
 }
 

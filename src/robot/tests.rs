@@ -1,7 +1,7 @@
 //! Tests of the robot description.
 
 use super::*;
-use crate::kinematics::{ArmModel, rotation_angle_rad};
+use crate::kinematics::{ArmModel, N_JOINTS, rotation_angle_rad};
 
 #[test]
 fn builtin_loads_without_warnings() {

@@ -1,6 +1,7 @@
 //! The paper's two-step minimax calibration (Algorithms I and II), and the least-squares baseline.
 //!
-//! Step 1 identifies each arm's DH parameters and reflector coordinates by minimising the maximum over
+//! Step 1 identifies each arm's kinematic parameters (the built-in IRB 14000's DH table, or the
+//! joint-origin corrections of a URDF chain) and reflector coordinates by minimising the maximum over
 //! the reflectors of the summed squared relative distance errors; step 2 identifies the right-arm base
 //! in the left-arm base frame by the same minimax over collaborative distance errors.
 //!
@@ -207,6 +208,15 @@ pub enum CalibrationError {
         side: Side,
         found: usize,
         needed: usize,
+    },
+    #[error(
+        "{side} arm: configuration `{id}` has {found} joint values, the arm's model has {expected} joints"
+    )]
+    JointCount {
+        side: Side,
+        id: String,
+        found: usize,
+        expected: usize,
     },
     #[error("{stage}: the identification Jacobian is rank deficient: {detail}")]
     RankDeficient { stage: Stage, detail: String },

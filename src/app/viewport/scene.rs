@@ -5,7 +5,6 @@
 use crate::analysis::ConfigRow;
 use crate::app::colormap;
 use crate::app::session::Session;
-use crate::kinematics::N_JOINTS;
 use crate::robot::{GeometryKind, PlacedShape, ShapeKind};
 use crate::side::Side;
 use nalgebra::{Isometry3, Matrix3, Matrix4, Vector3};
@@ -312,10 +311,10 @@ pub fn build_scene(
     };
 
     if options.show_robot {
-        let q = |side: Side| -> [f64; N_JOINTS] {
+        let q = |side: Side| -> Vec<f64> {
             poses[side_index(side)]
                 .and_then(|i| session.dataset.arm(side).measurements.get(i))
-                .map_or_else(|| crate::robot::home_q_rad(side), |m| m.q_rad)
+                .map_or_else(|| session.robot.home_q_rad(side), |m| m.q_rad.clone())
         };
         let shapes = session
             .robot
