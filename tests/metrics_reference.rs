@@ -21,14 +21,6 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-fn nominal_reflectors() -> [Vector3<f64>; 3] {
-    [
-        Vector3::new(45.0, 0.0, 40.0),
-        Vector3::new(-25.0, 40.0, 40.0),
-        Vector3::new(-25.0, -40.0, 40.0),
-    ]
-}
-
 /// The right-arm base in the left-arm base of the public YuMi body layout, made exactly orthonormal.
 fn nominal_base() -> Isometry3<f64> {
     #[rustfmt::skip]
@@ -46,8 +38,8 @@ fn nominal_base() -> Isometry3<f64> {
 fn nominal_model() -> DualArmModel {
     DualArmModel {
         arms: PerSide::new(
-            ArmModel::nominal_irb14000(nominal_reflectors()),
-            ArmModel::nominal_irb14000(nominal_reflectors()),
+            ArmModel::nominal_irb14000(common::reflectors_mm()),
+            ArmModel::nominal_irb14000(common::reflectors_mm()),
         ),
         left_base_from_right_base: nominal_base(),
     }
@@ -131,7 +123,7 @@ fn simulate(truth: &DualArmModel, n: [usize; 2], noise_mm: f64, seed: u64) -> Da
         dir: PathBuf::new(),
         robot: None,
         tracker: TrackerSpec::default(),
-        nominal_reflectors_mm: nominal_reflectors(),
+        nominal_reflectors_mm: common::reflectors_mm(),
         arms: PerSide::new(left, right),
     }
 }

@@ -1,5 +1,7 @@
 //! The two-step minimax calibration on synthetic data built here from the kinematics alone.
 
+mod common;
+
 use dualcal::dataset::{ArmData, Dataset, Measurement, Split, TrackerSpec};
 use dualcal::kinematics::{ArmModel, DualArmModel, N_PARAMS, joint_limits_rad, param_is_angle};
 use dualcal::metrics::evaluate;
@@ -15,19 +17,11 @@ use rand_distr::{Distribution, Normal};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
-fn reflectors() -> [Vector3<f64>; 3] {
-    [
-        Vector3::new(45.0, 0.0, 40.0),
-        Vector3::new(-25.0, 40.0, 40.0),
-        Vector3::new(-25.0, -40.0, 40.0),
-    ]
-}
-
 fn nominal() -> DualArmModel {
     DualArmModel {
         arms: PerSide::new(
-            ArmModel::nominal_irb14000(reflectors()),
-            ArmModel::nominal_irb14000(reflectors()),
+            ArmModel::nominal_irb14000(common::reflectors_mm()),
+            ArmModel::nominal_irb14000(common::reflectors_mm()),
         ),
         left_base_from_right_base: Isometry3::new(
             Vector3::new(61.61, -70.77, -34.14),
@@ -112,7 +106,7 @@ fn synthetic(seed: u64, n: usize, n_cal: usize, noise_mm: f64) -> Synthetic {
             dir: "synthetic".into(),
             robot: None,
             tracker: TrackerSpec::default(),
-            nominal_reflectors_mm: reflectors(),
+            nominal_reflectors_mm: common::reflectors_mm(),
             arms: PerSide::new(left, right),
         },
         truth,

@@ -19,14 +19,6 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::path::Path;
 
-fn reflectors() -> [Vector3<f64>; 3] {
-    [
-        Vector3::new(45.0, 0.0, 40.0),
-        Vector3::new(-25.0, 40.0, 40.0),
-        Vector3::new(-25.0, -40.0, 40.0),
-    ]
-}
-
 fn random_q(rng: &mut ChaCha8Rng) -> [f64; N_JOINTS] {
     let lim = joint_limits_rad();
     std::array::from_fn(|i| rng.random_range(lim[i].0..lim[i].1))
@@ -66,7 +58,7 @@ fn max_fk_error(
 fn urdf_fk_equals_dh_fk() {
     let robot = RobotDescription::builtin_irb14000();
     assert!(robot.warnings.is_empty(), "{:?}", robot.warnings);
-    let arm = ArmModel::nominal_irb14000(reflectors());
+    let arm = ArmModel::nominal_irb14000(common::reflectors_mm());
     for (side, seed) in [(Side::Left, 1), (Side::Right, 2)] {
         let (t, r) = max_fk_error(&robot, side, &arm, &robot.body_from_dh_base(side), 50, seed);
         assert!(t < 1e-9, "{side}: {t:e} mm");
@@ -100,7 +92,7 @@ fn fk_check_detects_the_public_a3() {
     );
     assert_ne!(text, BUILTIN_IRB14000_URDF);
     let robot = RobotDescription::from_str(&text, None).unwrap();
-    let arm = ArmModel::nominal_irb14000(reflectors());
+    let arm = ArmModel::nominal_irb14000(common::reflectors_mm());
     let (t, _) = max_fk_error(
         &robot,
         Side::Left,
@@ -131,9 +123,9 @@ fn derived_base_transform_matches_the_public_layout() {
         b.translation.vector
     );
     // And the nominal model carries it.
-    let model = robot.nominal_model(reflectors());
+    let model = robot.nominal_model(common::reflectors_mm());
     assert_eq!(model.left_base_from_right_base, b);
-    assert_eq!(model.arms.left.reflectors_mm, reflectors());
+    assert_eq!(model.arms.left.reflectors_mm, common::reflectors_mm());
 }
 
 #[test]
@@ -156,7 +148,7 @@ fn dh_base_sits_on_the_joint1_axis_below_link1() {
 }
 
 fn perturbed_model(robot: &RobotDescription, rng: &mut ChaCha8Rng) -> DualArmModel {
-    let nominal = robot.nominal_model(reflectors());
+    let nominal = robot.nominal_model(common::reflectors_mm());
     let perturb = |arm: &ArmModel, rng: &mut ChaCha8Rng| {
         let mut v = arm.to_vector();
         for k in 0..N_PARAMS {
@@ -277,14 +269,22 @@ fn assert_models_close(a: &DualArmModel, b: &DualArmModel, tol: f64) {
 fn dh_model_reads_the_urdf_back() {
     let robot = RobotDescription::builtin_irb14000();
     // The built-in URDF encodes Table 3.
-    let nominal = robot.nominal_model(reflectors());
-    assert_models_close(&robot.dh_model(reflectors()).unwrap(), &nominal, 1e-12);
+    let nominal = robot.nominal_model(common::reflectors_mm());
+    assert_models_close(
+        &robot.dh_model(common::reflectors_mm()).unwrap(),
+        &nominal,
+        1e-12,
+    );
 
     // A calibrated URDF gives back the calibrated model, reflectors included.
     let mut rng = ChaCha8Rng::seed_from_u64(5);
     let model = perturbed_model(&robot, &mut rng);
     let back = RobotDescription::from_str(&calibrated_urdf(&robot, &model).unwrap(), None).unwrap();
-    assert_models_close(&back.dh_model(reflectors()).unwrap(), &model, 1e-9);
+    assert_models_close(
+        &back.dh_model(common::reflectors_mm()).unwrap(),
+        &model,
+        1e-9,
+    );
     // ... which differs from the nominal one (the comparison can fail).
     let (va, vb) = (model.arms.left.to_vector(), nominal.arms.left.to_vector());
     assert!((va - vb).abs().max() > 1e-3);
@@ -297,7 +297,7 @@ fn dh_model_reads_the_urdf_back() {
     );
     let err = RobotDescription::from_str(&text, None)
         .unwrap()
-        .dh_model(reflectors())
+        .dh_model(common::reflectors_mm())
         .unwrap_err();
     assert!(err.to_string().contains("yumi_joint_3_l"), "{err}");
 }
@@ -305,7 +305,7 @@ fn dh_model_reads_the_urdf_back() {
 #[test]
 fn calibrated_urdf_refuses_non_finite_parameters() {
     let robot = RobotDescription::builtin_irb14000();
-    let mut model = robot.nominal_model(reflectors());
+    let mut model = robot.nominal_model(common::reflectors_mm());
     model.arms.right.dh[3].a_mm = f64::NAN;
     let err = calibrated_urdf(&robot, &model).unwrap_err();
     assert!(matches!(err, RobotError::Export { .. }), "{err}");

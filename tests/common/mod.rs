@@ -5,6 +5,18 @@
 use dualcal::dataset::Dataset;
 use dualcal::kinematics::DualArmModel;
 use dualcal::solver::{CalibrationResult, CalibrationSettings, Calibrator, Termination};
+use nalgebra::Vector3;
+
+/// The reflector coordinates (flange frame, mm) the tests' synthetic data use: a = (45, 0, 40),
+/// b = (−25, 40, 40), c = (−25, −40, 40). Written out here rather than taken from the simulator, so
+/// that the tests' data does not move with its defaults.
+pub fn reflectors_mm() -> [Vector3<f64>; 3] {
+    [
+        Vector3::new(45.0, 0.0, 40.0),
+        Vector3::new(-25.0, 40.0, 40.0),
+        Vector3::new(-25.0, -40.0, 40.0),
+    ]
+}
 
 /// Calibrate without observers. Panics when the input is refused or a stage ran out of iterations (a
 /// test that means to check those calls [`Calibrator`] itself); a stall is returned for the test to
