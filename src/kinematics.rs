@@ -276,6 +276,8 @@ pub fn rotation_angle_rad(r: &nalgebra::Rotation3<f64>) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::finite_difference::{Tolerance, check_jacobian};
+    use nalgebra::{DMatrix, DVector};
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
 
@@ -345,54 +347,64 @@ mod tests {
         assert!((f - t).abs().max() < 1e-9, "{f}\n{t}");
     }
 
+    /// The three reflector Jacobians stacked (rows: t_a x, y, z, t_b …, t_c …), and the reflector
+    /// points as a function of the 37 parameters, for [`check_jacobian`].
+    fn stacked_jacobian(model: &ArmModel, q: &[f64; N_JOINTS]) -> DMatrix<f64> {
+        let (_, jac) = model.reflector_jacobians(q);
+        DMatrix::from_fn(9, N_PARAMS, |r, c| jac[r / 3][(r % 3, c)])
+    }
+
+    fn stacked_points(q: &[f64; N_JOINTS]) -> impl Fn(&DVector<f64>) -> DVector<f64> {
+        let q = *q;
+        move |v| {
+            let fk = ArmModel::from_vector(&ParamVector::from_column_slice(v.as_slice()))
+                .reflector_fk(&q);
+            DVector::from_iterator(9, fk.points_mm.iter().flat_map(|p| p.iter().copied()))
+        }
+    }
+
+    fn step(k: usize) -> f64 {
+        if param_is_angle(k) { 1e-6 } else { 1e-4 }
+    }
+
+    fn check(model: &ArmModel, q: &[f64; N_JOINTS], jac: &DMatrix<f64>) -> Result<(), String> {
+        let x = DVector::from_column_slice(model.to_vector().as_slice());
+        check_jacobian(stacked_points(q), &x, jac, step, Tolerance::rel(1e-6)).map_err(|e| {
+            e.describe(
+                |r| format!("t_{}.{}", REFLECTOR_NAMES[r / 3], ["x", "y", "z"][r % 3]),
+                param_name,
+            )
+        })
+    }
+
     #[test]
     fn analytic_jacobian_matches_central_differences() {
         let mut rng = ChaCha8Rng::seed_from_u64(7);
         for _ in 0..20 {
             let model = perturbed(&mut rng);
             let q = random_q(&mut rng);
-            let (_, jac) = model.reflector_jacobians(&q);
-            let v0 = model.to_vector();
-            for k in 0..N_PARAMS {
-                let h = if param_is_angle(k) { 1e-6 } else { 1e-4 };
-                let mut vp = v0;
-                vp[k] += h;
-                let mut vm = v0;
-                vm[k] -= h;
-                let pp = ArmModel::from_vector(&vp).reflector_fk(&q).points_mm;
-                let pm = ArmModel::from_vector(&vm).reflector_fk(&q).points_mm;
-                for r in 0..3 {
-                    let fd = (pp[r] - pm[r]) / (2.0 * h);
-                    let an = jac[r].column(k).into_owned();
-                    let scale = an.norm().max(fd.norm()).max(1e-3);
-                    let rel = (fd - an).norm() / scale;
-                    assert!(
-                        rel < 1e-6,
-                        "param {} reflector {r}: analytic {an:?} fd {fd:?} rel {rel:e}",
-                        param_name(k)
-                    );
-                }
+            if let Err(e) = check(&model, &q, &stacked_jacobian(&model, &q)) {
+                panic!("q {q:?}: {e}");
             }
         }
     }
 
     #[test]
-    fn jacobian_detects_a_wrong_column() {
-        // The check above must be able to fail: a deliberately wrong column is caught.
+    fn jacobian_check_detects_a_wrong_column() {
+        // The check above must be able to fail: the same check, given a Jacobian whose α4 column is
+        // θ5's (a plausible indexing slip), names α4 and nothing else.
         let model = nominal();
         let q = [0.3, -0.5, 0.2, -0.4, 0.6, 0.5, -0.2];
-        let (_, jac) = model.reflector_jacobians(&q);
-        let k = 3 * 4 + 3; // alpha4
-        let h = 1e-6;
-        let mut vp = model.to_vector();
-        vp[k] += h;
-        let mut vm = model.to_vector();
-        vm[k] -= h;
-        let fd = (ArmModel::from_vector(&vp).reflector_fk(&q).points_mm[0]
-            - ArmModel::from_vector(&vm).reflector_fk(&q).points_mm[0])
-            / (2.0 * h);
-        let wrong = jac[0].column(k + 1).into_owned();
-        assert!((fd - wrong).norm() / fd.norm().max(1e-3) > 1e-3);
+        let alpha4 = 3 * 4 + 3;
+        let mut jac = stacked_jacobian(&model, &q);
+        check(&model, &q, &jac).expect("the true Jacobian passes");
+        let theta5 = jac.column(alpha4 + 1).into_owned();
+        jac.set_column(alpha4, &theta5);
+        let x = DVector::from_column_slice(model.to_vector().as_slice());
+        let err = check_jacobian(stacked_points(&q), &x, &jac, step, Tolerance::rel(1e-6))
+            .expect_err("a wrong column must be caught");
+        assert_eq!(err.columns(), vec![alpha4], "{err}");
+        assert!(check(&model, &q, &jac).unwrap_err().contains("alpha4"));
     }
 
     #[test]

@@ -210,6 +210,11 @@ fn bad_inputs_fail_with_a_message_naming_the_file() {
     let before = std::fs::read(&csv).unwrap();
     let out = dualcal(&["calibrate", s(&data), "--out", s(&csv)]);
     assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("refusing to overwrite the input") && err.contains("left.csv"),
+        "{err}"
+    );
     assert_eq!(std::fs::read(&csv).unwrap(), before);
 
     // A bad parameter file.
