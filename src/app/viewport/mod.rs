@@ -2,6 +2,7 @@
 
 pub mod camera;
 pub mod gpu;
+mod primitives;
 pub mod scene;
 
 use crate::app::colormap;
