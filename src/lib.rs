@@ -12,6 +12,7 @@ pub mod atomic;
 pub mod cli;
 pub mod collision;
 pub mod dataset;
+pub mod finite_difference;
 pub mod kinematics;
 pub mod meshes;
 pub mod metrics;

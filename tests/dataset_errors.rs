@@ -521,9 +521,22 @@ fn csv_without_header() {
 
 #[test]
 fn csv_non_numeric() {
-    let err = Fixture::with_left(&left_with_field(6, 3, "12,5x")).load();
-    // "12,5x" adds a field; use a clean non-number instead.
-    assert!(err.is_err());
+    // "12,5x" adds a field: a field-count error, not a number error.
+    let err = Fixture::with_left(&left_with_field(6, 3, "12,5x"))
+        .load()
+        .unwrap_err();
+    assert!(
+        matches!(
+            err,
+            DatasetError::FieldCount {
+                line: 6,
+                expected: 18,
+                found: 19,
+                ..
+            }
+        ),
+        "{err:?}"
+    );
     let err = Fixture::with_left(&left_with_field(6, 3, "twelve"))
         .load()
         .unwrap_err();

@@ -3,7 +3,8 @@
 //! (Set `XDG_RUNTIME_DIR` to a mode-700 directory to silence a harmless warning; `.ci/run` does.)
 #![cfg(feature = "gui")]
 
-use dualcal::app::{AppLaunch, WorkbenchApp};
+use dualcal::app::{AppLaunch, Command, WorkbenchApp};
+use dualcal::side::{ConfigId, PerSide};
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
 
@@ -159,7 +160,9 @@ fn a_broken_dataset_shows_its_error_and_keeps_the_last_good_one() {
         "format = \"dualcal-dataset/1\"\n[units]\nlength = \"furlong\"\nangle = \"deg\"\n",
     )
     .unwrap();
-    harness.state_mut().open_dataset(dir.path());
+    harness
+        .state_mut()
+        .apply(Command::OpenDataset(dir.path().to_path_buf()));
     step_until(
         &mut harness,
         MAX_LOAD_FRAMES,
@@ -197,7 +200,7 @@ fn viewport_snapshot() {
         view.camera = dualcal::app::viewport::camera::OrbitCamera::default();
         view.auto_scale = false;
         // One arm's calibration configurations keep the picture readable.
-        view.options.show_arm = [true, false];
+        view.options.show_arm = PerSide::new(true, false);
         view.options.show_ver = false;
         view.options.exaggeration = 5.0;
         view.options.color_max_mm = 10.0;
@@ -218,7 +221,7 @@ fn selecting_in_the_table_and_in_the_viewport() {
         .unwrap()
         .click();
     harness.step();
-    let (side, index) = harness.state().selection().expect("worst selected");
+    let ConfigId { side, index } = harness.state().selection().expect("worst selected");
     let session = harness.state().session().unwrap();
     let worst = session
         .nominal
@@ -233,8 +236,7 @@ fn selecting_in_the_table_and_in_the_viewport() {
         .find(|r| r.config.side == side && r.config.index == index)
         .unwrap();
     assert_eq!(row.worst_pos_mm, worst);
-    let side_index = dualcal::app::viewport::scene::side_index(side);
-    assert_eq!(harness.state().viewport_pose(side_index), Some(index));
+    assert_eq!(harness.state().viewport_pose(side), Some(index));
 
     // Clicking another row's id selects it.
     // The table is sorted by |Δd| descending: the second row is on screen.
@@ -244,7 +246,7 @@ fn selecting_in_the_table_and_in_the_viewport() {
     );
     let other = &session.nominal.configs[order[1]];
     assert_ne!((other.config.side, other.config.index), (side, index));
-    let (other_id, other_sel) = (other.id.clone(), (other.config.side, other.config.index));
+    let (other_id, other_sel) = (other.id.clone(), other.config);
     harness.get_by_label(&other_id).click();
     harness.step();
     assert_eq!(harness.state().selection(), Some(other_sel));
@@ -261,14 +263,11 @@ fn selecting_in_the_table_and_in_the_viewport() {
             .nominal
             .configs
             .iter()
-            .find(|r| (r.config.side, r.config.index) != other_sel)
+            .find(|r| r.config != other_sel)
             .unwrap();
         let anchor = dualcal::app::viewport::scene::pick_anchor(row);
         let [x, y] = camera.project(&anchor, 1400.0, 900.0).unwrap();
-        (
-            (row.config.side, row.config.index),
-            eframe::egui::pos2(x, y),
-        )
+        (row.config, eframe::egui::pos2(x, y))
     };
     click_at(&mut harness, at);
     let picked = harness
@@ -284,7 +283,7 @@ fn selecting_in_the_table_and_in_the_viewport() {
         .nominal
         .configs
         .iter()
-        .find(|r| (r.config.side, r.config.index) == picked)
+        .find(|r| r.config == picked)
         .unwrap();
     let [x, y] = camera
         .project(

@@ -1,5 +1,7 @@
 //! `dualcal-params/1`: round trips, unit conversion and refusal of malformed files.
 
+mod common;
+
 use dualcal::kinematics::{ArmModel, DualArmModel, IRB14000_NOMINAL_DH, N_PARAMS};
 use dualcal::params::{self, FixedParameter, FixedParameters, ParamsError, ParamsFile, Provenance};
 use dualcal::side::PerSide;
@@ -11,11 +13,7 @@ use std::path::Path;
 fn random_model(seed: u64) -> DualArmModel {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let arm = |rng: &mut ChaCha8Rng| {
-        let nominal = ArmModel::nominal_irb14000([
-            Vector3::new(45.0, 0.0, 40.0),
-            Vector3::new(-25.0, 40.0, 40.0),
-            Vector3::new(-25.0, -40.0, 40.0),
-        ]);
+        let nominal = ArmModel::nominal_irb14000(common::reflectors_mm());
         let v = nominal.to_vector()
             + nalgebra::DVector::from_fn(N_PARAMS, |_, _| rng.random_range(-0.01..0.01));
         nominal.with_vector(&v)

@@ -28,20 +28,6 @@ fn links(arms: [(&str, &str); 2]) -> PerSide<Option<ArmLinks>> {
     )
 }
 
-/// The Python to run for the independent check (numpy needed; the test fails without it).
-fn python() -> String {
-    let py = std::env::var("DUALCAL_PYTHON").unwrap_or_else(|_| "python3".into());
-    let ok = Command::new(&py)
-        .args(["-c", "import numpy"])
-        .output()
-        .is_ok_and(|o| o.status.success());
-    assert!(
-        ok,
-        "the independent URDF check needs Python with numpy (`{py}`; set DUALCAL_PYTHON)"
-    );
-    py
-}
-
 /// Reflector positions (base link frame, mm) of `side`'s configurations of `split`, computed by
 /// `tools/urdf_fk.py` from the URDF file alone.
 fn independent_points(
@@ -57,7 +43,7 @@ fn independent_points(
         .iter()
         .map(|r| format!("reflector_{r}_{}", arm.tip_link))
         .collect();
-    let out = Command::new(python())
+    let out = Command::new(common::python("numpy"))
         .arg(script)
         .arg(urdf)
         .args([&arm.base_link, &arm.tip_link])
@@ -325,15 +311,16 @@ fn assert_export(flow: &Flow, name: &str) {
         );
         assert!((file - cal).abs() < 1e-9, "{name} {side}: {file} vs {cal}");
     }
-    // ROS's check_urdf accepts it, where installed (`.ci/run` installs liburdfdom-tools).
-    if let Ok(o) = Command::new("check_urdf").arg(&out).output() {
-        assert!(
-            o.status.success(),
-            "{name}: check_urdf: {}{}",
-            String::from_utf8_lossy(&o.stdout),
-            String::from_utf8_lossy(&o.stderr)
-        );
-    }
+    // ROS's check_urdf accepts it (Debian's liburdfdom-tools, which `tools/test` installs).
+    let o = Command::new("check_urdf").arg(&out).output().unwrap_or_else(|e| {
+        panic!("this test needs ROS's check_urdf (Debian: liburdfdom-tools, which tools/test installs): {e}")
+    });
+    assert!(
+        o.status.success(),
+        "{name}: check_urdf: {}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
 }
 
 #[test]

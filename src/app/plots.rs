@@ -115,37 +115,32 @@ pub fn convergence_plot_ui(ui: &mut egui::Ui, history: &[IterationRecord], stage
     let step = series(&|r| r.step_norm);
     let kkt = series(&|r| r.kkt_residual);
     ui.columns(2, |cols| {
-        Plot::new(("objective", format!("{stage:?}")))
-            .legend(Legend::default())
-            .x_axis_label("iteration")
-            .x_axis_formatter(|m, _| format!("{:.0}", m.value))
-            .x_grid_spacer(iteration_spacer)
-            .set_margin_fraction(egui::vec2(0.05, 0.12))
-            .y_axis_label("mm² (log10)")
-            .y_axis_formatter(log_axis_label)
-            .y_grid_spacer(log_spacer)
-            .show(&mut cols[0], |plot| {
-                plot.line(Line::new("ψ = max F", psi).color(PSI_COLOR).width(2.5));
-                for (k, (name, points)) in ["F_a", "F_b", "F_c"].into_iter().zip(f).enumerate() {
-                    plot.line(Line::new(name, points).color(F_COLORS[k]));
-                }
-            });
-        Plot::new(("step", format!("{stage:?}")))
-            .legend(Legend::default())
-            .x_axis_label("iteration")
-            .x_axis_formatter(|m, _| format!("{:.0}", m.value))
-            .x_grid_spacer(iteration_spacer)
-            .set_margin_fraction(egui::vec2(0.05, 0.12))
-            .y_axis_label("log10")
-            .y_axis_formatter(log_axis_label)
-            .y_grid_spacer(log_spacer)
-            .show(&mut cols[1], |plot| {
-                plot.line(
-                    Line::new("step norm (scaled)", step).color(Color32::from_rgb(200, 150, 240)),
-                );
-                plot.line(Line::new("KKT residual", kkt).color(Color32::from_rgb(150, 210, 210)));
-            });
+        iteration_plot(("objective", stage), "mm² (log10)").show(&mut cols[0], |plot| {
+            plot.line(Line::new("ψ = max F", psi).color(PSI_COLOR).width(2.5));
+            for (k, (name, points)) in ["F_a", "F_b", "F_c"].into_iter().zip(f).enumerate() {
+                plot.line(Line::new(name, points).color(F_COLORS[k]));
+            }
+        });
+        iteration_plot(("step", stage), "log10").show(&mut cols[1], |plot| {
+            plot.line(
+                Line::new("step norm (scaled)", step).color(Color32::from_rgb(200, 150, 240)),
+            );
+            plot.line(Line::new("KKT residual", kkt).color(Color32::from_rgb(150, 210, 210)));
+        });
     });
+}
+
+/// A plot over the iterations with a log10 y axis.
+fn iteration_plot<'a>(id: (&str, Stage), y_label: &str) -> Plot<'a> {
+    Plot::new((id.0, format!("{:?}", id.1)))
+        .legend(Legend::default())
+        .x_axis_label("iteration")
+        .x_axis_formatter(|m, _| format!("{:.0}", m.value))
+        .x_grid_spacer(iteration_spacer)
+        .set_margin_fraction(egui::vec2(0.05, 0.12))
+        .y_axis_label(y_label)
+        .y_axis_formatter(log_axis_label)
+        .y_grid_spacer(log_spacer)
 }
 
 /// Bin `samples` into `bins` bars over `[lo, hi]`, as fractions of all samples.
@@ -166,17 +161,18 @@ pub fn histogram(samples: &[f64], lo: f64, hi: f64, bins: usize) -> Vec<(f64, f6
         .collect()
 }
 
-/// Histograms of one figure before (nominal) and after (calibrated) on one split, with the
+/// Histograms of one indicator before (nominal) and after (calibrated) on one split, with the
 /// Tables 4–8 style numbers beside them.
-pub fn accuracy_ui(ui: &mut egui::Ui, session: &Session, figure: Indicator, split: Split) {
+pub fn accuracy_ui(ui: &mut egui::Ui, session: &Session, indicator: Indicator, split: Split) {
     let before = session.nominal.figures(split);
     let after = session
         .calibrated
         .as_ref()
         .and_then(|c| c.analysis.figures(split));
-    let samples = |f: Option<&SplitFigures>| f.map(|f| f.pairs.samples(figure)).unwrap_or_default();
+    let samples =
+        |f: Option<&SplitFigures>| f.map(|f| f.pairs.samples(indicator)).unwrap_or_default();
     let (before_samples, after_samples) = (samples(before), samples(after));
-    let unit = if figure.is_position() { "mm" } else { "rad" };
+    let unit = if indicator.is_position() { "mm" } else { "rad" };
     let split_name = match split {
         Split::Cal => "calibration",
         Split::Ver => "verification",
@@ -187,13 +183,13 @@ pub fn accuracy_ui(ui: &mut egui::Ui, session: &Session, figure: Indicator, spli
         // Numbers.
         ui.vertical(|ui| {
             ui.set_width(270.0);
-            ui.label(RichText::new(format!("{} — {split_name} split", figure.label())).strong());
-            let thresholds: [String; 2] = if figure.is_position() {
+            ui.label(RichText::new(format!("{} — {split_name} split", indicator.label())).strong());
+            let thresholds: [String; 2] = if indicator.is_position() {
                 POS_THRESHOLDS_MM.map(|t| format!("|Δd| ≤ {t} mm"))
             } else {
                 ORI_THRESHOLDS_RAD.map(|t| format!("Δo ≤ {t} rad"))
             };
-            egui::Grid::new(("accuracy numbers", figure.label(), split))
+            egui::Grid::new(("accuracy numbers", indicator.label(), split))
                 .striped(true)
                 .num_columns(3)
                 .show(ui, |ui| {
@@ -205,11 +201,11 @@ pub fn accuracy_ui(ui: &mut egui::Ui, session: &Session, figure: Indicator, spli
                         before.and_then(|f| f.report.as_ref()),
                         after.and_then(|f| f.report.as_ref()),
                     ];
-                    let summaries = reports.map(|r| r.map(|r| figure.summary(r)));
+                    let summaries = reports.map(|r| r.map(|r| indicator.summary(r)));
                     let cell = |ui: &mut egui::Ui, v: Option<String>| {
                         ui.label(v.unwrap_or_else(|| "—".into()));
                     };
-                    let digits = if figure.is_position() { 3 } else { 5 };
+                    let digits = if indicator.is_position() { 3 } else { 5 };
                     ui.label(format!("RMS ({unit})"));
                     for s in summaries {
                         cell(ui, s.map(|s| format!("{:.digits$}", s.0)));
@@ -231,7 +227,7 @@ pub fn accuracy_ui(ui: &mut egui::Ui, session: &Session, figure: Indicator, spli
                     for f in [before, after] {
                         ui.label(f.map_or_else(
                             || "—".into(),
-                            |f| format!("{}", f.pairs.of(figure.pair_kind()).len()),
+                            |f| format!("{}", f.pairs.of(indicator.pair_kind()).len()),
                         ));
                     }
                     ui.end_row();
@@ -256,7 +252,7 @@ pub fn accuracy_ui(ui: &mut egui::Ui, session: &Session, figure: Indicator, spli
         let n = panels.len();
         ui.columns(n, |cols| {
             for (col, (name, samples, color)) in cols.iter_mut().zip(panels) {
-                histogram_plot_ui(col, figure, split, name, samples, color);
+                histogram_plot_ui(col, indicator, split, name, samples, color);
             }
         });
     });
@@ -269,7 +265,7 @@ const CALIBRATED_COLOR: Color32 = Color32::from_rgb(100, 190, 235);
 /// when they fall in range.
 fn histogram_plot_ui(
     ui: &mut egui::Ui,
-    figure: Indicator,
+    indicator: Indicator,
     split: Split,
     name: &str,
     samples: &[f64],
@@ -280,7 +276,7 @@ fn histogram_plot_ui(
         .filter(|x| x.is_finite())
         .fold(0.0f64, |m, x| m.max(x.abs()))
         .max(1e-9);
-    let (lo, hi) = if figure.is_position() {
+    let (lo, hi) = if indicator.is_position() {
         (-extent, extent)
     } else {
         (0.0, extent)
@@ -291,9 +287,9 @@ fn histogram_plot_ui(
         .into_iter()
         .map(|(x, y)| Bar::new(x, 100.0 * y).width(width * 0.95))
         .collect();
-    Plot::new(("histogram", figure.label(), split, name.to_string()))
+    Plot::new(("histogram", indicator.label(), split, name.to_string()))
         .legend(Legend::default())
-        .x_axis_label(if figure.is_position() {
+        .x_axis_label(if indicator.is_position() {
             "Δd (mm)"
         } else {
             "Δo (rad)"
@@ -302,7 +298,7 @@ fn histogram_plot_ui(
         .allow_scroll(false)
         .show(ui, |plot| {
             plot.bar_chart(BarChart::new(name, bars).color(color));
-            let t = if figure.is_position() {
+            let t = if indicator.is_position() {
                 POS_THRESHOLDS_MM.to_vec()
             } else {
                 ORI_THRESHOLDS_RAD.to_vec()
@@ -310,7 +306,7 @@ fn histogram_plot_ui(
             for (i, x) in t.into_iter().enumerate().filter(|(_, x)| *x <= extent) {
                 let c = Color32::from_gray(if i == 0 { 150 } else { 100 });
                 plot.vline(VLine::new(format!("±{x}"), x).color(c));
-                if figure.is_position() {
+                if indicator.is_position() {
                     plot.vline(VLine::new(format!("±{x}"), -x).color(c));
                 }
             }

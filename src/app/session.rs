@@ -2,10 +2,10 @@
 //! calibrated one, each with its [`Analysis`] (accuracy figures, pair residuals and the
 //! per-configuration rows the panels show).
 
-use crate::analysis::Analysis;
+use crate::analysis::{Analysis, ConfigRow};
 use crate::dataset::{self, Dataset};
 use crate::robot::RobotDescription;
-use crate::side::Side;
+use crate::side::{ConfigId, Side};
 use crate::solver::CalibrationResult;
 use anyhow::Context as _;
 use nalgebra::Isometry3;
@@ -72,14 +72,26 @@ impl Session {
 
     /// The newest model's figures: calibrated if there is one, else nominal.
     pub fn current(&self) -> &Analysis {
-        self.calibrated
-            .as_ref()
-            .map_or(&self.nominal, |c| &c.analysis)
+        self.analysis(true)
+    }
+
+    /// The calibrated model's figures when `calibrated` is asked for and there are any, else the
+    /// nominal model's.
+    pub fn analysis(&self, calibrated: bool) -> &Analysis {
+        match &self.calibrated {
+            Some(c) if calibrated => &c.analysis,
+            _ => &self.nominal,
+        }
     }
 
     pub fn body_from_left_base(&self) -> Isometry3<f64> {
         self.robot.body_from_arm_base(Side::Left)
     }
+}
+
+/// One configuration's row of an analysis.
+pub fn config_row(analysis: &Analysis, config: ConfigId) -> Option<&ConfigRow> {
+    analysis.configs.iter().find(|r| r.config == config)
 }
 
 #[cfg(test)]

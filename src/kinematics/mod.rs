@@ -20,7 +20,7 @@
 pub mod chain;
 pub mod dh;
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;
 
 use crate::side::{PerSide, Side};
 pub use chain::{

@@ -1,7 +1,8 @@
 //! Tests of the DH kinematics and the arm model.
 
 use super::*;
-use nalgebra::{Isometry3, Vector3};
+use crate::finite_difference::{Tolerance, check_jacobian};
+use nalgebra::{DMatrix, DVector, Isometry3, Vector3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -74,54 +75,57 @@ fn zero_pose_matches_hand_computation() {
     assert!((f - t).abs().max() < 1e-9, "{f}\n{t}");
 }
 
+/// The three reflector Jacobians stacked (rows: t_a x, y, z, t_b …, t_c …).
+pub(crate) fn stacked_jacobian(model: &ArmModel, q: &[f64]) -> DMatrix<f64> {
+    let jac = model.reflector_jacobians(q).jacobians;
+    DMatrix::from_fn(9, model.param_count(), |r, c| jac[r / 3][(r % 3, c)])
+}
+
+/// Check `jac` (stacked as [`stacked_jacobian`]) against central differences of the reflector
+/// points of `model` (either form) at `q`; the message names reflector rows and parameters.
+pub(crate) fn check_arm_jacobian(
+    model: &ArmModel,
+    q: &[f64],
+    jac: &DMatrix<f64>,
+) -> Result<(), String> {
+    let points = |v: &DVector<f64>| {
+        let fk = model.with_vector(v).reflector_fk(q);
+        DVector::from_iterator(9, fk.points_mm.iter().flat_map(|p| p.iter().copied()))
+    };
+    let step = |k: usize| if model.param_is_angle(k) { 1e-6 } else { 1e-4 };
+    check_jacobian(points, &model.to_vector(), jac, step, Tolerance::rel(1e-6)).map_err(|e| {
+        e.describe(
+            |r| format!("t_{}.{}", REFLECTOR_NAMES[r / 3], ["x", "y", "z"][r % 3]),
+            |k| model.param_name(k),
+        )
+    })
+}
+
 #[test]
 fn analytic_jacobian_matches_central_differences() {
     let mut rng = ChaCha8Rng::seed_from_u64(7);
     for _ in 0..20 {
         let model = perturbed(&mut rng);
         let q = random_q(&mut rng);
-        let jac = model.reflector_jacobians(&q).jacobians;
-        let v0 = model.to_vector();
-        for k in 0..N_PARAMS {
-            let h = if param_is_angle(k) { 1e-6 } else { 1e-4 };
-            let mut vp = v0.clone();
-            vp[k] += h;
-            let mut vm = v0.clone();
-            vm[k] -= h;
-            let pp = model.with_vector(&vp).reflector_fk(&q).points_mm;
-            let pm = model.with_vector(&vm).reflector_fk(&q).points_mm;
-            for r in 0..3 {
-                let fd = (pp[r] - pm[r]) / (2.0 * h);
-                let an = jac[r].column(k).into_owned();
-                let scale = an.norm().max(fd.norm()).max(1e-3);
-                let rel = (fd - an).norm() / scale;
-                assert!(
-                    rel < 1e-6,
-                    "param {} reflector {r}: analytic {an:?} fd {fd:?} rel {rel:e}",
-                    param_name(k)
-                );
-            }
+        if let Err(e) = check_arm_jacobian(&model, &q, &stacked_jacobian(&model, &q)) {
+            panic!("q {q:?}: {e}");
         }
     }
 }
 
 #[test]
-fn jacobian_detects_a_wrong_column() {
-    // The check above must be able to fail: a deliberately wrong column is caught.
+fn jacobian_check_detects_a_wrong_column() {
+    // The check above must be able to fail: given a Jacobian whose α4 column is θ5's (a plausible
+    // indexing slip), it names α4 and nothing else.
     let model = nominal();
     let q = [0.3, -0.5, 0.2, -0.4, 0.6, 0.5, -0.2];
-    let jac = model.reflector_jacobians(&q).jacobians;
-    let k = 3 * 4 + 3; // alpha4
-    let h = 1e-6;
-    let mut vp = model.to_vector();
-    vp[k] += h;
-    let mut vm = model.to_vector();
-    vm[k] -= h;
-    let fd = (model.with_vector(&vp).reflector_fk(&q).points_mm[0]
-        - model.with_vector(&vm).reflector_fk(&q).points_mm[0])
-        / (2.0 * h);
-    let wrong = jac[0].column(k + 1).into_owned();
-    assert!((fd - wrong).norm() / fd.norm().max(1e-3) > 1e-3);
+    let alpha4 = 3 * 4 + 3;
+    let mut jac = stacked_jacobian(&model, &q);
+    check_arm_jacobian(&model, &q, &jac).expect("the true Jacobian passes");
+    let theta5 = jac.column(alpha4 + 1).into_owned();
+    jac.set_column(alpha4, &theta5);
+    let err = check_arm_jacobian(&model, &q, &jac).unwrap_err();
+    assert!(err.contains("alpha4") && !err.contains("theta5"), "{err}");
 }
 
 #[test]
