@@ -3,8 +3,12 @@
 //!
 //! The engine stays in nalgebra f64 and mm; poses cross into parry's glam `Pose` at one seam
 //! ([`to_parry_pose`]: translation + scaled rotation axis). Shapes are in mm. A mesh collision
-//! element becomes the convex hull of its mesh (collision meshes are the coarse, convex-ish sets
-//! robot descriptions ship for exactly this); a mesh that cannot be loaded is left out with a warning.
+//! element of an arm link becomes the convex hull of its mesh (arm links are convex-ish, and hulls
+//! are fast and safe); one of the body is checked as its triangle surface (a parry `TriMesh`, as
+//! MoveIt checks meshes), because the hull of a torso such as the YuMi's fills the space where the
+//! arms rest. A link wholly inside the body's closed surface without touching it is not seen, which
+//! random sampling of whole arms practically never produces. A mesh that cannot be loaded is left
+//! out with a warning.
 //!
 //! Pairs that are never checked: links of the same rigid group (joined by fixed joints), adjacent
 //! links (joined by one movable joint — this includes link_1 and the body), and pairs of the same arm
@@ -14,11 +18,11 @@
 
 use crate::meshes::{GeometryKind, MeshSet};
 use crate::robot::{Kinematics, Owner, RobotDescription, ShapeKind};
-use crate::side::Side;
+use crate::side::{PerSide, Side};
 use nalgebra::{Isometry3, UnitQuaternion, Vector3};
 use parry3d::math::{Pose, Vector};
 use parry3d::query;
-use parry3d::shape::{Ball, Capsule, ConvexPolyhedron, Cuboid, Cylinder, Shape};
+use parry3d::shape::{Ball, Capsule, ConvexPolyhedron, Cuboid, Cylinder, Shape, TriMesh};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -51,6 +55,7 @@ enum Prim {
     Cylinder(Cylinder),
     Capsule(Capsule),
     Convex(ConvexPolyhedron),
+    Mesh(TriMesh),
 }
 
 impl Prim {
@@ -61,6 +66,7 @@ impl Prim {
             Prim::Cylinder(s) => s,
             Prim::Capsule(s) => s,
             Prim::Convex(s) => s,
+            Prim::Mesh(s) => s,
         }
     }
 }
@@ -105,11 +111,12 @@ pub fn to_parry_pose(iso: &Isometry3<f64>) -> Pose {
     )
 }
 
-/// The convex hull of a mesh element (its vertices in metres, scaled to mm).
-fn convex_hull(
+/// A mesh element (its vertices in metres, scaled to mm): its convex hull, or its triangle surface.
+fn mesh_shape(
     filename: &str,
     scale: &Vector3<f64>,
     meshes: &MeshSet,
+    hull: bool,
 ) -> Result<(Prim, f64), String> {
     let mesh = meshes
         .get(filename, [scale.x, scale.y, scale.z])
@@ -123,15 +130,26 @@ fn convex_hull(
         .iter()
         .map(|p| f64::from(p.length()))
         .fold(0.0, f64::max);
-    let hull = ConvexPolyhedron::from_convex_hull(&points)
-        .ok_or_else(|| format!("mesh `{filename}` has no convex hull (flat or degenerate)"))?;
-    Ok((Prim::Convex(hull), bound))
+    if hull {
+        let hull = ConvexPolyhedron::from_convex_hull(&points)
+            .ok_or_else(|| format!("mesh `{filename}` has no convex hull (flat or degenerate)"))?;
+        return Ok((Prim::Convex(hull), bound));
+    }
+    let indices: Vec<[u32; 3]> = mesh
+        .indices
+        .chunks_exact(3)
+        .map(|t| [t[0], t[1], t[2]])
+        .collect();
+    let trimesh = TriMesh::new(points, indices)
+        .map_err(|e| format!("mesh `{filename}` is not a usable triangle mesh ({e:?})"))?;
+    Ok((Prim::Mesh(trimesh), bound))
 }
 
 fn compile_shape(
     kind: &ShapeKind,
     link_from_shape: &Isometry3<f64>,
     meshes: &MeshSet,
+    owner: Owner,
 ) -> Result<CollisionShape, String> {
     let (prim, extra, bound) = match kind {
         ShapeKind::Box { half_extents_mm: h } => (
@@ -167,7 +185,8 @@ fn compile_shape(
         ShapeKind::Mesh {
             filename, scale, ..
         } => {
-            let (prim, bound) = convex_hull(filename, scale, meshes)?;
+            let hull = matches!(owner, Owner::Arm(_));
+            let (prim, bound) = mesh_shape(filename, scale, meshes, hull)?;
             (prim, Isometry3::identity(), bound)
         }
     };
@@ -197,7 +216,8 @@ impl CollisionWorld {
             if !kin.reachable[s.link] {
                 continue;
             }
-            let shape = match compile_shape(&s.kind, &s.link_from_shape, &meshes) {
+            let shape = match compile_shape(&s.kind, &s.link_from_shape, &meshes, kin.owner[s.link])
+            {
                 Ok(shape) => shape,
                 Err(why) => {
                     warnings.push(format!(
@@ -339,7 +359,19 @@ impl CollisionWorld {
                 if (ca - cb).norm() > sa.bound_radius_mm + sb.bound_radius_mm + margin_mm {
                     continue;
                 }
-                let hit = if margin_mm > 0.0 {
+                let meshes = matches!(sa.prim, Prim::Mesh(_)) || matches!(sb.prim, Prim::Mesh(_));
+                let hit = if margin_mm > 0.0 && meshes {
+                    // A search bounded by the margin: triangle meshes are pruned by it, where a
+                    // full distance query would visit every triangle pair near the closest one.
+                    query::closest_points(
+                        pose_a,
+                        sa.prim.shape(),
+                        pose_b,
+                        sb.prim.shape(),
+                        margin_mm as f32,
+                    )
+                    .is_ok_and(|c| !matches!(c, query::ClosestPoints::Disjoint))
+                } else if margin_mm > 0.0 {
                     query::distance(pose_a, sa.prim.shape(), pose_b, sb.prim.shape())
                         .is_ok_and(|d| f64::from(d.distance) < margin_mm)
                 } else {
@@ -383,6 +415,22 @@ impl CollisionWorld {
                 )
             })
             .collect()
+    }
+
+    /// Which arms take part in a collision (as [`CollisionWorld::in_collision`] sees it).
+    pub fn colliding_arms(&self, q_left: &[f64], q_right: &[f64], margin_mm: f64) -> PerSide<bool> {
+        let placed = self.place(q_left, q_right);
+        let mut out = PerSide::new(false, false);
+        for p in &self.pairs {
+            if self.pair_hits(&placed, p, self.pair_margin(p, margin_mm)) {
+                for l in [p.a, p.b] {
+                    if let Owner::Arm(side) = self.kin.owner[self.links[l].link] {
+                        out[side] = true;
+                    }
+                }
+            }
+        }
+        out
     }
 
     fn pair_margin(&self, p: &Pair, margin_mm: f64) -> f64 {
@@ -525,5 +573,50 @@ mod tests {
         // 2 arms x (15 same-arm non-adjacent pairs + 6 against the body) + 49 inter-arm pairs
         assert_eq!(world.checked_pair_count(), 2 * (15 + 6) + 49);
         assert!(world.warnings.is_empty());
+    }
+
+    #[test]
+    fn mesh_collision_geometry_is_used() {
+        // The YuMi-like package: a box mesh per link (arm links as convex hulls) and a body box
+        // below the shoulders (a triangle surface).
+        let dir = tempfile::tempdir().unwrap();
+        let urdf = crate::test_robots::write_yumi_like(dir.path());
+        let robot = RobotDescription::load(&urdf).unwrap();
+        let world = CollisionWorld::new(&robot);
+        assert!(world.warnings.is_empty(), "{:?}", world.warnings);
+        let (l, r) = (robot.home_q_rad(Side::Left), robot.home_q_rad(Side::Right));
+        assert!(
+            !world.in_collision(&l, &r, 5.0),
+            "{:?}",
+            world.colliding_pairs(&l, &r, 5.0)
+        );
+        // Some random left-arm poses reach into the body box (the body's triangle surface).
+        let limits = robot.joint_limits_rad(Side::Left);
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let hit = (0..500)
+            .map(|_| -> Vec<f64> {
+                limits
+                    .iter()
+                    .map(|&(lo, hi)| rng.random_range(lo..hi))
+                    .collect()
+            })
+            .find(|q| {
+                world
+                    .colliding_pairs(q, &r, 0.0)
+                    .iter()
+                    .any(|(a, _, k)| a == "yumi_body" && *k == PairKind::ArmBody)
+            })
+            .expect("an arm pose in the body");
+        let arms = world.colliding_arms(&hit, &r, 0.0);
+        assert!(arms.left && !arms.right);
+        // A missing collision mesh is a warning, not a refused robot.
+        std::fs::remove_file(dir.path().join("yumi_description/meshes/coarse/link_3.stl")).unwrap();
+        let robot = RobotDescription::load(&urdf).unwrap();
+        let world = CollisionWorld::new(&robot);
+        assert!(
+            world.warnings.iter().any(|w| w.contains("link_3")),
+            "{:?}",
+            world.warnings
+        );
     }
 }

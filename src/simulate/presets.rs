@@ -50,21 +50,21 @@ pub fn resting_poses(
     seed: u64,
 ) -> Result<PerSide<Vec<f64>>, SimError> {
     let mut rest = PerSide::from_fn(|side| robot.home_q_rad(side));
+    let limits = PerSide::from_fn(|side| robot.joint_limits_rad(side));
     let mut rng = rng_for(seed, STREAM_RESTING);
-    for side in Side::BOTH {
-        let collides =
-            |rest: &PerSide<Vec<f64>>| world.in_collision(&rest.left, &rest.right, CLEARANCE_MM);
-        if !collides(&rest) {
-            continue;
+    let mut attempts = 0;
+    loop {
+        let colliding = world.colliding_arms(&rest.left, &rest.right, CLEARANCE_MM);
+        let Some(side) = Side::BOTH.into_iter().find(|&s| colliding[s]) else {
+            break;
+        };
+        if attempts == RESTING_ATTEMPTS {
+            return Err(SimError::NoRestingPose { side, attempts });
         }
-        let limits = robot.joint_limits_rad(side);
-        let mut attempts = 0;
-        loop {
-            if attempts == RESTING_ATTEMPTS {
-                return Err(SimError::NoRestingPose { side, attempts });
-            }
-            attempts += 1;
-            rest[side] = limits
+        attempts += 1;
+        // Draw new poses for every arm in a collision (both for one between them).
+        for s in Side::BOTH.into_iter().filter(|&s| colliding[s]) {
+            rest[s] = limits[s]
                 .iter()
                 .map(|&(lo, hi)| {
                     if lo < hi {
@@ -74,9 +74,6 @@ pub fn resting_poses(
                     }
                 })
                 .collect();
-            if !collides(&rest) {
-                break;
-            }
         }
     }
     Ok(rest)

@@ -3,10 +3,9 @@
 //! change) and the reflector links it adds. URDF units: metres and radians, `rpy` as URDF reads it.
 //! Written as YAML or JSON (`dualcal-urdf-overlay/1`, see `docs/formats.md`).
 
-use super::{calibrated_urdf, export_err, urdf_pose_from_isometry};
+use super::{calibrated_urdf, export_err};
 use crate::kinematics::DualArmModel;
 use crate::robot::{RobotDescription, RobotError, isometry_from_urdf_pose};
-use nalgebra::Isometry3;
 use serde::Serialize;
 
 /// The format tag of an overlay.
@@ -20,8 +19,8 @@ pub struct OriginOverlay {
 }
 
 impl OriginOverlay {
-    fn of(origin_mm: &Isometry3<f64>) -> Self {
-        let pose = urdf_pose_from_isometry(origin_mm);
+    /// As the URDF writes it.
+    fn of(pose: &urdf_rs::Pose) -> Self {
         Self {
             xyz: pose.xyz.0,
             rpy: pose.rpy.0,
@@ -85,8 +84,8 @@ pub fn calibrated_overlay(
                 if change_mm > 1e-9 || change_mrad > 1e-9 {
                     joints.push(JointOverlay {
                         name: j.name.clone(),
-                        origin: OriginOverlay::of(&origin),
-                        nominal_origin: OriginOverlay::of(&nominal),
+                        origin: OriginOverlay::of(&j.origin),
+                        nominal_origin: OriginOverlay::of(&original.origin),
                         change_mm,
                         change_mrad,
                     });
@@ -148,7 +147,14 @@ impl CalibrationOverlay {
                 j.change_mrad
             );
         }
-        s += "reflectors:\n";
+        if self.joints.is_empty() {
+            s = s.replace("joints:\n", "joints: []\n");
+        }
+        s += if self.reflectors.is_empty() {
+            "reflectors: []\n"
+        } else {
+            "reflectors:\n"
+        };
         for r in &self.reflectors {
             s += &format!(
                 "  - link: {}\n    parent: {}\n    xyz: {}\n",
