@@ -37,17 +37,21 @@ fn bench(c: &mut Criterion) {
         );
     }
     let urdf_path = dir.path().join("robot.urdf");
-    let robot = urdf_rs::read_from_string(&format!("<robot name=\"r\">{links}</robot>")).expect("urdf");
+    let robot =
+        urdf_rs::read_from_string(&format!("<robot name=\"r\">{links}</robot>")).expect("urdf");
     let resolver = MeshResolver::new(Some(&urdf_path), PackageMap::new());
     let mut group = c.benchmark_group("meshes");
     group.sample_size(10);
-    group.bench_function(format!("load_{:.1}_MB_of_binary_stl", bytes as f64 / 1e6), |b| {
-        b.iter(|| {
-            let set = load_robot_meshes(black_box(&robot), &resolver, GeometryKind::Visual);
-            assert!(set.warnings.is_empty());
-            black_box(set.triangle_count())
-        })
-    });
+    group.bench_function(
+        format!("load_{:.1}_MB_of_binary_stl", bytes as f64 / 1e6),
+        |b| {
+            b.iter(|| {
+                let set = load_robot_meshes(black_box(&robot), &resolver, GeometryKind::Visual);
+                assert!(set.warnings.is_empty());
+                black_box(set.triangle_count())
+            })
+        },
+    );
     group.finish();
 }
 

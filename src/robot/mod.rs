@@ -417,7 +417,26 @@ impl RobotDescription {
                     packages: packages.clone(),
                 },
             )?,
-            None => Self::builtin_irb14000(),
+            None => {
+                let builtin = Self::builtin_irb14000();
+                // Links given without a robot file must be the built-in robot's own arms.
+                for (side, arm) in dataset.arms.iter() {
+                    if let Some(links) = &arm.links
+                        && links != &builtin.arms[side].links
+                    {
+                        return Err(RobotError::Structure {
+                            file: dataset.dir.join("dataset.toml").display().to_string(),
+                            message: format!(
+                                "the {side} arm's chain {links} is given without a `robot`: the built-in \
+                                 IRB 14000's arms are {} (its Table 3 model); name the robot description \
+                                 these links belong to",
+                                builtin.arms[side].links
+                            ),
+                        });
+                    }
+                }
+                builtin
+            }
         };
         robot.check_dataset(dataset)?;
         Ok(robot)
