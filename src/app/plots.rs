@@ -1,9 +1,9 @@
 //! Convergence curves and accuracy histograms (egui_plot).
 
-use crate::analysis::{Analysis, Indicator, SplitFigures};
+use crate::analysis::{Analysis, Histogram, Indicator, SplitFigures};
 use crate::app::session::Session;
 use crate::dataset::Split;
-use crate::metrics::{AccuracyReport, ORI_THRESHOLDS_RAD, POS_THRESHOLDS_MM};
+use crate::metrics::{AccuracyReport, ORI_THRESHOLDS_RAD, POS_THRESHOLDS_MM, PairKind};
 use crate::side::Side;
 use crate::solver::{IterationRecord, Stage};
 use eframe::egui::{self, Color32, RichText};
@@ -143,24 +143,6 @@ fn iteration_plot<'a>(id: (&str, Stage), y_label: &str) -> Plot<'a> {
         .y_grid_spacer(log_spacer)
 }
 
-/// Bin `samples` into `bins` bars over `[lo, hi]`, as fractions of all samples.
-pub fn histogram(samples: &[f64], lo: f64, hi: f64, bins: usize) -> Vec<(f64, f64)> {
-    let bins = bins.max(1);
-    let width = (hi - lo) / bins as f64;
-    let mut counts = vec![0usize; bins];
-    for &s in samples.iter().filter(|s| s.is_finite()) {
-        let k = ((s - lo) / width).floor();
-        let k = (k.max(0.0) as usize).min(bins - 1);
-        counts[k] += 1;
-    }
-    let n = samples.len().max(1) as f64;
-    counts
-        .into_iter()
-        .enumerate()
-        .map(|(k, c)| (lo + (k as f64 + 0.5) * width, c as f64 / n))
-        .collect()
-}
-
 /// Histograms of one indicator before (nominal) and after (calibrated) on one split, with the
 /// Tables 4–8 style numbers beside them.
 pub fn accuracy_ui(ui: &mut egui::Ui, session: &Session, indicator: Indicator, split: Split) {
@@ -169,9 +151,9 @@ pub fn accuracy_ui(ui: &mut egui::Ui, session: &Session, indicator: Indicator, s
         .calibrated
         .as_ref()
         .and_then(|c| c.analysis.figures(split));
-    let samples =
-        |f: Option<&SplitFigures>| f.map(|f| f.pairs.samples(indicator)).unwrap_or_default();
-    let (before_samples, after_samples) = (samples(before), samples(after));
+    fn histogram(f: Option<&SplitFigures>, indicator: Indicator) -> Option<&Histogram> {
+        f.and_then(|f| f.histogram(indicator))
+    }
     let unit = if indicator.is_position() { "mm" } else { "rad" };
     let split_name = match split {
         Split::Cal => "calibration",
@@ -224,11 +206,12 @@ pub fn accuracy_ui(ui: &mut egui::Ui, session: &Session, indicator: Indicator, s
                         ui.end_row();
                     }
                     ui.label("pairs");
-                    for f in [before, after] {
-                        ui.label(f.map_or_else(
-                            || "—".into(),
-                            |f| format!("{}", f.pairs.of(indicator.pair_kind()).len()),
-                        ));
+                    for r in reports {
+                        let stats = r.map(|r| match indicator.pair_kind() {
+                            PairKind::Relative(side) => r.relative(side),
+                            PairKind::Collaborative => &r.collaborative,
+                        });
+                        cell(ui, stats.map(|s| s.n_pairs.to_string()));
                     }
                     ui.end_row();
                 });
@@ -241,18 +224,17 @@ pub fn accuracy_ui(ui: &mut egui::Ui, session: &Session, indicator: Indicator, s
 
         // Before and after side by side, each on its own range (calibration shrinks the errors
         // by orders of magnitude, so a shared axis would hide one of them).
-        let panels: Vec<(&str, &[f64], Color32)> = if after_samples.is_empty() {
-            vec![("nominal", &before_samples[..], NOMINAL_COLOR)]
-        } else {
-            vec![
-                ("nominal", &before_samples[..], NOMINAL_COLOR),
-                ("calibrated", &after_samples[..], CALIBRATED_COLOR),
-            ]
-        };
-        let n = panels.len();
+        let panels: Vec<(&str, &Histogram, Color32)> = [
+            ("nominal", histogram(before, indicator), NOMINAL_COLOR),
+            ("calibrated", histogram(after, indicator), CALIBRATED_COLOR),
+        ]
+        .into_iter()
+        .filter_map(|(name, h, color)| Some((name, h?, color)))
+        .collect();
+        let n = panels.len().max(1);
         ui.columns(n, |cols| {
-            for (col, (name, samples, color)) in cols.iter_mut().zip(panels) {
-                histogram_plot_ui(col, indicator, split, name, samples, color);
+            for (col, (name, h, color)) in cols.iter_mut().zip(panels) {
+                histogram_plot_ui(col, indicator, split, name, h, color);
             }
         });
     });
@@ -261,30 +243,20 @@ pub fn accuracy_ui(ui: &mut egui::Ui, session: &Session, indicator: Indicator, s
 const NOMINAL_COLOR: Color32 = Color32::from_rgb(230, 120, 90);
 const CALIBRATED_COLOR: Color32 = Color32::from_rgb(100, 190, 235);
 
-/// One histogram: symmetric range for signed Δd, from zero for Δo; the paper's thresholds as lines
-/// when they fall in range.
+/// One histogram (binned by the engine: symmetric range for signed Δd, from zero for Δo); the
+/// paper's thresholds as lines when they fall in range.
 fn histogram_plot_ui(
     ui: &mut egui::Ui,
     indicator: Indicator,
     split: Split,
     name: &str,
-    samples: &[f64],
+    histogram: &Histogram,
     color: Color32,
 ) {
-    let extent = samples
-        .iter()
-        .filter(|x| x.is_finite())
-        .fold(0.0f64, |m, x| m.max(x.abs()))
-        .max(1e-9);
-    let (lo, hi) = if indicator.is_position() {
-        (-extent, extent)
-    } else {
-        (0.0, extent)
-    };
-    let bins = 41;
-    let width = (hi - lo) / bins as f64;
-    let bars: Vec<Bar> = histogram(samples, lo, hi, bins)
-        .into_iter()
+    let extent = histogram.hi;
+    let width = histogram.bin_width();
+    let bars: Vec<Bar> = histogram
+        .bars()
         .map(|(x, y)| Bar::new(x, 100.0 * y).width(width * 0.95))
         .collect();
     Plot::new(("histogram", indicator.label(), split, name.to_string()))
@@ -416,17 +388,5 @@ mod tests {
                 assert!(m.step_size <= (hi - lo) / 1.0 + 1.0);
             }
         }
-    }
-
-    #[test]
-    fn histogram_counts_every_sample_once() {
-        let samples = [-1.0, -0.5, 0.0, 0.49, 0.5, 1.0, 7.0, -7.0];
-        let h = histogram(&samples, -1.0, 1.0, 4);
-        let total: f64 = h.iter().map(|(_, y)| y).sum();
-        assert!((total - 1.0).abs() < 1e-12);
-        // Out-of-range samples land in the end bins.
-        assert!((h[0].1 - 2.0 / 8.0).abs() < 1e-12, "{h:?}");
-        assert!((h[3].1 - 3.0 / 8.0).abs() < 1e-12, "{h:?}");
-        assert!((h[0].0 + 0.75).abs() < 1e-12);
     }
 }
