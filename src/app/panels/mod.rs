@@ -44,25 +44,40 @@ impl Default for PlotsView {
 }
 
 impl WorkbenchApp {
+    /// Status bar; settings on the left at full height (a long form); the plots below the viewport
+    /// and the table (the histograms and the summary table need the width); the table on the right.
+    /// Default sizes follow the window (1280 × 800 up to 1920 × 1080 and beyond); every panel is
+    /// resizable within limits that leave the viewport a usable size.
     pub(super) fn panels_ui(&mut self, ui: &mut egui::Ui, commands: &mut Vec<Command>) {
+        let window = ui.available_size();
         egui::Panel::bottom("status bar").show(ui, |ui| self.status_bar_ui(ui, commands));
         egui::Panel::left("settings")
-            .default_size(270.0)
+            .default_size((window.x * 0.19).clamp(230.0, 300.0))
+            .size_range(200.0..=(window.x * 0.3).max(240.0))
             .resizable(true)
-            .show(ui, |ui| self.settings_panel_ui(ui, commands));
-        egui::Panel::right("table")
-            .default_size(450.0)
-            .resizable(true)
-            .show(ui, |ui| self.table_panel_ui(ui, commands));
+            .show(ui, |ui| {
+                // A side panel is as wide as its contents: fill it, or it shrinks to them.
+                ui.set_min_width(ui.available_width());
+                self.settings_panel_ui(ui, commands)
+            });
         egui::Panel::bottom("plots")
-            .default_size(300.0)
+            .default_size((window.y * 0.36).clamp(220.0, 420.0))
+            .size_range(140.0..=(window.y * 0.6).max(200.0))
             .resizable(true)
             .show(ui, |ui| self.plots_panel_ui(ui));
+        egui::Panel::right("table")
+            .default_size((window.x * 0.36).clamp(320.0, 480.0))
+            .size_range(220.0..=(window.x * 0.4).max(260.0))
+            .resizable(true)
+            .show(ui, |ui| {
+                ui.set_min_width(ui.available_width());
+                self.table_panel_ui(ui, commands)
+            });
     }
 
     fn plots_panel_ui(&mut self, ui: &mut egui::Ui) {
         let view = &mut self.plots;
-        ui.horizontal(|ui| {
+        ui.horizontal_wrapped(|ui| {
             ui.selectable_value(&mut view.tab, PlotTab::Convergence, "Convergence");
             ui.selectable_value(&mut view.tab, PlotTab::Accuracy, "Accuracy");
             ui.selectable_value(&mut view.tab, PlotTab::Summary, "Summary");
