@@ -1,7 +1,7 @@
 //! Convergence curves and accuracy histograms (egui_plot).
 
 use crate::analysis::{Analysis, Histogram, Indicator, SplitFigures};
-use crate::app::session::Session;
+use crate::app::session::{After, Session};
 use crate::dataset::Split;
 use crate::metrics::{AccuracyReport, ORI_THRESHOLDS_RAD, POS_THRESHOLDS_MM, PairKind};
 use crate::side::Side;
@@ -166,14 +166,40 @@ const MIN_HISTOGRAM_WIDTH: f32 = 230.0;
 /// Lowest histogram worth drawing.
 const MIN_HISTOGRAM_HEIGHT: f32 = 110.0;
 
-/// Histograms of one indicator before (nominal) and after (calibrated) on one split, with the Tables 4–8 style numbers beside them. The histograms
+/// Colour of the marker of live figures (a running calibration's current iterate).
+pub const LIVE_COLOR: Color32 = Color32::from_rgb(250, 200, 90);
+
+/// "live: iteration k of step s", shown above figures of a running calibration's current iterate.
+pub fn live_marker_ui(ui: &mut egui::Ui, after: Option<After<'_>>) {
+    if let Some(After::Live(live)) = after {
+        ui.label(RichText::new(format!("live: {}", live.label())).color(LIVE_COLOR))
+            .on_hover_text(
+                "The model the running calibration has reached, re-evaluated on the whole dataset \
+                 a few times a second; the finished run replaces it, Cancel discards it",
+            );
+    }
+}
+
+/// Histograms of one indicator before (nominal) and after (the live iterate during a run, else the
+/// last calibration) on one split, with the Tables 4–8 style numbers beside them. The histograms
 /// stand side by side when the width allows, else one above the other beside the numbers, else
 /// below the numbers.
 pub fn accuracy_ui(ui: &mut egui::Ui, session: &Session, indicator: Indicator, split: Split) {
-    let after = session.calibrated.as_ref().map(|c| &c.analysis);
-    let figures = [Some(&session.nominal), after].map(|a| a.and_then(|a| a.figures(split)));
-    let names = ["nominal".to_string(), "calibrated".to_string()];
-    let colors = [NOMINAL_COLOR, CALIBRATED_COLOR];
+    let after = session.after();
+    let figures = [Some(&session.nominal), after.map(|a| a.analysis())]
+        .map(|a| a.and_then(|a| a.figures(split)));
+    let names = [
+        "nominal".to_string(),
+        after.map_or_else(|| "calibrated".into(), After::short_name),
+    ];
+    let colors = [
+        NOMINAL_COLOR,
+        if matches!(after, Some(After::Live(_))) {
+            LIVE_COLOR
+        } else {
+            CALIBRATED_COLOR
+        },
+    ];
     let histograms: Vec<(&str, &Histogram, Color32)> = (0..2)
         .filter_map(|k| {
             let h = figures[k].and_then(|f| f.histogram(indicator))?;
@@ -187,7 +213,7 @@ pub fn accuracy_ui(ui: &mut egui::Ui, session: &Session, indicator: Indicator, s
     let numbers = |ui: &mut egui::Ui| {
         ui.vertical(|ui| {
             ui.set_width(NUMBERS_WIDTH);
-            accuracy_numbers_ui(ui, indicator, split, figures, &names, after.is_some());
+            accuracy_numbers_ui(ui, indicator, split, figures, &names, after);
         });
     };
     let n = histograms.len().max(1) as f32;
@@ -243,7 +269,7 @@ fn accuracy_numbers_ui(
     split: Split,
     figures: [Option<&SplitFigures>; 2],
     names: &[String; 2],
-    has_after: bool,
+    after: Option<After<'_>>,
 ) {
     let unit = if indicator.is_position() { "mm" } else { "rad" };
     let split_name = match split {
@@ -252,6 +278,7 @@ fn accuracy_numbers_ui(
         Split::All => "every",
     };
     ui.label(RichText::new(format!("{} — {split_name} split", indicator.label())).strong());
+    live_marker_ui(ui, after);
     let thresholds: [String; 2] = if indicator.is_position() {
         POS_THRESHOLDS_MM.map(|t| format!("|Δd| ≤ {t} mm"))
     } else {
@@ -299,7 +326,7 @@ fn accuracy_numbers_ui(
             }
             ui.end_row();
         });
-    if !has_after {
+    if after.is_none() {
         ui.label(RichText::new("Calibrate to see the calibrated figures.").color(Color32::GRAY));
     }
 }
@@ -360,19 +387,19 @@ fn histogram_plot_ui(
         });
 }
 
-/// All figures of one split at a glance, nominal against calibrated (the paper's Tables 4–8). Scrolls both ways, with solid scroll bars, when the panel is smaller.
+/// All figures of one split at a glance, nominal against the live iterate or the last calibration
+/// (the paper's Tables 4–8). Scrolls both ways, with solid scroll bars, when the panel is smaller.
 pub fn accuracy_summary_ui(ui: &mut egui::Ui, session: &Session, split: Split) {
     fn report(a: &Analysis, split: Split) -> Option<&AccuracyReport> {
         a.figures(split).and_then(|f| f.report.as_ref())
     }
+    let after = session.after();
+    live_marker_ui(ui, after);
     let reports = [
         ("nominal".to_string(), report(&session.nominal, split)),
         (
-            "calibrated".to_string(),
-            session
-                .calibrated
-                .as_ref()
-                .and_then(|c| report(&c.analysis, split)),
+            after.map_or_else(|| "calibrated".into(), After::short_name),
+            after.and_then(|a| report(a.analysis(), split)),
         ),
     ];
     let titles = [

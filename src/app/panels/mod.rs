@@ -5,7 +5,8 @@
 mod settings;
 mod view_options;
 
-use super::{Command, ERROR_COLOR, Status, WorkbenchApp, plots, session, table};
+use super::session::{self, After};
+use super::{Command, ERROR_COLOR, Status, WorkbenchApp, plots, table};
 use crate::analysis::Indicator;
 use crate::dataset::Split;
 use crate::side::Side;
@@ -130,12 +131,26 @@ impl WorkbenchApp {
             ui.label("No dataset.");
             return;
         };
-        let label = if session.calibrated.is_some() {
-            "errors of the calibrated model"
-        } else {
-            "errors of the nominal model"
+        match session.after() {
+            Some(After::Live(live)) => ui.label(
+                RichText::new(format!(
+                    "errors of the current iterate ({}, live)",
+                    live.label()
+                ))
+                .small()
+                .color(plots::LIVE_COLOR),
+            ),
+            Some(After::Calibrated(_)) => ui.label(
+                RichText::new("errors of the calibrated model")
+                    .small()
+                    .color(Color32::GRAY),
+            ),
+            None => ui.label(
+                RichText::new("errors of the nominal model")
+                    .small()
+                    .color(Color32::GRAY),
+            ),
         };
-        ui.label(RichText::new(label).small().color(Color32::GRAY));
         if let Some(config) = self.selection
             && let Some(row) = session::config_row(session.current(), config)
         {
@@ -194,6 +209,16 @@ impl WorkbenchApp {
                         ),
                         None => "Calibrating: starting…".into(),
                     });
+                    if let Some(live) = self.session.as_ref().and_then(|s| s.live.as_ref()) {
+                        ui.label(
+                            RichText::new(format!(
+                                "· figures of {} (evaluated in {:.0} ms)",
+                                live.label(),
+                                live.evaluation_secs * 1e3
+                            ))
+                            .color(plots::LIVE_COLOR),
+                        );
+                    }
                 }
             }
             if let Some(session) = &self.session {
