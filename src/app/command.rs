@@ -7,7 +7,7 @@ use super::events::AppEvent;
 use super::export::Export;
 use super::files::{self, FileReply, OpenKind, PathPrompt, PromptAction, SaveRequest};
 use super::task::BackgroundTask;
-use super::work::{CalibrationWork, LoadWork};
+use super::work::{CalibrationWork, LiveRate, LoadWork};
 use super::{Status, WorkbenchApp, table};
 use crate::side::ConfigId;
 use eframe::egui;
@@ -24,7 +24,8 @@ pub enum Command {
     ChooseFile(OpenKind),
     /// Calibrate the current dataset with the current settings.
     StartCalibration,
-    /// Stop the running calibration; the previous result stays.
+    /// Stop the running calibration; the last finished calibration (or the nominal model) is shown
+    /// again, the model the run reached is discarded.
     CancelCalibration,
     /// Select a configuration (or none); `reveal_in_table` scrolls the table to it.
     Select {
@@ -111,7 +112,11 @@ impl WorkbenchApp {
             self.errors.push("Open a dataset first.".into());
             return;
         };
-        let work = CalibrationWork::new(session, self.settings.clone());
+        let work = CalibrationWork::new(
+            session,
+            self.settings.clone(),
+            LiveRate::for_execution(self.execution),
+        );
         match BackgroundTask::start("calibration", work, self.events.sender(), self.execution) {
             Ok(task) => {
                 self.history.clear();

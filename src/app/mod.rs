@@ -34,7 +34,7 @@ use events::{AppEvent, EventChannel};
 use files::{FileAccess, FileReply, NativeFiles, PathPrompt};
 use frame_stats::FrameStats;
 use panels::PlotsView;
-use session::Session;
+use session::{LiveFigures, Session};
 use std::path::PathBuf;
 use task::{BackgroundTask, Execution, TaskEvent, TaskId};
 use viewport::ViewportState;
@@ -193,6 +193,11 @@ impl WorkbenchApp {
         &self.history
     }
 
+    /// Run background tasks on threads (native) or stepped in frames (as in a browser).
+    pub fn set_execution(&mut self, execution: Execution) {
+        self.execution = execution;
+    }
+
     pub fn settings_mut(&mut self) -> &mut CalibrationSettings {
         &mut self.settings
     }
@@ -265,7 +270,7 @@ impl WorkbenchApp {
             let result = match event {
                 TaskEvent::Loaded(result) => result.map(|loaded| *loaded),
                 TaskEvent::Failed(message) => Err(message),
-                TaskEvent::Calibration(_) | TaskEvent::Calibrated(_) => return,
+                TaskEvent::Calibration(_) | TaskEvent::Live(_) | TaskEvent::Calibrated(_) => return,
             };
             self.loading = None;
             match result {
@@ -279,6 +284,7 @@ impl WorkbenchApp {
         } else if self.calibration.as_ref().is_some_and(|t| t.id() == id) {
             let outcome = match event {
                 TaskEvent::Calibration(progress) => return self.on_calibration_progress(progress),
+                TaskEvent::Live(live) => return self.on_live(*live),
                 TaskEvent::Calibrated(outcome) => outcome,
                 TaskEvent::Failed(message) => Outcome::Failed(message),
                 TaskEvent::Loaded(_) => return,
@@ -334,7 +340,30 @@ impl WorkbenchApp {
         }
     }
 
+    /// The model the running calibration has reached: shown instead of the last finished calibration
+    /// (the table, the Accuracy and Summary tabs, the viewport) until the run ends. The display scale
+    /// stays, so the error vectors visibly shrink; it follows the errors again at the end.
+    fn on_live(&mut self, live: LiveFigures) {
+        if let Some(session) = &mut self.session {
+            session.live = Some(live);
+            self.generation += 1;
+        }
+    }
+
     fn on_calibration_end(&mut self, outcome: Outcome, task: &BackgroundTask) {
+        let had_live = self.session.as_mut().and_then(|s| s.live.take()).is_some();
+        if had_live {
+            self.generation += 1;
+        }
+        let kept = if self
+            .session
+            .as_ref()
+            .is_some_and(|s| s.calibrated.is_some())
+        {
+            "the previous calibration is shown again"
+        } else {
+            "the nominal model is shown again"
+        };
         self.status = Status::Idle(match outcome {
             Outcome::Calibrated(calibrated) => {
                 let terms: Vec<String> = calibrated
@@ -362,16 +391,19 @@ impl WorkbenchApp {
                     terms.join(", ")
                 )
             }
-            Outcome::Cancelled => {
+            Outcome::Cancelled { stage, iterations } => {
                 let latency = task
                     .since_cancel()
-                    .map(|t| format!(" {:.0} ms after Cancel", t.as_secs_f64() * 1e3))
+                    .map(|t| format!(", {:.0} ms after Cancel", t.as_secs_f64() * 1e3))
                     .unwrap_or_default();
-                format!("Calibration cancelled{latency}; the previous result is kept.")
+                format!(
+                    "Calibration cancelled after iteration {iterations} of {stage}{latency}; the model \
+                     it reached is discarded and {kept}."
+                )
             }
             Outcome::Failed(message) => {
                 self.errors.push(format!("calibration: {message}"));
-                "Calibration failed; the previous result is kept.".into()
+                format!("Calibration failed; {kept}.")
             }
         });
     }

@@ -74,10 +74,10 @@ impl Column {
 
     fn width(self) -> f32 {
         match self {
-            Column::Id => 70.0,
+            Column::Id => 64.0,
             Column::Arm => 40.0,
             Column::Split => 36.0,
-            _ => 96.0,
+            _ => 88.0,
         }
     }
 }
@@ -145,23 +145,49 @@ pub fn config_table_ui(
     selection: Option<ConfigId>,
     scroll_to_selection: bool,
 ) -> Option<ConfigId> {
+    // A narrow panel scrolls the columns sideways (header and rows together).
+    egui::ScrollArea::horizontal()
+        .id_salt("config table columns")
+        .auto_shrink([false, false])
+        .show(ui, |ui| {
+            table_ui(ui, analysis, state, selection, scroll_to_selection)
+        })
+        .inner
+}
+
+fn table_ui(
+    ui: &mut egui::Ui,
+    analysis: &Analysis,
+    state: &mut TableState,
+    selection: Option<ConfigId>,
+    scroll_to_selection: bool,
+) -> Option<ConfigId> {
     let mut clicked = None;
+    // The sort order in words (no arrow glyphs in the default fonts); the sorted title in colour.
+    ui.label(
+        RichText::new(format!(
+            "sorted by {}, {} first — click a title to sort",
+            state.column.title(),
+            match (state.column, state.descending) {
+                (Column::Id | Column::Arm | Column::Split, false) => "a",
+                (Column::Id | Column::Arm | Column::Split, true) => "z",
+                (_, true) => "largest",
+                (_, false) => "smallest",
+            }
+        ))
+        .small()
+        .color(Color32::GRAY),
+    );
     ui.horizontal(|ui| {
         for column in Column::ALL {
-            let arrow = if state.column == column {
-                if state.descending {
-                    " (desc)"
-                } else {
-                    " (asc)"
-                }
-            } else {
-                ""
-            };
+            let mut title = RichText::new(column.title()).strong();
+            if state.column == column {
+                title = title.color(Color32::from_rgb(120, 180, 240));
+            }
             let r = ui
                 .add_sized(
                     [column.width(), 20.0],
-                    egui::Button::new(RichText::new(format!("{}{arrow}", column.title())).strong())
-                        .frame(false),
+                    egui::Button::new(title).frame(false),
                 )
                 .on_hover_text(column.tooltip());
             if r.clicked() {

@@ -3,10 +3,12 @@
 //! A task's [`Work`] advances in steps ([`super::work`]: a load is one step, a calibration one outer
 //! iteration per step) and reports [`TaskEvent`]s on the app's event channel. A native build runs
 //! each task on its own thread; where there are no threads (a browser build) the same work is stepped
-//! from the frame loop ([`Execution::InFrames`], [`BackgroundTask::step_in_frame`]). Cancel is an
-//! `Arc<AtomicBool>` the work polls.
+//! from the frame loop ([`Execution::InFrames`], [`BackgroundTask::step_in_frame`]), and a step that
+//! reported something to show ([`Step::Show`]: a calibration's live view) ends the frame's slice.
+//! Cancel is an `Arc<AtomicBool>` the work polls.
 
 use super::events::{AppEvent, EventSender};
+use super::session::LiveFigures;
 use super::work::{Loaded, Outcome};
 use crate::solver::CalibrationEvent;
 use std::sync::Arc;
@@ -22,6 +24,8 @@ pub enum TaskEvent {
     Loaded(Result<Box<Loaded>, String>),
     /// A calibration's progress.
     Calibration(CalibrationEvent),
+    /// The model a running calibration has reached, evaluated.
+    Live(Box<LiveFigures>),
     /// A calibration ended.
     Calibrated(Outcome),
     /// The work stopped without reporting its end.
@@ -31,15 +35,26 @@ pub enum TaskEvent {
 impl TaskEvent {
     /// Whether this is the task's last event.
     pub fn is_final(&self) -> bool {
-        !matches!(self, TaskEvent::Calibration(_))
+        !matches!(self, TaskEvent::Calibration(_) | TaskEvent::Live(_))
     }
+}
+
+/// What a step of work says about the next one.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Step {
+    /// There is more to do.
+    More,
+    /// There is more to do, after the UI has shown what this step reported: work stepped in frames
+    /// ends the frame's slice here (a live view is drawn before the run goes on).
+    Show,
+    /// The work is done (its final event sent).
+    Done,
 }
 
 /// A task's work, in steps.
 pub trait Work: Send + 'static {
-    /// Do the next piece of work, reporting through `task`. Returns false once the work is done (its
-    /// final event sent).
-    fn step(&mut self, task: &TaskContext) -> bool;
+    /// Do the next piece of work, reporting through `task`.
+    fn step(&mut self, task: &TaskContext) -> Step;
 }
 
 /// What a step of work sees: where to report, and the task's cancel flag.
@@ -170,7 +185,8 @@ impl BackgroundTask {
         matches!(self.runner, Runner::InFrames { done: false, .. })
     }
 
-    /// Advance work that runs in frames for about `budget` (nothing for a thread's).
+    /// Advance work that runs in frames for about `budget`, or until a step has something to show
+    /// (nothing for a thread's).
     pub fn step_in_frame(&mut self, budget: Duration) {
         if let Runner::InFrames {
             work,
@@ -180,7 +196,11 @@ impl BackgroundTask {
         {
             let started = Instant::now();
             while !*done && started.elapsed() < budget {
-                *done = !work.step(context);
+                match work.step(context) {
+                    Step::More => {}
+                    Step::Show => break,
+                    Step::Done => *done = true,
+                }
             }
         }
     }
@@ -194,8 +214,9 @@ impl Drop for BackgroundTask {
 
 /// A task thread's body: every step, then — if the work panicked — a final event saying so.
 fn run_to_end(mut work: impl Work, context: &TaskContext, name: &str) {
-    let ran =
-        std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| while work.step(context) {}));
+    let ran = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        while work.step(context) != Step::Done {}
+    }));
     if ran.is_err() {
         context.report(TaskEvent::Failed(format!(
             "the {name} thread stopped unexpectedly"
@@ -215,18 +236,18 @@ mod tests {
     }
 
     impl Work for Counter {
-        fn step(&mut self, task: &TaskContext) -> bool {
+        fn step(&mut self, task: &TaskContext) -> Step {
             assert_ne!(Some(self.n), self.panic_at, "the work failed");
             if self.n == 0 || task.cancel_flag().load(Ordering::Relaxed) {
                 task.report(TaskEvent::Failed("done".into()));
-                return false;
+                return Step::Done;
             }
             self.n -= 1;
             task.report_progress(TaskEvent::Calibration(CalibrationEvent::StageFinished {
                 stage: crate::solver::Stage::Base,
                 termination: crate::solver::Termination::Converged,
             }));
-            true
+            Step::More
         }
     }
 

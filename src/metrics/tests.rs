@@ -666,3 +666,96 @@ fn tables_show_the_figures() {
         assert!(c.contains(s), "{s} missing in\n{c}");
     }
 }
+
+/// One pass over every pair gives what `evaluate` of each split, `per_config` over all configurations and
+/// the pair lists give (the verification configurations are interleaved with the calibration ones).
+#[test]
+fn sweep_agrees_with_evaluate_per_config_and_the_pair_lists() {
+    let mut rng = ChaCha8Rng::seed_from_u64(21);
+    let truth = true_model(&mut rng);
+    let ds = simulate(
+        &truth,
+        &random_isometry(&mut rng, 2000.0),
+        [14, 11],
+        0.3,
+        22,
+    );
+    let mut model = truth.clone();
+    model.arms.right = perturbed_arm(&mut rng, 0.3);
+    let s = sweep(&ds, &model).unwrap();
+    for split in [Split::Cal, Split::Ver] {
+        let expected = evaluate(&ds, &model, split).unwrap();
+        let got = s.split(split).expect("both splits have pairs");
+        assert_reports_close(&got.report, &expected, 1e-12);
+        for kind in [
+            PairKind::Relative(Side::Left),
+            PairKind::Relative(Side::Right),
+            PairKind::Collaborative,
+        ] {
+            let pairs = pairs(&ds, &model, split, kind).unwrap();
+            let sorted = |mut v: Vec<f32>| {
+                v.sort_by(f32::total_cmp);
+                v
+            };
+            let samples = got.samples(kind);
+            assert_eq!(
+                sorted(samples.pos_mm.clone()),
+                sorted(
+                    pairs
+                        .iter()
+                        .flat_map(|p| p.pos_error_mm.map(|d| d as f32))
+                        .collect()
+                ),
+                "{split:?} {kind:?} Δd"
+            );
+            let ori: Vec<f32> = pairs.iter().map(|p| p.ori_error_rad as f32).collect();
+            let (a, b) = (sorted(samples.ori_rad.clone()), sorted(ori));
+            assert_eq!(a.len(), b.len());
+            for (x, y) in a.iter().zip(&b) {
+                // Δo of (i, j) and (j, i) agree to rounding.
+                assert!((x - y).abs() <= 1e-6 * y.abs().max(1e-3), "{x} vs {y}");
+            }
+        }
+    }
+    assert!(s.split(Split::All).is_none());
+    let rows = per_config(&ds, &model, Split::All).unwrap();
+    assert_eq!(rows.len(), s.per_config.len());
+    for (a, b) in rows.iter().zip(&s.per_config) {
+        assert_eq!((a.config, &a.id), (b.config, &b.id));
+        let close = |x: f64, y: f64| (x - y).abs() <= 1e-12 * x.abs().max(1e-9);
+        for (x, y) in [
+            (a.relative_pos_max_mm, b.relative_pos_max_mm),
+            (a.relative_ori_rms_rad, b.relative_ori_rms_rad),
+            (a.relative_ori_max_rad, b.relative_ori_max_rad),
+            (a.collaborative_pos_max_mm, b.collaborative_pos_max_mm),
+            (a.collaborative_ori_rms_rad, b.collaborative_ori_rms_rad),
+            (a.collaborative_ori_max_rad, b.collaborative_ori_max_rad),
+            (a.rigidity_mm, b.rigidity_mm),
+            (a.fit_rms_mm, b.fit_rms_mm),
+        ] {
+            assert!(close(x, y), "{}: {x} vs {y}", a.id);
+        }
+    }
+}
+
+/// A split with fewer than two configurations on an arm has no figures; the other split still has.
+#[test]
+fn sweep_without_verification_configurations() {
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    let truth = true_model(&mut rng);
+    let mut ds = simulate(&truth, &Isometry3::identity(), [6, 7], 0.0, 6);
+    for (_, arm) in ds.arms.iter_mut() {
+        for m in &mut arm.measurements {
+            m.split = Split::Cal;
+        }
+    }
+    let s = sweep(&ds, &truth).unwrap();
+    assert!(s.ver.is_none());
+    let cal = s.cal.as_ref().unwrap();
+    assert_eq!(cal.report.collaborative.n_pairs, 42);
+    assert_eq!(cal.samples(PairKind::Collaborative).ori_rad.len(), 42);
+    assert_eq!(
+        cal.samples(PairKind::Relative(Side::Right)).pos_mm.len(),
+        3 * 21
+    );
+}

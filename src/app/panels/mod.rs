@@ -5,7 +5,8 @@
 mod settings;
 mod view_options;
 
-use super::{Command, ERROR_COLOR, Status, WorkbenchApp, plots, session, table};
+use super::session::{self, After};
+use super::{Command, ERROR_COLOR, Status, WorkbenchApp, plots, table};
 use crate::analysis::Indicator;
 use crate::dataset::Split;
 use crate::side::Side;
@@ -44,25 +45,40 @@ impl Default for PlotsView {
 }
 
 impl WorkbenchApp {
+    /// Status bar; settings on the left at full height (a long form); the plots below the viewport
+    /// and the table (the histograms and the summary table need the width); the table on the right.
+    /// Default sizes follow the window (1280 × 800 up to 1920 × 1080 and beyond); every panel is
+    /// resizable within limits that leave the viewport a usable size.
     pub(super) fn panels_ui(&mut self, ui: &mut egui::Ui, commands: &mut Vec<Command>) {
+        let window = ui.available_size();
         egui::Panel::bottom("status bar").show(ui, |ui| self.status_bar_ui(ui, commands));
         egui::Panel::left("settings")
-            .default_size(270.0)
+            .default_size((window.x * 0.19).clamp(230.0, 300.0))
+            .size_range(200.0..=(window.x * 0.3).max(240.0))
             .resizable(true)
-            .show(ui, |ui| self.settings_panel_ui(ui, commands));
-        egui::Panel::right("table")
-            .default_size(450.0)
-            .resizable(true)
-            .show(ui, |ui| self.table_panel_ui(ui, commands));
+            .show(ui, |ui| {
+                // A side panel is as wide as its contents: fill it, or it shrinks to them.
+                ui.set_min_width(ui.available_width());
+                self.settings_panel_ui(ui, commands)
+            });
         egui::Panel::bottom("plots")
-            .default_size(300.0)
+            .default_size((window.y * 0.36).clamp(220.0, 420.0))
+            .size_range(140.0..=(window.y * 0.6).max(200.0))
             .resizable(true)
             .show(ui, |ui| self.plots_panel_ui(ui));
+        egui::Panel::right("table")
+            .default_size((window.x * 0.36).clamp(320.0, 480.0))
+            .size_range(220.0..=(window.x * 0.4).max(260.0))
+            .resizable(true)
+            .show(ui, |ui| {
+                ui.set_min_width(ui.available_width());
+                self.table_panel_ui(ui, commands)
+            });
     }
 
     fn plots_panel_ui(&mut self, ui: &mut egui::Ui) {
         let view = &mut self.plots;
-        ui.horizontal(|ui| {
+        ui.horizontal_wrapped(|ui| {
             ui.selectable_value(&mut view.tab, PlotTab::Convergence, "Convergence");
             ui.selectable_value(&mut view.tab, PlotTab::Accuracy, "Accuracy");
             ui.selectable_value(&mut view.tab, PlotTab::Summary, "Summary");
@@ -115,12 +131,26 @@ impl WorkbenchApp {
             ui.label("No dataset.");
             return;
         };
-        let label = if session.calibrated.is_some() {
-            "errors of the calibrated model"
-        } else {
-            "errors of the nominal model"
+        match session.after() {
+            Some(After::Live(live)) => ui.label(
+                RichText::new(format!(
+                    "errors of the current iterate ({}, live)",
+                    live.label()
+                ))
+                .small()
+                .color(plots::LIVE_COLOR),
+            ),
+            Some(After::Calibrated(_)) => ui.label(
+                RichText::new("errors of the calibrated model")
+                    .small()
+                    .color(Color32::GRAY),
+            ),
+            None => ui.label(
+                RichText::new("errors of the nominal model")
+                    .small()
+                    .color(Color32::GRAY),
+            ),
         };
-        ui.label(RichText::new(label).small().color(Color32::GRAY));
         if let Some(config) = self.selection
             && let Some(row) = session::config_row(session.current(), config)
         {
@@ -179,6 +209,16 @@ impl WorkbenchApp {
                         ),
                         None => "Calibrating: starting…".into(),
                     });
+                    if let Some(live) = self.session.as_ref().and_then(|s| s.live.as_ref()) {
+                        ui.label(
+                            RichText::new(format!(
+                                "· figures of {} (evaluated in {:.0} ms)",
+                                live.label(),
+                                live.evaluation_secs * 1e3
+                            ))
+                            .color(plots::LIVE_COLOR),
+                        );
+                    }
                 }
             }
             if let Some(session) = &self.session {

@@ -11,10 +11,7 @@ use eframe::egui::{self, Color32, RichText};
 impl WorkbenchApp {
     pub(super) fn view_options_ui(&mut self, ui: &mut egui::Ui, commands: &mut Vec<Command>) {
         ui.heading("View");
-        let has_cal = self
-            .session
-            .as_ref()
-            .is_some_and(|s| s.calibrated.is_some());
+        let has_cal = self.session.as_ref().is_some_and(|s| s.after().is_some());
         let view = &mut self.viewport;
         layers_ui(ui, &mut view.options);
         model_choice_ui(ui, &mut view.options, has_cal);
@@ -88,6 +85,9 @@ fn model_choice_ui(ui: &mut egui::Ui, o: &mut SceneOptions, has_cal: bool) {
         ui.add_enabled_ui(has_cal, |ui| {
             if ui
                 .selectable_label(showing_calibrated, "calibrated")
+                .on_hover_text(
+                    "The last calibration; while one runs, the model it has reached (live)",
+                )
                 .on_disabled_hover_text("Calibrate first")
                 .clicked()
             {

@@ -8,7 +8,8 @@ pub mod scene;
 use crate::analysis::{Analysis, ConfigRow};
 use crate::app::colormap;
 use crate::app::command::Command;
-use crate::app::session::{self, Session};
+use crate::app::plots::LIVE_COLOR;
+use crate::app::session::{self, After, Session};
 use crate::side::{ConfigId, PerSide};
 use camera::OrbitCamera;
 use eframe::egui::{self, Color32, Pos2, Rect, Sense, Stroke, Vec2};
@@ -132,6 +133,9 @@ impl ViewportState {
             return clicked;
         }
         self.legends_ui(&painter, rect, session);
+        if let Some(session) = session {
+            self.model_label_ui(&painter, rect, session);
+        }
         if let (Some(session), Some(config)) = (session, selection) {
             self.selection_label_ui(&painter, rect, &view_proj, session, config);
         }
@@ -310,6 +314,25 @@ impl ViewportState {
                 ));
             }
         }
+    }
+
+    /// Which model is drawn, in the top-left corner; during a run, which iterate.
+    fn model_label_ui(&self, painter: &egui::Painter, rect: Rect, session: &Session) {
+        let (text, color) = match (self.options.use_calibrated, session.after()) {
+            (true, Some(After::Live(live))) => (format!("live: {}", live.label()), LIVE_COLOR),
+            (true, Some(After::Calibrated(_))) => {
+                ("calibrated model".to_string(), Color32::from_gray(220))
+            }
+            _ => ("nominal model".to_string(), Color32::from_gray(220)),
+        };
+        let galley = painter.layout_no_wrap(text, egui::FontId::proportional(13.0), color);
+        let pos = rect.left_top() + Vec2::new(12.0, 10.0);
+        painter.rect_filled(
+            Rect::from_min_size(pos, galley.size()).expand(4.0),
+            3.0,
+            Color32::from_black_alpha(150),
+        );
+        painter.galley(pos, galley, color);
     }
 
     /// Label the selected configuration where it is drawn.
