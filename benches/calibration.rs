@@ -1,7 +1,11 @@
 //! Speed of the full two-step calibration (targets: paper size, 2 × 120 configurations, in tens of
-//! milliseconds; 1000 configurations per arm in about a second).
+//! milliseconds; 1000 configurations per arm in about a second): the built-in IRB 14000 (Table 3,
+//! DH), and a robot description of the user's own (the YuMi-like test robot, URDF chains of 7 joints).
 //!
 //! `cargo bench --bench calibration`
+#[path = "../tests/fixtures/robots.rs"]
+mod robots;
+
 use criterion::{Criterion, criterion_group, criterion_main};
 use dualcal::robot::RobotDescription;
 use dualcal::simulate::{paper_options, simulate_with_robot};
@@ -29,6 +33,20 @@ fn bench(c: &mut Criterion) {
             })
         });
     }
+    // The same protocol on a URDF of the user's own: 7-joint chains, 51 parameters per arm (31 free).
+    let dir = tempfile::tempdir().expect("temp dir");
+    let yumi_like = RobotDescription::load(&robots::write_yumi_like(dir.path())).expect("robot");
+    let sim = simulate_with_robot(&paper_options(7, 220, 120), &yumi_like).expect("simulation");
+    let ds = sim.dataset.with_cal_subset(120);
+    group.bench_function("120_configs_per_arm_urdf_chains", |b| {
+        b.iter(|| {
+            let r = Calibrator::new(black_box(&ds), &sim.nominal)
+                .run()
+                .expect("calibration");
+            assert!(r.is_converged());
+            black_box(r.calibrated)
+        })
+    });
     group.finish();
 
     // Cancel latency: a run inside a practically endless paper-QP solve is cancelled; the time from

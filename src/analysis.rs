@@ -1,14 +1,15 @@
-//! The figures of a model on a dataset, as the workbench shows them: accuracy reports and pair
-//! residuals of the calibration and verification splits, a row per configuration, and the tracker →
+//! The figures of a model on a dataset, as the workbench shows them: accuracy reports and histograms
+//! of the calibration and verification splits, a row per configuration, and the tracker →
 //! robot registration that places the measured points next to the model's for drawing (the
 //! calibration itself never needs it: it works on distances).
 
 use crate::dataset::{Dataset, Split};
 use crate::kinematics::DualArmModel;
-use crate::metrics::{self, AccuracyReport, ConfigResiduals, PairKind, PairResiduals};
-use crate::side::{ConfigId, PerSide, Side};
+use crate::metrics::{self, AccuracyReport, PairKind, SplitSweep, Sweep};
+use crate::side::{ConfigId, Side};
 use anyhow::Context as _;
 use nalgebra::{Isometry3, Point3, Vector3};
+use rayon::prelude::*;
 
 /// Which accuracy indicator: relative (one arm) or collaborative, position or orientation.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -81,28 +82,77 @@ impl Indicator {
     }
 }
 
-/// The pair residuals of one split for the three pair kinds (left, right, collaborative).
-#[derive(Clone, Debug, Default)]
-pub struct PairSet {
-    pub relative: PerSide<Vec<PairResiduals>>,
-    pub collaborative: Vec<PairResiduals>,
+/// Bars of the accuracy histograms.
+pub const HISTOGRAM_BINS: usize = 41;
+
+/// A histogram of one indicator's samples over `[lo, hi]` in equal-width bins.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Histogram {
+    pub lo: f64,
+    pub hi: f64,
+    /// Fraction (0..1) of all samples in each bin; samples outside the range count in the end bins.
+    pub fractions: Vec<f64>,
+    /// How many samples: three per pair for `Δd` (one per reflector), one per pair for `Δo`.
+    pub samples: usize,
 }
 
-impl PairSet {
-    pub fn of(&self, kind: PairKind) -> &[PairResiduals] {
-        match kind {
-            PairKind::Relative(side) => &self.relative[side],
-            PairKind::Collaborative => &self.collaborative,
+impl Histogram {
+    /// Bin `samples` into `bins` bars over `[lo, hi]`. Non-finite samples count in the total only.
+    pub fn of(samples: &[f32], lo: f64, hi: f64, bins: usize) -> Self {
+        let bins = bins.max(1);
+        let per_width = bins as f64 / (hi - lo);
+        let counts = samples
+            .par_chunks(1 << 15)
+            .fold(
+                || vec![0usize; bins],
+                |mut counts, chunk| {
+                    for &s in chunk.iter().filter(|s| s.is_finite()) {
+                        // `as` truncates towards zero and saturates: below `lo` is bin 0.
+                        let k = ((f64::from(s) - lo) * per_width) as usize;
+                        counts[k.min(bins - 1)] += 1;
+                    }
+                    counts
+                },
+            )
+            .reduce(
+                || vec![0usize; bins],
+                |mut a, b| {
+                    a.iter_mut().zip(b).for_each(|(x, y)| *x += y);
+                    a
+                },
+            );
+        let n = samples.len().max(1) as f64;
+        Self {
+            lo,
+            hi,
+            fractions: counts.into_iter().map(|c| c as f64 / n).collect(),
+            samples: samples.len(),
         }
     }
 
-    /// Histogram samples of an indicator: every reflector's signed Δd (mm) or Δo (rad).
-    pub fn samples(&self, indicator: Indicator) -> Vec<f64> {
-        let pairs = self.of(indicator.pair_kind());
+    pub fn bin_width(&self) -> f64 {
+        (self.hi - self.lo) / self.fractions.len().max(1) as f64
+    }
+
+    /// (bin centre, fraction) of every bin.
+    pub fn bars(&self) -> impl Iterator<Item = (f64, f64)> + '_ {
+        let width = self.bin_width();
+        self.fractions
+            .iter()
+            .enumerate()
+            .map(move |(k, &f)| (self.lo + (k as f64 + 0.5) * width, f))
+    }
+
+    /// The histogram of an indicator on one split: every reflector's signed `Δd` over `±` the largest
+    /// `|Δd|`, or `Δo` from zero to the largest.
+    fn of_indicator(indicator: Indicator, split: &SplitSweep) -> Self {
+        let samples = split.samples(indicator.pair_kind());
+        let (_, max, _) = indicator.summary(&split.report);
+        let extent = max.max(1e-9);
         if indicator.is_position() {
-            pairs.iter().flat_map(|p| p.pos_error_mm).collect()
+            Self::of(&samples.pos_mm, -extent, extent, HISTOGRAM_BINS)
         } else {
-            pairs.iter().map(|p| p.ori_error_rad).collect()
+            Self::of(&samples.ori_rad, 0.0, extent, HISTOGRAM_BINS)
         }
     }
 }
@@ -132,12 +182,34 @@ impl ConfigRow {
     }
 }
 
-/// The figures of one split: its accuracy report and pair residuals (both empty when the split has
-/// too few configurations).
+/// The figures of one split: its accuracy report and the histograms of its six indicators (neither
+/// when the split has too few configurations).
 #[derive(Clone, Debug, Default)]
 pub struct SplitFigures {
     pub report: Option<AccuracyReport>,
-    pub pairs: PairSet,
+    /// In [`Indicator::ALL`] order.
+    histograms: Vec<Histogram>,
+}
+
+impl SplitFigures {
+    fn of(split: Option<SplitSweep>) -> Self {
+        match split {
+            Some(split) => Self {
+                report: Some(split.report),
+                histograms: Indicator::ALL
+                    .iter()
+                    .map(|&i| Histogram::of_indicator(i, &split))
+                    .collect(),
+            },
+            None => Self::default(),
+        }
+    }
+
+    /// The histogram of one indicator.
+    pub fn histogram(&self, indicator: Indicator) -> Option<&Histogram> {
+        let k = Indicator::ALL.iter().position(|&i| i == indicator)?;
+        self.histograms.get(k)
+    }
 }
 
 /// Everything derived from one model on one dataset.
@@ -166,47 +238,44 @@ impl Analysis {
         }
     }
 
-    /// Compute the figures of `model` on `dataset`; `body_from_left_base` places the drawing.
+    /// Compute the figures of `model` on `dataset`; `body_from_left_base` places the drawing. Every pair
+    /// of configurations is visited once ([`metrics::sweep`]); this is what the workbench recomputes
+    /// for the live view while a calibration runs (`cargo bench --bench analysis`).
     pub fn compute(
         dataset: &Dataset,
         model: &DualArmModel,
         body_from_left_base: &Isometry3<f64>,
     ) -> anyhow::Result<Self> {
-        let figures = |split: Split| -> anyhow::Result<SplitFigures> {
-            // A split may be absent (datasets without a `split` column are all `cal`).
-            let Ok(report) = metrics::evaluate(dataset, model, split) else {
-                return Ok(SplitFigures::default());
-            };
-            let get = |kind| metrics::pairs(dataset, model, split, kind);
-            Ok(SplitFigures {
-                report: Some(report),
-                pairs: PairSet {
-                    relative: PerSide::try_from_fn(|side| get(PairKind::Relative(side)))?,
-                    collaborative: get(PairKind::Collaborative)?,
-                },
-            })
-        };
-        let (cal, ver) = (figures(Split::Cal)?, figures(Split::Ver)?);
-        let per_config: Vec<ConfigResiduals> =
-            metrics::per_config(dataset, model, Split::All).context("per-configuration errors")?;
+        let Sweep {
+            per_config,
+            cal,
+            ver,
+        } = metrics::sweep(dataset, model).context("accuracy figures")?;
 
         // Model points in the left base, and the registration of the tracker onto them.
         let mut model_left: Vec<[Vector3<f64>; 3]> = Vec::new();
-        let mut from = Vec::new();
-        let mut to = Vec::new();
         for side in Side::BOTH {
             let arm = model.arm(side);
             let left_base_from_base = model.left_base_from(side);
-            for m in &dataset.arm(side).measurements {
-                let fk = arm.reflector_fk(&m.q_rad);
-                let pts = fk
-                    .points_mm
-                    .map(|p| (left_base_from_base * Point3::from(p)).coords);
-                from.extend(m.tracker_points_mm);
-                to.extend(pts);
-                model_left.push(pts);
-            }
+            let points: Vec<[Vector3<f64>; 3]> = dataset
+                .arm(side)
+                .measurements
+                .par_iter()
+                .map(|m| {
+                    arm.reflector_fk(&m.q_rad)
+                        .points_mm
+                        .map(|p| (left_base_from_base * Point3::from(p)).coords)
+                })
+                .collect();
+            model_left.extend(points);
         }
+        let measured = || {
+            Side::BOTH
+                .into_iter()
+                .flat_map(|side| &dataset.arm(side).measurements)
+        };
+        let from: Vec<Vector3<f64>> = measured().flat_map(|m| m.tracker_points_mm).collect();
+        let to: Vec<Vector3<f64>> = model_left.iter().flatten().copied().collect();
         let left_base_from_tracker = best_fit_rigid(&from, &to)
             .context("cannot register the tracker frame to the robot (degenerate points)")?;
         let sum_sq: f64 = from
@@ -216,43 +285,34 @@ impl Analysis {
             .sum();
         let registration_rms_mm = (sum_sq / from.len().max(1) as f64).sqrt();
 
+        // The sweep lists every configuration, in the same order (left arm first).
+        anyhow::ensure!(
+            per_config.len() == model_left.len(),
+            "{} configuration rows for {} configurations",
+            per_config.len(),
+            model_left.len()
+        );
         let body_from_tracker = body_from_left_base * left_base_from_tracker;
-        let mut configs = Vec::with_capacity(model_left.len());
-        let mut n = 0;
-        for side in Side::BOTH {
-            for (index, m) in dataset.arm(side).measurements.iter().enumerate() {
-                let model_pts = model_left[n];
-                n += 1;
-                let err = per_config
-                    .iter()
-                    .find(|c| c.config == ConfigId::new(side, index));
-                let (worst_pos_mm, worst_ori_rad, rigidity_mm) =
-                    err.map_or((f64::NAN, f64::NAN, f64::NAN), |c| {
-                        (
-                            c.relative_pos_max_mm.max(c.collaborative_pos_max_mm),
-                            c.relative_ori_max_rad.max(c.collaborative_ori_max_rad),
-                            c.rigidity_mm,
-                        )
-                    });
-                configs.push(ConfigRow {
-                    config: ConfigId::new(side, index),
-                    id: m.id.clone(),
-                    split: m.split,
-                    worst_pos_mm,
-                    worst_ori_rad,
-                    rigidity_mm,
-                    measured_body_mm: m
-                        .tracker_points_mm
-                        .map(|p| (body_from_tracker * Point3::from(p)).coords),
-                    model_body_mm: model_pts
-                        .map(|p| (body_from_left_base * Point3::from(p)).coords),
-                });
-            }
-        }
+        let configs = measured()
+            .zip(per_config)
+            .zip(model_left)
+            .map(|((m, c), model_pts)| ConfigRow {
+                config: c.config,
+                id: m.id.clone(),
+                split: m.split,
+                worst_pos_mm: c.relative_pos_max_mm.max(c.collaborative_pos_max_mm),
+                worst_ori_rad: c.relative_ori_max_rad.max(c.collaborative_ori_max_rad),
+                rigidity_mm: c.rigidity_mm,
+                measured_body_mm: m
+                    .tracker_points_mm
+                    .map(|p| (body_from_tracker * Point3::from(p)).coords),
+                model_body_mm: model_pts.map(|p| (body_from_left_base * Point3::from(p)).coords),
+            })
+            .collect();
         Ok(Self {
             model: model.clone(),
-            cal,
-            ver,
+            cal: SplitFigures::of(cal),
+            ver: SplitFigures::of(ver),
             configs,
             left_base_from_tracker,
             registration_rms_mm,
@@ -299,6 +359,20 @@ mod tests {
         let err = (fit.translation.vector - truth.translation.vector).norm();
         assert!(err < 0.05, "translation error {err} mm");
         assert!(fit.rotation.angle_to(&truth.rotation) < 1e-4);
+    }
+
+    #[test]
+    fn histogram_counts_every_sample_once() {
+        let samples = [-1.0, -0.5, 0.0, 0.49, 0.5, 1.0, 7.0, -7.0];
+        let h = Histogram::of(&samples, -1.0, 1.0, 4);
+        let total: f64 = h.fractions.iter().sum();
+        assert!((total - 1.0).abs() < 1e-12);
+        // Out-of-range samples land in the end bins.
+        assert!((h.fractions[0] - 2.0 / 8.0).abs() < 1e-12, "{h:?}");
+        assert!((h.fractions[3] - 3.0 / 8.0).abs() < 1e-12, "{h:?}");
+        let bars: Vec<(f64, f64)> = h.bars().collect();
+        assert!((bars[0].0 + 0.75).abs() < 1e-12);
+        assert_eq!(h.samples, 8);
     }
 
     #[test]

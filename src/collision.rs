@@ -2,7 +2,13 @@
 //! themselves, with the URDF's collision geometry (parry3d, f32).
 //!
 //! The engine stays in nalgebra f64 and mm; poses cross into parry's glam `Pose` at one seam
-//! ([`to_parry_pose`]: translation + scaled rotation axis). Shapes are in mm.
+//! ([`to_parry_pose`]: translation + scaled rotation axis). Shapes are in mm. A mesh collision
+//! element of an arm link becomes the convex hull of its mesh (arm links are convex-ish, and hulls
+//! are fast and safe); one of the body is checked as its triangle surface (a parry `TriMesh`, as
+//! MoveIt checks meshes), because the hull of a torso such as the YuMi's fills the space where the
+//! arms rest. A link wholly inside the body's closed surface without touching it is not seen, which
+//! random sampling of whole arms practically never produces. A mesh that cannot be loaded is left
+//! out with a warning.
 //!
 //! Pairs that are never checked: links of the same rigid group (joined by fixed joints), adjacent
 //! links (joined by one movable joint — this includes link_1 and the body), and pairs of the same arm
@@ -10,13 +16,13 @@
 //! collision" pairs: on a compact arm such as the YuMi, link i and link i+2 share a short offset
 //! link and overlap by design). [`CollisionWorld::excluded_pairs`] lists them.
 
-use crate::kinematics::N_JOINTS;
+use crate::meshes::{GeometryKind, MeshSet};
 use crate::robot::{Kinematics, Owner, RobotDescription, ShapeKind};
-use crate::side::Side;
+use crate::side::{PerSide, Side};
 use nalgebra::{Isometry3, UnitQuaternion, Vector3};
 use parry3d::math::{Pose, Vector};
 use parry3d::query;
-use parry3d::shape::{Ball, Capsule, Cuboid, Cylinder, Shape};
+use parry3d::shape::{Ball, Capsule, ConvexPolyhedron, Cuboid, Cylinder, Shape, TriMesh};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -48,6 +54,8 @@ enum Prim {
     Cuboid(Cuboid),
     Cylinder(Cylinder),
     Capsule(Capsule),
+    Convex(ConvexPolyhedron),
+    Mesh(TriMesh),
 }
 
 impl Prim {
@@ -57,6 +65,8 @@ impl Prim {
             Prim::Cuboid(s) => s,
             Prim::Cylinder(s) => s,
             Prim::Capsule(s) => s,
+            Prim::Convex(s) => s,
+            Prim::Mesh(s) => s,
         }
     }
 }
@@ -87,7 +97,7 @@ pub struct CollisionWorld {
     links: Vec<CollisionLink>,
     pairs: Vec<Pair>,
     excluded: Vec<(String, String, Exclusion)>,
-    /// Collision geometry that could not be used (meshes are not loaded for collision checks).
+    /// Collision geometry that could not be used (a mesh that is missing or cannot be read).
     pub warnings: Vec<String>,
 }
 
@@ -101,7 +111,46 @@ pub fn to_parry_pose(iso: &Isometry3<f64>) -> Pose {
     )
 }
 
-fn compile_shape(kind: &ShapeKind, link_from_shape: &Isometry3<f64>) -> Option<CollisionShape> {
+/// A mesh element (its vertices in metres, scaled to mm): its convex hull, or its triangle surface.
+fn mesh_shape(
+    filename: &str,
+    scale: &Vector3<f64>,
+    meshes: &MeshSet,
+    hull: bool,
+) -> Result<(Prim, f64), String> {
+    let mesh = meshes
+        .get(filename, [scale.x, scale.y, scale.z])
+        .ok_or_else(|| format!("mesh `{filename}` could not be loaded"))?;
+    let points: Vec<Vector> = mesh
+        .positions_m
+        .iter()
+        .map(|p| Vector::new(p[0] * 1000.0, p[1] * 1000.0, p[2] * 1000.0))
+        .collect();
+    let bound = points
+        .iter()
+        .map(|p| f64::from(p.length()))
+        .fold(0.0, f64::max);
+    if hull {
+        let hull = ConvexPolyhedron::from_convex_hull(&points)
+            .ok_or_else(|| format!("mesh `{filename}` has no convex hull (flat or degenerate)"))?;
+        return Ok((Prim::Convex(hull), bound));
+    }
+    let indices: Vec<[u32; 3]> = mesh
+        .indices
+        .chunks_exact(3)
+        .map(|t| [t[0], t[1], t[2]])
+        .collect();
+    let trimesh = TriMesh::new(points, indices)
+        .map_err(|e| format!("mesh `{filename}` is not a usable triangle mesh ({e:?})"))?;
+    Ok((Prim::Mesh(trimesh), bound))
+}
+
+fn compile_shape(
+    kind: &ShapeKind,
+    link_from_shape: &Isometry3<f64>,
+    meshes: &MeshSet,
+    owner: Owner,
+) -> Result<CollisionShape, String> {
     let (prim, extra, bound) = match kind {
         ShapeKind::Box { half_extents_mm: h } => (
             Prim::Cuboid(Cuboid::new(Vector::new(h.x as f32, h.y as f32, h.z as f32))),
@@ -133,9 +182,15 @@ fn compile_shape(kind: &ShapeKind, link_from_shape: &Isometry3<f64>) -> Option<C
             Isometry3::identity(),
             radius_mm + half_length_mm,
         ),
-        ShapeKind::Mesh { .. } => return None,
+        ShapeKind::Mesh {
+            filename, scale, ..
+        } => {
+            let hull = matches!(owner, Owner::Arm(_));
+            let (prim, bound) = mesh_shape(filename, scale, meshes, hull)?;
+            (prim, Isometry3::identity(), bound)
+        }
     };
-    Some(CollisionShape {
+    Ok(CollisionShape {
         prim,
         link_from_shape: link_from_shape * extra,
         bound_radius_mm: bound,
@@ -148,16 +203,29 @@ impl CollisionWorld {
         let kin = robot.kin.clone();
         let mut warnings = Vec::new();
         let mut links: Vec<CollisionLink> = Vec::new();
+        let has_meshes = kin
+            .collision
+            .iter()
+            .any(|s| matches!(s.kind, ShapeKind::Mesh { .. }));
+        let meshes = if has_meshes {
+            robot.load_meshes(GeometryKind::Collision)
+        } else {
+            MeshSet::default()
+        };
         for s in &kin.collision {
             if !kin.reachable[s.link] {
                 continue;
             }
-            let Some(shape) = compile_shape(&s.kind, &s.link_from_shape) else {
-                warnings.push(format!(
-                    "link `{}`: mesh collision geometry is not supported and is ignored",
-                    kin.link_names[s.link]
-                ));
-                continue;
+            let shape = match compile_shape(&s.kind, &s.link_from_shape, &meshes, kin.owner[s.link])
+            {
+                Ok(shape) => shape,
+                Err(why) => {
+                    warnings.push(format!(
+                        "link `{}`: {why}; this collision element is ignored",
+                        kin.link_names[s.link]
+                    ));
+                    continue;
+                }
             };
             match links.iter_mut().find(|l| l.link == s.link) {
                 Some(l) => l.shapes.push(shape),
@@ -216,13 +284,17 @@ impl CollisionWorld {
     /// Drop same-arm pairs that intersect in the zero pose and in every sampled configuration.
     fn exclude_always_touching(&mut self, robot: &RobotDescription) {
         let limits = Side::BOTH.map(|s| {
-            robot.joint_limits_rad(s).map(|(lo, hi)| {
-                if lo.is_finite() && hi.is_finite() && lo < hi {
-                    (lo, hi)
-                } else {
-                    (-3.0, 3.0)
-                }
-            })
+            robot
+                .joint_limits_rad(s)
+                .into_iter()
+                .map(|(lo, hi)| {
+                    if lo.is_finite() && hi.is_finite() && lo < hi {
+                        (lo, hi)
+                    } else {
+                        (-3.0, 3.0)
+                    }
+                })
+                .collect::<Vec<_>>()
         });
         let mut rng = ChaCha8Rng::seed_from_u64(0x5eed_c011);
         let mut always: Vec<bool> = self
@@ -231,11 +303,14 @@ impl CollisionWorld {
             .map(|p| p.kind == PairKind::SelfArm)
             .collect();
         for sample in 0..=ALWAYS_TOUCHING_SAMPLES {
-            let q: [[f64; N_JOINTS]; 2] = if sample == 0 {
-                [[0.0; N_JOINTS]; 2]
+            let q: [Vec<f64>; 2] = if sample == 0 {
+                [vec![0.0; limits[0].len()], vec![0.0; limits[1].len()]]
             } else {
                 std::array::from_fn(|s| {
-                    std::array::from_fn(|k| rng.random_range(limits[s][k].0..limits[s][k].1))
+                    limits[s]
+                        .iter()
+                        .map(|&(lo, hi)| rng.random_range(lo..hi))
+                        .collect()
                 })
             };
             let placed = self.place(&q[0], &q[1]);
@@ -261,11 +336,7 @@ impl CollisionWorld {
     }
 
     /// Poses of every collision shape (per link) in the body frame.
-    fn place(
-        &self,
-        q_left: &[f64; N_JOINTS],
-        q_right: &[f64; N_JOINTS],
-    ) -> Vec<Vec<(Pose, Vector3<f64>)>> {
+    fn place(&self, q_left: &[f64], q_right: &[f64]) -> Vec<Vec<(Pose, Vector3<f64>)>> {
         let poses = self.kin.body_from_links(q_left, q_right);
         self.links
             .iter()
@@ -288,7 +359,19 @@ impl CollisionWorld {
                 if (ca - cb).norm() > sa.bound_radius_mm + sb.bound_radius_mm + margin_mm {
                     continue;
                 }
-                let hit = if margin_mm > 0.0 {
+                let meshes = matches!(sa.prim, Prim::Mesh(_)) || matches!(sb.prim, Prim::Mesh(_));
+                let hit = if margin_mm > 0.0 && meshes {
+                    // A search bounded by the margin: triangle meshes are pruned by it, where a
+                    // full distance query would visit every triangle pair near the closest one.
+                    query::closest_points(
+                        pose_a,
+                        sa.prim.shape(),
+                        pose_b,
+                        sb.prim.shape(),
+                        margin_mm as f32,
+                    )
+                    .is_ok_and(|c| !matches!(c, query::ClosestPoints::Disjoint))
+                } else if margin_mm > 0.0 {
                     query::distance(pose_a, sa.prim.shape(), pose_b, sb.prim.shape())
                         .is_ok_and(|d| f64::from(d.distance) < margin_mm)
                 } else {
@@ -306,12 +389,7 @@ impl CollisionWorld {
     /// True if any link of one arm intersects (or is closer than `margin_mm` to) the other arm's
     /// links or the body, or two non-adjacent links of the same arm intersect. Joint values in
     /// chain order, rad.
-    pub fn in_collision(
-        &self,
-        q_left: &[f64; N_JOINTS],
-        q_right: &[f64; N_JOINTS],
-        margin_mm: f64,
-    ) -> bool {
+    pub fn in_collision(&self, q_left: &[f64], q_right: &[f64], margin_mm: f64) -> bool {
         let placed = self.place(q_left, q_right);
         self.pairs
             .iter()
@@ -321,8 +399,8 @@ impl CollisionWorld {
     /// Every colliding pair (link names and what kind of pair), for diagnostics and drawing.
     pub fn colliding_pairs(
         &self,
-        q_left: &[f64; N_JOINTS],
-        q_right: &[f64; N_JOINTS],
+        q_left: &[f64],
+        q_right: &[f64],
         margin_mm: f64,
     ) -> Vec<(String, String, PairKind)> {
         let placed = self.place(q_left, q_right);
@@ -337,6 +415,22 @@ impl CollisionWorld {
                 )
             })
             .collect()
+    }
+
+    /// Which arms take part in a collision (as [`CollisionWorld::in_collision`] sees it).
+    pub fn colliding_arms(&self, q_left: &[f64], q_right: &[f64], margin_mm: f64) -> PerSide<bool> {
+        let placed = self.place(q_left, q_right);
+        let mut out = PerSide::new(false, false);
+        for p in &self.pairs {
+            if self.pair_hits(&placed, p, self.pair_margin(p, margin_mm)) {
+                for l in [p.a, p.b] {
+                    if let Owner::Arm(side) = self.kin.owner[self.links[l].link] {
+                        out[side] = true;
+                    }
+                }
+            }
+        }
+        out
     }
 
     fn pair_margin(&self, p: &Pair, margin_mm: f64) -> f64 {
@@ -361,6 +455,8 @@ impl CollisionWorld {
 mod tests {
     use super::*;
     use crate::robot::home_q_rad;
+
+    use crate::kinematics::N_JOINTS;
 
     fn home() -> ([f64; N_JOINTS], [f64; N_JOINTS]) {
         (home_q_rad(Side::Left), home_q_rad(Side::Right))
@@ -477,5 +573,50 @@ mod tests {
         // 2 arms x (15 same-arm non-adjacent pairs + 6 against the body) + 49 inter-arm pairs
         assert_eq!(world.checked_pair_count(), 2 * (15 + 6) + 49);
         assert!(world.warnings.is_empty());
+    }
+
+    #[test]
+    fn mesh_collision_geometry_is_used() {
+        // The YuMi-like package: a box mesh per link (arm links as convex hulls) and a body box
+        // below the shoulders (a triangle surface).
+        let dir = tempfile::tempdir().unwrap();
+        let urdf = crate::test_robots::write_yumi_like(dir.path());
+        let robot = RobotDescription::load(&urdf).unwrap();
+        let world = CollisionWorld::new(&robot);
+        assert!(world.warnings.is_empty(), "{:?}", world.warnings);
+        let (l, r) = (robot.home_q_rad(Side::Left), robot.home_q_rad(Side::Right));
+        assert!(
+            !world.in_collision(&l, &r, 5.0),
+            "{:?}",
+            world.colliding_pairs(&l, &r, 5.0)
+        );
+        // Some random left-arm poses reach into the body box (the body's triangle surface).
+        let limits = robot.joint_limits_rad(Side::Left);
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let hit = (0..500)
+            .map(|_| -> Vec<f64> {
+                limits
+                    .iter()
+                    .map(|&(lo, hi)| rng.random_range(lo..hi))
+                    .collect()
+            })
+            .find(|q| {
+                world
+                    .colliding_pairs(q, &r, 0.0)
+                    .iter()
+                    .any(|(a, _, k)| a == "yumi_body" && *k == PairKind::ArmBody)
+            })
+            .expect("an arm pose in the body");
+        let arms = world.colliding_arms(&hit, &r, 0.0);
+        assert!(arms.left && !arms.right);
+        // A missing collision mesh is a warning, not a refused robot.
+        std::fs::remove_file(dir.path().join("yumi_description/meshes/coarse/link_3.stl")).unwrap();
+        let robot = RobotDescription::load(&urdf).unwrap();
+        let world = CollisionWorld::new(&robot);
+        assert!(
+            world.warnings.iter().any(|w| w.contains("link_3")),
+            "{:?}",
+            world.warnings
+        );
     }
 }

@@ -1,8 +1,8 @@
 //! dualcal: two-step minimax kinematic calibration of dual-arm robots from laser-tracker data.
 //!
-//! The engine modules (`kinematics`, `robot`, `collision`, `dataset`, `params`, `textfile`, `simulate`,
-//! `metrics`, `quality`, `solver`, `urdf_export`, `cli`) never depend on egui or wgpu; the workbench
-//! lives in `app` behind the `gui` feature.
+//! The engine modules (`kinematics`, `robot`, `meshes`, `collision`, `dataset`, `params`, `textfile`,
+//! `simulate`, `metrics`, `quality`, `solver`, `urdf_export`, `cli`) never depend on egui or wgpu; the
+//! workbench lives in `app` behind the `gui` feature.
 #![forbid(unsafe_code)]
 
 pub mod analysis;
@@ -12,7 +12,9 @@ pub mod atomic;
 pub mod cli;
 pub mod collision;
 pub mod dataset;
+pub mod finite_difference;
 pub mod kinematics;
+pub mod meshes;
 pub mod metrics;
 pub mod params;
 pub mod quality;
@@ -22,3 +24,8 @@ pub mod simulate;
 pub mod solver;
 pub mod textfile;
 pub mod urdf_export;
+
+/// Robot descriptions and mesh files the tests write (shared with the integration tests).
+#[cfg(test)]
+#[path = "../tests/fixtures/robots.rs"]
+pub(crate) mod test_robots;

@@ -210,6 +210,11 @@ fn bad_inputs_fail_with_a_message_naming_the_file() {
     let before = std::fs::read(&csv).unwrap();
     let out = dualcal(&["calibrate", s(&data), "--out", s(&csv)]);
     assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("refusing to overwrite the input") && err.contains("left.csv"),
+        "{err}"
+    );
     assert_eq!(std::fs::read(&csv).unwrap(), before);
 
     // A bad parameter file.
@@ -259,4 +264,55 @@ fn a_closed_output_pipe_ends_the_command_without_a_panic() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(!stderr.contains("panicked"), "{stderr}");
     assert_eq!(out.status.code(), Some(141), "{stderr}");
+}
+
+/// A run that stops at the iteration limit is a result, not an error: the summary is printed, the
+/// parameter file is written and marked `"converged": false`, each stage that did not converge gets a
+/// warning, and the command exits with status 2 (1 is for errors).
+#[test]
+fn a_calibration_that_does_not_converge_writes_its_result_marked_and_exits_2() {
+    let example = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/datasets/example");
+    let dir = tempfile::tempdir().unwrap();
+    let out_path = dir.path().join("p.json");
+    let out = dualcal(&[
+        "calibrate",
+        s(&example),
+        "--out",
+        s(&out_path),
+        "--max-iterations",
+        "2",
+        "--quiet",
+    ]);
+    let (stdout, stderr) = (
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr),
+    );
+    assert_eq!(out.status.code(), Some(2), "{stdout}\n{stderr}");
+    assert!(
+        stdout.contains("iteration limit reached after 2 iterations"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("Accuracy on the verification configurations"),
+        "{stdout}"
+    );
+    assert!(
+        stderr.contains("warning: step 1 (left arm) stopped at the iteration limit"),
+        "{stderr}"
+    );
+    assert!(stderr.contains("did not converge"), "{stderr}");
+    let file = json(&std::fs::read_to_string(&out_path).unwrap());
+    assert_eq!(file["converged"], serde_json::json!(false));
+    let stops: Vec<&str> = file["termination"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["termination"].as_str().unwrap())
+        .collect();
+    assert_eq!(stops, ["MaxIterations"; 3]);
+
+    // The converged run's file carries no marker.
+    ok(&["calibrate", s(&example), "--out", s(&out_path), "--quiet"]);
+    let file = json(&std::fs::read_to_string(&out_path).unwrap());
+    assert!(file.get("converged").is_none(), "{file}");
 }

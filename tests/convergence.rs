@@ -11,7 +11,7 @@ use dualcal::simulate::{
     unmodelled_joint_errors,
 };
 use dualcal::solver::{
-    CalibrationResult, CalibrationSettings, Calibrator, QpMethod, Stage, StageSummary, Termination,
+    CalibrationResult, CalibrationSettings, QpMethod, Stage, StageSummary, Termination,
 };
 
 fn simulate(seed: u64, gear_mrad: f64, compliance_mrad_per_m: f64) -> SimOutput {
@@ -71,9 +71,32 @@ fn a_kink_with_a_vanishing_multiplier_converges_within_the_default_budget() {
 /// The paper's subgradient QP is inexact; a step-1 stage run with it may end above the optimum, but
 /// then it must say so (`Stalled`), never `Converged`. Datasets where it stopped 0.01–2% above the
 /// exact QP's optimum before the classification existed (one of them at 63%, reported as converged).
+///
+/// How each stage ends is pinned: since the cold-start retries, the paper QP ends within 3e-4 of the
+/// exact QP's ψ on all of them, so a gap alone cannot tell a stage that stopped short from one that
+/// converged; the two `Stalled` stages (about 1e-4 above, where the exact QP still finds a descent) are
+/// what a classifier that never reports a stall gets wrong. A solver change that moves a case must
+/// update the table — keeping at least one stage of each kind.
 #[test]
 fn the_paper_qp_reports_convergence_only_at_the_optimum() {
-    for (seed, gear, compliance) in [(4, 0.0, 0.5), (6, 3.0, 0.0), (6, 0.0, 2.0), (6, 1.0, 0.5)] {
+    #[derive(Clone, Copy, PartialEq)]
+    enum Ends {
+        /// `Converged` or `NoProgress`, within 1e-3 of the exact QP's ψ.
+        AtOptimum,
+        /// `Stalled`, above the exact QP's ψ.
+        Stalled,
+    }
+    use Ends::{AtOptimum, Stalled};
+    // (seed, gear error mrad, compliance mrad/m) → how the left and right arm stages end.
+    let cases = [
+        ((4, 0.0, 0.5), [AtOptimum, AtOptimum]),
+        ((6, 3.0, 0.0), [Stalled, AtOptimum]),
+        ((6, 0.0, 2.0), [AtOptimum, Stalled]),
+        ((6, 1.0, 0.5), [AtOptimum, AtOptimum]),
+    ];
+    let all: Vec<Ends> = cases.iter().flat_map(|(_, e)| *e).collect();
+    assert!(all.contains(&AtOptimum) && all.contains(&Stalled));
+    for ((seed, gear, compliance), expected) in cases {
         let sim = simulate(seed, gear, compliance);
         let exact = run(&sim, CalibrationSettings::default());
         let paper = run(
@@ -83,52 +106,60 @@ fn the_paper_qp_reports_convergence_only_at_the_optimum() {
                 ..Default::default()
             },
         );
-        for side in Side::BOTH {
+        for (side, expected) in Side::BOTH.into_iter().zip(expected) {
             let (e, p) = (stage(&exact, side), stage(&paper, side));
-            assert!(e.termination.is_converged(), "{e:?}");
+            let case = format!("seed {seed} gear {gear} compliance {compliance} {side}");
+            assert!(e.termination.is_converged(), "{case}: exact QP {e:?}");
             let gap = p.psi_mm2 / e.psi_mm2 - 1.0;
-            if p.termination.is_converged() {
-                assert!(
-                    gap < 1e-3,
-                    "seed {seed} {side}: paper QP says {} at ψ {} but the optimum is {}",
-                    p.termination,
-                    p.psi_mm2,
-                    e.psi_mm2
-                );
-            } else {
-                assert_eq!(p.termination, Termination::Stalled, "{p:?}");
-                assert!(
-                    gap > 0.0,
-                    "seed {seed} {side}: stalled below the optimum? {p:?} {e:?}"
-                );
+            match expected {
+                AtOptimum => {
+                    assert!(
+                        p.termination.is_converged(),
+                        "{case}: expected the paper QP to converge, got {p:?}"
+                    );
+                    assert!(
+                        gap < 1e-3,
+                        "{case}: paper QP says {} at ψ {} but the optimum is {}",
+                        p.termination,
+                        p.psi_mm2,
+                        e.psi_mm2
+                    );
+                }
+                Stalled => {
+                    assert_eq!(
+                        p.termination,
+                        Termination::Stalled,
+                        "{case}: the paper QP stopped {gap:e} above the exact QP's ψ: {p:?}"
+                    );
+                    assert!(gap > 0.0, "{case}: stalled below the optimum? {p:?} {e:?}");
+                }
             }
         }
     }
 }
 
-/// A paper QP starved of iterations cannot reach the optimum: the stage must end `Stalled` (or at the
-/// iteration limit), never as converged. This exercises the `Stalled` path deterministically.
+/// A paper QP starved of iterations (two per outer iteration) cannot reach the optimum: both arm
+/// stages end `Stalled`, far above the exact QP's optimum, and the run is not converged. This exercises
+/// the `Stalled` path deterministically.
 #[test]
 fn a_starved_paper_qp_stalls_and_says_so() {
     let sim = simulate(1, 1.0, 0.5);
     let exact = run(&sim, CalibrationSettings::default());
-    let settings = CalibrationSettings {
-        qp: QpMethod::Paper,
-        max_qp_iterations: 2,
-        ..Default::default()
-    };
-    let r = Calibrator::new(&sim.dataset, &sim.nominal)
-        .settings(settings)
-        .run()
-        .expect("calibration");
-    let (p, e) = (stage(&r, Side::Left), stage(&exact, Side::Left));
-    assert!(
-        matches!(
-            p.termination,
-            Termination::Stalled | Termination::MaxIterations
-        ),
-        "{p:?}"
+    let starved = run(
+        &sim,
+        CalibrationSettings {
+            qp: QpMethod::Paper,
+            max_qp_iterations: 2,
+            ..Default::default()
+        },
     );
-    assert!(!r.is_converged());
-    assert!(p.psi_mm2 > e.psi_mm2 * (1.0 + 1e-3), "{p:?} vs {e:?}");
+    assert!(!starved.is_converged());
+    for side in Side::BOTH {
+        let (p, e) = (stage(&starved, side), stage(&exact, side));
+        assert_eq!(p.termination, Termination::Stalled, "{side}: {p:?}");
+        assert!(
+            p.psi_mm2 > e.psi_mm2 * (1.0 + 1e-3),
+            "{side}: {p:?} vs {e:?}"
+        );
+    }
 }

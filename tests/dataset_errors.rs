@@ -559,9 +559,22 @@ fn csv_without_header() {
 
 #[test]
 fn csv_non_numeric() {
-    let err = Fixture::with_left(&left_with_field(6, 3, "12,5x")).load();
-    // "12,5x" adds a field; use a clean non-number instead.
-    assert!(err.is_err());
+    // "12,5x" adds a field: a field-count error, not a number error.
+    let err = Fixture::with_left(&left_with_field(6, 3, "12,5x"))
+        .load()
+        .unwrap_err();
+    assert!(
+        matches!(
+            err,
+            DatasetError::FieldCount {
+                line: 6,
+                expected: 18,
+                found: 19,
+                ..
+            }
+        ),
+        "{err:?}"
+    );
     let err = Fixture::with_left(&left_with_field(6, 3, "twelve"))
         .load()
         .unwrap_err();
@@ -1034,7 +1047,7 @@ fn joint_values_outside_the_robots_limits_are_refused_after_loading() {
     use dualcal::robot::RobotDescription;
     use dualcal::side::PerSide;
     let robot = RobotDescription::builtin_irb14000();
-    let limits = PerSide::from_fn(|s| robot.joint_limits_rad(s).to_vec());
+    let limits = PerSide::from_fn(|s| robot.joint_limits_rad(s));
     // q2 of ABB axis 2 is limited to [-143.5°, 43.5°]; the fixture draws ±90°.
     let mut text = String::new();
     for l in csv_text(6, 1).lines() {
@@ -1056,7 +1069,7 @@ fn joint_values_outside_the_robots_limits_are_refused_after_loading() {
     let mut ds = Fixture::valid().load().unwrap();
     for arm in [&mut ds.arms.left, &mut ds.arms.right] {
         for m in &mut arm.measurements {
-            m.q_rad = [0.1, -0.5, 0.2, -0.3, 0.4, 0.5, 0.6];
+            m.q_rad = vec![0.1, -0.5, 0.2, -0.3, 0.4, 0.5, 0.6];
         }
     }
     ds.arms.left.measurements[2].q_rad[3] = 212f64.to_radians();
@@ -1067,18 +1080,18 @@ fn joint_values_outside_the_robots_limits_are_refused_after_loading() {
     );
     assert_names(&err, &["left.csv:6", "`q4`", "212.00°", "80.00°"]);
     // Two columns swapped in a row: the message says so.
-    ds.arms.left.measurements[2].q_rad = [2.0, 1.3, 2.0, -0.5, 2.0, 2.0, 2.0];
+    ds.arms.left.measurements[2].q_rad = vec![2.0, 1.3, 2.0, -0.5, 2.0, 2.0, 2.0];
     let err = dataset::check_joint_limits(&ds, &limits).unwrap_err();
     assert_names(&err, &["`q2`", "swapping q2 and q4"]);
     // Degrees in a file declared in radians.
     for m in ds.arms.left.measurements.iter_mut() {
-        m.q_rad = [10.0, -30.0, 20.0, -40.0, 50.0, 60.0, 70.0];
+        m.q_rad = vec![10.0, -30.0, 20.0, -40.0, 50.0, 60.0, 70.0];
     }
     let err = dataset::check_joint_limits(&ds, &limits).unwrap_err();
     assert_names(&err, &["in degrees", "units.angle"]);
     // Within the limits: accepted.
     for m in ds.arms.left.measurements.iter_mut() {
-        m.q_rad = [0.1, -0.5, 0.2, -0.3, 0.4, 0.5, 0.6];
+        m.q_rad = vec![0.1, -0.5, 0.2, -0.3, 0.4, 0.5, 0.6];
     }
     dataset::check_joint_limits(&ds, &limits).unwrap();
 }

@@ -4,7 +4,7 @@
 //! honoured; identifiability is re-checked at the solution.
 
 use dualcal::dataset::{Dataset, Split};
-use dualcal::kinematics::{ArmModel, DualArmModel, N_PARAMS, param_is_angle};
+use dualcal::kinematics::DualArmModel;
 use dualcal::robot::RobotDescription;
 use dualcal::side::{ConfigId, Side};
 use dualcal::simulate::{self, SimOptions, SimOutput};
@@ -42,15 +42,15 @@ fn data_of_another_robot_diverge_with_the_last_plausible_parameters() {
     let mut nominal = sim.nominal.clone();
     let mut v = nominal.arms.left.to_vector();
     v[8] -= 300.0; // a3
-    nominal.arms.left = ArmModel::from_vector(&v);
+    nominal.arms.left = nominal.arms.left.with_vector(&v);
     let result = Calibrator::new(&sim.dataset, &nominal).run().unwrap();
     let left = result.stage(Stage::Arm(Side::Left)).unwrap();
     assert_eq!(left.termination, Termination::Diverged, "{left:?}");
     assert!(!result.is_converged());
     // The parameters kept are plausible: within the bounds of the nominal model.
     let moved = result.calibrated.arms.left.to_vector() - nominal.arms.left.to_vector();
-    for k in 0..N_PARAMS {
-        let bound = if param_is_angle(k) {
+    for k in 0..moved.len() {
+        let bound = if nominal.arms.left.param_is_angle(k) {
             DIVERGED_ANGLE_RAD
         } else {
             DIVERGED_LENGTH_MM
@@ -102,7 +102,8 @@ fn exclusions_are_left_out_and_too_few_are_refused() {
             CalibrationError::TooFewConfigurations {
                 side: Side::Left,
                 found: 5,
-                needed: 6
+                needed: 6,
+                params: 31
             }
         ),
         "{err}"

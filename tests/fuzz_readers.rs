@@ -215,7 +215,7 @@ fn corpus(configs: usize) -> Corpus {
         max_attempts_per_config: 2000,
         ..simulate::paper_options(3, configs, configs - configs / 3)
     };
-    let never = |_: Side, _: &[f64; 7]| false;
+    let never = |_: Side, _: &[f64]| false;
     let sim = simulate::simulate(&opts, &nominal, &never).expect("simulation");
     let dir = tempfile::tempdir().unwrap();
     let src = dir.path().join("valid");
@@ -511,8 +511,8 @@ fn feed(target: Target, dir: &Path, bytes: &[u8], nominal: &DualArmModel) -> Res
                     for side in Side::BOTH {
                         let _ = robot.joint_limits_rad(side);
                     }
-                    let zero = [0.0; 7];
-                    let _ = robot.link_poses(&zero, &zero);
+                    let zero = PerSide::from_fn(|s| vec![0.0; robot.joint_limits_rad(s).len()]);
+                    let _ = robot.link_poses(&zero.left, &zero.right);
                     let _ = robot.dh_model(SimOptions::default_reflectors());
                     true
                 }

@@ -3,7 +3,8 @@
 //! (Set `XDG_RUNTIME_DIR` to a mode-700 directory to silence a harmless warning; `.ci/run` does.)
 #![cfg(feature = "gui")]
 
-use dualcal::app::{AppLaunch, WorkbenchApp};
+use dualcal::app::{AppLaunch, Command, WorkbenchApp};
+use dualcal::side::{ConfigId, PerSide};
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
 
@@ -143,7 +144,9 @@ fn cancel_stops_the_run_and_keeps_the_previous_state() {
         "a cancelled run must not replace the current result"
     );
     assert!(app.errors().is_empty(), "{:?}", app.errors());
+    // The status says what is shown: the last finished calibration, here none (the nominal model).
     harness.get_by_label_contains("cancelled");
+    harness.get_by_label_contains("the nominal model is shown again");
     harness.get_by_label("errors of the nominal model");
 }
 
@@ -159,7 +162,9 @@ fn a_broken_dataset_shows_its_error_and_keeps_the_last_good_one() {
         "format = \"dualcal-dataset/1\"\n[units]\nlength = \"furlong\"\nangle = \"deg\"\n",
     )
     .unwrap();
-    harness.state_mut().open_dataset(dir.path());
+    harness
+        .state_mut()
+        .apply(Command::OpenDataset(dir.path().to_path_buf()));
     step_until(
         &mut harness,
         MAX_LOAD_FRAMES,
@@ -197,7 +202,7 @@ fn viewport_snapshot() {
         view.camera = dualcal::app::viewport::camera::OrbitCamera::default();
         view.auto_scale = false;
         // One arm's calibration configurations keep the picture readable.
-        view.options.show_arm = [true, false];
+        view.options.show_arm = PerSide::new(true, false);
         view.options.show_ver = false;
         view.options.exaggeration = 5.0;
         view.options.color_max_mm = 10.0;
@@ -218,7 +223,7 @@ fn selecting_in_the_table_and_in_the_viewport() {
         .unwrap()
         .click();
     harness.step();
-    let (side, index) = harness.state().selection().expect("worst selected");
+    let ConfigId { side, index } = harness.state().selection().expect("worst selected");
     let session = harness.state().session().unwrap();
     let worst = session
         .nominal
@@ -233,8 +238,7 @@ fn selecting_in_the_table_and_in_the_viewport() {
         .find(|r| r.config.side == side && r.config.index == index)
         .unwrap();
     assert_eq!(row.worst_pos_mm, worst);
-    let side_index = dualcal::app::viewport::scene::side_index(side);
-    assert_eq!(harness.state().viewport_pose(side_index), Some(index));
+    assert_eq!(harness.state().viewport_pose(side), Some(index));
 
     // Clicking another row's id selects it.
     // The table is sorted by |Δd| descending: the second row is on screen.
@@ -244,7 +248,7 @@ fn selecting_in_the_table_and_in_the_viewport() {
     );
     let other = &session.nominal.configs[order[1]];
     assert_ne!((other.config.side, other.config.index), (side, index));
-    let (other_id, other_sel) = (other.id.clone(), (other.config.side, other.config.index));
+    let (other_id, other_sel) = (other.id.clone(), other.config);
     harness.get_by_label(&other_id).click();
     harness.step();
     assert_eq!(harness.state().selection(), Some(other_sel));
@@ -261,14 +265,11 @@ fn selecting_in_the_table_and_in_the_viewport() {
             .nominal
             .configs
             .iter()
-            .find(|r| (r.config.side, r.config.index) != other_sel)
+            .find(|r| r.config != other_sel)
             .unwrap();
         let anchor = dualcal::app::viewport::scene::pick_anchor(row);
         let [x, y] = camera.project(&anchor, 1400.0, 900.0).unwrap();
-        (
-            (row.config.side, row.config.index),
-            eframe::egui::pos2(x, y),
-        )
+        (row.config, eframe::egui::pos2(x, y))
     };
     click_at(&mut harness, at);
     let picked = harness
@@ -284,7 +285,7 @@ fn selecting_in_the_table_and_in_the_viewport() {
         .nominal
         .configs
         .iter()
-        .find(|r| (r.config.side, r.config.index) == picked)
+        .find(|r| r.config == picked)
         .unwrap();
     let [x, y] = camera
         .project(
@@ -483,4 +484,162 @@ fn the_compiled_in_example_unpacks_to_the_same_dataset() {
         dualcal::app::unpack_example(cache.path()).expect("again"),
         unpacked
     );
+}
+
+/// The Accuracy tab's RMS row: the label "RMS (mm)" and the nominal and the after cells beside it.
+fn accuracy_rms_cells(harness: &Harness<'_, WorkbenchApp>) -> [String; 2] {
+    use egui_kittest::kittest::NodeT;
+    let rms = harness.get_by_label("RMS (mm)");
+    let grid = rms.parent().expect("the numbers grid");
+    // A label's text is its accessibility value.
+    let labels: Vec<String> = grid
+        .children()
+        .filter_map(|n| n.accesskit_node().value())
+        .collect();
+    let at = labels
+        .iter()
+        .position(|l| l == "RMS (mm)")
+        .expect("RMS row");
+    [labels[at + 1].clone(), labels[at + 2].clone()]
+}
+
+/// What the Accuracy tab shows while a calibration runs is the figure of the model the run has
+/// reached: on a 2 × 400 simulated dataset, the "after" column of the collaborative Δd changes from
+/// frame to frame during the run (every stage changes it), every value it shows is the figure of one
+/// of the run's iterates (checked against a run of the same calibration next to the app), and differs
+/// from both the nominal and the final figure; the figures are marked live until the run ends.
+/// `execution` is where the app runs the calibration.
+fn accuracy_follows_a_running_calibration(execution: Option<dualcal::app::task::Execution>) {
+    use dualcal::dataset::Split;
+    use dualcal::solver::{CalibrationRun, Calibrator, IterationRecord, Observer, StageSummary};
+
+    let robot = dualcal::robot::RobotDescription::builtin_irb14000();
+    let sim = dualcal::simulate::simulate_with_robot(
+        &dualcal::simulate::paper_options(3, 400, 300),
+        &robot,
+    )
+    .expect("simulation");
+    let dir = tempfile::tempdir().unwrap();
+    dualcal::dataset::save(&sim.dataset, dir.path(), dualcal::dataset::Units::MM_DEG).unwrap();
+    let mut harness = harness(
+        [1280.0, 800.0],
+        AppLaunch {
+            dataset: Some(dir.path().to_path_buf()),
+            urdf: None,
+        },
+    );
+    loaded(&mut harness);
+    if let Some(execution) = execution {
+        harness.state_mut().set_execution(execution);
+    }
+
+    // The figure shown (collaborative Δd RMS on the verification split) of every iterate of the same
+    // calibration, run here.
+    struct Iterates<'a> {
+        dataset: &'a dualcal::dataset::Dataset,
+        rms_mm: Vec<f64>,
+    }
+    impl Iterates<'_> {
+        fn record(&mut self, run: &CalibrationRun) {
+            let report =
+                dualcal::metrics::evaluate(self.dataset, &run.current_model(), Split::Ver).unwrap();
+            self.rms_mm.push(report.collaborative.pos_rms_mm);
+        }
+    }
+    impl Observer for Iterates<'_> {
+        fn iteration(&mut self, _: &IterationRecord, run: &CalibrationRun) {
+            self.record(run);
+        }
+        fn stage_finished(&mut self, _: &StageSummary, run: &CalibrationRun) {
+            self.record(run);
+        }
+    }
+    let session = harness.state().session().unwrap();
+    let mut iterates = Iterates {
+        dataset: &session.dataset,
+        rms_mm: Vec::new(),
+    };
+    Calibrator::new(&session.dataset, &session.nominal.model)
+        .observer(&mut iterates)
+        .run()
+        .expect("reference calibration");
+    let iterate_rms = iterates.rms_mm;
+
+    harness.get_by_label("Accuracy").click();
+    harness.step();
+    harness
+        .get_by_role_and_label(eframe::egui::accesskit::Role::ComboBox, "Figure:")
+        .click();
+    harness.run_steps(2);
+    harness.get_by_label("collaborative Δd (mm)").click();
+    harness.run_steps(2);
+    harness.get_by_label("collaborative Δd (mm) — verification split");
+    let [nominal, before] = accuracy_rms_cells(&harness);
+    assert_eq!(before, "—", "no calibration yet");
+    harness.get_by_label("Calibrate").click();
+    harness.step();
+    assert!(harness.state().is_calibrating());
+    let mut shown = Vec::new();
+    let mut marked_live = false;
+    for _ in 0..MAX_RUN_FRAMES {
+        if !harness.state().is_calibrating() {
+            break;
+        }
+        harness.step();
+        if harness.state().is_calibrating() {
+            shown.push(accuracy_rms_cells(&harness)[1].clone());
+            marked_live |= harness.query_by_label_contains("live: ").is_some();
+        }
+    }
+    harness.step();
+    assert!(!harness.state().is_calibrating(), "the run did not end");
+    let app = harness.state();
+    assert!(app.errors().is_empty(), "{:?}", app.errors());
+    let calibrated = app.session().unwrap().calibrated.as_ref().expect("result");
+    let final_rms = calibrated
+        .analysis
+        .ver
+        .report
+        .unwrap()
+        .collaborative
+        .pos_rms_mm;
+    let [_, after] = accuracy_rms_cells(&harness);
+    assert_eq!(after, format!("{final_rms:.3}"));
+    assert!(harness.query_by_label_contains("live: ").is_none());
+
+    let mid: Vec<&String> = shown
+        .iter()
+        .filter(|v| **v != nominal && **v != after && v.as_str() != "—")
+        .collect();
+    assert!(
+        !mid.is_empty(),
+        "during the run the Accuracy tab showed only the previous figures: {shown:?} \
+         (nominal {nominal}, final {after})"
+    );
+    let mut distinct = mid.clone();
+    distinct.dedup();
+    println!("shown during the run: {distinct:?} (nominal {nominal}, final {after})");
+    assert!(
+        distinct.len() >= 2,
+        "the figures did not change between frames of the run: {shown:?}"
+    );
+    for v in &mid {
+        let v: f64 = v.parse().expect("a number");
+        assert!(
+            iterate_rms.iter().any(|x| (x - v).abs() <= 0.0006),
+            "{v} mm is no iterate's figure ({iterate_rms:?})"
+        );
+    }
+    assert!(marked_live, "the live figures were not marked as such");
+}
+
+#[test]
+fn the_accuracy_tab_follows_a_running_calibration() {
+    accuracy_follows_a_running_calibration(None);
+}
+
+/// The same where there are no threads (a browser): the calibration stepped within the frames.
+#[test]
+fn the_accuracy_tab_follows_a_calibration_stepped_in_frames() {
+    accuracy_follows_a_running_calibration(Some(dualcal::app::task::Execution::InFrames));
 }

@@ -138,7 +138,7 @@ fn explanations_of_single_mistakes() {
     let mut ds = s.dataset.clone();
     let i = (0..100)
         .find(|&i| {
-            let q = ds.arms.left.measurements[i].q_rad;
+            let q = &ds.arms.left.measurements[i].q_rad;
             (q[1] - q[3]).abs() > 0.5 && q[1] > -2.1 && q[1] < 0.75 && q[3] > -2.1 && q[3] < 0.75
         })
         .unwrap();
@@ -224,8 +224,8 @@ fn whole_file_findings() {
     // Joint values in ABB axis order: the nominal model is far off, an error with the cause.
     let mut ds = s.dataset.clone();
     for m in &mut ds.arms.left.measurements {
-        let q = m.q_rad;
-        m.q_rad = [q[0], q[1], q[3], q[4], q[5], q[6], q[2]];
+        let q = m.q_rad.clone();
+        m.q_rad = vec![q[0], q[1], q[3], q[4], q[5], q[6], q[2]];
     }
     let before = quality::screen(&ds, &s.nominal, &settings);
     assert!(before.has_errors());

@@ -1,7 +1,10 @@
 //! The two-step minimax calibration on synthetic data built here from the kinematics alone.
 
+mod common;
+
 use dualcal::dataset::{ArmData, Dataset, Measurement, Split, TrackerSpec};
 use dualcal::kinematics::{ArmModel, DualArmModel, N_PARAMS, joint_limits_rad, param_is_angle};
+use dualcal::metrics::evaluate;
 use dualcal::side::{PerSide, Side};
 use dualcal::solver::{
     CalibrationError, CalibrationEvent, CalibrationSettings, Calibrator, Method, QpMethod, Stage,
@@ -14,19 +17,11 @@ use rand_distr::{Distribution, Normal};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
-fn reflectors() -> [Vector3<f64>; 3] {
-    [
-        Vector3::new(45.0, 0.0, 40.0),
-        Vector3::new(-25.0, 40.0, 40.0),
-        Vector3::new(-25.0, -40.0, 40.0),
-    ]
-}
-
 fn nominal() -> DualArmModel {
     DualArmModel {
         arms: PerSide::new(
-            ArmModel::nominal_irb14000(reflectors()),
-            ArmModel::nominal_irb14000(reflectors()),
+            ArmModel::nominal_irb14000(common::reflectors_mm()),
+            ArmModel::nominal_irb14000(common::reflectors_mm()),
         ),
         left_base_from_right_base: Isometry3::new(
             Vector3::new(61.61, -70.77, -34.14),
@@ -40,7 +35,7 @@ fn perturb(rng: &mut ChaCha8Rng, arm: &ArmModel, mm: f64, rad: f64) -> ArmModel 
     for k in 0..N_PARAMS {
         v[k] += rng.random_range(-1.0..1.0) * if param_is_angle(k) { rad } else { mm };
     }
-    ArmModel::from_vector(&v)
+    arm.with_vector(&v)
 }
 
 struct Synthetic {
@@ -91,7 +86,7 @@ fn synthetic(seed: u64, n: usize, n_cal: usize, noise_mm: f64) -> Synthetic {
                 });
                 Measurement {
                     id: format!("{}{i:03}", if side == Side::Left { "L" } else { "R" }),
-                    q_rad: q,
+                    q_rad: q.to_vec(),
                     tracker_points_mm,
                     split: if i < n_cal { Split::Cal } else { Split::Ver },
                     line: i + 2,
@@ -101,6 +96,7 @@ fn synthetic(seed: u64, n: usize, n_cal: usize, noise_mm: f64) -> Synthetic {
         ArmData {
             side,
             file: format!("{side}.csv").into(),
+            links: None,
             measurements,
         }
     };
@@ -111,7 +107,7 @@ fn synthetic(seed: u64, n: usize, n_cal: usize, noise_mm: f64) -> Synthetic {
             dir: "synthetic".into(),
             robot: None,
             tracker: TrackerSpec::default(),
-            nominal_reflectors_mm: reflectors(),
+            nominal_reflectors_mm: common::reflectors_mm(),
             arms: PerSide::new(left, right),
         },
         truth,
@@ -220,9 +216,26 @@ fn identifiability_names_joint1_d_theta_and_joint7() {
     }
 }
 
+/// The three positioning RMS figures (left, right, collaborative) and their orientation RMS, of `model`
+/// on one split.
+fn accuracy(ds: &Dataset, model: &DualArmModel, split: Split) -> [(&'static str, f64, f64); 3] {
+    let r = evaluate(ds, model, split).expect("metrics");
+    [
+        ("relative left", &r.relative_left),
+        ("relative right", &r.relative_right),
+        ("collaborative", &r.collaborative),
+    ]
+    .map(|(name, s)| (name, s.pos_rms_mm, s.ori_rms_rad))
+}
+
+/// Tracker noise of 0.01 mm per axis: the true model's errors on this data are the noise floor
+/// (≈ 0.014 mm RMS of distance errors). Both QP solvers must take the nominal model (mm-level errors)
+/// down to that floor: on the calibration split each arm's worst-reflector RMS — the square root of
+/// the arm stage's minimax objective, of which the truth is one candidate — at or below the truth's;
+/// on the 100 verification configurations of each arm every RMS within 20% of the truth's.
 #[test]
 fn noisy_data_reaches_the_noise_floor_with_both_qp_solvers() {
-    let syn = synthetic(3, 50, 40, 0.01);
+    let syn = synthetic(3, 180, 80, 0.01);
     let exact = run(&syn.dataset, &CalibrationSettings::default()).expect("exact");
     let paper = run(
         &syn.dataset,
@@ -243,9 +256,34 @@ fn noisy_data_reaches_the_noise_floor_with_both_qp_solvers() {
             e.psi_mm2
         );
     }
-    // The calibrated model agrees with the truth to well below the nominal disagreement.
-    let d = max_distance_disagreement(&exact.calibrated, &syn.truth, 4);
-    assert!(d < 0.2, "{d}");
+    let ds = &syn.dataset;
+    for (qp, res) in [("exact", &exact), ("paper", &paper)] {
+        assert!(res.is_converged(), "{qp}: {:?}", res.stages);
+        let floor = accuracy(ds, &syn.truth, Split::Cal);
+        let start = accuracy(ds, &res.nominal, Split::Cal);
+        let calibrated = accuracy(ds, &res.calibrated, Split::Cal);
+        for (((name, c, _), (_, t, _)), (_, n, _)) in calibrated.into_iter().zip(floor).zip(start) {
+            assert!(
+                n > 100.0 * t,
+                "{name}: the nominal model must start far from the floor"
+            );
+            // The base stage optimises over the calibrated arms, not the true ones: no such bound.
+            if name != "collaborative" {
+                assert!(
+                    c <= t * (1.0 + 1e-9),
+                    "{qp} {name}, calibration split: {c} mm, above the noise floor {t} mm"
+                );
+            }
+        }
+        let floor = accuracy(ds, &syn.truth, Split::Ver);
+        let calibrated = accuracy(ds, &res.calibrated, Split::Ver);
+        for ((name, c, c_ori), (_, t, t_ori)) in calibrated.into_iter().zip(floor) {
+            assert!(
+                c <= 1.2 * t && c_ori <= 1.2 * t_ori,
+                "{qp} {name}, verification split: {c} mm, {c_ori} rad; noise floor {t} mm, {t_ori} rad"
+            );
+        }
+    }
 }
 
 #[test]
@@ -368,7 +406,7 @@ fn error_paths() {
     let mut syn = synthetic(9, 10, 10, 0.0);
     let first = syn.dataset.arms.left.measurements[0].clone();
     for m in &mut syn.dataset.arms.left.measurements {
-        m.q_rad = first.q_rad;
+        m.q_rad = first.q_rad.clone();
         m.tracker_points_mm = first.tracker_points_mm;
     }
     let err = run(&syn.dataset, &CalibrationSettings::default()).unwrap_err();

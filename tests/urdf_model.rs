@@ -1,6 +1,8 @@
 //! The URDF description against the DH model: forward kinematics, the derived base transform,
 //! the calibrated-URDF round trip, mesh resolution and loader errors.
 
+mod common;
+
 use dualcal::collision::CollisionWorld;
 use dualcal::kinematics::{
     ArmModel, DualArmModel, N_JOINTS, N_PARAMS, joint_limits_rad, param_is_angle,
@@ -16,14 +18,6 @@ use nalgebra::{Isometry3, Matrix3, Translation3, UnitQuaternion, Vector3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::path::Path;
-
-fn reflectors() -> [Vector3<f64>; 3] {
-    [
-        Vector3::new(45.0, 0.0, 40.0),
-        Vector3::new(-25.0, 40.0, 40.0),
-        Vector3::new(-25.0, -40.0, 40.0),
-    ]
-}
 
 fn random_q(rng: &mut ChaCha8Rng) -> [f64; N_JOINTS] {
     let lim = joint_limits_rad();
@@ -64,7 +58,7 @@ fn max_fk_error(
 fn urdf_fk_equals_dh_fk() {
     let robot = RobotDescription::builtin_irb14000();
     assert!(robot.warnings.is_empty(), "{:?}", robot.warnings);
-    let arm = ArmModel::nominal_irb14000(reflectors());
+    let arm = ArmModel::nominal_irb14000(common::reflectors_mm());
     for (side, seed) in [(Side::Left, 1), (Side::Right, 2)] {
         let (t, r) = max_fk_error(&robot, side, &arm, &robot.body_from_dh_base(side), 50, seed);
         assert!(t < 1e-9, "{side}: {t:e} mm");
@@ -98,7 +92,7 @@ fn fk_check_detects_the_public_a3() {
     );
     assert_ne!(text, BUILTIN_IRB14000_URDF);
     let robot = RobotDescription::from_str(&text, None).unwrap();
-    let arm = ArmModel::nominal_irb14000(reflectors());
+    let arm = ArmModel::nominal_irb14000(common::reflectors_mm());
     let (t, _) = max_fk_error(
         &robot,
         Side::Left,
@@ -129,9 +123,9 @@ fn derived_base_transform_matches_the_public_layout() {
         b.translation.vector
     );
     // And the nominal model carries it.
-    let model = robot.nominal_model(reflectors());
+    let model = robot.nominal_model(common::reflectors_mm());
     assert_eq!(model.left_base_from_right_base, b);
-    assert_eq!(model.arms.left.reflectors_mm, reflectors());
+    assert_eq!(model.arms.left.reflectors_mm, common::reflectors_mm());
 }
 
 #[test]
@@ -154,7 +148,7 @@ fn dh_base_sits_on_the_joint1_axis_below_link1() {
 }
 
 fn perturbed_model(robot: &RobotDescription, rng: &mut ChaCha8Rng) -> DualArmModel {
-    let nominal = robot.nominal_model(reflectors());
+    let nominal = robot.nominal_model(common::reflectors_mm());
     let perturb = |arm: &ArmModel, rng: &mut ChaCha8Rng| {
         let mut v = arm.to_vector();
         for k in 0..N_PARAMS {
@@ -164,7 +158,7 @@ fn perturbed_model(robot: &RobotDescription, rng: &mut ChaCha8Rng) -> DualArmMod
                 rng.random_range(-1.0..1.0)
             };
         }
-        ArmModel::from_vector(&v)
+        arm.with_vector(&v)
     };
     let db = Isometry3::from_parts(
         Translation3::new(
@@ -207,8 +201,12 @@ fn calibrated_urdf_reproduces_the_model() {
         &robot.body_from_dh_base(Side::Left),
     );
     assert!(t < 1e-9 && r < 1e-12, "{t} {r}");
+    // Loaded from text, the description is the URDF's own chains; its DH reading is the model.
     let (t, r) = pose_error(
-        &back.nominal_left_base_from_right_base(),
+        &back
+            .dh_model(common::reflectors_mm())
+            .unwrap()
+            .left_base_from_right_base,
         &model.left_base_from_right_base,
     );
     assert!(t < 1e-6 && r < 1e-9, "{t} {r}");
@@ -254,8 +252,19 @@ fn calibrated_urdf_reproduces_the_model() {
         }
     }
 
-    // Exporting again from the calibrated URDF updates the reflectors instead of duplicating them.
-    let again = calibrated_urdf(&back, &model).unwrap();
+    // Exporting again from the calibrated URDF (now the user's own description, a URDF chain per
+    // arm) updates the reflectors instead of duplicating them.
+    let again_model = back.nominal_model(common::reflectors_mm());
+    for (a, b) in again_model
+        .arms
+        .left
+        .reflectors_mm
+        .iter()
+        .zip(&model.arms.left.reflectors_mm)
+    {
+        assert!((a - b).norm() < 1e-9);
+    }
+    let again = calibrated_urdf(&back, &again_model).unwrap();
     let raw2 = urdf_rs::read_from_string(&again).unwrap();
     assert_eq!(raw2.links.len(), raw.links.len());
     assert_eq!(raw2.joints.len(), raw.joints.len());
@@ -264,7 +273,7 @@ fn calibrated_urdf_reproduces_the_model() {
 fn assert_models_close(a: &DualArmModel, b: &DualArmModel, tol: f64) {
     for side in Side::BOTH {
         let (va, vb) = (a.arm(side).to_vector(), b.arm(side).to_vector());
-        let worst = (va - vb).abs().max();
+        let worst = (&va - &vb).abs().max();
         assert!(worst < tol, "{side}: {worst:e}\n{va}\n{vb}");
     }
     let (t, r) = pose_error(&a.left_base_from_right_base, &b.left_base_from_right_base);
@@ -275,14 +284,22 @@ fn assert_models_close(a: &DualArmModel, b: &DualArmModel, tol: f64) {
 fn dh_model_reads_the_urdf_back() {
     let robot = RobotDescription::builtin_irb14000();
     // The built-in URDF encodes Table 3.
-    let nominal = robot.nominal_model(reflectors());
-    assert_models_close(&robot.dh_model(reflectors()).unwrap(), &nominal, 1e-12);
+    let nominal = robot.nominal_model(common::reflectors_mm());
+    assert_models_close(
+        &robot.dh_model(common::reflectors_mm()).unwrap(),
+        &nominal,
+        1e-12,
+    );
 
     // A calibrated URDF gives back the calibrated model, reflectors included.
     let mut rng = ChaCha8Rng::seed_from_u64(5);
     let model = perturbed_model(&robot, &mut rng);
     let back = RobotDescription::from_str(&calibrated_urdf(&robot, &model).unwrap(), None).unwrap();
-    assert_models_close(&back.dh_model(reflectors()).unwrap(), &model, 1e-9);
+    assert_models_close(
+        &back.dh_model(common::reflectors_mm()).unwrap(),
+        &model,
+        1e-9,
+    );
     // ... which differs from the nominal one (the comparison can fail).
     let (va, vb) = (model.arms.left.to_vector(), nominal.arms.left.to_vector());
     assert!((va - vb).abs().max() > 1e-3);
@@ -295,7 +312,7 @@ fn dh_model_reads_the_urdf_back() {
     );
     let err = RobotDescription::from_str(&text, None)
         .unwrap()
-        .dh_model(reflectors())
+        .dh_model(common::reflectors_mm())
         .unwrap_err();
     assert!(err.to_string().contains("yumi_joint_3_l"), "{err}");
 }
@@ -303,8 +320,8 @@ fn dh_model_reads_the_urdf_back() {
 #[test]
 fn calibrated_urdf_refuses_non_finite_parameters() {
     let robot = RobotDescription::builtin_irb14000();
-    let mut model = robot.nominal_model(reflectors());
-    model.arms.right.dh[3].a_mm = f64::NAN;
+    let mut model = robot.nominal_model(common::reflectors_mm());
+    model.arms.right.dh_mut().unwrap()[3].a_mm = f64::NAN;
     let err = calibrated_urdf(&robot, &model).unwrap_err();
     assert!(matches!(err, RobotError::Export { .. }), "{err}");
 }
@@ -456,15 +473,30 @@ fn malformed_xml_names_the_file() {
         "{err}"
     );
 
-    // Well-formed XML that is not a YuMi names the missing joints.
+    // Well-formed XML without the YuMi names asks which chains the arms are.
     let path = dir.path().join("other.urdf");
     std::fs::write(&path, "<robot name=\"other\"><link name=\"base\"/></robot>").unwrap();
     let err = RobotDescription::load(&path).unwrap_err();
     let msg = err.to_string();
+    assert!(matches!(err, RobotError::NoArms { .. }), "{msg}");
+    assert!(
+        msg.contains("other.urdf") && msg.contains("base_link") && msg.contains("tip_link"),
+        "{msg}"
+    );
+    // An incomplete YuMi names the missing joints.
+    let path = dir.path().join("half.urdf");
+    std::fs::write(
+        &path,
+        "<robot name=\"half\"><link name=\"a\"/><link name=\"b\"/><joint name=\"yumi_joint_1_l\" \
+         type=\"revolute\"><parent link=\"a\"/><child link=\"b\"/></joint></robot>",
+    )
+    .unwrap();
+    let err = RobotDescription::load(&path).unwrap_err();
+    let msg = err.to_string();
     assert!(matches!(err, RobotError::MissingJoints { .. }), "{msg}");
     assert!(
-        msg.contains("other.urdf")
-            && msg.contains("yumi_joint_1_l")
+        msg.contains("half.urdf")
+            && msg.contains("yumi_joint_2_l")
             && msg.contains("yumi_joint_6_r"),
         "{msg}"
     );
@@ -507,22 +539,25 @@ fn non_finite_origin_is_a_joint_error() {
 #[test]
 fn builtin_urdf_is_what_the_generator_writes() {
     // assets/irb14000.urdf is generated by tools/gen_urdf.py: a hand edit (or a generator change
-    // without regenerating) fails here. Skipped where python3 is not installed.
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let out = match std::process::Command::new("python3")
-        .arg(root.join("tools").join("gen_urdf.py"))
+    // without regenerating) fails here, and so does a generator that cannot run (no python3, a crash).
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/gen_urdf.py");
+    let python = common::python("math, sys");
+    let out = std::process::Command::new(&python)
+        .arg(&script)
         .output()
-    {
-        Ok(out) if out.status.success() => out,
-        _ => {
-            eprintln!("python3 not available: generator check skipped");
-            return;
-        }
-    };
-    let generated = String::from_utf8(out.stdout).unwrap();
+        .unwrap_or_else(|e| panic!("run {python} {}: {e}", script.display()));
+    assert!(
+        out.status.success(),
+        "{python} {} failed ({}):\n{}",
+        script.display(),
+        out.status,
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let generated = String::from_utf8(out.stdout).expect("the generator writes UTF-8");
     assert!(
         generated == BUILTIN_IRB14000_URDF,
-        "regenerate: python3 tools/gen_urdf.py > assets/irb14000.urdf"
+        "assets/irb14000.urdf is not what tools/gen_urdf.py writes; regenerate: \
+         python3 tools/gen_urdf.py > assets/irb14000.urdf"
     );
 }
 

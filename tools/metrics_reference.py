@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Independent reference implementation of dualcal's accuracy metrics (paper eqs. 5-8).
 
-Written from the definitions in issue 2, sharing no code with the Rust crate: its own file readers, its own
+Written from the definitions of the paper (eqs. 5–8, docs/solver.md), sharing no code with the Rust crate: its own file readers, its own
 standard-DH forward kinematics (4x4 homogeneous matrices), its own Kabsch fit (numpy SVD) and its own
 rotation angle (arccos of the trace). Prints the same JSON as `dualcal evaluate --json`:
 
@@ -13,7 +13,7 @@ Usage:
 
 DATASET is a `dualcal-dataset/1` directory (or its dataset.toml). `--nominal` uses the paper's Table 3 for
 both arms, the dataset's nominal reflectors and the right-arm base in the left-arm base given on the
-command line (mm; default: the public YuMi figures quoted in issue 2).
+command line (mm; default: the public YuMi body layout).
 """
 
 import argparse

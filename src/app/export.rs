@@ -1,8 +1,8 @@
 //! Export: parameter file, calibrated URDF, per-configuration CSV and plot PNG contents. Where the
 //! bytes go is the file seam's business ([`super::files`]).
 
+use super::files::SaveRequest;
 use super::session::{self, Session};
-use crate::dataset::Split;
 use anyhow::Context as _;
 use eframe::egui;
 
@@ -13,6 +13,57 @@ pub enum Export {
     Urdf,
     Csv,
     PlotPng,
+}
+
+impl Export {
+    /// The file's contents from the session; `None` where there is nothing to export (a model
+    /// before any calibration; the plots, which are a screenshot: see [`encode_png`]).
+    pub fn contents(self, session: &Session) -> Option<anyhow::Result<Vec<u8>>> {
+        match (self, &session.calibrated) {
+            (Export::Params, Some(cal)) => Some(export_params(session, cal)),
+            (Export::Urdf, Some(cal)) => Some(export_urdf(session, cal)),
+            (Export::Csv, _) => Some(export_csv(session)),
+            (Export::Params | Export::Urdf, None) | (Export::PlotPng, _) => None,
+        }
+    }
+
+    /// The save dialog for `bytes` of this kind: title, suggested name, filter.
+    pub fn save_request(self, bytes: Vec<u8>) -> SaveRequest {
+        let (title, file_name, filter_name, extensions): (_, _, _, &'static [&'static str]) =
+            match self {
+                Export::Params => (
+                    "Export parameters (dualcal-params/1)",
+                    "params.json",
+                    "JSON",
+                    &["json"],
+                ),
+                Export::Urdf => (
+                    "Export calibrated URDF",
+                    "calibrated.urdf",
+                    "URDF",
+                    &["urdf"],
+                ),
+                Export::Csv => (
+                    "Export per-configuration errors (CSV)",
+                    "configurations.csv",
+                    "CSV",
+                    &["csv"],
+                ),
+                Export::PlotPng => (
+                    "Export plots as PNG",
+                    "dualcal-plots.png",
+                    "PNG image",
+                    &["png"],
+                ),
+            };
+        SaveRequest {
+            title,
+            file_name: file_name.into(),
+            filter_name,
+            extensions,
+            bytes,
+        }
+    }
 }
 
 /// A screenshot region as PNG bytes.
@@ -51,12 +102,7 @@ pub fn export_csv(session: &Session) -> anyhow::Result<Vec<u8>> {
         w.write_record([
             row.id.clone(),
             row.config.side.name().to_string(),
-            if row.split == Split::Cal {
-                "cal"
-            } else {
-                "ver"
-            }
-            .to_string(),
+            row.split.name().to_string(),
             format!("{:.6}", row.worst_pos_mm),
             format!("{:.8}", row.worst_ori_rad),
             format!("{:.6}", row.rigidity_mm),
@@ -114,7 +160,8 @@ mod tests {
         Side::BOTH
             .iter()
             .flat_map(|&s| {
-                a.arm(s).dh.iter().zip(&b.arm(s).dh).flat_map(|(x, y)| {
+                let (a, b) = (a.arm(s).dh().unwrap(), b.arm(s).dh().unwrap());
+                a.iter().zip(b).flat_map(|(x, y)| {
                     [
                         (x.a_mm - y.a_mm).abs(),
                         (x.d_mm - y.d_mm).abs(),

@@ -1,9 +1,12 @@
 //! File access behind one seam: the native build uses rfd dialogs on helper threads and atomic
 //! writes; a browser build can replace [`FileAccess`] with downloads and `<input type=file>`.
-//! Replies arrive on a channel the app drains each frame, so the UI never waits on a dialog.
+//! Replies arrive on the app's event channel, drained each frame, so the UI never waits on a dialog.
+//! Where no dialog is available the app asks for a path itself ([`PathPrompt`]).
 
+use super::command::Command;
+use super::events::{AppEvent, EventSender};
+use eframe::egui::{self, Color32, RichText};
 use std::path::PathBuf;
-use std::sync::mpsc::Sender;
 
 /// What the user wants to open.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -39,9 +42,9 @@ pub trait FileAccess {
         true
     }
     /// Ask the user for a file to open; the reply goes to `reply`.
-    fn open(&self, kind: OpenKind, reply: Sender<FileReply>);
+    fn open(&self, kind: OpenKind, reply: EventSender);
     /// Ask the user where to save and write the bytes; the reply goes to `reply`.
-    fn save(&self, request: SaveRequest, reply: Sender<FileReply>);
+    fn save(&self, request: SaveRequest, reply: EventSender);
 }
 
 /// Native dialogs (rfd) run on a helper thread; writes are atomic.
@@ -61,7 +64,7 @@ impl FileAccess for NativeFiles {
         }
     }
 
-    fn open(&self, kind: OpenKind, reply: Sender<FileReply>) {
+    fn open(&self, kind: OpenKind, reply: EventSender) {
         let spawned = std::thread::Builder::new()
             .name("dualcal-open-dialog".into())
             .spawn(move || {
@@ -76,17 +79,17 @@ impl FileAccess for NativeFiles {
                         .add_filter("URDF", &["urdf", "xml"])
                         .pick_file(),
                 };
-                let _ = reply.send(match picked {
+                reply.send(AppEvent::File(match picked {
                     Some(path) => FileReply::Open(kind, path),
                     None => FileReply::Cancelled,
-                });
+                }));
             });
         if let Err(e) = spawned {
             eprintln!("dualcal: cannot start the file dialog: {e}");
         }
     }
 
-    fn save(&self, request: SaveRequest, reply: Sender<FileReply>) {
+    fn save(&self, request: SaveRequest, reply: EventSender) {
         let spawned = std::thread::Builder::new()
             .name("dualcal-save-dialog".into())
             .spawn(move || {
@@ -95,13 +98,10 @@ impl FileAccess for NativeFiles {
                     .set_file_name(&request.file_name)
                     .add_filter(request.filter_name, request.extensions)
                     .save_file();
-                let _ = reply.send(match picked {
-                    Some(path) => match crate::atomic::write_atomic(&path, &request.bytes) {
-                        Ok(()) => FileReply::Saved(path),
-                        Err(e) => FileReply::Failed(format!("{}: {e}", path.display())),
-                    },
+                reply.send(AppEvent::File(match picked {
+                    Some(path) => write(&path, &request.bytes),
                     None => FileReply::Cancelled,
-                });
+                }));
             });
         if let Err(e) = spawned {
             eprintln!("dualcal: cannot start the file dialog: {e}");
@@ -109,7 +109,82 @@ impl FileAccess for NativeFiles {
     }
 }
 
+/// Write a file atomically; the reply says how it went.
+pub fn write(path: &std::path::Path, bytes: &[u8]) -> FileReply {
+    match crate::atomic::write_atomic(path, bytes) {
+        Ok(()) => FileReply::Saved(path.to_path_buf()),
+        Err(e) => FileReply::Failed(format!("{}: {e}", path.display())),
+    }
+}
+
 fn on_path(program: &str) -> bool {
     std::env::var_os("PATH")
         .is_some_and(|paths| std::env::split_paths(&paths).any(|dir| dir.join(program).is_file()))
+}
+
+/// What the in-app path prompt does with the path.
+pub enum PromptAction {
+    Open(OpenKind),
+    Save(SaveRequest),
+}
+
+/// The in-app replacement for a file dialog.
+pub struct PathPrompt {
+    pub action: PromptAction,
+    pub text: String,
+    /// Why the last attempt failed.
+    pub error: Option<String>,
+    /// Focus the text field on the first frame.
+    focused: bool,
+}
+
+impl PathPrompt {
+    pub fn new(action: PromptAction, path: PathBuf) -> Self {
+        Self {
+            action,
+            text: path.display().to_string(),
+            error: None,
+            focused: false,
+        }
+    }
+
+    /// The prompt's window: [`Command::ConfirmPrompt`] with the typed path, or
+    /// [`Command::ClosePrompt`].
+    pub fn ui(&mut self, ctx: &egui::Context) -> Option<Command> {
+        let (title, verb) = match &self.action {
+            PromptAction::Open(OpenKind::Dataset) => ("Open dataset", "Open"),
+            PromptAction::Open(OpenKind::Urdf) => ("Open robot description (URDF)", "Open"),
+            PromptAction::Save(r) => (r.title, "Save"),
+        };
+        let mut command = None;
+        egui::Window::new(title)
+            .collapsible(false)
+            .resizable(false)
+            .anchor(egui::Align2::CENTER_CENTER, egui::Vec2::ZERO)
+            .show(ctx, |ui| {
+                ui.label("No file dialog is available here; type the path:");
+                let r = ui.add(
+                    egui::TextEdit::singleline(&mut self.text)
+                        .desired_width(520.0)
+                        .id_salt("path prompt"),
+                );
+                if !self.focused {
+                    r.request_focus();
+                    self.focused = true;
+                }
+                let entered = r.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter));
+                if let Some(e) = &self.error {
+                    ui.label(RichText::new(e).color(Color32::from_rgb(255, 110, 100)));
+                }
+                ui.horizontal(|ui| {
+                    if ui.button(verb).clicked() || entered {
+                        command = Some(Command::ConfirmPrompt(PathBuf::from(self.text.trim())));
+                    }
+                    if ui.button("Cancel").clicked() {
+                        command = Some(Command::ClosePrompt);
+                    }
+                });
+            });
+        command
+    }
 }

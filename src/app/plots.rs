@@ -1,9 +1,9 @@
 //! Convergence curves and accuracy histograms (egui_plot).
 
-use crate::analysis::{Analysis, Indicator, SplitFigures};
-use crate::app::session::Session;
+use crate::analysis::{Analysis, Histogram, Indicator, SplitFigures};
+use crate::app::session::{After, Session};
 use crate::dataset::Split;
-use crate::metrics::{AccuracyReport, ORI_THRESHOLDS_RAD, POS_THRESHOLDS_MM};
+use crate::metrics::{AccuracyReport, ORI_THRESHOLDS_RAD, POS_THRESHOLDS_MM, PairKind};
 use crate::side::Side;
 use crate::solver::{IterationRecord, Stage};
 use eframe::egui::{self, Color32, RichText};
@@ -61,8 +61,23 @@ fn log_spacer(input: egui_plot::GridInput) -> Vec<egui_plot::GridMark> {
 /// Iteration axis: integer marks about a third of the range apart (1, 2, 5 × 10^k), so their
 /// labels have room.
 fn iteration_spacer(input: egui_plot::GridInput) -> Vec<egui_plot::GridMark> {
-    let (lo, hi) = input.bounds;
-    let raw = ((hi - lo) / 3.0).max(1.0);
+    marks_apart(
+        input.bounds,
+        ((input.bounds.1 - input.bounds.0) / 3.0).max(1.0),
+    )
+}
+
+/// Histogram axis: marks about a quarter of the range apart (1, 2, 5 × 10^k), so a narrow histogram
+/// still has labels (egui_plot's own marks are powers of ten, whose labels a narrow plot hides).
+fn histogram_spacer(input: egui_plot::GridInput) -> Vec<egui_plot::GridMark> {
+    marks_apart(input.bounds, (input.bounds.1 - input.bounds.0) / 4.0)
+}
+
+/// Marks at multiples of the smallest 1, 2, 5 × 10^k step of at least `raw` within `(lo, hi)`.
+fn marks_apart((lo, hi): (f64, f64), raw: f64) -> Vec<egui_plot::GridMark> {
+    if !(raw.is_finite() && raw > 0.0) {
+        return Vec::new();
+    }
     let p = 10f64.powf(raw.log10().floor());
     let step = [1.0, 2.0, 5.0, 10.0]
         .into_iter()
@@ -115,194 +130,249 @@ pub fn convergence_plot_ui(ui: &mut egui::Ui, history: &[IterationRecord], stage
     let step = series(&|r| r.step_norm);
     let kkt = series(&|r| r.kkt_residual);
     ui.columns(2, |cols| {
-        Plot::new(("objective", format!("{stage:?}")))
-            .legend(Legend::default())
-            .x_axis_label("iteration")
-            .x_axis_formatter(|m, _| format!("{:.0}", m.value))
-            .x_grid_spacer(iteration_spacer)
-            .set_margin_fraction(egui::vec2(0.05, 0.12))
-            .y_axis_label("mm² (log10)")
-            .y_axis_formatter(log_axis_label)
-            .y_grid_spacer(log_spacer)
-            .show(&mut cols[0], |plot| {
-                plot.line(Line::new("ψ = max F", psi).color(PSI_COLOR).width(2.5));
-                for (k, (name, points)) in ["F_a", "F_b", "F_c"].into_iter().zip(f).enumerate() {
-                    plot.line(Line::new(name, points).color(F_COLORS[k]));
-                }
-            });
-        Plot::new(("step", format!("{stage:?}")))
-            .legend(Legend::default())
-            .x_axis_label("iteration")
-            .x_axis_formatter(|m, _| format!("{:.0}", m.value))
-            .x_grid_spacer(iteration_spacer)
-            .set_margin_fraction(egui::vec2(0.05, 0.12))
-            .y_axis_label("log10")
-            .y_axis_formatter(log_axis_label)
-            .y_grid_spacer(log_spacer)
-            .show(&mut cols[1], |plot| {
-                plot.line(
-                    Line::new("step norm (scaled)", step).color(Color32::from_rgb(200, 150, 240)),
-                );
-                plot.line(Line::new("KKT residual", kkt).color(Color32::from_rgb(150, 210, 210)));
-            });
+        iteration_plot(("objective", stage), "mm² (log10)").show(&mut cols[0], |plot| {
+            plot.line(Line::new("ψ = max F", psi).color(PSI_COLOR).width(2.5));
+            for (k, (name, points)) in ["F_a", "F_b", "F_c"].into_iter().zip(f).enumerate() {
+                plot.line(Line::new(name, points).color(F_COLORS[k]));
+            }
+        });
+        iteration_plot(("step", stage), "log10").show(&mut cols[1], |plot| {
+            plot.line(
+                Line::new("step norm (scaled)", step).color(Color32::from_rgb(200, 150, 240)),
+            );
+            plot.line(Line::new("KKT residual", kkt).color(Color32::from_rgb(150, 210, 210)));
+        });
     });
 }
 
-/// Bin `samples` into `bins` bars over `[lo, hi]`, as fractions of all samples.
-pub fn histogram(samples: &[f64], lo: f64, hi: f64, bins: usize) -> Vec<(f64, f64)> {
-    let bins = bins.max(1);
-    let width = (hi - lo) / bins as f64;
-    let mut counts = vec![0usize; bins];
-    for &s in samples.iter().filter(|s| s.is_finite()) {
-        let k = ((s - lo) / width).floor();
-        let k = (k.max(0.0) as usize).min(bins - 1);
-        counts[k] += 1;
-    }
-    let n = samples.len().max(1) as f64;
-    counts
-        .into_iter()
-        .enumerate()
-        .map(|(k, c)| (lo + (k as f64 + 0.5) * width, c as f64 / n))
-        .collect()
+/// A plot over the iterations with a log10 y axis.
+fn iteration_plot<'a>(id: (&str, Stage), y_label: &str) -> Plot<'a> {
+    Plot::new((id.0, format!("{:?}", id.1)))
+        .legend(Legend::default())
+        .x_axis_label("iteration")
+        .include_x(0.0)
+        .x_axis_formatter(|m, _| format!("{:.0}", m.value))
+        .x_grid_spacer(iteration_spacer)
+        .set_margin_fraction(egui::vec2(0.05, 0.12))
+        .y_axis_label(y_label)
+        .y_axis_formatter(log_axis_label)
+        .y_grid_spacer(log_spacer)
 }
 
-/// Histograms of one figure before (nominal) and after (calibrated) on one split, with the
-/// Tables 4–8 style numbers beside them.
-pub fn accuracy_ui(ui: &mut egui::Ui, session: &Session, figure: Indicator, split: Split) {
-    let before = session.nominal.figures(split);
-    let after = session
-        .calibrated
-        .as_ref()
-        .and_then(|c| c.analysis.figures(split));
-    let samples = |f: Option<&SplitFigures>| f.map(|f| f.pairs.samples(figure)).unwrap_or_default();
-    let (before_samples, after_samples) = (samples(before), samples(after));
-    let unit = if figure.is_position() { "mm" } else { "rad" };
+/// Width of the numbers beside the histograms.
+const NUMBERS_WIDTH: f32 = 290.0;
+/// Narrowest histogram worth drawing.
+const MIN_HISTOGRAM_WIDTH: f32 = 230.0;
+/// Lowest histogram worth drawing.
+const MIN_HISTOGRAM_HEIGHT: f32 = 110.0;
+
+/// Colour of the marker of live figures (a running calibration's current iterate).
+pub const LIVE_COLOR: Color32 = Color32::from_rgb(250, 200, 90);
+
+/// "live: iteration k of step s", shown above figures of a running calibration's current iterate.
+pub fn live_marker_ui(ui: &mut egui::Ui, after: Option<After<'_>>) {
+    if let Some(After::Live(live)) = after {
+        ui.label(RichText::new(format!("live: {}", live.label())).color(LIVE_COLOR))
+            .on_hover_text(
+                "The model the running calibration has reached, re-evaluated on the whole dataset \
+                 a few times a second; the finished run replaces it, Cancel discards it",
+            );
+    }
+}
+
+/// Histograms of one indicator before (nominal) and after (the live iterate during a run, else the
+/// last calibration) on one split, with the Tables 4–8 style numbers beside them. The histograms
+/// stand side by side when the width allows, else one above the other beside the numbers, else
+/// below the numbers.
+pub fn accuracy_ui(ui: &mut egui::Ui, session: &Session, indicator: Indicator, split: Split) {
+    let after = session.after();
+    let figures = [Some(&session.nominal), after.map(|a| a.analysis())]
+        .map(|a| a.and_then(|a| a.figures(split)));
+    let names = [
+        "nominal".to_string(),
+        after.map_or_else(|| "calibrated".into(), After::short_name),
+    ];
+    let colors = [
+        NOMINAL_COLOR,
+        if matches!(after, Some(After::Live(_))) {
+            LIVE_COLOR
+        } else {
+            CALIBRATED_COLOR
+        },
+    ];
+    let histograms: Vec<(&str, &Histogram, Color32)> = (0..2)
+        .filter_map(|k| {
+            let h = figures[k].and_then(|f| f.histogram(indicator))?;
+            Some((names[k].as_str(), h, colors[k]))
+        })
+        .collect();
+
+    let spacing = ui.spacing().item_spacing.x;
+    let width = ui.available_width();
+    let height = ui.available_height();
+    let numbers = |ui: &mut egui::Ui| {
+        ui.vertical(|ui| {
+            ui.set_width(NUMBERS_WIDTH);
+            accuracy_numbers_ui(ui, indicator, split, figures, &names, after);
+        });
+    };
+    let n = histograms.len().max(1) as f32;
+    if width >= NUMBERS_WIDTH + n * (MIN_HISTOGRAM_WIDTH + spacing) {
+        // Numbers | histograms side by side.
+        ui.horizontal_top(|ui| {
+            numbers(ui);
+            let w = (ui.available_width() - (n - 1.0) * spacing) / n;
+            for (name, h, color) in &histograms {
+                histogram_plot_ui(ui, indicator, split, name, h, *color, egui::vec2(w, height));
+            }
+        });
+    } else if width >= NUMBERS_WIDTH + MIN_HISTOGRAM_WIDTH + spacing
+        && height >= n * MIN_HISTOGRAM_HEIGHT
+    {
+        // Numbers | histograms stacked.
+        ui.horizontal_top(|ui| {
+            numbers(ui);
+            ui.vertical(|ui| {
+                let w = ui.available_width();
+                let h = (height - (n - 1.0) * ui.spacing().item_spacing.y) / n;
+                for (name, hist, color) in &histograms {
+                    histogram_plot_ui(ui, indicator, split, name, hist, *color, egui::vec2(w, h));
+                }
+            });
+        });
+    } else {
+        // Narrow: numbers, then the histograms side by side below them, all scrolling.
+        egui::ScrollArea::vertical().show(ui, |ui| {
+            numbers(ui);
+            ui.horizontal(|ui| {
+                let w = ((ui.available_width() - (n - 1.0) * spacing) / n).max(120.0);
+                for (name, h, color) in &histograms {
+                    histogram_plot_ui(
+                        ui,
+                        indicator,
+                        split,
+                        name,
+                        h,
+                        *color,
+                        egui::vec2(w, MIN_HISTOGRAM_HEIGHT * 1.5),
+                    );
+                }
+            });
+        });
+    }
+}
+
+/// The Tables 4–8 style numbers of one indicator, nominal and after.
+fn accuracy_numbers_ui(
+    ui: &mut egui::Ui,
+    indicator: Indicator,
+    split: Split,
+    figures: [Option<&SplitFigures>; 2],
+    names: &[String; 2],
+    after: Option<After<'_>>,
+) {
+    let unit = if indicator.is_position() { "mm" } else { "rad" };
     let split_name = match split {
         Split::Cal => "calibration",
         Split::Ver => "verification",
         Split::All => "every",
     };
-
-    ui.horizontal_top(|ui| {
-        // Numbers.
-        ui.vertical(|ui| {
-            ui.set_width(270.0);
-            ui.label(RichText::new(format!("{} — {split_name} split", figure.label())).strong());
-            let thresholds: [String; 2] = if figure.is_position() {
-                POS_THRESHOLDS_MM.map(|t| format!("|Δd| ≤ {t} mm"))
-            } else {
-                ORI_THRESHOLDS_RAD.map(|t| format!("Δo ≤ {t} rad"))
+    ui.label(RichText::new(format!("{} — {split_name} split", indicator.label())).strong());
+    live_marker_ui(ui, after);
+    let thresholds: [String; 2] = if indicator.is_position() {
+        POS_THRESHOLDS_MM.map(|t| format!("|Δd| ≤ {t} mm"))
+    } else {
+        ORI_THRESHOLDS_RAD.map(|t| format!("Δo ≤ {t} rad"))
+    };
+    egui::Grid::new(("accuracy numbers", indicator.label(), split))
+        .striped(true)
+        .num_columns(3)
+        .show(ui, |ui| {
+            ui.label("");
+            for name in names {
+                ui.label(name);
+            }
+            ui.end_row();
+            let reports = figures.map(|f| f.and_then(|f| f.report.as_ref()));
+            let summaries = reports.map(|r| r.map(|r| indicator.summary(r)));
+            let cell = |ui: &mut egui::Ui, v: Option<String>| {
+                ui.label(v.unwrap_or_else(|| "—".into()));
             };
-            egui::Grid::new(("accuracy numbers", figure.label(), split))
-                .striped(true)
-                .num_columns(3)
-                .show(ui, |ui| {
-                    ui.label("");
-                    ui.label("nominal");
-                    ui.label("calibrated");
-                    ui.end_row();
-                    let reports = [
-                        before.and_then(|f| f.report.as_ref()),
-                        after.and_then(|f| f.report.as_ref()),
-                    ];
-                    let summaries = reports.map(|r| r.map(|r| figure.summary(r)));
-                    let cell = |ui: &mut egui::Ui, v: Option<String>| {
-                        ui.label(v.unwrap_or_else(|| "—".into()));
-                    };
-                    let digits = if figure.is_position() { 3 } else { 5 };
-                    ui.label(format!("RMS ({unit})"));
-                    for s in summaries {
-                        cell(ui, s.map(|s| format!("{:.digits$}", s.0)));
-                    }
-                    ui.end_row();
-                    ui.label(format!("max ({unit})"));
-                    for s in summaries {
-                        cell(ui, s.map(|s| format!("{:.digits$}", s.1)));
-                    }
-                    ui.end_row();
-                    for (t, label) in thresholds.iter().enumerate() {
-                        ui.label(label);
-                        for s in summaries {
-                            cell(ui, s.map(|s| format!("{:.1} %", 100.0 * s.2[t])));
-                        }
-                        ui.end_row();
-                    }
-                    ui.label("pairs");
-                    for f in [before, after] {
-                        ui.label(f.map_or_else(
-                            || "—".into(),
-                            |f| format!("{}", f.pairs.of(figure.pair_kind()).len()),
-                        ));
-                    }
-                    ui.end_row();
+            let digits = if indicator.is_position() { 3 } else { 5 };
+            ui.label(format!("RMS ({unit})"));
+            for s in summaries {
+                cell(ui, s.map(|s| format!("{:.digits$}", s.0)));
+            }
+            ui.end_row();
+            ui.label(format!("max ({unit})"));
+            for s in summaries {
+                cell(ui, s.map(|s| format!("{:.digits$}", s.1)));
+            }
+            ui.end_row();
+            for (t, label) in thresholds.iter().enumerate() {
+                ui.label(label);
+                for s in summaries {
+                    cell(ui, s.map(|s| format!("{:.1} %", 100.0 * s.2[t])));
+                }
+                ui.end_row();
+            }
+            ui.label("pairs");
+            for r in reports {
+                let stats = r.map(|r| match indicator.pair_kind() {
+                    PairKind::Relative(side) => r.relative(side),
+                    PairKind::Collaborative => &r.collaborative,
                 });
-            if after.is_none() {
-                ui.label(
-                    RichText::new("Calibrate to see the calibrated figures.").color(Color32::GRAY),
-                );
+                cell(ui, stats.map(|s| s.n_pairs.to_string()));
             }
+            ui.end_row();
         });
-
-        // Before and after side by side, each on its own range (calibration shrinks the errors
-        // by orders of magnitude, so a shared axis would hide one of them).
-        let panels: Vec<(&str, &[f64], Color32)> = if after_samples.is_empty() {
-            vec![("nominal", &before_samples[..], NOMINAL_COLOR)]
-        } else {
-            vec![
-                ("nominal", &before_samples[..], NOMINAL_COLOR),
-                ("calibrated", &after_samples[..], CALIBRATED_COLOR),
-            ]
-        };
-        let n = panels.len();
-        ui.columns(n, |cols| {
-            for (col, (name, samples, color)) in cols.iter_mut().zip(panels) {
-                histogram_plot_ui(col, figure, split, name, samples, color);
-            }
-        });
-    });
+    if after.is_none() {
+        ui.label(RichText::new("Calibrate to see the calibrated figures.").color(Color32::GRAY));
+    }
 }
 
 const NOMINAL_COLOR: Color32 = Color32::from_rgb(230, 120, 90);
 const CALIBRATED_COLOR: Color32 = Color32::from_rgb(100, 190, 235);
 
-/// One histogram: symmetric range for signed Δd, from zero for Δo; the paper's thresholds as lines
-/// when they fall in range.
+/// One histogram of `size`: symmetric range for signed Δd, from zero for Δo; the paper's thresholds
+/// as lines when they fall in range.
 fn histogram_plot_ui(
     ui: &mut egui::Ui,
-    figure: Indicator,
+    indicator: Indicator,
     split: Split,
     name: &str,
-    samples: &[f64],
+    histogram: &Histogram,
     color: Color32,
+    size: egui::Vec2,
 ) {
-    let extent = samples
-        .iter()
-        .filter(|x| x.is_finite())
-        .fold(0.0f64, |m, x| m.max(x.abs()))
-        .max(1e-9);
-    let (lo, hi) = if figure.is_position() {
-        (-extent, extent)
-    } else {
-        (0.0, extent)
-    };
-    let bins = 41;
-    let width = (hi - lo) / bins as f64;
-    let bars: Vec<Bar> = histogram(samples, lo, hi, bins)
-        .into_iter()
+    let width = histogram.bin_width();
+    let bars: Vec<Bar> = histogram
+        .bars()
         .map(|(x, y)| Bar::new(x, 100.0 * y).width(width * 0.95))
         .collect();
-    Plot::new(("histogram", figure.label(), split, name.to_string()))
+    let extent = histogram.hi;
+    // The id does not depend on the name ("iteration k" changes during a run): the plot keeps its
+    // state while the live figures update.
+    let slot = if name == "nominal" {
+        "nominal"
+    } else {
+        "after"
+    };
+    Plot::new(("histogram", indicator.label(), split, slot))
+        .width(size.x.max(MIN_HISTOGRAM_WIDTH * 0.5))
+        .height(size.y.max(MIN_HISTOGRAM_HEIGHT * 0.5))
         .legend(Legend::default())
-        .x_axis_label(if figure.is_position() {
+        .x_axis_label(if indicator.is_position() {
             "Δd (mm)"
         } else {
             "Δo (rad)"
         })
+        .x_grid_spacer(histogram_spacer)
         .y_axis_label("% of samples")
         .allow_scroll(false)
         .show(ui, |plot| {
             plot.bar_chart(BarChart::new(name, bars).color(color));
-            let t = if figure.is_position() {
+            let t = if indicator.is_position() {
                 POS_THRESHOLDS_MM.to_vec()
             } else {
                 ORI_THRESHOLDS_RAD.to_vec()
@@ -310,26 +380,26 @@ fn histogram_plot_ui(
             for (i, x) in t.into_iter().enumerate().filter(|(_, x)| *x <= extent) {
                 let c = Color32::from_gray(if i == 0 { 150 } else { 100 });
                 plot.vline(VLine::new(format!("±{x}"), x).color(c));
-                if figure.is_position() {
+                if indicator.is_position() {
                     plot.vline(VLine::new(format!("±{x}"), -x).color(c));
                 }
             }
         });
 }
 
-/// All figures of one split at a glance, nominal against calibrated (the paper's Tables 4–8).
+/// All figures of one split at a glance, nominal against the live iterate or the last calibration
+/// (the paper's Tables 4–8). Scrolls both ways, with solid scroll bars, when the panel is smaller.
 pub fn accuracy_summary_ui(ui: &mut egui::Ui, session: &Session, split: Split) {
     fn report(a: &Analysis, split: Split) -> Option<&AccuracyReport> {
         a.figures(split).and_then(|f| f.report.as_ref())
     }
+    let after = session.after();
+    live_marker_ui(ui, after);
     let reports = [
-        ("nominal", report(&session.nominal, split)),
+        ("nominal".to_string(), report(&session.nominal, split)),
         (
-            "calibrated",
-            session
-                .calibrated
-                .as_ref()
-                .and_then(|c| report(&c.analysis, split)),
+            after.map_or_else(|| "calibrated".into(), After::short_name),
+            after.and_then(|a| report(a.analysis(), split)),
         ),
     ];
     let titles = [
@@ -344,61 +414,64 @@ pub fn accuracy_summary_ui(ui: &mut egui::Ui, session: &Session, split: Split) {
         "Δo ≤ 0.005 rad",
         "Δo ≤ 0.01 rad",
     ];
-    egui::ScrollArea::both().show(ui, |ui| {
-        egui::Grid::new(("accuracy summary", split))
-            .striped(true)
-            .num_columns(titles.len())
-            .spacing([14.0, 4.0])
-            .show(ui, |ui| {
-                for t in titles {
-                    ui.label(RichText::new(t).strong());
-                }
-                ui.end_row();
-                let kinds = [
-                    (
-                        "relative, left arm",
-                        Indicator::RelativePosition(Side::Left),
-                        Indicator::RelativeOrientation(Side::Left),
-                    ),
-                    (
-                        "relative, right arm",
-                        Indicator::RelativePosition(Side::Right),
-                        Indicator::RelativeOrientation(Side::Right),
-                    ),
-                    (
-                        "collaborative",
-                        Indicator::CollaborativePosition,
-                        Indicator::CollaborativeOrientation,
-                    ),
-                ];
-                for (name, pos, ori) in kinds {
-                    for (row, (model, report)) in reports.iter().enumerate() {
-                        ui.label(if row == 0 { name } else { "" });
-                        ui.label(*model);
-                        match report {
-                            Some(r) => {
-                                let (p_rms, p_max, p_freq) = pos.summary(r);
-                                let (o_rms, o_max, o_freq) = ori.summary(r);
-                                ui.label(format!("{p_rms:.3}"));
-                                ui.label(format!("{p_max:.3}"));
-                                ui.label(format!("{:.1} %", 100.0 * p_freq[0]));
-                                ui.label(format!("{:.1} %", 100.0 * p_freq[1]));
-                                ui.label(format!("{o_rms:.5}"));
-                                ui.label(format!("{o_max:.5}"));
-                                ui.label(format!("{:.1} %", 100.0 * o_freq[0]));
-                                ui.label(format!("{:.1} %", 100.0 * o_freq[1]));
-                            }
-                            None => {
-                                for _ in 0..8 {
-                                    ui.label("—");
+    ui.spacing_mut().scroll = egui::style::ScrollStyle::solid();
+    egui::ScrollArea::both()
+        .auto_shrink([false, false])
+        .show(ui, |ui| {
+            egui::Grid::new(("accuracy summary", split))
+                .striped(true)
+                .num_columns(titles.len())
+                .spacing([14.0, 4.0])
+                .show(ui, |ui| {
+                    for t in titles {
+                        ui.label(RichText::new(t).strong());
+                    }
+                    ui.end_row();
+                    let kinds = [
+                        (
+                            "relative, left arm",
+                            Indicator::RelativePosition(Side::Left),
+                            Indicator::RelativeOrientation(Side::Left),
+                        ),
+                        (
+                            "relative, right arm",
+                            Indicator::RelativePosition(Side::Right),
+                            Indicator::RelativeOrientation(Side::Right),
+                        ),
+                        (
+                            "collaborative",
+                            Indicator::CollaborativePosition,
+                            Indicator::CollaborativeOrientation,
+                        ),
+                    ];
+                    for (name, pos, ori) in kinds {
+                        for (row, (model, report)) in reports.iter().enumerate() {
+                            ui.label(if row == 0 { name } else { "" });
+                            ui.label(model);
+                            match report {
+                                Some(r) => {
+                                    let (p_rms, p_max, p_freq) = pos.summary(r);
+                                    let (o_rms, o_max, o_freq) = ori.summary(r);
+                                    ui.label(format!("{p_rms:.3}"));
+                                    ui.label(format!("{p_max:.3}"));
+                                    ui.label(format!("{:.1} %", 100.0 * p_freq[0]));
+                                    ui.label(format!("{:.1} %", 100.0 * p_freq[1]));
+                                    ui.label(format!("{o_rms:.5}"));
+                                    ui.label(format!("{o_max:.5}"));
+                                    ui.label(format!("{:.1} %", 100.0 * o_freq[0]));
+                                    ui.label(format!("{:.1} %", 100.0 * o_freq[1]));
+                                }
+                                None => {
+                                    for _ in 0..8 {
+                                        ui.label("—");
+                                    }
                                 }
                             }
+                            ui.end_row();
                         }
-                        ui.end_row();
                     }
-                }
-            });
-    });
+                });
+        });
 }
 
 #[cfg(test)]
@@ -420,17 +493,5 @@ mod tests {
                 assert!(m.step_size <= (hi - lo) / 1.0 + 1.0);
             }
         }
-    }
-
-    #[test]
-    fn histogram_counts_every_sample_once() {
-        let samples = [-1.0, -0.5, 0.0, 0.49, 0.5, 1.0, 7.0, -7.0];
-        let h = histogram(&samples, -1.0, 1.0, 4);
-        let total: f64 = h.iter().map(|(_, y)| y).sum();
-        assert!((total - 1.0).abs() < 1e-12);
-        // Out-of-range samples land in the end bins.
-        assert!((h[0].1 - 2.0 / 8.0).abs() < 1e-12, "{h:?}");
-        assert!((h[3].1 - 3.0 / 8.0).abs() < 1e-12, "{h:?}");
-        assert!((h[0].0 + 0.75).abs() < 1e-12);
     }
 }

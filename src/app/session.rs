@@ -1,12 +1,12 @@
-//! The app's view of the engine: a loaded dataset and robot, the nominal model and (after a run) the
-//! calibrated one, each with its [`Analysis`] (accuracy figures, pair residuals and the
-//! per-configuration rows the panels show).
+//! The app's view of the engine: a loaded dataset and robot, the nominal model, (after a run) the
+//! calibrated one and (during a run) the model the run has reached, each with its [`Analysis`]
+//! (accuracy figures, histograms and the per-configuration rows the panels show).
 
-use crate::analysis::Analysis;
+use crate::analysis::{Analysis, ConfigRow};
 use crate::dataset::{self, Dataset};
 use crate::robot::RobotDescription;
-use crate::side::Side;
-use crate::solver::CalibrationResult;
+use crate::side::{ConfigId, Side};
+use crate::solver::{CalibrationResult, Stage};
 use anyhow::Context as _;
 use nalgebra::Isometry3;
 use std::path::{Path, PathBuf};
@@ -19,6 +19,58 @@ pub struct Calibrated {
     pub analysis: Analysis,
 }
 
+/// The model a running calibration has reached, with its figures: what the workbench shows instead of
+/// the last finished calibration until the run ends.
+#[derive(Clone, Debug)]
+pub struct LiveFigures {
+    /// The stage the model is from (the one running, or the one that just ended).
+    pub stage: Stage,
+    /// Outer iterations of `stage` done.
+    pub iteration: usize,
+    /// Whether `stage` had ended: its parameters are final.
+    pub stage_finished: bool,
+    pub analysis: Analysis,
+    /// How long the worker took to compute `analysis`.
+    pub evaluation_secs: f64,
+}
+
+impl LiveFigures {
+    /// "iteration k of step s", as the panels mark the live figures.
+    pub fn label(&self) -> String {
+        if self.stage_finished {
+            format!("iteration {} of {}, stage done", self.iteration, self.stage)
+        } else {
+            format!("iteration {} of {}", self.iteration, self.stage)
+        }
+    }
+}
+
+/// What the "after" figures are of.
+#[derive(Clone, Copy, Debug)]
+pub enum After<'a> {
+    /// A run is going: the model it has reached.
+    Live(&'a LiveFigures),
+    /// The last finished calibration.
+    Calibrated(&'a Calibrated),
+}
+
+impl<'a> After<'a> {
+    pub fn analysis(self) -> &'a Analysis {
+        match self {
+            After::Live(live) => &live.analysis,
+            After::Calibrated(c) => &c.analysis,
+        }
+    }
+
+    /// A short name for a column or a legend: "calibrated" or "iteration k".
+    pub fn short_name(self) -> String {
+        match self {
+            After::Live(live) => format!("iteration {}", live.iteration),
+            After::Calibrated(_) => "calibrated".into(),
+        }
+    }
+}
+
 /// A loaded dataset with its robot and figures.
 #[derive(Clone)]
 pub struct Session {
@@ -27,7 +79,10 @@ pub struct Session {
     /// Where the robot came from (`None`: built in).
     pub robot_source: Option<PathBuf>,
     pub nominal: Analysis,
+    /// The last finished calibration.
     pub calibrated: Option<Calibrated>,
+    /// While a calibration runs: the model it has reached (cleared when it ends).
+    pub live: Option<LiveFigures>,
 }
 
 impl Session {
@@ -38,10 +93,11 @@ impl Session {
         let robot_path = urdf
             .map(Path::to_path_buf)
             .or_else(|| dataset.robot.clone());
-        let robot = match &robot_path {
-            Some(p) => RobotDescription::load(p)?,
-            None => RobotDescription::builtin_irb14000(),
-        };
+        let robot = RobotDescription::for_dataset_with(
+            &dataset,
+            robot_path.as_deref(),
+            &Default::default(),
+        )?;
         Self::new(dataset, robot, robot_path)
     }
 
@@ -50,18 +106,14 @@ impl Session {
         robot: RobotDescription,
         robot_source: Option<PathBuf>,
     ) -> anyhow::Result<Self> {
-        // A URDF of our own (e.g. an exported calibrated one) carries its DH model; the built-in
-        // robot is Table 3.
-        let nominal_model = match &robot_source {
-            Some(_) => robot
-                .dh_model(dataset.nominal_reflectors_mm)
-                .with_context(|| "the robot description does not encode a DH model")?,
-            None => robot.nominal_model(dataset.nominal_reflectors_mm),
-        };
+        // The description's own model: Table 3 for the built-in robot, the URDF's chains otherwise
+        // (the same nominal model as `dualcal calibrate` and `evaluate --nominal`).
+        robot.check_dataset(&dataset)?;
+        let nominal_model = robot.nominal_model(dataset.nominal_reflectors_mm);
         let nominal = Analysis::compute(
             &dataset,
             &nominal_model,
-            &robot.body_from_dh_base(Side::Left),
+            &robot.body_from_arm_base(Side::Left),
         )
         .context("nominal accuracy")?;
         Ok(Self {
@@ -70,19 +122,43 @@ impl Session {
             robot_source,
             nominal,
             calibrated: None,
+            live: None,
         })
     }
 
-    /// The newest model's figures: calibrated if there is one, else nominal.
+    /// The newest model's figures: the running calibration's iterate, else the last finished
+    /// calibration, else the nominal model.
     pub fn current(&self) -> &Analysis {
-        self.calibrated
-            .as_ref()
-            .map_or(&self.nominal, |c| &c.analysis)
+        self.analysis(true)
+    }
+
+    /// The newest model other than the nominal one: the live iterate while a calibration runs, else
+    /// the last finished calibration.
+    pub fn after(&self) -> Option<After<'_>> {
+        match (&self.live, &self.calibrated) {
+            (Some(live), _) => Some(After::Live(live)),
+            (None, Some(c)) => Some(After::Calibrated(c)),
+            (None, None) => None,
+        }
+    }
+
+    /// The newest model's figures when `calibrated` is asked for and there are any ([`Self::after`]),
+    /// else the nominal model's.
+    pub fn analysis(&self, calibrated: bool) -> &Analysis {
+        match self.after() {
+            Some(after) if calibrated => after.analysis(),
+            _ => &self.nominal,
+        }
     }
 
     pub fn body_from_left_base(&self) -> Isometry3<f64> {
-        self.robot.body_from_dh_base(Side::Left)
+        self.robot.body_from_arm_base(Side::Left)
     }
+}
+
+/// One configuration's row of an analysis.
+pub fn config_row(analysis: &Analysis, config: ConfigId) -> Option<&ConfigRow> {
+    analysis.configs.iter().find(|r| r.config == config)
 }
 
 #[cfg(test)]

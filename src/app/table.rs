@@ -1,8 +1,8 @@
 //! The per-configuration table: sortable by every column, rows select in 3D.
 
 use crate::analysis::{Analysis, ConfigRow};
-use crate::app::viewport::scene::Selection;
 use crate::dataset::Split;
+use crate::side::ConfigId;
 use eframe::egui::{self, Color32, RichText, Sense};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -53,12 +53,31 @@ impl Column {
         }
     }
 
+    /// What the column shows for `row`.
+    fn text(self, row: &ConfigRow) -> String {
+        let number = |x: f64, digits: usize| {
+            if x.is_finite() {
+                format!("{x:.digits$}")
+            } else {
+                "—".into()
+            }
+        };
+        match self {
+            Column::Id => row.id.clone(),
+            Column::Arm => row.config.side.name().into(),
+            Column::Split => row.split.name().into(),
+            Column::WorstPos => number(row.worst_pos_mm, 3),
+            Column::WorstOri => number(row.worst_ori_rad, 5),
+            Column::Rigidity => number(row.rigidity_mm, 3),
+        }
+    }
+
     fn width(self) -> f32 {
         match self {
-            Column::Id => 70.0,
+            Column::Id => 64.0,
             Column::Arm => 40.0,
             Column::Split => 36.0,
-            _ => 96.0,
+            _ => 88.0,
         }
     }
 }
@@ -102,13 +121,13 @@ pub fn sorted_rows(analysis: &Analysis, state: TableState) -> Vec<usize> {
 }
 
 /// The configuration with the largest worst |Δd|.
-pub fn worst(analysis: &Analysis) -> Selection {
+pub fn worst(analysis: &Analysis) -> Option<ConfigId> {
     analysis
         .configs
         .iter()
         .filter(|r| r.worst_pos_mm.is_finite())
         .max_by(|a, b| a.worst_pos_mm.total_cmp(&b.worst_pos_mm))
-        .map(|r| (r.config.side, r.config.index))
+        .map(|r| r.config)
 }
 
 fn cell(ui: &mut egui::Ui, width: f32, text: RichText) {
@@ -118,31 +137,57 @@ fn cell(ui: &mut egui::Ui, width: f32, text: RichText) {
     );
 }
 
-/// Draw the table; returns a new selection when a row was clicked.
+/// Draw the table; returns the configuration whose row was clicked.
 pub fn config_table_ui(
     ui: &mut egui::Ui,
     analysis: &Analysis,
     state: &mut TableState,
-    selection: Selection,
+    selection: Option<ConfigId>,
     scroll_to_selection: bool,
-) -> Option<Selection> {
+) -> Option<ConfigId> {
+    // A narrow panel scrolls the columns sideways (header and rows together).
+    egui::ScrollArea::horizontal()
+        .id_salt("config table columns")
+        .auto_shrink([false, false])
+        .show(ui, |ui| {
+            table_ui(ui, analysis, state, selection, scroll_to_selection)
+        })
+        .inner
+}
+
+fn table_ui(
+    ui: &mut egui::Ui,
+    analysis: &Analysis,
+    state: &mut TableState,
+    selection: Option<ConfigId>,
+    scroll_to_selection: bool,
+) -> Option<ConfigId> {
     let mut clicked = None;
+    // The sort order in words (no arrow glyphs in the default fonts); the sorted title in colour.
+    ui.label(
+        RichText::new(format!(
+            "sorted by {}, {} first — click a title to sort",
+            state.column.title(),
+            match (state.column, state.descending) {
+                (Column::Id | Column::Arm | Column::Split, false) => "a",
+                (Column::Id | Column::Arm | Column::Split, true) => "z",
+                (_, true) => "largest",
+                (_, false) => "smallest",
+            }
+        ))
+        .small()
+        .color(Color32::GRAY),
+    );
     ui.horizontal(|ui| {
         for column in Column::ALL {
-            let arrow = if state.column == column {
-                if state.descending {
-                    " (desc)"
-                } else {
-                    " (asc)"
-                }
-            } else {
-                ""
-            };
+            let mut title = RichText::new(column.title()).strong();
+            if state.column == column {
+                title = title.color(Color32::from_rgb(120, 180, 240));
+            }
             let r = ui
                 .add_sized(
                     [column.width(), 20.0],
-                    egui::Button::new(RichText::new(format!("{}{arrow}", column.title())).strong())
-                        .frame(false),
+                    egui::Button::new(title).frame(false),
                 )
                 .on_hover_text(column.tooltip());
             if r.clicked() {
@@ -165,13 +210,9 @@ pub fn config_table_ui(
         .auto_shrink([false, false])
         .id_salt("config table");
     if scroll_to_selection
-        && let Some(pos) = order.iter().position(|&i| {
-            selection
-                == Some((
-                    analysis.configs[i].config.side,
-                    analysis.configs[i].config.index,
-                ))
-        })
+        && let Some(pos) = order
+            .iter()
+            .position(|&i| selection == Some(analysis.configs[i].config))
     {
         let spacing = ui.spacing().item_spacing.y;
         scroll =
@@ -180,7 +221,7 @@ pub fn config_table_ui(
     scroll.show_rows(ui, row_height, order.len(), |ui, range| {
         for &i in &order[range] {
             let row = &analysis.configs[i];
-            let selected = selection == Some((row.config.side, row.config.index));
+            let selected = selection == Some(row.config);
             let response = ui
                 .horizontal(|ui| {
                     ui.set_height(row_height);
@@ -188,35 +229,9 @@ pub fn config_table_ui(
                         let t = RichText::new(t).monospace();
                         if selected { t.color(Color32::WHITE) } else { t }
                     };
-                    let num = |x: f64, digits: usize| {
-                        if x.is_finite() {
-                            format!("{x:.digits$}")
-                        } else {
-                            "—".into()
-                        }
-                    };
-                    cell(ui, Column::Id.width(), strong(row.id.clone()));
-                    cell(
-                        ui,
-                        Column::Arm.width(),
-                        strong(row.config.side.name().into()),
-                    );
-                    cell(ui, Column::Split.width(), strong(row.split.name().into()));
-                    cell(
-                        ui,
-                        Column::WorstPos.width(),
-                        strong(num(row.worst_pos_mm, 3)),
-                    );
-                    cell(
-                        ui,
-                        Column::WorstOri.width(),
-                        strong(num(row.worst_ori_rad, 5)),
-                    );
-                    cell(
-                        ui,
-                        Column::Rigidity.width(),
-                        strong(num(row.rigidity_mm, 3)),
-                    );
+                    for column in Column::ALL {
+                        cell(ui, column.width(), strong(column.text(row)));
+                    }
                 })
                 .response;
             if selected {
@@ -228,7 +243,7 @@ pub fn config_table_ui(
             }
             let r = ui.interact(response.rect, egui::Id::unique(("row", i)), Sense::click());
             if r.clicked() {
-                clicked = Some(Some((row.config.side, row.config.index)));
+                clicked = Some(row.config);
             }
         }
     });

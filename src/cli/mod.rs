@@ -5,8 +5,8 @@ use crate::dataset::{self, Dataset, Split};
 use crate::metrics;
 use crate::params::{ParamsFile, Provenance};
 use crate::quality;
-use crate::robot::RobotDescription;
-use crate::side::{ConfigId, Side};
+use crate::robot::{ArmLinks, LoadOptions, RobotDescription};
+use crate::side::{ConfigId, PerSide, Side};
 use crate::simulate;
 use crate::solver::{
     CalibrationEvent, CalibrationResult, CalibrationSettings, Calibrator, Method, QpMethod,
@@ -99,6 +99,16 @@ pub struct SimulateArgs {
     /// Overwrite an existing simulated dataset in --out.
     #[arg(long)]
     pub force: bool,
+    /// Simulate this robot description (URDF) instead of the built-in IRB 14000; the dataset refers to
+    /// it. Its collision geometry keeps the configurations collision-free.
+    #[arg(long)]
+    pub urdf: Option<PathBuf>,
+    /// With --urdf: the left arm's chain, BASE:TIP (default: the YuMi joint names).
+    #[arg(long, requires = "urdf", value_parser = ArmLinks::parse)]
+    pub left: Option<ArmLinks>,
+    /// With --urdf: the right arm's chain, BASE:TIP (default: the YuMi joint names).
+    #[arg(long, requires = "urdf", value_parser = ArmLinks::parse)]
+    pub right: Option<ArmLinks>,
 }
 
 #[derive(Args, Debug)]
@@ -108,7 +118,8 @@ pub struct EvaluateArgs {
     /// Parameter file (dualcal-params/1).
     #[arg(long, conflicts_with = "nominal", required_unless_present = "nominal")]
     pub params: Option<PathBuf>,
-    /// Use the nominal model: Table 3, the dataset's nominal reflectors and the URDF's base transform.
+    /// Use the nominal model: the dataset's robot description (Table 3 for the built-in IRB 14000, else
+    /// the URDF's own arm chains), the dataset's nominal reflectors and the URDF's base transform.
     #[arg(long)]
     pub nominal: bool,
     #[arg(long, value_enum, default_value_t = Split::All)]
@@ -131,9 +142,14 @@ pub struct CalibrateArgs {
     /// Where to write the parameters (dualcal-params/1 JSON).
     #[arg(long)]
     pub out: PathBuf,
-    /// Also write a calibrated copy of the robot's URDF.
+    /// Also write a calibrated copy of the robot's URDF (the user's own file with only the arm joints'
+    /// origins changed, and the reflectors added as links).
     #[arg(long)]
     pub urdf: Option<PathBuf>,
+    /// Also write the calibration as an overlay robot software can apply to its description: the
+    /// calibrated origin of every changed joint and the reflector links (YAML, or JSON for `.json`).
+    #[arg(long)]
+    pub overlay: Option<PathBuf>,
     /// Outer iterations per stage.
     #[arg(long, default_value_t = 200)]
     pub max_iterations: usize,
@@ -272,8 +288,26 @@ fn simulate_cmd(a: &SimulateArgs) -> Result<()> {
             ..simulate::GrossErrorModel::study()
         });
     }
-    let robot = RobotDescription::builtin_irb14000();
-    let out = simulate::simulate_with_robot(&opts, &robot)?;
+    let robot = match &a.urdf {
+        Some(path) => RobotDescription::load_with(
+            path,
+            &LoadOptions {
+                arms: PerSide::new(a.left.clone(), a.right.clone()),
+                ..Default::default()
+            },
+        )?,
+        None => RobotDescription::builtin_irb14000(),
+    };
+    for w in &robot.warnings {
+        eprintln!("warning: {w}");
+    }
+    let mut out = simulate::simulate_with_robot(&opts, &robot)?;
+    if let Some(path) = &a.urdf {
+        out.dataset.robot = Some(path.canonicalize().unwrap_or_else(|_| path.clone()));
+        for (side, arm) in out.dataset.arms.iter_mut() {
+            arm.links = Some(robot.arm(side).links.clone());
+        }
+    }
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     let overwrite = if a.force {
         Overwrite::Allow
@@ -286,6 +320,7 @@ fn simulate_cmd(a: &SimulateArgs) -> Result<()> {
     truth.method = Some(serde_json::json!("simulation truth"));
     truth.provenance = Some(Provenance::now(Some(&a.out)));
     truth.write(&a.out.join("truth.json"))?;
+    outln!("{}", describe_robot(&robot));
     outln!(
         "simulated {} configurations per arm ({} cal, {} ver), seed {}, into {}",
         a.configs,
@@ -313,16 +348,6 @@ fn simulate_cmd(a: &SimulateArgs) -> Result<()> {
 
 pub(crate) fn load_dataset(path: &Path) -> Result<Dataset> {
     Ok(dataset::load(path)?)
-}
-
-/// A dataset with its robot: loaded, and its joint values checked against the robot's limits.
-fn load_with_robot(path: &Path) -> Result<(Dataset, RobotDescription)> {
-    let ds = load_dataset(path)?;
-    let robot = RobotDescription::for_dataset(&ds)
-        .with_context(|| format!("loading the robot of {}", ds.dir.display()))?;
-    let limits = crate::side::PerSide::from_fn(|s| robot.joint_limits_rad(s).to_vec());
-    dataset::check_joint_limits(&ds, &limits)?;
-    Ok((ds, robot))
 }
 
 /// Print a screening's whole-file findings as warnings; `Err` with the errors among them.
@@ -372,10 +397,49 @@ fn print_flags(title: &str, screening: &quality::Screening, excluded: &[ConfigId
     }
 }
 
+/// The dataset's joint values against the robot's limits (docs/reliability.md).
+fn check_limits(ds: &Dataset, robot: &RobotDescription) -> Result<()> {
+    let limits = PerSide::from_fn(|s| robot.joint_limits_rad(s));
+    Ok(dataset::check_joint_limits(ds, &limits)?)
+}
+
+/// The dataset's robot description, checked against its CSVs.
+pub(crate) fn robot_of(ds: &Dataset) -> Result<RobotDescription> {
+    let robot = RobotDescription::for_dataset(ds)
+        .with_context(|| format!("loading the robot of {}", ds.dir.display()))?;
+    for w in &robot.warnings {
+        eprintln!("warning: {w}");
+    }
+    Ok(robot)
+}
+
+/// `robot: FILE; left arm BASE → TIP (N joints: …), right arm …; nominal model …`.
+pub fn describe_robot(robot: &RobotDescription) -> String {
+    let arms: Vec<String> = robot
+        .arms()
+        .iter()
+        .map(|(side, a)| format!("{side} arm {} ({} joints)", a.links, a.chain.dof()))
+        .collect();
+    format!(
+        "robot: {}; {}; nominal model: {}",
+        robot.name(),
+        arms.join(", "),
+        if robot.is_builtin() {
+            "Table 3 (DH)"
+        } else {
+            "the URDF's joint origins"
+        }
+    )
+}
+
 fn evaluate_cmd(a: &EvaluateArgs) -> Result<()> {
-    let (ds, robot) = load_with_robot(&a.dataset)?;
+    let ds = load_dataset(&a.dataset)?;
+    let robot = robot_of(&ds)?;
+    check_limits(&ds, &robot)?;
     let model = match &a.params {
-        Some(p) => ParamsFile::read(p)?.to_model()?,
+        Some(p) => ParamsFile::read(p)?
+            .to_model_for(&robot)
+            .map_err(|e| anyhow::anyhow!("{}: {e}", p.display()))?,
         None => robot.nominal_model(ds.nominal_reflectors_mm),
     };
     let report = metrics::evaluate(&ds, &model, a.split)?;
@@ -391,6 +455,7 @@ fn evaluate_cmd(a: &EvaluateArgs) -> Result<()> {
             ds.dir.display(),
             a.split
         );
+        outln!("{}", describe_robot(&robot));
         outln!("{}", metrics::format_table(&report));
     }
     Ok(())
@@ -454,12 +519,15 @@ impl NotConverged {
 }
 
 fn calibrate_cmd(a: &CalibrateArgs) -> Result<()> {
-    let (ds, robot) = load_with_robot(&a.dataset)?;
-    // Never write over an input: the dataset's files, its robot description, or one output over the
-    // other.
+    let ds = load_dataset(&a.dataset)?;
+    // Never write over an input: the dataset's files, its robot description, or one output over
+    // another.
     let mut inputs: Vec<PathBuf> = ds.files().to_vec();
     inputs.extend(ds.robot.clone());
-    for out in [Some(&a.out), a.urdf.as_ref()].into_iter().flatten() {
+    for out in [Some(&a.out), a.urdf.as_ref(), a.overlay.as_ref()]
+        .into_iter()
+        .flatten()
+    {
         crate::atomic::refuse_overwrite_input(
             out,
             &inputs.iter().map(PathBuf::as_path).collect::<Vec<_>>(),
@@ -468,6 +536,20 @@ fn calibrate_cmd(a: &CalibrateArgs) -> Result<()> {
     if let Some(urdf) = &a.urdf {
         crate::atomic::refuse_overwrite_input(urdf, &[&a.out])
             .context("--urdf and --out name the same file")?;
+    }
+    if let Some(overlay) = &a.overlay {
+        let others: Vec<&Path> = [Some(&a.out), a.urdf.as_ref()]
+            .into_iter()
+            .flatten()
+            .map(PathBuf::as_path)
+            .collect();
+        crate::atomic::refuse_overwrite_input(overlay, &others)
+            .context("--overlay names the same file as another output")?;
+    }
+    let robot = robot_of(&ds)?;
+    check_limits(&ds, &robot)?;
+    if !a.quiet {
+        eprintln!("{}", describe_robot(&robot));
     }
     let nominal = robot.nominal_model(ds.nominal_reflectors_mm);
     let mut settings = settings_from(a);
@@ -561,6 +643,20 @@ fn calibrate_cmd(a: &CalibrateArgs) -> Result<()> {
             .with_context(|| format!("writing {}", path.display()))?;
         outln!("calibrated URDF written to {}", path.display());
     }
+    if let Some(path) = &a.overlay {
+        let overlay = crate::urdf_export::calibrated_overlay(&robot, &result.calibrated)?;
+        let json = path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("json"));
+        let text = if json {
+            overlay.to_json()
+        } else {
+            overlay.to_yaml()
+        };
+        crate::atomic::write_atomic(path, text.as_bytes())
+            .with_context(|| format!("writing {}", path.display()))?;
+        outln!("calibration overlay written to {}", path.display());
+    }
     if !result.is_converged() {
         let how: Vec<String> = result
             .stages
@@ -579,7 +675,7 @@ fn print_identifiability(result: &CalibrationResult) {
         outln!(
             "\n{side} arm: {} of {} parameters identified; condition number {:.3e} → {:.3e}",
             rep.free.len(),
-            crate::kinematics::N_PARAMS,
+            result.nominal.arm(side).param_count(),
             rep.condition_before,
             rep.condition_after
         );

@@ -49,13 +49,19 @@ pub(crate) fn run(a: &ReproduceArgs) -> Result<()> {
     let robot = RobotDescription::builtin_irb14000();
     match a.study {
         Study::Fig4 => {
-            let ds = match &a.dataset {
-                Some(p) => load_dataset(p)?,
+            let (ds, nominal) = match &a.dataset {
+                Some(p) => {
+                    let ds = load_dataset(p)?;
+                    let nominal = super::robot_of(&ds)?.nominal_model(ds.nominal_reflectors_mm);
+                    (ds, nominal)
+                }
                 None => {
-                    simulate::simulate_with_robot(&study_options(a, a.seeds[0]), &robot)?.dataset
+                    let ds = simulate::simulate_with_robot(&study_options(a, a.seeds[0]), &robot)?
+                        .dataset;
+                    let nominal = robot.nominal_model(ds.nominal_reflectors_mm);
+                    (ds, nominal)
                 }
             };
-            let nominal = robot.nominal_model(ds.nominal_reflectors_mm);
             outln!(
                 "Paper Fig. 4: relative accuracy against the number of calibration configurations (per arm)"
             );

@@ -2,26 +2,43 @@
 
 use super::error::{DatasetError, read_text};
 use super::units::Units;
-use super::{CSV_COLUMNS, MIN_CONFIGS, Measurement, SPLIT_COLUMN, Split, validate};
-use crate::kinematics::N_JOINTS;
+use super::{MIN_CONFIGS, Measurement, SPLIT_COLUMN, Split, validate};
 use crate::side::Side;
 use crate::textfile::excerpt;
 use nalgebra::Vector3;
 use std::path::Path;
 
-/// Check the header; returns whether it has the `split` column.
+/// Names of the reflector columns, in order.
+const POINT_COLUMNS: [&str; 9] = ["ax", "ay", "az", "bx", "by", "bz", "cx", "cy", "cz"];
+
+/// The joint number of a column named `q<N>` (N ≥ 1).
+fn joint_column(name: &str) -> Option<usize> {
+    name.strip_prefix('q')
+        .filter(|d| !d.is_empty() && d.bytes().all(|b| b.is_ascii_digit()) && !d.starts_with('0'))
+        .and_then(|d| d.parse().ok())
+}
+
+/// The columns of a header with `joints` joint columns (without `split`).
+pub(super) fn columns(joints: usize) -> Vec<String> {
+    let mut out = vec!["id".to_string()];
+    out.extend((1..=joints).map(|j| format!("q{j}")));
+    out.extend(POINT_COLUMNS.iter().map(|c| c.to_string()));
+    out
+}
+
+/// Check the header; returns the number of joint columns and whether it has the `split` column.
 fn check_header(
     path: &Path,
     line: usize,
     header: &csv::StringRecord,
-) -> Result<bool, DatasetError> {
+) -> Result<(usize, bool), DatasetError> {
     let err = |field: &str, message: String| DatasetError::Header {
         path: path.to_path_buf(),
         line,
         field: field.to_string(),
         message,
     };
-    let expected = format!("{},[{SPLIT_COLUMN}]", CSV_COLUMNS.join(","));
+    let expected = format!("id,q1,…,qN,{},[{SPLIT_COLUMN}]", POINT_COLUMNS.join(","));
     if header.len() == 1 {
         let only = &excerpt(header.get(0).unwrap_or(""));
         if let Some(sep) = [';', '\t', ' '].into_iter().find(|&c| only.contains(c)) {
@@ -31,47 +48,64 @@ fn check_header(
             ));
         }
     }
-    for (i, want) in CSV_COLUMNS.iter().enumerate() {
+    // The joint columns q1 … qN: as many as there are in sequence after `id`.
+    let joints = (1..header.len())
+        .take_while(|&i| header.get(i).and_then(joint_column) == Some(i))
+        .count();
+    // With no joint column at all, q1 is what is missing.
+    let wanted = columns(joints.max(1));
+    for (i, want) in wanted.iter().map(String::as_str).enumerate() {
         let Some(got) = header.get(i) else {
             return Err(err(
                 want,
                 format!("missing column `{want}`; the header must be {expected}"),
             ));
         };
-        if got != *want {
-            let got = &excerpt(got);
-            let message = if CSV_COLUMNS.contains(&got.as_str()) || got == SPLIT_COLUMN {
-                format!(
-                    "column `{got}` is in position {}, where `{want}` belongs; the header must be {expected} in this order",
-                    i + 1
-                )
-            } else {
-                format!(
-                    "unknown column `{got}` in position {}, where `{want}` belongs; the header must be {expected}",
-                    i + 1
-                )
-            };
-            return Err(err(got, message));
+        if got == want {
+            continue;
         }
+        let got = &excerpt(got);
+        let message = if joint_column(got).is_some() && i > 0 {
+            format!(
+                "column `{got}` is in position {}, where `q{}` belongs; the joint columns must be \
+                 q1, q2, … without gaps, in this order (header {expected})",
+                i + 1,
+                joints + 1
+            )
+        } else if POINT_COLUMNS.contains(&got.as_str()) || got == SPLIT_COLUMN || got == "id" {
+            format!(
+                "column `{got}` is in position {}, where `{want}` belongs; the header must be {expected} in this order",
+                i + 1
+            )
+        } else {
+            format!(
+                "unknown column `{got}` in position {}, where `{want}` belongs; the header must be {expected}",
+                i + 1
+            )
+        };
+        return Err(err(got, message));
     }
+    let n = wanted.len();
     match header.len() {
-        17 => Ok(false),
-        18 if header.get(17) == Some(SPLIT_COLUMN) => Ok(true),
-        n if n > 18 && header.get(17) == Some(SPLIT_COLUMN) => {
-            let got = &excerpt(header.get(18).unwrap_or(""));
+        len if len == n => Ok((joints, false)),
+        len if len == n + 1 && header.get(n) == Some(SPLIT_COLUMN) => Ok((joints, true)),
+        len if len > n + 1 && header.get(n) == Some(SPLIT_COLUMN) => {
+            let got = &excerpt(header.get(n + 1).unwrap_or(""));
             Err(err(
                 got,
                 format!(
-                    "unknown column `{got}` in position 19; nothing may follow `{SPLIT_COLUMN}` (header {expected})"
+                    "unknown column `{got}` in position {}; nothing may follow `{SPLIT_COLUMN}` (header {expected})",
+                    n + 2
                 ),
             ))
         }
         _ => {
-            let got = &excerpt(header.get(17).unwrap_or(""));
+            let got = &excerpt(header.get(n).unwrap_or(""));
             Err(err(
                 got,
                 format!(
-                    "unknown column `{got}` in position 18; only `{SPLIT_COLUMN}` may follow `cz` (header {expected})"
+                    "unknown column `{got}` in position {}; only `{SPLIT_COLUMN}` may follow `cz` (header {expected})",
+                    n + 1
                 ),
             ))
         }
@@ -163,45 +197,44 @@ fn csv_error(
     }
 }
 
-/// One data row (its id already checked) in mm and rad.
+/// One data row (its id already checked) in mm and rad; `names` are the header's columns.
 fn parse_row(
     path: &Path,
     line: usize,
     rec: &csv::StringRecord,
+    names: &[String],
+    joints: usize,
     has_split: bool,
     units: Units,
 ) -> Result<Measurement, DatasetError> {
     let field = |i: usize| rec.get(i).unwrap_or("");
-    let field_err = |name: &str, message: String| DatasetError::Field {
-        path: path.to_path_buf(),
-        line,
-        field: name.to_string(),
-        message,
+    let number = |col: usize| parse_number(path, line, &names[col], field(col));
+    // Absurd magnitudes are refused with the column (docs/reliability.md).
+    let plausible = |col: usize, check: fn(&str, f64) -> Result<(), String>, v: f64| {
+        check(field(col), v).map_err(|message| DatasetError::Field {
+            path: path.to_path_buf(),
+            line,
+            field: names[col].clone(),
+            message,
+        })
     };
-    let mut q_rad = [0.0; N_JOINTS];
-    for (j, q) in q_rad.iter_mut().enumerate() {
-        let col = 1 + j;
-        let text = field(col);
-        *q = units
-            .angle
-            .to_rad(parse_number(path, line, CSV_COLUMNS[col], text)?);
-        validate::joint_magnitude(text, *q)
-            .map_err(|message| field_err(CSV_COLUMNS[col], message))?;
-    }
+    let q_rad = (1..=joints)
+        .map(|col| {
+            let q = units.angle.to_rad(number(col)?);
+            plausible(col, validate::joint_magnitude, q)?;
+            Ok(q)
+        })
+        .collect::<Result<Vec<f64>, DatasetError>>()?;
     let mut tracker_points_mm = [Vector3::zeros(); 3];
     for (k, p) in tracker_points_mm.iter_mut().enumerate() {
         for c in 0..3 {
-            let col = 8 + 3 * k + c;
-            let text = field(col);
-            p[c] = units
-                .length
-                .to_mm(parse_number(path, line, CSV_COLUMNS[col], text)?);
-            validate::coordinate_magnitude(text, p[c])
-                .map_err(|message| field_err(CSV_COLUMNS[col], message))?;
+            let col = 1 + joints + 3 * k + c;
+            p[c] = units.length.to_mm(number(col)?);
+            plausible(col, validate::coordinate_magnitude, p[c])?;
         }
     }
     let split = if has_split {
-        match field(17) {
+        match field(names.len()) {
             "cal" => Split::Cal,
             "ver" => Split::Ver,
             other => {
@@ -263,13 +296,14 @@ pub(super) fn read_arm(
                 line: end_line,
                 field: "id".into(),
                 message: format!(
-                    "missing header{}; expected {},[{SPLIT_COLUMN}] after any `#` comment lines",
+                    "missing header{}; expected id,q1,…,qN,{},[{SPLIT_COLUMN}] after any `#` comment \
+                     lines",
                     if text.trim().is_empty() {
                         " (the file is empty)"
                     } else {
                         ""
                     },
-                    CSV_COLUMNS.join(",")
+                    POINT_COLUMNS.join(",")
                 ),
             });
         }
@@ -280,7 +314,8 @@ pub(super) fn read_arm(
         }
     };
     let header_line = line_at(header.position(), 1);
-    let has_split = check_header(path, header_line, &header)?;
+    let (joints, has_split) = check_header(path, header_line, &header)?;
+    let names = columns(joints);
 
     let mut out = Vec::new();
     let mut first_line_of_id: std::collections::HashMap<String, usize> = Default::default();
@@ -321,7 +356,9 @@ pub(super) fn read_arm(
             });
         }
         first_line_of_id.insert(id.to_string(), line);
-        out.push(parse_row(path, line, &rec, has_split, units)?);
+        out.push(parse_row(
+            path, line, &rec, &names, joints, has_split, units,
+        )?);
     }
     if out.len() < MIN_CONFIGS {
         return Err(DatasetError::TooFewConfigurations {

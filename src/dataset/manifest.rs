@@ -2,7 +2,7 @@
 
 use super::error::{DatasetError, line_col};
 use super::units::{AngleUnit, LengthUnit, Units};
-use super::{DATASET_FORMAT, TrackerSpec};
+use super::{ArmLinks, DATASET_FORMAT, TrackerSpec};
 use crate::side::{PerSide, Side};
 use crate::textfile::excerpt;
 use nalgebra::Vector3;
@@ -55,6 +55,14 @@ struct RawReflectors {
 struct RawArm {
     name: Option<Spanned<String>>,
     file: Option<Spanned<String>>,
+    base_link: Option<Spanned<String>>,
+    tip_link: Option<Spanned<String>>,
+}
+
+/// One `[[arms]]` entry: its CSV and, optionally, its chain in the robot description.
+pub(super) struct ManifestArm {
+    pub file: PathBuf,
+    pub links: Option<ArmLinks>,
 }
 
 /// What `dataset.toml` says, validated and in mm.
@@ -63,8 +71,8 @@ pub(super) struct Manifest {
     pub robot: Option<PathBuf>,
     pub tracker: TrackerSpec,
     pub reflectors_mm: [Vector3<f64>; 3],
-    /// CSV path of each arm.
-    pub files: PerSide<PathBuf>,
+    /// CSV path and chain links of each arm.
+    pub arms: PerSide<ManifestArm>,
 }
 
 struct ManifestCtx<'a> {
@@ -118,13 +126,13 @@ pub(super) fn parse(path: &Path, dir: &Path, text: &str) -> Result<Manifest, Dat
         Some(t) => parse_tracker(&cx, t)?,
     };
     let reflectors_mm = parse_reflectors(&cx, raw.reflectors, units.length)?;
-    let files = parse_arms(&cx, dir, raw.arms.unwrap_or_default())?;
+    let arms = parse_arms(&cx, dir, raw.arms.unwrap_or_default())?;
     Ok(Manifest {
         units,
         robot,
         tracker,
         reflectors_mm,
-        files,
+        arms,
     })
 }
 
@@ -272,7 +280,7 @@ fn parse_tracker(cx: &ManifestCtx, t: Spanned<RawTracker>) -> Result<TrackerSpec
     })
 }
 
-/// `[reflectors]`: the nominal flange coordinates `a`, `b`, `c`, converted to mm.
+/// `[reflectors]`: the nominal coordinates `a`, `b`, `c` in the tip frame, converted to mm.
 fn parse_reflectors(
     cx: &ManifestCtx,
     raw: Option<Spanned<RawReflectors>>,
@@ -282,7 +290,7 @@ fn parse_reflectors(
         return Err(cx.err(
             None,
             "reflectors",
-            "missing [reflectors] table with the nominal flange coordinates a, b, c",
+            "missing [reflectors] table with the nominal coordinates a, b, c in the tip link's frame",
         ));
     };
     let refl_line = Some(cx.line_of(refl.span()));
@@ -326,13 +334,47 @@ fn parse_reflectors(
     Ok(reflectors_mm)
 }
 
-/// `[[arms]]`: one entry per arm with its `name` (`left`/`right`) and CSV `file`.
+/// `base_link` and `tip_link` of an `[[arms]]` entry: both or neither, non-empty.
+fn parse_links(
+    cx: &ManifestCtx,
+    line: usize,
+    base: Option<Spanned<String>>,
+    tip: Option<Spanned<String>>,
+) -> Result<Option<ArmLinks>, DatasetError> {
+    let check = |v: &Spanned<String>, field: &str| {
+        if v.get_ref().trim().is_empty() {
+            Err(cx.err(Some(cx.line_of(v.span())), field, "empty link name"))
+        } else {
+            Ok(v.get_ref().trim().to_string())
+        }
+    };
+    match (base, tip) {
+        (None, None) => Ok(None),
+        (Some(b), Some(t)) => Ok(Some(ArmLinks::new(
+            check(&b, "arms.base_link")?,
+            check(&t, "arms.tip_link")?,
+        ))),
+        (Some(_), None) => Err(cx.err(
+            Some(line),
+            "arms.tip_link",
+            "missing; base_link and tip_link go together (the arm's chain from base_link to tip_link)",
+        )),
+        (None, Some(_)) => Err(cx.err(
+            Some(line),
+            "arms.base_link",
+            "missing; base_link and tip_link go together (the arm's chain from base_link to tip_link)",
+        )),
+    }
+}
+
+/// `[[arms]]`: one entry per arm with its `name` (`left`/`right`), CSV `file` and optionally its chain
+/// (`base_link`, `tip_link`).
 fn parse_arms(
     cx: &ManifestCtx,
     dir: &Path,
     arms: Vec<Spanned<RawArm>>,
-) -> Result<PerSide<PathBuf>, DatasetError> {
-    let mut files: PerSide<Option<PathBuf>> = PerSide::default();
+) -> Result<PerSide<ManifestArm>, DatasetError> {
+    let mut files: PerSide<Option<ManifestArm>> = PerSide::default();
     let mut arm_lines: PerSide<usize> = PerSide::default();
     for arm in arms {
         let line = cx.line_of(arm.span());
@@ -386,7 +428,8 @@ fn parse_arms(
         }
         let path = super::validate::data_file_in(dir, file.get_ref())
             .map_err(|message| cx.err(Some(cx.line_of(file.span())), "arms.file", message))?;
-        files[side] = Some(path);
+        let links = parse_links(cx, line, arm.base_link, arm.tip_link)?;
+        files[side] = Some(ManifestArm { file: path, links });
         arm_lines[side] = name_line;
     }
     files.try_map(|side, file| {

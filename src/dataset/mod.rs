@@ -9,7 +9,7 @@ mod units;
 mod validate;
 
 pub use crate::atomic::Overwrite;
-use crate::kinematics::N_JOINTS;
+pub use crate::robot::ArmLinks;
 use crate::side::{ConfigId, PerSide, Side};
 pub use error::DatasetError;
 use error::read_text;
@@ -69,8 +69,8 @@ impl Split {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Measurement {
     pub id: String,
-    /// Joint values in chain order, rad.
-    pub q_rad: [f64; N_JOINTS],
+    /// Joint values in chain order (the CSV's `q1 … qN`), rad.
+    pub q_rad: Vec<f64>,
     /// Measured reflector positions a, b, c in the tracker frame, mm.
     pub tracker_points_mm: [Vector3<f64>; 3],
     /// `Cal` or `Ver` (never `All`); rows without a split column are `Cal`.
@@ -101,10 +101,18 @@ impl Default for TrackerSpec {
 pub struct ArmData {
     pub side: Side,
     pub file: PathBuf,
+    /// The arm's chain in the robot description (`base_link`, `tip_link` in the manifest); `None`:
+    /// the description's default arms (the built-in robot, or the YuMi joint names).
+    pub links: Option<ArmLinks>,
     pub measurements: Vec<Measurement>,
 }
 
 impl ArmData {
+    /// Number of joint values per configuration (the CSV's joint columns; every row has as many).
+    pub fn joint_count(&self) -> usize {
+        self.measurements.first().map_or(0, |m| m.q_rad.len())
+    }
+
     pub fn select(&self, split: Split) -> Vec<&Measurement> {
         self.measurements
             .iter()
@@ -121,7 +129,7 @@ pub struct Dataset {
     /// Robot description (resolved path), or `None` for the built-in IRB 14000.
     pub robot: Option<PathBuf>,
     pub tracker: TrackerSpec,
-    /// Nominal reflector coordinates in the flange frame, mm.
+    /// Nominal reflector coordinates in the tip link's frame (the flange for the built-in robot), mm.
     pub nominal_reflectors_mm: [Vector3<f64>; 3],
     pub arms: PerSide<ArmData>,
 }
@@ -207,11 +215,11 @@ impl Dataset {
     }
 }
 
-/// Expected CSV columns, in order (`split` is optional and last).
-pub const CSV_COLUMNS: [&str; 17] = [
-    "id", "q1", "q2", "q3", "q4", "q5", "q6", "q7", "ax", "ay", "az", "bx", "by", "bz", "cx", "cy",
-    "cz",
-];
+/// The CSV columns of an arm with `joints` joints, in order (`split`, optional, comes last):
+/// `id, q1 … qN, ax, ay, az, bx, by, bz, cx, cy, cz`.
+pub fn csv_columns(joints: usize) -> Vec<String> {
+    csv::columns(joints)
+}
 /// The optional last CSV column.
 pub const SPLIT_COLUMN: &str = "split";
 
@@ -241,11 +249,12 @@ pub fn load_with_units(path: &Path) -> Result<(Dataset, Units), DatasetError> {
     let (dir, manifest_path) = resolve(path);
     let text = read_text(&manifest_path)?;
     let m = manifest::parse(&manifest_path, &dir, &text)?;
-    let arms = m.files.try_map(|side, file| {
-        let measurements = csv::read_arm(&file, side, m.units, &m.reflectors_mm)?;
+    let arms = m.arms.try_map(|side, arm| {
+        let measurements = csv::read_arm(&arm.file, side, m.units, &m.reflectors_mm)?;
         Ok::<_, DatasetError>(ArmData {
             side,
-            file,
+            file: arm.file,
+            links: arm.links,
             measurements,
         })
     })?;
@@ -269,7 +278,7 @@ mod tests {
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
 
-    fn random_arm(rng: &mut ChaCha8Rng, side: Side, n: usize) -> ArmData {
+    fn random_arm(rng: &mut ChaCha8Rng, side: Side, n: usize, n_joints: usize) -> ArmData {
         let measurements = (0..n)
             .map(|i| Measurement {
                 // Ids that need CSV quoting must survive too.
@@ -278,7 +287,7 @@ mod tests {
                     1 => "ü-2".to_string(),
                     _ => format!("{side}{i}"),
                 },
-                q_rad: std::array::from_fn(|_| rng.random_range(-3.0..3.0)),
+                q_rad: (0..n_joints).map(|_| rng.random_range(-3.0..3.0)).collect(),
                 // The nominal triangle turned and placed at random.
                 tracker_points_mm: {
                     let turn =
@@ -299,6 +308,7 @@ mod tests {
         ArmData {
             side,
             file: PathBuf::new(),
+            links: None,
             measurements,
         }
     }
@@ -315,8 +325,8 @@ mod tests {
             nominal_reflectors_mm: crate::simulate::SimOptions::default_reflectors()
                 .map(|p| p + Vector3::from_fn(|_, _| rng.random_range(-5.0..5.0))),
             arms: PerSide::new(
-                random_arm(&mut rng, Side::Left, 9),
-                random_arm(&mut rng, Side::Right, 7),
+                random_arm(&mut rng, Side::Left, 9, 7),
+                random_arm(&mut rng, Side::Right, 7, 7),
             ),
         }
     }
@@ -330,12 +340,14 @@ mod tests {
         for side in Side::BOTH {
             let (x, y) = (a.arm(side), b.arm(side));
             assert_eq!(y.side, side);
+            assert_eq!(x.links, y.links);
             assert_eq!(x.measurements.len(), y.measurements.len());
             for (m, n) in x.measurements.iter().zip(&y.measurements) {
                 assert_eq!(m.id, n.id);
                 assert_eq!(m.split, n.split);
-                for j in 0..N_JOINTS {
-                    assert!((m.q_rad[j] - n.q_rad[j]).abs() <= tol_rad);
+                assert_eq!(m.q_rad.len(), n.q_rad.len());
+                for (q, r) in m.q_rad.iter().zip(&n.q_rad) {
+                    assert!((q - r).abs() <= tol_rad);
                 }
                 for k in 0..3 {
                     assert!((m.tracker_points_mm[k] - n.tracker_points_mm[k]).amax() <= tol_mm);
@@ -367,6 +379,32 @@ mod tests {
                 assert_eq!(back.arms.right.measurements[3].line, 6);
             }
         }
+    }
+
+    #[test]
+    fn arms_of_other_joint_counts_and_their_links_round_trip() {
+        let mut d = random_dataset(11);
+        let mut rng = ChaCha8Rng::seed_from_u64(12);
+        d.arms.left = random_arm(&mut rng, Side::Left, 6, 6);
+        d.arms.right = random_arm(&mut rng, Side::Right, 5, 9);
+        d.arms.left.links = Some(ArmLinks::new("table", "left_ee_link"));
+        d.arms.right.links = Some(ArmLinks::new("right_base_link", "right tool \"x\""));
+        let dir = tempfile::tempdir().unwrap();
+        save(&d, dir.path(), Units::MM_RAD).unwrap();
+        let header = std::fs::read_to_string(dir.path().join("right.csv")).unwrap();
+        assert!(
+            header.contains("id,q1,q2,q3,q4,q5,q6,q7,q8,q9,ax,"),
+            "{header}"
+        );
+        let back = load(dir.path()).unwrap();
+        assert_close(&d, &back, 0.0, 0.0);
+        assert_eq!(back.arms.left.joint_count(), 6);
+        // Rows of different lengths are refused on save.
+        d.arms.left.measurements[1].q_rad.push(0.5);
+        assert!(matches!(
+            save_with(&d, dir.path(), Units::MM_RAD, Overwrite::Allow),
+            Err(DatasetError::Content { .. })
+        ));
     }
 
     #[test]

@@ -3,7 +3,7 @@
 use super::error::DatasetError;
 use super::units::Units;
 use super::{
-    ArmData, CSV_COLUMNS, DATASET_FORMAT, Dataset, MANIFEST_FILE, MIN_CONFIGS, SPLIT_COLUMN, Split,
+    ArmData, DATASET_FORMAT, Dataset, MANIFEST_FILE, MIN_CONFIGS, SPLIT_COLUMN, Split, csv_columns,
 };
 use crate::atomic::{Overwrite, refuse_existing, write_atomic};
 use crate::side::{PerSide, Side};
@@ -43,9 +43,15 @@ fn arm_csv(arm: &ArmData, path: &Path, units: Units) -> Result<Vec<u8>, DatasetE
         });
     }
     let mut seen = std::collections::HashSet::new();
+    let joints = arm.joint_count();
+    let order = match &arm.links {
+        None if joints == 7 => "chain order (ABB axes 1, 2, 7, 3, 4, 5, 6)".to_string(),
+        None => "chain order".to_string(),
+        Some(links) => format!("the chain order of {links}"),
+    };
     let mut bytes = format!(
-        "# {DATASET_FORMAT}: {} arm. q1..q7 in chain order (ABB axes 1, 2, 7, 3, 4, 5, 6), {}; \
-         reflectors a, b, c in the tracker frame, {}.\n",
+        "# {DATASET_FORMAT}: {} arm. q1..q{joints} in {order}, {}; reflectors a, b, c in the \
+         tracker frame, {}.\n",
         arm.side,
         units.angle.name(),
         units.length.name()
@@ -55,8 +61,8 @@ fn arm_csv(arm: &ArmData, path: &Path, units: Units) -> Result<Vec<u8>, DatasetE
         let mut w = csv::WriterBuilder::new()
             .has_headers(false)
             .from_writer(&mut bytes);
-        let mut header: Vec<&str> = CSV_COLUMNS.to_vec();
-        header.push(SPLIT_COLUMN);
+        let mut header = csv_columns(joints);
+        header.push(SPLIT_COLUMN.to_string());
         w.write_record(&header)
             .map_err(|e| content_err(e.to_string()))?;
         for m in &arm.measurements {
@@ -69,6 +75,12 @@ fn arm_csv(arm: &ArmData, path: &Path, units: Units) -> Result<Vec<u8>, DatasetE
             }
             if !seen.insert(id) {
                 return Err(content_err(format!("cannot save: duplicate id `{id}`")));
+            }
+            if m.q_rad.len() != joints {
+                return Err(content_err(format!(
+                    "cannot save configuration `{id}`: {} joint values, the arm's first configuration has {joints}",
+                    m.q_rad.len()
+                )));
             }
             check_finite(path, &format!("configuration `{id}`"), &m.q_rad)?;
             for p in &m.tracker_points_mm {
@@ -145,6 +157,13 @@ fn manifest_text(
             toml_str(side.name()),
             toml_str(&format!("{side}.csv"))
         );
+        if let Some(links) = &dataset.arms[side].links {
+            s += &format!(
+                "base_link = {}\ntip_link = {}\n",
+                toml_str(&links.base_link),
+                toml_str(&links.tip_link)
+            );
+        }
     }
     Ok(s)
 }

@@ -18,10 +18,13 @@
 //!   of pairs whose `Δo` is within 0.005 rad and 0.01 rad.
 //!
 //! Forward kinematics and the Kabsch fit are computed once per configuration; the pair loops only combine
-//! precomputed points and rotations (no allocation per pair) and run in parallel with rayon.
+//! precomputed points and rotations (no allocation per pair) and run in parallel with rayon. [`sweep`]
+//! computes the figures of both splits, every configuration's residuals and histogram samples in one
+//! pass that visits each pair once (what the workbench shows of a model).
 
 mod geometry;
 mod kabsch;
+mod sweep;
 mod tables;
 #[cfg(test)]
 mod tests;
@@ -37,6 +40,7 @@ pub use kabsch::{KabschFit, kabsch_fit, kabsch_fit_points, kabsch_rotation};
 use nalgebra::{Isometry3, Vector3};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
+pub use sweep::{PairSamples, SplitSweep, Sweep, sweep};
 pub use tables::{format_comparison, format_table};
 
 /// The metrics need at least two configurations per arm (one pair); a calibration needs more
@@ -175,6 +179,15 @@ pub enum MetricsError {
     },
     #[error("model: {field} is not finite")]
     NonFiniteModel { field: String },
+    #[error(
+        "{side} arm, configuration `{id}`: {found} joint values, the model's arm has {expected} joints"
+    )]
+    JointCount {
+        side: Side,
+        id: String,
+        found: usize,
+        expected: usize,
+    },
     #[error(
         "model: the {side} arm's reflectors t_a, t_b, t_c are (nearly) collinear, no flange rotation can be fitted"
     )]

@@ -42,7 +42,8 @@ fn random_isometry(rng: &mut ChaCha8Rng, scale_mm: f64) -> Isometry3<f64> {
 }
 
 fn perturbed_arm(rng: &mut ChaCha8Rng, size: f64) -> ArmModel {
-    let mut v = ArmModel::nominal_irb14000(nominal_reflectors()).to_vector();
+    let nominal = ArmModel::nominal_irb14000(nominal_reflectors());
+    let mut v = nominal.to_vector();
     for k in 0..N_PARAMS {
         v[k] += size
             * if param_is_angle(k) {
@@ -51,7 +52,7 @@ fn perturbed_arm(rng: &mut ChaCha8Rng, size: f64) -> ArmModel {
                 rng.random_range(-0.5..0.5)
             };
     }
-    ArmModel::from_vector(&v)
+    nominal.with_vector(&v)
 }
 
 fn random_q(rng: &mut ChaCha8Rng) -> [f64; N_JOINTS] {
@@ -81,7 +82,7 @@ fn simulate(
                 });
                 Measurement {
                     id: format!("{}{i:03}", side.name()),
-                    q_rad,
+                    q_rad: q_rad.to_vec(),
                     tracker_points_mm,
                     split: if i % 3 == 2 { Split::Ver } else { Split::Cal },
                     line: i + 2,
@@ -91,6 +92,7 @@ fn simulate(
         ArmData {
             side,
             file: PathBuf::from(format!("{}.csv", side.name())),
+            links: None,
             measurements,
         }
     };
@@ -212,7 +214,9 @@ fn base_translation_error_gives_the_expected_collaborative_error() {
     // the left base and the right base sits 300 mm along x. Every measured left-right distance is
     // 300 mm for every reflector.
     let zero_arm = ArmModel {
-        dh: [DhRow::new(0.0, 0.0, 0.0, 0.0); N_JOINTS],
+        kinematics: crate::kinematics::ArmKinematics::Dh(
+            [DhRow::new(0.0, 0.0, 0.0, 0.0); N_JOINTS],
+        ),
         reflectors_mm: nominal_reflectors(),
     };
     let truth = DualArmModel {
@@ -222,7 +226,7 @@ fn base_translation_error_gives_the_expected_collaborative_error() {
     let mut ds = simulate(&truth, &Isometry3::identity(), [3, 4], 0.0, 5);
     for (arm, offset) in [(&mut ds.arms.left, 0.0), (&mut ds.arms.right, 300.0)] {
         for m in &mut arm.measurements {
-            m.q_rad = [0.0; N_JOINTS];
+            m.q_rad = vec![0.0; N_JOINTS];
             m.tracker_points_mm = nominal_reflectors().map(|t| t + Vector3::x() * offset);
         }
     }
@@ -541,9 +545,24 @@ fn bad_input_is_an_error_not_a_panic() {
     ));
 
     let mut m = truth.clone();
-    m.arms.right.dh[3].alpha_rad = f64::NAN;
+    m.arms.right.dh_mut().unwrap()[3].alpha_rad = f64::NAN;
     let e = evaluate(&ds, &m, Split::All).unwrap_err();
     assert!(e.to_string().contains("alpha4"), "{e}");
+    // A model of another joint count is refused, naming the configuration.
+    let mut short = ds.clone();
+    short.arms.left.measurements[1].q_rad.pop();
+    let e = evaluate(&short, &truth, Split::All).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            MetricsError::JointCount {
+                found: 6,
+                expected: 7,
+                ..
+            }
+        ),
+        "{e}"
+    );
 
     let mut m = truth.clone();
     m.left_base_from_right_base.translation.vector.x = f64::NAN;
@@ -561,8 +580,8 @@ fn bad_input_is_an_error_not_a_panic() {
     ));
 
     let mut m = truth.clone();
-    m.arms.left.dh[0].d_mm = 1e308;
-    m.arms.left.dh[2].d_mm = 1e308;
+    m.arms.left.dh_mut().unwrap()[0].d_mm = 1e308;
+    m.arms.left.dh_mut().unwrap()[2].d_mm = 1e308;
     assert!(evaluate(&ds, &m, Split::All).is_err());
 }
 
@@ -646,4 +665,97 @@ fn tables_show_the_figures() {
     ] {
         assert!(c.contains(s), "{s} missing in\n{c}");
     }
+}
+
+/// One pass over every pair gives what `evaluate` of each split, `per_config` over all configurations and
+/// the pair lists give (the verification configurations are interleaved with the calibration ones).
+#[test]
+fn sweep_agrees_with_evaluate_per_config_and_the_pair_lists() {
+    let mut rng = ChaCha8Rng::seed_from_u64(21);
+    let truth = true_model(&mut rng);
+    let ds = simulate(
+        &truth,
+        &random_isometry(&mut rng, 2000.0),
+        [14, 11],
+        0.3,
+        22,
+    );
+    let mut model = truth.clone();
+    model.arms.right = perturbed_arm(&mut rng, 0.3);
+    let s = sweep(&ds, &model).unwrap();
+    for split in [Split::Cal, Split::Ver] {
+        let expected = evaluate(&ds, &model, split).unwrap();
+        let got = s.split(split).expect("both splits have pairs");
+        assert_reports_close(&got.report, &expected, 1e-12);
+        for kind in [
+            PairKind::Relative(Side::Left),
+            PairKind::Relative(Side::Right),
+            PairKind::Collaborative,
+        ] {
+            let pairs = pairs(&ds, &model, split, kind).unwrap();
+            let sorted = |mut v: Vec<f32>| {
+                v.sort_by(f32::total_cmp);
+                v
+            };
+            let samples = got.samples(kind);
+            assert_eq!(
+                sorted(samples.pos_mm.clone()),
+                sorted(
+                    pairs
+                        .iter()
+                        .flat_map(|p| p.pos_error_mm.map(|d| d as f32))
+                        .collect()
+                ),
+                "{split:?} {kind:?} Δd"
+            );
+            let ori: Vec<f32> = pairs.iter().map(|p| p.ori_error_rad as f32).collect();
+            let (a, b) = (sorted(samples.ori_rad.clone()), sorted(ori));
+            assert_eq!(a.len(), b.len());
+            for (x, y) in a.iter().zip(&b) {
+                // Δo of (i, j) and (j, i) agree to rounding.
+                assert!((x - y).abs() <= 1e-6 * y.abs().max(1e-3), "{x} vs {y}");
+            }
+        }
+    }
+    assert!(s.split(Split::All).is_none());
+    let rows = per_config(&ds, &model, Split::All).unwrap();
+    assert_eq!(rows.len(), s.per_config.len());
+    for (a, b) in rows.iter().zip(&s.per_config) {
+        assert_eq!((a.config, &a.id), (b.config, &b.id));
+        let close = |x: f64, y: f64| (x - y).abs() <= 1e-12 * x.abs().max(1e-9);
+        for (x, y) in [
+            (a.relative_pos_max_mm, b.relative_pos_max_mm),
+            (a.relative_ori_rms_rad, b.relative_ori_rms_rad),
+            (a.relative_ori_max_rad, b.relative_ori_max_rad),
+            (a.collaborative_pos_max_mm, b.collaborative_pos_max_mm),
+            (a.collaborative_ori_rms_rad, b.collaborative_ori_rms_rad),
+            (a.collaborative_ori_max_rad, b.collaborative_ori_max_rad),
+            (a.rigidity_mm, b.rigidity_mm),
+            (a.fit_rms_mm, b.fit_rms_mm),
+        ] {
+            assert!(close(x, y), "{}: {x} vs {y}", a.id);
+        }
+    }
+}
+
+/// A split with fewer than two configurations on an arm has no figures; the other split still has.
+#[test]
+fn sweep_without_verification_configurations() {
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    let truth = true_model(&mut rng);
+    let mut ds = simulate(&truth, &Isometry3::identity(), [6, 7], 0.0, 6);
+    for (_, arm) in ds.arms.iter_mut() {
+        for m in &mut arm.measurements {
+            m.split = Split::Cal;
+        }
+    }
+    let s = sweep(&ds, &truth).unwrap();
+    assert!(s.ver.is_none());
+    let cal = s.cal.as_ref().unwrap();
+    assert_eq!(cal.report.collaborative.n_pairs, 42);
+    assert_eq!(cal.samples(PairKind::Collaborative).ori_rad.len(), 42);
+    assert_eq!(
+        cal.samples(PairKind::Relative(Side::Right)).pos_mm.len(),
+        3 * 21
+    );
 }

@@ -83,11 +83,7 @@ fn points(
         .arm(side)
         .measurements
         .iter()
-        .map(|m| {
-            let q = map(&m.q_rad);
-            let q: [f64; crate::kinematics::N_JOINTS] = std::array::from_fn(|j| q[j]);
-            arm.reflector_fk(&q).points_mm
-        })
+        .map(|m| arm.reflector_fk(&map(&m.q_rad)).points_mm)
         .collect()
 }
 
@@ -117,10 +113,14 @@ pub fn nominal_findings(dataset: &Dataset, nominal: &DualArmModel) -> Vec<Findin
                     "the joint columns look like ABB axis order 1–7; q1..q7 are in chain order (ABB \
                      axes 1, 2, 7, 3, 4, 5, 6)",
                     Box::new(|q: &[f64]| {
-                        crate::kinematics::ABB_AXIS_OF_CHAIN
-                            .iter()
-                            .map(|&a| q[a - 1])
-                            .collect()
+                        if q.len() == crate::kinematics::ABB_AXIS_OF_CHAIN.len() {
+                            crate::kinematics::ABB_AXIS_OF_CHAIN
+                                .iter()
+                                .map(|&a| q[a - 1])
+                                .collect()
+                        } else {
+                            q.to_vec()
+                        }
                     }),
                 ),
                 (

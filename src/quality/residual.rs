@@ -282,7 +282,7 @@ fn explain(
     let nq = m.q_rad.len();
     for a in 0..nq {
         for b in a + 1..nq {
-            let mut q = m.q_rad;
+            let mut q = m.q_rad.clone();
             q.swap(a, b);
             let p = arm.reflector_fk(&q).points_mm;
             let e = fit.displacement(&m.tracker_points_mm, &p, Some(i));

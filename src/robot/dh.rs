@@ -1,9 +1,11 @@
 //! The IRB 14000's naming scheme and the DH reading of its description: joint names, the DH base
 //! frame of each arm, and the DH table read off the joint origins.
 
-use super::tree::{KinJoint, Kinematics};
 use super::{RobotDescription, RobotError, isometry_from_urdf_pose};
-use crate::kinematics::{ArmModel, DhRow, DualArmModel, IRB14000_NOMINAL_DH, N_JOINTS};
+use crate::kinematics::{
+    ArmKinematics, ArmModel, DhRow, DualArmModel, IRB14000_NOMINAL_DH, N_JOINTS,
+};
+
 use crate::side::{PerSide, Side};
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 
@@ -78,41 +80,26 @@ pub fn dh_row_from_origin(origin: &Isometry3<f64>) -> Option<DhRow> {
     (dt < 1e-6 && dr < 1e-9).then_some(row)
 }
 
-/// DH base frames: each arm's joint-1 frame (at zero) · Tz(−66) · Rz(π), in the body frame.
-pub(super) fn dh_base_frames(
-    kin: &Kinematics,
-    arm_joints: &PerSide<[usize; N_JOINTS]>,
-) -> PerSide<Isometry3<f64>> {
-    let zero = [0.0; N_JOINTS];
-    let poses = kin.body_from_links(&zero, &zero);
-    arm_joints.map(|_, idx| {
-        let j1: &KinJoint = &kin.joints[idx[0]];
-        poses[j1.parent] * j1.parent_from_joint * joint1_from_dh_base()
-    })
-}
-
 impl RobotDescription {
-    /// The DH base frame (frame 0) of `side` in the body frame, mm.
+    /// The DH base frame (frame 0) of `side` in the body frame, mm: for the built-in robot its model
+    /// base; for a description in the YuMi naming scheme `yumi_joint_1_x`'s frame (at zero) ·
+    /// Tz(−66 mm) · Rz(π); otherwise the arm's model base ([`RobotDescription::body_from_arm_base`]).
     pub fn body_from_dh_base(&self, side: Side) -> Isometry3<f64> {
-        self.kin.body_from_dh_base[side]
-    }
-
-    /// The right arm's DH base frame in the left arm's DH base frame, as the URDF places them.
-    pub fn nominal_left_base_from_right_base(&self) -> Isometry3<f64> {
-        self.body_from_dh_base(Side::Left).inverse() * self.body_from_dh_base(Side::Right)
-    }
-
-    /// The nominal dual-arm model: Table 3 for both arms, the given nominal reflectors, and the
-    /// base transform derived from this URDF.
-    pub fn nominal_model(&self, reflectors_mm: [Vector3<f64>; 3]) -> DualArmModel {
-        let arm = ArmModel {
-            dh: IRB14000_NOMINAL_DH,
-            reflectors_mm,
-        };
-        DualArmModel {
-            arms: PerSide::new(arm.clone(), arm),
-            left_base_from_right_base: self.nominal_left_base_from_right_base(),
+        if self.is_builtin() {
+            return self.body_from_arm_base(side);
         }
+        let name = arm_joint_name(side, 0);
+        let Some(j1) = self.urdf.joints.iter().find(|j| j.name == name) else {
+            return self.body_from_arm_base(side);
+        };
+        let poses = self.kin.body_from_links(&[], &[]);
+        let parent = self
+            .kin
+            .link_names
+            .iter()
+            .position(|n| *n == j1.parent.link)
+            .map_or_else(Isometry3::identity, |i| poses[i]);
+        parent * isometry_from_urdf_pose(&j1.origin) * joint1_from_dh_base()
     }
 
     /// The dual-arm model this URDF encodes: DH rows read off the arm joints' origins (the inverse
@@ -124,8 +111,7 @@ impl RobotDescription {
             .source
             .as_ref()
             .map_or_else(|| "<string>".to_string(), |p| p.display().to_string());
-        let zero = [0.0; N_JOINTS];
-        let poses = self.kin.body_from_links(&zero, &zero);
+        let poses = self.kin.body_from_links(&[], &[]);
         let link_pose = |name: &str| {
             self.kin
                 .link_names
@@ -135,7 +121,7 @@ impl RobotDescription {
                 .map(|i| poses[i])
         };
         let arms = PerSide::try_from_fn(|side| {
-            let names = self.arm_joint_names(side);
+            let names: Vec<String> = (0..N_JOINTS).map(|k| arm_joint_name(side, k)).collect();
             let bad = |joint: &str, problem: &str| RobotError::BadJoint {
                 file: file.clone(),
                 line: None,
@@ -166,7 +152,8 @@ impl RobotDescription {
                 dh[k] = dh_row_from_origin(&origin)
                     .ok_or_else(|| bad(&names[k + 1], "origin is not of DH form Rz Tz Tx Rx"))?;
             }
-            let link7 = poses[self.kin.arm_links[side][N_JOINTS - 1]];
+            let link7 = link_pose(&arm_link_name(side, N_JOINTS))
+                .ok_or_else(|| bad(&names[N_JOINTS - 1], "its child link_7 is missing"))?;
             let flange = poses[self.kin.flange[side]];
             dh[N_JOINTS - 1] =
                 dh_row_from_origin(&(link7.inverse() * flange)).ok_or_else(|| {
@@ -182,13 +169,14 @@ impl RobotDescription {
                 }
             }
             Ok(ArmModel {
-                dh,
+                kinematics: ArmKinematics::Dh(dh),
                 reflectors_mm: reflectors,
             })
         })?;
+        let base = PerSide::from_fn(|side| self.body_from_dh_base(side));
         Ok(DualArmModel {
             arms,
-            left_base_from_right_base: self.nominal_left_base_from_right_base(),
+            left_base_from_right_base: base.left.inverse() * base.right,
         })
     }
 }

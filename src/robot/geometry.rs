@@ -1,64 +1,9 @@
 //! Link geometry: primitives and meshes (resolved here, never by shelling out to ROS), with colours.
 
 use super::tree::{Kinematics, LocalShape};
-use super::{PackageMap, ShapeKind, finite_pose, isometry_from_urdf_pose};
+use super::{ShapeKind, finite_pose, isometry_from_urdf_pose};
+use crate::meshes::MeshResolver;
 use nalgebra::Vector3;
-use std::path::{Path, PathBuf};
-
-/// Where a URDF's mesh paths are resolved from.
-pub(super) struct MeshResolver<'a> {
-    pub(super) urdf_dir: Option<PathBuf>,
-    pub(super) packages: &'a PackageMap,
-    pub(super) ros_package_path: Vec<PathBuf>,
-}
-
-impl MeshResolver<'_> {
-    fn resolve(&self, filename: &str) -> Result<PathBuf, String> {
-        if let Some(rest) = filename.strip_prefix("package://") {
-            let (pkg, rel) = rest.split_once('/').unwrap_or((rest, ""));
-            let mut candidates = Vec::new();
-            if let Some(dir) = self.packages.get(pkg) {
-                candidates.push(dir.join(rel));
-            }
-            for dir in &self.ros_package_path {
-                candidates.push(dir.join(pkg).join(rel));
-                if dir.file_name().is_some_and(|n| n == pkg) {
-                    candidates.push(dir.join(rel));
-                }
-            }
-            if let Some(dir) = &self.urdf_dir {
-                for anc in dir.ancestors() {
-                    if anc.file_name().is_some_and(|n| n == pkg) {
-                        candidates.push(anc.join(rel));
-                    }
-                    candidates.push(anc.join(pkg).join(rel));
-                }
-            }
-            return candidates.into_iter().find(|p| p.is_file()).ok_or_else(|| {
-                format!(
-                    "mesh `{filename}` not found (looked for package `{pkg}` in the package map, \
-                     ROS_PACKAGE_PATH and the URDF directory's ancestors)"
-                )
-            });
-        }
-        let path = if let Some(abs) = filename.strip_prefix("file://") {
-            PathBuf::from(abs)
-        } else if filename.contains("://") {
-            return Err(format!("mesh `{filename}`: unsupported URL scheme"));
-        } else {
-            let p = Path::new(filename);
-            match (&self.urdf_dir, p.is_absolute()) {
-                (Some(dir), false) => dir.join(p),
-                _ => p.to_path_buf(),
-            }
-        };
-        if path.is_file() {
-            Ok(path)
-        } else {
-            Err(format!("mesh `{filename}` not found at {}", path.display()))
-        }
-    }
-}
 
 const DEFAULT_VISUAL_RGBA: [f32; 4] = [0.72, 0.73, 0.75, 1.0];
 const COLLISION_RGBA: [f32; 4] = [0.95, 0.45, 0.15, 0.5];
@@ -67,7 +12,7 @@ const COLLISION_RGBA: [f32; 4] = [0.95, 0.45, 0.15, 0.5];
 fn compile_geometry(
     geometry: &urdf_rs::Geometry,
     link: &str,
-    resolver: &MeshResolver<'_>,
+    resolver: &MeshResolver,
     warnings: &mut Vec<String>,
 ) -> Option<ShapeKind> {
     let ok = |v: f64| v.is_finite() && v > 0.0;
@@ -158,7 +103,7 @@ fn material_rgba(material: Option<&urdf_rs::Material>, robot: &urdf_rs::Robot) -
 /// The visual and collision shapes of every link, in their link's frame.
 pub(super) fn compile_shapes(
     urdf: &urdf_rs::Robot,
-    resolver: &MeshResolver<'_>,
+    resolver: &MeshResolver,
     kin: &mut Kinematics,
     warnings: &mut Vec<String>,
 ) {

@@ -1,7 +1,7 @@
 //! Tests of the robot description.
 
 use super::*;
-use crate::kinematics::{ArmModel, rotation_angle_rad};
+use crate::kinematics::{ArmModel, N_JOINTS, rotation_angle_rad};
 
 #[test]
 fn builtin_loads_without_warnings() {
@@ -73,4 +73,19 @@ fn broken_chain_is_reported_with_line() {
         }
         other => panic!("unexpected {other}"),
     }
+}
+
+#[test]
+fn dataset_links_without_a_robot_must_be_the_builtin_arms() {
+    let example = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/datasets/example");
+    let mut ds = crate::dataset::load(&example).unwrap();
+    assert!(RobotDescription::for_dataset(&ds).unwrap().is_builtin());
+    ds.arms.left.links = Some(ArmLinks::new("yumi_body", "yumi_flange_l"));
+    assert!(RobotDescription::for_dataset(&ds).is_ok());
+    ds.arms.left.links = Some(ArmLinks::new("yumi_body", "yumi_link_7_l"));
+    let err = RobotDescription::for_dataset(&ds).unwrap_err().to_string();
+    assert!(
+        err.contains("yumi_link_7_l") && err.contains("robot"),
+        "{err}"
+    );
 }

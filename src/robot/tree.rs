@@ -1,10 +1,13 @@
-//! The URDF compiled into a kinematic tree: joints in topological order, the arms' joints, links
-//! and flanges, and each link's owner.
+//! The URDF compiled into a kinematic tree: joints in topological order, the arms' joints and tips,
+//! the body link, each arm's model base frame and each link's owner.
 
-use super::dh::{arm_joint_name, dh_base_frames, flange_link_name};
-use super::geometry::{MeshResolver, compile_shapes};
-use super::{Owner, RobotError, ShapeKind, finite_pose, isometry_from_urdf_pose, line_of};
-use crate::kinematics::N_JOINTS;
+use super::arms::ArmSpec;
+use super::dh::joint1_from_dh_base;
+use super::geometry::compile_shapes;
+use super::{
+    Messages, ModelForm, Owner, RobotError, ShapeKind, finite_pose, isometry_from_urdf_pose,
+};
+use crate::meshes::MeshResolver;
 use crate::side::{PerSide, Side};
 use nalgebra::{Isometry3, Translation3, Unit, UnitQuaternion, Vector3};
 use std::collections::HashMap;
@@ -32,7 +35,7 @@ pub(crate) struct KinJoint {
     /// The joint frame in the parent link's frame (the URDF `<origin>`), mm.
     pub(crate) parent_from_joint: Isometry3<f64>,
     pub(crate) motion: Motion,
-    /// (arm, chain position) of the seven arm joints.
+    /// (arm, chain position) of the arms' movable joints.
     pub(crate) arm: Option<(Side, usize)>,
 }
 
@@ -42,32 +45,26 @@ pub(crate) struct Kinematics {
     pub(crate) link_names: Vec<String>,
     /// Joints in topological order (a joint's parent link is placed before it is used).
     pub(crate) joints: Vec<KinJoint>,
-    /// Index of the body link (parent of `yumi_joint_1_l`).
+    /// Index of the body link: the deepest link above both arms' base links.
     pub(crate) body: usize,
     /// Links connected to the body link's tree.
     pub(crate) reachable: Vec<bool>,
     pub(crate) owner: Vec<Owner>,
     /// For every link, the index in `joints` of its parent joint.
     parent_joint: Vec<Option<usize>>,
-    /// Link index of each arm's flange (`yumi_flange_x`, or link_7 as a fallback).
+    /// Link index of each arm's tip link.
     pub(crate) flange: PerSide<usize>,
-    /// Link indices of link_1..link_7 of each arm.
-    pub(crate) arm_links: PerSide<[usize; N_JOINTS]>,
-    pub(crate) body_from_dh_base: PerSide<Isometry3<f64>>,
+    /// Each arm's model base frame (DH frame 0, or the base link) in the body frame.
+    pub(crate) body_from_arm_base: PerSide<Isometry3<f64>>,
     pub(crate) visual: Vec<LocalShape>,
     pub(crate) collision: Vec<LocalShape>,
 }
 
 impl Kinematics {
-    fn motion(
-        &self,
-        joint: &KinJoint,
-        q_left: &[f64; N_JOINTS],
-        q_right: &[f64; N_JOINTS],
-    ) -> Isometry3<f64> {
+    fn motion(&self, joint: &KinJoint, q_left: &[f64], q_right: &[f64]) -> Isometry3<f64> {
         let q = match joint.arm {
-            Some((Side::Left, k)) => q_left[k],
-            Some((Side::Right, k)) => q_right[k],
+            Some((Side::Left, k)) => q_left.get(k).copied().unwrap_or(0.0),
+            Some((Side::Right, k)) => q_right.get(k).copied().unwrap_or(0.0),
             None => 0.0,
         };
         motion_transform(&joint.motion, q)
@@ -75,11 +72,7 @@ impl Kinematics {
 
     /// Every link's pose in the body frame (indexed like `link_names`; unreachable links get the
     /// pose relative to their own root, and are filtered by callers).
-    pub(crate) fn body_from_links(
-        &self,
-        q_left: &[f64; N_JOINTS],
-        q_right: &[f64; N_JOINTS],
-    ) -> Vec<Isometry3<f64>> {
+    pub(crate) fn body_from_links(&self, q_left: &[f64], q_right: &[f64]) -> Vec<Isometry3<f64>> {
         let mut poses = vec![Isometry3::identity(); self.link_names.len()];
         for j in &self.joints {
             poses[j.child] =
@@ -114,14 +107,8 @@ impl Kinematics {
     }
 
     /// Pose of one link in the body frame, with `side` at `q` and everything else at zero.
-    pub(crate) fn body_from_link(
-        &self,
-        link: usize,
-        side: Side,
-        q: &[f64; N_JOINTS],
-    ) -> Isometry3<f64> {
-        let zero = [0.0; N_JOINTS];
-        let mut qs = PerSide::new(&zero, &zero);
+    pub(crate) fn body_from_link(&self, link: usize, side: Side, q: &[f64]) -> Isometry3<f64> {
+        let mut qs: PerSide<&[f64]> = PerSide::new(&[], &[]);
         qs[side] = q;
         let (ql, qr) = (qs.left, qs.right);
         // Walk up to the root, then compose downwards.
@@ -135,6 +122,33 @@ impl Kinematics {
             acc
         };
         chain_from_root(self.body).inverse() * chain_from_root(link)
+    }
+
+    /// The link called `name`, if it hangs below `link` through fixed joints only.
+    pub(crate) fn fixed_below(&self, link: usize, name: &str) -> Option<usize> {
+        let found = self.link_names.iter().position(|n| n == name)?;
+        let mut l = found;
+        while let Some(ji) = self.parent_joint[l] {
+            let j = &self.joints[ji];
+            if !matches!(j.motion, Motion::Fixed) {
+                return None;
+            }
+            if j.parent == link {
+                return Some(found);
+            }
+            l = j.parent;
+        }
+        None
+    }
+
+    /// The links from `link` up to its root, `link` first.
+    fn ancestors(&self, mut link: usize) -> Vec<usize> {
+        let mut out = vec![link];
+        while let Some(ji) = self.parent_joint[link] {
+            link = self.joints[ji].parent;
+            out.push(link);
+        }
+        out
     }
 }
 
@@ -153,115 +167,148 @@ pub(crate) fn motion_transform(motion: &Motion, q: f64) -> Isometry3<f64> {
     }
 }
 
-/// Names and line lookups for the messages of one URDF file.
-struct Messages<'a> {
-    text: &'a str,
-    file: &'a str,
+/// The URDF's links and joints, checked (no duplicate, undefined link, non-finite origin, bad axis,
+/// second parent or loop) and in topological order, before the arms are known.
+pub(crate) struct Tree {
+    link_names: Vec<String>,
+    link_index: HashMap<String, usize>,
+    joints: Vec<KinJoint>,
+    /// The joints' names, in `joints` order.
+    joint_names: Vec<String>,
+    parent_joint: Vec<Option<usize>>,
+    root_of: Vec<usize>,
 }
 
-impl Messages<'_> {
-    fn structure(&self, message: String) -> RobotError {
-        RobotError::Structure {
-            file: self.file.to_string(),
-            message,
-        }
-    }
-
-    fn bad_joint(&self, joint: &str, problem: String) -> RobotError {
-        RobotError::BadJoint {
-            file: self.file.to_string(),
-            line: line_of(self.text, &format!("name=\"{joint}\"")),
-            joint: joint.to_string(),
-            problem,
-        }
-    }
-}
-
-/// Compile a parsed URDF into the kinematic tree with its arms, flanges, DH base frames and shapes.
-pub(crate) fn compile(
+/// Check and order the links and joints of a parsed URDF.
+pub(crate) fn parse_tree(
     urdf: &urdf_rs::Robot,
-    text: &str,
-    file: &str,
-    resolver: &MeshResolver<'_>,
+    msg: &Messages,
     warnings: &mut Vec<String>,
-) -> Result<Kinematics, RobotError> {
-    let msg = Messages { text, file };
-    // The seven joints of each arm must exist.
-    let missing: Vec<String> = Side::BOTH
-        .iter()
-        .flat_map(|&s| (0..N_JOINTS).map(move |k| arm_joint_name(s, k)))
-        .filter(|n| !urdf.joints.iter().any(|j| &j.name == n))
-        .collect();
-    if !missing.is_empty() {
-        return Err(RobotError::MissingJoints {
-            file: file.to_string(),
-            missing,
-        });
-    }
+) -> Result<Tree, RobotError> {
     let link_names: Vec<String> = urdf.links.iter().map(|l| l.name.clone()).collect();
-    let mut link_index: HashMap<&str, usize> = HashMap::new();
+    let mut link_index: HashMap<String, usize> = HashMap::new();
     for (i, n) in link_names.iter().enumerate() {
-        if link_index.insert(n.as_str(), i).is_some() {
+        if link_index.insert(n.clone(), i).is_some() {
             return Err(msg.structure(format!("link `{n}` is defined twice")));
         }
     }
-    let mut raw = parse_joints(urdf, &link_index, &msg, warnings)?;
-    let arm_joints_raw = mark_arm_joints(urdf, &mut raw, &link_names, &msg, warnings)?;
-    let tree = order_tree(urdf, raw, &link_names, &msg)?;
-    let arm_joints = arm_joints_raw.map(|_, idx| idx.map(|k| tree.new_index[k]));
-    let joints = tree.joints;
-    let body = joints[arm_joints.left[0]].parent;
-    let reachable: Vec<bool> = tree
+    let raw = parse_joints(urdf, &link_index, msg, warnings)?;
+    let ordered = order_tree(urdf, raw, &link_names, msg)?;
+    Ok(Tree {
+        link_names,
+        link_index,
+        joints: ordered.joints,
+        joint_names: ordered.names,
+        parent_joint: ordered.parent_joint,
+        root_of: ordered.root_of,
+    })
+}
+
+/// Compile the tree with its arms into the kinematics: the arms' joints, tips, the body link, the
+/// model base frames and the shapes.
+pub(crate) fn compile(
+    urdf: &urdf_rs::Robot,
+    mut tree: Tree,
+    arms: &PerSide<ArmSpec>,
+    form: ModelForm,
+    msg: &Messages,
+    resolver: &MeshResolver,
+    warnings: &mut Vec<String>,
+) -> Result<Kinematics, RobotError> {
+    // Each arm's movable joints with their chain position.
+    for (side, spec) in arms.iter() {
+        for (k, joint) in spec.chain.joints.iter().enumerate() {
+            if let Some(ji) = tree.joint_names.iter().position(|n| *n == joint.name) {
+                tree.joints[ji].arm = Some((side, k));
+            }
+        }
+    }
+    let index = |name: &str| tree.link_index[name];
+    let flange = arms.as_ref().map(|_, a| index(&a.links.tip_link));
+    let bases = arms.as_ref().map(|_, a| index(&a.links.base_link));
+    let mut kin = Kinematics {
+        link_names: tree.link_names,
+        joints: tree.joints,
+        body: 0,
+        reachable: Vec::new(),
+        owner: Vec::new(),
+        parent_joint: tree.parent_joint,
+        flange,
+        body_from_arm_base: PerSide::new(Isometry3::identity(), Isometry3::identity()),
+        visual: Vec::new(),
+        collision: Vec::new(),
+    };
+    // The body: the deepest common ancestor of both base links.
+    let right_up = kin.ancestors(bases.right);
+    kin.body = kin
+        .ancestors(bases.left)
+        .into_iter()
+        .find(|l| right_up.contains(l))
+        .ok_or_else(|| {
+            msg.structure(format!(
+                "the arms' base links `{}` and `{}` are not connected",
+                arms.left.links.base_link, arms.right.links.base_link
+            ))
+        })?;
+    kin.reachable = tree
         .root_of
         .iter()
-        .map(|&r| r == tree.root_of[body])
+        .map(|&r| r == tree.root_of[kin.body])
         .collect();
-    let unreachable: Vec<&str> = (0..link_names.len())
-        .filter(|&l| !reachable[l])
-        .map(|l| link_names[l].as_str())
+    let unreachable: Vec<&str> = (0..kin.link_names.len())
+        .filter(|&l| !kin.reachable[l])
+        .map(|l| kin.link_names[l].as_str())
         .collect();
     if !unreachable.is_empty() {
         warnings.push(format!(
             "link(s) {} are not connected to `{}` and are ignored",
             unreachable.join(", "),
-            link_names[body]
+            kin.link_names[kin.body]
         ));
     }
-    let owner = owners(&joints, link_names.len(), body, &arm_joints, &msg)?;
-    let arm_links = arm_joints.map(|_, idx| idx.map(|k| joints[k].child));
-    let flange = PerSide::from_fn(|side| {
-        find_flange(
-            side,
-            arm_links[side][N_JOINTS - 1],
-            &joints,
-            &tree.parent_joint,
-            &link_index,
-            &link_names,
-            warnings,
-        )
-    });
-    let mut kin = Kinematics {
-        link_names,
-        joints,
-        body,
-        reachable,
-        owner,
-        parent_joint: tree.parent_joint,
-        flange,
-        arm_links,
-        body_from_dh_base: PerSide::new(Isometry3::identity(), Isometry3::identity()),
-        visual: Vec::new(),
-        collision: Vec::new(),
+    for side in Side::BOTH {
+        // Movable joints between the body and a base link are held at zero.
+        for &l in kin
+            .ancestors(bases[side])
+            .iter()
+            .take_while(|&&l| l != kin.body)
+        {
+            if let Some(ji) = kin.parent_joint[l]
+                && !matches!(kin.joints[ji].motion, Motion::Fixed)
+            {
+                warnings.push(format!(
+                    "a movable joint above the {side} arm's base link `{}` (to `{}`) is held at zero",
+                    arms[side].links.base_link, kin.link_names[l]
+                ));
+            }
+        }
+    }
+    kin.owner = owners(&kin);
+    kin.body_from_arm_base = match form {
+        ModelForm::Chain => bases.map(|side, b| kin.body_from_link(b, side, &[])),
+        ModelForm::Dh => dh_base_frames(&kin, arms),
     };
-    kin.body_from_dh_base = dh_base_frames(&kin, &arm_joints);
     compile_shapes(urdf, resolver, &mut kin, warnings);
     Ok(kin)
+}
+
+/// DH base frames: each arm's joint-1 frame (at zero) · Tz(−66) · Rz(π), in the body frame.
+fn dh_base_frames(kin: &Kinematics, arms: &PerSide<ArmSpec>) -> PerSide<Isometry3<f64>> {
+    let poses = kin.body_from_links(&[], &[]);
+    arms.as_ref().map(|side, _| {
+        let j1 = kin
+            .joints
+            .iter()
+            .find(|j| j.arm == Some((side, 0)))
+            .expect("every arm has a first movable joint");
+        poses[j1.parent] * j1.parent_from_joint * joint1_from_dh_base()
+    })
 }
 
 /// Every joint of the file, in file order, with its links, origin and motion.
 fn parse_joints(
     urdf: &urdf_rs::Robot,
-    link_index: &HashMap<&str, usize>,
+    link_index: &HashMap<String, usize>,
     msg: &Messages,
     warnings: &mut Vec<String>,
 ) -> Result<Vec<KinJoint>, RobotError> {
@@ -318,71 +365,15 @@ fn parse_joints(
     Ok(raw)
 }
 
-/// Mark the seven joints of each arm (revolute, chained, ideally about +z) and return their indices
-/// in `raw`, in chain order.
-fn mark_arm_joints(
-    urdf: &urdf_rs::Robot,
-    raw: &mut [KinJoint],
-    link_names: &[String],
-    msg: &Messages,
-    warnings: &mut Vec<String>,
-) -> Result<PerSide<[usize; N_JOINTS]>, RobotError> {
-    let joint_pos = |name: &str| urdf.joints.iter().position(|j| j.name == name);
-    let mut arm_joint_idx = PerSide::new([0usize; N_JOINTS], [0usize; N_JOINTS]);
-    for side in Side::BOTH {
-        for k in 0..N_JOINTS {
-            let name = arm_joint_name(side, k);
-            let Some(ji) = joint_pos(&name) else {
-                return Err(msg.bad_joint(&name, "missing".into()));
-            };
-            let j = &urdf.joints[ji];
-            if !matches!(
-                j.joint_type,
-                urdf_rs::JointType::Revolute | urdf_rs::JointType::Continuous
-            ) {
-                return Err(msg.bad_joint(
-                    &name,
-                    format!("type is {:?}, expected revolute", j.joint_type),
-                ));
-            }
-            if let Motion::Revolute(axis) = &raw[ji].motion
-                && (axis.into_inner() - Vector3::z()).norm() > 1e-9
-            {
-                warnings.push(format!(
-                    "joint `{name}` turns about {:?}, not 0 0 1: the DH correspondence assumes +z",
-                    j.axis.xyz.0
-                ));
-            }
-            if k > 0 {
-                let prev = &raw[arm_joint_idx[side][k - 1]];
-                if raw[ji].parent != prev.child {
-                    return Err(msg.bad_joint(
-                        &name,
-                        format!(
-                            "parent link is `{}`, expected `{}` (the child of `{}`)",
-                            j.parent.link,
-                            link_names[prev.child],
-                            arm_joint_name(side, k - 1)
-                        ),
-                    ));
-                }
-            }
-            raw[ji].arm = Some((side, k));
-            arm_joint_idx[side][k] = ji;
-        }
-    }
-    Ok(arm_joint_idx)
-}
-
 /// The joints in topological order (from the roots down) and the tree's bookkeeping.
 struct OrderedTree {
     joints: Vec<KinJoint>,
+    /// The joints' names, in `joints` order.
+    names: Vec<String>,
     /// For every link, the index in `joints` of its parent joint.
     parent_joint: Vec<Option<usize>>,
     /// For every link, the root link of its tree.
     root_of: Vec<usize>,
-    /// File-order joint index → topological index.
-    new_index: Vec<usize>,
 }
 
 /// Check the tree structure (each link has at most one parent joint, no loops) and order the joints.
@@ -437,82 +428,27 @@ fn order_tree(
         new_index[old] = new;
     }
     let joints: Vec<KinJoint> = order.iter().map(|&o| raw[o].clone()).collect();
+    let names: Vec<String> = order.iter().map(|&o| urdf.joints[o].name.clone()).collect();
     let parent_joint: Vec<Option<usize>> = parent_joint_raw
         .iter()
         .map(|p| p.map(|o| new_index[o]))
         .collect();
     Ok(OrderedTree {
         joints,
+        names,
         parent_joint,
         root_of,
-        new_index,
     })
 }
 
-/// Owners: every link below an arm's joint 1 belongs to that arm, the rest to the body.
-fn owners(
-    joints: &[KinJoint],
-    n_links: usize,
-    body: usize,
-    arm_joints: &PerSide<[usize; N_JOINTS]>,
-    msg: &Messages,
-) -> Result<Vec<Owner>, RobotError> {
-    let mut owner = vec![Owner::Body; n_links];
-    for j in joints {
+/// Owners: every link below an arm's first movable joint belongs to that arm, the rest to the body.
+fn owners(kin: &Kinematics) -> Vec<Owner> {
+    let mut owner = vec![Owner::Body; kin.link_names.len()];
+    for j in &kin.joints {
         owner[j.child] = match j.arm {
             Some((side, 0)) => Owner::Arm(side),
             _ => owner[j.parent],
         };
     }
-    for side in Side::BOTH {
-        let l1 = joints[arm_joints[side][0]].child;
-        if owner[body] != Owner::Body || owner[l1] != Owner::Arm(side) {
-            return Err(msg.structure(format!("the {side} arm is not a branch of the body link")));
-        }
-    }
-    Ok(owner)
-}
-
-/// The flange link of `side`: `yumi_flange_x` when it is fixed below link 7, else link 7 (with a
-/// warning).
-fn find_flange(
-    side: Side,
-    link7: usize,
-    joints: &[KinJoint],
-    parent_joint: &[Option<usize>],
-    link_index: &HashMap<&str, usize>,
-    link_names: &[String],
-    warnings: &mut Vec<String>,
-) -> usize {
-    let name = flange_link_name(side);
-    let fixed_below_link7 = |mut l: usize| {
-        while let Some(ji) = parent_joint[l] {
-            let j = &joints[ji];
-            if !matches!(j.motion, Motion::Fixed) {
-                return false;
-            }
-            if j.parent == link7 {
-                return true;
-            }
-            l = j.parent;
-        }
-        false
-    };
-    match link_index.get(name.as_str()) {
-        Some(&l) if fixed_below_link7(l) => l,
-        Some(_) => {
-            warnings.push(format!(
-                "link `{name}` is not fixed to `{}`; the flange is taken to be `{}`",
-                link_names[link7], link_names[link7]
-            ));
-            link7
-        }
-        None => {
-            warnings.push(format!(
-                "no link `{name}`; the flange is taken to be `{}`",
-                link_names[link7]
-            ));
-            link7
-        }
-    }
+    owner
 }

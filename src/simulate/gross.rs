@@ -106,7 +106,7 @@ pub(super) fn inject(
                     _ => {
                         let others = &clean[side.other()].measurements;
                         let source = rng.random_range(0..others.len());
-                        m.q_rad = others[source].q_rad;
+                        m.q_rad = others[source].q_rad.clone();
                         m.tracker_points_mm = others[source].tracker_points_mm.map(|p| {
                             p + Vector3::new(gauss(&mut rng), gauss(&mut rng), gauss(&mut rng))
                                 * sigma_mm

@@ -1,23 +1,28 @@
 //! Simulated laser-tracker measurements of both arms (the paper's §4.1 protocol made concrete).
 //!
 //! # Protocol
-//! 1. **True robot.** Each arm's 28 DH values get independent Gaussian errors
-//!    (`dh_error.length_mm` on `a`, `d`; `dh_error.angle_rad` on `theta`, `alpha`), each reflector
+//! 1. **True robot.** Each arm's kinematic parameters get independent Gaussian errors
+//!    (`dh_error.length_mm` on the lengths, `dh_error.angle_rad` on the angles: `a, d` and
+//!    `theta, alpha` of the 28 DH values of the built-in robot; `tx, ty, tz` and `rx, ry, rz` of every
+//!    joint-origin correction of a URDF chain but the first — a rigid motion of the whole arm, which
+//!    the base error below models — including those distances cannot see), each reflector
 //!    coordinate gets `reflector_error_mm`, and the true right-arm base is
 //!    `left_base_from_right_base_nominal · E` with `E` a small random isometry (translation
 //!    `N(0, base_error_mm)` per axis, rotation vector `N(0, base_error_rad)` per axis). The left-arm base
 //!    is the reference frame and has no error. With `nominal_rms_target_mm` (the default) each arm's
-//!    DH + reflector error is then scaled by one factor so that the nominal model's RMS relative
+//!    kinematic + reflector error is then scaled by one factor so that the nominal model's RMS relative
 //!    positioning error on the simulated configurations is paper-like (paper Table 5: 2.45 mm left,
 //!    5.56 mm right); the σ's then only shape the error.
-//! 2. **Tracker.** Placed in the robot's body frame (x forward, z up; `body_from_left_base` links it
-//!    to the left DH base) at a distance uniform in `tracker_distance_m` from the body origin, in a
+//! 2. **Tracker.** Placed in the robot's body frame (x forward, z up as in ROS's REP 103;
+//!    `body_from_left_base` links it to the left arm's model base) at a distance uniform in `tracker_distance_m` from the body origin, in a
 //!    direction with azimuth uniform in `±tracker_azimuth_max_deg` about +x and elevation uniform in
 //!    `tracker_elevation_deg`; its orientation is a uniformly random rotation.
 //! 3. **Configurations** (drawn before the truth, see step 1). Commanded joint values uniform within
-//!    the joint limits shrunk by `joint_limit_margin_fraction` of each joint's range at both ends. A
-//!    configuration is accepted when the reflectors face the tracker —
-//!    flange z · unit(tracker − flange origin) ≥ cos(`facing_max_angle_deg`) — and then
+//!    the joint limits ([`crate::kinematics::ArmModel::joint_limits_rad`]) shrunk by
+//!    `joint_limit_margin_fraction` of each joint's range at both ends. A configuration is accepted
+//!    when the reflectors face the tracker — n · unit(tracker − tip origin) ≥ cos(`facing_max_angle_deg`)
+//!    with n the normal of the reflector triangle pointing away from the tip origin (the flange z axis
+//!    for the default reflectors) — and then
 //!    `!collides(side, &q)` (so the closure is called only for facing configurations). Both checks use
 //!    the *nominal* model (the planner does not know the truth), so the configurations depend only on the
 //!    seed, the nominal model, the tracker pose and the closure; the error options never change them. After `max_attempts_per_config · n_configs`
@@ -46,22 +51,26 @@ mod tests;
 mod truth;
 
 use crate::dataset::{ArmData, Dataset, Measurement, Split, TrackerSpec};
-use crate::kinematics::{DualArmModel, N_JOINTS};
+use crate::kinematics::DualArmModel;
 use crate::side::{PerSide, Side};
 pub use gross::{GrossError, GrossErrorModel, GrossErrorRecord};
 use nalgebra::{Isometry3, Point3, Vector3};
-pub use presets::{paper_options, simulate_with_robot, unmodelled_joint_errors};
+pub use presets::{
+    default_reflectors_for, paper_options, resting_poses, simulate_with_robot,
+    unmodelled_joint_errors,
+};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;
 use std::path::PathBuf;
 
-/// Standard deviation of the random DH errors of the true robot.
+/// Standard deviation of the random kinematic errors of the true robot (DH values, or joint-origin
+/// corrections of a chain).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DhErrorSize {
-    /// σ of `a` and `d`, mm.
+    /// σ of the lengths (`a`, `d`; `tx, ty, tz`), mm.
     pub length_mm: f64,
-    /// σ of `theta` and `alpha`, rad.
+    /// σ of the angles (`theta`, `alpha`; `rx, ry, rz`), rad.
     pub angle_rad: f64,
 }
 
@@ -132,14 +141,15 @@ pub struct SimOptions {
     pub tracker_azimuth_max_deg: f64,
     /// Tracker direction: elevation above the body's xy plane, uniform in (min, max), deg.
     pub tracker_elevation_deg: (f64, f64),
-    /// The robot's body frame (x forward, z up) relative to the left-arm DH base.
+    /// The robot's body frame (x forward, z up) relative to the left arm's model base.
     pub body_from_left_base: Isometry3<f64>,
     pub joint_error: Option<JointErrorModel>,
     pub outliers: Option<OutlierModel>,
     /// Gross errors of real files (misread reflectors, swapped labels, rows of the other arm), applied
     /// after `outliers`.
     pub gross_errors: Option<GrossErrorModel>,
-    /// Largest angle between the flange z axis and the direction to the tracker, deg.
+    /// Largest angle between the reflectors' facing direction (the flange z axis for the default
+    /// reflectors) and the direction to the tracker, deg.
     pub facing_max_angle_deg: f64,
     /// Joint ranges are shrunk by this fraction of the range at both ends.
     pub joint_limit_margin_fraction: f64,
@@ -222,8 +232,8 @@ pub struct SimOutput {
     pub outliers: Vec<OutlierRecord>,
     /// Injected gross errors (empty without [`SimOptions::gross_errors`]).
     pub gross_errors: Vec<GrossErrorRecord>,
-    /// Phases φ_i of the periodic joint error per arm (zeros without joint errors).
-    pub joint_error_phases_rad: PerSide<[f64; N_JOINTS]>,
+    /// Phases φ_i of the periodic joint error per arm and joint (zeros without joint errors).
+    pub joint_error_phases_rad: PerSide<Vec<f64>>,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -233,6 +243,8 @@ pub enum SimError {
         field: &'static str,
         message: String,
     },
+    #[error("{side} arm: no resting pose free of collisions found ({attempts} tried)")]
+    NoRestingPose { side: Side, attempts: usize },
     #[error(
         "{side} arm: only {accepted} of {wanted} configurations found in {attempts} attempts \
          ({rejected_for_facing} not facing the tracker, {rejected_for_collision} in collision)"
@@ -258,7 +270,9 @@ const STREAM_OUTLIERS: u64 = 4;
 
 const STREAM_TARGET: u64 = 5;
 
-const STREAM_GROSS: u64 = 6;
+const STREAM_RESTING: u64 = 6;
+
+const STREAM_GROSS: u64 = 7;
 
 const fn stream_configs(side: Side) -> u64 {
     match side {
@@ -293,7 +307,7 @@ fn gauss3(rng: &mut ChaCha8Rng) -> Vector3<f64> {
 pub fn simulate(
     opts: &SimOptions,
     nominal: &DualArmModel,
-    collides: &dyn Fn(Side, &[f64; N_JOINTS]) -> bool,
+    collides: &dyn Fn(Side, &[f64]) -> bool,
 ) -> Result<SimOutput, SimError> {
     check::check_options(opts, nominal)?;
     let tracker_from_left_base = sampling::place_tracker(opts);
@@ -309,7 +323,7 @@ pub fn simulate(
     let configs = accepted.as_ref().map(|_, a| a.configs.clone());
     let truth = truth::perturb_model(opts, nominal, &configs);
 
-    let mut phases = PerSide::new([0.0; N_JOINTS], [0.0; N_JOINTS]);
+    let mut phases = PerSide::from_fn(|side| vec![0.0; nominal.arm(side).joint_count()]);
     if opts.joint_error.is_some() {
         let mut rng = rng_for(opts.seed, STREAM_JOINT_ERROR);
         for p in phases.left.iter_mut().chain(phases.right.iter_mut()) {
@@ -319,6 +333,7 @@ pub fn simulate(
     let mut arms = PerSide::from_fn(|side| ArmData {
         side,
         file: PathBuf::from(format!("{}.csv", side.name())),
+        links: None,
         measurements: measure_arm(
             opts,
             side,
@@ -362,8 +377,8 @@ fn measure_arm(
     side: Side,
     truth: &DualArmModel,
     tracker_from_left_base: &Isometry3<f64>,
-    configs: &[[f64; N_JOINTS]],
-    phases: &[f64; N_JOINTS],
+    configs: &[Vec<f64>],
+    phases: &[f64],
 ) -> Vec<Measurement> {
     let true_arm = truth.arm(side);
     let tracker_from_base = tracker_from_left_base * truth.left_base_from(side);
@@ -382,9 +397,9 @@ fn measure_arm(
                 Some(model) => {
                     let dq =
                         joint_errors::joint_error_rad(model, phases, true_arm, q, &gravity_in_base);
-                    std::array::from_fn(|j| q[j] + dq[j])
+                    q.iter().zip(&dq).map(|(q, dq)| q + dq).collect()
                 }
-                None => *q,
+                None => q.clone(),
             };
             let fk = true_arm.reflector_fk(&q_true);
             let tracker_points_mm = fk.points_mm.map(|p| {
@@ -395,7 +410,7 @@ fn measure_arm(
             });
             Measurement {
                 id: format!("{prefix}{:03}", i + 1),
-                q_rad: *q,
+                q_rad: q.clone(),
                 tracker_points_mm,
                 split: if i < opts.n_cal {
                     Split::Cal

@@ -1,7 +1,7 @@
 //! Steps 2 and 3 of the protocol: the tracker's place and the configurations that face it.
 
 use super::{STREAM_TRACKER, SimError, SimOptions, gauss, rng_for, stream_configs};
-use crate::kinematics::{ArmModel, N_JOINTS, joint_limits_rad};
+use crate::kinematics::ArmModel;
 use crate::side::Side;
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 use rand::Rng;
@@ -44,22 +44,40 @@ pub(super) fn place_tracker(opts: &SimOptions) -> Isometry3<f64> {
     tracker_from_body * opts.body_from_left_base
 }
 
+/// The direction the reflectors of `arm` face, in its tip frame: the normal of their triangle,
+/// pointing away from the tip origin (+z for a degenerate triangle).
+pub(super) fn facing_axis(arm: &ArmModel) -> Vector3<f64> {
+    let t = &arm.reflectors_mm;
+    let n = (t[1] - t[0]).cross(&(t[2] - t[0]));
+    let norm = n.norm();
+    if !(norm > 0.0 && norm.is_finite()) {
+        return Vector3::z();
+    }
+    let n = n / norm;
+    if n.dot(&(t[0] + t[1] + t[2])) < 0.0 {
+        -n
+    } else {
+        n
+    }
+}
+
 /// Do the reflectors of `arm` at `q` face a tracker at `tracker_in_base_mm`?
 fn faces(
     arm: &ArmModel,
-    q: &[f64; N_JOINTS],
+    axis: &Vector3<f64>,
+    q: &[f64],
     tracker_in_base_mm: &Point3<f64>,
     cos_max: f64,
 ) -> bool {
     let flange = arm.base_from_flange(q);
-    let z = flange.rotation * Vector3::z();
+    let z = flange.rotation * axis;
     let to_tracker = tracker_in_base_mm - Point3::from(flange.translation.vector);
     let n = to_tracker.norm();
     n > 0.0 && z.dot(&to_tracker) >= cos_max * n
 }
 
 pub(super) struct Accepted {
-    pub configs: Vec<[f64; N_JOINTS]>,
+    pub configs: Vec<Vec<f64>>,
     pub attempts: usize,
     pub rejected_for_facing: usize,
     pub rejected_for_collision: usize,
@@ -70,13 +88,18 @@ pub(super) fn sample_configurations(
     side: Side,
     nominal_arm: &ArmModel,
     tracker_in_base_mm: &Point3<f64>,
-    collides: &dyn Fn(Side, &[f64; N_JOINTS]) -> bool,
+    collides: &dyn Fn(Side, &[f64]) -> bool,
 ) -> Result<Accepted, SimError> {
     let mut rng = rng_for(opts.seed, stream_configs(side));
-    let limits = joint_limits_rad().map(|(lo, hi)| {
-        let margin = opts.joint_limit_margin_fraction * (hi - lo);
-        (lo + margin, hi - margin)
-    });
+    let limits: Vec<(f64, f64)> = nominal_arm
+        .joint_limits_rad()
+        .into_iter()
+        .map(|(lo, hi)| {
+            let margin = opts.joint_limit_margin_fraction * (hi - lo);
+            (lo + margin, hi - margin)
+        })
+        .collect();
+    let axis = facing_axis(nominal_arm);
     let cos_max = opts.facing_max_angle_deg.to_radians().cos();
     let max_attempts = opts.max_attempts_per_config.saturating_mul(opts.n_configs);
     let mut out = Accepted {
@@ -97,15 +120,17 @@ pub(super) fn sample_configurations(
             });
         }
         out.attempts += 1;
-        let q: [f64; N_JOINTS] = std::array::from_fn(|i| {
-            let (lo, hi) = limits[i];
-            if lo < hi {
-                rng.random_range(lo..hi)
-            } else {
-                lo
-            }
-        });
-        if !faces(nominal_arm, &q, tracker_in_base_mm, cos_max) {
+        let q: Vec<f64> = limits
+            .iter()
+            .map(|&(lo, hi)| {
+                if lo < hi {
+                    rng.random_range(lo..hi)
+                } else {
+                    lo
+                }
+            })
+            .collect();
+        if !faces(nominal_arm, &axis, &q, tracker_in_base_mm, cos_max) {
             out.rejected_for_facing += 1;
         } else if collides(side, &q) {
             out.rejected_for_collision += 1;

@@ -3,7 +3,7 @@
 use super::joint_errors::joint_error_rad;
 use super::truth::{pair_distances_mm, relative_rms_mm};
 use super::*;
-use crate::kinematics::{ArmModel, N_DH, joint_limits_rad};
+use crate::kinematics::{ArmModel, N_DH, N_JOINTS, joint_limits_rad};
 use nalgebra::{Matrix3, Rotation3, Translation3, UnitQuaternion};
 
 /// The nominal IRB 14000 with the public body layout's right-arm base.
@@ -25,7 +25,7 @@ fn nominal() -> DualArmModel {
     }
 }
 
-fn never(_: Side, _: &[f64; N_JOINTS]) -> bool {
+fn never(_: Side, _: &[f64]) -> bool {
     false
 }
 
@@ -347,11 +347,11 @@ fn target_scaling_keeps_the_error_direction() {
     );
     for side in Side::BOTH {
         let nominal = raw.nominal.arm(side).to_vector();
-        let d_raw = raw.truth.arm(side).to_vector() - nominal;
-        let d_scaled = scaled.truth.arm(side).to_vector() - nominal;
+        let d_raw = raw.truth.arm(side).to_vector() - &nominal;
+        let d_scaled = scaled.truth.arm(side).to_vector() - &nominal;
         let s = d_scaled.dot(&d_raw) / d_raw.norm_squared();
         assert!(
-            (d_scaled - s * d_raw).norm() < 1e-9 * d_raw.norm() * s.max(1.0),
+            (d_scaled - s * &d_raw).norm() < 1e-9 * d_raw.norm() * s.max(1.0),
             "{side}"
         );
         // Noise-free target hit; the data adds only ~10 µm of tracker noise.
@@ -360,7 +360,7 @@ fn target_scaling_keeps_the_error_direction() {
             .arm(side)
             .measurements
             .iter()
-            .map(|m| m.q_rad)
+            .map(|m| m.q_rad.clone())
             .collect();
         let nominal_distances = pair_distances_mm(scaled.nominal.arm(side), &configs);
         let exact = relative_rms_mm(scaled.truth.arm(side), &nominal_distances, &configs);
@@ -512,7 +512,7 @@ fn collision_closure_is_honoured() {
     let free = run(&opts);
     // Reject the half of the space with q1 > 0 on the left arm only.
     let calls = std::cell::Cell::new(0usize);
-    let half = |side: Side, q: &[f64; N_JOINTS]| {
+    let half = |side: Side, q: &[f64]| {
         calls.set(calls.get() + 1);
         side == Side::Left && q[0] > 0.0
     };
@@ -545,7 +545,7 @@ fn collision_closure_is_honoured() {
         max_attempts_per_config: 20,
         ..opts
     };
-    let all = |_: Side, _: &[f64; N_JOINTS]| true;
+    let all = |_: Side, _: &[f64]| true;
     let err = simulate(&opts, &nominal(), &all).unwrap_err();
     match err {
         SimError::NotEnoughConfigurations {
@@ -616,7 +616,7 @@ fn periodic_joint_error_follows_the_documented_formula() {
     assert_eq!(out.tracker_from_left_base, clean.tracker_from_left_base);
     let mut largest_shift: f64 = 0.0;
     for side in Side::BOTH {
-        let phases = out.joint_error_phases_rad[side];
+        let phases = &out.joint_error_phases_rad[side];
         assert!(
             phases
                 .iter()

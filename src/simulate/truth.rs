@@ -1,13 +1,14 @@
 //! Step 1 of the protocol: the true robot, the nominal one plus random geometric errors.
 
 use super::{STREAM_GEOMETRY, STREAM_TARGET, SimOptions, gauss, gauss3, rng_for};
-use crate::kinematics::{ArmModel, DualArmModel, N_DH, N_JOINTS, ParamVector};
+use crate::kinematics::{ArmModel, DualArmModel};
 use crate::side::PerSide;
+use nalgebra::DVector;
 use nalgebra::{Isometry3, Translation3, UnitQuaternion};
 use rand::Rng;
 
 /// Reflector distances `|p_i,k − p_j,k|` of all pairs i < j of `configs`, flattened, mm.
-pub(super) fn pair_distances_mm(arm: &ArmModel, configs: &[[f64; N_JOINTS]]) -> Vec<[f64; 3]> {
+pub(super) fn pair_distances_mm(arm: &ArmModel, configs: &[Vec<f64>]) -> Vec<[f64; 3]> {
     let points: Vec<_> = configs
         .iter()
         .map(|q| arm.reflector_fk(q).points_mm)
@@ -27,7 +28,7 @@ pub(super) fn pair_distances_mm(arm: &ArmModel, configs: &[[f64; N_JOINTS]]) -> 
 pub(super) fn relative_rms_mm(
     truth: &ArmModel,
     nominal_distances: &[[f64; 3]],
-    configs: &[[f64; N_JOINTS]],
+    configs: &[Vec<f64>],
 ) -> f64 {
     if nominal_distances.is_empty() {
         return 0.0;
@@ -51,12 +52,12 @@ pub(super) fn relative_rms_mm(
 /// error is not zero) so that the nominal relative RMS on `configs` equals `target_mm`.
 fn true_arm(
     nominal: &ArmModel,
-    delta: &ParamVector,
+    delta: &DVector<f64>,
     target_mm: Option<f64>,
-    configs: &[[f64; N_JOINTS]],
+    configs: &[Vec<f64>],
 ) -> ArmModel {
     let v0 = nominal.to_vector();
-    let at = |scale: f64| ArmModel::from_vector(&(v0 + scale * delta));
+    let at = |scale: f64| nominal.with_vector(&(&v0 + scale * delta));
     let Some(target_mm) = target_mm else {
         return at(1.0);
     };
@@ -81,25 +82,33 @@ fn true_arm(
 pub(super) fn perturb_model(
     opts: &SimOptions,
     nominal: &DualArmModel,
-    configs: &PerSide<Vec<[f64; N_JOINTS]>>,
+    configs: &PerSide<Vec<Vec<f64>>>,
 ) -> DualArmModel {
     let mut rng = rng_for(opts.seed, STREAM_GEOMETRY);
-    let mut draw = || {
-        let mut d = ParamVector::zeros();
-        for k in 0..N_DH {
-            let sigma = if k % 4 < 2 {
-                opts.dh_error.length_mm
-            } else {
+    let mut draw = |arm: &ArmModel| {
+        let mut d = DVector::zeros(arm.param_count());
+        for k in 0..arm.reflector_offset() {
+            let sigma = if arm.param_is_angle(k) {
                 opts.dh_error.angle_rad
+            } else {
+                opts.dh_error.length_mm
             };
             d[k] = sigma * gauss(&mut rng);
         }
-        for k in N_DH..d.len() {
+        for k in arm.reflector_offset()..d.len() {
             d[k] = opts.reflector_error_mm * gauss(&mut rng);
+        }
+        // A chain's first joint-origin correction moves the whole arm rigidly: the same as the
+        // right arm's base error, or the tracker frame for the left arm. The base error models the
+        // mounting; the drawn values stay unused (so that the other draws do not change).
+        if arm.chain().is_some() {
+            for v in d.iter_mut().take(crate::kinematics::PARAMS_PER_JOINT) {
+                *v = 0.0;
+            }
         }
         d
     };
-    let delta = PerSide::from_fn(|_| draw());
+    let delta = PerSide::from_fn(|side| draw(nominal.arm(side)));
     let dt = opts.base_error_mm * gauss3(&mut rng);
     let dr = opts.base_error_rad * gauss3(&mut rng);
     let error = Isometry3::from_parts(Translation3::from(dt), UnitQuaternion::from_scaled_axis(dr));

@@ -8,8 +8,8 @@
 //! no pair Jacobian is ever formed.
 
 use super::problem::{Eval, LeastSquaresSystem, MinimaxProblem, StageParams};
-use crate::kinematics::{ArmModel, N_JOINTS, N_PARAMS, ParamVector, PointJacobian, ReflectorFk};
-use nalgebra::{DMatrix, DVector, SVector, Vector3};
+use crate::kinematics::{ArmJacobians, ArmModel, ReflectorFk};
+use nalgebra::{DMatrix, DVector, Vector3};
 use rayon::prelude::*;
 
 /// Side pairs of the reflector triangle, in the order of constraints (14): ab, bc, ca.
@@ -17,11 +17,15 @@ pub const SIDES: [(usize, usize); 3] = [(0, 1), (1, 2), (2, 0)];
 
 /// Step-1 problem of one arm.
 pub struct ArmProblem {
-    qs: Vec<[f64; N_JOINTS]>,
+    qs: Vec<Vec<f64>>,
     /// Measured distances per reflector, pairs i<j in row-major order.
     measured_dist_mm: [Vec<f64>; 3],
     n_pairs: usize,
-    x0: ParamVector,
+    /// The start model (its form and chain; its parameters are `x0`).
+    start: ArmModel,
+    x0: DVector<f64>,
+    /// Index of the first reflector coordinate in x.
+    reflector_offset: usize,
     free: Vec<usize>,
     /// x = x0 + scatter(scale ∘ y).
     scale: DVector<f64>,
@@ -34,7 +38,7 @@ pub struct ArmProblem {
 impl ArmProblem {
     /// `measured` are tracker-frame reflector positions, one triple per configuration.
     pub fn new(
-        qs: Vec<[f64; N_JOINTS]>,
+        qs: Vec<Vec<f64>>,
         measured: &[[Vector3<f64>; 3]],
         start: &ArmModel,
         free: Vec<usize>,
@@ -61,7 +65,9 @@ impl ArmProblem {
             qs,
             measured_dist_mm,
             n_pairs,
+            start: start.clone(),
             x0: start.to_vector(),
+            reflector_offset: start.reflector_offset(),
             free,
             scale,
             mean_side_mm,
@@ -81,9 +87,14 @@ impl ArmProblem {
     pub fn free(&self) -> &[usize] {
         &self.free
     }
+    /// Number of parameters of the arm (free and fixed).
+    pub fn param_count(&self) -> usize {
+        self.x0.len()
+    }
+
     /// Full parameter vector at scaled point y.
-    pub fn x_of(&self, y: &DVector<f64>) -> ParamVector {
-        let mut x = self.x0;
+    pub fn x_of(&self, y: &DVector<f64>) -> DVector<f64> {
+        let mut x = self.x0.clone();
         for (c, &k) in self.free.iter().enumerate() {
             x[k] += self.scale[c] * y[c];
         }
@@ -91,14 +102,14 @@ impl ArmProblem {
     }
 
     pub fn model_at(&self, y: &DVector<f64>) -> ArmModel {
-        ArmModel::from_vector(&self.x_of(y))
+        self.start.with_vector(&self.x_of(y))
     }
 
     fn fk_all(&self, model: &ArmModel) -> Vec<ReflectorFk> {
         self.qs.par_iter().map(|q| model.reflector_fk(q)).collect()
     }
 
-    fn jac_all(&self, model: &ArmModel) -> Vec<(ReflectorFk, [PointJacobian; 3])> {
+    fn jac_all(&self, model: &ArmModel) -> Vec<ArmJacobians> {
         self.qs
             .par_iter()
             .map(|q| model.reflector_jacobians(q))
@@ -149,8 +160,9 @@ impl ArmProblem {
         sum
     }
 
-    fn constraints(&self, x: &ParamVector, with_grad: bool) -> (Vec<f64>, Vec<DVector<f64>>) {
-        let t = |r: usize| x.fixed_rows::<3>(N_PARAMS - 9 + 3 * r).into_owned();
+    fn constraints(&self, x: &DVector<f64>, with_grad: bool) -> (Vec<f64>, Vec<DVector<f64>>) {
+        let off = self.reflector_offset;
+        let t = |r: usize| x.fixed_rows::<3>(off + 3 * r).into_owned();
         let eps = self.side_tolerance_mm * self.side_tolerance_mm;
         let mut cons = Vec::with_capacity(3);
         let mut grads = Vec::new();
@@ -161,12 +173,12 @@ impl ArmProblem {
             // c_l = (t_l² − ε)/ε ≤ 0: eq. (15), normalised so that its scale is one.
             cons.push((dev * dev - eps) / eps);
             if with_grad {
-                let mut gx = ParamVector::zeros();
+                let mut gx = DVector::zeros(x.len());
                 if len > 0.0 {
                     let dl = v / len * (2.0 * dev / eps);
                     for c in 0..3 {
-                        gx[N_PARAMS - 9 + 3 * a + c] += dl[c];
-                        gx[N_PARAMS - 9 + 3 * b + c] -= dl[c];
+                        gx[off + 3 * a + c] += dl[c];
+                        gx[off + 3 * b + c] -= dl[c];
                     }
                 }
                 grads.push(self.restrict(&gx));
@@ -176,7 +188,7 @@ impl ArmProblem {
     }
 
     /// Gradient with respect to x → gradient with respect to y.
-    fn restrict(&self, gx: &ParamVector) -> DVector<f64> {
+    fn restrict(&self, gx: &DVector<f64>) -> DVector<f64> {
         DVector::from_iterator(
             self.free.len(),
             self.free
@@ -186,37 +198,68 @@ impl ArmProblem {
         )
     }
 
-    /// Rows −u_ijᵀ(J_i,k − J_j,k) of the pair Jacobian (full 37 columns, unscaled) for an evenly
-    /// strided subset of at most `max_pairs` pairs per reflector.
-    pub fn sample_pair_jacobian(
-        &self,
-        y: &DVector<f64>,
-        max_pairs: usize,
-    ) -> Vec<SVector<f64, N_PARAMS>> {
+    /// The pair Jacobian (all parameters, unscaled) on an evenly strided subset of at most
+    /// `max_pairs` pairs per reflector, one column per pair and reflector ([`pair_jacobian_columns`]).
+    pub fn sample_pair_jacobian(&self, y: &DVector<f64>, max_pairs: usize) -> DMatrix<f64> {
         let model = self.model_at(y);
-        let jac = self.jac_all(&model);
-        let stride = self.n_pairs.div_ceil(max_pairs.max(1)).max(1);
-        let n = self.qs.len();
-        let mut rows = Vec::new();
-        let mut idx = 0usize;
-        for i in 0..n {
-            for j in i + 1..n {
-                if idx.is_multiple_of(stride) {
-                    for k in 0..3 {
-                        let v = jac[i].0.points_mm[k] - jac[j].0.points_mm[k];
-                        let dist = v.norm();
-                        if dist > 0.0 {
-                            let u = v / dist;
-                            let d = jac[i].1[k] - jac[j].1[k];
-                            rows.push(-(d.transpose() * u));
-                        }
+        pair_jacobian_columns(&self.jac_all(&model), max_pairs)
+    }
+}
+
+/// `out[c] = −((J_i − J_j)ᵀ u)[p]` for every parameter `p = params[c]`: one row of the distance
+/// Jacobian (the derivative of the measured-minus-model distance), in the same floating-point order as
+/// nalgebra's `(J_i − J_j).transpose() * u`.
+fn pair_row(
+    ji: &nalgebra::Matrix3xX<f64>,
+    jj: &nalgebra::Matrix3xX<f64>,
+    u: &Vector3<f64>,
+    params: impl Iterator<Item = usize>,
+    out: &mut [f64],
+) {
+    for (o, p) in out.iter_mut().zip(params) {
+        let d0 = ji[(0, p)] - jj[(0, p)];
+        let d1 = ji[(1, p)] - jj[(1, p)];
+        let d2 = ji[(2, p)] - jj[(2, p)];
+        *o = -(d0 * u.x + d1 * u.y + d2 * u.z);
+    }
+}
+
+/// Rows −u_ijᵀ(J_i,k − J_j,k) of the pair Jacobian (all parameters, unscaled) for an evenly strided
+/// subset of at most `max_pairs` pairs per reflector, as the columns of a matrix (parameters × rows),
+/// so that `M Mᵀ` is the Gram matrix.
+pub fn pair_jacobian_columns(jac: &[ArmJacobians], max_pairs: usize) -> DMatrix<f64> {
+    let n = jac.len();
+    let n_pairs = n * n.saturating_sub(1) / 2;
+    let stride = n_pairs.div_ceil(max_pairs.max(1)).max(1);
+    let p = jac.first().map_or(0, |j| j.jacobians[0].ncols());
+    let mut data: Vec<f64> = Vec::with_capacity(3 * n_pairs.div_ceil(stride) * p);
+    let mut row = vec![0.0; p];
+    let mut count = 0;
+    let mut idx = 0usize;
+    for i in 0..n {
+        for j in i + 1..n {
+            if idx.is_multiple_of(stride) {
+                for k in 0..3 {
+                    let v = jac[i].fk.points_mm[k] - jac[j].fk.points_mm[k];
+                    let dist = v.norm();
+                    if dist > 0.0 {
+                        let u = v / dist;
+                        pair_row(
+                            &jac[i].jacobians[k],
+                            &jac[j].jacobians[k],
+                            &u,
+                            0..p,
+                            &mut row,
+                        );
+                        data.extend_from_slice(&row);
+                        count += 1;
                     }
                 }
-                idx += 1;
             }
+            idx += 1;
         }
-        rows
     }
+    DMatrix::from_vec(p, count, data)
 }
 
 impl MinimaxProblem for ArmProblem {
@@ -234,20 +277,29 @@ impl MinimaxProblem for ArmProblem {
 
     fn evaluate(&self, y: &DVector<f64>) -> Eval {
         let x = self.x_of(y);
-        let model = ArmModel::from_vector(&x);
+        let model = self.start.with_vector(&x);
         let jac = self.jac_all(&model);
-        let points: Vec<[Vector3<f64>; 3]> = jac.iter().map(|(fk, _)| fk.points_mm).collect();
+        let points: Vec<[Vector3<f64>; 3]> = jac.iter().map(|j| j.fk.points_mm).collect();
         let norm = 1.0 / self.n_pairs.max(1) as f64;
         let per_reflector: Vec<(f64, DVector<f64>)> = (0..3)
             .into_par_iter()
             .map(|k| {
                 let mut w = vec![Vector3::zeros(); points.len()];
                 let sum = self.pair_sums(&points, k, Some(&mut w));
-                let mut gx = ParamVector::zeros();
-                for (wi, (_, jk)) in w.iter().zip(&jac) {
-                    gx -= jk[k].transpose() * wi * 2.0;
+                // ∇F_k = −2 Σ_i J_i,kᵀ w_i,k, on the free parameters only (the others are dropped by
+                // the restriction to y anyway).
+                let mut g = vec![0.0; self.free.len()];
+                for (wi, jk) in w.iter().zip(&jac) {
+                    let j = &jk.jacobians[k];
+                    for (gc, &p) in g.iter_mut().zip(&self.free) {
+                        *gc -= (j[(0, p)] * wi.x + j[(1, p)] * wi.y + j[(2, p)] * wi.z) * 2.0;
+                    }
                 }
-                (sum * norm, self.restrict(&(gx * norm)))
+                let grad = DVector::from_iterator(
+                    self.free.len(),
+                    g.iter().zip(self.scale.iter()).map(|(gc, s)| gc * norm * s),
+                );
+                (sum * norm, grad)
             })
             .collect();
         let (cons, cons_grad) = self.constraints(&x, true);
@@ -265,7 +317,7 @@ impl MinimaxProblem for ArmProblem {
 
     fn values(&self, y: &DVector<f64>) -> ([f64; 3], Vec<f64>) {
         let x = self.x_of(y);
-        let model = ArmModel::from_vector(&x);
+        let model = self.start.with_vector(&x);
         let points: Vec<[Vector3<f64>; 3]> = self
             .fk_all(&model)
             .into_iter()
@@ -296,16 +348,22 @@ impl MinimaxProblem for ArmProblem {
                 for j in i + 1..n {
                     let idx = base + (j - i - 1);
                     for k in 0..3 {
-                        let v = jac[i].0.points_mm[k] - jac[j].0.points_mm[k];
+                        let v = jac[i].fk.points_mm[k] - jac[j].fk.points_mm[k];
                         let dist = v.norm();
                         if dist <= 0.0 {
                             continue;
                         }
                         let r = self.measured_dist_mm[k][idx] - dist;
                         let u = v / dist;
-                        let d = (jac[i].1[k] - jac[j].1[k]).transpose() * u;
-                        for (c, &p) in self.free.iter().enumerate() {
-                            row[c] = -d[p] * self.scale[c];
+                        pair_row(
+                            &jac[i].jacobians[k],
+                            &jac[j].jacobians[k],
+                            &u,
+                            self.free.iter().copied(),
+                            row.as_mut_slice(),
+                        );
+                        for (c, r) in row.iter_mut().enumerate() {
+                            *r *= self.scale[c];
                         }
                         jtj.ger(1.0, &row, &row, 1.0);
                         jtr.axpy(r, &row, 1.0);
@@ -325,73 +383,93 @@ impl MinimaxProblem for ArmProblem {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::kinematics::joint_limits_rad;
+    use crate::finite_difference::{Tolerance, check_jacobian};
+    use crate::kinematics::{SerialChain, joint_limits_rad};
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
+    use std::sync::Arc;
 
-    fn setup(n: usize) -> ArmProblem {
-        let mut rng = ChaCha8Rng::seed_from_u64(3);
-        let nominal = ArmModel::nominal_irb14000([
+    fn reflectors() -> [Vector3<f64>; 3] {
+        [
             Vector3::new(45.0, 0.0, 40.0),
             Vector3::new(-25.0, 40.0, 40.0),
             Vector3::new(-25.0, -40.0, 40.0),
-        ]);
+        ]
+    }
+
+    /// The built-in DH arm and a YuMi-like chain.
+    fn nominals() -> [ArmModel; 2] {
+        let urdf = urdf_rs::read_from_string(&crate::test_robots::yumi_like_urdf()).unwrap();
+        let chain = SerialChain::from_urdf(&urdf, "yumi_body", "yumi_link_7_l").unwrap();
+        [
+            ArmModel::nominal_irb14000(reflectors()),
+            ArmModel::nominal_chain(Arc::new(chain), reflectors()),
+        ]
+    }
+
+    fn setup(nominal: &ArmModel, n: usize) -> ArmProblem {
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
         let mut xt = nominal.to_vector();
-        for k in 0..N_PARAMS {
-            xt[k] += rng.random_range(-0.5..0.5)
-                * if crate::kinematics::param_is_angle(k) {
-                    0.01
-                } else {
-                    1.0
-                };
+        for k in 0..xt.len() {
+            xt[k] +=
+                rng.random_range(-0.5..0.5) * if nominal.param_is_angle(k) { 0.01 } else { 1.0 };
         }
-        let truth = ArmModel::from_vector(&xt);
+        let truth = nominal.with_vector(&xt);
         let lim = joint_limits_rad();
-        let qs: Vec<[f64; 7]> = (0..n)
-            .map(|_| std::array::from_fn(|i| rng.random_range(lim[i].0..lim[i].1)))
+        let qs: Vec<Vec<f64>> = (0..n)
+            .map(|_| {
+                (0..7)
+                    .map(|i| rng.random_range(lim[i].0..lim[i].1))
+                    .collect()
+            })
             .collect();
         let measured: Vec<_> = qs.iter().map(|q| truth.reflector_fk(q).points_mm).collect();
-        let free: Vec<usize> = (0..N_PARAMS).collect();
-        let scale = DVector::from_element(N_PARAMS, 0.7);
-        ArmProblem::new(qs, &measured, &nominal, free, scale, 0.02)
+        let free: Vec<usize> = (0..xt.len()).collect();
+        let scale = DVector::from_element(xt.len(), 0.7);
+        ArmProblem::new(qs, &measured, nominal, free, scale, 0.02)
     }
 
     #[test]
     fn gradient_matches_finite_differences() {
-        let p = setup(9);
+        for nominal in nominals() {
+            gradient_check(&setup(&nominal, 9));
+        }
+    }
+
+    fn gradient_check(p: &ArmProblem) {
         let mut rng = ChaCha8Rng::seed_from_u64(11);
         let y = DVector::from_fn(p.dim(), |_, _| rng.random_range(-0.3..0.3));
         let e = p.evaluate(&y);
-        let h = 1e-5;
-        let f_scale = e.psi();
-        for c in 0..p.dim() {
-            let mut yp = y.clone();
-            yp[c] += h;
-            let mut ym = y.clone();
-            ym[c] -= h;
-            let (fp, cp) = p.values(&yp);
-            let (fm, cm) = p.values(&ym);
-            for k in 0..3 {
-                let fd = (fp[k] - fm[k]) / (2.0 * h);
-                let an = e.grad[k][c];
-                // Central differences: O(h²) truncation plus round-off of order f·1e-16/h.
-                let tol = 1e-6 * an.abs().max(fd.abs()) + 1e-9 * f_scale;
-                assert!((fd - an).abs() <= tol, "f{k} col {c}: {an} vs {fd}");
-            }
-            for l in 0..3 {
-                let fd = (cp[l] - cm[l]) / (2.0 * h);
-                let an = e.cons_grad[l][c];
-                assert!(
-                    (fd - an).abs() <= 1e-5 * (1.0 + an.abs().max(fd.abs())),
-                    "c{l} col {c}: {an} vs {fd}"
-                );
-            }
-        }
+        let rows = |g: &[DVector<f64>]| DMatrix::from_fn(g.len(), p.dim(), |r, c| g[r][c]);
+        let objectives = |y: &DVector<f64>| DVector::from_row_slice(&p.values(y).0);
+        check_jacobian(
+            objectives,
+            &y,
+            &rows(&e.grad),
+            |_| 1e-5,
+            Tolerance::rel(1e-6),
+        )
+        .unwrap_or_else(|m| panic!("objectives f0..f2: {m}"));
+        let constraints = |y: &DVector<f64>| DVector::from_vec(p.values(y).1);
+        // The side-length constraints curve sharply: O(h²) truncation is ~3e-7 relative here.
+        check_jacobian(
+            constraints,
+            &y,
+            &rows(&e.cons_grad),
+            |_| 1e-5,
+            Tolerance::rel(1e-5),
+        )
+        .unwrap_or_else(|m| panic!("constraints c0..c2: {m}"));
     }
 
     #[test]
     fn least_squares_system_matches_pairwise_definition() {
-        let p = setup(7);
+        for nominal in nominals() {
+            least_squares_check(&setup(&nominal, 7));
+        }
+    }
+
+    fn least_squares_check(p: &ArmProblem) {
         let y = DVector::from_element(p.dim(), 0.1);
         let ls = p.least_squares(&y);
         let (f, _) = p.values(&y);

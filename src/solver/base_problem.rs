@@ -198,6 +198,7 @@ impl MinimaxProblem for BaseProblem {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::finite_difference::{Tolerance, check_jacobian};
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
 
@@ -238,22 +239,9 @@ mod tests {
         let p = BaseProblem::new(left, right, &ml, &mr, start);
         let y = DVector::from_fn(6, |i, _| 0.1 * (i as f64 - 2.5));
         let e = p.evaluate(&y);
-        let h = 1e-6;
-        for c in 0..6 {
-            let mut yp = y.clone();
-            yp[c] += h;
-            let mut ym = y.clone();
-            ym[c] -= h;
-            let (fp, _) = p.values(&yp);
-            let (fm, _) = p.values(&ym);
-            for k in 0..3 {
-                let fd = (fp[k] - fm[k]) / (2.0 * h);
-                let an = e.grad[k][c];
-                assert!(
-                    (fd - an).abs() <= 1e-5 * (1.0 + an.abs()),
-                    "f{k} col {c}: {an} vs {fd}"
-                );
-            }
-        }
+        let analytic = DMatrix::from_fn(3, 6, |k, c| e.grad[k][c]);
+        let objectives = |y: &DVector<f64>| DVector::from_row_slice(&p.values(y).0);
+        check_jacobian(objectives, &y, &analytic, |_| 1e-6, Tolerance::rel(1e-6))
+            .unwrap_or_else(|m| panic!("objectives f0..f2: {m}"));
     }
 }

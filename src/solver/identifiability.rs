@@ -1,20 +1,29 @@
 //! Which parameters can distance data identify?
 //!
-//! The identification Jacobian (rows −u_ijᵀ(J_i − J_j), one per pair and reflector) is column-scaled to
-//! unit RMS sensitivity. Columns are then taken greedily in a preferred order — the reflector
-//! coordinates first, then joints 2…6, then joint 1, then joint 7 — and a column is kept only if the
-//! part of it that the already kept columns cannot explain is large enough (modified Gram–Schmidt,
-//! re-orthogonalised). The rest are fixed at their start values. This is a column-pivoted QR with a
-//! physically motivated pivot order, so the report can say *what* a fixed parameter depends on.
+//! The identification Jacobian (rows −u_ijᵀ(J_i − J_j), one per pair and reflector, on a sample of
+//! pairs) is summarised by its mean Gram matrix `G = MᵀM / rows` ([`gram_by_product`], or
+//! [`gram_by_qr`] for the built-in robot, whose calibrations stay bit-identical to earlier releases).
+//! Columns are scaled to unit RMS sensitivity and taken greedily in a preferred order
+//! ([`crate::kinematics::ArmModel::identifiability_order`]); a column is kept only if the part of it
+//! that the already kept columns cannot explain has norm ≥ [`NEAR_DEPENDENT_TOL`]. That is modified
+//! Gram–Schmidt in the G inner product, i.e. a Cholesky factorisation of G in the preference order
+//! that skips the columns it cannot extend — a column-pivoted QR with a physically motivated pivot
+//! order, so the report can say *what* a fixed parameter depends on. Squaring the condition number puts
+//! the residuals' noise floor near √ε ≈ 1e-8, below [`UNIDENTIFIABLE_TOL`]. The fixed parameters stay
+//! at their start values.
 
-use crate::kinematics::{N_DH, N_PARAMS, param_name};
-use nalgebra::{DMatrix, DVector, SVector};
+use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 
 /// Relative residual below which a column counts as exactly unidentifiable (numerical zero).
 pub const UNIDENTIFIABLE_TOL: f64 = 1e-7;
 /// Relative residual below which a column counts as near-dependent and is fixed too.
 pub const NEAR_DEPENDENT_TOL: f64 = 2e-3;
+/// A column whose norm is below this fraction of the largest column's is unidentifiable outright,
+/// before any scaling. URDF angles written as `1.570796325` or `1.5708` leave a parameter that is
+/// physically a rigid motion (a shift along joint 1's axis) with a sensitivity of 1e-9 … 1e-6 of the
+/// others; scaled to unit norm, such a column looks independent and its value runs off to 1e8 mm.
+pub const NEGLIGIBLE_COLUMN: f64 = 1e-6;
 
 /// A fixed parameter and why.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -37,163 +46,156 @@ pub struct IdentifiabilityReport {
     pub condition_after: f64,
 }
 
-/// Preferred order in which columns are considered.
-fn preference_order() -> Vec<usize> {
-    let mut order: Vec<usize> = (N_DH..N_PARAMS).collect();
-    order.extend(4..24); // joints 2..6
-    order.extend([0, 3, 1, 2]); // joint 1: a, alpha, then d, theta
-    order.extend(24..28); // joint 7
-    order
+/// The mean Gram matrix `MMᵀ / count` of `columns` (one column per sampled pair and reflector), as one
+/// matrix product.
+pub fn gram_by_product(columns: &DMatrix<f64>) -> DMatrix<f64> {
+    let n = columns.ncols().max(1);
+    columns * columns.transpose() / n as f64
 }
 
-fn physical_reason(k: usize) -> Option<&'static str> {
-    match k {
-        1 => Some(
-            "joint 1 d: a translation along the first axis moves every point alike and is absorbed by the tracker/base frame",
-        ),
-        2 => Some(
-            "joint 1 θ: a rotation about the first axis turns every point alike and is absorbed by the tracker/base frame",
-        ),
-        24..=27 => {
-            Some("joint 7: a constant flange transform is absorbed by the reflector coordinates")
-        }
-        _ => None,
-    }
+/// The mean Gram matrix `RᵀR / count` of `columns` through a thin QR of their transpose (`Mᵀ = Q R`).
+/// The same matrix as [`gram_by_product`] up to rounding; the built-in robot's calibrations use it so
+/// that they stay bit-identical to earlier releases.
+pub fn gram_by_qr(columns: &DMatrix<f64>) -> DMatrix<f64> {
+    let (p, count) = columns.shape();
+    let mut m = DMatrix::<f64>::zeros(count.max(p), p);
+    m.rows_mut(0, count).copy_from(&columns.transpose());
+    let r = m.qr().r();
+    r.transpose() * &r / count.max(1) as f64
 }
 
-fn condition_number(cols: &[DVector<f64>]) -> f64 {
-    if cols.is_empty() {
+/// What the analysis needs to know about the parameters.
+pub struct ParameterInfo<'a> {
+    /// Order in which the parameters are considered (every index once).
+    pub order: &'a [usize],
+    /// Parameters that may be free at all (the others are fixed by the user).
+    pub allowed: &'a [bool],
+    pub name: &'a dyn Fn(usize) -> String,
+    /// Why a parameter is unidentifiable, when physics says so.
+    pub reason: &'a dyn Fn(usize) -> Option<String>,
+}
+
+/// Condition number of the scaled Gram submatrix of `idx` (the square root of its eigenvalue ratio).
+fn condition(scaled: &DMatrix<f64>, idx: &[usize]) -> f64 {
+    if idx.is_empty() {
         return 1.0;
     }
-    let m = DMatrix::from_columns(cols);
-    let sv = m.singular_values();
-    let max = sv.max();
-    let min = sv.min();
+    let sub = DMatrix::from_fn(idx.len(), idx.len(), |i, j| scaled[(idx[i], idx[j])]);
+    let ev = sub.symmetric_eigenvalues();
+    let (max, min) = (ev.max(), ev.min());
     if min <= max * 1e-15 {
         f64::INFINITY
     } else {
-        max / min
+        (max / min).sqrt()
     }
 }
 
-/// Analyse sampled Jacobian rows (full 37 columns, unscaled). `allowed` restricts which parameters may
-/// be free at all (e.g. the user fixed some).
-///
-/// The rows are reduced once by a thin QR, `M = Q R`: `R` (37 × 37) has the same column norms, inner
-/// products and singular values as `M`, so all the work below is on 37-vectors whatever the number of
-/// pairs.
-pub fn analyse(
-    rows: &[SVector<f64, N_PARAMS>],
-    allowed: &[bool; N_PARAMS],
-) -> IdentifiabilityReport {
-    analyse_with_gram(rows, allowed).0
-}
-
-/// [`analyse`], also returning the mean Gram matrix `MᵀM / rows` of the unscaled rows (whose diagonal is
-/// the squared RMS sensitivity of each parameter and which is the Gauss–Newton matrix up to a factor 2).
-pub fn analyse_with_gram(
-    rows: &[SVector<f64, N_PARAMS>],
-    allowed: &[bool; N_PARAMS],
-) -> (IdentifiabilityReport, DMatrix<f64>) {
-    let n = rows.len().max(1);
-    let mut m = DMatrix::<f64>::zeros(rows.len().max(N_PARAMS), N_PARAMS);
-    for (i, r) in rows.iter().enumerate() {
-        m.row_mut(i).copy_from(&r.transpose());
-    }
-    let r = m.qr().r(); // N_PARAMS × N_PARAMS
-    let gram = r.transpose() * &r / n as f64;
-    let column = |k: usize| r.column(k).into_owned();
-    let norms: Vec<f64> = (0..N_PARAMS).map(|k| column(k).norm()).collect();
-    let max_norm = norms.iter().copied().fold(0.0, f64::max).max(1e-300);
-    let scaled: Vec<DVector<f64>> = (0..N_PARAMS)
-        .map(|k| {
-            if norms[k] > 1e-12 * max_norm {
-                column(k) / norms[k]
-            } else {
-                DVector::zeros(N_PARAMS)
-            }
-        })
+/// The kept parameters that column `k` leans on most (largest coefficients of its projection).
+fn leaning_on(scaled: &DMatrix<f64>, kept: &[usize], k: usize, info: &ParameterInfo) -> String {
+    let g = DMatrix::from_fn(kept.len(), kept.len(), |i, j| scaled[(kept[i], kept[j])]);
+    let b = nalgebra::DVector::from_fn(kept.len(), |i, _| scaled[(kept[i], k)]);
+    let coef = g
+        .svd(true, true)
+        .solve(&b, 1e-12)
+        .unwrap_or_else(|_| nalgebra::DVector::zeros(kept.len()));
+    let mut lean: Vec<(usize, f64)> = kept
+        .iter()
+        .copied()
+        .zip(coef.iter().map(|c| c.abs()))
         .collect();
-    let has_zero = scaled.iter().any(|c| c.norm() == 0.0);
-    let nonzero: Vec<DVector<f64>> = scaled.iter().filter(|c| c.norm() > 0.0).cloned().collect();
-    let condition_before = if has_zero {
-        f64::INFINITY
+    lean.sort_by(|x, y| y.1.total_cmp(&x.1));
+    let names: Vec<String> = lean.iter().take(3).map(|(j, _)| (info.name)(*j)).collect();
+    names.join(", ")
+}
+
+/// Analyse the mean Gram matrix `gram` of the unscaled pair Jacobian.
+pub fn analyse(gram: &DMatrix<f64>, info: &ParameterInfo) -> IdentifiabilityReport {
+    let p = gram.ncols();
+    let norms: Vec<f64> = (0..p).map(|k| gram[(k, k)].max(0.0).sqrt()).collect();
+    let max_norm = norms.iter().copied().fold(0.0, f64::max).max(1e-300);
+    let usable: Vec<bool> = norms
+        .iter()
+        .map(|&n| n.is_finite() && n > NEGLIGIBLE_COLUMN * max_norm)
+        .collect();
+    let scaled = DMatrix::from_fn(p, p, |a, b| {
+        if usable[a] && usable[b] {
+            gram[(a, b)] / (norms[a] * norms[b])
+        } else {
+            0.0
+        }
+    });
+    let condition_before = if usable.iter().all(|&u| u) {
+        condition(&scaled, &(0..p).collect::<Vec<_>>())
     } else {
-        condition_number(&nonzero)
+        f64::INFINITY
     };
-    let mut basis: Vec<DVector<f64>> = Vec::new();
+    // Rows of the Cholesky factor of the kept columns, in kept order.
     let mut kept: Vec<usize> = Vec::new();
+    let mut l: Vec<Vec<f64>> = Vec::new();
     let mut fixed = Vec::new();
-    for k in preference_order() {
-        if !allowed[k] {
+    for &k in info.order {
+        if !info.allowed.get(k).copied().unwrap_or(false) {
             fixed.push(FixedParameter {
                 index: k,
-                name: param_name(k),
+                name: (info.name)(k),
                 residual: f64::NAN,
                 reason: "fixed by the user".into(),
             });
             continue;
         }
-        let mut r = scaled[k].clone();
-        for _ in 0..2 {
-            for b in &basis {
-                let c = b.dot(&r);
-                r.axpy(-c, b, 1.0);
+        let res = if usable[k] {
+            let mut lk = Vec::with_capacity(kept.len() + 1);
+            for (jpos, &j) in kept.iter().enumerate() {
+                let dot: f64 = lk.iter().zip(&l[jpos]).map(|(a, b)| a * b).sum();
+                lk.push((scaled[(k, j)] - dot) / l[jpos][jpos]);
             }
-        }
-        let res = r.norm();
-        if res >= NEAR_DEPENDENT_TOL {
-            basis.push(r / res);
-            kept.push(k);
-            continue;
-        }
+            let res = (1.0 - lk.iter().map(|v| v * v).sum::<f64>())
+                .max(0.0)
+                .sqrt();
+            if res >= NEAR_DEPENDENT_TOL {
+                lk.push(res);
+                l.push(lk);
+                kept.push(k);
+                continue;
+            }
+            res
+        } else {
+            0.0
+        };
         let reason = if res < UNIDENTIFIABLE_TOL {
-            match physical_reason(k) {
+            match (info.reason)(k) {
                 Some(why) => format!("unidentifiable from distances ({why})"),
+                None if !usable[k] => {
+                    "unidentifiable from distances: the distances do not depend on it".into()
+                }
                 None => {
                     "unidentifiable from distances: its column is a combination of the kept ones"
                         .into()
                 }
             }
         } else {
-            // Name the kept parameters it leans on most.
-            let a =
-                DMatrix::from_columns(&kept.iter().map(|&j| scaled[j].clone()).collect::<Vec<_>>());
-            let coef = a
-                .clone()
-                .svd(true, true)
-                .solve(&scaled[k], 1e-12)
-                .unwrap_or_else(|_| DVector::zeros(kept.len()));
-            let mut lean: Vec<(usize, f64)> = kept
-                .iter()
-                .copied()
-                .zip(coef.iter().map(|c| c.abs()))
-                .collect();
-            lean.sort_by(|x, y| y.1.total_cmp(&x.1));
-            let names: Vec<String> = lean.iter().take(3).map(|(j, _)| param_name(*j)).collect();
             format!(
                 "near-dependent (residual {res:.1e} of its scaled column) on {}",
-                names.join(", ")
+                leaning_on(&scaled, &kept, k, info)
             )
         };
         fixed.push(FixedParameter {
             index: k,
-            name: param_name(k),
+            name: (info.name)(k),
             residual: res,
             reason,
         });
     }
     kept.sort_unstable();
     fixed.sort_by_key(|f| f.index);
-    let condition_after =
-        condition_number(&kept.iter().map(|&k| scaled[k].clone()).collect::<Vec<_>>());
-    (
-        IdentifiabilityReport {
-            free: kept,
-            fixed,
-            condition_before,
-            condition_after,
-        },
-        gram,
-    )
+    let condition_after = condition(&scaled, &kept);
+    IdentifiabilityReport {
+        free: kept,
+        fixed,
+        condition_before,
+        condition_after,
+    }
 }
+
+#[cfg(test)]
+mod tests;

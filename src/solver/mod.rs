@@ -1,6 +1,7 @@
 //! The paper's two-step minimax calibration (Algorithms I and II), and the least-squares baseline.
 //!
-//! Step 1 identifies each arm's DH parameters and reflector coordinates by minimising the maximum over
+//! Step 1 identifies each arm's kinematic parameters (the built-in IRB 14000's DH table, or the
+//! joint-origin corrections of a URDF chain) and reflector coordinates by minimising the maximum over
 //! the reflectors of the summed squared relative distance errors; step 2 identifies the right-arm base
 //! in the left-arm base frame by the same minimax over collaborative distance errors.
 //!
@@ -140,9 +141,14 @@ pub fn min_configurations(n_params: usize) -> usize {
     (n_params + 18).div_ceil(9).max(crate::dataset::MIN_CONFIGS)
 }
 
-/// The parameters of one arm that distances can identify at most: all but `d1`, `θ1` (absorbed by the
-/// tracker frame) and the four of the last joint (absorbed by the reflector coordinates).
-pub const MAX_IDENTIFIABLE_PARAMS: usize = crate::kinematics::N_PARAMS - 6;
+/// The parameters of an arm that distances can identify at most: all but those physics rules out (for
+/// the built-in robot `d1`, `θ1`, absorbed by the tracker frame, and the four of the last joint,
+/// absorbed by the reflector coordinates: 31 of 37).
+pub fn identifiable_params(arm: &crate::kinematics::ArmModel) -> usize {
+    (0..arm.param_count())
+        .filter(|&k| arm.unidentifiable_reason(k).is_none())
+        .count()
+}
 
 impl std::fmt::Display for Termination {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -234,13 +240,23 @@ pub enum CalibrationError {
     #[error(
         "{side} arm: {found} configurations in the selected split (after exclusions), at least {needed} \
          are needed to identify the arm's parameters from distances (9n − 18 independent distances \
-         for {} parameters; the paper uses 120)",
-        MAX_IDENTIFIABLE_PARAMS
+         for {params} parameters; the paper uses 120)"
     )]
     TooFewConfigurations {
         side: Side,
         found: usize,
         needed: usize,
+        /// The arm's identifiable parameters.
+        params: usize,
+    },
+    #[error(
+        "{side} arm: configuration `{id}` has {found} joint values, the arm's model has {expected} joints"
+    )]
+    JointCount {
+        side: Side,
+        id: String,
+        found: usize,
+        expected: usize,
     },
     #[error("{stage}: the identification Jacobian is rank deficient: {detail}")]
     RankDeficient { stage: Stage, detail: String },

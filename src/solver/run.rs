@@ -15,7 +15,7 @@ use super::{
     StageSummary, Termination,
 };
 use crate::dataset::Dataset;
-use crate::kinematics::{DualArmModel, N_JOINTS, N_PARAMS, param_is_angle, param_name};
+use crate::kinematics::{ArmKinematics, DualArmModel};
 use crate::side::{ConfigId, PerSide, Side};
 use nalgebra::{DMatrix, DVector, Vector3};
 use std::sync::Arc;
@@ -129,7 +129,7 @@ pub enum Progress {
 
 /// Per-arm measurements of the selected split.
 struct ArmInput {
-    qs: Vec<[f64; N_JOINTS]>,
+    qs: Vec<Vec<f64>>,
     measured: Vec<[Vector3<f64>; 3]>,
     side_tolerance_mm: f64,
 }
@@ -174,7 +174,7 @@ impl CalibrationRun {
         settings: CalibrationSettings,
         cancel: Arc<AtomicBool>,
     ) -> Result<Self, CalibrationError> {
-        let inputs = PerSide::try_from_fn(|side| arm_input(dataset, side, &settings))?;
+        let inputs = PerSide::try_from_fn(|side| arm_input(dataset, nominal, side, &settings))?;
         let mut run = Self {
             settings,
             nominal: nominal.clone(),
@@ -406,17 +406,34 @@ impl CalibrationRun {
     fn arm_solver(&mut self, side: Side) -> Result<Box<dyn StageSolver>, CalibrationError> {
         let stage = Stage::Arm(side);
         let input = &self.inputs[side];
+        let start = self.nominal.arm(side);
+        let n_params = start.param_count();
         let probe = ArmProblem::new(
             input.qs.clone(),
             &input.measured,
-            self.nominal.arm(side),
-            (0..N_PARAMS).collect(),
-            DVector::from_element(N_PARAMS, 1.0),
+            start,
+            (0..n_params).collect(),
+            DVector::from_element(n_params, 1.0),
             input.side_tolerance_mm,
         );
         // A few thousand pairs show every dependency (they are exact) and estimate the scaling well.
-        let rows = probe.sample_pair_jacobian(&DVector::zeros(N_PARAMS), IDENTIFIABILITY_PAIRS);
-        let (report, gram) = identifiability::analyse_with_gram(&rows, &[true; N_PARAMS]);
+        let columns = probe.sample_pair_jacobian(&DVector::zeros(n_params), IDENTIFIABILITY_PAIRS);
+        let gram = match start.kinematics {
+            // The built-in robot's Gram matrix as earlier releases computed it: its calibrations stay
+            // bit-identical.
+            ArmKinematics::Dh(_) => identifiability::gram_by_qr(&columns),
+            ArmKinematics::Chain { .. } => identifiability::gram_by_product(&columns),
+        };
+        let order = start.identifiability_order();
+        let report = identifiability::analyse(
+            &gram,
+            &identifiability::ParameterInfo {
+                order: &order,
+                allowed: &vec![true; n_params],
+                name: &|k| start.param_name(k),
+                reason: &|k| start.unidentifiable_reason(k),
+            },
+        );
         if report.free.is_empty() {
             return Err(CalibrationError::RankDeficient {
                 stage,
@@ -493,9 +510,9 @@ impl CalibrationRun {
         };
         let now = arm.to_vector();
         let nominal = self.nominal.arm(side).to_vector();
-        (0..N_PARAMS).find_map(|k| {
+        (0..now.len().min(nominal.len())).find_map(|k| {
             let moved = (now[k] - nominal[k]).abs();
-            let (limit, unit) = if param_is_angle(k) {
+            let (limit, unit) = if arm.param_is_angle(k) {
                 (super::DIVERGED_ANGLE_RAD, "rad")
             } else {
                 (super::DIVERGED_LENGTH_MM, "mm")
@@ -503,7 +520,7 @@ impl CalibrationRun {
             (moved > limit).then(|| {
                 format!(
                     "{} moved {moved:.3} {unit} from its nominal value (more than {limit} {unit})",
-                    param_name(k)
+                    arm.param_name(k)
                 )
             })
         })
@@ -545,20 +562,35 @@ impl CalibrationRun {
             return;
         };
         let input = &self.inputs[side];
+        let arm = self.committed.arm(side);
+        let n_params = arm.param_count();
         let probe = ArmProblem::new(
             input.qs.clone(),
             &input.measured,
-            self.committed.arm(side),
-            (0..N_PARAMS).collect(),
-            DVector::from_element(N_PARAMS, 1.0),
+            arm,
+            (0..n_params).collect(),
+            DVector::from_element(n_params, 1.0),
             input.side_tolerance_mm,
         );
-        let rows = probe.sample_pair_jacobian(&DVector::zeros(N_PARAMS), IDENTIFIABILITY_PAIRS);
-        let mut allowed = [false; N_PARAMS];
+        let columns = probe.sample_pair_jacobian(&DVector::zeros(n_params), IDENTIFIABILITY_PAIRS);
+        let gram = match arm.kinematics {
+            ArmKinematics::Dh(_) => identifiability::gram_by_qr(&columns),
+            ArmKinematics::Chain { .. } => identifiability::gram_by_product(&columns),
+        };
+        let mut allowed = vec![false; n_params];
         for &k in &start.free {
             allowed[k] = true;
         }
-        let at_solution = identifiability::analyse(&rows, &allowed);
+        let order = arm.identifiability_order();
+        let at_solution = identifiability::analyse(
+            &gram,
+            &identifiability::ParameterInfo {
+                order: &order,
+                allowed: &allowed,
+                name: &|k| arm.param_name(k),
+                reason: &|k| arm.unidentifiable_reason(k),
+            },
+        );
         for f in &at_solution.fixed {
             if allowed[f.index] {
                 self.diagnostics.push(format!(
@@ -598,6 +630,7 @@ impl CalibrationRun {
 /// The selected split of one arm, checked.
 fn arm_input(
     dataset: &Dataset,
+    nominal: &DualArmModel,
     side: Side,
     settings: &CalibrationSettings,
 ) -> Result<ArmInput, CalibrationError> {
@@ -611,15 +644,26 @@ fn arm_input(
         })
         .map(|(_, m)| m)
         .collect();
-    let needed = super::min_configurations(super::MAX_IDENTIFIABLE_PARAMS);
+    let params = super::identifiable_params(nominal.arm(side));
+    let needed = super::min_configurations(params);
     if ms.len() < needed {
         return Err(CalibrationError::TooFewConfigurations {
             side,
             found: ms.len(),
             needed,
+            params,
         });
     }
-    let qs: Vec<[f64; N_JOINTS]> = ms.iter().map(|m| m.q_rad).collect();
+    let expected = nominal.arm(side).joint_count();
+    if let Some(m) = ms.iter().find(|m| m.q_rad.len() != expected) {
+        return Err(CalibrationError::JointCount {
+            side,
+            id: m.id.clone(),
+            found: m.q_rad.len(),
+            expected,
+        });
+    }
+    let qs: Vec<Vec<f64>> = ms.iter().map(|m| m.q_rad.clone()).collect();
     let measured: Vec<[Vector3<f64>; 3]> = ms.iter().map(|m| m.tracker_points_mm).collect();
     if qs
         .iter()

@@ -5,6 +5,18 @@
 use dualcal::dataset::Dataset;
 use dualcal::kinematics::DualArmModel;
 use dualcal::solver::{CalibrationResult, CalibrationSettings, Calibrator, Termination};
+use nalgebra::Vector3;
+
+/// The reflector coordinates (flange frame, mm) the tests' synthetic data use: a = (45, 0, 40),
+/// b = (−25, 40, 40), c = (−25, −40, 40). Written out here rather than taken from the simulator, so
+/// that the tests' data does not move with its defaults.
+pub fn reflectors_mm() -> [Vector3<f64>; 3] {
+    [
+        Vector3::new(45.0, 0.0, 40.0),
+        Vector3::new(-25.0, 40.0, 40.0),
+        Vector3::new(-25.0, -40.0, 40.0),
+    ]
+}
 
 /// Calibrate without observers. Panics when the input is refused or a stage ran out of iterations (a
 /// test that means to check those calls [`Calibrator`] itself); a stall is returned for the test to
@@ -26,4 +38,57 @@ pub fn calibrate(
         );
     }
     result
+}
+
+/// The Python that runs this repository's `tools/*.py`: `DUALCAL_PYTHON` if set, else the first of
+/// `python3`, `/usr/bin/python3` that can `import` every module of `imports` (comma-separated, e.g.
+/// `"numpy, tomllib"`). Panics — fails the test, never skips it — with a message saying what to install
+/// when there is none: `tools/test` installs what the tests need.
+pub fn python(imports: &str) -> String {
+    use std::collections::HashMap;
+    use std::sync::{Mutex, OnceLock};
+    static FOUND: OnceLock<Mutex<HashMap<String, Result<String, String>>>> = OnceLock::new();
+    let mut found = FOUND
+        .get_or_init(Default::default)
+        .lock()
+        .unwrap_or_else(|e| e.into_inner());
+    let result = found
+        .entry(imports.to_string())
+        .or_insert_with(|| find_python(imports))
+        .clone();
+    drop(found);
+    match result {
+        Ok(py) => py,
+        Err(tried) => panic!(
+            "this test needs a Python 3 that can `import {imports}` (on Debian the packages python3 and \
+             python3-numpy, which `tools/test` installs), or DUALCAL_PYTHON naming such a Python; \
+             tried {tried}"
+        ),
+    }
+}
+
+fn find_python(imports: &str) -> Result<String, String> {
+    let candidates: Vec<String> = match std::env::var("DUALCAL_PYTHON") {
+        Ok(p) => vec![p],
+        Err(_) => vec!["python3".into(), "/usr/bin/python3".into()],
+    };
+    let mut tried = Vec::new();
+    for py in &candidates {
+        match std::process::Command::new(py)
+            .args(["-c", &format!("import {imports}")])
+            .output()
+        {
+            Ok(out) if out.status.success() => return Ok(py.clone()),
+            Ok(out) => tried.push(format!(
+                "`{py}`: {}",
+                String::from_utf8_lossy(&out.stderr)
+                    .trim()
+                    .lines()
+                    .last()
+                    .unwrap_or("")
+            )),
+            Err(e) => tried.push(format!("`{py}`: {e}")),
+        }
+    }
+    Err(tried.join("; "))
 }

@@ -1,5 +1,6 @@
 //! Orbit camera around a target point, in the robot's body frame (mm, z up).
 
+use eframe::egui;
 use nalgebra::{Matrix4, Point3, Vector3, Vector4};
 
 /// An orbit camera: yaw and pitch about the target, distance from it, perspective projection.
@@ -73,6 +74,30 @@ impl OrbitCamera {
 
     pub fn view_proj(&self, aspect: f32) -> Matrix4<f32> {
         self.projection(aspect) * self.view()
+    }
+
+    /// Mouse input on the viewport: drag orbits, right/middle or shift-drag pans, the wheel zooms, a
+    /// double click resets the view.
+    pub fn handle_input(&mut self, response: &egui::Response) {
+        let (shift, scroll) = response
+            .ctx
+            .input(|i| (i.modifiers.shift, i.smooth_scroll_delta.y));
+        let d = response.drag_delta();
+        let primary = response.dragged_by(egui::PointerButton::Primary);
+        if primary && !shift {
+            self.orbit(d.x, d.y);
+        } else if primary
+            || response.dragged_by(egui::PointerButton::Secondary)
+            || response.dragged_by(egui::PointerButton::Middle)
+        {
+            self.pan(d.x, d.y, response.rect.height());
+        }
+        if response.hovered() && scroll != 0.0 {
+            self.zoom((-scroll * 0.002).exp());
+        }
+        if response.double_clicked() {
+            *self = Self::default();
+        }
     }
 
     /// Orbit by a drag of `dx`, `dy` points.

@@ -5,6 +5,7 @@
 //! [`ViewportCallback`] uploads the scene when it changed, writes the camera uniform and records the
 //! render pass in `prepare`.
 
+use super::primitives::{MeshVertex, unit_box, unit_cylinder, unit_sphere};
 use super::scene::{ColorVertex, MeshInstance, Primitive, SceneData};
 use eframe::egui_wgpu::{self, wgpu};
 use std::sync::Arc;
@@ -23,13 +24,6 @@ pub struct FrameUniform {
     pub light_dir: [f32; 4],
     /// Camera position, w unused.
     pub eye: [f32; 4],
-}
-
-#[repr(C)]
-#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
-struct MeshVertex {
-    position: [f32; 3],
-    normal: [f32; 3],
 }
 
 #[repr(C)]
@@ -105,15 +99,10 @@ struct Targets {
 /// Everything the viewport keeps on the GPU; stored in egui-wgpu's callback resources.
 pub struct ViewportGpu {
     sample_count: u32,
-    mesh_pipeline: wgpu::RenderPipeline,
-    line_pipeline: wgpu::RenderPipeline,
-    triangle_pipeline: wgpu::RenderPipeline,
-    background_pipeline: wgpu::RenderPipeline,
+    pipelines: Pipelines,
     uniform_buffer: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
-    mesh_vertices: wgpu::Buffer,
-    mesh_indices: wgpu::Buffer,
-    mesh_ranges: [MeshRange; 3],
+    meshes: UnitMeshes,
     instances: DynBuffer,
     /// Instance ranges per primitive (box, cylinder, sphere).
     instance_ranges: [std::ops::Range<u32>; 3],
@@ -133,6 +122,212 @@ fn primitive_index(p: Primitive) -> usize {
     }
 }
 
+/// The render pipelines: instanced unit meshes, coloured lines and triangles, the background.
+struct Pipelines {
+    mesh: wgpu::RenderPipeline,
+    line: wgpu::RenderPipeline,
+    triangle: wgpu::RenderPipeline,
+    background: wgpu::RenderPipeline,
+}
+
+/// What differs between the pipelines (all draw into [`COLOR_FORMAT`] + [`DEPTH_FORMAT`] with the
+/// shader's `vs_main` and `fs_main`).
+struct PipelineSpec<'a> {
+    label: &'a str,
+    layout: &'a wgpu::PipelineLayout,
+    shader: &'a wgpu::ShaderModule,
+    buffers: &'a [Option<wgpu::VertexBufferLayout<'a>>],
+    topology: wgpu::PrimitiveTopology,
+    depth_write: bool,
+    depth_compare: wgpu::CompareFunction,
+    blend: Option<wgpu::BlendState>,
+}
+
+fn create_pipeline(
+    device: &wgpu::Device,
+    spec: PipelineSpec<'_>,
+    sample_count: u32,
+) -> wgpu::RenderPipeline {
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(spec.label),
+        layout: Some(spec.layout),
+        vertex: wgpu::VertexState {
+            module: spec.shader,
+            entry_point: Some("vs_main"),
+            compilation_options: Default::default(),
+            buffers: spec.buffers,
+        },
+        primitive: wgpu::PrimitiveState {
+            topology: spec.topology,
+            cull_mode: None,
+            ..Default::default()
+        },
+        depth_stencil: Some(wgpu::DepthStencilState {
+            format: DEPTH_FORMAT,
+            depth_write_enabled: Some(spec.depth_write),
+            depth_compare: Some(spec.depth_compare),
+            stencil: wgpu::StencilState::default(),
+            bias: wgpu::DepthBiasState::default(),
+        }),
+        multisample: wgpu::MultisampleState {
+            count: sample_count,
+            mask: !0,
+            alpha_to_coverage_enabled: false,
+        },
+        fragment: Some(wgpu::FragmentState {
+            module: spec.shader,
+            entry_point: Some("fs_main"),
+            compilation_options: Default::default(),
+            targets: &[Some(wgpu::ColorTargetState {
+                format: COLOR_FORMAT,
+                blend: spec.blend,
+                write_mask: wgpu::ColorWrites::ALL,
+            })],
+        }),
+        multiview_mask: None,
+        cache: None,
+    })
+}
+
+fn shader(device: &wgpu::Device, label: &str, wgsl: &'static str) -> wgpu::ShaderModule {
+    device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(label),
+        source: wgpu::ShaderSource::Wgsl(wgsl.into()),
+    })
+}
+
+impl Pipelines {
+    fn new(device: &wgpu::Device, frame_layout: &wgpu::BindGroupLayout, sample_count: u32) -> Self {
+        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("viewport layout"),
+            bind_group_layouts: &[Some(frame_layout)],
+            immediate_size: 0,
+        });
+        let empty_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("viewport background layout"),
+            bind_group_layouts: &[],
+            immediate_size: 0,
+        });
+        let mesh_shader = shader(
+            device,
+            "mesh.wgsl",
+            include_str!("../../../shaders/mesh.wgsl"),
+        );
+        let line_shader = shader(
+            device,
+            "lines.wgsl",
+            include_str!("../../../shaders/lines.wgsl"),
+        );
+        let background_shader = shader(
+            device,
+            "background.wgsl",
+            include_str!("../../../shaders/background.wgsl"),
+        );
+        let mesh_buffers = [
+            Some(wgpu::VertexBufferLayout {
+                array_stride: std::mem::size_of::<MeshVertex>() as u64,
+                step_mode: wgpu::VertexStepMode::Vertex,
+                attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3],
+            }),
+            Some(wgpu::VertexBufferLayout {
+                array_stride: std::mem::size_of::<GpuInstance>() as u64,
+                step_mode: wgpu::VertexStepMode::Instance,
+                attributes: &wgpu::vertex_attr_array![
+                    2 => Float32x4, 3 => Float32x4, 4 => Float32x4, 5 => Float32x4,
+                    6 => Float32x4, 7 => Float32x4, 8 => Float32x4, 9 => Float32x4
+                ],
+            }),
+        ];
+        let color_buffers = [Some(wgpu::VertexBufferLayout {
+            array_stride: std::mem::size_of::<ColorVertex>() as u64,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x4],
+        })];
+        let colored = |label, topology, depth_write| PipelineSpec {
+            label,
+            layout: &layout,
+            shader: &line_shader,
+            buffers: &color_buffers,
+            topology,
+            depth_write,
+            depth_compare: wgpu::CompareFunction::LessEqual,
+            blend: Some(wgpu::BlendState::ALPHA_BLENDING),
+        };
+        let pipeline = |spec| create_pipeline(device, spec, sample_count);
+        Self {
+            mesh: pipeline(PipelineSpec {
+                label: "viewport mesh pipeline",
+                layout: &layout,
+                shader: &mesh_shader,
+                buffers: &mesh_buffers,
+                topology: wgpu::PrimitiveTopology::TriangleList,
+                depth_write: true,
+                depth_compare: wgpu::CompareFunction::LessEqual,
+                blend: None,
+            }),
+            line: pipeline(colored(
+                "viewport line pipeline",
+                wgpu::PrimitiveTopology::LineList,
+                true,
+            )),
+            triangle: pipeline(colored(
+                "viewport triangle pipeline",
+                wgpu::PrimitiveTopology::TriangleList,
+                false,
+            )),
+            background: pipeline(PipelineSpec {
+                label: "viewport background pipeline",
+                layout: &empty_layout,
+                shader: &background_shader,
+                buffers: &[],
+                topology: wgpu::PrimitiveTopology::TriangleList,
+                depth_write: false,
+                depth_compare: wgpu::CompareFunction::Always,
+                blend: None,
+            }),
+        }
+    }
+}
+
+/// The three unit primitives in one vertex and one index buffer.
+struct UnitMeshes {
+    vertices: wgpu::Buffer,
+    indices: wgpu::Buffer,
+    /// Index ranges of box, cylinder, sphere.
+    ranges: [MeshRange; 3],
+}
+
+impl UnitMeshes {
+    fn new(device: &wgpu::Device) -> Self {
+        let meshes = [unit_box(), unit_cylinder(32), unit_sphere(24, 16)];
+        let mut vertices: Vec<MeshVertex> = Vec::new();
+        let mut indices: Vec<u32> = Vec::new();
+        let ranges = meshes.map(|(v, i)| {
+            let range = MeshRange {
+                first_index: indices.len() as u32,
+                index_count: i.len() as u32,
+                base_vertex: vertices.len() as i32,
+            };
+            vertices.extend(v);
+            indices.extend(i);
+            range
+        });
+        Self {
+            vertices: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("viewport unit mesh vertices"),
+                contents: bytemuck::cast_slice(&vertices),
+                usage: wgpu::BufferUsages::VERTEX,
+            }),
+            indices: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("viewport unit mesh indices"),
+                contents: bytemuck::cast_slice(&indices),
+                usage: wgpu::BufferUsages::INDEX,
+            }),
+            ranges,
+        }
+    }
+}
+
 impl ViewportGpu {
     /// Create the pipelines and buffers. `sample_count` is 1 (no MSAA) or 4.
     pub fn new(device: &wgpu::Device, sample_count: u32) -> Self {
@@ -142,7 +337,7 @@ impl ViewportGpu {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let bind_group_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        let frame_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("viewport frame layout"),
             entries: &[wgpu::BindGroupLayoutEntry {
                 binding: 0,
@@ -157,212 +352,18 @@ impl ViewportGpu {
         });
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("viewport frame bind group"),
-            layout: &bind_group_layout,
+            layout: &frame_layout,
             entries: &[wgpu::BindGroupEntry {
                 binding: 0,
                 resource: uniform_buffer.as_entire_binding(),
             }],
         });
-        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("viewport layout"),
-            bind_group_layouts: &[Some(&bind_group_layout)],
-            immediate_size: 0,
-        });
-        let empty_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("viewport background layout"),
-            bind_group_layouts: &[],
-            immediate_size: 0,
-        });
-
-        let mesh_shader = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("mesh.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(include_str!("../../../shaders/mesh.wgsl").into()),
-        });
-        let line_shader = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("lines.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(include_str!("../../../shaders/lines.wgsl").into()),
-        });
-        let background_shader = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("background.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(
-                include_str!("../../../shaders/background.wgsl").into(),
-            ),
-        });
-
-        let multisample = wgpu::MultisampleState {
-            count: sample_count,
-            mask: !0,
-            alpha_to_coverage_enabled: false,
-        };
-        let depth = |write: bool| wgpu::DepthStencilState {
-            format: DEPTH_FORMAT,
-            depth_write_enabled: Some(write),
-            depth_compare: Some(wgpu::CompareFunction::LessEqual),
-            stencil: wgpu::StencilState::default(),
-            bias: wgpu::DepthBiasState::default(),
-        };
-        let opaque_target = [Some(wgpu::ColorTargetState {
-            format: COLOR_FORMAT,
-            blend: None,
-            write_mask: wgpu::ColorWrites::ALL,
-        })];
-        let blended_target = [Some(wgpu::ColorTargetState {
-            format: COLOR_FORMAT,
-            blend: Some(wgpu::BlendState::ALPHA_BLENDING),
-            write_mask: wgpu::ColorWrites::ALL,
-        })];
-
-        let mesh_vertex_layout = wgpu::VertexBufferLayout {
-            array_stride: std::mem::size_of::<MeshVertex>() as u64,
-            step_mode: wgpu::VertexStepMode::Vertex,
-            attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3],
-        };
-        let instance_layout = wgpu::VertexBufferLayout {
-            array_stride: std::mem::size_of::<GpuInstance>() as u64,
-            step_mode: wgpu::VertexStepMode::Instance,
-            attributes: &wgpu::vertex_attr_array![
-                2 => Float32x4, 3 => Float32x4, 4 => Float32x4, 5 => Float32x4,
-                6 => Float32x4, 7 => Float32x4, 8 => Float32x4, 9 => Float32x4
-            ],
-        };
-        let color_vertex_layout = wgpu::VertexBufferLayout {
-            array_stride: std::mem::size_of::<ColorVertex>() as u64,
-            step_mode: wgpu::VertexStepMode::Vertex,
-            attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x4],
-        };
-
-        let mesh_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("viewport mesh pipeline"),
-            layout: Some(&layout),
-            vertex: wgpu::VertexState {
-                module: &mesh_shader,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[Some(mesh_vertex_layout), Some(instance_layout)],
-            },
-            primitive: wgpu::PrimitiveState {
-                topology: wgpu::PrimitiveTopology::TriangleList,
-                cull_mode: None,
-                ..Default::default()
-            },
-            depth_stencil: Some(depth(true)),
-            multisample,
-            fragment: Some(wgpu::FragmentState {
-                module: &mesh_shader,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &opaque_target,
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
-        let color_pipeline = |label: &str, topology, write_depth: bool, targets| {
-            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some(label),
-                layout: Some(&layout),
-                vertex: wgpu::VertexState {
-                    module: &line_shader,
-                    entry_point: Some("vs_main"),
-                    compilation_options: Default::default(),
-                    buffers: &[Some(color_vertex_layout.clone())],
-                },
-                primitive: wgpu::PrimitiveState {
-                    topology,
-                    cull_mode: None,
-                    ..Default::default()
-                },
-                depth_stencil: Some(depth(write_depth)),
-                multisample,
-                fragment: Some(wgpu::FragmentState {
-                    module: &line_shader,
-                    entry_point: Some("fs_main"),
-                    compilation_options: Default::default(),
-                    targets,
-                }),
-                multiview_mask: None,
-                cache: None,
-            })
-        };
-        let line_pipeline = color_pipeline(
-            "viewport line pipeline",
-            wgpu::PrimitiveTopology::LineList,
-            true,
-            &blended_target,
-        );
-        let triangle_pipeline = color_pipeline(
-            "viewport triangle pipeline",
-            wgpu::PrimitiveTopology::TriangleList,
-            false,
-            &blended_target,
-        );
-        let background_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("viewport background pipeline"),
-            layout: Some(&empty_layout),
-            vertex: wgpu::VertexState {
-                module: &background_shader,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: DEPTH_FORMAT,
-                depth_write_enabled: Some(false),
-                depth_compare: Some(wgpu::CompareFunction::Always),
-                stencil: wgpu::StencilState::default(),
-                bias: wgpu::DepthBiasState::default(),
-            }),
-            multisample,
-            fragment: Some(wgpu::FragmentState {
-                module: &background_shader,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &opaque_target,
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
-
-        // The three unit primitives in one vertex and one index buffer.
-        let meshes = [unit_box(), unit_cylinder(32), unit_sphere(24, 16)];
-        let mut vertices: Vec<MeshVertex> = Vec::new();
-        let mut indices: Vec<u32> = Vec::new();
-        let mut mesh_ranges = [MeshRange {
-            first_index: 0,
-            index_count: 0,
-            base_vertex: 0,
-        }; 3];
-        for (k, (v, i)) in meshes.into_iter().enumerate() {
-            mesh_ranges[k] = MeshRange {
-                first_index: indices.len() as u32,
-                index_count: i.len() as u32,
-                base_vertex: vertices.len() as i32,
-            };
-            vertices.extend(v);
-            indices.extend(i);
-        }
-        let mesh_vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("viewport unit mesh vertices"),
-            contents: bytemuck::cast_slice(&vertices),
-            usage: wgpu::BufferUsages::VERTEX,
-        });
-        let mesh_indices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("viewport unit mesh indices"),
-            contents: bytemuck::cast_slice(&indices),
-            usage: wgpu::BufferUsages::INDEX,
-        });
-
         Self {
             sample_count,
-            mesh_pipeline,
-            line_pipeline,
-            triangle_pipeline,
-            background_pipeline,
+            pipelines: Pipelines::new(device, &frame_layout, sample_count),
             uniform_buffer,
             bind_group,
-            mesh_vertices,
-            mesh_indices,
-            mesh_ranges,
+            meshes: UnitMeshes::new(device),
             instances: DynBuffer::new(device, "viewport instances", wgpu::BufferUsages::VERTEX),
             instance_ranges: [0..0, 0..0, 0..0],
             lines: DynBuffer::new(device, "viewport lines", wgpu::BufferUsages::VERTEX),
@@ -499,16 +500,16 @@ impl ViewportGpu {
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        pass.set_pipeline(&self.background_pipeline);
+        pass.set_pipeline(&self.pipelines.background);
         pass.draw(0..3, 0..1);
 
         pass.set_bind_group(0, &self.bind_group, &[]);
         if self.instances.len > 0 {
-            pass.set_pipeline(&self.mesh_pipeline);
-            pass.set_vertex_buffer(0, self.mesh_vertices.slice(..));
+            pass.set_pipeline(&self.pipelines.mesh);
+            pass.set_vertex_buffer(0, self.meshes.vertices.slice(..));
             pass.set_vertex_buffer(1, self.instances.buffer.slice(..));
-            pass.set_index_buffer(self.mesh_indices.slice(..), wgpu::IndexFormat::Uint32);
-            for (range, mesh) in self.instance_ranges.iter().zip(&self.mesh_ranges) {
+            pass.set_index_buffer(self.meshes.indices.slice(..), wgpu::IndexFormat::Uint32);
+            for (range, mesh) in self.instance_ranges.iter().zip(&self.meshes.ranges) {
                 if !range.is_empty() {
                     pass.draw_indexed(
                         mesh.first_index..mesh.first_index + mesh.index_count,
@@ -519,12 +520,12 @@ impl ViewportGpu {
             }
         }
         if self.lines.len > 0 {
-            pass.set_pipeline(&self.line_pipeline);
+            pass.set_pipeline(&self.pipelines.line);
             pass.set_vertex_buffer(0, self.lines.buffer.slice(..));
             pass.draw(0..self.lines.len, 0..1);
         }
         if self.triangles.len > 0 {
-            pass.set_pipeline(&self.triangle_pipeline);
+            pass.set_pipeline(&self.pipelines.triangle);
             pass.set_vertex_buffer(0, self.triangles.buffer.slice(..));
             pass.draw(0..self.triangles.len, 0..1);
         }
@@ -573,120 +574,9 @@ impl egui_wgpu::CallbackTrait for ViewportCallback {
     }
 }
 
-// ---- unit primitives -------------------------------------------------------------------------------
-
-/// Cube [-1, 1]³ with flat normals.
-fn unit_box() -> (Vec<MeshVertex>, Vec<u32>) {
-    let mut v = Vec::with_capacity(24);
-    let mut i = Vec::with_capacity(36);
-    for axis in 0..3 {
-        for sign in [-1.0f32, 1.0] {
-            let mut n = [0.0; 3];
-            n[axis] = sign;
-            let (u_axis, v_axis) = ((axis + 1) % 3, (axis + 2) % 3);
-            let base = v.len() as u32;
-            for (su, sv) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
-                let mut p = [0.0; 3];
-                p[axis] = sign;
-                p[u_axis] = su;
-                p[v_axis] = sv;
-                v.push(MeshVertex {
-                    position: p,
-                    normal: n,
-                });
-            }
-            i.extend([base, base + 1, base + 2, base, base + 2, base + 3]);
-        }
-    }
-    (v, i)
-}
-
-/// Cylinder of radius 1 from z = -1 to z = 1, with caps.
-fn unit_cylinder(segments: u32) -> (Vec<MeshVertex>, Vec<u32>) {
-    let mut v = Vec::new();
-    let mut i = Vec::new();
-    for k in 0..=segments {
-        let a = k as f32 / segments as f32 * std::f32::consts::TAU;
-        let (s, c) = a.sin_cos();
-        v.push(MeshVertex {
-            position: [c, s, -1.0],
-            normal: [c, s, 0.0],
-        });
-        v.push(MeshVertex {
-            position: [c, s, 1.0],
-            normal: [c, s, 0.0],
-        });
-    }
-    for k in 0..segments {
-        let b = 2 * k;
-        i.extend([b, b + 2, b + 1, b + 1, b + 2, b + 3]);
-    }
-    for z in [-1.0f32, 1.0] {
-        let centre = v.len() as u32;
-        v.push(MeshVertex {
-            position: [0.0, 0.0, z],
-            normal: [0.0, 0.0, z],
-        });
-        for k in 0..=segments {
-            let a = k as f32 / segments as f32 * std::f32::consts::TAU;
-            let (s, c) = a.sin_cos();
-            v.push(MeshVertex {
-                position: [c, s, z],
-                normal: [0.0, 0.0, z],
-            });
-        }
-        for k in 0..segments {
-            i.extend([centre, centre + 1 + k, centre + 2 + k]);
-        }
-    }
-    (v, i)
-}
-
-/// Sphere of radius 1 (latitude/longitude grid).
-fn unit_sphere(segments: u32, rings: u32) -> (Vec<MeshVertex>, Vec<u32>) {
-    let mut v = Vec::new();
-    let mut i = Vec::new();
-    for r in 0..=rings {
-        let phi = r as f32 / rings as f32 * std::f32::consts::PI;
-        let (sp, cp) = phi.sin_cos();
-        for k in 0..=segments {
-            let a = k as f32 / segments as f32 * std::f32::consts::TAU;
-            let (s, c) = a.sin_cos();
-            let p = [sp * c, sp * s, cp];
-            v.push(MeshVertex {
-                position: p,
-                normal: p,
-            });
-        }
-    }
-    let row = segments + 1;
-    for r in 0..rings {
-        for k in 0..segments {
-            let a = r * row + k;
-            let b = a + row;
-            i.extend([a, b, a + 1, a + 1, b, b + 1]);
-        }
-    }
-    (v, i)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn unit_meshes_index_their_own_vertices_and_have_unit_normals() {
-        for (v, i) in [unit_box(), unit_cylinder(16), unit_sphere(12, 8)] {
-            assert_eq!(i.len() % 3, 0);
-            assert!(i.iter().all(|&k| (k as usize) < v.len()));
-            for vert in &v {
-                let n = vert.normal;
-                let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
-                assert!((len - 1.0).abs() < 1e-5, "{n:?}");
-                assert!(vert.position.iter().all(|c| c.abs() <= 1.0 + 1e-6));
-            }
-        }
-    }
 
     #[test]
     fn frame_uniform_matches_the_wgsl_layout() {

@@ -2,15 +2,21 @@
 
 pub mod camera;
 pub mod gpu;
+mod primitives;
 pub mod scene;
 
+use crate::analysis::{Analysis, ConfigRow};
 use crate::app::colormap;
-use crate::app::session::Session;
+use crate::app::command::Command;
+use crate::app::plots::LIVE_COLOR;
+use crate::app::session::{self, After, Session};
+use crate::side::{ConfigId, PerSide};
 use camera::OrbitCamera;
 use eframe::egui::{self, Color32, Pos2, Rect, Sense, Stroke, Vec2};
 use eframe::egui_wgpu::{self, wgpu};
 use gpu::{FrameUniform, ViewportCallback, ViewportGpu};
-use scene::{SceneData, SceneOptions, Selection};
+use nalgebra::Matrix4;
+use scene::{SceneData, SceneOptions};
 use std::sync::Arc;
 
 /// Picking radius around a configuration's anchor, points.
@@ -32,7 +38,7 @@ pub struct ViewportState {
     pub camera: OrbitCamera,
     pub options: SceneOptions,
     /// Measurement index each arm is drawn in (`None`: home pose).
-    pub poses: [Option<usize>; 2],
+    pub poses: PerSide<Option<usize>>,
     scene: Arc<SceneData>,
     scene_key: Option<SceneKey>,
     version: u64,
@@ -40,7 +46,7 @@ pub struct ViewportState {
     /// Choose exaggeration and colour range from the errors when a model arrives.
     pub auto_scale: bool,
     /// The configuration under the pointer.
-    pub hovered_config: Option<(crate::side::Side, usize)>,
+    pub hovered_config: Option<ConfigId>,
 }
 
 /// What the cached scene was built from.
@@ -49,16 +55,19 @@ struct SceneKey {
     /// `None`: no session (the built-in robot alone is drawn).
     session_generation: Option<u64>,
     options: SceneOptions,
-    poses: [Option<usize>; 2],
-    selection: Selection,
+    poses: PerSide<Option<usize>>,
+    selection: Option<ConfigId>,
 }
+
+/// Each arm drawn in its first configuration.
+const FIRST_POSES: PerSide<Option<usize>> = PerSide::new(Some(0), Some(0));
 
 impl Default for ViewportState {
     fn default() -> Self {
         Self {
             camera: OrbitCamera::default(),
             options: SceneOptions::default(),
-            poses: [Some(0), Some(0)],
+            poses: FIRST_POSES,
             scene: Arc::new(SceneData::default()),
             scene_key: None,
             version: 0,
@@ -69,26 +78,21 @@ impl Default for ViewportState {
     }
 }
 
-/// What the user did in the viewport this frame.
-#[derive(Default)]
-pub struct ViewportResponse {
-    /// A configuration was clicked (or empty space: `Some(None)` clears the selection).
-    pub clicked: Option<Selection>,
-}
-
 impl ViewportState {
+    /// Draw each arm in its first configuration (a new dataset).
+    pub fn reset_poses(&mut self) {
+        self.poses = FIRST_POSES;
+    }
+
     /// With auto scale on: draw the 95th-percentile point error as about 60 mm and put about 1.5
     /// times it at the top of the colour bar.
     pub fn auto_scale(&mut self, session: &Session) {
         if !self.auto_scale {
             return;
         }
-        let analysis = if self.options.use_calibrated {
-            session.current()
-        } else {
-            &session.nominal
-        };
-        let mut errors: Vec<f64> = analysis
+        let mut errors: Vec<f64> = self
+            .options
+            .analysis(session)
             .configs
             .iter()
             .flat_map(|r| r.point_errors_mm())
@@ -106,108 +110,141 @@ impl ViewportState {
     }
 
     /// Draw the viewport into the remaining space of `ui`. `generation` identifies the session's
-    /// content (bump it when the session or its models change).
+    /// content (bump it when the session or its models change). A click selects the configuration
+    /// under the pointer, or none.
     pub fn ui(
         &mut self,
         ui: &mut egui::Ui,
         frame: &eframe::Frame,
         session: Option<&Session>,
         generation: u64,
-        selection: Selection,
-    ) -> ViewportResponse {
-        let mut out = ViewportResponse::default();
+        selection: Option<ConfigId>,
+    ) -> Option<Command> {
         let (rect, response) = ui.allocate_exact_size(ui.available_size(), Sense::click_and_drag());
         if rect.width() < 2.0 || rect.height() < 2.0 {
-            return out;
+            return None;
         }
-
-        // Camera interaction.
-        let shift = ui.input(|i| i.modifiers.shift);
-        if response.dragged_by(egui::PointerButton::Primary) && !shift {
-            let d = response.drag_delta();
-            self.camera.orbit(d.x, d.y);
-        } else if response.dragged_by(egui::PointerButton::Secondary)
-            || response.dragged_by(egui::PointerButton::Middle)
-            || (response.dragged_by(egui::PointerButton::Primary) && shift)
+        self.camera.handle_input(&response);
+        self.update_scene(session, generation, selection);
+        let view_proj = self.camera.view_proj(rect.width() / rect.height());
+        let clicked = self.pick_ui(&response, session, &view_proj);
+        let painter = ui.painter_at(rect);
+        if !self.paint_scene(&painter, rect, frame, &view_proj) {
+            return clicked;
+        }
+        self.legends_ui(&painter, rect, session);
+        if let Some(session) = session {
+            self.model_label_ui(&painter, rect, session);
+        }
+        if let (Some(session), Some(config)) = (session, selection) {
+            self.selection_label_ui(&painter, rect, &view_proj, session, config);
+        }
+        if let (Some(session), Some(config)) = (session, self.hovered_config)
+            && let Some(m) = session
+                .dataset
+                .arm(config.side)
+                .measurements
+                .get(config.index)
         {
-            let d = response.drag_delta();
-            self.camera.pan(d.x, d.y, rect.height());
+            response.on_hover_text_at_pointer(format!(
+                "{} ({} arm) — click to select",
+                m.id, config.side
+            ));
         }
-        if response.hovered() {
-            let scroll = ui.input(|i| i.smooth_scroll_delta.y);
-            if scroll != 0.0 {
-                self.camera.zoom((-scroll * 0.002).exp());
-            }
-        }
-        if response.double_clicked() {
-            self.camera = OrbitCamera::default();
-        }
+        clicked
+    }
 
-        // Scene (rebuilt only when something it depends on changed). Without a dataset the built-in
-        // robot is drawn in its home pose, so the window never opens on an empty view.
+    /// Rebuild the scene when something it depends on changed. Without a dataset the built-in
+    /// robot is drawn in its home pose, so the window never opens on an empty view.
+    fn update_scene(
+        &mut self,
+        session: Option<&Session>,
+        generation: u64,
+        selection: Option<ConfigId>,
+    ) {
         let key = SceneKey {
             session_generation: session.map(|_| generation),
             options: self.options.clone(),
             poses: self.poses,
             selection,
         };
-        if self.scene_key.as_ref() != Some(&key) {
-            self.version += 1;
-            self.scene = Arc::new(match session {
-                Some(session) => {
-                    scene::build_scene(session, &self.options, self.poses, selection, self.version)
-                }
-                None => {
-                    scene::build_robot_scene(scene::builtin_robot(), &self.options, self.version)
-                }
+        if self.scene_key.as_ref() == Some(&key) {
+            return;
+        }
+        self.version += 1;
+        self.scene = Arc::new(match session {
+            Some(session) => {
+                scene::build_scene(session, &self.options, self.poses, selection, self.version)
+            }
+            None => scene::build_robot_scene(scene::builtin_robot(), &self.options, self.version),
+        });
+        self.scene_key = Some(key);
+    }
+
+    /// Picking on the CPU: the hovered configuration, and the selection a click makes.
+    fn pick_ui(
+        &mut self,
+        response: &egui::Response,
+        session: Option<&Session>,
+        view_proj: &Matrix4<f32>,
+    ) -> Option<Command> {
+        let Some(session) = session else {
+            self.hovered_config = None;
+            return None;
+        };
+        let analysis = self.options.analysis(session);
+        let pick = |pos: Pos2| self.nearest_config(analysis, view_proj, response.rect, pos);
+        let hovered = response.hover_pos().and_then(pick);
+        let clicked = response
+            .clicked()
+            .then(|| response.interact_pointer_pos())
+            .flatten()
+            .map(|pos| Command::Select {
+                config: pick(pos),
+                reveal_in_table: true,
             });
-            self.scene_key = Some(key);
-        }
+        self.hovered_config = hovered;
+        clicked
+    }
 
-        // Picking on the CPU: nearest projected configuration anchor.
-        let aspect = rect.width() / rect.height();
-        let view_proj = self.camera.view_proj(aspect);
-        self.hovered_config = None;
-        if let Some(session) = session {
-            let analysis = if self.options.use_calibrated {
-                session.current()
-            } else {
-                &session.nominal
-            };
-            let pointer = response.hover_pos();
-            let pick = |pos: Pos2| {
-                let mut best: Option<(f32, (crate::side::Side, usize))> = None;
-                for row in analysis.configs.iter().filter(|r| self.options.shows(r)) {
-                    let anchor = scene::pick_anchor(row);
-                    if let Some([x, y]) =
-                        self.camera
-                            .project_with(&view_proj, &anchor, rect.width(), rect.height())
-                    {
-                        let d = (Pos2::new(rect.left() + x, rect.top() + y) - pos).length();
-                        if d < PICK_RADIUS_POINTS && best.is_none_or(|(bd, _)| d < bd) {
-                            best = Some((d, (row.config.side, row.config.index)));
-                        }
-                    }
+    /// The shown configuration drawn nearest to `pos`, if within the pick radius.
+    fn nearest_config(
+        &self,
+        analysis: &Analysis,
+        view_proj: &Matrix4<f32>,
+        rect: Rect,
+        pos: Pos2,
+    ) -> Option<ConfigId> {
+        let mut best: Option<(f32, ConfigId)> = None;
+        for row in analysis.configs.iter().filter(|r| self.options.shows(r)) {
+            if let Some(at) = self.screen_pos(view_proj, rect, row) {
+                let d = (at - pos).length();
+                if d < PICK_RADIUS_POINTS && best.is_none_or(|(bd, _)| d < bd) {
+                    best = Some((d, row.config));
                 }
-                best.map(|(_, s)| s)
-            };
-            if let Some(pos) = pointer {
-                self.hovered_config = pick(pos);
-            }
-            if response.clicked()
-                && let Some(pos) = response.interact_pointer_pos()
-            {
-                out.clicked = Some(pick(pos));
             }
         }
+        best.map(|(_, config)| config)
+    }
 
-        // Offscreen target sized in physical pixels, drawn by egui as an image.
-        let ppp = ui.ctx().pixels_per_point();
-        let size_px = [
-            (rect.width() * ppp).round().max(1.0) as u32,
-            (rect.height() * ppp).round().max(1.0) as u32,
-        ];
-        let painter = ui.painter_at(rect);
+    /// Where a configuration's anchor is drawn in `rect` (`None`: behind the camera).
+    fn screen_pos(&self, view_proj: &Matrix4<f32>, rect: Rect, row: &ConfigRow) -> Option<Pos2> {
+        let anchor = scene::pick_anchor(row);
+        let [x, y] = self
+            .camera
+            .project_with(view_proj, &anchor, rect.width(), rect.height())?;
+        Some(Pos2::new(rect.left() + x, rect.top() + y))
+    }
+
+    /// The scene, rendered offscreen at the rect's size in physical pixels and drawn by egui as an
+    /// image. Without wgpu, a note instead (returns false).
+    fn paint_scene(
+        &mut self,
+        painter: &egui::Painter,
+        rect: Rect,
+        frame: &eframe::Frame,
+        view_proj: &Matrix4<f32>,
+    ) -> bool {
         let Some(rs) = frame.wgpu_render_state() else {
             painter.rect_filled(rect, 0.0, Color32::from_gray(20));
             painter.text(
@@ -217,32 +254,14 @@ impl ViewportState {
                 egui::FontId::proportional(14.0),
                 Color32::LIGHT_GRAY,
             );
-            return out;
+            return false;
         };
-        {
-            let mut renderer = rs.renderer.write();
-            let new_view = renderer
-                .callback_resources
-                .get_mut::<ViewportGpu>()
-                .and_then(|gpu| gpu.ensure_targets(&rs.device, size_px));
-            if let Some(view) = new_view {
-                match self.texture {
-                    Some(id) => renderer.update_egui_texture_from_wgpu_texture(
-                        &rs.device,
-                        &view,
-                        wgpu::FilterMode::Linear,
-                        id,
-                    ),
-                    None => {
-                        self.texture = Some(renderer.register_native_texture(
-                            &rs.device,
-                            &view,
-                            wgpu::FilterMode::Linear,
-                        ));
-                    }
-                }
-            }
-        }
+        let ppp = painter.ctx().pixels_per_point();
+        let size_px = [
+            (rect.width() * ppp).round().max(1.0) as u32,
+            (rect.height() * ppp).round().max(1.0) as u32,
+        ];
+        self.register_target(rs, size_px);
         let eye = self.camera.eye_mm();
         let to_eye = (eye - self.camera.target_mm).normalize();
         // Head light, a little above and to the side of the view direction.
@@ -267,54 +286,94 @@ impl ViewportState {
                 Color32::WHITE,
             );
         }
+        true
+    }
 
-        self.legends_ui(&painter, rect, session);
-        // Label the selected configuration where it is drawn.
-        if let (Some(session), Some((side, index))) = (session, selection) {
-            let analysis = if self.options.use_calibrated {
-                session.current()
-            } else {
-                &session.nominal
-            };
-            if let Some(row) = analysis
-                .configs
-                .iter()
-                .find(|r| r.config.side == side && r.config.index == index)
-                && let Some([x, y]) = self.camera.project_with(
-                    &view_proj,
-                    &scene::pick_anchor(row),
-                    rect.width(),
-                    rect.height(),
-                )
-            {
-                let at = Pos2::new(rect.left() + x, rect.top() + y);
-                painter.circle_stroke(at, 10.0, Stroke::new(2.0, Color32::WHITE));
-                let text = format!("{} ({side})", row.id);
-                let galley =
-                    painter.layout_no_wrap(text, egui::FontId::proportional(13.0), Color32::WHITE);
-                let pos = at + Vec2::new(13.0, -8.0);
-                painter.rect_filled(
-                    Rect::from_min_size(pos, galley.size()).expand(3.0),
-                    3.0,
-                    Color32::from_black_alpha(170),
-                );
-                painter.galley(pos, galley, Color32::WHITE);
+    /// Size the offscreen target and (re)register it as the egui texture drawn.
+    fn register_target(&mut self, rs: &egui_wgpu::RenderState, size_px: [u32; 2]) {
+        let mut renderer = rs.renderer.write();
+        let new_view = renderer
+            .callback_resources
+            .get_mut::<ViewportGpu>()
+            .and_then(|gpu| gpu.ensure_targets(&rs.device, size_px));
+        let Some(view) = new_view else {
+            return;
+        };
+        match self.texture {
+            Some(id) => renderer.update_egui_texture_from_wgpu_texture(
+                &rs.device,
+                &view,
+                wgpu::FilterMode::Linear,
+                id,
+            ),
+            None => {
+                self.texture = Some(renderer.register_native_texture(
+                    &rs.device,
+                    &view,
+                    wgpu::FilterMode::Linear,
+                ));
             }
         }
-        if let (Some(session), Some((side, index))) = (session, self.hovered_config)
-            && let Some(m) = session.dataset.arm(side).measurements.get(index)
-        {
-            response
-                .clone()
-                .on_hover_text_at_pointer(format!("{} ({side} arm) — click to select", m.id));
-        }
-        out
+    }
+
+    /// Which model is drawn, in the top-left corner; during a run, which iterate.
+    fn model_label_ui(&self, painter: &egui::Painter, rect: Rect, session: &Session) {
+        let (text, color) = match (self.options.use_calibrated, session.after()) {
+            (true, Some(After::Live(live))) => (format!("live: {}", live.label()), LIVE_COLOR),
+            (true, Some(After::Calibrated(_))) => {
+                ("calibrated model".to_string(), Color32::from_gray(220))
+            }
+            _ => ("nominal model".to_string(), Color32::from_gray(220)),
+        };
+        let galley = painter.layout_no_wrap(text, egui::FontId::proportional(13.0), color);
+        let pos = rect.left_top() + Vec2::new(12.0, 10.0);
+        painter.rect_filled(
+            Rect::from_min_size(pos, galley.size()).expand(4.0),
+            3.0,
+            Color32::from_black_alpha(150),
+        );
+        painter.galley(pos, galley, color);
+    }
+
+    /// Label the selected configuration where it is drawn.
+    fn selection_label_ui(
+        &self,
+        painter: &egui::Painter,
+        rect: Rect,
+        view_proj: &Matrix4<f32>,
+        session: &Session,
+        config: ConfigId,
+    ) {
+        let Some(row) = session::config_row(self.options.analysis(session), config) else {
+            return;
+        };
+        let Some(at) = self.screen_pos(view_proj, rect, row) else {
+            return;
+        };
+        painter.circle_stroke(at, 10.0, Stroke::new(2.0, Color32::WHITE));
+        let text = format!("{} ({})", row.id, config.side);
+        let galley = painter.layout_no_wrap(text, egui::FontId::proportional(13.0), Color32::WHITE);
+        let pos = at + Vec2::new(13.0, -8.0);
+        painter.rect_filled(
+            Rect::from_min_size(pos, galley.size()).expand(3.0),
+            3.0,
+            Color32::from_black_alpha(170),
+        );
+        painter.galley(pos, galley, Color32::WHITE);
     }
 
     /// Colour bar and exaggeration legend in the bottom-left corner.
     fn legends_ui(&self, painter: &egui::Painter, rect: Rect, session: Option<&Session>) {
-        let font = egui::FontId::proportional(12.0);
         let text_color = Color32::from_gray(220);
+        let text = |pos: Pos2, anchor: egui::Align2, text: String| {
+            painter.text(
+                pos,
+                anchor,
+                text,
+                egui::FontId::proportional(12.0),
+                text_color,
+            );
+        };
         let bar_w = 180.0;
         let bar_h = 12.0;
         let origin = Pos2::new(rect.left() + 14.0, rect.bottom() - 48.0);
@@ -324,51 +383,30 @@ impl ViewportState {
             Pos2::new(bar.right() + 70.0, bar.bottom() + 34.0),
         );
         painter.rect_filled(bg, 4.0, Color32::from_black_alpha(150));
-        let mut mesh = egui::Mesh::default();
-        let n = 32;
-        for k in 0..=n {
-            let t = k as f32 / n as f32;
-            let x = bar.left() + t * bar_w;
-            let c = colormap::color32(t);
-            mesh.colored_vertex(Pos2::new(x, bar.top()), c);
-            mesh.colored_vertex(Pos2::new(x, bar.bottom()), c);
-            if k > 0 {
-                let i = 2 * k as u32;
-                mesh.add_triangle(i - 2, i - 1, i);
-                mesh.add_triangle(i - 1, i + 1, i);
-            }
-        }
-        painter.add(egui::Shape::mesh(mesh));
-        painter.text(
+        painter.add(egui::Shape::mesh(color_bar_mesh(bar)));
+        let below = bar.bottom() + 3.0;
+        text(
             Pos2::new(bar.left(), bar.top() - 4.0),
             egui::Align2::LEFT_BOTTOM,
-            "point error after registration",
-            font.clone(),
-            text_color,
+            "point error after registration".into(),
         );
-        painter.text(
-            Pos2::new(bar.left(), bar.bottom() + 3.0),
+        text(
+            Pos2::new(bar.left(), below),
             egui::Align2::LEFT_TOP,
-            "0 mm",
-            font.clone(),
-            text_color,
+            "0 mm".into(),
         );
-        painter.text(
-            Pos2::new(bar.right(), bar.bottom() + 3.0),
+        text(
+            Pos2::new(bar.right(), below),
             egui::Align2::RIGHT_TOP,
             format!("≥ {:.2} mm", self.options.color_max_mm),
-            font.clone(),
-            text_color,
         );
-        painter.text(
+        text(
             Pos2::new(bar.left(), bar.bottom() + 18.0),
             egui::Align2::LEFT_TOP,
             format!(
                 "error vectors ×{:.0} (1 mm drawn as {:.0} mm)",
                 self.options.exaggeration, self.options.exaggeration
             ),
-            font.clone(),
-            text_color,
         );
         if session.is_none() {
             painter.text(
@@ -386,6 +424,25 @@ impl ViewportState {
             egui::StrokeKind::Inside,
         );
     }
+}
+
+/// The colour map as a horizontal bar filling `bar`.
+fn color_bar_mesh(bar: Rect) -> egui::Mesh {
+    let mut mesh = egui::Mesh::default();
+    let n = 32;
+    for k in 0..=n {
+        let t = k as f32 / n as f32;
+        let x = bar.left() + t * bar.width();
+        let c = colormap::color32(t);
+        mesh.colored_vertex(Pos2::new(x, bar.top()), c);
+        mesh.colored_vertex(Pos2::new(x, bar.bottom()), c);
+        if k > 0 {
+            let i = 2 * k as u32;
+            mesh.add_triangle(i - 2, i - 1, i);
+            mesh.add_triangle(i - 1, i + 1, i);
+        }
+    }
+    mesh
 }
 
 /// Round to 1, 2 or 5 times a power of ten.

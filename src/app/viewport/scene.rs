@@ -2,12 +2,12 @@
 //! triangle vertices for the grid, axes, reflector triangles and error vectors. Rebuilt only when the
 //! data or the display options change.
 
-use crate::analysis::ConfigRow;
+use crate::analysis::{Analysis, ConfigRow};
 use crate::app::colormap;
 use crate::app::session::Session;
-use crate::kinematics::N_JOINTS;
-use crate::robot::{GeometryKind, PlacedShape, ShapeKind};
-use crate::side::Side;
+use crate::dataset::Split;
+use crate::robot::{GeometryKind, PlacedShape, RobotDescription, ShapeKind};
+use crate::side::{ConfigId, PerSide};
 use nalgebra::{Isometry3, Matrix3, Matrix4, Vector3};
 
 /// A unit primitive the mesh pipeline instances.
@@ -92,7 +92,7 @@ pub struct SceneOptions {
     pub show_cal: bool,
     pub show_ver: bool,
     /// Draw configurations of these arms.
-    pub show_arm: [bool; 2],
+    pub show_arm: PerSide<bool>,
     /// Error vectors are drawn this many times their length.
     pub exaggeration: f32,
     /// Error (mm) at the top of the colour scale.
@@ -111,7 +111,7 @@ impl Default for SceneOptions {
             show_vectors: true,
             show_cal: true,
             show_ver: true,
-            show_arm: [true, true],
+            show_arm: PerSide::new(true, true),
             exaggeration: 50.0,
             color_max_mm: 2.0,
             use_calibrated: true,
@@ -121,19 +121,17 @@ impl Default for SceneOptions {
 
 impl SceneOptions {
     pub fn shows(&self, row: &ConfigRow) -> bool {
-        let split_ok = match row.split {
-            crate::dataset::Split::Cal => self.show_cal,
-            crate::dataset::Split::Ver => self.show_ver,
-            crate::dataset::Split::All => self.show_cal || self.show_ver,
+        let split_shown = match row.split {
+            Split::Cal => self.show_cal,
+            Split::Ver => self.show_ver,
+            Split::All => self.show_cal || self.show_ver,
         };
-        split_ok && self.show_arm[side_index(row.config.side)]
+        split_shown && self.show_arm[row.config.side]
     }
-}
 
-pub fn side_index(side: Side) -> usize {
-    match side {
-        Side::Left => 0,
-        Side::Right => 1,
+    /// The figures of the model drawn: the calibrated one if chosen and there is one.
+    pub fn analysis<'a>(&self, session: &'a Session) -> &'a Analysis {
+        session.analysis(self.use_calibrated)
     }
 }
 
@@ -260,18 +258,16 @@ fn grid(out: &mut Vec<ColorVertex>) {
     );
 }
 
-/// The selected configuration, as (side, index into the arm's measurements).
-pub type Selection = Option<(Side, usize)>;
-
 /// The built-in IRB 14000, created once (drawn while no dataset is loaded).
-pub fn builtin_robot() -> &'static crate::robot::RobotDescription {
-    static ROBOT: std::sync::OnceLock<crate::robot::RobotDescription> = std::sync::OnceLock::new();
-    ROBOT.get_or_init(crate::robot::RobotDescription::builtin_irb14000)
+pub fn builtin_robot() -> &'static RobotDescription {
+    static ROBOT: std::sync::OnceLock<RobotDescription> = std::sync::OnceLock::new();
+    ROBOT.get_or_init(RobotDescription::builtin_irb14000)
 }
 
-/// The robot alone, both arms in the home pose, and the grid.
-pub fn build_robot_scene(
-    robot: &crate::robot::RobotDescription,
+/// The robot with the arms in joint positions `q_rad`, and the grid.
+fn robot_scene(
+    robot: &RobotDescription,
+    q_rad: PerSide<Vec<f64>>,
     options: &SceneOptions,
     version: u64,
 ) -> SceneData {
@@ -280,11 +276,7 @@ pub fn build_robot_scene(
         ..Default::default()
     };
     if options.show_robot {
-        let shapes = robot.shapes(
-            &crate::robot::home_q_rad(Side::Left),
-            &crate::robot::home_q_rad(Side::Right),
-            GeometryKind::Visual,
-        );
+        let shapes = robot.shapes(&q_rad.left, &q_rad.right, GeometryKind::Visual);
         robot_instances(&shapes, &mut scene.instances);
     }
     if options.show_grid {
@@ -293,43 +285,42 @@ pub fn build_robot_scene(
     scene
 }
 
-/// Build the whole scene. `poses` holds the measurement index each arm is drawn in.
+/// The robot alone, both arms in the home pose, and the grid.
+pub fn build_robot_scene(
+    robot: &RobotDescription,
+    options: &SceneOptions,
+    version: u64,
+) -> SceneData {
+    robot_scene(
+        robot,
+        PerSide::from_fn(|side| robot.home_q_rad(side)),
+        options,
+        version,
+    )
+}
+
+/// Build the whole scene. `poses` holds the measurement index each arm is drawn in (`None`: home).
 pub fn build_scene(
     session: &Session,
     options: &SceneOptions,
-    poses: [Option<usize>; 2],
-    selection: Selection,
+    poses: PerSide<Option<usize>>,
+    selection: Option<ConfigId>,
     version: u64,
 ) -> SceneData {
-    let mut scene = SceneData {
-        version,
-        ..Default::default()
-    };
-    let analysis = if options.use_calibrated {
-        session.current()
-    } else {
-        &session.nominal
-    };
-
-    if options.show_robot {
-        let q = |side: Side| -> [f64; N_JOINTS] {
-            poses[side_index(side)]
-                .and_then(|i| session.dataset.arm(side).measurements.get(i))
-                .map_or_else(|| crate::robot::home_q_rad(side), |m| m.q_rad)
-        };
-        let shapes = session
-            .robot
-            .shapes(&q(Side::Left), &q(Side::Right), GeometryKind::Visual);
-        robot_instances(&shapes, &mut scene.instances);
-    }
-    if options.show_grid {
-        grid(&mut scene.lines);
-    }
-
+    let q_rad = poses.map(|side, pose| {
+        pose.and_then(|i| session.dataset.arm(side).measurements.get(i))
+            .map_or_else(|| session.robot.home_q_rad(side), |m| m.q_rad.clone())
+    });
+    let mut scene = robot_scene(&session.robot, q_rad, options, version);
     let max = options.color_max_mm.max(1e-6);
     let model_color = [0.35, 0.37, 0.40, 0.8];
-    for row in analysis.configs.iter().filter(|r| options.shows(r)) {
-        let selected = selection == Some((row.config.side, row.config.index));
+    for row in options
+        .analysis(session)
+        .configs
+        .iter()
+        .filter(|r| options.shows(r))
+    {
+        let selected = selection == Some(row.config);
         let errors = row.point_errors_mm();
         let mean = (errors[0] + errors[1] + errors[2]) / 3.0;
         if options.show_measured {
@@ -395,11 +386,8 @@ mod tests {
     fn without_a_dataset_the_robot_alone_is_drawn() {
         let options = SceneOptions::default();
         let scene = build_robot_scene(builtin_robot(), &options, 1);
-        let shapes = builtin_robot().shapes(
-            &crate::robot::home_q_rad(Side::Left),
-            &crate::robot::home_q_rad(Side::Right),
-            GeometryKind::Visual,
-        );
+        let home = PerSide::from_fn(crate::robot::home_q_rad);
+        let shapes = builtin_robot().shapes(&home.left, &home.right, GeometryKind::Visual);
         assert!(!shapes.is_empty());
         assert!(!scene.instances.is_empty(), "no robot drawn");
         assert!(

@@ -1,5 +1,5 @@
-//! Export of a calibrated URDF: a copy of the robot's URDF whose joint origins reproduce a
-//! calibrated [`DualArmModel`] exactly.
+//! The calibrated URDF of the built-in IRB 14000: a copy of its URDF whose joint origins reproduce a
+//! calibrated DH [`DualArmModel`] exactly.
 //!
 //! With the frame conventions of [`crate::robot`], per arm:
 //! - the chain-position-2 joint origin in link_1 is `joint1_from_dh_base · DH_1(0)`
@@ -13,49 +13,14 @@
 //! The XML is written by urdf-rs's writer (shortest round-trip float formatting, i.e. full
 //! precision); everything else in the URDF (geometry, meshes, limits, other links) is kept.
 
+use super::patch::REFLECTOR_RADIUS_M;
+use super::{export_err, urdf_pose_from_isometry};
 use crate::kinematics::{DualArmModel, N_JOINTS, REFLECTOR_NAMES};
 use crate::robot::{
     RobotDescription, RobotError, arm_link_name, flange_link_name, joint1_from_dh_base, side_suffix,
 };
 use crate::side::Side;
-use nalgebra::{Isometry3, Matrix3, Rotation3, Vector3};
-
-/// Radius of the sphere drawn for a reflector, m (a 0.5" SMR).
-const REFLECTOR_RADIUS_M: f64 = 0.00635;
-
-/// URDF roll, pitch, yaw of a rotation (`R = Rz(yaw) Ry(pitch) Rx(roll)`).
-///
-/// Yaw and pitch are read from the first column; roll from `(Rz(yaw) Ry(pitch))ᵀ R`, so that the
-/// triple reproduces `R` to round-off even near gimbal lock (an error in yaw is absorbed by roll).
-pub fn rpy_from_rotation(r: &Rotation3<f64>) -> [f64; 3] {
-    let m: &Matrix3<f64> = r.matrix();
-    let yaw = if m[(1, 0)].abs() + m[(0, 0)].abs() > 1e-300 {
-        m[(1, 0)].atan2(m[(0, 0)])
-    } else {
-        0.0
-    };
-    let pitch = (-m[(2, 0)]).atan2(m[(0, 0)].hypot(m[(1, 0)]));
-    let rest = (Rotation3::from_axis_angle(&Vector3::z_axis(), yaw)
-        * Rotation3::from_axis_angle(&Vector3::y_axis(), pitch))
-    .inverse()
-        * r;
-    let k = rest.matrix();
-    let roll = (k[(2, 1)] - k[(1, 2)]).atan2(k[(1, 1)] + k[(2, 2)]);
-    [roll, pitch, yaw]
-}
-
-/// A URDF `<origin>` (m, rpy) from an isometry in mm.
-pub fn urdf_pose_from_isometry(iso: &Isometry3<f64>) -> urdf_rs::Pose {
-    let t = iso.translation.vector / 1000.0;
-    urdf_rs::Pose {
-        xyz: urdf_rs::Vec3([t.x, t.y, t.z]),
-        rpy: urdf_rs::Vec3(rpy_from_rotation(&iso.rotation.to_rotation_matrix())),
-    }
-}
-
-fn export_err(message: String) -> RobotError {
-    RobotError::Export { message }
-}
+use nalgebra::{Isometry3, Vector3};
 
 fn fixed_joint(name: String, parent: &str, child: &str, origin: urdf_rs::Pose) -> urdf_rs::Joint {
     urdf_rs::Joint {
@@ -112,15 +77,12 @@ fn joint_mut<'a>(
 fn check_finite(model: &DualArmModel) -> Result<(), RobotError> {
     for side in Side::BOTH {
         let arm = model.arm(side);
-        let finite = arm.dh.iter().all(|r| {
-            [r.a_mm, r.d_mm, r.theta_rad, r.alpha_rad]
-                .iter()
-                .all(|v| v.is_finite())
-        }) && arm
-            .reflectors_mm
-            .iter()
-            .all(|t| t.iter().all(|v| v.is_finite()));
-        if !finite {
+        if arm.dh().is_none() {
+            return Err(export_err(format!(
+                "the {side} arm's model is not a DH table; the built-in IRB 14000 exports DH models"
+            )));
+        }
+        if arm.first_non_finite().is_some() {
             return Err(export_err(format!(
                 "the {side} arm's parameters are not all finite"
             )));
@@ -145,7 +107,10 @@ fn write_arm(
     urdf: &mut urdf_rs::Robot,
 ) -> Result<(), RobotError> {
     let names = robot.arm_joint_names(side);
-    let dh = &model.arm(side).dh;
+    let dh = model
+        .arm(side)
+        .dh()
+        .ok_or_else(|| export_err(format!("the {side} arm's model is not a DH table")))?;
     for name in &names {
         let j = joint_mut(urdf, name)?;
         if (Vector3::new(j.axis.xyz[0], j.axis.xyz[1], j.axis.xyz[2]) - Vector3::z()).norm() > 1e-9
@@ -225,18 +190,17 @@ fn write_arm(
     Ok(())
 }
 
-/// A copy of `robot`'s URDF whose joint origins reproduce `model` (both arms' DH tables and the
-/// right-arm base) exactly, with the reflectors as fixed links of the flanges. The text is checked
-/// by loading it back before it is returned.
-pub fn calibrated_urdf(
+/// A copy of the built-in `robot`'s URDF whose joint origins reproduce `model` (both arms' DH tables
+/// and the right-arm base) exactly, with the reflectors as fixed links of the flanges. The text is
+/// checked by loading it back before it is returned.
+pub(super) fn calibrated_dh_urdf(
     robot: &RobotDescription,
     model: &DualArmModel,
 ) -> Result<String, RobotError> {
     check_finite(model)?;
     let mut urdf = robot.urdf.clone();
-    let zero = [0.0; N_JOINTS];
     let body_from_link: std::collections::HashMap<String, Isometry3<f64>> =
-        robot.link_poses(&zero, &zero).into_iter().collect();
+        robot.link_poses(&[], &[]).into_iter().collect();
 
     for side in Side::BOTH {
         write_arm(robot, model, side, &mut urdf)?;
@@ -271,31 +235,4 @@ pub fn calibrated_urdf(
     RobotDescription::from_str(&text, None)
         .map_err(|e| export_err(format!("the written URDF does not load back: {e}")))?;
     Ok(text)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::kinematics::rotation_angle_rad;
-    use nalgebra::UnitQuaternion;
-
-    #[test]
-    fn rpy_roundtrip_including_gimbal_lock() {
-        let cases = [
-            (0.3, -0.4, 2.0),
-            (-2.9, 1.2, -0.7),
-            (0.5, std::f64::consts::FRAC_PI_2, 0.2),
-            (0.5, -std::f64::consts::FRAC_PI_2 + 1e-9, 0.2),
-            (0.0, 0.0, std::f64::consts::PI),
-        ];
-        for (r, p, y) in cases {
-            let q = UnitQuaternion::from_euler_angles(r, p, y).to_rotation_matrix();
-            let [r2, p2, y2] = rpy_from_rotation(&q);
-            let back = UnitQuaternion::from_euler_angles(r2, p2, y2).to_rotation_matrix();
-            assert!(
-                rotation_angle_rad(&(q.inverse() * back)) < 1e-14,
-                "{r} {p} {y}"
-            );
-        }
-    }
 }

@@ -1,0 +1,212 @@
+//! What the user asks for — in a panel, in the viewport, in the path prompt, through a file dialog or
+//! by dropping a file — is a [`Command`], and [`WorkbenchApp::apply`] is the one place that carries
+//! commands out (after the frame's UI is built). Widgets bound to view state (display options, plot
+//! tabs, the calibration settings) edit it in place.
+
+use super::events::AppEvent;
+use super::export::Export;
+use super::files::{self, FileReply, OpenKind, PathPrompt, PromptAction, SaveRequest};
+use super::task::BackgroundTask;
+use super::work::{CalibrationWork, LiveRate, LoadWork};
+use super::{Status, WorkbenchApp, table};
+use crate::side::ConfigId;
+use eframe::egui;
+use std::path::PathBuf;
+
+/// Something the user asked for.
+#[derive(Debug)]
+pub enum Command {
+    /// Load a dataset (directory or `dataset.toml`); the current one stays until it has loaded.
+    OpenDataset(PathBuf),
+    /// Reload the current dataset with another robot description (used for later datasets too).
+    OpenUrdf(PathBuf),
+    /// Ask the user for a file to open: the native dialog, or the in-app path prompt without one.
+    ChooseFile(OpenKind),
+    /// Calibrate the current dataset with the current settings.
+    StartCalibration,
+    /// Stop the running calibration; the last finished calibration (or the nominal model) is shown
+    /// again, the model the run reached is discarded.
+    CancelCalibration,
+    /// Select a configuration (or none); `reveal_in_table` scrolls the table to it.
+    Select {
+        config: Option<ConfigId>,
+        reveal_in_table: bool,
+    },
+    /// Select the configuration with the largest |Δd| of the current model.
+    SelectWorst,
+    Export(Export),
+    /// The path typed into the path prompt.
+    ConfirmPrompt(PathBuf),
+    ClosePrompt,
+    /// Remove the error message at this index.
+    DismissError(usize),
+}
+
+impl Command {
+    /// Open a file the user chose.
+    pub fn open(kind: OpenKind, path: PathBuf) -> Self {
+        match kind {
+            OpenKind::Dataset => Command::OpenDataset(path),
+            OpenKind::Urdf => Command::OpenUrdf(path),
+        }
+    }
+}
+
+impl WorkbenchApp {
+    /// Carry out a command.
+    pub fn apply(&mut self, command: Command) {
+        match command {
+            Command::OpenDataset(path) => self.start_load(path, self.urdf_override.clone()),
+            Command::OpenUrdf(path) => match &self.session {
+                Some(session) => self.start_load(session.dataset.dir.clone(), Some(path)),
+                // Nothing to reload: the robot is used for the next dataset.
+                None => self.urdf_override = Some(path),
+            },
+            Command::ChooseFile(kind) => self.choose_file(kind),
+            Command::StartCalibration => self.start_calibration(),
+            Command::CancelCalibration => {
+                if let Some(task) = &mut self.calibration {
+                    task.cancel();
+                }
+            }
+            Command::Select {
+                config,
+                reveal_in_table,
+            } => self.select(config, reveal_in_table),
+            Command::SelectWorst => {
+                if let Some(session) = &self.session {
+                    let worst = table::worst(session.current());
+                    self.select(worst, true);
+                }
+            }
+            Command::Export(Export::PlotPng) => self.request_screenshot(),
+            Command::Export(what) => self.export(what),
+            Command::ConfirmPrompt(path) => self.confirm_prompt(path),
+            Command::ClosePrompt => self.prompt = None,
+            Command::DismissError(k) => {
+                if k < self.errors.len() {
+                    self.errors.remove(k);
+                }
+            }
+        }
+    }
+
+    /// Load on a background task; on failure the error is shown and the current session stays.
+    fn start_load(&mut self, dataset: PathBuf, urdf: Option<PathBuf>) {
+        let status = format!("Loading {}…", dataset.display());
+        let work = LoadWork { dataset, urdf };
+        match BackgroundTask::start("load", work, self.events.sender(), self.execution) {
+            Ok(task) => {
+                self.status = Status::Idle(status);
+                self.loading = Some(task);
+            }
+            Err(e) => self.errors.push(format!("cannot start loading: {e}")),
+        }
+    }
+
+    fn start_calibration(&mut self) {
+        if self.calibration.is_some() {
+            return;
+        }
+        let Some(session) = &self.session else {
+            self.errors.push("Open a dataset first.".into());
+            return;
+        };
+        let work = CalibrationWork::new(
+            session,
+            self.settings.clone(),
+            LiveRate::for_execution(self.execution),
+        );
+        match BackgroundTask::start("calibration", work, self.events.sender(), self.execution) {
+            Ok(task) => {
+                self.history.clear();
+                self.status = Status::Running {
+                    stage: None,
+                    iteration: 0,
+                };
+                self.calibration = Some(task);
+            }
+            Err(e) => self
+                .errors
+                .push(format!("cannot start the calibration thread: {e}")),
+        }
+    }
+
+    /// Select a configuration and pose its arm in it.
+    fn select(&mut self, config: Option<ConfigId>, reveal_in_table: bool) {
+        self.selection = config;
+        if let Some(config) = config {
+            self.viewport.poses[config.side] = Some(config.index);
+        }
+        self.scroll_table_to_selection = reveal_in_table;
+    }
+
+    fn choose_file(&mut self, kind: OpenKind) {
+        if self.files.dialogs_available() {
+            self.files.open(kind, self.events.sender().clone());
+            return;
+        }
+        let suggested = match (kind, &self.session) {
+            (OpenKind::Dataset, Some(s)) => s.dataset.dir.join("dataset.toml"),
+            (OpenKind::Urdf, Some(s)) => s.dataset.dir.join("robot.urdf"),
+            (_, None) => std::env::current_dir().unwrap_or_default(),
+        };
+        self.prompt = Some(PathPrompt::new(PromptAction::Open(kind), suggested));
+    }
+
+    /// Ask where to save: the native dialog, or the in-app path prompt without one.
+    pub(super) fn save(&mut self, request: SaveRequest) {
+        if self.files.dialogs_available() {
+            self.files.save(request, self.events.sender().clone());
+        } else {
+            let suggested = std::env::current_dir()
+                .unwrap_or_default()
+                .join(&request.file_name);
+            self.prompt = Some(PathPrompt::new(PromptAction::Save(request), suggested));
+        }
+    }
+
+    fn export(&mut self, what: Export) {
+        let Some(session) = &self.session else {
+            return;
+        };
+        match what.contents(session) {
+            Some(Ok(bytes)) => self.save(what.save_request(bytes)),
+            Some(Err(e)) => self.errors.push(format!("export: {e:#}")),
+            None => {}
+        }
+    }
+
+    /// "Export plots as PNG": the screenshot is taken when the next frame is painted and arrives as
+    /// an event.
+    fn request_screenshot(&mut self) {
+        if self.session.is_none() {
+            return;
+        }
+        self.screenshot_pending = true;
+        let events = self.events.sender().clone();
+        self.ctx
+            .send_viewport_cmd(egui::ViewportCommand::Screenshot(
+                egui::ScreenshotCallback::new(move |image| {
+                    events.send(AppEvent::Screenshot(image))
+                }),
+            ));
+        self.ctx.request_repaint();
+    }
+
+    fn confirm_prompt(&mut self, path: PathBuf) {
+        let Some(mut prompt) = self.prompt.take() else {
+            return;
+        };
+        match &prompt.action {
+            PromptAction::Open(kind) => self.apply(Command::open(*kind, path)),
+            PromptAction::Save(request) => match files::write(&path, &request.bytes) {
+                FileReply::Failed(e) => {
+                    prompt.error = Some(e);
+                    self.prompt = Some(prompt);
+                }
+                reply => self.on_file_reply(reply),
+            },
+        }
+    }
+}

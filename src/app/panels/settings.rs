@@ -1,0 +1,247 @@
+//! The left panel: dataset, robot, calibration settings and buttons, export, then the view options.
+
+use super::{Command, WorkbenchApp, choice_ui, grid_row_ui};
+use crate::app::bundled_example_path;
+use crate::app::export::Export;
+use crate::app::files::OpenKind;
+use crate::dataset::Split;
+use crate::side::Side;
+use crate::solver::{CalibrationSettings, Method, QpMethod};
+use eframe::egui::{self, Color32, RichText};
+use std::path::Path;
+
+impl WorkbenchApp {
+    pub(super) fn settings_panel_ui(&mut self, ui: &mut egui::Ui, commands: &mut Vec<Command>) {
+        egui::ScrollArea::vertical().show(ui, |ui| {
+            self.dataset_section_ui(ui, commands);
+            ui.separator();
+            self.robot_section_ui(ui, commands);
+            ui.separator();
+            ui.heading("Calibration");
+            let running = self.calibration.is_some();
+            ui.add_enabled_ui(!running, |ui| {
+                calibration_settings_ui(ui, &mut self.settings)
+            });
+            self.calibration_buttons_ui(ui, commands);
+            ui.separator();
+            self.export_section_ui(ui, commands);
+            ui.separator();
+            self.view_options_ui(ui, commands);
+        });
+    }
+
+    fn dataset_section_ui(&self, ui: &mut egui::Ui, commands: &mut Vec<Command>) {
+        ui.heading("Dataset");
+        match &self.session {
+            Some(s) => {
+                let d = &s.dataset;
+                ui.label(RichText::new(file_name(&d.dir)).strong())
+                    .on_hover_text(d.dir.display().to_string());
+                let count = |side: Side, split: Split| d.arm(side).select(split).len();
+                ui.label(format!(
+                    "left: {} cal + {} ver\nright: {} cal + {} ver",
+                    count(Side::Left, Split::Cal),
+                    count(Side::Left, Split::Ver),
+                    count(Side::Right, Split::Cal),
+                    count(Side::Right, Split::Ver),
+                ));
+                ui.label(format!(
+                    "tracker MPE {} µm + {} µm/m",
+                    d.tracker.mpe_um, d.tracker.mpe_um_per_m
+                ));
+            }
+            None => {
+                ui.label("none loaded");
+            }
+        }
+        ui.horizontal(|ui| {
+            if ui
+                .button("Open dataset…")
+                .on_hover_text("Open a dualcal-dataset/1 dataset.toml (or drop one on the window)")
+                .clicked()
+            {
+                commands.push(Command::ChooseFile(OpenKind::Dataset));
+            }
+            if ui
+                .add_enabled(self.loading.is_none(), egui::Button::new("Example"))
+                .on_hover_text("Open the bundled simulated example dataset")
+                .clicked()
+            {
+                commands.push(Command::OpenDataset(bundled_example_path()));
+            }
+        });
+    }
+
+    fn robot_section_ui(&self, ui: &mut egui::Ui, commands: &mut Vec<Command>) {
+        ui.heading("Robot");
+        let source = self.session.as_ref().and_then(|s| s.robot_source.as_ref());
+        ui.label(source.map_or_else(|| "built-in IRB 14000".to_string(), |p| file_name(p)));
+        if ui
+            .button("Open URDF…")
+            .on_hover_text("Use another robot description (URDF) for this dataset")
+            .clicked()
+        {
+            commands.push(Command::ChooseFile(OpenKind::Urdf));
+        }
+    }
+
+    fn calibration_buttons_ui(&self, ui: &mut egui::Ui, commands: &mut Vec<Command>) {
+        let running = self.calibration.is_some();
+        ui.horizontal(|ui| {
+            let calibrate =
+                egui::Button::new(RichText::new("Calibrate").strong().color(Color32::WHITE))
+                    .fill(Color32::from_rgb(38, 92, 160))
+                    .min_size(egui::vec2(110.0, 26.0));
+            if ui
+                .add_enabled(!running && self.session.is_some(), calibrate)
+                .on_hover_text(
+                    "Run the two-step calibration (step 1 per arm, then step 2) on a worker thread",
+                )
+                .clicked()
+            {
+                commands.push(Command::StartCalibration);
+            }
+            if ui
+                .add_enabled(
+                    running,
+                    egui::Button::new("Cancel").min_size(egui::vec2(80.0, 26.0)),
+                )
+                .on_hover_text("Stop the run; the previous result stays")
+                .clicked()
+            {
+                commands.push(Command::CancelCalibration);
+            }
+        });
+    }
+
+    fn export_section_ui(&self, ui: &mut egui::Ui, commands: &mut Vec<Command>) {
+        ui.heading("Export");
+        let has_cal = self
+            .session
+            .as_ref()
+            .is_some_and(|s| s.calibrated.is_some());
+        let mut button = |ui: &mut egui::Ui, label: &str, hover: &str, what: Export| {
+            let mut response = ui.button(label).on_hover_text(hover);
+            if matches!(what, Export::Params | Export::Urdf) {
+                response = response.on_disabled_hover_text("Calibrate first");
+            }
+            if response.clicked() {
+                commands.push(Command::Export(what));
+            }
+        };
+        ui.add_enabled_ui(has_cal, |ui| {
+            button(
+                ui,
+                "Parameters (JSON)…",
+                "dualcal-params/1 file of the calibrated model",
+                Export::Params,
+            );
+            button(
+                ui,
+                "Calibrated URDF…",
+                "A copy of the robot description whose joints reproduce the calibrated model",
+                Export::Urdf,
+            );
+        });
+        ui.add_enabled_ui(self.session.is_some(), |ui| {
+            button(
+                ui,
+                "Configuration errors (CSV)…",
+                "Per-configuration errors of the current model",
+                Export::Csv,
+            );
+            button(
+                ui,
+                "Plots (PNG)…",
+                "The plot area as shown",
+                Export::PlotPng,
+            );
+        });
+    }
+}
+
+/// The settings grid: method, QP solver, split, iteration limit, tolerances.
+fn calibration_settings_ui(ui: &mut egui::Ui, settings: &mut CalibrationSettings) {
+    egui::Grid::new("settings grid").num_columns(2).show(ui, |ui| {
+        grid_row_ui(
+            ui,
+            "Method",
+            "Minimax: the paper's min over parameters of the max over reflectors of the summed squared distance errors.\nLeast squares: all distance errors (Levenberg–Marquardt), for comparison.",
+            |ui| {
+                choice_ui(
+                    ui,
+                    "method",
+                    &mut settings.method,
+                    &[(Method::Minimax, "minimax"), (Method::LeastSquares, "least squares")],
+                )
+            },
+        );
+        grid_row_ui(
+            ui,
+            "QP solver",
+            "exact: active-set solution of each SQP subproblem.\npaper: the primal-dual subgradient method of eqs. (29)–(31) (slow, inexact).",
+            |ui| {
+                choice_ui(
+                    ui,
+                    "qp",
+                    &mut settings.qp,
+                    &[(QpMethod::Exact, "exact"), (QpMethod::Paper, "paper")],
+                )
+            },
+        );
+        grid_row_ui(
+            ui,
+            "Split",
+            "Configurations used for identification: the calibration split only, or all of them",
+            |ui| {
+                choice_ui(
+                    ui,
+                    "split",
+                    &mut settings.split,
+                    &[(Split::Cal, "cal"), (Split::All, "all")],
+                )
+            },
+        );
+        grid_row_ui(
+            ui,
+            "Iteration limit",
+            "Outer SQP iterations per stage",
+            |ui| ui.add(egui::DragValue::new(&mut settings.max_iterations).range(1..=10_000)),
+        );
+        grid_row_ui(
+            ui,
+            "Step tolerance",
+            "Stop a stage when the scaled parameter step norm falls below this",
+            |ui| {
+                ui.add(
+                    egui::DragValue::new(&mut settings.step_tolerance)
+                        .range(1e-14..=1e-2)
+                        .speed(0.0)
+                        .custom_formatter(|v, _| format!("{v:.1e}"))
+                        .custom_parser(|s| s.trim().parse::<f64>().ok()),
+                )
+            },
+        );
+        if settings.qp == QpMethod::Paper {
+            grid_row_ui(
+                ui,
+                "QP iterations",
+                "Subgradient iterations of the paper's QP solver per outer iteration",
+                |ui| {
+                    ui.add(
+                        egui::DragValue::new(&mut settings.max_qp_iterations)
+                            .range(10..=1_000_000),
+                    )
+                },
+            );
+        }
+    });
+}
+
+/// A path's last component (the whole path when it has none).
+fn file_name(path: &Path) -> String {
+    path.file_name().map_or_else(
+        || path.display().to_string(),
+        |n| n.to_string_lossy().into(),
+    )
+}

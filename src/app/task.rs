@@ -1,0 +1,310 @@
+//! Work done off the frame: loading a dataset and calibrating are [`BackgroundTask`]s.
+//!
+//! A task's [`Work`] advances in steps ([`super::work`]: a load is one step, a calibration one outer
+//! iteration per step) and reports [`TaskEvent`]s on the app's event channel. A native build runs
+//! each task on its own thread; where there are no threads (a browser build) the same work is stepped
+//! from the frame loop ([`Execution::InFrames`], [`BackgroundTask::step_in_frame`]), and a step that
+//! reported something to show ([`Step::Show`]: a calibration's live view) ends the frame's slice.
+//! Cancel is an `Arc<AtomicBool>` the work polls.
+
+use super::events::{AppEvent, EventSender};
+use super::session::LiveFigures;
+use super::work::{Loaded, Outcome};
+use crate::solver::CalibrationEvent;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::time::{Duration, Instant};
+
+/// Tells one task's events from another's (a replaced task may still report).
+pub type TaskId = u64;
+
+/// What a task reports.
+pub enum TaskEvent {
+    /// A dataset load ended.
+    Loaded(Result<Box<Loaded>, String>),
+    /// A calibration's progress.
+    Calibration(CalibrationEvent),
+    /// The model a running calibration has reached, evaluated.
+    Live(Box<LiveFigures>),
+    /// A calibration ended.
+    Calibrated(Outcome),
+    /// The work stopped without reporting its end.
+    Failed(String),
+}
+
+impl TaskEvent {
+    /// Whether this is the task's last event.
+    pub fn is_final(&self) -> bool {
+        !matches!(self, TaskEvent::Calibration(_) | TaskEvent::Live(_))
+    }
+}
+
+/// What a step of work says about the next one.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Step {
+    /// There is more to do.
+    More,
+    /// There is more to do, after the UI has shown what this step reported: work stepped in frames
+    /// ends the frame's slice here (a live view is drawn before the run goes on).
+    Show,
+    /// The work is done (its final event sent).
+    Done,
+}
+
+/// A task's work, in steps.
+pub trait Work: Send + 'static {
+    /// Do the next piece of work, reporting through `task`.
+    fn step(&mut self, task: &TaskContext) -> Step;
+}
+
+/// What a step of work sees: where to report, and the task's cancel flag.
+pub struct TaskContext {
+    id: TaskId,
+    events: EventSender,
+    cancel: Arc<AtomicBool>,
+}
+
+impl TaskContext {
+    pub fn report(&self, event: TaskEvent) {
+        self.events.send(AppEvent::Task(self.id, event));
+    }
+
+    /// Report progress that may be dropped while the UI is behind.
+    pub fn report_progress(&self, event: TaskEvent) {
+        self.events.send_droppable(AppEvent::Task(self.id, event));
+    }
+
+    pub fn cancel_flag(&self) -> &Arc<AtomicBool> {
+        &self.cancel
+    }
+}
+
+/// Where tasks run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Execution {
+    /// Each task on its own thread.
+    Thread,
+    /// Stepped from the frame loop, a time slice per frame (for targets without threads).
+    InFrames,
+}
+
+impl Default for Execution {
+    fn default() -> Self {
+        if cfg!(target_arch = "wasm32") {
+            Execution::InFrames
+        } else {
+            Execution::Thread
+        }
+    }
+}
+
+enum Runner {
+    /// The thread reports by itself; it is not joined (a dropped task's thread ends on its own).
+    Thread,
+    InFrames {
+        work: Box<dyn Work>,
+        context: TaskContext,
+        done: bool,
+    },
+}
+
+/// A running task: the handle the app keeps. Dropping it cancels the work.
+pub struct BackgroundTask {
+    id: TaskId,
+    started: Instant,
+    cancel: Arc<AtomicBool>,
+    cancel_requested: Option<Instant>,
+    runner: Runner,
+}
+
+static NEXT_TASK_ID: AtomicU64 = AtomicU64::new(1);
+
+impl BackgroundTask {
+    /// Start `work`; its events go to `events`. `name` names its thread.
+    pub fn start(
+        name: &str,
+        work: impl Work,
+        events: &EventSender,
+        execution: Execution,
+    ) -> std::io::Result<Self> {
+        let id = NEXT_TASK_ID.fetch_add(1, Ordering::Relaxed);
+        let cancel = Arc::new(AtomicBool::new(false));
+        let context = TaskContext {
+            id,
+            events: events.clone(),
+            cancel: cancel.clone(),
+        };
+        let runner = match execution {
+            Execution::Thread => {
+                let what = name.to_string();
+                std::thread::Builder::new()
+                    .name(format!("dualcal-{name}"))
+                    .spawn(move || run_to_end(work, &context, &what))?;
+                Runner::Thread
+            }
+            Execution::InFrames => Runner::InFrames {
+                work: Box::new(work),
+                context,
+                done: false,
+            },
+        };
+        Ok(Self {
+            id,
+            started: Instant::now(),
+            cancel,
+            cancel_requested: None,
+            runner,
+        })
+    }
+
+    pub fn id(&self) -> TaskId {
+        self.id
+    }
+
+    pub fn elapsed_secs(&self) -> f64 {
+        self.started.elapsed().as_secs_f64()
+    }
+
+    /// Ask the work to stop; it still reports its end.
+    pub fn cancel(&mut self) {
+        self.cancel_requested.get_or_insert_with(Instant::now);
+        self.cancel.store(true, Ordering::Relaxed);
+    }
+
+    pub fn is_cancelling(&self) -> bool {
+        self.cancel.load(Ordering::Relaxed)
+    }
+
+    /// Time since [`cancel`](Self::cancel) was first called.
+    pub fn since_cancel(&self) -> Option<Duration> {
+        self.cancel_requested.map(|t| t.elapsed())
+    }
+
+    /// Whether the frame loop must keep stepping this task.
+    pub fn needs_frames(&self) -> bool {
+        matches!(self.runner, Runner::InFrames { done: false, .. })
+    }
+
+    /// Advance work that runs in frames for about `budget`, or until a step has something to show
+    /// (nothing for a thread's).
+    pub fn step_in_frame(&mut self, budget: Duration) {
+        if let Runner::InFrames {
+            work,
+            context,
+            done,
+        } = &mut self.runner
+        {
+            let started = Instant::now();
+            while !*done && started.elapsed() < budget {
+                match work.step(context) {
+                    Step::More => {}
+                    Step::Show => break,
+                    Step::Done => *done = true,
+                }
+            }
+        }
+    }
+}
+
+impl Drop for BackgroundTask {
+    fn drop(&mut self) {
+        self.cancel.store(true, Ordering::Relaxed);
+    }
+}
+
+/// A task thread's body: every step, then — if the work panicked — a final event saying so.
+fn run_to_end(mut work: impl Work, context: &TaskContext, name: &str) {
+    let ran = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        while work.step(context) != Step::Done {}
+    }));
+    if ran.is_err() {
+        context.report(TaskEvent::Failed(format!(
+            "the {name} thread stopped unexpectedly"
+        )));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::app::events::EventChannel;
+
+    /// Counts to `n`, one step at a time, then reports its end.
+    struct Counter {
+        n: usize,
+        panic_at: Option<usize>,
+    }
+
+    impl Work for Counter {
+        fn step(&mut self, task: &TaskContext) -> Step {
+            assert_ne!(Some(self.n), self.panic_at, "the work failed");
+            if self.n == 0 || task.cancel_flag().load(Ordering::Relaxed) {
+                task.report(TaskEvent::Failed("done".into()));
+                return Step::Done;
+            }
+            self.n -= 1;
+            task.report_progress(TaskEvent::Calibration(CalibrationEvent::StageFinished {
+                stage: crate::solver::Stage::Base,
+                termination: crate::solver::Termination::Converged,
+            }));
+            Step::More
+        }
+    }
+
+    fn events_of(channel: &EventChannel, id: TaskId) -> Vec<TaskEvent> {
+        channel
+            .drain()
+            .into_iter()
+            .filter_map(|e| match e {
+                AppEvent::Task(task, event) if task == id => Some(event),
+                _ => None,
+            })
+            .collect()
+    }
+
+    #[test]
+    fn work_stepped_in_frames_reports_like_a_thread() {
+        let channel = EventChannel::new(None);
+        let mut task = BackgroundTask::start(
+            "count",
+            Counter {
+                n: 3,
+                panic_at: None,
+            },
+            channel.sender(),
+            Execution::InFrames,
+        )
+        .unwrap();
+        while task.needs_frames() {
+            task.step_in_frame(Duration::from_millis(1));
+        }
+        let events = events_of(&channel, task.id());
+        assert_eq!(events.len(), 4);
+        assert!(events[3].is_final() && !events[0].is_final());
+    }
+
+    #[test]
+    fn a_panicking_thread_reports_that_it_stopped() {
+        let channel = EventChannel::new(None);
+        let task = BackgroundTask::start(
+            "count",
+            Counter {
+                n: 3,
+                panic_at: Some(1),
+            },
+            channel.sender(),
+            Execution::Thread,
+        )
+        .unwrap();
+        let deadline = Instant::now() + Duration::from_secs(20);
+        let mut events = Vec::new();
+        while !events.last().is_some_and(TaskEvent::is_final) && Instant::now() < deadline {
+            events.extend(events_of(&channel, task.id()));
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        match events.last() {
+            Some(TaskEvent::Failed(message)) => assert!(message.contains("stopped unexpectedly")),
+            _ => panic!("no final event"),
+        }
+    }
+}

@@ -1,0 +1,357 @@
+//! What the background tasks do: load a dataset into a [`Session`] (one step), and calibrate one (a
+//! [`CalibrationRun`], one outer iteration per step; now and then one more step evaluates the model
+//! the run has reached, for the live view: [`LiveRate`]).
+
+use super::session::{Calibrated, LiveFigures, Session};
+use super::task::{Execution, Step, TaskContext, TaskEvent, Work};
+use crate::analysis::Analysis;
+use crate::dataset::Dataset;
+use crate::kinematics::DualArmModel;
+use crate::solver::{
+    CalibrationEvent, CalibrationResult, CalibrationRun, CalibrationSettings, Calibrator,
+    IterationRecord, Observer, Progress, Stage, StageSummary, Termination,
+};
+use anyhow::Context as _;
+use nalgebra::Isometry3;
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+/// A dataset and robot loaded.
+pub struct Loaded {
+    pub session: Session,
+    /// The robot description it was loaded with (`None`: the dataset's own or the built-in one).
+    pub urdf: Option<PathBuf>,
+    pub elapsed_secs: f64,
+}
+
+/// Load a dataset (directory or `dataset.toml`), with `urdf` overriding its robot.
+pub struct LoadWork {
+    pub dataset: PathBuf,
+    pub urdf: Option<PathBuf>,
+}
+
+impl Work for LoadWork {
+    fn step(&mut self, task: &TaskContext) -> Step {
+        let started = std::time::Instant::now();
+        let result = Session::load(&self.dataset, self.urdf.as_deref())
+            .with_context(|| format!("cannot open dataset {}", self.dataset.display()))
+            .map(|session| {
+                Box::new(Loaded {
+                    session,
+                    urdf: self.urdf.take(),
+                    elapsed_secs: started.elapsed().as_secs_f64(),
+                })
+            })
+            .map_err(|e| format!("{e:#}"));
+        task.report(TaskEvent::Loaded(result));
+        Step::Done
+    }
+}
+
+/// How a calibration ended.
+pub enum Outcome {
+    /// The calibrated model with its figures (every stage ran, converged or not).
+    Calibrated(Box<Calibrated>),
+    /// The cancel flag stopped it in `stage` after `iterations` of its outer iterations; the model
+    /// reached is not kept.
+    Cancelled { stage: Stage, iterations: usize },
+    /// Why it did not succeed.
+    Failed(String),
+}
+
+/// How often a running calibration publishes the model it has reached: not sooner than
+/// `min_interval` after the last publication, nor sooner than `cost_factor` times the time its
+/// evaluation took (so evaluating takes at most `1 / (1 + cost_factor)` of the worker's time, however
+/// large the dataset), and at the end of every stage but the last (whose result follows at once).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LiveRate {
+    pub min_interval: Duration,
+    pub cost_factor: u32,
+}
+
+impl LiveRate {
+    /// On a worker thread: ten times a second on paper-size data; at 2 × 1000 configurations, as
+    /// often as keeps the evaluation under a third of the worker's time.
+    pub const THREAD: LiveRate = LiveRate {
+        min_interval: Duration::from_millis(100),
+        cost_factor: 2,
+    };
+    /// Stepped in frames (no threads): the evaluation is a step of its own and may take a frame past
+    /// its budget, so at most every 250 ms and at most a tenth of the work time.
+    pub const IN_FRAMES: LiveRate = LiveRate {
+        min_interval: Duration::from_millis(250),
+        cost_factor: 10,
+    };
+
+    pub fn for_execution(execution: Execution) -> Self {
+        match execution {
+            Execution::Thread => Self::THREAD,
+            Execution::InFrames => Self::IN_FRAMES,
+        }
+    }
+}
+
+/// A model to evaluate for the live view.
+struct Snapshot {
+    stage: Stage,
+    iteration: usize,
+    stage_finished: bool,
+    model: DualArmModel,
+}
+
+/// When the next live view is due, and the one waiting to be evaluated.
+struct LiveSchedule {
+    rate: LiveRate,
+    /// When the last live view was sent (or the run started).
+    last: Instant,
+    /// How long its evaluation took.
+    last_cost: Duration,
+    pending: Option<Snapshot>,
+}
+
+impl LiveSchedule {
+    fn new(rate: LiveRate) -> Self {
+        Self {
+            rate,
+            last: Instant::now(),
+            last_cost: Duration::ZERO,
+            pending: None,
+        }
+    }
+
+    fn due(&self) -> bool {
+        let wait = self
+            .rate
+            .min_interval
+            .max(self.last_cost * self.rate.cost_factor);
+        self.pending.is_none() && self.last.elapsed() >= wait
+    }
+}
+
+/// The run's observer: progress events for the status bar and the curves, and the live snapshots.
+struct Reporter<'a> {
+    task: &'a TaskContext,
+    live: &'a mut LiveSchedule,
+}
+
+impl Observer for Reporter<'_> {
+    fn stage_started(&mut self, stage: Stage, n_configs: usize, n_pairs: usize) {
+        self.task
+            .report(TaskEvent::Calibration(CalibrationEvent::StageStarted {
+                stage,
+                n_configs,
+                n_pairs,
+            }));
+    }
+
+    /// Iterations arrive when the UI keeps up (they are many); a snapshot when one is due.
+    fn iteration(&mut self, record: &IterationRecord, run: &CalibrationRun) {
+        self.task
+            .report_progress(TaskEvent::Calibration(CalibrationEvent::Iteration(
+                record.clone(),
+            )));
+        if self.live.due() {
+            self.live.pending = Some(Snapshot {
+                stage: record.stage,
+                iteration: record.iteration,
+                stage_finished: false,
+                model: run.current_model(),
+            });
+        }
+    }
+
+    /// Stage boundaries always arrive, with the stage's final model (unless it was cancelled).
+    fn stage_finished(&mut self, summary: &StageSummary, run: &CalibrationRun) {
+        self.task
+            .report(TaskEvent::Calibration(CalibrationEvent::StageFinished {
+                stage: summary.stage,
+                termination: summary.termination,
+            }));
+        if summary.termination != Termination::Cancelled {
+            self.live.pending = Some(Snapshot {
+                stage: summary.stage,
+                iteration: summary.iterations,
+                stage_finished: true,
+                model: run.current_model(),
+            });
+        }
+    }
+}
+
+/// The two-step calibration of a session's nominal model. The first step sets the run up (the
+/// identifiability analysis); each further step is one outer iteration, or the evaluation of a live
+/// snapshot ([`TaskEvent::Live`]).
+pub struct CalibrationWork {
+    dataset: Arc<Dataset>,
+    nominal: DualArmModel,
+    settings: CalibrationSettings,
+    body_from_left_base: Isometry3<f64>,
+    run: Option<CalibrationRun>,
+    live: LiveSchedule,
+}
+
+impl CalibrationWork {
+    pub fn new(session: &Session, settings: CalibrationSettings, rate: LiveRate) -> Self {
+        Self {
+            dataset: session.dataset.clone(),
+            nominal: session.nominal.model.clone(),
+            settings,
+            body_from_left_base: session.body_from_left_base(),
+            run: None,
+            live: LiveSchedule::new(rate),
+        }
+    }
+
+    fn outcome(&self, result: CalibrationResult) -> Outcome {
+        if let Some(s) = result
+            .stages
+            .iter()
+            .find(|s| s.termination == Termination::Cancelled)
+        {
+            return Outcome::Cancelled {
+                stage: s.stage,
+                iterations: s.iterations,
+            };
+        }
+        match Analysis::compute(&self.dataset, &result.calibrated, &self.body_from_left_base) {
+            Ok(analysis) => Outcome::Calibrated(Box::new(Calibrated { result, analysis })),
+            Err(e) => Outcome::Failed(format!("calibrated model: {e:#}")),
+        }
+    }
+}
+
+impl Work for CalibrationWork {
+    fn step(&mut self, task: &TaskContext) -> Step {
+        let Some(run) = &mut self.run else {
+            let started = Calibrator::new(&self.dataset, &self.nominal)
+                .settings(self.settings.clone())
+                .cancel(task.cancel_flag().clone())
+                .start();
+            return match started {
+                Ok(run) => {
+                    self.run = Some(run);
+                    Step::More
+                }
+                Err(e) => {
+                    task.report(TaskEvent::Calibrated(Outcome::Failed(e.to_string())));
+                    Step::Done
+                }
+            };
+        };
+        if let Some(snapshot) = self.live.pending.take() {
+            let started = Instant::now();
+            // A model the figures cannot be computed of (e.g. a degenerate reflector triangle on the
+            // way) is not shown; the view keeps the previous one.
+            if let Ok(analysis) =
+                Analysis::compute(&self.dataset, &snapshot.model, &self.body_from_left_base)
+            {
+                let cost = started.elapsed();
+                task.report(TaskEvent::Live(Box::new(LiveFigures {
+                    stage: snapshot.stage,
+                    iteration: snapshot.iteration,
+                    stage_finished: snapshot.stage_finished,
+                    analysis,
+                    evaluation_secs: cost.as_secs_f64(),
+                })));
+            }
+            self.live.last_cost = started.elapsed();
+            self.live.last = Instant::now();
+            return Step::Show;
+        }
+        let mut reporter = Reporter {
+            task,
+            live: &mut self.live,
+        };
+        let outcome = match run.step(&mut [&mut reporter]) {
+            Ok(Progress::Running) => return Step::More,
+            Ok(Progress::Finished(result)) => self.outcome(*result),
+            Err(e) => Outcome::Failed(e.to_string()),
+        };
+        task.report(TaskEvent::Calibrated(outcome));
+        Step::Done
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::app::events::{AppEvent, EventChannel};
+    use crate::app::task::{BackgroundTask, Execution};
+    use std::path::Path;
+    use std::time::Duration;
+
+    fn run_in_frames(work: impl Work, channel: &EventChannel) -> Vec<AppEvent> {
+        let mut task =
+            BackgroundTask::start("work", work, channel.sender(), Execution::InFrames).unwrap();
+        while task.needs_frames() {
+            task.step_in_frame(Duration::from_millis(5));
+        }
+        channel.drain()
+    }
+
+    /// Without threads: the example loads and calibrates when stepped from a frame loop.
+    #[test]
+    fn the_example_loads_and_calibrates_stepped_in_frames() {
+        let channel = EventChannel::new(None);
+        let load = LoadWork {
+            dataset: Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/datasets/example"),
+            urdf: None,
+        };
+        let Some(AppEvent::Task(_, TaskEvent::Loaded(Ok(loaded)))) =
+            run_in_frames(load, &channel).pop()
+        else {
+            panic!("the example did not load");
+        };
+        let calibration = CalibrationWork::new(
+            &loaded.session,
+            CalibrationSettings::default(),
+            LiveRate::IN_FRAMES,
+        );
+        let events = run_in_frames(calibration, &channel);
+        let iterations = events
+            .iter()
+            .filter(|e| {
+                matches!(
+                    e,
+                    AppEvent::Task(_, TaskEvent::Calibration(CalibrationEvent::Iteration(_)))
+                )
+            })
+            .count();
+        // The live views: at least the end of both arms' stages (the last stage's result follows).
+        let live: Vec<&LiveFigures> = events
+            .iter()
+            .filter_map(|e| match e {
+                AppEvent::Task(_, TaskEvent::Live(live)) => Some(&**live),
+                _ => None,
+            })
+            .collect();
+        let ends: Vec<Stage> = live
+            .iter()
+            .filter(|l| l.stage_finished)
+            .map(|l| l.stage)
+            .collect();
+        assert_eq!(
+            ends,
+            [
+                Stage::Arm(crate::side::Side::Left),
+                Stage::Arm(crate::side::Side::Right)
+            ]
+        );
+        let nominal_rms = |a: &Analysis| a.ver.report.unwrap().relative_left.pos_rms_mm;
+        let after_left = live.iter().find(|l| l.stage_finished).unwrap();
+        assert!(nominal_rms(&after_left.analysis) < 0.1 * nominal_rms(&loaded.session.nominal));
+        match events.last() {
+            Some(AppEvent::Task(_, TaskEvent::Calibrated(Outcome::Calibrated(c)))) => {
+                assert!(c.result.is_converged());
+                assert_eq!(iterations, c.result.history.len());
+                // The left arm's stage ended with the model the run then kept.
+                assert_eq!(
+                    after_left.analysis.model.arms.left,
+                    c.result.calibrated.arms.left
+                );
+            }
+            _ => panic!("no calibrated result"),
+        }
+    }
+}

@@ -1,0 +1,198 @@
+//! Building a [`SerialChain`] from a parsed URDF.
+
+use super::{ChainError, ChainJoint, MovableKind, SerialChain};
+use crate::robot::{finite_pose, isometry_from_urdf_pose};
+use nalgebra::{Isometry3, Translation3, Unit, UnitQuaternion, Vector3};
+use std::collections::HashMap;
+
+/// The rotation taking +z to `axis` (identity for +z, a half turn about x for −z).
+fn aligned_rotation(axis: &Unit<Vector3<f64>>) -> UnitQuaternion<f64> {
+    UnitQuaternion::rotation_between(&Vector3::z(), axis).unwrap_or_else(|| {
+        UnitQuaternion::from_axis_angle(&Vector3::x_axis(), std::f64::consts::PI)
+    })
+}
+
+fn joint_kind_name(kind: &urdf_rs::JointType) -> &'static str {
+    match kind {
+        urdf_rs::JointType::Revolute => "revolute",
+        urdf_rs::JointType::Continuous => "continuous",
+        urdf_rs::JointType::Prismatic => "prismatic",
+        urdf_rs::JointType::Fixed => "fixed",
+        urdf_rs::JointType::Floating => "floating",
+        urdf_rs::JointType::Planar => "planar",
+        urdf_rs::JointType::Spherical => "spherical",
+    }
+}
+
+/// The joints from `base_link` down to `tip_link`, in chain order.
+fn path<'a>(
+    robot: &'a urdf_rs::Robot,
+    base_link: &str,
+    tip_link: &str,
+) -> Result<Vec<&'a urdf_rs::Joint>, ChainError> {
+    for (role, link) in [("base", base_link), ("tip", tip_link)] {
+        if !robot.links.iter().any(|l| l.name == link) {
+            return Err(ChainError::UnknownLink {
+                role,
+                link: link.to_string(),
+            });
+        }
+    }
+    let parent_joint: HashMap<&str, &urdf_rs::Joint> = robot
+        .joints
+        .iter()
+        .map(|j| (j.child.link.as_str(), j))
+        .collect();
+    let no_path = || ChainError::NoPath {
+        base: base_link.into(),
+        tip: tip_link.into(),
+    };
+    let mut path = Vec::new();
+    let mut link = tip_link;
+    while link != base_link {
+        let joint = parent_joint.get(link).ok_or_else(no_path)?;
+        if path.len() > robot.joints.len() {
+            // A cycle (a malformed description): no path either.
+            return Err(no_path());
+        }
+        path.push(*joint);
+        link = joint.parent.link.as_str();
+    }
+    path.reverse();
+    Ok(path)
+}
+
+impl SerialChain {
+    /// The chain of `robot` from `base_link` down to `tip_link`.
+    pub fn from_urdf(
+        robot: &urdf_rs::Robot,
+        base_link: &str,
+        tip_link: &str,
+    ) -> Result<Self, ChainError> {
+        let mut joints = Vec::new();
+        let mut warnings = Vec::new();
+        let mut pending = Isometry3::identity();
+        let mut folded = Vec::new();
+        for j in path(robot, base_link, tip_link)? {
+            if !finite_pose(&j.origin) {
+                return Err(ChainError::NonFiniteOrigin {
+                    joint: j.name.clone(),
+                });
+            }
+            let origin = isometry_from_urdf_pose(&j.origin);
+            let kind = match j.joint_type {
+                urdf_rs::JointType::Fixed => {
+                    pending *= origin;
+                    folded.push(j.name.clone());
+                    continue;
+                }
+                urdf_rs::JointType::Revolute => MovableKind::Revolute,
+                urdf_rs::JointType::Continuous => MovableKind::Continuous,
+                ref other => {
+                    return Err(ChainError::UnsupportedJoint {
+                        joint: j.name.clone(),
+                        kind: joint_kind_name(other),
+                        base: base_link.into(),
+                        tip: tip_link.into(),
+                    });
+                }
+            };
+            if let Some(m) = &j.mimic {
+                return Err(ChainError::MimicJoint {
+                    joint: j.name.clone(),
+                    mimicked: m.joint.clone(),
+                });
+            }
+            let a = Vector3::from(j.axis.xyz.0);
+            let norm = a.norm();
+            if !(norm.is_finite() && norm > 1e-9) {
+                return Err(ChainError::BadAxis {
+                    joint: j.name.clone(),
+                    axis: j.axis.xyz.0,
+                });
+            }
+            let axis = Unit::new_normalize(a);
+            let limits_rad = match kind {
+                MovableKind::Continuous => None,
+                MovableKind::Revolute => {
+                    let (lower, upper) = (j.limit.lower, j.limit.upper);
+                    if !(lower.is_finite() && upper.is_finite() && lower <= upper) {
+                        return Err(ChainError::BadLimits {
+                            joint: j.name.clone(),
+                            lower,
+                            upper,
+                        });
+                    }
+                    if lower == upper {
+                        // urdf-rs reads a revolute joint without <limit> as [0, 0].
+                        warnings.push(format!(
+                            "joint `{}` is revolute with the limits [{lower}, {upper}] (or none): it is \
+                             treated as turning ±π",
+                            j.name
+                        ));
+                        None
+                    } else {
+                        Some((lower, upper))
+                    }
+                }
+            };
+            joints.push(ChainJoint {
+                name: j.name.clone(),
+                kind,
+                parent_from_joint: origin,
+                prev_from_parent: pending,
+                folded_fixed: std::mem::take(&mut folded),
+                axis,
+                limits_rad,
+                joint_from_aligned: aligned_rotation(&axis),
+                parent_link: j.parent.link.clone(),
+                child_link: j.child.link.clone(),
+            });
+            pending = Isometry3::identity();
+        }
+        if joints.is_empty() {
+            return Err(ChainError::NoMovableJoint {
+                base: base_link.into(),
+                tip: tip_link.into(),
+            });
+        }
+        let mut prev_c = UnitQuaternion::identity();
+        let mut prev_aligned_from_aligned = Vec::with_capacity(joints.len());
+        for j in &joints {
+            let c = j.joint_from_aligned;
+            prev_aligned_from_aligned.push(
+                Isometry3::from_parts(Translation3::identity(), prev_c.inverse())
+                    * j.prev_from_parent
+                    * j.parent_from_joint
+                    * Isometry3::from_parts(Translation3::identity(), c),
+            );
+            prev_c = c;
+        }
+        let last_aligned_from_tip =
+            Isometry3::from_parts(Translation3::identity(), prev_c.inverse()) * pending;
+        Ok(Self {
+            base_link: base_link.into(),
+            tip_link: tip_link.into(),
+            joints,
+            last_from_tip: pending,
+            warnings,
+            prev_aligned_from_aligned,
+            last_aligned_from_tip,
+        })
+    }
+}
+
+/// Refuse two arm chains that share a movable joint (a torso joint above both bases, as on a Nextage
+/// described from `WAIST`): the two arms' measurements would each move it on their own.
+pub fn check_disjoint(left: &SerialChain, right: &SerialChain) -> Result<(), ChainError> {
+    match left
+        .joints
+        .iter()
+        .find(|j| right.joints.iter().any(|k| k.name == j.name))
+    {
+        Some(j) => Err(ChainError::SharedJoint {
+            joint: j.name.clone(),
+        }),
+        None => Ok(()),
+    }
+}

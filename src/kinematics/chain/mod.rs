@@ -1,0 +1,486 @@
+//! An arm as the serial chain of a URDF between a base link and a tip link, its forward kinematics,
+//! and its calibration parametrisation.
+//!
+//! **The chain.** The joints on the path from `base_link` down to `tip_link`, in chain order. Each
+//! revolute or continuous joint is a *movable joint* with its own variable `q_k` (rad, the URDF
+//! joint's own variable); fixed joints are folded into the origin of the next movable joint, or into
+//! [`SerialChain::last_from_tip`] after the last one. Prismatic, floating, planar and spherical joints,
+//! mimic joints, a missing link and a tip that is not below the base are refused with a
+//! [`ChainError`] naming the link or joint. The joint origins are taken as they are: no DH form is
+//! needed. Lengths in mm, angles in rad.
+//!
+//! **The parametrisation.** Every movable joint k gets a small correction `Δ_k` of its origin,
+//! inserted between the URDF origin and the joint rotation and expressed in the joint's *aligned
+//! frame* (the joint frame turned by a constant rotation `C_k` so that its z axis is the joint axis;
+//! `C_k = I` when the URDF axis is +z):
+//!
+//! ```text
+//! prev_from_child_k(q) = P_k · O_k · C_k · Δ_k · Rz(q_k) · C_kᵀ,
+//! Δ_k = T(tx, ty, tz) · Rx(rx) · Ry(ry) · Rz(rz)
+//! ```
+//!
+//! (`P_k` the fixed joints folded before joint k, `O_k` its URDF `<origin>`), so `rz` is the joint's
+//! zero offset, `tz` a shift along its axis, and `tx, ty, rx, ry` move the axis line. Six per joint and
+//! the three reflector coordinates in the tip frame: `6n + 9` parameters, of which distance data
+//! identify `4n + 3` ([`minimal_parameter_count`]); the identifiability analysis picks which, in the
+//! order of [`SerialChain::preference_order`]. The corrected URDF origin is `O_k · C_k Δ_k C_kᵀ`
+//! ([`SerialChain::corrected_origins`]): a change of the joint's own origin by exactly the
+//! correction, in the URDF's own frames.
+//!
+//! **Jacobians** (exact at any correction, [`SerialChain::reflector_jacobians`]): with `R`, `o` the
+//! aligned frame before the correction and `o' = o + R t` its corrected origin, a translation moves a
+//! point along its axis (`R e_x` …), a rotation about axis `w` through `o'` moves point p by
+//! `w × (p − o')` (`w` = `R e_x`, `R Rx(rx) e_y`, `R Rx(rx) Ry(ry) e_z` for the three elementary
+//! rotations), and the reflector coordinates move with the tip rotation.
+
+mod build;
+#[cfg(test)]
+mod tests;
+
+use super::{ArmJacobians, REFLECTOR_NAMES, ReflectorFk};
+pub use build::check_disjoint;
+use nalgebra::{Isometry3, Matrix3xX, Translation3, Unit, UnitQuaternion, Vector3};
+
+/// Correction parameters per movable joint: `tx, ty, tz` (mm), `rx, ry, rz` (rad).
+pub const PARAMS_PER_JOINT: usize = 6;
+/// Names of the six correction parameters of a joint, in parameter order.
+pub const CORRECTION_NAMES: [&str; PARAMS_PER_JOINT] = ["tx", "ty", "tz", "rx", "ry", "rz"];
+
+/// Why a chain cannot be built from a robot description, or does not fit the data.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ChainError {
+    #[error("{role} link `{link}` is not a link of the robot description")]
+    UnknownLink { role: &'static str, link: String },
+    #[error("tip link `{tip}` is not below base link `{base}` in the robot description")]
+    NoPath { base: String, tip: String },
+    #[error(
+        "joint `{joint}` between `{base}` and `{tip}` is {kind}; an arm chain may only hold revolute, \
+         continuous and fixed joints"
+    )]
+    UnsupportedJoint {
+        joint: String,
+        kind: &'static str,
+        base: String,
+        tip: String,
+    },
+    #[error("joint `{joint}` mimics `{mimicked}`; a mimic joint cannot be part of an arm chain")]
+    MimicJoint { joint: String, mimicked: String },
+    #[error("joint `{joint}`: its axis {axis:?} has zero length or is not finite")]
+    BadAxis { joint: String, axis: [f64; 3] },
+    #[error("joint `{joint}`: its origin is not finite")]
+    NonFiniteOrigin { joint: String },
+    #[error("joint `{joint}`: lower limit {lower} is above upper limit {upper}, or not finite")]
+    BadLimits {
+        joint: String,
+        lower: f64,
+        upper: f64,
+    },
+    #[error("no revolute or continuous joint between `{base}` and `{tip}`")]
+    NoMovableJoint { base: String, tip: String },
+    #[error(
+        "joint `{joint}` is in both arm chains; each arm's data would move it on its own — choose base \
+         links below it"
+    )]
+    SharedJoint { joint: String },
+}
+
+impl ChainError {
+    /// The joint or link the error is about.
+    pub fn subject(&self) -> Option<&str> {
+        match self {
+            ChainError::UnknownLink { .. } | ChainError::NoPath { .. } => None,
+            ChainError::NoMovableJoint { .. } => None,
+            ChainError::UnsupportedJoint { joint, .. }
+            | ChainError::MimicJoint { joint, .. }
+            | ChainError::BadAxis { joint, .. }
+            | ChainError::NonFiniteOrigin { joint }
+            | ChainError::BadLimits { joint, .. }
+            | ChainError::SharedJoint { joint } => Some(joint),
+        }
+    }
+}
+
+/// Revolute (limited) or continuous (unlimited) joint.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MovableKind {
+    Revolute,
+    Continuous,
+}
+
+/// One movable joint of a chain.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ChainJoint {
+    /// The URDF joint's name.
+    pub name: String,
+    pub kind: MovableKind,
+    /// The URDF `<origin>` of this joint (mm), i.e. `parent_link_from_joint`.
+    pub parent_from_joint: Isometry3<f64>,
+    /// The fixed joints between the previous movable joint's child link (or the base link) and this
+    /// joint's parent link, folded: `prev_from_parent` (identity when there are none).
+    pub prev_from_parent: Isometry3<f64>,
+    /// Names of those fixed joints, in chain order.
+    pub folded_fixed: Vec<String>,
+    /// Unit joint axis in the joint frame.
+    pub axis: Unit<Vector3<f64>>,
+    /// `(lower, upper)` in rad as the URDF gives them; `None` for a continuous joint.
+    pub limits_rad: Option<(f64, f64)>,
+    /// `C_k`: the joint frame's rotation to the aligned frame (whose z axis is the joint axis).
+    pub joint_from_aligned: UnitQuaternion<f64>,
+    /// The joint's parent and child links.
+    pub parent_link: String,
+    pub child_link: String,
+}
+
+impl ChainJoint {
+    /// The range a joint may take: its limits, or ±π for a continuous joint.
+    pub fn range_rad(&self) -> (f64, f64) {
+        self.limits_rad
+            .unwrap_or((-std::f64::consts::PI, std::f64::consts::PI))
+    }
+}
+
+/// The serial chain of a robot description between two links.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SerialChain {
+    pub base_link: String,
+    pub tip_link: String,
+    pub joints: Vec<ChainJoint>,
+    /// The fixed joints after the last movable joint, folded: `last_child_from_tip`.
+    pub last_from_tip: Isometry3<f64>,
+    /// Things the user should know (a revolute joint without limits, …).
+    pub warnings: Vec<String>,
+    /// `B_k = C_{k−1}ᵀ · prev_from_parent · parent_from_joint · C_k` (C_0 = I): the aligned frame of
+    /// joint k in the rotated aligned frame of joint k − 1 (or the base link).
+    prev_aligned_from_aligned: Vec<Isometry3<f64>>,
+    /// `C_nᵀ · last_from_tip`.
+    last_aligned_from_tip: Isometry3<f64>,
+}
+
+fn rot_x(a: f64) -> UnitQuaternion<f64> {
+    UnitQuaternion::from_axis_angle(&Vector3::x_axis(), a)
+}
+fn rot_y(a: f64) -> UnitQuaternion<f64> {
+    UnitQuaternion::from_axis_angle(&Vector3::y_axis(), a)
+}
+fn rot_z(a: f64) -> UnitQuaternion<f64> {
+    UnitQuaternion::from_axis_angle(&Vector3::z_axis(), a)
+}
+
+/// `Δ = T(tx, ty, tz) Rx(rx) Ry(ry) Rz(rz)`.
+pub fn correction_transform(c: &[f64; PARAMS_PER_JOINT]) -> Isometry3<f64> {
+    Isometry3::from_parts(
+        Translation3::new(c[0], c[1], c[2]),
+        rot_x(c[3]) * rot_y(c[4]) * rot_z(c[5]),
+    )
+}
+
+/// The number of parameters distance-only data can identify for an arm of `revolute` revolute
+/// joints measured at three points: the axes at q = 0 are lines (4 each, the product-of-exponentials
+/// count), the three points add 9, and a rigid motion of everything (6) leaves every distance alone:
+/// `4R + 9 − 6 = 4R + 3` (31 for the 7-joint YuMi arm = 37 DH+reflector parameters − 6 fixed).
+pub const fn minimal_parameter_count(revolute: usize) -> usize {
+    4 * revolute + 3
+}
+
+impl SerialChain {
+    /// Number of movable joints.
+    pub fn dof(&self) -> usize {
+        self.joints.len()
+    }
+
+    /// Number of parameters: six corrections per joint and nine reflector coordinates.
+    pub fn param_count(&self) -> usize {
+        PARAMS_PER_JOINT * self.dof() + 9
+    }
+
+    /// Index of the first reflector coordinate in the parameter vector.
+    pub fn reflector_offset(&self) -> usize {
+        PARAMS_PER_JOINT * self.dof()
+    }
+
+    /// Name of parameter `k`: `<joint>.tx` … `<joint>.rz`, `t_a.x` … `t_c.z`.
+    pub fn param_name(&self, k: usize) -> String {
+        let off = self.reflector_offset();
+        if k < off {
+            format!(
+                "{}.{}",
+                self.joints[k / PARAMS_PER_JOINT].name,
+                CORRECTION_NAMES[k % PARAMS_PER_JOINT]
+            )
+        } else if k < off + 9 {
+            format!(
+                "t_{}.{}",
+                REFLECTOR_NAMES[(k - off) / 3],
+                ["x", "y", "z"][(k - off) % 3]
+            )
+        } else {
+            format!("p{k}")
+        }
+    }
+
+    /// Is parameter `k` an angle (rad) rather than a length (mm)?
+    pub fn param_is_angle(&self, k: usize) -> bool {
+        k < self.reflector_offset() && k % PARAMS_PER_JOINT >= 3
+    }
+
+    /// Joint names in chain order (the CSV's `q1 … qN`).
+    pub fn joint_names(&self) -> Vec<&str> {
+        self.joints.iter().map(|j| j.name.as_str()).collect()
+    }
+
+    /// `base → tip` with the joint count, for messages.
+    pub fn describe(&self) -> String {
+        format!(
+            "{} → {} ({} joints)",
+            self.base_link,
+            self.tip_link,
+            self.dof()
+        )
+    }
+
+    /// Tip pose in the base link's frame (mm) with the given corrections; `q_rad` in chain order
+    /// (missing values count as zero, extra ones are ignored).
+    pub fn base_from_tip(
+        &self,
+        corrections: &[[f64; PARAMS_PER_JOINT]],
+        q_rad: &[f64],
+    ) -> Isometry3<f64> {
+        debug_assert_eq!(q_rad.len(), self.dof());
+        let mut f = Isometry3::identity();
+        for (k, (b, c)) in self
+            .prev_aligned_from_aligned
+            .iter()
+            .zip(corrections)
+            .enumerate()
+        {
+            let q = q_rad.get(k).copied().unwrap_or(0.0);
+            // Δ · Rz(q) = T(t) Rx Ry Rz(rz + q).
+            let moved = Isometry3::from_parts(
+                Translation3::new(c[0], c[1], c[2]),
+                rot_x(c[3]) * rot_y(c[4]) * rot_z(c[5] + q),
+            );
+            f = f * b * moved;
+        }
+        f * self.last_aligned_from_tip
+    }
+
+    /// The nominal tip pose (all corrections zero).
+    pub fn nominal_base_from_tip(&self, q_rad: &[f64]) -> Isometry3<f64> {
+        self.base_from_tip(&vec![[0.0; PARAMS_PER_JOINT]; self.dof()], q_rad)
+    }
+
+    /// The aligned frame of every movable joint (z = its axis, after its correction's translation
+    /// and tilt) in the base link's frame, then the tip frame.
+    pub fn joint_frames(
+        &self,
+        corrections: &[[f64; PARAMS_PER_JOINT]],
+        q_rad: &[f64],
+    ) -> Vec<Isometry3<f64>> {
+        let mut out = Vec::with_capacity(self.dof() + 1);
+        let mut f = Isometry3::identity();
+        for (k, (b, c)) in self
+            .prev_aligned_from_aligned
+            .iter()
+            .zip(corrections)
+            .enumerate()
+        {
+            let q = q_rad.get(k).copied().unwrap_or(0.0);
+            f *= b;
+            out.push(
+                f * Isometry3::from_parts(
+                    Translation3::new(c[0], c[1], c[2]),
+                    rot_x(c[3]) * rot_y(c[4]),
+                ),
+            );
+            f *= Isometry3::from_parts(
+                Translation3::new(c[0], c[1], c[2]),
+                rot_x(c[3]) * rot_y(c[4]) * rot_z(c[5] + q),
+            );
+        }
+        out.push(f * self.last_aligned_from_tip);
+        out
+    }
+
+    /// Reflector positions, tip pose and the analytic Jacobians with respect to all parameters
+    /// (corrections of every joint, then the reflector coordinates).
+    pub fn reflector_jacobians(
+        &self,
+        corrections: &[[f64; PARAMS_PER_JOINT]],
+        reflectors_mm: &[Vector3<f64>; 3],
+        q_rad: &[f64],
+    ) -> ArmJacobians {
+        let n = self.dof();
+        // Per joint: the three translation directions, the three rotation axes and the corrected
+        // origin o' through which they pass.
+        let mut dirs: Vec<[Vector3<f64>; 6]> = Vec::with_capacity(n);
+        let mut origins: Vec<Vector3<f64>> = Vec::with_capacity(n);
+        let mut f = Isometry3::identity();
+        for (k, (b, c)) in self
+            .prev_aligned_from_aligned
+            .iter()
+            .zip(corrections)
+            .enumerate()
+        {
+            let q = q_rad.get(k).copied().unwrap_or(0.0);
+            f *= b;
+            let r = f.rotation;
+            let rx = rot_x(c[3]);
+            let rxy = rx * rot_y(c[4]);
+            let t = Vector3::new(c[0], c[1], c[2]);
+            origins.push(f.translation.vector + r * t);
+            dirs.push([
+                r * Vector3::x(),
+                r * Vector3::y(),
+                r * Vector3::z(),
+                r * Vector3::x(),
+                r * (rx * Vector3::y()),
+                r * (rxy * Vector3::z()),
+            ]);
+            f *= Isometry3::from_parts(Translation3::from(t), rxy * rot_z(c[5] + q));
+        }
+        let tip = f * self.last_aligned_from_tip;
+        let points_mm = reflectors_mm.map(|t| tip.transform_point(&t.into()).coords);
+        let rot_tip = tip.rotation.to_rotation_matrix().into_inner();
+        let cols = self.param_count();
+        let off = self.reflector_offset();
+        let jacobians = std::array::from_fn(|k| {
+            let p = points_mm[k];
+            let mut j = Matrix3xX::zeros(cols);
+            for (i, (d, o)) in dirs.iter().zip(&origins).enumerate() {
+                let lever = p - o;
+                let base = PARAMS_PER_JOINT * i;
+                for c in 0..3 {
+                    j.set_column(base + c, &d[c]);
+                    j.set_column(base + 3 + c, &d[3 + c].cross(&lever));
+                }
+            }
+            j.fixed_view_mut::<3, 3>(0, off + 3 * k).copy_from(&rot_tip);
+            j
+        });
+        ArmJacobians {
+            fk: ReflectorFk {
+                points_mm,
+                base_from_flange: tip,
+            },
+            jacobians,
+        }
+    }
+
+    /// The corrected URDF `<origin>` of every movable joint (mm): `O_k · C_k Δ_k C_kᵀ`.
+    pub fn corrected_origins(
+        &self,
+        corrections: &[[f64; PARAMS_PER_JOINT]],
+    ) -> Vec<(String, Isometry3<f64>)> {
+        self.joints
+            .iter()
+            .zip(corrections)
+            .map(|(j, c)| {
+                let cj = Isometry3::from_parts(Translation3::identity(), j.joint_from_aligned);
+                (
+                    j.name.clone(),
+                    j.parent_from_joint * cj * correction_transform(c) * cj.inverse(),
+                )
+            })
+            .collect()
+    }
+
+    /// The URDF origin of this chain's first movable joint that puts its base frame where step 2 of
+    /// the calibration found it: the chain is measured in another frame F (the first arm's base),
+    /// `f_from_base_nominal` is the base link in F from the URDF tree and `f_from_base_calibrated` the
+    /// calibrated one. The base link itself stays where the tree puts it; only joint 1's origin moves
+    /// by the (small) base correction: `O₁' = P⁻¹ N⁻¹ C P O₁` with P the fixed joints folded before
+    /// joint 1, N nominal, C calibrated.
+    pub fn first_origin_with_base_correction(
+        &self,
+        first_origin: &Isometry3<f64>,
+        f_from_base_nominal: &Isometry3<f64>,
+        f_from_base_calibrated: &Isometry3<f64>,
+    ) -> Isometry3<f64> {
+        let p = self.joints[0].prev_from_parent;
+        p.inverse() * f_from_base_nominal.inverse() * f_from_base_calibrated * p * first_origin
+    }
+
+    /// Is joint `k`'s axis parallel to joint `k − 1`'s (at q = 0, within 1e-6 rad)?
+    pub fn parallel_to_previous(&self, k: usize) -> bool {
+        if k == 0 || k >= self.dof() {
+            return false;
+        }
+        // Joint k's axis in the aligned frame of joint k − 1 (whose z is that joint's axis).
+        let axis = self.prev_aligned_from_aligned[k].rotation * Vector3::z();
+        axis.cross(&Vector3::z()).norm() < 1e-6
+    }
+
+    /// Greedy preference order of the identifiability analysis, *base first*: the reflector
+    /// coordinates, then joints 1 … n, each `rz` (the joint offset), `tz` (a shift along the axis),
+    /// then the axis line `tx, ty, rx, ry`. Joint offsets and shifts stay where they are; of each axis
+    /// line only what the previous joint's offset and shift cannot explain is kept (for an axis
+    /// parallel to the previous one, Hayati's tilt instead of the shift). Joint 1's six are a rigid
+    /// motion of the arm and are fixed, the last joint's offset and shift go to the reflectors. Real
+    /// robots' largest errors are joint offsets (encoder zeros): this order keeps them as offsets.
+    pub fn preference_order(&self) -> Vec<usize> {
+        let off = self.reflector_offset();
+        let mut out: Vec<usize> = (off..off + 9).collect();
+        for k in 0..self.dof() {
+            let b = PARAMS_PER_JOINT * k;
+            out.extend([b + 5, b + 2, b, b + 1, b + 3, b + 4]);
+        }
+        out
+    }
+
+    /// Why correction parameter `k` cannot be identified from distances, when physics says so.
+    pub fn physical_reason(&self, k: usize) -> Option<String> {
+        if k >= self.reflector_offset() {
+            return None;
+        }
+        let (joint, c) = (k / PARAMS_PER_JOINT, k % PARAMS_PER_JOINT);
+        let name = &self.joints[joint].name;
+        if joint == 0 {
+            return Some(format!(
+                "`{name}` is the first joint: moving its origin moves the whole arm rigidly, which the \
+                 tracker frame absorbs"
+            ));
+        }
+        match c {
+            2 | 5 if joint + 1 == self.dof() => Some(format!(
+                "`{name}` is the last joint: a {} its axis moves the tip frame alike and is absorbed by \
+                 the reflector coordinates",
+                if c == 2 { "shift along" } else { "turn about" }
+            )),
+            2 if self.parallel_to_previous(joint) => Some(format!(
+                "`{name}`'s axis is parallel to `{}`'s: a shift along it equals that joint's shift \
+                 (the tilt, Hayati's β, is identified instead)",
+                self.joints[joint - 1].name
+            )),
+            0 | 1 | 3 | 4 => Some(format!(
+                "moves `{name}`'s axis as `{}`'s offset or shift along its own axis does",
+                self.joints[joint - 1].name
+            )),
+            _ => None,
+        }
+    }
+
+    /// The tool axis in the tip frame: the last joint's axis, signed to point away from the previous
+    /// joint's origin at q = 0 (the way a flange faces). Used to face simulated reflectors to the
+    /// tracker and to place default reflectors.
+    pub fn tool_axis(&self) -> Unit<Vector3<f64>> {
+        let zero = vec![[0.0; PARAMS_PER_JOINT]; self.dof()];
+        let q = vec![0.0; self.dof()];
+        let frames = self.joint_frames(&zero, &q);
+        let n = self.dof();
+        let tip = frames[n];
+        let last = frames[n - 1];
+        let axis_base = last.rotation * Vector3::z();
+        let from = if n >= 2 {
+            frames[n - 2].translation.vector
+        } else {
+            Vector3::zeros()
+        };
+        let away = tip.translation.vector - from;
+        let signed = if axis_base.dot(&away) < 0.0 {
+            -axis_base
+        } else {
+            axis_base
+        };
+        Unit::new_normalize(tip.rotation.inverse() * signed)
+    }
+}

@@ -1,0 +1,350 @@
+//! The geometric model of the robot: each arm's kinematics and reflectors, and the right-arm base in
+//! the left-arm base frame.
+//!
+//! An arm's kinematics take one of two forms ([`ArmKinematics`]):
+//!
+//! - **DH** — the built-in ABB IRB 14000: the paper's standard Denavit–Hartenberg table (Table 3),
+//!   seven joints, 28 values ([`dh`]). Its calibrations are exactly those of earlier releases.
+//! - **Chain** — any other robot: the serial chain of a URDF between a base link and a tip link
+//!   ([`SerialChain`]), with however many revolute joints it has, its joint origins as the URDF writes
+//!   them, and a small correction of each joint origin as the calibration parameters ([`chain`]).
+//!
+//! Either way the model's base frame is the arm's *model base* (the DH frame 0, or the chain's base
+//! link), its tip the flange (DH frame 7) or the tip link, and the three reflectors `t_a, t_b, t_c` are
+//! constant points in the tip frame. Lengths in mm, angles in rad; joint values in chain order.
+//!
+//! The parameter vector of an arm ([`ArmModel::to_vector`]) is the kinematic parameters followed by
+//! the nine reflector coordinates; [`ArmModel::param_name`] names them and [`ArmModel::with_vector`]
+//! builds the model back.
+
+pub mod chain;
+pub mod dh;
+#[cfg(test)]
+pub(crate) mod tests;
+
+use crate::side::{PerSide, Side};
+pub use chain::{
+    CORRECTION_NAMES, ChainError, ChainJoint, MovableKind, PARAMS_PER_JOINT, SerialChain,
+    correction_transform, minimal_parameter_count,
+};
+pub use dh::{
+    ABB_AXIS_OF_CHAIN, DhRow, IRB14000_NOMINAL_DH, JOINT_LIMITS_DEG, N_DH, N_JOINTS, N_PARAMS,
+    ParamVector, PointJacobian, joint_limits_rad, param_is_angle, param_name,
+};
+use nalgebra::{DVector, Isometry3, Matrix3xX, Vector3};
+use std::sync::Arc;
+
+/// Reflector labels in file order.
+pub const REFLECTOR_NAMES: [&str; 3] = ["a", "b", "c"];
+
+/// The kinematic part of one arm's model.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ArmKinematics {
+    /// Standard DH, seven joints in chain order (ABB axes 1, 2, 7, 3, 4, 5, 6): the built-in IRB 14000.
+    Dh([DhRow; N_JOINTS]),
+    /// A URDF serial chain and the correction of each of its movable joints' origins
+    /// (`[tx, ty, tz, rx, ry, rz]`, mm and rad, see [`chain`]).
+    Chain {
+        chain: Arc<SerialChain>,
+        corrections: Vec<[f64; PARAMS_PER_JOINT]>,
+    },
+}
+
+/// The geometric model of one arm: its kinematics and the reflector coordinates in its tip frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ArmModel {
+    pub kinematics: ArmKinematics,
+    /// Reflector coordinates `t_a, t_b, t_c` in the tip frame (the flange, DH frame 7, for the
+    /// built-in robot; the tip link for a chain), mm.
+    pub reflectors_mm: [Vector3<f64>; 3],
+}
+
+/// Reflector positions and tip pose of one configuration.
+#[derive(Clone, Debug)]
+pub struct ReflectorFk {
+    /// Reflector positions in the arm's model base frame, mm.
+    pub points_mm: [Vector3<f64>; 3],
+    /// Tip (flange) pose in the model base frame.
+    pub base_from_flange: Isometry3<f64>,
+}
+
+/// Reflector positions and their Jacobians with respect to every parameter of the arm.
+#[derive(Clone, Debug)]
+pub struct ArmJacobians {
+    pub fk: ReflectorFk,
+    /// `∂p_k/∂x`, 3 × [`ArmModel::param_count`] each.
+    pub jacobians: [Matrix3xX<f64>; 3],
+}
+
+impl ArmModel {
+    /// The nominal IRB 14000 arm (Table 3) with the given reflector coordinates.
+    pub fn nominal_irb14000(reflectors_mm: [Vector3<f64>; 3]) -> Self {
+        Self {
+            kinematics: ArmKinematics::Dh(IRB14000_NOMINAL_DH),
+            reflectors_mm,
+        }
+    }
+
+    /// The nominal model of a chain (no corrections) with the given reflector coordinates.
+    pub fn nominal_chain(chain: Arc<SerialChain>, reflectors_mm: [Vector3<f64>; 3]) -> Self {
+        let corrections = vec![[0.0; PARAMS_PER_JOINT]; chain.dof()];
+        Self {
+            kinematics: ArmKinematics::Chain { chain, corrections },
+            reflectors_mm,
+        }
+    }
+
+    /// The DH table, for the DH form.
+    pub fn dh(&self) -> Option<&[DhRow; N_JOINTS]> {
+        match &self.kinematics {
+            ArmKinematics::Dh(dh) => Some(dh),
+            ArmKinematics::Chain { .. } => None,
+        }
+    }
+
+    /// The DH table, mutably, for the DH form.
+    pub fn dh_mut(&mut self) -> Option<&mut [DhRow; N_JOINTS]> {
+        match &mut self.kinematics {
+            ArmKinematics::Dh(dh) => Some(dh),
+            ArmKinematics::Chain { .. } => None,
+        }
+    }
+
+    /// The serial chain, for the chain form.
+    pub fn chain(&self) -> Option<&Arc<SerialChain>> {
+        match &self.kinematics {
+            ArmKinematics::Chain { chain, .. } => Some(chain),
+            ArmKinematics::Dh(_) => None,
+        }
+    }
+
+    /// The joint-origin corrections, for the chain form.
+    pub fn corrections(&self) -> Option<&[[f64; PARAMS_PER_JOINT]]> {
+        match &self.kinematics {
+            ArmKinematics::Chain { corrections, .. } => Some(corrections),
+            ArmKinematics::Dh(_) => None,
+        }
+    }
+
+    /// Number of movable joints (the CSV's `q1 … qN`).
+    pub fn joint_count(&self) -> usize {
+        match &self.kinematics {
+            ArmKinematics::Dh(_) => N_JOINTS,
+            ArmKinematics::Chain { chain, .. } => chain.dof(),
+        }
+    }
+
+    /// `(lower, upper)` of every joint in chain order, rad: Table 3's limits for DH (ABB's), the URDF's
+    /// for a chain (±π for a continuous joint).
+    pub fn joint_limits_rad(&self) -> Vec<(f64, f64)> {
+        match &self.kinematics {
+            ArmKinematics::Dh(_) => joint_limits_rad().to_vec(),
+            ArmKinematics::Chain { chain, .. } => {
+                chain.joints.iter().map(|j| j.range_rad()).collect()
+            }
+        }
+    }
+
+    /// Number of parameters: the kinematic ones and the nine reflector coordinates.
+    pub fn param_count(&self) -> usize {
+        self.reflector_offset() + 9
+    }
+
+    /// Index of the first reflector coordinate in the parameter vector.
+    pub fn reflector_offset(&self) -> usize {
+        match &self.kinematics {
+            ArmKinematics::Dh(_) => N_DH,
+            ArmKinematics::Chain { chain, .. } => chain.reflector_offset(),
+        }
+    }
+
+    /// Name of parameter `k`: `a1 … alpha7` (DH) or `<joint>.tx … <joint>.rz` (chain), then
+    /// `t_a.x … t_c.z`.
+    pub fn param_name(&self, k: usize) -> String {
+        match &self.kinematics {
+            ArmKinematics::Dh(_) => param_name(k),
+            ArmKinematics::Chain { chain, .. } => chain.param_name(k),
+        }
+    }
+
+    /// Is parameter `k` an angle (rad) rather than a length (mm)?
+    pub fn param_is_angle(&self, k: usize) -> bool {
+        match &self.kinematics {
+            ArmKinematics::Dh(_) => param_is_angle(k),
+            ArmKinematics::Chain { chain, .. } => chain.param_is_angle(k),
+        }
+    }
+
+    /// The parameter vector: kinematic parameters, then `t_a, t_b, t_c`.
+    pub fn to_vector(&self) -> DVector<f64> {
+        match &self.kinematics {
+            ArmKinematics::Dh(dh) => {
+                let v = dh::to_vector(dh, &self.reflectors_mm);
+                DVector::from_column_slice(v.as_slice())
+            }
+            ArmKinematics::Chain { corrections, .. } => {
+                let n = corrections.len();
+                let mut v = DVector::zeros(PARAMS_PER_JOINT * n + 9);
+                for (k, c) in corrections.iter().enumerate() {
+                    for (i, x) in c.iter().enumerate() {
+                        v[PARAMS_PER_JOINT * k + i] = *x;
+                    }
+                }
+                for (r, t) in self.reflectors_mm.iter().enumerate() {
+                    for c in 0..3 {
+                        v[PARAMS_PER_JOINT * n + 3 * r + c] = t[c];
+                    }
+                }
+                v
+            }
+        }
+    }
+
+    /// The model of the same form (and chain) with the parameters `x` ([`ArmModel::to_vector`]'s
+    /// layout; missing trailing values are taken as zero).
+    pub fn with_vector(&self, x: &DVector<f64>) -> Self {
+        let at = |k: usize| x.get(k).copied().unwrap_or(0.0);
+        let off = self.reflector_offset();
+        let reflectors_mm = std::array::from_fn(|r| {
+            Vector3::new(at(off + 3 * r), at(off + 3 * r + 1), at(off + 3 * r + 2))
+        });
+        let kinematics = match &self.kinematics {
+            ArmKinematics::Dh(_) => ArmKinematics::Dh(std::array::from_fn(|i| {
+                DhRow::new(at(4 * i), at(4 * i + 1), at(4 * i + 2), at(4 * i + 3))
+            })),
+            ArmKinematics::Chain { chain, .. } => ArmKinematics::Chain {
+                chain: chain.clone(),
+                corrections: (0..chain.dof())
+                    .map(|k| std::array::from_fn(|i| at(PARAMS_PER_JOINT * k + i)))
+                    .collect(),
+            },
+        };
+        Self {
+            kinematics,
+            reflectors_mm,
+        }
+    }
+
+    /// The first parameter that is not finite, by name.
+    pub fn first_non_finite(&self) -> Option<String> {
+        self.to_vector()
+            .iter()
+            .position(|v| !v.is_finite())
+            .map(|k| self.param_name(k))
+    }
+
+    /// Tip pose in the model base frame (the flange for DH). `q_rad` in chain order; it must have
+    /// [`ArmModel::joint_count`] values (missing ones count as zero, extra ones are ignored).
+    pub fn base_from_flange(&self, q_rad: &[f64]) -> Isometry3<f64> {
+        match &self.kinematics {
+            ArmKinematics::Dh(dh) => dh::base_from_flange(dh, q_rad),
+            ArmKinematics::Chain { chain, corrections } => chain.base_from_tip(corrections, q_rad),
+        }
+    }
+
+    /// Reflector positions (model base frame, mm) and tip pose (paper eq. 3).
+    pub fn reflector_fk(&self, q_rad: &[f64]) -> ReflectorFk {
+        let base_from_flange = self.base_from_flange(q_rad);
+        let points_mm = self
+            .reflectors_mm
+            .map(|t| base_from_flange.transform_point(&t.into()).coords);
+        ReflectorFk {
+            points_mm,
+            base_from_flange,
+        }
+    }
+
+    /// Reflector positions and their analytic Jacobians with respect to every parameter (eq. 4 for
+    /// DH; see [`chain`] for the chain form).
+    pub fn reflector_jacobians(&self, q_rad: &[f64]) -> ArmJacobians {
+        match &self.kinematics {
+            ArmKinematics::Dh(dh) => {
+                let (fk, jac) = dh::reflector_jacobians(dh, &self.reflectors_mm, q_rad);
+                ArmJacobians {
+                    fk,
+                    jacobians: jac.map(|j| Matrix3xX::from_column_slice(j.as_slice())),
+                }
+            }
+            ArmKinematics::Chain { chain, corrections } => {
+                chain.reflector_jacobians(corrections, &self.reflectors_mm, q_rad)
+            }
+        }
+    }
+
+    /// One frame per movable joint, in the model base frame, whose z axis is that joint's axis and
+    /// whose origin lies on it (DH frames 0 … 6, or the chain's aligned joint frames), then the tip.
+    pub fn joint_frames(&self, q_rad: &[f64]) -> Vec<Isometry3<f64>> {
+        match &self.kinematics {
+            ArmKinematics::Dh(dh) => dh::frames(dh, q_rad).to_vec(),
+            ArmKinematics::Chain { chain, corrections } => chain.joint_frames(corrections, q_rad),
+        }
+    }
+
+    /// The order in which the identifiability analysis considers the parameters (the preferred ones
+    /// first): the reflector coordinates, then for DH joints 2 … 6, joint 1 and joint 7, for a chain
+    /// base first (see [`SerialChain::preference_order`]).
+    pub fn identifiability_order(&self) -> Vec<usize> {
+        match &self.kinematics {
+            ArmKinematics::Dh(_) => dh::preference_order(),
+            ArmKinematics::Chain { chain, .. } => chain.preference_order(),
+        }
+    }
+
+    /// Why parameter `k` cannot be identified from distances, when physics says so.
+    pub fn unidentifiable_reason(&self, k: usize) -> Option<String> {
+        match &self.kinematics {
+            ArmKinematics::Dh(_) => dh::physical_reason(k).map(str::to_string),
+            ArmKinematics::Chain { chain, .. } => chain.physical_reason(k),
+        }
+    }
+}
+
+/// The geometric model of the whole dual-arm robot: both arms and the right-arm base in the left-arm
+/// base.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DualArmModel {
+    pub arms: PerSide<ArmModel>,
+    /// The right arm's model base frame in the left arm's (DH frames 0 for the built-in robot, the
+    /// chains' base links otherwise).
+    pub left_base_from_right_base: Isometry3<f64>,
+}
+
+impl DualArmModel {
+    pub fn arm(&self, side: Side) -> &ArmModel {
+        &self.arms[side]
+    }
+
+    pub fn arm_mut(&mut self, side: Side) -> &mut ArmModel {
+        &mut self.arms[side]
+    }
+
+    /// Transform taking points of `side`'s base frame into the left-arm base frame.
+    pub fn left_base_from(&self, side: Side) -> Isometry3<f64> {
+        match side {
+            Side::Left => Isometry3::identity(),
+            Side::Right => self.left_base_from_right_base,
+        }
+    }
+
+    /// A description of the first problem that keeps this model from being used with `joint_counts`
+    /// joint values per arm (a different joint count), if any.
+    pub fn joint_count_mismatch(&self, joint_counts: PerSide<usize>) -> Option<(Side, usize)> {
+        Side::BOTH
+            .into_iter()
+            .find(|&s| self.arm(s).joint_count() != joint_counts[s])
+            .map(|s| (s, self.arm(s).joint_count()))
+    }
+}
+
+/// Rotation angle of `R` (norm of its logarithm, the vee of `log(R)`), rad.
+pub fn rotation_angle_rad(r: &nalgebra::Rotation3<f64>) -> f64 {
+    // Robust near 0 and π: atan2 of |sin| and cos.
+    let m = r.matrix();
+    let cos = ((m.trace() - 1.0) * 0.5).clamp(-1.0, 1.0);
+    let s = Vector3::new(
+        m[(2, 1)] - m[(1, 2)],
+        m[(0, 2)] - m[(2, 0)],
+        m[(1, 0)] - m[(0, 1)],
+    );
+    (0.5 * s.norm()).atan2(cos)
+}

@@ -1,0 +1,369 @@
+//! One arm in the parameter file: a DH table (the built-in IRB 14000) or the joint-origin corrections
+//! of a URDF chain, and the reflectors.
+
+use super::{ParamsError, invalid};
+use crate::kinematics::{ArmKinematics, ArmModel, DhRow, N_JOINTS, PARAMS_PER_JOINT, SerialChain};
+use crate::robot::RobotDescription;
+use crate::side::Side;
+use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
+use std::sync::Arc;
+
+/// One DH row: `a`, `d` in the length unit, `theta`, `alpha` in the angle unit.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DhEntry {
+    pub a: f64,
+    pub d: f64,
+    pub theta: f64,
+    pub alpha: f64,
+}
+
+/// The correction of one joint's origin: `tx, ty, tz` in the length unit, `rx, ry, rz` in the angle
+/// unit, in the joint's aligned frame (see [`crate::kinematics::chain`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct JointCorrection {
+    /// The URDF joint's name.
+    pub name: String,
+    pub tx: f64,
+    pub ty: f64,
+    pub tz: f64,
+    pub rx: f64,
+    pub ry: f64,
+    pub rz: f64,
+}
+
+/// An arm modelled as a URDF chain: its links and the correction of every movable joint, in chain
+/// order.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ChainParams {
+    pub base_link: String,
+    pub tip_link: String,
+    pub joints: Vec<JointCorrection>,
+}
+
+/// Reflector coordinates in the tip frame (length unit).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ReflectorsEntry {
+    pub a: [f64; 3],
+    pub b: [f64; 3],
+    pub c: [f64; 3],
+}
+
+/// One arm: either 7 DH rows in chain order (`dh`) or a chain's corrections (`chain`), and the
+/// reflectors.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ArmParams {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dh: Option<Vec<DhEntry>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub chain: Option<ChainParams>,
+    pub reflectors: ReflectorsEntry,
+}
+
+/// Mm and rad per file unit.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Scale {
+    pub mm: f64,
+    pub rad: f64,
+}
+
+pub(super) fn finite(field: &str, values: &[f64]) -> Result<(), ParamsError> {
+    match values.iter().find(|x| !x.is_finite()) {
+        Some(x) => Err(invalid(field, format!("{x} is not a finite number"))),
+        None => Ok(()),
+    }
+}
+
+/// Largest plausible |DH length|, |joint-origin correction| and |base translation|, mm (100 m).
+pub const MAX_LENGTH_MM: f64 = 100_000.0;
+/// Largest plausible |DH angle| or angle correction, rad (a few turns; offsets are normally within ±π).
+pub const MAX_ANGLE_RAD: f64 = 100.0;
+/// Largest plausible distance of a reflector from the tip frame's origin, mm.
+pub const MAX_REFLECTOR_MM: f64 = 10_000.0;
+
+/// Values (already in mm or rad) within ±`max`: an absurd magnitude is a unit or export error.
+pub(super) fn plausible(
+    field: &str,
+    values: &[f64],
+    max: f64,
+    unit: &str,
+) -> Result<(), ParamsError> {
+    match values.iter().find(|x| x.abs() > max) {
+        Some(x) => Err(invalid(
+            field,
+            format!("{x:e} {unit} is not a plausible value (|value| ≤ {max} {unit}); wrong unit?"),
+        )),
+        None => Ok(()),
+    }
+}
+
+/// The file form of one arm's model (mm, rad).
+pub(super) fn arm_params(arm: &ArmModel) -> ArmParams {
+    let t = |k: usize| {
+        let v = arm.reflectors_mm[k];
+        [v.x, v.y, v.z]
+    };
+    let reflectors = ReflectorsEntry {
+        a: t(0),
+        b: t(1),
+        c: t(2),
+    };
+    match &arm.kinematics {
+        ArmKinematics::Dh(dh) => ArmParams {
+            dh: Some(
+                dh.iter()
+                    .map(|r| DhEntry {
+                        a: r.a_mm,
+                        d: r.d_mm,
+                        theta: r.theta_rad,
+                        alpha: r.alpha_rad,
+                    })
+                    .collect(),
+            ),
+            chain: None,
+            reflectors,
+        },
+        ArmKinematics::Chain { chain, corrections } => ArmParams {
+            dh: None,
+            chain: Some(ChainParams {
+                base_link: chain.base_link.clone(),
+                tip_link: chain.tip_link.clone(),
+                joints: chain
+                    .joints
+                    .iter()
+                    .zip(corrections)
+                    .map(|(j, c)| JointCorrection {
+                        name: j.name.clone(),
+                        tx: c[0],
+                        ty: c[1],
+                        tz: c[2],
+                        rx: c[3],
+                        ry: c[4],
+                        rz: c[5],
+                    })
+                    .collect(),
+            }),
+            reflectors,
+        },
+    }
+}
+
+fn reflectors_mm(
+    side: &str,
+    r: &ReflectorsEntry,
+    scale: Scale,
+) -> Result<[Vector3<f64>; 3], ParamsError> {
+    let mut out = [Vector3::zeros(); 3];
+    for (k, (name, v)) in [("a", r.a), ("b", r.b), ("c", r.c)].into_iter().enumerate() {
+        finite(&format!("arms.{side}.reflectors.{name}"), &v)?;
+        out[k] = Vector3::from(v) * scale.mm;
+        plausible(
+            &format!("arms.{side}.reflectors.{name}"),
+            &[out[k].norm()],
+            MAX_REFLECTOR_MM,
+            "mm",
+        )?;
+    }
+    Ok(out)
+}
+
+fn dh_rows(side: &str, rows: &[DhEntry], scale: Scale) -> Result<[DhRow; N_JOINTS], ParamsError> {
+    if rows.len() != N_JOINTS {
+        return Err(invalid(
+            format!("arms.{side}.dh"),
+            format!(
+                "{} rows; expected {N_JOINTS} (one per joint, chain order)",
+                rows.len()
+            ),
+        ));
+    }
+    let mut dh = [DhRow::new(0.0, 0.0, 0.0, 0.0); N_JOINTS];
+    for (i, (row, e)) in dh.iter_mut().zip(rows).enumerate() {
+        for (name, v) in [
+            ("a", e.a),
+            ("d", e.d),
+            ("theta", e.theta),
+            ("alpha", e.alpha),
+        ] {
+            finite(&format!("arms.{side}.dh[{i}].{name}"), &[v])?;
+        }
+        for (name, v, per_unit, max, unit) in [
+            ("a", e.a, scale.mm, MAX_LENGTH_MM, "mm"),
+            ("d", e.d, scale.mm, MAX_LENGTH_MM, "mm"),
+            ("theta", e.theta, scale.rad, MAX_ANGLE_RAD, "rad"),
+            ("alpha", e.alpha, scale.rad, MAX_ANGLE_RAD, "rad"),
+        ] {
+            plausible(
+                &format!("arms.{side}.dh[{i}].{name}"),
+                &[v * per_unit],
+                max,
+                unit,
+            )?;
+        }
+        *row = DhRow::new(
+            e.a * scale.mm,
+            e.d * scale.mm,
+            e.theta * scale.rad,
+            e.alpha * scale.rad,
+        );
+    }
+    Ok(dh)
+}
+
+/// The corrections of a chain entry (mm, rad), checked for finiteness.
+fn corrections(
+    side: &str,
+    chain: &ChainParams,
+    scale: Scale,
+) -> Result<Vec<[f64; PARAMS_PER_JOINT]>, ParamsError> {
+    chain
+        .joints
+        .iter()
+        .enumerate()
+        .map(|(i, j)| {
+            let v = [j.tx, j.ty, j.tz, j.rx, j.ry, j.rz];
+            for (k, (name, x)) in crate::kinematics::CORRECTION_NAMES
+                .iter()
+                .zip(v)
+                .enumerate()
+            {
+                let field = format!("arms.{side}.chain.joints[{i}].{name}");
+                finite(&field, &[x])?;
+                if k < 3 {
+                    plausible(&field, &[x * scale.mm], MAX_LENGTH_MM, "mm")?;
+                } else {
+                    plausible(&field, &[x * scale.rad], MAX_ANGLE_RAD, "rad")?;
+                }
+            }
+            Ok([
+                v[0] * scale.mm,
+                v[1] * scale.mm,
+                v[2] * scale.mm,
+                v[3] * scale.rad,
+                v[4] * scale.rad,
+                v[5] * scale.rad,
+            ])
+        })
+        .collect()
+}
+
+fn one_form<'a>(side: &str, arm: &'a ArmParams) -> Result<Form<'a>, ParamsError> {
+    match (&arm.dh, &arm.chain) {
+        (Some(dh), None) => Ok(Form::Dh(dh)),
+        (None, Some(chain)) => Ok(Form::Chain(chain)),
+        _ => Err(invalid(
+            format!("arms.{side}"),
+            "give exactly one of `dh` (the built-in IRB 14000's DH table) and `chain` (a URDF chain's \
+             joint corrections)",
+        )),
+    }
+}
+
+enum Form<'a> {
+    Dh(&'a [DhEntry]),
+    Chain(&'a ChainParams),
+}
+
+/// Check an arm entry without a robot description (finite numbers, one form, 7 DH rows).
+pub(super) fn validate(side: &str, arm: &ArmParams, scale: Scale) -> Result<(), ParamsError> {
+    reflectors_mm(side, &arm.reflectors, scale)?;
+    match one_form(side, arm)? {
+        Form::Dh(rows) => dh_rows(side, rows, scale).map(|_| ()),
+        Form::Chain(chain) => {
+            if chain.joints.is_empty() {
+                return Err(invalid(
+                    format!("arms.{side}.chain.joints"),
+                    "no joints; a chain has at least one movable joint",
+                ));
+            }
+            corrections(side, chain, scale).map(|_| ())
+        }
+    }
+}
+
+/// The DH model of an arm entry (chain entries need the robot: [`arm_model_for`]).
+pub(super) fn arm_model(
+    side: &str,
+    arm: &ArmParams,
+    scale: Scale,
+) -> Result<ArmModel, ParamsError> {
+    let reflectors_mm = reflectors_mm(side, &arm.reflectors, scale)?;
+    match one_form(side, arm)? {
+        Form::Dh(rows) => Ok(ArmModel {
+            kinematics: ArmKinematics::Dh(dh_rows(side, rows, scale)?),
+            reflectors_mm,
+        }),
+        Form::Chain(_) => Err(invalid(
+            format!("arms.{side}.chain"),
+            "chain parameters need the robot description they belong to (ParamsFile::to_model_for)",
+        )),
+    }
+}
+
+/// The model of an arm entry for `robot`'s arm `side`: a DH entry needs the built-in robot, a chain
+/// entry the same chain (links and joint names, in order).
+pub(super) fn arm_model_for(
+    s: Side,
+    arm: &ArmParams,
+    scale: Scale,
+    robot: &RobotDescription,
+) -> Result<ArmModel, ParamsError> {
+    let side = s.name();
+    match one_form(side, arm)? {
+        Form::Dh(_) if robot.is_builtin() => arm_model(side, arm, scale),
+        Form::Dh(_) => Err(invalid(
+            format!("arms.{side}.dh"),
+            format!(
+                "DH parameters belong to the built-in IRB 14000, but the robot is {} (its arms are URDF \
+                 chains)",
+                robot.name()
+            ),
+        )),
+        Form::Chain(params) => {
+            let spec = robot.arm(s);
+            let chain: &Arc<SerialChain> = &spec.chain;
+            if robot.is_builtin()
+                || params.base_link != chain.base_link
+                || params.tip_link != chain.tip_link
+            {
+                return Err(invalid(
+                    format!("arms.{side}.chain"),
+                    format!(
+                        "the parameters are for the chain {} → {}, the robot's {side} arm is {}{}",
+                        params.base_link,
+                        params.tip_link,
+                        spec.links,
+                        if robot.is_builtin() {
+                            " of the built-in IRB 14000 (a DH model)"
+                        } else {
+                            ""
+                        }
+                    ),
+                ));
+            }
+            let names: Vec<&str> = params.joints.iter().map(|j| j.name.as_str()).collect();
+            if names != chain.joint_names() {
+                return Err(invalid(
+                    format!("arms.{side}.chain.joints"),
+                    format!(
+                        "the joints are {}, the robot's chain has {}",
+                        names.join(", "),
+                        chain.joint_names().join(", ")
+                    ),
+                ));
+            }
+            Ok(ArmModel {
+                kinematics: ArmKinematics::Chain {
+                    chain: chain.clone(),
+                    corrections: corrections(side, params, scale)?,
+                },
+                reflectors_mm: reflectors_mm(side, &arm.reflectors, scale)?,
+            })
+        }
+    }
+}

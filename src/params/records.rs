@@ -1,0 +1,216 @@
+//! The optional records of a parameter file: provenance, the method, conditioning and statistics,
+//! and the file of a calibration.
+
+use super::{FixedParameter, FixedParameters, ParamsFile};
+use crate::dataset::{Dataset, Split};
+use crate::metrics::AccuracyReport;
+use crate::side::{PerSide, Side};
+use crate::solver::CalibrationResult;
+use serde::{Deserialize, Serialize};
+use serde_json::Value;
+use std::path::Path;
+
+/// Where a parameter file came from.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Provenance {
+    /// Program name, `dualcal`.
+    pub tool: String,
+    /// Program version.
+    pub version: String,
+    /// The dataset the parameters were identified from.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dataset: Option<String>,
+    /// UTC time of writing, `YYYY-MM-DDTHH:MM:SSZ`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub date_utc: Option<String>,
+    /// Anything else a tool recorded.
+    #[serde(flatten)]
+    pub extra: serde_json::Map<String, Value>,
+}
+
+impl Provenance {
+    /// This program, now, with an optional dataset path.
+    pub fn now(dataset: Option<&Path>) -> Self {
+        Self {
+            tool: env!("CARGO_PKG_NAME").to_string(),
+            version: env!("CARGO_PKG_VERSION").to_string(),
+            dataset: dataset.map(|p| p.display().to_string()),
+            date_utc: Some(utc_timestamp(std::time::SystemTime::now())),
+            extra: Default::default(),
+        }
+    }
+}
+
+/// `YYYY-MM-DDTHH:MM:SSZ` of a system time (UTC, proleptic Gregorian calendar).
+pub fn utc_timestamp(t: std::time::SystemTime) -> String {
+    let secs: i64 = match t.duration_since(std::time::UNIX_EPOCH) {
+        Ok(d) => i64::try_from(d.as_secs()).unwrap_or(i64::MAX / 2),
+        Err(e) => -i64::try_from(e.duration().as_secs()).unwrap_or(i64::MAX / 2),
+    };
+    let days = secs.div_euclid(86_400);
+    let sod = secs.rem_euclid(86_400);
+    let (y, m, d) = civil_from_days(days);
+    format!(
+        "{y:04}-{m:02}-{d:02}T{:02}:{:02}:{:02}Z",
+        sod / 3600,
+        (sod / 60) % 60,
+        sod % 60
+    )
+}
+
+/// Calendar date of a day count since 1970-01-01 (the usual era-of-400-years computation, with March
+/// as the first month of the computational year so that leap days fall at the end).
+fn civil_from_days(days: i64) -> (i64, u32, u32) {
+    let z = days + 719_468; // days since 0000-03-01
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097; // [0, 146096]
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365; // [0, 399]
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100); // [0, 365]
+    let mp = (5 * doy + 2) / 153; // March = 0
+    let d = (doy - (153 * mp + 2) / 5 + 1) as u32;
+    let m = if mp < 10 { mp + 3 } else { mp - 9 } as u32;
+    let y = yoe + era * 400 + i64::from(m <= 2);
+    (y, m, d)
+}
+
+/// The `method` record of a calibration's parameter file.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct MethodRecord {
+    pub name: String,
+    /// `Minimax` or `LeastSquares`.
+    pub objective: String,
+    /// `Exact` or `Paper`.
+    pub qp: String,
+    /// `Cal`, `Ver` or `All`: the configurations used for identification.
+    pub split: String,
+    pub max_iterations: usize,
+    pub step_tolerance: f64,
+    pub progress_tolerance: f64,
+    /// Configurations left out of the identification (`--exclude`, `--auto-exclude`, the workbench).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub excluded: Vec<ConfigRef>,
+}
+
+/// A configuration by arm and id, as in the dataset's CSV.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct ConfigRef {
+    pub arm: Side,
+    pub id: String,
+}
+
+/// Conditioning of one arm's identification (`statistics.identifiability.<arm>`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ConditioningRecord {
+    /// Number of identified (free) parameters.
+    pub identified: usize,
+    /// Condition number of the scaled Jacobian with every parameter; `null` when infinite.
+    pub condition_before: Option<f64>,
+    /// ... with the fixed parameters removed; `null` when infinite.
+    pub condition_after: Option<f64>,
+}
+
+/// The `statistics` record of a calibration's parameter file.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct StatisticsRecord {
+    /// Accuracy of the calibrated model on the calibration configurations (`null` if there are too few).
+    pub cal: Option<AccuracyReport>,
+    /// ... on the verification configurations.
+    pub ver: Option<AccuracyReport>,
+    /// Per arm; `null` for an arm whose stage did not run.
+    pub identifiability: PerSide<Option<ConditioningRecord>>,
+    /// Allowed deviation of the reflector triangle's sides (constraint 14), mm.
+    pub reflector_side_tolerance_mm: PerSide<f64>,
+    pub elapsed_secs: f64,
+}
+
+/// `Some(v)` for a finite `v` (JSON has no infinity).
+fn finite_or_none(v: f64) -> Option<f64> {
+    v.is_finite().then_some(v)
+}
+
+/// A record as the file's free-form JSON value.
+fn record(value: &impl Serialize) -> Option<Value> {
+    serde_json::to_value(value).ok()
+}
+
+impl ParamsFile {
+    /// The file of a calibration: the calibrated model plus method, fixed parameters and why, per-stage
+    /// termination, accuracy on the cal and ver splits of `dataset`, conditioning and provenance, and
+    /// `converged: false` when the run did not converge. The command line and the workbench both
+    /// export this.
+    pub fn from_calibration(result: &CalibrationResult, dataset: &Dataset) -> ParamsFile {
+        let settings = &result.settings;
+        let mut file = ParamsFile::from_model(&result.calibrated);
+        file.method = record(&MethodRecord {
+            name: "two-step minimax calibration (paper Algorithms I and II)".into(),
+            objective: format!("{:?}", settings.method),
+            qp: format!("{:?}", settings.qp),
+            split: format!("{:?}", settings.split),
+            max_iterations: settings.max_iterations,
+            step_tolerance: settings.step_tolerance,
+            progress_tolerance: settings.progress_tolerance,
+            excluded: settings
+                .exclude
+                .iter()
+                .filter_map(|c| {
+                    let m = dataset.arm(c.side).measurements.get(c.index)?;
+                    Some(ConfigRef {
+                        arm: c.side,
+                        id: m.id.clone(),
+                    })
+                })
+                .collect(),
+        });
+        let fixed = |side: Side| -> Vec<FixedParameter> {
+            result.identifiability[side]
+                .iter()
+                .flat_map(|rep| {
+                    rep.fixed.iter().map(|f| FixedParameter {
+                        name: f.name.clone(),
+                        reason: f.reason.clone(),
+                    })
+                })
+                .collect()
+        };
+        file.fixed_parameters = Some(FixedParameters {
+            left: fixed(Side::Left),
+            right: fixed(Side::Right),
+        });
+        file.termination = record(&result.stages);
+        // The figures leave the excluded configurations out, as the solver did.
+        let kept = dataset.excluding(&settings.exclude);
+        let accuracy = |split| crate::metrics::evaluate(&kept, &result.calibrated, split).ok();
+        file.statistics = record(&StatisticsRecord {
+            cal: accuracy(Split::Cal),
+            ver: accuracy(Split::Ver),
+            identifiability: result.identifiability.as_ref().map(|_, rep| {
+                rep.as_ref().map(|rep| ConditioningRecord {
+                    identified: rep.free.len(),
+                    condition_before: finite_or_none(rep.condition_before),
+                    condition_after: finite_or_none(rep.condition_after),
+                })
+            }),
+            reflector_side_tolerance_mm: result.side_tolerance_mm,
+            elapsed_secs: result.elapsed_secs,
+        });
+        file.converged = (!result.is_converged()).then_some(false);
+        file.provenance = Some(Provenance::now(Some(&dataset.dir)));
+        file
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn civil_dates() {
+        assert_eq!(civil_from_days(0), (1970, 1, 1));
+        assert_eq!(civil_from_days(-1), (1969, 12, 31));
+        assert_eq!(civil_from_days(11_016), (2000, 2, 29));
+        assert_eq!(civil_from_days(11_017), (2000, 3, 1));
+        assert_eq!(civil_from_days(19_723), (2024, 1, 1));
+        let t = std::time::UNIX_EPOCH + std::time::Duration::from_secs(1_700_000_000);
+        assert_eq!(utc_timestamp(t), "2023-11-14T22:13:20Z");
+    }
+}

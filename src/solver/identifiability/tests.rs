@@ -1,0 +1,201 @@
+//! Tests of the identifiability analysis on the built-in DH arm and on URDF chains.
+
+use super::*;
+use crate::kinematics::{ArmModel, CORRECTION_NAMES, SerialChain, minimal_parameter_count};
+use crate::solver::arm_problem::pair_jacobian_columns;
+use crate::test_robots::{dual_ur_like_urdf, yumi_like_urdf};
+use nalgebra::Vector3;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use std::sync::Arc;
+
+fn reflectors() -> [Vector3<f64>; 3] {
+    [
+        Vector3::new(45.0, 0.0, 40.0),
+        Vector3::new(-25.0, 40.0, 40.0),
+        Vector3::new(-25.0, -40.0, 40.0),
+    ]
+}
+
+fn chain(text: &str, base: &str, tip: &str) -> Arc<SerialChain> {
+    let urdf = urdf_rs::read_from_string(text).unwrap();
+    Arc::new(SerialChain::from_urdf(&urdf, base, tip).unwrap())
+}
+
+/// The pair-Jacobian columns of `n` random configurations of `arm`.
+fn columns(arm: &ArmModel, n: usize, rng: &mut ChaCha8Rng) -> DMatrix<f64> {
+    let limits = arm.joint_limits_rad();
+    let jacs: Vec<_> = (0..n)
+        .map(|_| {
+            let q: Vec<f64> = limits
+                .iter()
+                .map(|&(lo, hi)| rng.random_range(lo..hi))
+                .collect();
+            arm.reflector_jacobians(&q)
+        })
+        .collect();
+    pair_jacobian_columns(&jacs, 3000)
+}
+
+fn report(arm: &ArmModel, gram: &DMatrix<f64>) -> IdentifiabilityReport {
+    let order = arm.identifiability_order();
+    analyse(
+        gram,
+        &ParameterInfo {
+            order: &order,
+            allowed: &vec![true; arm.param_count()],
+            name: &|k| arm.param_name(k),
+            reason: &|k| arm.unidentifiable_reason(k),
+        },
+    )
+}
+
+#[test]
+fn the_dh_arm_fixes_exactly_the_six_parameters_physics_predicts() {
+    let arm = ArmModel::nominal_irb14000(reflectors());
+    let mut rng = ChaCha8Rng::seed_from_u64(1);
+    let rep = report(&arm, &gram_by_qr(&columns(&arm, 120, &mut rng)));
+    let fixed: Vec<&str> = rep.fixed.iter().map(|f| f.name.as_str()).collect();
+    assert_eq!(fixed, ["d1", "theta1", "a7", "d7", "theta7", "alpha7"]);
+    assert!(
+        rep.fixed
+            .iter()
+            .all(|f| f.reason.starts_with("unidentifiable"))
+    );
+    assert!(rep.condition_before.is_infinite());
+    assert!(rep.condition_after < 30.0, "{}", rep.condition_after);
+}
+
+#[test]
+fn chains_keep_the_minimal_count_base_first() {
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    for (text, base, tip, n) in [
+        (yumi_like_urdf(), "yumi_body", "yumi_link_7_l", 7),
+        (dual_ur_like_urdf(), "left_base_link", "left_ee_link", 6),
+        (
+            crate::robot::BUILTIN_IRB14000_URDF.to_string(),
+            "yumi_body",
+            "yumi_flange_l",
+            7,
+        ),
+    ] {
+        let chain = chain(&text, base, tip);
+        let arm = ArmModel::nominal_chain(chain.clone(), reflectors());
+        let rep = report(&arm, &gram_by_product(&columns(&arm, 60, &mut rng)));
+        assert_eq!(rep.free.len(), minimal_parameter_count(n), "{tip}");
+        assert!(rep.condition_before.is_infinite());
+        assert!(rep.condition_after < 30.0, "{tip}: {}", rep.condition_after);
+        let kept = |k: usize| -> Vec<&str> {
+            (0..6)
+                .filter(|c| rep.free.contains(&(6 * k + c)))
+                .map(|c| CORRECTION_NAMES[c])
+                .collect()
+        };
+        // Joint 1's correction is a rigid motion of the arm; the reflectors are all kept.
+        assert!(kept(0).is_empty());
+        assert!((chain.reflector_offset()..chain.param_count()).all(|k| rep.free.contains(&k)));
+        for k in 1..n {
+            let name = &chain.joints[k].name;
+            let kept = kept(k);
+            if k == n - 1 {
+                // The last joint's offset and shift pass to the reflectors.
+                assert_eq!(kept.len(), 2, "{name}");
+                assert!(!kept.contains(&"tz") && !kept.contains(&"rz"), "{name}");
+            } else {
+                // Every other joint keeps its offset and three more: the shift tz, or for an axis
+                // parallel to the previous one the tilt about the common normal (Hayati's β).
+                assert_eq!(kept.len(), 4, "{name}: {kept:?}");
+                assert!(kept.contains(&"rz"), "{name}");
+                assert_eq!(
+                    kept.contains(&"tz"),
+                    !chain.parallel_to_previous(k),
+                    "{name}: {kept:?}"
+                );
+            }
+        }
+        // Every fixed parameter has a physical reason.
+        for f in &rep.fixed {
+            assert!(f.reason.contains('`'), "{}: {}", f.name, f.reason);
+        }
+    }
+}
+
+#[test]
+fn gram_by_qr_and_by_product_keep_the_same_parameters() {
+    let mut rng = ChaCha8Rng::seed_from_u64(8);
+    let yumi = chain(&yumi_like_urdf(), "yumi_body", "yumi_link_7_l");
+    let ur = chain(&dual_ur_like_urdf(), "left_base_link", "left_ee_link");
+    for arm in [
+        ArmModel::nominal_irb14000(reflectors()),
+        ArmModel::nominal_chain(yumi, reflectors()),
+        ArmModel::nominal_chain(ur, reflectors()),
+    ] {
+        let m = columns(&arm, 120, &mut rng);
+        let (a, b) = (gram_by_qr(&m), gram_by_product(&m));
+        assert!((&a - &b).amax() < 1e-9 * b.amax());
+        let (ra, rb) = (report(&arm, &a), report(&arm, &b));
+        assert_eq!(ra.free, rb.free);
+        assert!((ra.condition_after / rb.condition_after - 1.0).abs() < 1e-6);
+        for (fa, fb) in ra.fixed.iter().zip(&rb.fixed) {
+            assert_eq!(fa.index, fb.index);
+            assert!((fa.residual - fb.residual).abs() < 1e-6, "{}", fa.name);
+        }
+    }
+}
+
+#[test]
+fn negligible_columns_are_unidentifiable_outright() {
+    // Three parameters: two independent, and one whose sensitivity is 1e-9 of the others' — as a
+    // `1.570796325` in a URDF leaves a rigid motion. Scaled to unit norm it would look independent.
+    let m = DMatrix::from_fn(3, 200, |r, c| {
+        let t = c as f64;
+        match r {
+            0 => t.sin(),
+            1 => (0.7 * t).cos(),
+            _ => 1e-9 * (1.3 * t).sin(),
+        }
+    });
+    let gram = gram_by_product(&m);
+    let rep = analyse(
+        &gram,
+        &ParameterInfo {
+            order: &[0, 1, 2],
+            allowed: &[true; 3],
+            name: &|k| format!("p{k}"),
+            reason: &|_| None,
+        },
+    );
+    assert_eq!(rep.free, [0, 1]);
+    assert_eq!(rep.fixed[0].index, 2);
+    assert!(
+        rep.fixed[0].reason.contains("do not depend"),
+        "{}",
+        rep.fixed[0].reason
+    );
+    assert!(rep.condition_before.is_infinite());
+}
+
+#[test]
+fn user_fixed_and_near_dependent_parameters_are_reported() {
+    let m = DMatrix::from_fn(3, 100, |r, c| {
+        let t = c as f64;
+        match r {
+            0 => t.sin(),
+            1 => (0.7 * t).cos(),
+            // Nearly the first column.
+            _ => t.sin() + 1e-4 * (0.7 * t).cos() + 1e-4 * (2.1 * t).sin(),
+        }
+    });
+    let rep = analyse(
+        &gram_by_product(&m),
+        &ParameterInfo {
+            order: &[0, 1, 2],
+            allowed: &[true, false, true],
+            name: &|k| format!("p{k}"),
+            reason: &|_| None,
+        },
+    );
+    assert_eq!(rep.free, [0]);
+    assert_eq!(rep.fixed[0].reason, "fixed by the user");
+    assert!(rep.fixed[1].reason.contains("near-dependent") && rep.fixed[1].reason.contains("p0"));
+}

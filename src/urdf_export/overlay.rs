@@ -1,0 +1,168 @@
+//! A calibration as an overlay robot software can apply to its own description: the calibrated
+//! `<origin>` of every joint the calibration changes (with the original one and the size of the
+//! change) and the reflector links it adds. URDF units: metres and radians, `rpy` as URDF reads it.
+//! Written as YAML or JSON (`dualcal-urdf-overlay/1`, see `docs/formats.md`).
+
+use super::{calibrated_urdf, export_err};
+use crate::kinematics::DualArmModel;
+use crate::robot::{RobotDescription, RobotError, isometry_from_urdf_pose};
+use serde::Serialize;
+
+/// The format tag of an overlay.
+pub const OVERLAY_FORMAT: &str = "dualcal-urdf-overlay/1";
+
+/// A URDF `<origin>`: metres and radians.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct OriginOverlay {
+    pub xyz: [f64; 3],
+    pub rpy: [f64; 3],
+}
+
+impl OriginOverlay {
+    /// As the URDF writes it.
+    fn of(pose: &urdf_rs::Pose) -> Self {
+        Self {
+            xyz: pose.xyz.0,
+            rpy: pose.rpy.0,
+        }
+    }
+}
+
+/// One joint whose origin the calibration changes.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct JointOverlay {
+    pub name: String,
+    /// The calibrated origin: replace the joint's `<origin>` with it.
+    pub origin: OriginOverlay,
+    /// The origin in the description the calibration started from.
+    pub nominal_origin: OriginOverlay,
+    /// Size of the change: translation, mm, and rotation angle, mrad.
+    pub change_mm: f64,
+    pub change_mrad: f64,
+}
+
+/// A reflector added as a fixed link.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ReflectorOverlay {
+    pub link: String,
+    pub parent: String,
+    /// Position in the parent (tip) link's frame, m.
+    pub xyz: [f64; 3],
+}
+
+/// The whole overlay.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct CalibrationOverlay {
+    pub format: String,
+    /// The description it applies to.
+    pub robot: String,
+    pub joints: Vec<JointOverlay>,
+    pub reflectors: Vec<ReflectorOverlay>,
+}
+
+/// The overlay of `model` on `robot`: the joints whose origins differ between `robot` and its
+/// calibrated URDF ([`calibrated_urdf`]), and the reflector links that file adds.
+pub fn calibrated_overlay(
+    robot: &RobotDescription,
+    model: &DualArmModel,
+) -> Result<CalibrationOverlay, RobotError> {
+    let text = calibrated_urdf(robot, model)?;
+    let calibrated = urdf_rs::read_from_string(&text)
+        .map_err(|e| export_err(format!("the calibrated URDF does not parse: {e}")))?;
+    let mut joints = Vec::new();
+    let mut reflectors = Vec::new();
+    for j in &calibrated.joints {
+        let origin = isometry_from_urdf_pose(&j.origin);
+        match robot.urdf.joints.iter().find(|o| o.name == j.name) {
+            Some(original) => {
+                let nominal = isometry_from_urdf_pose(&original.origin);
+                let change = nominal.inverse() * origin;
+                let (change_mm, change_mrad) = (
+                    change.translation.vector.norm(),
+                    change.rotation.angle() * 1000.0,
+                );
+                if change_mm > 1e-9 || change_mrad > 1e-9 {
+                    joints.push(JointOverlay {
+                        name: j.name.clone(),
+                        origin: OriginOverlay::of(&j.origin),
+                        nominal_origin: OriginOverlay::of(&original.origin),
+                        change_mm,
+                        change_mrad,
+                    });
+                }
+            }
+            None if j.child.link.starts_with("reflector_") => reflectors.push(ReflectorOverlay {
+                link: j.child.link.clone(),
+                parent: j.parent.link.clone(),
+                xyz: j.origin.xyz.0,
+            }),
+            None => {}
+        }
+    }
+    Ok(CalibrationOverlay {
+        format: OVERLAY_FORMAT.into(),
+        robot: robot.name(),
+        joints,
+        reflectors,
+    })
+}
+
+/// A YAML double-quoted string.
+fn quoted(s: &str) -> String {
+    serde_json::to_string(s).unwrap_or_else(|_| "\"\"".into())
+}
+
+fn list(v: &[f64; 3]) -> String {
+    format!("[{:?}, {:?}, {:?}]", v[0], v[1], v[2])
+}
+
+impl CalibrationOverlay {
+    /// Pretty JSON.
+    pub fn to_json(&self) -> String {
+        let mut s = serde_json::to_string_pretty(self).unwrap_or_default();
+        s.push('\n');
+        s
+    }
+
+    /// Block-style YAML (numbers with full precision).
+    pub fn to_yaml(&self) -> String {
+        let mut s = format!(
+            "# Calibrated joint origins of {} (dualcal). URDF units: metres, radians (rpy).\n\
+             # Replace each joint's <origin> with `origin`; add each reflector as a fixed link.\n\
+             format: {}\nrobot: {}\njoints:\n",
+            self.robot,
+            quoted(&self.format),
+            quoted(&self.robot)
+        );
+        for j in &self.joints {
+            s += &format!(
+                "  - name: {}\n    origin: {{xyz: {}, rpy: {}}}\n    nominal_origin: {{xyz: {}, rpy: {}}}\n    \
+                 change_mm: {:?}\n    change_mrad: {:?}\n",
+                quoted(&j.name),
+                list(&j.origin.xyz),
+                list(&j.origin.rpy),
+                list(&j.nominal_origin.xyz),
+                list(&j.nominal_origin.rpy),
+                j.change_mm,
+                j.change_mrad
+            );
+        }
+        if self.joints.is_empty() {
+            s = s.replace("joints:\n", "joints: []\n");
+        }
+        s += if self.reflectors.is_empty() {
+            "reflectors: []\n"
+        } else {
+            "reflectors:\n"
+        };
+        for r in &self.reflectors {
+            s += &format!(
+                "  - link: {}\n    parent: {}\n    xyz: {}\n",
+                quoted(&r.link),
+                quoted(&r.parent),
+                list(&r.xyz)
+            );
+        }
+        s
+    }
+}
