@@ -8,7 +8,6 @@
 pub mod analysis;
 #[cfg(feature = "gui")]
 pub mod app;
-pub mod atomic;
 pub mod cli;
 pub mod collision;
 pub mod dataset;
@@ -16,6 +15,7 @@ pub mod finite_difference;
 pub mod kinematics;
 pub mod meshes;
 pub mod metrics;
+pub mod output;
 pub mod params;
 pub mod quality;
 pub mod robot;

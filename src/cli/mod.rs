@@ -1,8 +1,8 @@
 //! The `dualcal` command line: simulate, evaluate, calibrate, reproduce (and `gui` in the binary).
 
-use crate::atomic::Overwrite;
 use crate::dataset::{self, Dataset, Split};
 use crate::metrics;
+use crate::output::Overwrite;
 use crate::params::{ParamsFile, Provenance};
 use crate::quality;
 use crate::robot::{ArmLinks, LoadOptions, RobotDescription};
@@ -314,7 +314,7 @@ fn simulate_cmd(a: &SimulateArgs) -> Result<()> {
     } else {
         Overwrite::Refuse
     };
-    crate::atomic::refuse_existing(&[&a.out.join("truth.json")], overwrite)?;
+    crate::output::refuse_existing(&[&a.out.join("truth.json")], overwrite)?;
     dataset::save_with(&out.dataset, &a.out, dataset::Units::MM_DEG, overwrite)?;
     let mut truth = ParamsFile::from_model(&out.truth);
     truth.method = Some(serde_json::json!("simulation truth"));
@@ -528,13 +528,13 @@ fn calibrate_cmd(a: &CalibrateArgs) -> Result<()> {
         .into_iter()
         .flatten()
     {
-        crate::atomic::refuse_overwrite_input(
+        crate::output::refuse_overwrite_input(
             out,
             &inputs.iter().map(PathBuf::as_path).collect::<Vec<_>>(),
         )?;
     }
     if let Some(urdf) = &a.urdf {
-        crate::atomic::refuse_overwrite_input(urdf, &[&a.out])
+        crate::output::refuse_overwrite_input(urdf, &[&a.out])
             .context("--urdf and --out name the same file")?;
     }
     if let Some(overlay) = &a.overlay {
@@ -543,7 +543,7 @@ fn calibrate_cmd(a: &CalibrateArgs) -> Result<()> {
             .flatten()
             .map(PathBuf::as_path)
             .collect();
-        crate::atomic::refuse_overwrite_input(overlay, &others)
+        crate::output::refuse_overwrite_input(overlay, &others)
             .context("--overlay names the same file as another output")?;
     }
     let robot = robot_of(&ds)?;
@@ -639,7 +639,7 @@ fn calibrate_cmd(a: &CalibrateArgs) -> Result<()> {
     outln!("parameters written to {}", a.out.display());
     if let Some(path) = &a.urdf {
         let text = crate::urdf_export::calibrated_urdf(&robot, &result.calibrated)?;
-        crate::atomic::write_atomic(path, text.as_bytes())
+        crate::output::write_atomic(path, text.as_bytes())
             .with_context(|| format!("writing {}", path.display()))?;
         outln!("calibrated URDF written to {}", path.display());
     }
@@ -653,7 +653,7 @@ fn calibrate_cmd(a: &CalibrateArgs) -> Result<()> {
         } else {
             overlay.to_yaml()
         };
-        crate::atomic::write_atomic(path, text.as_bytes())
+        crate::output::write_atomic(path, text.as_bytes())
             .with_context(|| format!("writing {}", path.display()))?;
         outln!("calibration overlay written to {}", path.display());
     }

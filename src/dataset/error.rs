@@ -1,6 +1,6 @@
 //! Typed loading and saving errors, and reading a text file.
 
-use crate::atomic::OutputError;
+use crate::output::OutputError;
 use crate::side::Side;
 use std::path::{Path, PathBuf};
 

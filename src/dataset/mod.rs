@@ -8,7 +8,7 @@ mod save;
 mod units;
 mod validate;
 
-pub use crate::atomic::Overwrite;
+pub use crate::output::Overwrite;
 pub use crate::robot::ArmLinks;
 use crate::side::{ConfigId, PerSide, Side};
 pub use error::DatasetError;
@@ -274,7 +274,7 @@ pub fn load_with_units(path: &Path) -> Result<(Dataset, Units), DatasetError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::atomic::OutputError;
+    use crate::output::OutputError;
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
 

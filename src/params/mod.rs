@@ -10,8 +10,8 @@
 mod arm;
 mod records;
 
-use crate::atomic::write_atomic;
 use crate::kinematics::{DualArmModel, N_PARAMS, PARAMS_PER_JOINT, param_name};
+use crate::output::write_atomic;
 use crate::robot::RobotDescription;
 use crate::side::{PerSide, Side};
 pub use arm::{ArmParams, ChainParams, DhEntry, JointCorrection, ReflectorsEntry};
