@@ -32,6 +32,7 @@ macro_rules! outln {
 }
 
 mod outlier_study;
+mod paper_study;
 mod reproduce;
 
 /// Two-step minimax kinematic calibration of dual-arm robots from laser-tracker data.
@@ -183,6 +184,9 @@ pub enum Study {
     /// Gross errors (misread reflectors, swapped labels, rows of the other arm): detection, false
     /// alarms, accuracy with and without exclusion (docs/reliability.md).
     Outliers,
+    /// The paper's comparison of methods: Tables 4–8 and Figs. 4, 6–8 as CSV, SVG and a Markdown
+    /// report in --out (docs/reproduction.md).
+    Paper,
 }
 
 #[derive(Args, Debug)]
@@ -192,16 +196,25 @@ pub struct ReproduceArgs {
     /// Simulation seed(s), comma separated.
     #[arg(long, value_delimiter = ',', default_value = "1")]
     pub seeds: Vec<u64>,
-    /// Calibration set sizes for fig4.
-    #[arg(
-        long,
-        value_delimiter = ',',
-        default_value = "10,20,30,40,50,60,70,80,90,100,110,120"
-    )]
-    pub sizes: Vec<usize>,
-    /// Use this dataset instead of simulating (fig4 only).
+    /// Calibration set sizes for fig4 and paper [default: 10,20,…,120; paper --quick: 20,60,120].
+    #[arg(long, value_delimiter = ',')]
+    pub sizes: Option<Vec<usize>>,
+    /// Use this dataset instead of simulating (fig4 and paper).
     #[arg(long)]
     pub dataset: Option<PathBuf>,
+    /// Paper study: the output directory (created) for the CSVs, the SVG figures and report.md.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Paper study: replace outputs that already exist in --out.
+    #[arg(long)]
+    pub force: bool,
+    /// Paper study: the quick version (one seed unless --seeds, 2 × (80 + 60) configurations, Fig. 4
+    /// at 20, 50 and 80 configurations) that the tests run.
+    #[arg(long)]
+    pub quick: bool,
+    /// Paper study: only these methods (keys of `comparison::METHODS`, comma separated) [default: all].
+    #[arg(long, value_delimiter = ',')]
+    pub methods: Option<Vec<String>>,
     /// Simulate with unmodelled joint errors (1 mrad gear error, 0.5 mrad/m compliance) — a paper-like
     /// residual of ~0.4 mm after calibration (fig4 and qp).
     #[arg(long)]
