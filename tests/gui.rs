@@ -325,12 +325,36 @@ fn click_at(harness: &mut Harness<'_, WorkbenchApp>, pos: eframe::egui::Pos2) {
 /// Not a benchmark with a threshold: prints the time to build and render (lavapipe, no window) a
 /// 1400×900 frame with all 2 × 220 configurations' triangles and error vectors, the camera orbiting
 /// so the viewport re-renders every frame. Run with
-/// `cargo test --release --test gui frame_time -- --ignored --nocapture`.
+/// `cargo test --release --test gui frame_time -- --ignored --nocapture`; with
+/// `DUALCAL_FRAME_TIME_DATASET=DIR` on another dataset (e.g. one of the public YuMi, with its meshes).
 #[test]
 #[ignore]
 fn frame_time() {
-    let mut harness = harness([1400.0, 900.0], AppLaunch::default());
+    let dataset = std::env::var_os("DUALCAL_FRAME_TIME_DATASET").map(std::path::PathBuf::from);
+    let mut harness = harness(
+        [1400.0, 900.0],
+        AppLaunch {
+            dataset,
+            urdf: None,
+        },
+    );
     loaded(&mut harness);
+    step_until(&mut harness, MAX_LOAD_FRAMES, "loading the meshes", |app| {
+        !app.is_loading_meshes()
+    });
+    if let Some(dualcal::app::session::RobotMeshes::Loaded(m)) =
+        harness.state().session().map(|s| &s.meshes)
+    {
+        println!(
+            "robot meshes: {} files, {} triangles as loaded; packed {} meshes, {} vertices, {} triangles, in {:.3} s",
+            m.visual_files,
+            m.visual_triangles,
+            m.packed.mesh_count(),
+            m.packed.vertices.len(),
+            m.packed.indices.len() / 3,
+            m.elapsed_secs
+        );
+    }
     type Setup = fn(&mut dualcal::app::viewport::scene::SceneOptions);
     let variants: [(&str, bool, Setup); 4] = [
         ("whole window", true, |_| {}),

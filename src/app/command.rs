@@ -20,6 +20,8 @@ pub enum Command {
     OpenDataset(PathBuf),
     /// Reload the current dataset with another robot description (used for later datasets too).
     OpenUrdf(PathBuf),
+    /// Reload the current dataset with the robot it names (drop the one opened with [`Self::OpenUrdf`]).
+    UseDatasetRobot,
     /// Ask the user for a file to open: the native dialog, or the in-app path prompt without one.
     ChooseFile(OpenKind),
     /// Calibrate the current dataset with the current settings.
@@ -61,6 +63,10 @@ impl WorkbenchApp {
                 Some(session) => self.start_load(session.dataset.dir.clone(), Some(path)),
                 // Nothing to reload: the robot is used for the next dataset.
                 None => self.urdf_override = Some(path),
+            },
+            Command::UseDatasetRobot => match &self.session {
+                Some(session) => self.start_load(session.dataset.dir.clone(), None),
+                None => self.urdf_override = None,
             },
             Command::ChooseFile(kind) => self.choose_file(kind),
             Command::StartCalibration => self.start_calibration(),

@@ -2,6 +2,7 @@
 //! calibrated one and (during a run) the model the run has reached, each with its [`Analysis`]
 //! (accuracy figures, histograms and the per-configuration rows the panels show).
 
+use super::viewport::mesh_pack::PackedMeshes;
 use crate::analysis::{Analysis, ConfigRow};
 use crate::dataset::{self, Dataset};
 use crate::robot::RobotDescription;
@@ -71,6 +72,44 @@ impl<'a> After<'a> {
     }
 }
 
+/// The robot's meshes, loaded and packed off the UI thread after the robot ([`super::work::MeshWork`]).
+#[derive(Clone, Debug, Default)]
+pub enum RobotMeshes {
+    /// The description has no mesh geometry.
+    #[default]
+    None,
+    /// Being loaded: meshes are drawn as placeholder boxes.
+    Loading,
+    Loaded(Arc<LoadedMeshes>),
+    /// The loading stopped unexpectedly (why): meshes stay placeholder boxes.
+    Failed(String),
+}
+
+impl RobotMeshes {
+    /// The packed meshes, once loaded.
+    pub fn packed(&self) -> Option<&Arc<PackedMeshes>> {
+        match self {
+            RobotMeshes::Loaded(m) => Some(&m.packed),
+            _ => None,
+        }
+    }
+}
+
+/// A robot's visual meshes, packed for the GPU, and what could not be loaded.
+#[derive(Debug)]
+pub struct LoadedMeshes {
+    /// The visual meshes, and the collision meshes of links whose visual mesh is missing (stand-ins).
+    pub packed: Arc<PackedMeshes>,
+    /// Distinct visual mesh files loaded, and their triangles.
+    pub visual_files: usize,
+    pub visual_triangles: usize,
+    /// Visual mesh files that could not be loaded (each drawn as a stand-in or a placeholder).
+    pub visual_missing: usize,
+    /// Problems the robot's own warnings do not already name (unreadable, empty or unsupported files).
+    pub warnings: Vec<String>,
+    pub elapsed_secs: f64,
+}
+
 /// A loaded dataset with its robot and figures.
 #[derive(Clone)]
 pub struct Session {
@@ -78,6 +117,8 @@ pub struct Session {
     pub robot: Arc<RobotDescription>,
     /// Where the robot came from (`None`: built in).
     pub robot_source: Option<PathBuf>,
+    /// The robot's meshes (loaded after the session).
+    pub meshes: RobotMeshes,
     pub nominal: Analysis,
     /// The last finished calibration.
     pub calibrated: Option<Calibrated>,
@@ -120,6 +161,7 @@ impl Session {
             dataset: Arc::new(dataset),
             robot: Arc::new(robot),
             robot_source,
+            meshes: RobotMeshes::None,
             nominal,
             calibrated: None,
             live: None,

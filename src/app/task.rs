@@ -8,7 +8,7 @@
 //! Cancel is an `Arc<AtomicBool>` the work polls.
 
 use super::events::{AppEvent, EventSender};
-use super::session::LiveFigures;
+use super::session::{LiveFigures, LoadedMeshes};
 use super::work::{Loaded, Outcome};
 use crate::solver::CalibrationEvent;
 use std::sync::Arc;
@@ -22,6 +22,8 @@ pub type TaskId = u64;
 pub enum TaskEvent {
     /// A dataset load ended.
     Loaded(Result<Box<Loaded>, String>),
+    /// A robot's meshes are loaded and packed.
+    Meshes(Box<LoadedMeshes>),
     /// A calibration's progress.
     Calibration(CalibrationEvent),
     /// The model a running calibration has reached, evaluated.

@@ -1,12 +1,17 @@
-//! What the background tasks do: load a dataset into a [`Session`] (one step), and calibrate one (a
-//! [`CalibrationRun`], one outer iteration per step; now and then one more step evaluates the model
-//! the run has reached, for the live view: [`LiveRate`]).
+//! What the background tasks do: load a dataset into a [`Session`] (one step), load and pack its
+//! robot's meshes ([`MeshWork`], one step), and calibrate one (a [`CalibrationRun`], one outer
+//! iteration per step; now and then one more step evaluates the model the run has reached, for the
+//! live view: [`LiveRate`]).
 
-use super::session::{Calibrated, LiveFigures, Session};
+use super::session::{Calibrated, LiveFigures, LoadedMeshes, Session};
 use super::task::{Execution, Step, TaskContext, TaskEvent, Work};
+use super::viewport::mesh_pack::{MeshKey, PackedMeshes};
 use crate::analysis::Analysis;
 use crate::dataset::Dataset;
 use crate::kinematics::DualArmModel;
+use crate::meshes::{GeometryKind, MeshWarning};
+use crate::robot::{RobotDescription, ShapeKind};
+use crate::side::Side;
 use crate::solver::{
     CalibrationEvent, CalibrationResult, CalibrationRun, CalibrationSettings, Calibrator,
     IterationRecord, Observer, Progress, Stage, StageSummary, Termination,
@@ -35,7 +40,14 @@ impl Work for LoadWork {
     fn step(&mut self, task: &TaskContext) -> Step {
         let started = std::time::Instant::now();
         let result = Session::load(&self.dataset, self.urdf.as_deref())
-            .with_context(|| format!("cannot open dataset {}", self.dataset.display()))
+            .with_context(|| match &self.urdf {
+                Some(urdf) => format!(
+                    "cannot use robot description {} for dataset {}",
+                    urdf.display(),
+                    self.dataset.display()
+                ),
+                None => format!("cannot open dataset {}", self.dataset.display()),
+            })
             .map(|session| {
                 Box::new(Loaded {
                     session,
@@ -46,6 +58,104 @@ impl Work for LoadWork {
             .map_err(|e| format!("{e:#}"));
         task.report(TaskEvent::Loaded(result));
         Step::Done
+    }
+}
+
+/// Load a robot's visual meshes and pack them for the GPU. Links whose visual mesh cannot be loaded
+/// get their collision meshes loaded too (drawn as stand-ins).
+pub struct MeshWork {
+    pub robot: Arc<RobotDescription>,
+}
+
+impl Work for MeshWork {
+    fn step(&mut self, task: &TaskContext) -> Step {
+        task.report(TaskEvent::Meshes(Box::new(load_meshes(&self.robot))));
+        Step::Done
+    }
+}
+
+/// Does the robot draw any mesh?
+pub fn has_visual_meshes(robot: &RobotDescription) -> bool {
+    robot.urdf.links.iter().any(|l| {
+        l.visual
+            .iter()
+            .any(|v| matches!(v.geometry, urdf_rs::Geometry::Mesh { .. }))
+    })
+}
+
+/// The robot's visual meshes packed, with the collision meshes of the links whose visual mesh is
+/// missing.
+pub fn load_meshes(robot: &RobotDescription) -> LoadedMeshes {
+    let started = Instant::now();
+    let visual = robot.load_meshes(GeometryKind::Visual);
+    let home = |side| robot.home_q_rad(side);
+    let (ql, qr) = (home(Side::Left), home(Side::Right));
+    let missing_links: Vec<String> = robot
+        .shapes(&ql, &qr, GeometryKind::Visual)
+        .into_iter()
+        .filter(|s| match &s.kind {
+            ShapeKind::Mesh {
+                filename, scale, ..
+            } => visual.get(filename, (*scale).into()).is_none(),
+            _ => false,
+        })
+        .map(|s| s.link)
+        .collect();
+    let collision = if missing_links.is_empty() {
+        Default::default()
+    } else {
+        robot.load_meshes(GeometryKind::Collision)
+    };
+    let stand_ins: Vec<(MeshKey, &crate::meshes::TriangleMesh)> = robot
+        .shapes(&ql, &qr, GeometryKind::Collision)
+        .into_iter()
+        .filter(|s| missing_links.contains(&s.link))
+        .filter_map(|s| match s.kind {
+            ShapeKind::Mesh {
+                filename, scale, ..
+            } => {
+                let scale: [f64; 3] = scale.into();
+                let mesh = collision.get(&filename, scale)?;
+                Some((
+                    MeshKey::new(GeometryKind::Collision, &filename, scale),
+                    &**mesh,
+                ))
+            }
+            _ => None,
+        })
+        .collect();
+    let visual_meshes = visual.meshes.iter().map(|((filename, bits), mesh)| {
+        (
+            MeshKey {
+                kind: GeometryKind::Visual,
+                filename: filename.clone(),
+                scale_bits: *bits,
+            },
+            &**mesh,
+        )
+    });
+    let packed = PackedMeshes::pack(visual_meshes.chain(stand_ins));
+    // Files not found are named by the robot's own warnings already (per link).
+    let warnings = visual
+        .warnings
+        .iter()
+        .filter(|w| {
+            !matches!(
+                w,
+                MeshWarning::NotFound { .. }
+                    | MeshWarning::UnknownPackage { .. }
+                    | MeshWarning::UnsupportedScheme { .. }
+            )
+        })
+        .map(|w| format!("{w}; drawn as a placeholder"))
+        .collect();
+    LoadedMeshes {
+        packed: Arc::new(packed),
+        visual_files: visual.meshes.len(),
+        visual_triangles: visual.triangle_count(),
+        visual_missing: visual.warnings.len(),
+        warnings,
+        elapsed_secs: started.elapsed().as_secs_f64(),
     }
 }
 

@@ -7,6 +7,9 @@ mod view_options;
 
 use super::session::{self, After};
 use super::{Command, ERROR_COLOR, Status, WorkbenchApp, plots, table};
+
+/// Colour of warnings (the robot's).
+const WARNING_COLOR: Color32 = Color32::from_rgb(235, 180, 90);
 use crate::analysis::Indicator;
 use crate::dataset::Split;
 use crate::side::Side;

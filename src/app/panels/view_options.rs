@@ -3,7 +3,6 @@
 
 use super::{Command, WorkbenchApp};
 use crate::app::session::Session;
-use crate::app::viewport::camera::OrbitCamera;
 use crate::app::viewport::scene::SceneOptions;
 use crate::side::{PerSide, Side};
 use eframe::egui::{self, Color32, RichText};
@@ -27,7 +26,7 @@ impl WorkbenchApp {
                 .on_hover_text("Also: double-click the viewport")
                 .clicked()
             {
-                view.camera = OrbitCamera::default();
+                view.camera = view.home_camera;
             }
             if ui
                 .button("Select worst")
