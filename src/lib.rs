@@ -1,14 +1,13 @@
 //! dualcal: two-step minimax kinematic calibration of dual-arm robots from laser-tracker data.
 //!
-//! The engine modules (`kinematics`, `robot`, `meshes`, `collision`, `dataset`, `params`, `simulate`,
-//! `metrics`, `solver`, `urdf_export`, `cli`) never depend on egui or wgpu; the workbench lives in `app` behind the
-//! `gui` feature.
+//! The engine modules (`kinematics`, `robot`, `meshes`, `collision`, `dataset`, `params`, `textfile`,
+//! `simulate`, `metrics`, `quality`, `solver`, `urdf_export`, `cli`) never depend on egui or wgpu; the
+//! workbench lives in `app` behind the `gui` feature.
 #![forbid(unsafe_code)]
 
 pub mod analysis;
 #[cfg(feature = "gui")]
 pub mod app;
-pub mod atomic;
 pub mod cli;
 pub mod collision;
 pub mod dataset;
@@ -16,11 +15,14 @@ pub mod finite_difference;
 pub mod kinematics;
 pub mod meshes;
 pub mod metrics;
+pub mod output;
 pub mod params;
+pub mod quality;
 pub mod robot;
 pub mod side;
 pub mod simulate;
 pub mod solver;
+pub mod textfile;
 pub mod urdf_export;
 
 /// Robot descriptions and mesh files the tests write (shared with the integration tests).

@@ -2,6 +2,7 @@
 //! nothing panics on any input.
 
 use dualcal::dataset::{self, Dataset, DatasetError, MIN_CONFIGS, Split};
+use nalgebra::{UnitQuaternion, Vector3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::path::{Path, PathBuf};
@@ -28,14 +29,26 @@ file = "right.csv"
 
 const HEADER: &str = "id,q1,q2,q3,q4,q5,q6,q7,ax,ay,az,bx,by,bz,cx,cy,cz,split";
 
-/// A valid CSV: two comment lines, the header on line 3, `n` rows on lines 4.. .
+/// A valid CSV: two comment lines, the header on line 3, `n` rows on lines 4.. . Joint values are
+/// random; each row's reflectors are the nominal triangle of `MANIFEST`, turned and placed at random.
 fn csv_text(n: usize, seed: u64) -> String {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let triangle = [
+        Vector3::new(45.0, 0.0, 40.0),
+        Vector3::new(-25.0, 40.0, 40.0),
+        Vector3::new(-25.0, -40.0, 40.0),
+    ];
     let mut s = format!("# measured 2026-11-21\n# joints in deg, points in mm\n{HEADER}\n");
     for i in 0..n {
         let mut row = vec![format!("c{i}")];
         row.extend((0..7).map(|_| format!("{:.4}", rng.random_range(-90.0..90.0))));
-        row.extend((0..9).map(|_| format!("{:.6}", rng.random_range(-2000.0..2000.0))));
+        let turn =
+            UnitQuaternion::from_scaled_axis(Vector3::from_fn(|_, _| rng.random_range(-3.0..3.0)));
+        let centre = Vector3::from_fn(|_, _| rng.random_range(-2000.0..2000.0));
+        for p in &triangle {
+            let q = turn * p + centre;
+            row.extend(q.iter().map(|x| format!("{x:.6}")));
+        }
         row.push(if i % 3 == 2 { "ver" } else { "cal" }.into());
         s += &row.join(",");
         s.push('\n');
@@ -143,14 +156,39 @@ fn valid_dataset_loads_and_converts_units() {
     assert_eq!(d.robot, None);
 }
 
+/// `csv_text` with the reflector coordinates in metres.
+fn csv_text_in_m(n: usize, seed: u64) -> String {
+    csv_text(n, seed)
+        .lines()
+        .map(|l| {
+            if l.starts_with('#') || l.starts_with("id,") {
+                return l.to_string();
+            }
+            l.split(',')
+                .enumerate()
+                .map(|(i, f)| match i {
+                    8..=16 => format!("{}", f.parse::<f64>().unwrap() / 1000.0),
+                    _ => f.to_string(),
+                })
+                .collect::<Vec<_>>()
+                .join(",")
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+        + "\n"
+}
+
 #[test]
 fn metres_are_converted_to_mm_and_manifest_path_is_accepted() {
     let manifest = MANIFEST
         .replace("length = \"mm\"", "length = \"m\"")
-        .replace("angle = \"deg\"", "angle = \"rad\"");
-    let f = Fixture::with_manifest(&manifest);
+        .replace("angle = \"deg\"", "angle = \"rad\"")
+        .replace("[45.0, 0.0, 40.0]", "[0.045, 0.0, 0.04]")
+        .replace("[-25.0, 40.0, 40.0]", "[-0.025, 0.04, 0.04]")
+        .replace("[-25.0, -40.0, 40]", "[-0.025, -0.04, 0.04]");
+    let f = Fixture::new(&manifest, &csv_text_in_m(6, 1), &csv_text_in_m(5, 2));
     let d = dataset::load(&f.file("dataset.toml")).unwrap();
-    assert_eq!(d.nominal_reflectors_mm[0].x, 45_000.0);
+    assert_eq!(d.nominal_reflectors_mm[0].x, 45.0);
     let text = csv_text(6, 1);
     let row: Vec<f64> = text
         .lines()
@@ -162,7 +200,7 @@ fn metres_are_converted_to_mm_and_manifest_path_is_accepted() {
         .map(|s| s.parse().unwrap())
         .collect();
     assert_eq!(d.arms.left.measurements[0].q_rad[0], row[0]);
-    assert!((d.arms.left.measurements[0].tracker_points_mm[0].x - row[7] * 1000.0).abs() < 1e-9);
+    assert!((d.arms.left.measurements[0].tracker_points_mm[0].x - row[7]).abs() < 1e-9);
 }
 
 #[test]
@@ -776,4 +814,329 @@ fn random_mutations_never_panic() {
     // The mutations must actually exercise the error paths.
     assert!(errors > 200, "only {errors} of 400 mutations were refused");
     f.load().unwrap();
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Plausibility (docs/reliability.md)
+
+/// The values of data line `line` (1-based) of the valid left CSV.
+fn left_row(line: usize) -> Vec<String> {
+    csv_text(6, 1)
+        .lines()
+        .nth(line - 1)
+        .unwrap()
+        .split(',')
+        .map(String::from)
+        .collect()
+}
+
+#[test]
+fn data_file_outside_the_dataset_directory_is_refused_without_reading_it() {
+    for file in [
+        "../../../../etc/passwd",
+        "/etc/passwd",
+        "sub/../../left.csv",
+    ] {
+        let manifest = MANIFEST.replace("file = \"left.csv\"", &format!("file = \"{file}\""));
+        let err = Fixture::with_manifest(&manifest).load().unwrap_err();
+        assert!(
+            matches!(err, DatasetError::Manifest { line: Some(15), ref field, .. } if field == "arms.file"),
+            "{err:?}"
+        );
+        let msg = err.to_string();
+        assert!(msg.contains("inside the dataset directory"), "{msg}");
+        assert!(!msg.contains("root:"), "{msg}");
+    }
+}
+
+#[test]
+fn utf16_files_are_refused_with_a_save_as_utf8_hint() {
+    let csv = csv_text(6, 1);
+    let with_bom: Vec<u8> = [0xFF, 0xFE]
+        .into_iter()
+        .chain(csv.encode_utf16().flat_map(u16::to_le_bytes))
+        .collect();
+    let without_bom: Vec<u8> = csv.encode_utf16().flat_map(u16::to_be_bytes).collect();
+    for bytes in [with_bom, without_bom] {
+        let f = Fixture::valid();
+        std::fs::write(f.file("left.csv"), &bytes).unwrap();
+        let err = f.load().unwrap_err();
+        assert!(matches!(err, DatasetError::Text { .. }), "{err:?}");
+        assert_names(&err, &["left.csv", "UTF-16", "save it as UTF-8"]);
+    }
+    let manifest: Vec<u8> = [0xFF, 0xFE]
+        .into_iter()
+        .chain(MANIFEST.encode_utf16().flat_map(u16::to_le_bytes))
+        .collect();
+    let f = Fixture::valid();
+    std::fs::write(f.file("dataset.toml"), manifest).unwrap();
+    assert_names(&f.load().unwrap_err(), &["dataset.toml", "UTF-16"]);
+}
+
+#[test]
+fn binary_data_is_refused_with_its_line() {
+    let text = csv_text(6, 1).replacen("\nc3,", "\nc3\0,", 1);
+    let err = Fixture::with_left(&text).load().unwrap_err();
+    assert!(matches!(err, DatasetError::Text { .. }), "{err:?}");
+    assert_names(&err, &["left.csv", "line 7", "binary"]);
+}
+
+#[test]
+fn empty_and_header_only_files() {
+    let err = Fixture::with_left("").load().unwrap_err();
+    assert!(matches!(err, DatasetError::Header { .. }), "{err:?}");
+    assert_names(&err, &["left.csv", "the file is empty"]);
+    let err = Fixture::with_left(&format!("{HEADER}\n"))
+        .load()
+        .unwrap_err();
+    assert!(
+        matches!(err, DatasetError::TooFewConfigurations { found: 0, .. }),
+        "{err:?}"
+    );
+}
+
+#[test]
+fn a_file_cut_off_inside_a_row_says_so() {
+    let text = csv_text(6, 1);
+    let cut = &text[..text.trim_end().rfind(',').unwrap() - 30];
+    let err = Fixture::with_left(cut).load().unwrap_err();
+    assert!(
+        matches!(
+            err,
+            DatasetError::FieldCount {
+                line: 9,
+                truncated: true,
+                ..
+            }
+        ),
+        "{err:?}"
+    );
+    assert_names(&err, &["left.csv:9", "cut off"]);
+    // A short row in the middle is not called truncated.
+    let err = Fixture::with_left(&left_with_line(5, "c1,1,2,3"))
+        .load()
+        .unwrap_err();
+    assert!(
+        matches!(
+            err,
+            DatasetError::FieldCount {
+                line: 5,
+                truncated: false,
+                ..
+            }
+        ),
+        "{err:?}"
+    );
+}
+
+#[test]
+fn absurd_magnitudes_are_refused() {
+    let err = Fixture::with_left(&left_with_field(6, 9, "1e12"))
+        .load()
+        .unwrap_err();
+    assert!(
+        matches!(err, DatasetError::Field { line: 6, ref field, .. } if field == "ay"),
+        "{err:?}"
+    );
+    assert_names(&err, &["left.csv:6", "`ay`", "1e12", "tracker"]);
+    let err = Fixture::with_left(&left_with_field(5, 3, "-4e9"))
+        .load()
+        .unwrap_err();
+    assert!(
+        matches!(err, DatasetError::Field { line: 5, ref field, .. } if field == "q3"),
+        "{err:?}"
+    );
+    assert_names(&err, &["left.csv:5", "`q3`", "joint value"]);
+}
+
+#[test]
+fn collinear_and_coincident_reflectors_are_refused() {
+    // c on the line through a and b.
+    let mut row = left_row(7);
+    let v = |i: usize| -> f64 { row[i].parse().unwrap() };
+    let mid: Vec<String> = (0..3)
+        .map(|c| format!("{}", 2.0 * v(11 + c) - v(8 + c)))
+        .collect();
+    row.splice(14..17, mid);
+    let err = Fixture::with_left(&left_with_line(7, &row.join(",")))
+        .load()
+        .unwrap_err();
+    assert!(
+        matches!(err, DatasetError::DegenerateTriangle { line: 7, .. }),
+        "{err:?}"
+    );
+    assert_names(&err, &["left.csv:7", "collinear", "`c3`"]);
+    // b where a is.
+    let mut row = left_row(5);
+    let a: Vec<String> = row[8..11].to_vec();
+    row.splice(11..14, a);
+    let err = Fixture::with_left(&left_with_line(5, &row.join(",")))
+        .load()
+        .unwrap_err();
+    assert!(
+        matches!(err, DatasetError::DegenerateTriangle { line: 5, .. }),
+        "{err:?}"
+    );
+    assert_names(&err, &["left.csv:5", "a and b", "0.0"]);
+}
+
+#[test]
+fn a_row_pasted_twice_is_refused() {
+    let mut row = left_row(8);
+    row[0] = "c5-again".into();
+    let text = format!("{}{}\n", csv_text(6, 1), row.join(","));
+    let err = Fixture::with_left(&text).load().unwrap_err();
+    assert!(
+        matches!(
+            err,
+            DatasetError::DuplicateRow {
+                line: 10,
+                first_line: 8,
+                ..
+            }
+        ),
+        "{err:?}"
+    );
+    assert_names(
+        &err,
+        &["left.csv:10", "c5-again", "left.csv:8", "pasted twice"],
+    );
+    // A left row in the right arm's file.
+    let mut row = left_row(4);
+    row[0] = "r-extra".into();
+    let right = format!("{}{}\n", csv_text(5, 2), row.join(","));
+    let err = Fixture::new(MANIFEST, &csv_text(6, 1), &right)
+        .load()
+        .unwrap_err();
+    assert!(
+        matches!(
+            err,
+            DatasetError::DuplicateRow {
+                line: 9,
+                first_line: 4,
+                ..
+            }
+        ),
+        "{err:?}"
+    );
+    assert_names(&err, &["right.csv:9", "left.csv:4"]);
+}
+
+#[test]
+fn coordinates_in_another_unit_than_declared_are_refused() {
+    // A metre file declared as millimetres.
+    let f = Fixture::new(MANIFEST, &csv_text_in_m(6, 1), &csv_text(5, 2));
+    let err = f.load().unwrap_err();
+    assert!(matches!(err, DatasetError::UnitMismatch { .. }), "{err:?}");
+    assert_names(&err, &["left.csv", "look like metres", "units.length"]);
+    // Nominal reflectors in metres declared as millimetres.
+    let manifest = MANIFEST
+        .replace("[45.0, 0.0, 40.0]", "[0.045, 0.0, 0.04]")
+        .replace("[-25.0, 40.0, 40.0]", "[-0.025, 0.04, 0.04]")
+        .replace("[-25.0, -40.0, 40]", "[-0.025, -0.04, 0.04]");
+    let err = Fixture::with_manifest(&manifest).load().unwrap_err();
+    assert!(
+        matches!(err, DatasetError::Manifest { ref field, .. } if field == "reflectors"),
+        "{err:?}"
+    );
+    assert_names(&err, &["dataset.toml", "metres"]);
+}
+
+#[test]
+fn joint_values_outside_the_robots_limits_are_refused_after_loading() {
+    use dualcal::robot::RobotDescription;
+    use dualcal::side::PerSide;
+    let robot = RobotDescription::builtin_irb14000();
+    let limits = PerSide::from_fn(|s| robot.joint_limits_rad(s));
+    // q2 of ABB axis 2 is limited to [-143.5°, 43.5°]; the fixture draws ±90°.
+    let mut text = String::new();
+    for l in csv_text(6, 1).lines() {
+        let mut f: Vec<String> = l.split(',').map(String::from).collect();
+        if f.len() > 8 && !l.starts_with("id") && !l.starts_with('#') {
+            f[2] = "-10".into();
+            f[4] = "-20".into();
+        }
+        text += &(f.join(",") + "\n");
+    }
+    let ds = Fixture::with_left(&text).load().unwrap();
+    let err = dataset::check_joint_limits(&ds, &limits).unwrap_err();
+    // The right arm's rows are untouched and fail; the left arm's pass.
+    assert!(
+        matches!(err, DatasetError::JointLimit { ref path, .. } if path.ends_with("right.csv")),
+        "{err:?}"
+    );
+    // One value far outside: named with its line, column and the limits.
+    let mut ds = Fixture::valid().load().unwrap();
+    for arm in [&mut ds.arms.left, &mut ds.arms.right] {
+        for m in &mut arm.measurements {
+            m.q_rad = vec![0.1, -0.5, 0.2, -0.3, 0.4, 0.5, 0.6];
+        }
+    }
+    ds.arms.left.measurements[2].q_rad[3] = 212f64.to_radians();
+    let err = dataset::check_joint_limits(&ds, &limits).unwrap_err();
+    assert!(
+        matches!(err, DatasetError::JointLimit { line: 6, ref field, .. } if field == "q4"),
+        "{err:?}"
+    );
+    assert_names(&err, &["left.csv:6", "`q4`", "212.00°", "80.00°"]);
+    // Two columns swapped in a row: the message says so.
+    ds.arms.left.measurements[2].q_rad = vec![2.0, 1.3, 2.0, -0.5, 2.0, 2.0, 2.0];
+    let err = dataset::check_joint_limits(&ds, &limits).unwrap_err();
+    assert_names(&err, &["`q2`", "swapping q2 and q4"]);
+    // Degrees in a file declared in radians.
+    for m in ds.arms.left.measurements.iter_mut() {
+        m.q_rad = vec![10.0, -30.0, 20.0, -40.0, 50.0, 60.0, 70.0];
+    }
+    let err = dataset::check_joint_limits(&ds, &limits).unwrap_err();
+    assert_names(&err, &["in degrees", "units.angle"]);
+    // Within the limits: accepted.
+    for m in ds.arms.left.measurements.iter_mut() {
+        m.q_rad = vec![0.1, -0.5, 0.2, -0.3, 0.4, 0.5, 0.6];
+    }
+    dataset::check_joint_limits(&ds, &limits).unwrap();
+}
+
+#[test]
+fn implausible_tracker_mpe_is_refused() {
+    let manifest = MANIFEST.replace("mpe_um_per_m = 0.8", "mpe_um_per_m = 8e5");
+    let err = Fixture::with_manifest(&manifest).load().unwrap_err();
+    assert!(
+        matches!(err, DatasetError::Manifest { line: Some(8), ref field, .. } if field == "tracker.mpe_um_per_m"),
+        "{err:?}"
+    );
+    assert_names(&err, &["dataset.toml:8", "plausible"]);
+}
+
+/// Found by fuzzing: text of the file that ends up in a message (a path in the manifest, an id, a
+/// URDF link name) is bounded, so no message quotes kilobytes.
+#[test]
+fn long_paths_and_ids_are_refused_with_a_short_message() {
+    let long = "x".repeat(2000);
+    let manifest = MANIFEST.replace("file = \"left.csv\"", &format!("file = \"{long}.csv\""));
+    let err = Fixture::with_manifest(&manifest).load().unwrap_err();
+    assert!(
+        matches!(err, DatasetError::Manifest { ref field, .. } if field == "arms.file"),
+        "{err:?}"
+    );
+    assert!(err.to_string().len() < 300, "{err}");
+    let manifest = MANIFEST.replace("[units]", &format!("robot = \"a/{long}\"\n[units]"));
+    let err = Fixture::with_manifest(&manifest).load().unwrap_err();
+    assert!(err.to_string().len() < 300, "{err}");
+    let manifest = MANIFEST.replace("file = \"left.csv\"", "file = \"left\\n.csv\"");
+    assert_names(
+        &Fixture::with_manifest(&manifest).load().unwrap_err(),
+        &["control character"],
+    );
+    let err = Fixture::with_left(&left_with_field(5, 0, &"i".repeat(500)))
+        .load()
+        .unwrap_err();
+    assert!(
+        matches!(err, DatasetError::Field { line: 5, ref field, .. } if field == "id"),
+        "{err:?}"
+    );
+    assert!(err.to_string().len() < 300, "{err}");
+    let err = Fixture::with_left(&left_with_field(6, 0, "\"c\tx\""))
+        .load()
+        .unwrap_err();
+    assert_names(&err, &["left.csv:6", "control character"]);
 }

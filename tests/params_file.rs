@@ -358,3 +358,63 @@ fn nominal_irb14000_table_survives() {
     let back = ParamsFile::from_model(&model).to_model().unwrap();
     assert_eq!(back.arms.left.dh(), Some(&IRB14000_NOMINAL_DH));
 }
+
+#[test]
+fn utf16_empty_and_binary_files_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = serde_json::to_string_pretty(&valid_json(8)).unwrap();
+    let utf16: Vec<u8> = [0xFF, 0xFE]
+        .into_iter()
+        .chain(text.encode_utf16().flat_map(u16::to_le_bytes))
+        .collect();
+    let p = dir.path().join("params.json");
+    std::fs::write(&p, utf16).unwrap();
+    let e = params::read_model(&p).unwrap_err();
+    assert!(matches!(e, ParamsError::Text { .. }), "{e:?}");
+    assert!(e.to_string().contains("save it as UTF-8"), "{e}");
+    std::fs::write(&p, b"{\"format\": \0}").unwrap();
+    assert!(matches!(
+        params::read_model(&p),
+        Err(ParamsError::Text { .. })
+    ));
+    let e = err_of("  \n");
+    assert!(e.to_string().contains("empty"), "{e}");
+    // A byte-order mark and CRLF line ends are fine.
+    let crlf = format!("\u{feff}{}", text.replace('\n', "\r\n"));
+    params::read_model(&write_text(dir.path(), &crlf)).unwrap();
+}
+
+#[test]
+fn absurd_magnitudes_are_refused() {
+    for (pointer, value, field) in [
+        ("/arms/left/dh/3/d", 1e12, "arms.left.dh[3].d"),
+        ("/arms/right/dh/0/theta", -5e3, "arms.right.dh[0].theta"),
+        ("/arms/right/reflectors/b/2", 2e6, "arms.right.reflectors.b"),
+        (
+            "/right_base_in_left/translation/1",
+            1e300,
+            "right_base_in_left.translation",
+        ),
+    ] {
+        let mut v = valid_json(9);
+        *v.pointer_mut(pointer).unwrap() = serde_json::json!(value);
+        let e = err_of(&v.to_string());
+        assert!(
+            matches!(e, ParamsError::Invalid { field: ref f, .. } if f == field),
+            "{pointer}: {e:?}"
+        );
+        assert!(e.to_string().contains("plausible"), "{e}");
+    }
+}
+
+#[test]
+fn messages_quote_at_most_a_short_excerpt() {
+    let mut v = valid_json(10);
+    let long = "x".repeat(5000);
+    v["arms"]["left"]["dh"][0]["a"] = serde_json::json!(long);
+    let e = err_of(&v.to_string());
+    assert!(e.to_string().len() < 400, "{e}");
+    v["format"] = serde_json::json!(long);
+    let e = err_of(&v.to_string());
+    assert!(e.to_string().len() < 400, "{e}");
+}

@@ -366,13 +366,13 @@ fn error_paths() {
             err,
             CalibrationError::TooFewConfigurations {
                 found: 3,
-                needed: 4,
+                needed: 6,
                 ..
             }
         ),
         "{err}"
     );
-    assert!(err.to_string().contains("at least 4"));
+    assert!(err.to_string().contains("at least 6"));
 
     // Non-finite measurements.
     let mut syn = synthetic(7, 10, 10, 0.0);

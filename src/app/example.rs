@@ -52,7 +52,7 @@ pub fn unpack_example(root: &Path) -> std::io::Result<PathBuf> {
     for (name, bytes) in EXAMPLE_FILES {
         let path = dir.join(name);
         if !path.exists() {
-            crate::atomic::write_atomic(&path, bytes)?;
+            crate::output::write_atomic(&path, bytes)?;
         }
     }
     Ok(dir)

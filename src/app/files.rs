@@ -111,7 +111,7 @@ impl FileAccess for NativeFiles {
 
 /// Write a file atomically; the reply says how it went.
 pub fn write(path: &std::path::Path, bytes: &[u8]) -> FileReply {
-    match crate::atomic::write_atomic(path, bytes) {
+    match crate::output::write_atomic(path, bytes) {
         Ok(()) => FileReply::Saved(path.to_path_buf()),
         Err(e) => FileReply::Failed(format!("{}: {e}", path.display())),
     }

@@ -1,11 +1,12 @@
 //! The `dualcal` command line: simulate, evaluate, calibrate, reproduce (and `gui` in the binary).
 
-use crate::atomic::Overwrite;
 use crate::dataset::{self, Dataset, Split};
 use crate::metrics;
+use crate::output::Overwrite;
 use crate::params::{ParamsFile, Provenance};
+use crate::quality;
 use crate::robot::{ArmLinks, LoadOptions, RobotDescription};
-use crate::side::{PerSide, Side};
+use crate::side::{ConfigId, PerSide, Side};
 use crate::simulate;
 use crate::solver::{
     CalibrationEvent, CalibrationResult, CalibrationSettings, Calibrator, Method, QpMethod,
@@ -30,6 +31,7 @@ macro_rules! outln {
     }};
 }
 
+mod outlier_study;
 mod reproduce;
 
 /// Two-step minimax kinematic calibration of dual-arm robots from laser-tracker data.
@@ -85,6 +87,15 @@ pub struct SimulateArgs {
     /// Size of an outlier displacement, mm.
     #[arg(long, default_value_t = 1.0)]
     pub outlier_mm: f64,
+    /// Fraction of configurations with a reflector misread by 0.5–5 mm (gross errors, docs/reliability.md).
+    #[arg(long, default_value_t = 0.0)]
+    pub misread_fraction: f64,
+    /// Fraction of configurations with two reflector labels swapped.
+    #[arg(long, default_value_t = 0.0)]
+    pub swapped_labels_fraction: f64,
+    /// Fraction of configurations replaced by a configuration of the other arm.
+    #[arg(long, default_value_t = 0.0)]
+    pub other_arm_fraction: f64,
     /// Overwrite an existing simulated dataset in --out.
     #[arg(long)]
     pub force: bool,
@@ -151,6 +162,14 @@ pub struct CalibrateArgs {
     /// Only the summary, no per-iteration lines.
     #[arg(long, short)]
     pub quiet: bool,
+    /// Leave these configurations out (ids, comma separated; `left:ID` or `right:ID` where both arms
+    /// have the id). Also left out of the accuracy tables.
+    #[arg(long, value_delimiter = ',')]
+    pub exclude: Vec<String>,
+    /// Leave out the configurations the screening flags, by the documented rule (docs/reliability.md):
+    /// flags before fitting, then after each fit, at most 10% of an arm.
+    #[arg(long)]
+    pub auto_exclude: bool,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum, PartialEq, Eq)]
@@ -161,6 +180,9 @@ pub enum Study {
     Qp,
     /// Minimax against least squares with unmodelled joint errors and outliers (docs/solver.md).
     Robustness,
+    /// Gross errors (misread reflectors, swapped labels, rows of the other arm): detection, false
+    /// alarms, accuracy with and without exclusion (docs/reliability.md).
+    Outliers,
 }
 
 #[derive(Args, Debug)]
@@ -191,6 +213,15 @@ pub struct ReproduceArgs {
     /// With --unmodelled (implied; all studies): joint compliance, mrad/m, instead of 0.5.
     #[arg(long)]
     pub compliance_mrad_per_m: Option<f64>,
+    /// Outliers study: fraction of each arm's configurations with a misread reflector (default 0.03).
+    #[arg(long)]
+    pub misread_fraction: Option<f64>,
+    /// Outliers study: fraction with two reflector labels swapped (default 0.01).
+    #[arg(long)]
+    pub swapped_labels_fraction: Option<f64>,
+    /// Outliers study: fraction replaced by a row of the other arm (default 0.01).
+    #[arg(long)]
+    pub other_arm_fraction: Option<f64>,
 }
 
 impl ReproduceArgs {
@@ -249,6 +280,14 @@ fn simulate_cmd(a: &SimulateArgs) -> Result<()> {
             magnitude_mm: a.outlier_mm,
         });
     }
+    if a.misread_fraction > 0.0 || a.swapped_labels_fraction > 0.0 || a.other_arm_fraction > 0.0 {
+        opts.gross_errors = Some(simulate::GrossErrorModel {
+            misread_fraction: a.misread_fraction,
+            swapped_labels_fraction: a.swapped_labels_fraction,
+            other_arm_fraction: a.other_arm_fraction,
+            ..simulate::GrossErrorModel::study()
+        });
+    }
     let robot = match &a.urdf {
         Some(path) => RobotDescription::load_with(
             path,
@@ -275,7 +314,7 @@ fn simulate_cmd(a: &SimulateArgs) -> Result<()> {
     } else {
         Overwrite::Refuse
     };
-    crate::atomic::refuse_existing(&[&a.out.join("truth.json")], overwrite)?;
+    crate::output::refuse_existing(&[&a.out.join("truth.json")], overwrite)?;
     dataset::save_with(&out.dataset, &a.out, dataset::Units::MM_DEG, overwrite)?;
     let mut truth = ParamsFile::from_model(&out.truth);
     truth.method = Some(serde_json::json!("simulation truth"));
@@ -296,11 +335,72 @@ fn simulate_cmd(a: &SimulateArgs) -> Result<()> {
         out.rejected_for_facing
     );
     outln!("true parameters: {}", a.out.join("truth.json").display());
+    for r in &out.gross_errors {
+        outln!(
+            "gross error: {} arm `{}`: {:?}",
+            r.config.side,
+            r.id,
+            r.error
+        );
+    }
     Ok(())
 }
 
 pub(crate) fn load_dataset(path: &Path) -> Result<Dataset> {
     Ok(dataset::load(path)?)
+}
+
+/// Print a screening's whole-file findings as warnings; `Err` with the errors among them.
+fn report_findings(screening: &quality::Screening) -> Result<()> {
+    for f in &screening.findings {
+        if f.severity == quality::Severity::Warning {
+            eprintln!("warning: {f}");
+        }
+    }
+    let errors: Vec<String> = screening
+        .findings
+        .iter()
+        .filter(|f| f.severity == quality::Severity::Error)
+        .map(|f| f.message.clone())
+        .collect();
+    if errors.is_empty() {
+        Ok(())
+    } else {
+        bail!("{}", errors.join("\nerror: "))
+    }
+}
+
+/// The suspect configurations, one line each (most severe flag first).
+fn print_flags(title: &str, screening: &quality::Screening, excluded: &[ConfigId]) {
+    let worst = screening.worst_per_config();
+    if worst.is_empty() {
+        return;
+    }
+    outln!("\n{title} ({}):", worst.len());
+    for f in &worst {
+        let mark = if excluded.contains(&f.config) {
+            "excluded"
+        } else {
+            "kept"
+        };
+        outln!(
+            "  {:<5} {:<10} line {:<5} {:<3} {:<14} {:>9.3} mm  {:<8}  {}",
+            f.config.side.name(),
+            crate::textfile::excerpt(&f.id),
+            f.line,
+            f.split.name(),
+            f.kind.label(),
+            f.size_mm,
+            mark,
+            f.reason
+        );
+    }
+}
+
+/// The dataset's joint values against the robot's limits (docs/reliability.md).
+fn check_limits(ds: &Dataset, robot: &RobotDescription) -> Result<()> {
+    let limits = PerSide::from_fn(|s| robot.joint_limits_rad(s));
+    Ok(dataset::check_joint_limits(ds, &limits)?)
 }
 
 /// The dataset's robot description, checked against its CSVs.
@@ -335,6 +435,7 @@ pub fn describe_robot(robot: &RobotDescription) -> String {
 fn evaluate_cmd(a: &EvaluateArgs) -> Result<()> {
     let ds = load_dataset(&a.dataset)?;
     let robot = robot_of(&ds)?;
+    check_limits(&ds, &robot)?;
     let model = match &a.params {
         Some(p) => ParamsFile::read(p)?
             .to_model_for(&robot)
@@ -419,37 +520,126 @@ impl NotConverged {
 
 fn calibrate_cmd(a: &CalibrateArgs) -> Result<()> {
     let ds = load_dataset(&a.dataset)?;
-    let inputs = ds.files();
+    // Never write over an input: the dataset's files, its robot description, or one output over
+    // another.
+    let mut inputs: Vec<PathBuf> = ds.files().to_vec();
+    inputs.extend(ds.robot.clone());
     for out in [Some(&a.out), a.urdf.as_ref(), a.overlay.as_ref()]
         .into_iter()
         .flatten()
     {
-        crate::atomic::refuse_overwrite_input(
+        crate::output::refuse_overwrite_input(
             out,
             &inputs.iter().map(PathBuf::as_path).collect::<Vec<_>>(),
         )?;
     }
+    if let Some(urdf) = &a.urdf {
+        crate::output::refuse_overwrite_input(urdf, &[&a.out])
+            .context("--urdf and --out name the same file")?;
+    }
+    if let Some(overlay) = &a.overlay {
+        let others: Vec<&Path> = [Some(&a.out), a.urdf.as_ref()]
+            .into_iter()
+            .flatten()
+            .map(PathBuf::as_path)
+            .collect();
+        crate::output::refuse_overwrite_input(overlay, &others)
+            .context("--overlay names the same file as another output")?;
+    }
     let robot = robot_of(&ds)?;
+    check_limits(&ds, &robot)?;
     if !a.quiet {
         eprintln!("{}", describe_robot(&robot));
     }
     let nominal = robot.nominal_model(ds.nominal_reflectors_mm);
-    let mut progress = |e: &CalibrationEvent| {
-        if !a.quiet {
-            print_event(e)
+    let mut settings = settings_from(a);
+    for spec in &a.exclude {
+        let config = ds
+            .config_by_id(spec.trim())
+            .map_err(|e| anyhow::anyhow!("--exclude: {e}"))?;
+        if !settings.exclude.contains(&config) {
+            settings.exclude.push(config);
         }
+    }
+    let screen_settings = quality::ScreenSettings::default();
+    let before = quality::screen(&ds, &nominal, &screen_settings);
+    report_findings(&before)?;
+    let (result, after) = if a.auto_exclude {
+        if !a.quiet {
+            eprintln!(
+                "--auto-exclude: screening, fitting and screening again (progress not shown)"
+            );
+        }
+        let auto = quality::auto_exclude(&ds, &nominal, &settings, &screen_settings)?;
+        outln!(
+            "--auto-exclude: {} configuration(s) left out after {} fit(s){}",
+            auto.excluded.len(),
+            auto.rounds,
+            if auto.excluded.is_empty() { "" } else { ":" }
+        );
+        for f in &auto.excluded {
+            outln!("  {f}");
+        }
+        if let Some(why) = &auto.stopped {
+            eprintln!("warning: --auto-exclude stopped: {why}");
+        }
+        (auto.result, auto.screening)
+    } else {
+        print_flags(
+            "Suspect configurations before fitting (nominal model)",
+            &before,
+            &settings.exclude,
+        );
+        let mut progress = |e: &CalibrationEvent| {
+            if !a.quiet {
+                print_event(e)
+            }
+        };
+        let result = Calibrator::new(&ds, &nominal)
+            .settings(settings)
+            .observer(&mut progress)
+            .run()?;
+        let after = quality::screen_result(&ds, &result, &screen_settings);
+        (result, after)
     };
-    let result = Calibrator::new(&ds, &nominal)
-        .settings(settings_from(a))
-        .observer(&mut progress)
-        .run()?;
     print_identifiability(&result);
-    outln!("\n{}", comparison_table(&ds, &result)?);
-    ParamsFile::from_calibration(&result, &ds).write(&a.out)?;
+    let excluded = &result.settings.exclude;
+    outln!("\n{}", comparison_table(&ds.excluding(excluded), &result)?);
+    print_flags(
+        "Suspect configurations with the calibrated model",
+        &after,
+        excluded,
+    );
+    let suspects_kept: Vec<String> = after
+        .worst_per_config()
+        .iter()
+        .filter(|f| !excluded.contains(&f.config))
+        .map(|f| f.id.clone())
+        .collect();
+    if !suspects_kept.is_empty() {
+        let shown = suspects_kept.len().min(10);
+        eprintln!(
+            "warning: {} suspect configuration(s) were used for the calibration; the minimax fit is \
+             steered by its worst point: look at them, then --exclude {}{} or --auto-exclude",
+            suspects_kept.len(),
+            suspects_kept[..shown].join(","),
+            if shown < suspects_kept.len() {
+                ",…"
+            } else {
+                ""
+            }
+        );
+    }
+    for f in &after.findings {
+        eprintln!("warning: {f}");
+    }
+    let mut file = ParamsFile::from_calibration(&result, &ds);
+    file.quality = serde_json::to_value(quality::QualityRecord::new(&ds, &after, excluded)).ok();
+    file.write(&a.out)?;
     outln!("parameters written to {}", a.out.display());
     if let Some(path) = &a.urdf {
         let text = crate::urdf_export::calibrated_urdf(&robot, &result.calibrated)?;
-        crate::atomic::write_atomic(path, text.as_bytes())
+        crate::output::write_atomic(path, text.as_bytes())
             .with_context(|| format!("writing {}", path.display()))?;
         outln!("calibrated URDF written to {}", path.display());
     }
@@ -463,7 +653,7 @@ fn calibrate_cmd(a: &CalibrateArgs) -> Result<()> {
         } else {
             overlay.to_yaml()
         };
-        crate::atomic::write_atomic(path, text.as_bytes())
+        crate::output::write_atomic(path, text.as_bytes())
             .with_context(|| format!("writing {}", path.display()))?;
         outln!("calibration overlay written to {}", path.display());
     }

@@ -146,6 +146,7 @@ pub(crate) fn run(a: &ReproduceArgs) -> Result<()> {
             }
         }
         Study::Robustness => robustness_study(a, &robot)?,
+        Study::Outliers => super::outlier_study::run(a, &robot)?,
     }
     Ok(())
 }

@@ -2,8 +2,9 @@
 
 use super::error::{DatasetError, read_text};
 use super::units::Units;
-use super::{MIN_CONFIGS, Measurement, SPLIT_COLUMN, Split};
+use super::{MIN_CONFIGS, Measurement, SPLIT_COLUMN, Split, validate};
 use crate::side::Side;
+use crate::textfile::excerpt;
 use nalgebra::Vector3;
 use std::path::Path;
 
@@ -39,7 +40,7 @@ fn check_header(
     };
     let expected = format!("id,q1,…,qN,{},[{SPLIT_COLUMN}]", POINT_COLUMNS.join(","));
     if header.len() == 1 {
-        let only = header.get(0).unwrap_or("");
+        let only = &excerpt(header.get(0).unwrap_or(""));
         if let Some(sep) = [';', '\t', ' '].into_iter().find(|&c| only.contains(c)) {
             return Err(err(
                 only,
@@ -63,6 +64,7 @@ fn check_header(
         if got == want {
             continue;
         }
+        let got = &excerpt(got);
         let message = if joint_column(got).is_some() && i > 0 {
             format!(
                 "column `{got}` is in position {}, where `q{}` belongs; the joint columns must be \
@@ -70,7 +72,7 @@ fn check_header(
                 i + 1,
                 joints + 1
             )
-        } else if POINT_COLUMNS.contains(&got) || got == SPLIT_COLUMN || got == "id" {
+        } else if POINT_COLUMNS.contains(&got.as_str()) || got == SPLIT_COLUMN || got == "id" {
             format!(
                 "column `{got}` is in position {}, where `{want}` belongs; the header must be {expected} in this order",
                 i + 1
@@ -87,8 +89,18 @@ fn check_header(
     match header.len() {
         len if len == n => Ok((joints, false)),
         len if len == n + 1 && header.get(n) == Some(SPLIT_COLUMN) => Ok((joints, true)),
+        len if len > n + 1 && header.get(n) == Some(SPLIT_COLUMN) => {
+            let got = &excerpt(header.get(n + 1).unwrap_or(""));
+            Err(err(
+                got,
+                format!(
+                    "unknown column `{got}` in position {}; nothing may follow `{SPLIT_COLUMN}` (header {expected})",
+                    n + 2
+                ),
+            ))
+        }
         _ => {
-            let got = header.get(n).unwrap_or("");
+            let got = &excerpt(header.get(n).unwrap_or(""));
             Err(err(
                 got,
                 format!(
@@ -112,9 +124,9 @@ fn parse_number(path: &Path, line: usize, field: &str, s: &str) -> Result<f64, D
     }
     let x: f64 = s
         .parse()
-        .map_err(|_| err(format!("`{s}` is not a number")))?;
+        .map_err(|_| err(format!("`{}` is not a number", excerpt(s))))?;
     if !x.is_finite() {
-        return Err(err(format!("`{s}` is not a finite number")));
+        return Err(err(format!("`{}` is not a finite number", excerpt(s))));
     }
     Ok(x)
 }
@@ -159,8 +171,15 @@ impl LineCounter {
     }
 }
 
-/// A CSV reader error as a dataset error at `line`.
-fn csv_error(path: &Path, e: csv::Error, line: usize) -> DatasetError {
+/// A CSV reader error as a dataset error at `line`; `last_line` is the file's last line with content
+/// and `ends_open` whether the file ends without a line end (a row cut off there was truncated).
+fn csv_error(
+    path: &Path,
+    e: csv::Error,
+    line: usize,
+    last_line: usize,
+    ends_open: bool,
+) -> DatasetError {
     match e.kind() {
         csv::ErrorKind::UnequalLengths {
             expected_len, len, ..
@@ -169,6 +188,7 @@ fn csv_error(path: &Path, e: csv::Error, line: usize) -> DatasetError {
             line,
             expected: usize::try_from(*expected_len).unwrap_or(usize::MAX),
             found: usize::try_from(*len).unwrap_or(usize::MAX),
+            truncated: ends_open && line == last_line && len < expected_len,
         },
         _ => DatasetError::Content {
             path: path.to_path_buf(),
@@ -189,13 +209,28 @@ fn parse_row(
 ) -> Result<Measurement, DatasetError> {
     let field = |i: usize| rec.get(i).unwrap_or("");
     let number = |col: usize| parse_number(path, line, &names[col], field(col));
+    // Absurd magnitudes are refused with the column (docs/reliability.md).
+    let plausible = |col: usize, check: fn(&str, f64) -> Result<(), String>, v: f64| {
+        check(field(col), v).map_err(|message| DatasetError::Field {
+            path: path.to_path_buf(),
+            line,
+            field: names[col].clone(),
+            message,
+        })
+    };
     let q_rad = (1..=joints)
-        .map(|col| number(col).map(|v| units.angle.to_rad(v)))
-        .collect::<Result<Vec<f64>, _>>()?;
+        .map(|col| {
+            let q = units.angle.to_rad(number(col)?);
+            plausible(col, validate::joint_magnitude, q)?;
+            Ok(q)
+        })
+        .collect::<Result<Vec<f64>, DatasetError>>()?;
     let mut tracker_points_mm = [Vector3::zeros(); 3];
     for (k, p) in tracker_points_mm.iter_mut().enumerate() {
         for c in 0..3 {
-            p[c] = units.length.to_mm(number(1 + joints + 3 * k + c)?);
+            let col = 1 + joints + 3 * k + c;
+            p[c] = units.length.to_mm(number(col)?);
+            plausible(col, validate::coordinate_magnitude, p[c])?;
         }
     }
     let split = if has_split {
@@ -207,7 +242,10 @@ fn parse_row(
                     path: path.to_path_buf(),
                     line,
                     field: SPLIT_COLUMN.into(),
-                    message: format!("unknown split `{other}`; expected `cal` or `ver`"),
+                    message: format!(
+                        "unknown split `{}`; expected `cal` or `ver`",
+                        excerpt(other)
+                    ),
                 });
             }
         }
@@ -228,6 +266,7 @@ pub(super) fn read_arm(
     path: &Path,
     side: Side,
     units: Units,
+    nominal_reflectors_mm: &[Vector3<f64>; 3],
 ) -> Result<Vec<Measurement>, DatasetError> {
     let text = read_text(path)?;
     let mut reader = csv::ReaderBuilder::new()
@@ -243,7 +282,10 @@ pub(super) fn read_arm(
         Some(p) => lines.record_line(&text, usize::try_from(p.byte()).unwrap_or(usize::MAX)),
         None => fallback,
     };
-    let map_csv_err = |e: csv::Error, line: usize| csv_error(path, e, line);
+    let content_lines = text.trim_end().lines().count();
+    let ends_open = !text.is_empty() && !text.ends_with('\n');
+    let map_csv_err =
+        |e: csv::Error, line: usize| csv_error(path, e, line, content_lines, ends_open);
 
     let mut records = reader.records();
     let end_line = text.lines().count() + 1;
@@ -254,8 +296,13 @@ pub(super) fn read_arm(
                 line: end_line,
                 field: "id".into(),
                 message: format!(
-                    "missing header; expected id,q1,…,qN,{},[{SPLIT_COLUMN}] after any `#` comment \
+                    "missing header{}; expected id,q1,…,qN,{},[{SPLIT_COLUMN}] after any `#` comment \
                      lines",
+                    if text.trim().is_empty() {
+                        " (the file is empty)"
+                    } else {
+                        ""
+                    },
                     POINT_COLUMNS.join(",")
                 ),
             });
@@ -292,11 +339,19 @@ pub(super) fn read_arm(
                 message: "empty id; every row needs a unique id".into(),
             });
         }
+        if let Err(message) = validate::usable_id(id) {
+            return Err(DatasetError::Field {
+                path: path.to_path_buf(),
+                line,
+                field: "id".into(),
+                message,
+            });
+        }
         if let Some(&first_line) = first_line_of_id.get(id) {
             return Err(DatasetError::DuplicateId {
                 path: path.to_path_buf(),
                 line,
-                id: id.to_string(),
+                id: excerpt(id),
                 first_line,
             });
         }
@@ -313,6 +368,7 @@ pub(super) fn read_arm(
             min: MIN_CONFIGS,
         });
     }
+    validate::check_arm(path, &out, units.length, nominal_reflectors_mm)?;
     Ok(out)
 }
 

@@ -1,8 +1,13 @@
 //! Typed loading and saving errors, and reading a text file.
 
-use crate::atomic::OutputError;
+use crate::output::OutputError;
 use crate::side::Side;
 use std::path::{Path, PathBuf};
+
+/// An angle in degrees and radians.
+fn deg_rad(x_rad: f64) -> String {
+    format!("{:.2}° ({x_rad:.4} rad)", x_rad.to_degrees())
+}
 
 /// `path:line` or `path` when the line is unknown.
 fn at(path: &Path, line: &Option<usize>) -> String {
@@ -71,12 +76,17 @@ pub enum DatasetError {
         message: String,
     },
     /// A CSV row has a different number of fields than the header.
-    #[error("{path}:{line}: expected {expected} fields (as in the header), found {found}")]
+    #[error(
+        "{path}:{line}: expected {expected} fields (as in the header), found {found}{}",
+        if *.truncated { " (the file ends inside this row: was it cut off while copying?)" } else { "" }
+    )]
     FieldCount {
         path: PathBuf,
         line: usize,
         expected: usize,
         found: usize,
+        /// The row is the file's last and has no line end: the file was probably truncated.
+        truncated: bool,
     },
     /// Two CSV rows share an id.
     #[error("{path}:{line}: field `id`: duplicate id `{id}` (first used on line {first_line})")]
@@ -85,6 +95,53 @@ pub enum DatasetError {
         line: usize,
         id: String,
         first_line: usize,
+    },
+    /// The same reflector coordinates in two rows (of one file or of both arms): a row pasted twice.
+    #[error(
+        "{path}:{line}: the reflector coordinates of `{id}` repeat those of `{first_id}` ({}:{first_line}) \
+         exactly; a tracker never measures the same values twice: a row pasted twice?",
+        .first_path.display()
+    )]
+    DuplicateRow {
+        path: PathBuf,
+        line: usize,
+        id: String,
+        first_path: PathBuf,
+        first_line: usize,
+        first_id: String,
+    },
+    /// The three reflectors of a row are (nearly) collinear or coincide: no flange pose can be measured
+    /// from them.
+    #[error("{path}:{line}: {message}")]
+    DegenerateTriangle {
+        path: PathBuf,
+        line: usize,
+        message: String,
+    },
+    /// The measured coordinates do not fit the declared length unit or the nominal reflectors.
+    #[error("{path}: {message}")]
+    UnitMismatch { path: PathBuf, message: String },
+    /// A joint value outside the robot's joint limits.
+    #[error(
+        "{path}:{line}: field `{field}`: {} is outside the joint's limits [{}, {}] of the robot \
+         description{hint}",
+        deg_rad(*.value_rad), deg_rad(*.lower_rad), deg_rad(*.upper_rad)
+    )]
+    JointLimit {
+        path: PathBuf,
+        line: usize,
+        field: String,
+        value_rad: f64,
+        lower_rad: f64,
+        upper_rad: f64,
+        /// More values out of range in this file, a likely cause (swapped columns, unit), or nothing.
+        hint: String,
+    },
+    /// A file is not UTF-8 text (UTF-16, binary data) or too large.
+    #[error("{path}: {problem}")]
+    Text {
+        path: PathBuf,
+        problem: crate::textfile::TextProblem,
     },
     /// An arm has fewer configurations than the calibration needs.
     #[error(
@@ -104,7 +161,7 @@ pub enum DatasetError {
     Content { path: PathBuf, message: String },
 }
 
-/// 1-based line and column of byte `offset` in `text`, and the trimmed text of that line.
+/// 1-based line and column of byte `offset` in `text`, and a short excerpt of that line (trimmed).
 pub(super) fn line_col(text: &str, offset: usize) -> (usize, usize, String) {
     let offset = offset.min(text.len());
     let before = text.as_bytes().get(..offset).unwrap_or(&[]);
@@ -119,32 +176,26 @@ pub(super) fn line_col(text: &str, offset: usize) -> (usize, usize, String) {
         .unwrap_or("")
         .lines()
         .next()
-        .unwrap_or("")
-        .trim()
-        .to_string();
-    (line, col, line_text)
+        .unwrap_or("");
+    (line, col, crate::textfile::excerpt(line_text.trim()))
 }
 
-/// Read a text file: UTF-8, an optional byte-order mark is dropped.
+/// Read a text file: UTF-8, an optional byte-order mark is dropped (see [`crate::textfile`]).
 pub(super) fn read_text(path: &Path) -> Result<String, DatasetError> {
-    let bytes = std::fs::read(path).map_err(|source| DatasetError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    let (bom, body) = match bytes.strip_prefix(b"\xEF\xBB\xBF") {
-        Some(rest) => (3, rest),
-        None => (0, &bytes[..]),
-    };
-    match std::str::from_utf8(body) {
-        Ok(s) => Ok(s.to_owned()),
-        Err(e) => {
-            let pos = e.valid_up_to();
-            let line = body[..pos].iter().filter(|&&b| b == b'\n').count() + 1;
-            Err(DatasetError::Encoding {
-                path: path.to_path_buf(),
-                line,
-                byte: pos + bom + 1,
-            })
-        }
-    }
+    use crate::textfile::{ReadError, TextProblem};
+    crate::textfile::read(path).map_err(|e| match e {
+        ReadError::Io(source) => DatasetError::Io {
+            path: path.to_path_buf(),
+            source,
+        },
+        ReadError::Text(TextProblem::InvalidUtf8 { line, byte }) => DatasetError::Encoding {
+            path: path.to_path_buf(),
+            line,
+            byte,
+        },
+        ReadError::Text(problem) => DatasetError::Text {
+            path: path.to_path_buf(),
+            problem,
+        },
+    })
 }

@@ -4,6 +4,7 @@ use super::error::{DatasetError, line_col};
 use super::units::{AngleUnit, LengthUnit, Units};
 use super::{ArmLinks, DATASET_FORMAT, TrackerSpec};
 use crate::side::{PerSide, Side};
+use crate::textfile::excerpt;
 use nalgebra::Vector3;
 use std::path::{Path, PathBuf};
 use toml::Spanned;
@@ -105,7 +106,8 @@ impl ManifestCtx<'_> {
             path: self.path.to_path_buf(),
             line,
             text,
-            message: e.message().trim().to_string(),
+            // The parser's message may quote the input: keep it short.
+            message: crate::textfile::excerpt_n(e.message().trim(), 200),
         }
     }
 }
@@ -147,7 +149,10 @@ fn check_format(cx: &ManifestCtx, tag: Option<Spanned<toml::Value>>) -> Result<(
         other => Err(cx.err(
             Some(cx.line_of(tag.span())),
             "format",
-            format!("unknown format tag {other}; expected \"{DATASET_FORMAT}\""),
+            format!(
+                "unknown format tag {}; expected \"{DATASET_FORMAT}\"",
+                excerpt(&other.to_string())
+            ),
         )),
     }
 }
@@ -177,7 +182,7 @@ fn parse_units(cx: &ManifestCtx, raw: Option<Spanned<RawUnits>>) -> Result<Units
                 "units.length",
                 format!(
                     "unknown length unit \"{}\"; expected \"mm\" or \"m\"",
-                    s.get_ref()
+                    excerpt(s.get_ref())
                 ),
             )
         })?,
@@ -196,7 +201,7 @@ fn parse_units(cx: &ManifestCtx, raw: Option<Spanned<RawUnits>>) -> Result<Units
                 "units.angle",
                 format!(
                     "unknown angle unit \"{}\"; expected \"deg\" or \"rad\"",
-                    s.get_ref()
+                    excerpt(s.get_ref())
                 ),
             )
         })?,
@@ -221,6 +226,7 @@ fn parse_robot(
             "empty path; leave `robot` out for the built-in IRB 14000",
         ));
     }
+    super::validate::usable_path(r.get_ref()).map_err(|m| cx.err(line, "robot", m))?;
     let p = dir.join(r.get_ref());
     if !p.is_file() {
         return Err(cx.err(
@@ -245,14 +251,25 @@ fn parse_tracker(cx: &ManifestCtx, t: Spanned<RawTracker>) -> Result<TrackerSpec
             None => Err(cx.err(line, &field, "missing; expected a number of micrometres")),
             Some(v) => {
                 let x = *v.get_ref();
-                if x.is_finite() && x >= 0.0 {
-                    Ok(x)
-                } else {
+                if !(x.is_finite() && x >= 0.0) {
                     Err(cx.err(
                         Some(cx.line_of(v.span())),
                         &field,
                         format!("{x} is not a finite, non-negative number of micrometres"),
                     ))
+                } else if x > super::validate::MAX_MPE_UM {
+                    Err(cx.err(
+                        Some(cx.line_of(v.span())),
+                        &field,
+                        format!(
+                            "{x} µm is not a plausible tracker MPE (at most {} µm: laser trackers \
+                             measure to tens of micrometres); the values are micrometres whatever \
+                             [units] says",
+                            super::validate::MAX_MPE_UM
+                        ),
+                    ))
+                } else {
+                    Ok(x)
                 }
             }
         }
@@ -286,7 +303,13 @@ fn parse_reflectors(
             return Err(cx.err(refl_line, &field, format!("missing; {expected}")));
         };
         let line = Some(cx.line_of(v.span()));
-        let bad = |found: &str| cx.err(line, &field, format!("{expected}, found {found}"));
+        let bad = |found: &str| {
+            cx.err(
+                line,
+                &field,
+                format!("{expected}, found {}", excerpt(found)),
+            )
+        };
         let toml::Value::Array(items) = v.get_ref() else {
             return Err(bad(&v.get_ref().to_string()));
         };
@@ -304,6 +327,9 @@ fn parse_reflectors(
             }
             reflectors_mm[k][c] = length.to_mm(x);
         }
+    }
+    if let Err(message) = super::validate::nominal_triangle(&reflectors_mm, length) {
+        return Err(cx.err(refl_line, "reflectors", message));
     }
     Ok(reflectors_mm)
 }
@@ -368,7 +394,10 @@ fn parse_arms(
                 return Err(cx.err(
                     Some(name_line),
                     "arms.name",
-                    format!("unknown arm \"{other}\"; expected \"left\" or \"right\""),
+                    format!(
+                        "unknown arm \"{}\"; expected \"left\" or \"right\"",
+                        excerpt(other)
+                    ),
                 ));
             }
         };
@@ -397,11 +426,10 @@ fn parse_arms(
                 "empty file name",
             ));
         }
+        let path = super::validate::data_file_in(dir, file.get_ref())
+            .map_err(|message| cx.err(Some(cx.line_of(file.span())), "arms.file", message))?;
         let links = parse_links(cx, line, arm.base_link, arm.tip_link)?;
-        files[side] = Some(ManifestArm {
-            file: dir.join(file.get_ref()),
-            links,
-        });
+        files[side] = Some(ManifestArm { file: path, links });
         arm_lines[side] = name_line;
     }
     files.try_map(|side, file| {

@@ -6,16 +6,20 @@ mod error;
 mod manifest;
 mod save;
 mod units;
+mod validate;
 
-pub use crate::atomic::Overwrite;
+pub use crate::output::Overwrite;
 pub use crate::robot::ArmLinks;
-use crate::side::{PerSide, Side};
+use crate::side::{ConfigId, PerSide, Side};
 pub use error::DatasetError;
 use error::read_text;
 use nalgebra::Vector3;
 pub use save::{save, save_with};
 use std::path::{Path, PathBuf};
 pub use units::{AngleUnit, LengthUnit, Units};
+pub use validate::{
+    JOINT_LIMIT_TOLERANCE_RAD, MAX_COORDINATE_MM, MAX_JOINT_RAD, check_joint_limits,
+};
 
 /// The format tag written in `dataset.toml`.
 pub const DATASET_FORMAT: &str = "dualcal-dataset/1";
@@ -153,6 +157,54 @@ impl Dataset {
         out
     }
 
+    /// The same dataset without the configurations `exclude` (indices into this dataset's arms; the
+    /// result's indices are renumbered). For accuracy figures without suspect measurements; a
+    /// calibration leaves configurations out with `CalibrationSettings::exclude` instead, which keeps
+    /// the indices.
+    pub fn excluding(&self, exclude: &[ConfigId]) -> Dataset {
+        let mut out = self.clone();
+        for (side, arm) in out.arms.iter_mut() {
+            let mut index = 0;
+            arm.measurements.retain(|_| {
+                let keep = !exclude.contains(&ConfigId::new(side, index));
+                index += 1;
+                keep
+            });
+        }
+        out
+    }
+
+    /// The configuration with id `spec` (unique across both arms), or `left:ID` / `right:ID`.
+    pub fn config_by_id(&self, spec: &str) -> Result<ConfigId, String> {
+        let (sides, id): (Vec<Side>, &str) = match spec.split_once(':') {
+            Some(("left", id)) => (vec![Side::Left], id),
+            Some(("right", id)) => (vec![Side::Right], id),
+            _ => (Side::BOTH.to_vec(), spec),
+        };
+        let found: Vec<ConfigId> = sides
+            .iter()
+            .filter_map(|&side| {
+                let index = self
+                    .arm(side)
+                    .measurements
+                    .iter()
+                    .position(|m| m.id == id)?;
+                Some(ConfigId::new(side, index))
+            })
+            .collect();
+        match found.as_slice() {
+            [one] => Ok(*one),
+            [] => Err(format!(
+                "no configuration with id `{}`",
+                crate::textfile::excerpt(id)
+            )),
+            _ => Err(format!(
+                "both arms have a configuration `{}`: write left:{0} or right:{0}",
+                crate::textfile::excerpt(id)
+            )),
+        }
+    }
+
     /// The files the dataset was read from: the manifest and both CSVs.
     pub fn files(&self) -> [PathBuf; 3] {
         [
@@ -198,7 +250,7 @@ pub fn load_with_units(path: &Path) -> Result<(Dataset, Units), DatasetError> {
     let text = read_text(&manifest_path)?;
     let m = manifest::parse(&manifest_path, &dir, &text)?;
     let arms = m.arms.try_map(|side, arm| {
-        let measurements = csv::read_arm(&arm.file, side, m.units)?;
+        let measurements = csv::read_arm(&arm.file, side, m.units, &m.reflectors_mm)?;
         Ok::<_, DatasetError>(ArmData {
             side,
             file: arm.file,
@@ -206,6 +258,7 @@ pub fn load_with_units(path: &Path) -> Result<(Dataset, Units), DatasetError> {
             measurements,
         })
     })?;
+    validate::check_both(&arms)?;
     Ok((
         Dataset {
             dir,
@@ -221,7 +274,7 @@ pub fn load_with_units(path: &Path) -> Result<(Dataset, Units), DatasetError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::atomic::OutputError;
+    use crate::output::OutputError;
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
 
@@ -235,9 +288,15 @@ mod tests {
                     _ => format!("{side}{i}"),
                 },
                 q_rad: (0..n_joints).map(|_| rng.random_range(-3.0..3.0)).collect(),
-                tracker_points_mm: std::array::from_fn(|_| {
-                    Vector3::from_fn(|_, _| rng.random_range(-3000.0..3000.0))
-                }),
+                // The nominal triangle turned and placed at random.
+                tracker_points_mm: {
+                    let turn =
+                        nalgebra::UnitQuaternion::from_scaled_axis(Vector3::from_fn(|_, _| {
+                            rng.random_range(-3.0..3.0)
+                        }));
+                    let centre = Vector3::from_fn(|_, _| rng.random_range(-3000.0..3000.0));
+                    crate::simulate::SimOptions::default_reflectors().map(|p| turn * p + centre)
+                },
                 split: if rng.random_bool(0.3) {
                     Split::Ver
                 } else {
@@ -263,9 +322,8 @@ mod tests {
                 mpe_um: 10.0,
                 mpe_um_per_m: 1.25,
             },
-            nominal_reflectors_mm: std::array::from_fn(|_| {
-                Vector3::from_fn(|_, _| rng.random_range(-50.0..50.0))
-            }),
+            nominal_reflectors_mm: crate::simulate::SimOptions::default_reflectors()
+                .map(|p| p + Vector3::from_fn(|_, _| rng.random_range(-5.0..5.0))),
             arms: PerSide::new(
                 random_arm(&mut rng, Side::Left, 9, 7),
                 random_arm(&mut rng, Side::Right, 7, 7),

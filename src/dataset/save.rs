@@ -5,7 +5,7 @@ use super::units::Units;
 use super::{
     ArmData, DATASET_FORMAT, Dataset, MANIFEST_FILE, MIN_CONFIGS, SPLIT_COLUMN, Split, csv_columns,
 };
-use crate::atomic::{Overwrite, refuse_existing, write_atomic};
+use crate::output::{Overwrite, refuse_existing, write_atomic};
 use crate::side::{PerSide, Side};
 use std::path::Path;
 

@@ -79,6 +79,29 @@ pub(super) fn finite(field: &str, values: &[f64]) -> Result<(), ParamsError> {
     }
 }
 
+/// Largest plausible |DH length|, |joint-origin correction| and |base translation|, mm (100 m).
+pub const MAX_LENGTH_MM: f64 = 100_000.0;
+/// Largest plausible |DH angle| or angle correction, rad (a few turns; offsets are normally within ±π).
+pub const MAX_ANGLE_RAD: f64 = 100.0;
+/// Largest plausible distance of a reflector from the tip frame's origin, mm.
+pub const MAX_REFLECTOR_MM: f64 = 10_000.0;
+
+/// Values (already in mm or rad) within ±`max`: an absurd magnitude is a unit or export error.
+pub(super) fn plausible(
+    field: &str,
+    values: &[f64],
+    max: f64,
+    unit: &str,
+) -> Result<(), ParamsError> {
+    match values.iter().find(|x| x.abs() > max) {
+        Some(x) => Err(invalid(
+            field,
+            format!("{x:e} {unit} is not a plausible value (|value| ≤ {max} {unit}); wrong unit?"),
+        )),
+        None => Ok(()),
+    }
+}
+
 /// The file form of one arm's model (mm, rad).
 pub(super) fn arm_params(arm: &ArmModel) -> ArmParams {
     let t = |k: usize| {
@@ -139,6 +162,12 @@ fn reflectors_mm(
     for (k, (name, v)) in [("a", r.a), ("b", r.b), ("c", r.c)].into_iter().enumerate() {
         finite(&format!("arms.{side}.reflectors.{name}"), &v)?;
         out[k] = Vector3::from(v) * scale.mm;
+        plausible(
+            &format!("arms.{side}.reflectors.{name}"),
+            &[out[k].norm()],
+            MAX_REFLECTOR_MM,
+            "mm",
+        )?;
     }
     Ok(out)
 }
@@ -163,6 +192,19 @@ fn dh_rows(side: &str, rows: &[DhEntry], scale: Scale) -> Result<[DhRow; N_JOINT
         ] {
             finite(&format!("arms.{side}.dh[{i}].{name}"), &[v])?;
         }
+        for (name, v, per_unit, max, unit) in [
+            ("a", e.a, scale.mm, MAX_LENGTH_MM, "mm"),
+            ("d", e.d, scale.mm, MAX_LENGTH_MM, "mm"),
+            ("theta", e.theta, scale.rad, MAX_ANGLE_RAD, "rad"),
+            ("alpha", e.alpha, scale.rad, MAX_ANGLE_RAD, "rad"),
+        ] {
+            plausible(
+                &format!("arms.{side}.dh[{i}].{name}"),
+                &[v * per_unit],
+                max,
+                unit,
+            )?;
+        }
         *row = DhRow::new(
             e.a * scale.mm,
             e.d * scale.mm,
@@ -185,8 +227,18 @@ fn corrections(
         .enumerate()
         .map(|(i, j)| {
             let v = [j.tx, j.ty, j.tz, j.rx, j.ry, j.rz];
-            for (name, x) in crate::kinematics::CORRECTION_NAMES.iter().zip(v) {
-                finite(&format!("arms.{side}.chain.joints[{i}].{name}"), &[x])?;
+            for (k, (name, x)) in crate::kinematics::CORRECTION_NAMES
+                .iter()
+                .zip(v)
+                .enumerate()
+            {
+                let field = format!("arms.{side}.chain.joints[{i}].{name}");
+                finite(&field, &[x])?;
+                if k < 3 {
+                    plausible(&field, &[x * scale.mm], MAX_LENGTH_MM, "mm")?;
+                } else {
+                    plausible(&field, &[x * scale.rad], MAX_ANGLE_RAD, "rad")?;
+                }
             }
             Ok([
                 v[0] * scale.mm,

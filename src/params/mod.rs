@@ -10,14 +10,17 @@
 mod arm;
 mod records;
 
-use crate::atomic::write_atomic;
 use crate::kinematics::{DualArmModel, N_PARAMS, PARAMS_PER_JOINT, param_name};
+use crate::output::write_atomic;
 use crate::robot::RobotDescription;
 use crate::side::{PerSide, Side};
 pub use arm::{ArmParams, ChainParams, DhEntry, JointCorrection, ReflectorsEntry};
+pub use arm::{MAX_ANGLE_RAD, MAX_LENGTH_MM, MAX_REFLECTOR_MM};
 use arm::{Scale, arm_model, arm_model_for, arm_params, finite};
 use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion, Vector3};
-pub use records::{ConditioningRecord, MethodRecord, Provenance, StatisticsRecord, utc_timestamp};
+pub use records::{
+    ConditioningRecord, ConfigRef, MethodRecord, Provenance, StatisticsRecord, utc_timestamp,
+};
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
@@ -48,6 +51,12 @@ pub enum ParamsError {
         path: PathBuf,
         #[source]
         source: std::io::Error,
+    },
+    /// Not UTF-8 text (UTF-16, binary data, bad bytes) or too large.
+    #[error("{path}: {problem}")]
+    Text {
+        path: PathBuf,
+        problem: crate::textfile::TextProblem,
     },
     /// Not valid JSON, or a field has the wrong type or is missing.
     #[error("{path}:{line}:{column}: {message}")]
@@ -168,6 +177,10 @@ pub struct ParamsFile {
     pub converged: Option<bool>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub provenance: Option<Provenance>,
+    /// Suspect configurations and the ones left out (free form; dualcal writes a
+    /// `quality::QualityRecord`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub quality: Option<Value>,
     /// Fields this version does not know; kept for round trips.
     #[serde(flatten)]
     pub extra: serde_json::Map<String, Value>,
@@ -209,6 +222,7 @@ impl ParamsFile {
             statistics: None,
             converged: None,
             provenance: None,
+            quality: None,
             extra: Default::default(),
         }
     }
@@ -220,7 +234,7 @@ impl ParamsFile {
                 "format",
                 format!(
                     "unknown format tag \"{}\"; expected \"{PARAMS_FORMAT}\"",
-                    self.format
+                    crate::textfile::excerpt(&self.format)
                 ),
             ));
         }
@@ -230,7 +244,10 @@ impl ParamsFile {
             other => {
                 return Err(invalid(
                     "units.length",
-                    format!("unknown length unit \"{other}\"; expected \"mm\" or \"m\""),
+                    format!(
+                        "unknown length unit \"{}\"; expected \"mm\" or \"m\"",
+                        crate::textfile::excerpt(other)
+                    ),
                 ));
             }
         };
@@ -240,7 +257,10 @@ impl ParamsFile {
             other => {
                 return Err(invalid(
                     "units.angle",
-                    format!("unknown angle unit \"{other}\"; expected \"rad\" or \"deg\""),
+                    format!(
+                        "unknown angle unit \"{}\"; expected \"rad\" or \"deg\"",
+                        crate::textfile::excerpt(other)
+                    ),
                 ));
             }
         };
@@ -266,6 +286,12 @@ impl ParamsFile {
         }
         let rotation = UnitQuaternion::from_rotation_matrix(&nearest_rotation(&m));
         let translation = Translation3::from(Vector3::from(b.translation) * scale.mm);
+        arm::plausible(
+            "right_base_in_left.translation",
+            translation.vector.as_slice(),
+            arm::MAX_LENGTH_MM,
+            "mm",
+        )?;
         Ok(Isometry3::from_parts(translation, rotation))
     }
 
@@ -298,7 +324,7 @@ impl ParamsFile {
                         format!("fixed_parameters.{side}[{i}].name"),
                         format!(
                             "unknown parameter `{}`; expected one of {} … {}",
-                            f.name,
+                            crate::textfile::excerpt(&f.name),
                             names.first().map_or("", String::as_str),
                             names.last().map_or("", String::as_str)
                         ),
@@ -355,12 +381,18 @@ impl ParamsFile {
 
     /// Parse a parameter file. JSON syntax and type errors carry the line and column.
     pub fn read(path: &Path) -> Result<ParamsFile, ParamsError> {
-        let bytes = std::fs::read(path).map_err(|source| ParamsError::Io {
-            path: path.to_path_buf(),
-            source,
+        use crate::textfile::ReadError;
+        let text = crate::textfile::read(path).map_err(|e| match e {
+            ReadError::Io(source) => ParamsError::Io {
+                path: path.to_path_buf(),
+                source,
+            },
+            ReadError::Text(problem) => ParamsError::Text {
+                path: path.to_path_buf(),
+                problem,
+            },
         })?;
-        let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(&bytes);
-        Self::parse(path, bytes)
+        Self::parse(path, text.as_bytes())
     }
 
     /// Parse parameter-file text; `path` is only used in messages.
@@ -370,14 +402,24 @@ impl ParamsFile {
             line: e.line(),
             column: e.column(),
             message: {
-                // serde_json appends " at line L column C"; the variant shows them already.
+                // serde_json appends " at line L column C"; the variant shows them already. Its
+                // message may quote the input: keep it short.
                 let s = e.to_string();
-                match s.rfind(" at line ") {
+                let s = match s.rfind(" at line ") {
                     Some(i) => s[..i].to_string(),
                     None => s,
-                }
+                };
+                crate::textfile::excerpt_n(&s, 200)
             },
         };
+        if bytes.iter().all(u8::is_ascii_whitespace) {
+            return Err(ParamsError::Json {
+                path: path.to_path_buf(),
+                line: 1,
+                column: 1,
+                message: "the file is empty; expected a dualcal-params/1 JSON object".into(),
+            });
+        }
         // Syntax first, then the format tag (so another format gets the right message), then the types.
         let value: Value = serde_json::from_slice(bytes).map_err(json_err)?;
         match value.get("format") {
@@ -385,7 +427,10 @@ impl ParamsFile {
             Some(other) => {
                 return Err(ParamsError::Format {
                     path: path.to_path_buf(),
-                    message: format!("unknown format tag {other}; expected \"{PARAMS_FORMAT}\""),
+                    message: format!(
+                        "unknown format tag {}; expected \"{PARAMS_FORMAT}\"",
+                        crate::textfile::excerpt(&other.to_string())
+                    ),
                 });
             }
             None => {

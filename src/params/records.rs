@@ -86,6 +86,16 @@ pub struct MethodRecord {
     pub max_iterations: usize,
     pub step_tolerance: f64,
     pub progress_tolerance: f64,
+    /// Configurations left out of the identification (`--exclude`, `--auto-exclude`, the workbench).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub excluded: Vec<ConfigRef>,
+}
+
+/// A configuration by arm and id, as in the dataset's CSV.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct ConfigRef {
+    pub arm: Side,
+    pub id: String,
 }
 
 /// Conditioning of one arm's identification (`statistics.identifiability.<arm>`).
@@ -139,6 +149,17 @@ impl ParamsFile {
             max_iterations: settings.max_iterations,
             step_tolerance: settings.step_tolerance,
             progress_tolerance: settings.progress_tolerance,
+            excluded: settings
+                .exclude
+                .iter()
+                .filter_map(|c| {
+                    let m = dataset.arm(c.side).measurements.get(c.index)?;
+                    Some(ConfigRef {
+                        arm: c.side,
+                        id: m.id.clone(),
+                    })
+                })
+                .collect(),
         });
         let fixed = |side: Side| -> Vec<FixedParameter> {
             result.identifiability[side]
@@ -156,7 +177,9 @@ impl ParamsFile {
             right: fixed(Side::Right),
         });
         file.termination = record(&result.stages);
-        let accuracy = |split| crate::metrics::evaluate(dataset, &result.calibrated, split).ok();
+        // The figures leave the excluded configurations out, as the solver did.
+        let kept = dataset.excluding(&settings.exclude);
+        let accuracy = |split| crate::metrics::evaluate(&kept, &result.calibrated, split).ok();
         file.statistics = record(&StatisticsRecord {
             cal: accuracy(Split::Cal),
             ver: accuracy(Split::Ver),

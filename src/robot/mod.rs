@@ -59,6 +59,12 @@ pub enum RobotError {
         #[source]
         source: std::io::Error,
     },
+    /// Not UTF-8 text (UTF-16, binary data, bad bytes) or too large.
+    #[error("{}: {problem}", .path.display())]
+    Text {
+        path: PathBuf,
+        problem: crate::textfile::TextProblem,
+    },
     #[error(
         "{}: this is a xacro file; expand it first with `xacro {} > robot.urdf` (ROS's xacro; \
          `pip install xacro` works without ROS) and use the URDF it writes",
@@ -247,6 +253,40 @@ fn line_of(text: &str, needle: &str) -> Option<usize> {
         .map(|pos| text[..pos].bytes().filter(|&b| b == b'\n').count() + 1)
 }
 
+/// Longest link or joint name accepted, characters: names are quoted in messages.
+pub const MAX_NAME_CHARS: usize = 256;
+
+/// Every link and joint name (and a joint's parent and child) is one printable line of at most
+/// [`MAX_NAME_CHARS`] characters, so that no message quotes kilobytes of a garbled file.
+fn check_names(urdf: &urdf_rs::Robot, file: &str) -> Result<(), RobotError> {
+    let names = urdf
+        .links
+        .iter()
+        .map(|l| ("link", &l.name))
+        .chain(urdf.joints.iter().flat_map(|j| {
+            [
+                ("joint", &j.name),
+                ("parent link", &j.parent.link),
+                ("child link", &j.child.link),
+            ]
+        }));
+    for (what, name) in names {
+        if name.chars().count() > MAX_NAME_CHARS || name.chars().any(char::is_control) {
+            return Err(RobotError::Parse {
+                file: file.to_string(),
+                line: None,
+                message: format!(
+                    "{what} name `{}` ({} characters) is not a usable name (one line, at most \
+                     {MAX_NAME_CHARS} characters)",
+                    crate::textfile::excerpt(name),
+                    name.chars().count()
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
 /// The line number in a RustyXML parse error message ("Parse error; Line: 12, Column: 3, …").
 fn line_from_message(message: &str) -> Option<usize> {
     let rest = &message[message.find("Line: ")? + "Line: ".len()..];
@@ -296,9 +336,15 @@ impl RobotDescription {
                 path: path.to_path_buf(),
             });
         }
-        let text = std::fs::read_to_string(path).map_err(|source| RobotError::Io {
-            path: path.to_path_buf(),
-            source,
+        let text = crate::textfile::read(path).map_err(|e| match e {
+            crate::textfile::ReadError::Io(source) => RobotError::Io {
+                path: path.to_path_buf(),
+                source,
+            },
+            crate::textfile::ReadError::Text(problem) => RobotError::Text {
+                path: path.to_path_buf(),
+                problem,
+            },
         })?;
         let file = path.display().to_string();
         Self::parse(&text, Some(path), &file, options, ModelForm::Chain)
@@ -343,9 +389,21 @@ impl RobotDescription {
         options: &LoadOptions,
         form: ModelForm,
     ) -> Result<Self, RobotError> {
+        // The XML parser recurses per element: refuse absurd nesting before it overflows its stack.
+        if let Some(line) = crate::textfile::xml_too_deep(text) {
+            return Err(RobotError::Parse {
+                file: file.to_string(),
+                line: Some(line),
+                message: format!(
+                    "elements nest more than {} deep",
+                    crate::textfile::MAX_XML_DEPTH
+                ),
+            });
+        }
         let msg = Messages { text, file };
         let urdf = urdf_rs::read_from_string(text).map_err(|e| {
-            let mut message = e.to_string();
+            // The parser's message may quote the input: keep it short.
+            let mut message = crate::textfile::excerpt_n(&e.to_string(), 200);
             if text.contains("xacro:") {
                 message.push_str(
                     " (the file holds xacro markup: expand it first with `xacro FILE > robot.urdf`)",
@@ -358,6 +416,7 @@ impl RobotDescription {
             }
         })?;
         let mut warnings = Vec::new();
+        check_names(&urdf, file)?;
         let tree = tree::parse_tree(&urdf, &msg, &mut warnings)?;
         let yumi = arms::has_yumi_names(&urdf);
         let links = match &options.arms {

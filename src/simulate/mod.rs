@@ -31,7 +31,9 @@
 //!    `q + δq(q)` where `δq` is the optional unmodelled joint error ([`JointErrorModel`]). Measured point
 //!    = `tracker_from_left_base · left_base_from_arm_base(true) · FK_true(q + δq) · t_k(true)` + Gaussian
 //!    noise with σ = MPE/2 per axis, MPE = `mpe_um + mpe_um_per_m · distance_m` (converted to mm).
-//!    Optional outliers ([`OutlierModel`]) then displace one reflector of some configurations.
+//!    Optional outliers ([`OutlierModel`]) then displace one reflector of some configurations, and
+//!    optional gross errors ([`GrossErrorModel`]) misread a reflector, swap two labels or put a row of
+//!    the other arm into some configurations.
 //! 5. **Split.** The first `n_cal` accepted configurations of each arm are `cal`, the rest `ver`.
 //!    Configurations are drawn independently, so this is a random split. Ids are `L001…`, `R001…`;
 //!    `Measurement::line` is the CSV line the writer produces with the header on line 1 (`i + 2`).
@@ -40,6 +42,7 @@
 //! only the outlier rows, and enabling joint errors does not change the configurations or the noise draws.
 
 mod check;
+mod gross;
 mod joint_errors;
 mod presets;
 mod sampling;
@@ -50,6 +53,7 @@ mod truth;
 use crate::dataset::{ArmData, Dataset, Measurement, Split, TrackerSpec};
 use crate::kinematics::DualArmModel;
 use crate::side::{PerSide, Side};
+pub use gross::{GrossError, GrossErrorModel, GrossErrorRecord};
 use nalgebra::{Isometry3, Point3, Vector3};
 pub use presets::{
     default_reflectors_for, paper_options, resting_poses, simulate_with_robot,
@@ -141,6 +145,9 @@ pub struct SimOptions {
     pub body_from_left_base: Isometry3<f64>,
     pub joint_error: Option<JointErrorModel>,
     pub outliers: Option<OutlierModel>,
+    /// Gross errors of real files (misread reflectors, swapped labels, rows of the other arm), applied
+    /// after `outliers`.
+    pub gross_errors: Option<GrossErrorModel>,
     /// Largest angle between the reflectors' facing direction (the flange z axis for the default
     /// reflectors) and the direction to the tracker, deg.
     pub facing_max_angle_deg: f64,
@@ -184,6 +191,7 @@ impl Default for SimOptions {
             body_from_left_base: Isometry3::identity(),
             joint_error: None,
             outliers: None,
+            gross_errors: None,
             facing_max_angle_deg: 70.0,
             joint_limit_margin_fraction: 0.05,
             max_attempts_per_config: 500,
@@ -222,6 +230,8 @@ pub struct SimOutput {
     pub attempts: PerSide<usize>,
     /// Injected outliers (empty without [`SimOptions::outliers`]).
     pub outliers: Vec<OutlierRecord>,
+    /// Injected gross errors (empty without [`SimOptions::gross_errors`]).
+    pub gross_errors: Vec<GrossErrorRecord>,
     /// Phases φ_i of the periodic joint error per arm and joint (zeros without joint errors).
     pub joint_error_phases_rad: PerSide<Vec<f64>>,
 }
@@ -261,6 +271,8 @@ const STREAM_OUTLIERS: u64 = 4;
 const STREAM_TARGET: u64 = 5;
 
 const STREAM_RESTING: u64 = 6;
+
+const STREAM_GROSS: u64 = 7;
 
 const fn stream_configs(side: Side) -> u64 {
     match side {
@@ -335,6 +347,10 @@ pub fn simulate(
         Some(model) => inject_outliers(opts, model, &mut arms),
         None => Vec::new(),
     };
+    let gross_errors = match &opts.gross_errors {
+        Some(model) => gross::inject(opts, model, &mut arms),
+        None => Vec::new(),
+    };
     Ok(SimOutput {
         dataset: Dataset {
             dir: PathBuf::new(),
@@ -350,6 +366,7 @@ pub fn simulate(
         rejected_for_facing: accepted.values().map(|a| a.rejected_for_facing).sum(),
         attempts: accepted.map(|_, a| a.attempts),
         outliers,
+        gross_errors,
         joint_error_phases_rad: phases,
     })
 }

@@ -39,7 +39,7 @@ pub mod sqp;
 mod stage;
 
 use crate::dataset::Split;
-use crate::side::Side;
+use crate::side::{ConfigId, Side};
 pub use result::{CalibrationResult, STAGES};
 pub use run::{CalibrationRun, Calibrator, Observer, Progress};
 use serde::{Deserialize, Serialize};
@@ -85,6 +85,10 @@ pub struct CalibrationSettings {
     pub progress_tolerance: f64,
     /// Iterations of the paper's subgradient QP solver per outer iteration.
     pub max_qp_iterations: usize,
+    /// Configurations left out of the identification (suspect measurements: see
+    /// [`crate::quality`]). Indices refer to the dataset given to the calibration.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub exclude: Vec<ConfigId>,
 }
 
 fn default_progress_tolerance() -> f64 {
@@ -101,6 +105,7 @@ impl Default for CalibrationSettings {
             step_tolerance: 1e-8,
             progress_tolerance: default_progress_tolerance(),
             max_qp_iterations: 2000,
+            exclude: Vec::new(),
         }
     }
 }
@@ -121,6 +126,30 @@ impl Termination {
     }
 }
 
+/// How far a step-1 iterate may move from the nominal model before the stage is stopped as
+/// [`Termination::Diverged`]: calibration corrects millimetres and milliradians, so a DH length or
+/// reflector coordinate moved by more than this is no calibration but a solver running away along a
+/// direction the data do not constrain (or data that do not belong to this robot), mm.
+pub const DIVERGED_LENGTH_MM: f64 = 100.0;
+/// … and a DH angle moved by more than this, rad (about 29°).
+pub const DIVERGED_ANGLE_RAD: f64 = 0.5;
+
+/// The smallest number of calibration configurations per arm from which `n_params` parameters can be
+/// identified by distances: each reflector's `n` measured points give `3n − 6` independent distances
+/// (the point cloud up to a rigid motion), so three reflectors give `9n − 18`.
+pub fn min_configurations(n_params: usize) -> usize {
+    (n_params + 18).div_ceil(9).max(crate::dataset::MIN_CONFIGS)
+}
+
+/// The parameters of an arm that distances can identify at most: all but those physics rules out (for
+/// the built-in robot `d1`, `θ1`, absorbed by the tracker frame, and the four of the last joint,
+/// absorbed by the reflector coordinates: 31 of 37).
+pub fn identifiable_params(arm: &crate::kinematics::ArmModel) -> usize {
+    (0..arm.param_count())
+        .filter(|&k| arm.unidentifiable_reason(k).is_none())
+        .count()
+}
+
 impl std::fmt::Display for Termination {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(match self {
@@ -129,6 +158,8 @@ impl std::fmt::Display for Termination {
             Termination::Stalled => "stalled above the optimum",
             Termination::MaxIterations => "iteration limit reached",
             Termination::Cancelled => "cancelled",
+            Termination::Diverged => "diverged (parameters left the plausible range)",
+            Termination::NonFinite => "stopped at a non-finite value",
         })
     }
 }
@@ -177,6 +208,11 @@ pub enum Termination {
     NoProgress,
     MaxIterations,
     Cancelled,
+    /// A parameter moved implausibly far from the nominal model ([`DIVERGED_LENGTH_MM`],
+    /// [`DIVERGED_ANGLE_RAD`]); the stage keeps the last plausible iterate.
+    Diverged,
+    /// The objective became NaN or infinite; the stage keeps the last finite iterate.
+    NonFinite,
 }
 
 /// Progress events delivered to an observer.
@@ -202,12 +238,16 @@ pub enum CalibrationEvent {
 #[derive(Debug, thiserror::Error)]
 pub enum CalibrationError {
     #[error(
-        "{side} arm: {found} configurations in the selected split, at least {needed} are needed (paper Table 2)"
+        "{side} arm: {found} configurations in the selected split (after exclusions), at least {needed} \
+         are needed to identify the arm's parameters from distances (9n − 18 independent distances \
+         for {params} parameters; the paper uses 120)"
     )]
     TooFewConfigurations {
         side: Side,
         found: usize,
         needed: usize,
+        /// The arm's identifiable parameters.
+        params: usize,
     },
     #[error(
         "{side} arm: configuration `{id}` has {found} joint values, the arm's model has {expected} joints"

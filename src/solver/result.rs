@@ -26,6 +26,12 @@ pub struct CalibrationResult {
     /// Which parameters of each arm were identified and which fixed, and why (`None` for an arm whose
     /// stage did not start).
     pub identifiability: PerSide<Option<IdentifiabilityReport>>,
+    /// The same analysis repeated at each arm's solution (`None` for an arm whose stage did not end
+    /// normally); [`CalibrationResult::warnings`] reports parameters that lost their identifiability.
+    pub identifiability_at_solution: PerSide<Option<IdentifiabilityReport>>,
+    /// What the run found wrong on the way (divergence, non-finite values, dependencies at the
+    /// solution), one sentence each; part of [`CalibrationResult::warnings`].
+    pub diagnostics: Vec<String>,
     /// Allowed deviation δ of the reflector triangle's sides (constraint 14, ε = δ²), mm, per arm.
     pub side_tolerance_mm: PerSide<f64>,
     pub elapsed_secs: f64,
@@ -43,8 +49,9 @@ impl CalibrationResult {
         self.stages.iter().find(|s| s.stage == stage)
     }
 
-    /// One warning per stage that did not converge, and one for each stage that did not run; empty
-    /// when the run converged. The command line and the workbench both show these.
+    /// One warning per stage that did not converge, one for each stage that did not run, and the
+    /// run's diagnostics (divergence, non-finite values, parameters no longer identifiable at the
+    /// solution); empty when all is well. The command line and the workbench both show these.
     pub fn warnings(&self) -> Vec<String> {
         let mut out: Vec<String> = self
             .stages
@@ -59,6 +66,11 @@ impl CalibrationResult {
                 Termination::Cancelled => format!(
                     "{} was cancelled after {} iterations; the parameters are those reached",
                     s.stage, s.iterations
+                ),
+                Termination::Diverged | Termination::NonFinite => format!(
+                    "{} {} after {} iterations; the parameters are the last plausible ones, not a \
+                     calibration",
+                    s.stage, s.termination, s.iterations
                 ),
                 _ => format!(
                     "{} stopped where the exact QP still predicts a decrease of ψ by more than {:.0e} \
@@ -78,6 +90,7 @@ impl CalibrationResult {
                 out.push(format!("{stage} did not run; its parameters are nominal"));
             }
         }
+        out.extend(self.diagnostics.iter().cloned());
         out
     }
 

@@ -14,9 +14,9 @@ use super::{
     CalibrationError, CalibrationEvent, CalibrationSettings, IterationRecord, Method, Stage,
     StageSummary, Termination,
 };
-use crate::dataset::{Dataset, MIN_CONFIGS};
+use crate::dataset::Dataset;
 use crate::kinematics::{ArmKinematics, DualArmModel};
-use crate::side::{PerSide, Side};
+use crate::side::{ConfigId, PerSide, Side};
 use nalgebra::{DMatrix, DVector, Vector3};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -142,6 +142,9 @@ struct ActiveStage {
     start_psi_mm2: f64,
     /// `StageStarted` is reported by the first step of the stage.
     announced: bool,
+    /// The last iterate with finite, plausible parameters (kept when the stage ends `NonFinite` or
+    /// `Diverged`); `None` until the first iteration.
+    last_good: Option<StageParams>,
 }
 
 /// A two-step calibration in progress: the executor of the stages. Advance it with
@@ -156,6 +159,10 @@ pub struct CalibrationRun {
     history: Vec<IterationRecord>,
     stages: Vec<StageSummary>,
     identifiability: PerSide<Option<IdentifiabilityReport>>,
+    /// The identifiability analysis repeated at each arm's solution.
+    identifiability_at_solution: PerSide<Option<IdentifiabilityReport>>,
+    /// What went wrong and where, for the warnings (divergence, non-finite values, new dependencies).
+    diagnostics: Vec<String>,
     cancel: Arc<AtomicBool>,
     started: Instant,
 }
@@ -177,6 +184,8 @@ impl CalibrationRun {
             history: Vec::new(),
             stages: Vec::new(),
             identifiability: PerSide::default(),
+            identifiability_at_solution: PerSide::default(),
+            diagnostics: Vec::new(),
             cancel,
             started: Instant::now(),
         };
@@ -249,12 +258,25 @@ impl CalibrationRun {
             Some(state) => {
                 active.iterations += 1;
                 let psi_mm2 = max3(state.f_mm2);
-                if !psi_mm2.is_finite() || !state.step_norm.is_finite() {
-                    return Err(CalibrationError::NonFinite {
-                        stage: active.stage,
-                        detail: format!("ψ = {psi_mm2}, step norm = {}", state.step_norm),
-                    });
+                let params = active.solver.current();
+                if !psi_mm2.is_finite() || !state.step_norm.is_finite() || !params_finite(&params) {
+                    self.diagnostics.push(format!(
+                        "{}: non-finite value at iteration {} (ψ = {psi_mm2}, step norm = {}); \
+                         the parameters are those of the last finite iterate",
+                        active.stage, active.iterations, state.step_norm
+                    ));
+                    return self.finish_stage(active, Termination::NonFinite, observers);
                 }
+                if let Some(why) = self.implausible(active.stage, &params) {
+                    self.diagnostics.push(format!(
+                        "{} diverged at iteration {}: {why}; the parameters are those of the last \
+                         plausible iterate (are the measurements those of this robot? see \
+                         `dualcal` quality flags)",
+                        active.stage, active.iterations
+                    ));
+                    return self.finish_stage(active, Termination::Diverged, observers);
+                }
+                active.last_good = Some(params);
                 let record = IterationRecord {
                     stage: active.stage,
                     iteration: active.iterations,
@@ -287,12 +309,32 @@ impl CalibrationRun {
     /// Commit a finished stage, report it, and start the next one (none after a cancel).
     fn finish_stage(
         &mut self,
-        active: ActiveStage,
+        mut active: ActiveStage,
         termination: Termination,
         observers: &mut [&mut dyn Observer],
     ) -> Result<Progress, CalibrationError> {
-        let f_mm2 = active.solver.objectives_mm2();
-        apply(&mut self.committed, active.stage, active.solver.current());
+        let params = match termination {
+            // The solver's iterate is broken or implausible: keep the last good one (or the start).
+            Termination::NonFinite | Termination::Diverged => active.last_good.take(),
+            _ => Some(active.solver.current()),
+        };
+        let f_mm2 = match termination {
+            Termination::NonFinite | Termination::Diverged => [f64::NAN; 3],
+            _ => active.solver.objectives_mm2(),
+        };
+        if let Some(params) = params {
+            apply(&mut self.committed, active.stage, params);
+        }
+        let f_mm2 = if f_mm2.iter().all(|f| f.is_finite()) {
+            f_mm2
+        } else {
+            self.stage_objectives(active.stage)
+        };
+        if let Stage::Arm(side) = active.stage
+            && termination != Termination::Cancelled
+        {
+            self.recheck_identifiability(side);
+        }
         let summary = StageSummary {
             stage: active.stage,
             n_configs: self.stage_size(active.stage).0,
@@ -355,6 +397,7 @@ impl CalibrationRun {
             solver,
             iterations: 0,
             announced: false,
+            last_good: None,
         })
     }
 
@@ -460,6 +503,114 @@ impl CalibrationRun {
         })
     }
 
+    /// Why step-1 parameters are implausible (moved too far from the nominal model), if they are.
+    fn implausible(&self, stage: Stage, params: &StageParams) -> Option<String> {
+        let (Stage::Arm(side), StageParams::Arm(arm)) = (stage, params) else {
+            return None;
+        };
+        let now = arm.to_vector();
+        let nominal = self.nominal.arm(side).to_vector();
+        (0..now.len().min(nominal.len())).find_map(|k| {
+            let moved = (now[k] - nominal[k]).abs();
+            let (limit, unit) = if arm.param_is_angle(k) {
+                (super::DIVERGED_ANGLE_RAD, "rad")
+            } else {
+                (super::DIVERGED_LENGTH_MM, "mm")
+            };
+            (moved > limit).then(|| {
+                format!(
+                    "{} moved {moved:.3} {unit} from its nominal value (more than {limit} {unit})",
+                    arm.param_name(k)
+                )
+            })
+        })
+    }
+
+    /// F_a, F_b, F_c of the committed model on a stage's data, mm² (for a stage whose solver state is
+    /// unusable).
+    fn stage_objectives(&self, stage: Stage) -> [f64; 3] {
+        match stage {
+            Stage::Arm(side) => {
+                let input = &self.inputs[side];
+                let arm = self.committed.arm(side);
+                let pts: Vec<[Vector3<f64>; 3]> = input
+                    .qs
+                    .iter()
+                    .map(|q| arm.reflector_fk(q).points_mm)
+                    .collect();
+                let n = pts.len();
+                std::array::from_fn(|k| {
+                    let mut sum = 0.0;
+                    for i in 0..n {
+                        for j in i + 1..n {
+                            let dm = (input.measured[i][k] - input.measured[j][k]).norm();
+                            let dp = (pts[i][k] - pts[j][k]).norm();
+                            sum += (dm - dp) * (dm - dp);
+                        }
+                    }
+                    sum
+                })
+            }
+            Stage::Base => [f64::NAN; 3],
+        }
+    }
+
+    /// Repeat the identifiability analysis at `side`'s solution: a parameter that was identifiable at
+    /// the start but is (nearly) dependent there is poorly determined by the data at the answer.
+    fn recheck_identifiability(&mut self, side: Side) {
+        let Some(start) = self.identifiability[side].clone() else {
+            return;
+        };
+        let input = &self.inputs[side];
+        let arm = self.committed.arm(side);
+        let n_params = arm.param_count();
+        let probe = ArmProblem::new(
+            input.qs.clone(),
+            &input.measured,
+            arm,
+            (0..n_params).collect(),
+            DVector::from_element(n_params, 1.0),
+            input.side_tolerance_mm,
+        );
+        let columns = probe.sample_pair_jacobian(&DVector::zeros(n_params), IDENTIFIABILITY_PAIRS);
+        let gram = match arm.kinematics {
+            ArmKinematics::Dh(_) => identifiability::gram_by_qr(&columns),
+            ArmKinematics::Chain { .. } => identifiability::gram_by_product(&columns),
+        };
+        let mut allowed = vec![false; n_params];
+        for &k in &start.free {
+            allowed[k] = true;
+        }
+        let order = arm.identifiability_order();
+        let at_solution = identifiability::analyse(
+            &gram,
+            &identifiability::ParameterInfo {
+                order: &order,
+                allowed: &allowed,
+                name: &|k| arm.param_name(k),
+                reason: &|k| arm.unidentifiable_reason(k),
+            },
+        );
+        for f in &at_solution.fixed {
+            if allowed[f.index] {
+                self.diagnostics.push(format!(
+                    "step 1 ({side} arm): at the solution {} is no longer identifiable from these \
+                     configurations ({}); its value is poorly determined",
+                    f.name, f.reason
+                ));
+            }
+        }
+        let (before, after) = (start.condition_after, at_solution.condition_after);
+        if after.is_finite() && before.is_finite() && after > CONDITION_GROWTH * before {
+            self.diagnostics.push(format!(
+                "step 1 ({side} arm): the scaled Jacobian's condition number grew from {before:.3e} at \
+                 the start to {after:.3e} at the solution; the identified parameters are sensitive to \
+                 measurement errors"
+            ));
+        }
+        self.identifiability_at_solution[side] = Some(at_solution);
+    }
+
     fn result(&self) -> CalibrationResult {
         CalibrationResult {
             nominal: self.nominal.clone(),
@@ -468,6 +619,8 @@ impl CalibrationRun {
             history: self.history.clone(),
             stages: self.stages.clone(),
             identifiability: self.identifiability.clone(),
+            identifiability_at_solution: self.identifiability_at_solution.clone(),
+            diagnostics: self.diagnostics.clone(),
             side_tolerance_mm: self.inputs.as_ref().map(|_, i| i.side_tolerance_mm),
             elapsed_secs: self.started.elapsed().as_secs_f64(),
         }
@@ -481,12 +634,24 @@ fn arm_input(
     side: Side,
     settings: &CalibrationSettings,
 ) -> Result<ArmInput, CalibrationError> {
-    let ms = dataset.arm(side).select(settings.split);
-    if ms.len() < MIN_CONFIGS {
+    let ms: Vec<&crate::dataset::Measurement> = dataset
+        .arm(side)
+        .measurements
+        .iter()
+        .enumerate()
+        .filter(|(i, m)| {
+            settings.split.contains(m.split) && !settings.exclude.contains(&ConfigId::new(side, *i))
+        })
+        .map(|(_, m)| m)
+        .collect();
+    let params = super::identifiable_params(nominal.arm(side));
+    let needed = super::min_configurations(params);
+    if ms.len() < needed {
         return Err(CalibrationError::TooFewConfigurations {
             side,
             found: ms.len(),
-            needed: MIN_CONFIGS,
+            needed,
+            params,
         });
     }
     let expected = nominal.arm(side).joint_count();
@@ -534,6 +699,20 @@ fn apply(model: &mut DualArmModel, stage: Stage, params: StageParams) {
         }
     }
 }
+
+/// Are all of a stage's parameters finite?
+fn params_finite(params: &StageParams) -> bool {
+    match params {
+        StageParams::Arm(arm) => arm.to_vector().iter().all(|v| v.is_finite()),
+        StageParams::Base(b) => {
+            b.translation.vector.iter().all(|v| v.is_finite())
+                && b.rotation.coords.iter().all(|v| v.is_finite())
+        }
+    }
+}
+
+/// A condition number at the solution this many times the start's is reported.
+pub const CONDITION_GROWTH: f64 = 10.0;
 
 fn max3(f: [f64; 3]) -> f64 {
     f.iter().copied().fold(f64::NEG_INFINITY, f64::max)

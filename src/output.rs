@@ -30,8 +30,32 @@ pub enum OutputError {
 }
 
 /// Write `bytes` to `path` atomically: a temporary file in the same directory is written, flushed to
-/// disk and renamed over `path`. The parent directory must exist.
+/// disk and renamed over `path`. The parent directory must exist. On any error (a full disk, no
+/// permission, `path` is a directory) the temporary file is removed, an existing `path` is left as it
+/// was, and the error says so.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    write_atomic_with(path, |file| file.write_all(bytes))
+}
+
+/// [`write_atomic`] with the content written by `write` (which may fail half-way: the old file is kept).
+pub fn write_atomic_with(
+    path: &Path,
+    write: impl FnOnce(&mut std::fs::File) -> std::io::Result<()>,
+) -> std::io::Result<()> {
+    write_atomic_inner(path, write).map_err(|e| {
+        let kept = if path.symlink_metadata().is_ok() {
+            "the existing file was left unchanged"
+        } else {
+            "nothing was written"
+        };
+        std::io::Error::new(e.kind(), format!("{e}; {kept}"))
+    })
+}
+
+fn write_atomic_inner(
+    path: &Path,
+    write: impl FnOnce(&mut std::fs::File) -> std::io::Result<()>,
+) -> std::io::Result<()> {
     let dir = match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
@@ -42,6 +66,12 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
             "output path has no file name",
         ));
     }
+    if path.is_dir() {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::IsADirectory,
+            "the output path is a directory",
+        ));
+    }
     let mut builder = tempfile::Builder::new();
     builder.prefix(".dualcal-").suffix(".tmp");
     // Ordinary file permissions (0644 less the umask), not the private 0600 of a temporary file.
@@ -50,8 +80,9 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
         use std::os::unix::fs::PermissionsExt;
         builder.permissions(std::fs::Permissions::from_mode(0o644));
     }
+    // Dropping `tmp` on an error below removes the temporary file.
     let mut tmp = builder.tempfile_in(dir)?;
-    tmp.write_all(bytes)?;
+    write(tmp.as_file_mut())?;
     tmp.flush()?;
     tmp.as_file().sync_all()?;
     tmp.persist(path).map_err(|e| e.error)?;
@@ -128,6 +159,37 @@ mod tests {
             .map(|e| e.unwrap().file_name())
             .collect();
         assert_eq!(names, vec![std::ffi::OsString::from("out.txt")]);
+    }
+
+    /// A disk that fills up half-way through the write: the old file stays, no temporary file is left
+    /// behind, and the error says the old file was kept.
+    #[test]
+    fn a_failed_write_keeps_the_old_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("params.json");
+        write_atomic(&p, b"old content").unwrap();
+        let err = write_atomic_with(&p, |f| {
+            f.write_all(b"new con")?;
+            Err(std::io::Error::new(
+                std::io::ErrorKind::StorageFull,
+                "No space left on device",
+            ))
+        })
+        .unwrap_err();
+        assert_eq!(err.kind(), std::io::ErrorKind::StorageFull);
+        assert!(err.to_string().contains("left unchanged"), "{err}");
+        assert_eq!(std::fs::read(&p).unwrap(), b"old content");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+        // A new file that fails: nothing is left.
+        let q = dir.path().join("new.json");
+        let err = write_atomic_with(&q, |_| Err(std::io::Error::other("boom"))).unwrap_err();
+        assert!(err.to_string().contains("nothing was written"), "{err}");
+        assert!(!q.exists());
+        // A directory in the way is not replaced.
+        std::fs::create_dir(dir.path().join("out")).unwrap();
+        let err = write_atomic(&dir.path().join("out"), b"x").unwrap_err();
+        assert!(err.to_string().contains("directory"), "{err}");
+        assert!(dir.path().join("out").is_dir());
     }
 
     #[test]

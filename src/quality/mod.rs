@@ -1,0 +1,462 @@
+//! Screening the measurements for suspect configurations, before and after a fit, and leaving them
+//! out.
+//!
+//! The minimax objective is, by construction, steered by its single worst point, so one misread
+//! reflector can spoil a calibration. Three kinds of evidence, each per configuration (arm and row):
+//!
+//! - **the reflector triangle** ([`triangle`]): the three reflectors are rigid on the flange, so every
+//!   configuration's measured triangle must have the same side lengths, whatever the robot model.
+//!   A side that differs from the arm's median by more than [`ScreenSettings::triangle_k`] robust
+//!   standard deviations (never less than the tracker's noise) flags the configuration; the two
+//!   deviating sides name the misread reflector, and a permutation of the labels that restores the
+//!   triangle says the labels were swapped in that row.
+//! - **the distances to the other configurations** ([`residual`]): given a model (the nominal one before
+//!   fitting, the calibrated one after), each configuration's reflector `k` gets a robust (Huber)
+//!   estimate of the displacement `e` that explains its distance errors to all the other
+//!   configurations, `Δd_ij ≈ w_ij · e_i` (the tracker-frame misread, mm). `|e|` beyond
+//!   [`ScreenSettings::residual_k`] robust standard deviations of the arm's `|e|` flags it. For a flagged
+//!   row, swapped labels, two swapped joint columns and "a row of the other arm" are tried, and one that
+//!   makes the row fit is named.
+//! - **whole-file checks** ([`frames`]): a nominal model that disagrees with the data by more than a
+//!   robot can be off (joint order, units, wrong robot: an error), the two arms not in one tracker
+//!   frame (collaborative errors far above relative ones before fitting, or a base far from the
+//!   robot description's after), and a tracker that moved within one arm's measurements (distances
+//!   across one row far worse than on either side).
+//!
+//! [`screen`] runs them before fitting, [`screen_result`] after; [`auto_exclude`] applies the
+//! documented rule (`docs/reliability.md`). Configurations are left out of a calibration through
+//! [`crate::solver::CalibrationSettings::exclude`], and out of accuracy figures through
+//! [`crate::dataset::Dataset::excluding`].
+
+pub mod frames;
+pub mod residual;
+pub mod triangle;
+
+use crate::dataset::{Dataset, Split};
+use crate::kinematics::DualArmModel;
+use crate::side::{ConfigId, Side};
+use crate::solver::{CalibrationError, CalibrationResult, CalibrationSettings, Calibrator};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+
+/// What makes a configuration suspect.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum FlagKind {
+    /// Its reflector triangle differs from the rigid triangle of the other configurations: a
+    /// reflector misread, re-seated or occluded and re-measured.
+    Triangle,
+    /// Its reflector labels look permuted (the triangle, or the distances, fit after relabelling).
+    LabelsSwapped,
+    /// Its distances to the other configurations do not fit the model.
+    Residual,
+    /// Two of its joint columns look swapped (the distances fit after swapping them back).
+    JointsSwapped,
+    /// It fits the other arm's measurements: a row of the other arm's file.
+    OtherArm,
+}
+
+impl FlagKind {
+    /// A short name for tables.
+    pub fn label(self) -> &'static str {
+        match self {
+            FlagKind::Triangle => "triangle",
+            FlagKind::LabelsSwapped => "labels swapped",
+            FlagKind::Residual => "residual",
+            FlagKind::JointsSwapped => "joints swapped",
+            FlagKind::OtherArm => "other arm",
+        }
+    }
+}
+
+/// A suspect configuration.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Flag {
+    pub config: ConfigId,
+    /// The row's id and CSV line.
+    pub id: String,
+    pub line: usize,
+    pub split: Split,
+    pub kind: FlagKind,
+    /// How large the problem is, mm: the triangle's largest side deviation, or the largest estimated
+    /// reflector displacement.
+    pub size_mm: f64,
+    /// The threshold `size_mm` exceeded, mm.
+    pub threshold_mm: f64,
+    /// The reflector implicated (0 = a, 1 = b, 2 = c), when one is.
+    pub reflector: Option<usize>,
+    /// One sentence: what was found and what it suggests.
+    pub reason: String,
+}
+
+impl Flag {
+    /// How far beyond its threshold (≥ 1): orders flags by severity.
+    pub fn severity(&self) -> f64 {
+        self.size_mm / self.threshold_mm.max(1e-12)
+    }
+}
+
+impl std::fmt::Display for Flag {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} arm `{}` (line {}, {}): {}",
+            self.config.side,
+            self.id,
+            self.line,
+            self.split.name(),
+            self.reason
+        )
+    }
+}
+
+/// How serious a whole-file finding is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Severity {
+    /// The data may still be usable; the user should know.
+    Warning,
+    /// The data cannot give a meaningful calibration as they are; the command line refuses.
+    Error,
+}
+
+/// A finding about a whole file or arm, not one configuration.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Finding {
+    pub severity: Severity,
+    /// The arm concerned, if one.
+    pub side: Option<Side>,
+    pub message: String,
+}
+
+impl std::fmt::Display for Finding {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.message)
+    }
+}
+
+/// Thresholds of the screening. The defaults are those of `docs/reliability.md`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ScreenSettings {
+    /// A triangle side deviating by more than this many robust standard deviations flags the
+    /// configuration (the standard deviation is never taken below the tracker's side noise).
+    pub triangle_k: f64,
+    /// An estimated reflector displacement beyond this many robust standard deviations of the arm's
+    /// displacements flags the configuration.
+    pub residual_k: f64,
+    /// Neither threshold is taken below this many times the tracker's MPE at the measuring distance.
+    pub mpe_floor: f64,
+    /// Largest fraction of an arm's configurations [`auto_exclude`] removes; beyond it the data are
+    /// not "a few outliers" and need a look instead.
+    pub max_excluded_fraction: f64,
+    /// Rounds of fit and screen in [`auto_exclude`].
+    pub max_rounds: usize,
+}
+
+impl Default for ScreenSettings {
+    fn default() -> Self {
+        Self {
+            triangle_k: 6.0,
+            residual_k: 5.0,
+            mpe_floor: 3.0,
+            max_excluded_fraction: 0.1,
+            max_rounds: 3,
+        }
+    }
+}
+
+/// The outcome of a screening.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Screening {
+    /// Suspect configurations (a configuration may carry several flags), arm by arm, in row order.
+    pub flags: Vec<Flag>,
+    /// Whole-file findings.
+    pub findings: Vec<Finding>,
+}
+
+impl Screening {
+    /// The suspect configurations, each once, in order.
+    pub fn suspects(&self) -> Vec<ConfigId> {
+        let mut v: Vec<ConfigId> = self.flags.iter().map(|f| f.config).collect();
+        v.sort();
+        v.dedup();
+        v
+    }
+
+    /// The flags of each suspect configuration, most severe first.
+    pub fn by_config(&self) -> BTreeMap<ConfigId, Vec<&Flag>> {
+        let mut map: BTreeMap<ConfigId, Vec<&Flag>> = BTreeMap::new();
+        for f in &self.flags {
+            map.entry(f.config).or_default().push(f);
+        }
+        for flags in map.values_mut() {
+            flags.sort_by(|a, b| b.severity().total_cmp(&a.severity()));
+        }
+        map
+    }
+
+    /// The most severe flag of each suspect configuration.
+    pub fn worst_per_config(&self) -> Vec<&Flag> {
+        self.by_config().into_values().map(|v| v[0]).collect()
+    }
+
+    /// The rows of `side` that carry a flag.
+    pub fn suspect_rows(&self, side: Side) -> Vec<usize> {
+        self.suspects()
+            .into_iter()
+            .filter(|c| c.side == side)
+            .map(|c| c.index)
+            .collect()
+    }
+
+    /// Is there a finding of [`Severity::Error`]?
+    pub fn has_errors(&self) -> bool {
+        self.findings.iter().any(|f| f.severity == Severity::Error)
+    }
+
+    fn sort(&mut self) {
+        self.flags.sort_by_key(|f| (f.config, f.kind as u8));
+    }
+}
+
+/// The tracker's MPE at the arm's mean measuring distance, mm.
+pub(crate) fn mpe_mm(dataset: &Dataset, side: Side) -> f64 {
+    let ms = &dataset.arm(side).measurements;
+    let n = (3 * ms.len()).max(1) as f64;
+    let mean_m = ms
+        .iter()
+        .flat_map(|m| m.tracker_points_mm.iter())
+        .map(|p| p.norm())
+        .sum::<f64>()
+        / n
+        / 1000.0;
+    (dataset.tracker.mpe_um + dataset.tracker.mpe_um_per_m * mean_m) / 1000.0
+}
+
+/// Screen a dataset before fitting, with the nominal model: triangle flags, gross residual flags
+/// (the nominal model is millimetres off, so only gross errors show), and the whole-file checks.
+pub fn screen(dataset: &Dataset, nominal: &DualArmModel, settings: &ScreenSettings) -> Screening {
+    let mut out = Screening::default();
+    for side in Side::BOTH {
+        out.flags.extend(triangle::flags(dataset, side, settings));
+        out.flags
+            .extend(residual::flags(dataset, nominal, side, settings));
+    }
+    out.findings
+        .extend(frames::nominal_findings(dataset, nominal));
+    for side in Side::BOTH {
+        let suspects = out.suspect_rows(side);
+        out.findings.extend(frames::tracker_moved(
+            dataset, nominal, side, &suspects, settings,
+        ));
+    }
+    out.sort();
+    out
+}
+
+/// Screen a dataset with a calibrated model: triangle and residual flags, a tracker that moved within
+/// an arm, and a right-arm base far from the robot description's (the arms not in one tracker frame).
+pub fn screen_result(
+    dataset: &Dataset,
+    result: &CalibrationResult,
+    settings: &ScreenSettings,
+) -> Screening {
+    screen_model(dataset, &result.nominal, &result.calibrated, settings)
+}
+
+/// [`screen_result`] for any model and the nominal one it started from.
+pub fn screen_model(
+    dataset: &Dataset,
+    nominal: &DualArmModel,
+    model: &DualArmModel,
+    settings: &ScreenSettings,
+) -> Screening {
+    let mut out = Screening::default();
+    for side in Side::BOTH {
+        out.flags.extend(triangle::flags(dataset, side, settings));
+        out.flags
+            .extend(residual::flags(dataset, model, side, settings));
+        let suspects = out.suspect_rows(side);
+        out.findings.extend(frames::tracker_moved(
+            dataset, model, side, &suspects, settings,
+        ));
+    }
+    out.findings.extend(frames::base_deviation(nominal, model));
+    out.sort();
+    out
+}
+
+/// What [`auto_exclude`] did.
+#[derive(Clone, Debug)]
+pub struct AutoExclusion {
+    /// The configurations left out, with the flag that removed each (most severe), in order.
+    pub excluded: Vec<Flag>,
+    /// The calibration without them.
+    pub result: CalibrationResult,
+    /// The screening of that calibration (flags of the excluded configurations included).
+    pub screening: Screening,
+    /// Fits run (1 when nothing was suspect after the first).
+    pub rounds: usize,
+    /// Why the rule stopped before every suspect was excluded (too many suspects in an arm), if it
+    /// did.
+    pub stopped: Option<String>,
+}
+
+/// The `--auto-exclude` rule: screen with the nominal model and leave the flagged configurations out;
+/// fit; screen with the fitted model and leave the newly flagged out; repeat until nothing new is
+/// flagged or [`ScreenSettings::max_rounds`] fits have run. At most
+/// [`ScreenSettings::max_excluded_fraction`] of an arm's configurations are excluded: when a round
+/// would exclude more, it excludes none of its new suspects and the rule stops and says so (a moved
+/// tracker or a wrong robot is not cured by exclusion). `settings.exclude` (the user's own exclusions) is kept.
+pub fn auto_exclude(
+    dataset: &Dataset,
+    nominal: &DualArmModel,
+    settings: &CalibrationSettings,
+    screen_settings: &ScreenSettings,
+) -> Result<AutoExclusion, CalibrationError> {
+    let mut excluded: Vec<Flag> = Vec::new();
+    let mut settings = settings.clone();
+    let first = screen(dataset, nominal, screen_settings);
+    let mut stopped = take_new(
+        dataset,
+        &first,
+        &mut settings,
+        &mut excluded,
+        screen_settings,
+    );
+    let mut rounds = 0;
+    loop {
+        let result = Calibrator::new(dataset, nominal)
+            .settings(settings.clone())
+            .run()?;
+        rounds += 1;
+        let screening = screen_result(dataset, &result, screen_settings);
+        let before = excluded.len();
+        if stopped.is_none() && rounds < screen_settings.max_rounds {
+            stopped = take_new(
+                dataset,
+                &screening,
+                &mut settings,
+                &mut excluded,
+                screen_settings,
+            );
+        }
+        if excluded.len() == before {
+            excluded.sort_by_key(|f| f.config);
+            return Ok(AutoExclusion {
+                excluded,
+                result,
+                screening,
+                rounds,
+                stopped,
+            });
+        }
+    }
+}
+
+/// Add the newly suspect configurations of `screening` to the exclusions, within the per-arm cap;
+/// returns why it stopped short, if it did.
+fn take_new(
+    dataset: &Dataset,
+    screening: &Screening,
+    settings: &mut CalibrationSettings,
+    excluded: &mut Vec<Flag>,
+    screen_settings: &ScreenSettings,
+) -> Option<String> {
+    let mut stopped = None;
+    for side in Side::BOTH {
+        let n = dataset.arm(side).measurements.len();
+        let cap = (screen_settings.max_excluded_fraction * n as f64).floor() as usize;
+        let mut new: Vec<&Flag> = screening
+            .worst_per_config()
+            .into_iter()
+            .filter(|f| f.config.side == side && !settings.exclude.contains(&f.config))
+            .collect();
+        new.sort_by(|a, b| b.severity().total_cmp(&a.severity()));
+        let already = excluded.iter().filter(|f| f.config.side == side).count();
+        let room = cap.saturating_sub(already);
+        if new.len() > room {
+            stopped = Some(format!(
+                "{side} arm: {} more configurations are suspect, but at most {:.0}% of an arm's {n} \
+                 configurations ({cap}) are excluded automatically, so none of them was; so many \
+                 suspects suggest a problem with the whole measurement (a moved tracker, a wrong robot \
+                 description, wrong units) rather than a few outliers: look at the flags",
+                new.len(),
+                100.0 * screen_settings.max_excluded_fraction
+            ));
+            continue;
+        }
+        for f in new {
+            settings.exclude.push(f.config);
+            excluded.push(f.clone());
+        }
+    }
+    stopped
+}
+
+/// The `quality` record of a parameter file: the flags of the final screening and the configurations
+/// left out.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct QualityRecord {
+    pub flags: Vec<Flag>,
+    pub findings: Vec<Finding>,
+    /// `arm`, `id` and why, for every configuration left out.
+    pub excluded: Vec<ExcludedRecord>,
+}
+
+/// One excluded configuration in a [`QualityRecord`].
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ExcludedRecord {
+    pub arm: Side,
+    pub id: String,
+    /// The flag's reason, or `"excluded by the user"`.
+    pub reason: String,
+}
+
+impl QualityRecord {
+    /// The record of a screening and the exclusions in `exclude` (reasons from the screening's flags).
+    pub fn new(dataset: &Dataset, screening: &Screening, exclude: &[ConfigId]) -> Self {
+        let by_config = screening.by_config();
+        let excluded = exclude
+            .iter()
+            .filter_map(|c| {
+                let m = dataset.arm(c.side).measurements.get(c.index)?;
+                Some(ExcludedRecord {
+                    arm: c.side,
+                    id: m.id.clone(),
+                    reason: by_config
+                        .get(c)
+                        .map_or_else(|| "excluded by the user".into(), |f| f[0].reason.clone()),
+                })
+            })
+            .collect();
+        Self {
+            flags: screening.flags.clone(),
+            findings: screening.findings.clone(),
+            excluded,
+        }
+    }
+}
+
+/// Robust statistics shared by the checks.
+pub(crate) mod stats {
+    /// Median (NaN for no values).
+    pub fn median(values: &[f64]) -> f64 {
+        let mut v: Vec<f64> = values.iter().copied().filter(|x| !x.is_nan()).collect();
+        if v.is_empty() {
+            return f64::NAN;
+        }
+        v.sort_by(f64::total_cmp);
+        let n = v.len();
+        if n % 2 == 1 {
+            v[n / 2]
+        } else {
+            0.5 * (v[n / 2 - 1] + v[n / 2])
+        }
+    }
+
+    /// Robust standard deviation: 1.4826 × the median absolute deviation from the median.
+    pub fn mad_sigma(values: &[f64]) -> f64 {
+        let m = median(values);
+        let dev: Vec<f64> = values.iter().map(|x| (x - m).abs()).collect();
+        1.4826 * median(&dev)
+    }
+}
