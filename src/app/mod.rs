@@ -115,6 +115,8 @@ pub struct WorkbenchApp {
     /// Side and bottom panels shown (off: the viewport fills the window).
     panels_visible: bool,
     frame_stats: Option<FrameStats>,
+    /// Fault injection for tests: the next calibration worker panics.
+    panic_in_next_calibration: bool,
 }
 
 impl WorkbenchApp {
@@ -163,6 +165,7 @@ impl WorkbenchApp {
             screenshot_pending: false,
             panels_visible: true,
             frame_stats: FrameStats::from_env(),
+            panic_in_next_calibration: false,
         };
         let dataset = launch.dataset.unwrap_or_else(bundled_example_path);
         app.apply(Command::OpenDataset(dataset));
@@ -233,6 +236,13 @@ impl WorkbenchApp {
     /// Replace the file-dialog seam (a browser build, or tests).
     pub fn set_file_access(&mut self, files: Box<dyn FileAccess>) {
         self.files = files;
+    }
+
+    /// Fault injection for tests: the next calibration's worker panics in its first step (a bug in
+    /// the engine, as the workbench would meet it).
+    #[doc(hidden)]
+    pub fn inject_panic_in_next_calibration(&mut self) {
+        self.panic_in_next_calibration = true;
     }
 
     // ---- events ----------------------------------------------------------------------------------
@@ -307,6 +317,19 @@ impl WorkbenchApp {
             let outcome = match event {
                 TaskEvent::Calibration(progress) => return self.on_calibration_progress(progress),
                 TaskEvent::Live(live) => return self.on_live(*live),
+                TaskEvent::Nominal(analysis) => {
+                    if let Some(session) = &mut self.session {
+                        session.nominal = *analysis;
+                        self.generation += 1;
+                    }
+                    return;
+                }
+                TaskEvent::AutoExcluded(summary) => {
+                    if let Some(session) = &mut self.session {
+                        session.auto_exclusion = Some(summary);
+                    }
+                    return;
+                }
                 TaskEvent::Calibrated(outcome) => outcome,
                 TaskEvent::Failed(message) => Outcome::Failed(message),
                 TaskEvent::Loaded(_) | TaskEvent::Meshes(_) => return,
@@ -442,7 +465,13 @@ impl WorkbenchApp {
                     .collect();
                 // The solver's own history is complete even if progress events were dropped.
                 self.history = calibrated.result.history.clone();
+                let excluded = match calibrated.result.settings.exclude.len() {
+                    0 => String::new(),
+                    n => format!(" {n} configuration(s) left out."),
+                };
+                let advice = excluded + &advice;
                 if let Some(session) = &mut self.session {
+                    session.exclude = calibrated.result.settings.exclude.clone();
                     session.calibrated = Some(*calibrated);
                     self.viewport.auto_scale(session);
                 }
@@ -532,6 +561,13 @@ impl eframe::App for WorkbenchApp {
         }
         if let Some(prompt) = &mut self.prompt {
             commands.extend(prompt.ui(ui.ctx()));
+        }
+        // X excludes (or includes again) the selected configuration, picked in the table or the view.
+        if let Some(config) = self.selection
+            && !ui.ctx().egui_wants_keyboard_input()
+            && ui.ctx().input(|i| i.key_pressed(egui::Key::X))
+        {
+            commands.push(Command::ToggleExclude(config));
         }
         egui::CentralPanel::default()
             .frame(egui::Frame::NONE)

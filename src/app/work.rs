@@ -1,17 +1,23 @@
 //! What the background tasks do: load a dataset into a [`Session`] (one step), load and pack its
 //! robot's meshes ([`MeshWork`], one step), and calibrate one (a [`CalibrationRun`], one outer
 //! iteration per step; now and then one more step evaluates the model the run has reached, for the
-//! live view: [`LiveRate`]).
+//! live view: [`LiveRate`]), or apply the Auto-exclude rule ([`AutoExcludeWork`], one step).
+//!
+//! A calibration leaves out the session's excluded configurations (`CalibrationSettings::exclude`);
+//! when they differ from those of the nominal figures shown, its first step re-evaluates the nominal
+//! model without them ([`TaskEvent::Nominal`]), so "before" and "after" figures are of the same
+//! configurations, as in `dualcal calibrate --exclude`.
 
-use super::session::{Calibrated, LiveFigures, LoadedMeshes, Session};
+use super::session::{AutoExcludeSummary, Calibrated, LiveFigures, LoadedMeshes, Session};
 use super::task::{Execution, Step, TaskContext, TaskEvent, Work};
 use super::viewport::mesh_pack::{MeshKey, PackedMeshes};
 use crate::analysis::Analysis;
 use crate::dataset::Dataset;
 use crate::kinematics::DualArmModel;
 use crate::meshes::{GeometryKind, MeshWarning};
+use crate::quality::{self, ScreenSettings};
 use crate::robot::{RobotDescription, ShapeKind};
-use crate::side::Side;
+use crate::side::{ConfigId, Side};
 use crate::solver::{
     CalibrationEvent, CalibrationResult, CalibrationRun, CalibrationSettings, Calibrator,
     IterationRecord, Observer, Progress, Stage, StageSummary, Termination,
@@ -290,15 +296,20 @@ impl Observer for Reporter<'_> {
 }
 
 /// The two-step calibration of a session's nominal model. The first step sets the run up (the
-/// identifiability analysis); each further step is one outer iteration, or the evaluation of a live
-/// snapshot ([`TaskEvent::Live`]).
+/// identifiability analysis; the nominal figures without the excluded configurations, if those
+/// changed); each further step is one outer iteration, or the evaluation of a live snapshot
+/// ([`TaskEvent::Live`]). The end screens the result ([`quality::screen_result`]).
 pub struct CalibrationWork {
     dataset: Arc<Dataset>,
     nominal: DualArmModel,
     settings: CalibrationSettings,
     body_from_left_base: Isometry3<f64>,
+    /// The exclusions of the nominal figures the session shows.
+    nominal_excluded: Vec<ConfigId>,
     run: Option<CalibrationRun>,
     live: LiveSchedule,
+    /// Fault injection for tests: panic in the first step.
+    pub panic_at_start: bool,
 }
 
 impl CalibrationWork {
@@ -308,9 +319,20 @@ impl CalibrationWork {
             nominal: session.nominal.model.clone(),
             settings,
             body_from_left_base: session.body_from_left_base(),
+            nominal_excluded: session.nominal.excluded.clone(),
             run: None,
             live: LiveSchedule::new(rate),
+            panic_at_start: false,
         }
+    }
+
+    fn analysis(&self, model: &DualArmModel) -> anyhow::Result<Analysis> {
+        Analysis::compute_excluding(
+            &self.dataset,
+            model,
+            &self.body_from_left_base,
+            &self.settings.exclude,
+        )
     }
 
     fn outcome(&self, result: CalibrationResult) -> Outcome {
@@ -324,16 +346,52 @@ impl CalibrationWork {
                 iterations: s.iterations,
             };
         }
-        match Analysis::compute(&self.dataset, &result.calibrated, &self.body_from_left_base) {
-            Ok(analysis) => Outcome::Calibrated(Box::new(Calibrated { result, analysis })),
-            Err(e) => Outcome::Failed(format!("calibrated model: {e:#}")),
+        let analysis = self.analysis(&result.calibrated);
+        calibrated_outcome(&self.dataset, result, analysis, None)
+    }
+}
+
+/// A finished calibration with its figures and its screening.
+fn calibrated_outcome(
+    dataset: &Dataset,
+    result: CalibrationResult,
+    analysis: anyhow::Result<Analysis>,
+    screening: Option<quality::Screening>,
+) -> Outcome {
+    match analysis {
+        Ok(analysis) => {
+            let screening = screening.unwrap_or_else(|| {
+                quality::screen_result(dataset, &result, &ScreenSettings::default())
+            });
+            Outcome::Calibrated(Box::new(Calibrated {
+                result,
+                analysis,
+                screening,
+            }))
         }
+        Err(e) => Outcome::Failed(format!("calibrated model: {e:#}")),
     }
 }
 
 impl Work for CalibrationWork {
     fn step(&mut self, task: &TaskContext) -> Step {
         let Some(run) = &mut self.run else {
+            assert!(
+                !self.panic_at_start,
+                "fault injected into the calibration worker"
+            );
+            if self.nominal_excluded != self.settings.exclude {
+                match self.analysis(&self.nominal) {
+                    Ok(analysis) => task.report(TaskEvent::Nominal(Box::new(analysis))),
+                    Err(e) => {
+                        task.report(TaskEvent::Calibrated(Outcome::Failed(format!(
+                            "nominal figures without the excluded configurations: {e:#}"
+                        ))));
+                        return Step::Done;
+                    }
+                }
+                self.nominal_excluded = self.settings.exclude.clone();
+            }
             let started = Calibrator::new(&self.dataset, &self.nominal)
                 .settings(self.settings.clone())
                 .cancel(task.cancel_flag().clone())
@@ -353,9 +411,12 @@ impl Work for CalibrationWork {
             let started = Instant::now();
             // A model the figures cannot be computed of (e.g. a degenerate reflector triangle on the
             // way) is not shown; the view keeps the previous one.
-            if let Ok(analysis) =
-                Analysis::compute(&self.dataset, &snapshot.model, &self.body_from_left_base)
-            {
+            if let Ok(analysis) = Analysis::compute_excluding(
+                &self.dataset,
+                &snapshot.model,
+                &self.body_from_left_base,
+                &self.settings.exclude,
+            ) {
                 let cost = started.elapsed();
                 task.report(TaskEvent::Live(Box::new(LiveFigures {
                     stage: snapshot.stage,
@@ -379,6 +440,72 @@ impl Work for CalibrationWork {
             Err(e) => Outcome::Failed(e.to_string()),
         };
         task.report(TaskEvent::Calibrated(outcome));
+        Step::Done
+    }
+}
+
+/// The Auto-exclude rule ([`quality::auto_exclude`], `dualcal calibrate --auto-exclude`): screen, leave
+/// the suspects out, fit, screen again, … in one step (a few fits; no live view, not cancellable
+/// midway). Reports the nominal figures without the configurations it removed, what it removed
+/// ([`TaskEvent::AutoExcluded`]) and the calibration it ended with.
+pub struct AutoExcludeWork {
+    dataset: Arc<Dataset>,
+    nominal: DualArmModel,
+    settings: CalibrationSettings,
+    body_from_left_base: Isometry3<f64>,
+}
+
+impl AutoExcludeWork {
+    /// `settings.exclude` (the user's own exclusions) is kept.
+    pub fn new(session: &Session, settings: CalibrationSettings) -> Self {
+        Self {
+            dataset: session.dataset.clone(),
+            nominal: session.nominal.model.clone(),
+            settings,
+            body_from_left_base: session.body_from_left_base(),
+        }
+    }
+}
+
+impl Work for AutoExcludeWork {
+    fn step(&mut self, task: &TaskContext) -> Step {
+        let auto = match quality::auto_exclude(
+            &self.dataset,
+            &self.nominal,
+            &self.settings,
+            &ScreenSettings::default(),
+        ) {
+            Ok(auto) => auto,
+            Err(e) => {
+                task.report(TaskEvent::Calibrated(Outcome::Failed(e.to_string())));
+                return Step::Done;
+            }
+        };
+        let exclude = &auto.result.settings.exclude;
+        let figures = |model: &DualArmModel| {
+            Analysis::compute_excluding(&self.dataset, model, &self.body_from_left_base, exclude)
+        };
+        match figures(&self.nominal) {
+            Ok(nominal) => task.report(TaskEvent::Nominal(Box::new(nominal))),
+            Err(e) => {
+                task.report(TaskEvent::Calibrated(Outcome::Failed(format!(
+                    "nominal figures without the excluded configurations: {e:#}"
+                ))));
+                return Step::Done;
+            }
+        }
+        task.report(TaskEvent::AutoExcluded(AutoExcludeSummary {
+            excluded: auto.excluded.clone(),
+            rounds: auto.rounds,
+            stopped: auto.stopped.clone(),
+        }));
+        let analysis = figures(&auto.result.calibrated);
+        task.report(TaskEvent::Calibrated(calibrated_outcome(
+            &self.dataset,
+            auto.result,
+            analysis,
+            Some(auto.screening),
+        )));
         Step::Done
     }
 }

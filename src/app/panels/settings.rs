@@ -215,6 +215,9 @@ fn robot_summary_ui(ui: &mut egui::Ui, session: &Session) {
                 .size(10.5),
         )
         .on_hover_text(hover);
+        egui::CollapsingHeader::new(format!("{side} joints and parameters"))
+            .id_salt(("robot arm", side.name()))
+            .show(ui, |ui| arm_details_ui(ui, session, side));
     }
     ui.label(
         RichText::new(if robot.is_builtin() {
@@ -266,6 +269,81 @@ fn robot_summary_ui(ui: &mut egui::Ui, session: &Session) {
                 ui.label(RichText::new(w.as_str()).small().color(WARNING_COLOR));
             }
         });
+    }
+}
+
+/// One arm's joints (chain order, the CSV's `q1 … qN`) with their limits, and its calibration
+/// parameters: how many, which distances cannot identify (and why), and after a calibration which
+/// were identified.
+fn arm_details_ui(ui: &mut egui::Ui, session: &Session, side: Side) {
+    let arm = &session.robot.arms()[side];
+    egui::Grid::new(("joints", side.name()))
+        .num_columns(3)
+        .striped(true)
+        .show(ui, |ui| {
+            for (k, (name, (lo, hi))) in arm
+                .joint_names()
+                .iter()
+                .zip(arm.joint_limits_rad())
+                .enumerate()
+            {
+                ui.label(RichText::new(format!("q{}", k + 1)).small());
+                ui.label(RichText::new(name.as_str()).small().monospace());
+                ui.label(
+                    RichText::new(format!("{:.1}° … {:.1}°", lo.to_degrees(), hi.to_degrees()))
+                        .small(),
+                )
+                .on_hover_text(format!("{lo:.4} … {hi:.4} rad"));
+                ui.end_row();
+            }
+        });
+    let model = session.nominal.model.arm(side);
+    let n = model.param_count();
+    let unidentifiable: Vec<(String, String)> = (0..n)
+        .filter_map(|k| {
+            model
+                .unidentifiable_reason(k)
+                .map(|why| (model.param_name(k), why))
+        })
+        .collect();
+    ui.label(
+        RichText::new(format!(
+            "{n} parameters, {} identifiable by distances, {} not:",
+            n - unidentifiable.len(),
+            unidentifiable.len()
+        ))
+        .small(),
+    )
+    .on_hover_text(
+        "The arm's calibration parameters (docs/solver.md): the kinematic ones and the nine reflector \
+         coordinates. Those distances between measured points cannot see are never identified.",
+    );
+    for (name, why) in &unidentifiable {
+        ui.label(
+            RichText::new(format!("{name}: {why}"))
+                .small()
+                .color(Color32::GRAY),
+        );
+    }
+    if let Some(c) = &session.calibrated
+        && let Some(report) = &c.result.identifiability[side]
+    {
+        ui.label(
+            RichText::new(format!(
+                "last calibration: {} of {n} identified (condition {:.2e} → {:.2e}); fixed:",
+                report.free.len(),
+                report.condition_before,
+                report.condition_after
+            ))
+            .small(),
+        );
+        for f in &report.fixed {
+            ui.label(
+                RichText::new(format!("{}: {}", f.name, f.reason))
+                    .small()
+                    .color(Color32::GRAY),
+            );
+        }
     }
 }
 

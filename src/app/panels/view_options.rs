@@ -59,6 +59,9 @@ fn layers_ui(ui: &mut egui::Ui, o: &mut SceneOptions) {
             .on_hover_text("Model reflector triangles (forward kinematics)");
         ui.checkbox(&mut o.show_vectors, "error vectors")
             .on_hover_text("From each model point towards the measured one, exaggerated");
+        ui.checkbox(&mut o.show_flags, "flags").on_hover_text(
+            "Configurations the screening flags in magenta to red by severity (size over threshold), outlined",
+        );
     });
     ui.horizontal(|ui| {
         ui.checkbox(&mut o.show_cal, "cal");

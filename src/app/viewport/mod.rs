@@ -88,6 +88,11 @@ impl ViewportState {
         self.poses = FIRST_POSES;
     }
 
+    /// The scene last built (what the GPU draws).
+    pub fn scene(&self) -> &SceneData {
+        &self.scene
+    }
+
     /// Frame a new robot and its data: the built-in robot's default view, any other robot seen from
     /// the same direction at a distance that fits its links and the measured points.
     pub fn frame(&mut self, session: &Session) {
@@ -443,6 +448,24 @@ impl ViewportState {
                 self.options.exaggeration, self.options.exaggeration
             ),
         );
+        if let Some(session) = session
+            && self.options.show_flags
+        {
+            let flagged = self.options.screening(session).suspects().len();
+            if flagged > 0 {
+                let at = Pos2::new(bar.left(), bg.top() - 6.0);
+                let galley = painter.layout_no_wrap(
+                    format!(
+                        "{flagged} flagged: magenta to red by severity; excluded: grey (X toggles)"
+                    ),
+                    egui::FontId::proportional(12.0),
+                    crate::app::colormap::flag_color32(2.0),
+                );
+                let r = Rect::from_min_size(at - Vec2::new(0.0, galley.size().y), galley.size());
+                painter.rect_filled(r.expand(4.0), 4.0, Color32::from_black_alpha(150));
+                painter.galley(r.min, galley, Color32::WHITE);
+            }
+        }
         if session.is_none() {
             painter.text(
                 Pos2::new(rect.center().x, rect.top() + rect.height() * 0.8),

@@ -11,6 +11,7 @@ use crate::analysis::{Analysis, ConfigRow};
 use crate::app::colormap;
 use crate::app::session::Session;
 use crate::dataset::Split;
+use crate::quality::Screening;
 use crate::robot::{GeometryKind, PlacedShape, RobotDescription, ShapeKind};
 use crate::side::{ConfigId, PerSide};
 use nalgebra::{Isometry3, Matrix3, Matrix4, Vector3};
@@ -121,6 +122,8 @@ pub struct SceneOptions {
     pub color_max_mm: f32,
     /// Draw the calibrated model (if any) rather than the nominal one.
     pub use_calibrated: bool,
+    /// Colour the configurations the screening flags by severity (else by their error).
+    pub show_flags: bool,
 }
 
 impl Default for SceneOptions {
@@ -137,6 +140,7 @@ impl Default for SceneOptions {
             exaggeration: 50.0,
             color_max_mm: 2.0,
             use_calibrated: true,
+            show_flags: true,
         }
     }
 }
@@ -155,6 +159,14 @@ impl SceneOptions {
     pub fn analysis<'a>(&self, session: &'a Session) -> &'a Analysis {
         session.analysis(self.use_calibrated)
     }
+
+    /// The screening that goes with the model drawn: the last calibration's, or the nominal one.
+    pub fn screening<'a>(&self, session: &'a Session) -> &'a Screening {
+        match (&session.calibrated, self.use_calibrated) {
+            (Some(c), true) => &c.screening,
+            _ => &session.screening,
+        }
+    }
 }
 
 fn srgb_linear(rgb: [u8; 3], alpha: f32) -> [f32; 4] {
@@ -167,7 +179,7 @@ const PLACEHOLDER_HALF_MM: f64 = 20.0;
 /// Colour of a placeholder box while the meshes load.
 const LOADING_RGBA: [f32; 4] = [0.35, 0.36, 0.38, 1.0];
 /// Colour of a placeholder box for a mesh that could not be loaded.
-const MISSING_RGBA: [f32; 4] = [0.8, 0.3, 0.8, 1.0];
+const MISSING_RGBA: [f32; 4] = [0.85, 0.5, 0.16, 1.0];
 
 /// A stand-in (a missing visual mesh drawn as its link's collision geometry): the visual's colour
 /// turned towards amber, so it reads as "not the real mesh".
@@ -449,6 +461,8 @@ pub fn build_scene(
     );
     let max = options.color_max_mm.max(1e-6);
     let model_color = [0.35, 0.37, 0.40, 0.8];
+    let excluded_color = [0.25, 0.25, 0.25, 0.5];
+    let flags = options.screening(session).by_config();
     for row in options
         .analysis(session)
         .configs
@@ -458,19 +472,42 @@ pub fn build_scene(
         let selected = selection == Some(row.config);
         let errors = row.point_errors_mm();
         let mean = (errors[0] + errors[1] + errors[2]) / 3.0;
+        // A flagged configuration in its flag's colour (severity), outlined; an excluded one grey.
+        let flag = flags
+            .get(&row.config)
+            .filter(|_| options.show_flags && !row.excluded)
+            .map(|f| colormap::flag_linear(f[0].severity()));
         if options.show_measured {
-            let [r, g, b] = colormap::linear(mean as f32 / max);
-            let alpha = if selected { 0.95 } else { 0.3 };
+            let ([r, g, b], alpha) = match (row.excluded, flag) {
+                (true, _) => ([0.3; 3], if selected { 0.8 } else { 0.15 }),
+                (false, Some(c)) => (c, if selected { 0.95 } else { 0.6 }),
+                (false, None) => (
+                    colormap::linear(mean as f32 / max),
+                    if selected { 0.95 } else { 0.3 },
+                ),
+            };
             for p in row.measured_body_mm {
                 scene.triangles.push(ColorVertex {
                     position: p.cast::<f32>().into(),
                     color: [r, g, b, alpha],
                 });
             }
+            if let Some([r, g, b]) = flag {
+                for k in 0..3 {
+                    line(
+                        &mut scene.lines,
+                        row.measured_body_mm[k],
+                        row.measured_body_mm[(k + 1) % 3],
+                        [r, g, b, 1.0],
+                    );
+                }
+            }
         }
         if options.show_model {
             let c = if selected {
                 [1.0, 1.0, 1.0, 1.0]
+            } else if row.excluded {
+                excluded_color
             } else {
                 model_color
             };
@@ -489,9 +526,14 @@ pub fn build_scene(
                 .zip(row.model_body_mm)
                 .zip(row.measured_body_mm)
             {
-                let [r, g, b] = colormap::linear(*error as f32 / max);
+                let color = if row.excluded {
+                    excluded_color
+                } else {
+                    let [r, g, b] = colormap::linear(*error as f32 / max);
+                    [r, g, b, 1.0]
+                };
                 let to = from + (measured - from) * options.exaggeration as f64;
-                line(&mut scene.lines, from, to, [r, g, b, 1.0]);
+                line(&mut scene.lines, from, to, color);
             }
         }
         if selected {
