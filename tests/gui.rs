@@ -1025,3 +1025,78 @@ fn meshes_warnings(session: &dualcal::app::session::Session) -> usize {
         _ => 0,
     }
 }
+
+/// Not a test: the README's screenshot of the workbench on a dataset of your own (e.g. one simulated
+/// with the public YuMi description, see docs/performance.md), after Auto-exclude, the most severe
+/// flagged configuration selected (its row struck through in the table, its flag beside it). Writes a PNG (window size `DUALCAL_SCREENSHOT_SIZE`, default
+/// 1280x800). Run with
+/// `DUALCAL_SCREENSHOT_DATASET=DIR DUALCAL_SCREENSHOT_OUT=docs/workbench-yumi.png cargo test --release --test gui workbench_screenshot -- --ignored --nocapture`.
+#[test]
+#[ignore]
+fn workbench_screenshot() {
+    let dataset = std::env::var_os("DUALCAL_SCREENSHOT_DATASET")
+        .map(std::path::PathBuf::from)
+        .expect("set DUALCAL_SCREENSHOT_DATASET to a dataset directory");
+    let out = std::env::var_os("DUALCAL_SCREENSHOT_OUT")
+        .map_or_else(|| "target/workbench.png".into(), std::path::PathBuf::from);
+    let size = std::env::var("DUALCAL_SCREENSHOT_SIZE").unwrap_or_else(|_| "1280x800".into());
+    let (w, h) = size
+        .split_once('x')
+        .and_then(|(w, h)| Some((w.parse::<f32>().ok()?, h.parse::<f32>().ok()?)))
+        .expect("DUALCAL_SCREENSHOT_SIZE as WxH");
+    let mut harness = Harness::builder()
+        .with_size(eframe::egui::Vec2::new(w, h))
+        .wgpu()
+        .build_eframe(move |cc| {
+            WorkbenchApp::new(
+                cc,
+                AppLaunch {
+                    dataset: Some(dataset),
+                    urdf: None,
+                },
+            )
+        });
+    loaded(&mut harness);
+    step_until(&mut harness, MAX_LOAD_FRAMES, "loading the meshes", |app| {
+        !app.is_loading_meshes()
+    });
+    harness.get_by_label("Auto-exclude").click();
+    harness.step();
+    step_until(&mut harness, MAX_RUN_FRAMES, "auto-exclude", |app| {
+        !app.is_calibrating()
+    });
+    assert!(
+        harness.state().errors().is_empty(),
+        "{:?}",
+        harness.state().errors()
+    );
+    let worst = harness
+        .state()
+        .session()
+        .unwrap()
+        .screening
+        .worst_per_config()
+        .into_iter()
+        .max_by(|a, b| a.severity().total_cmp(&b.severity()))
+        .map(|f| f.config);
+    harness.state_mut().apply(Command::Select {
+        config: worst,
+        reveal_in_table: true,
+    });
+    {
+        // Closer to the robot, the verification configurations hidden: the robot and the flagged
+        // triangles stay readable at 1280 × 800.
+        let view = harness.state_mut().viewport_mut();
+        view.camera.distance_mm *= 0.7;
+        view.options.show_ver = false;
+    }
+    harness.run_steps(4);
+    let image = harness.render().expect("render");
+    image.save(&out).expect("write the PNG");
+    println!(
+        "wrote {} ({}x{})",
+        out.display(),
+        image.width(),
+        image.height()
+    );
+}

@@ -41,10 +41,10 @@ impl Column {
         Column::Id,
         Column::Arm,
         Column::Split,
+        Column::Flag,
         Column::WorstPos,
         Column::WorstOri,
         Column::Rigidity,
-        Column::Flag,
     ];
 
     fn title(self) -> &'static str {
