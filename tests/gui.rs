@@ -747,13 +747,20 @@ fn excluding_a_flagged_configuration_resolves_at_once_and_changes_the_figures() 
             .iter()
             .max_by(|a, b| a.severity().total_cmp(&b.severity()))
             .unwrap();
-        (f.config, f.id.clone(), f.kind.label().to_string())
+        (
+            f.config,
+            f.id.clone(),
+            format!("{} {:.2}", f.kind.label(), f.size_mm),
+        )
     };
     // The count, and the flag column sorted most severe first.
     harness.get_by_label_contains("flagged (nominal model), 0 excluded");
     harness.get_by_label("flag (mm)").click();
     harness.run_steps(2);
-    harness.get_by_label_contains(&flagged_reason);
+    assert!(
+        harness.query_all_by_label_contains(&flagged_reason).count() >= 1,
+        "no {flagged_reason} flag shown"
+    );
     // The 3D view draws the flagged configurations in their flag colour, outlined.
     let flag_lines = |app: &WorkbenchApp| {
         let session = app.session().unwrap();
