@@ -687,18 +687,51 @@ fn calibrate_cmd(a: &CalibrateArgs) -> Result<()> {
 }
 
 fn print_identifiability(result: &CalibrationResult) {
+    let settings = &result.settings;
+    outln!(
+        "\nmethod: step 1 `{}`, step 2 `{}`",
+        settings.method.name(),
+        settings.base_method.name()
+    );
     for (side, rep) in result.identifiability.iter() {
         let Some(rep) = rep else { continue };
+        let extra = if settings.method.is_absolute() {
+            format!(" and the 6 of tracker_from_{}_base", side.name())
+        } else {
+            String::new()
+        };
         outln!(
-            "\n{side} arm: {} of {} parameters identified; condition number {:.3e} → {:.3e}",
+            "\n{side} arm: {} of {} parameters identified{extra}; condition number {:.3e} → {:.3e}",
             rep.free.len(),
             result.nominal.arm(side).param_count(),
             rep.condition_before,
             rep.condition_after
         );
+        if let Some(r) = result.reflector_used[side] {
+            outln!(
+                "  reflector {r} used (distance-single); the other two reflectors' coordinates are \
+                 nominal: the flange's orientation is not identified"
+            );
+        }
         for f in &rep.fixed {
             outln!("  fixed {:<8} {}", f.name, f.reason);
         }
+    }
+    for (side, t) in result.tracker_from_base.iter() {
+        let Some(t) = t else { continue };
+        let v = t.translation.vector;
+        let w = t.rotation.scaled_axis();
+        outln!(
+            "tracker_from_{}_base: translation ({:.3}, {:.3}, {:.3}) mm, rotation vector ({:.6}, \
+             {:.6}, {:.6}) rad",
+            side.name(),
+            v.x,
+            v.y,
+            v.z,
+            w.x,
+            w.y,
+            w.z
+        );
     }
     for s in &result.stages {
         outln!(
