@@ -6,7 +6,6 @@
 
 mod common;
 #[path = "fixtures/robots.rs"]
-#[allow(dead_code)]
 mod robots;
 
 use dualcal::dataset::{Dataset, Split};
@@ -98,9 +97,8 @@ fn each_new_method_recovers_known_parameters_from_noise_free_data() {
             let arm = r.calibrated.arm(side);
             for m in &sim.dataset.arm(side).measurements {
                 let p = arm.reflector_fk(&m.q_rad).points_mm;
-                for k in 0..3 {
-                    let e = (found.transform_point(&p[k].into()).coords - m.tracker_points_mm[k])
-                        .norm();
+                for (pk, mk) in p.iter().zip(&m.tracker_points_mm) {
+                    let e = (found.transform_point(&(*pk).into()).coords - mk).norm();
                     assert!(e < 1e-5, "{method:?} {side} {}: {e} mm", m.id);
                 }
             }

@@ -163,7 +163,7 @@ impl BaseTransform {
 
     /// Checked (finite, a rotation within [`ROTATION_TOLERANCE`], a plausible translation) and
     /// re-orthonormalised; `field` names it in messages.
-    fn to_isometry(&self, field: &str, scale: Scale) -> Result<Isometry3<f64>, ParamsError> {
+    fn checked_isometry(&self, field: &str, scale: Scale) -> Result<Isometry3<f64>, ParamsError> {
         finite(&format!("{field}.translation"), &self.translation)?;
         finite(&format!("{field}.rotation"), self.rotation.as_flattened())?;
         let m = Matrix3::from_fn(|i, j| self.rotation[i][j]);
@@ -308,7 +308,7 @@ impl ParamsFile {
     /// re-orthonormalised.
     fn base_transform(&self, scale: Scale) -> Result<Isometry3<f64>, ParamsError> {
         self.right_base_in_left
-            .to_isometry("right_base_in_left", scale)
+            .checked_isometry("right_base_in_left", scale)
     }
 
     /// The tracker frames, checked like `right_base_in_left`.
@@ -320,11 +320,11 @@ impl ParamsFile {
         Ok(PerSide::new(
             frames
                 .tracker_from_left_base
-                .map(|b| b.to_isometry("tracker_frames.tracker_from_left_base", scale))
+                .map(|b| b.checked_isometry("tracker_frames.tracker_from_left_base", scale))
                 .transpose()?,
             frames
                 .tracker_from_right_base
-                .map(|b| b.to_isometry("tracker_frames.tracker_from_right_base", scale))
+                .map(|b| b.checked_isometry("tracker_frames.tracker_from_right_base", scale))
                 .transpose()?,
         ))
     }
