@@ -535,10 +535,9 @@ impl NotConverged {
     pub const EXIT_CODE: u8 = 2;
 }
 
-fn calibrate_cmd(a: &CalibrateArgs) -> Result<()> {
-    let ds = load_dataset(&a.dataset)?;
-    // Never write over an input: the dataset's files, its robot description, or one output over
-    // another.
+/// Refuse outputs that would write over an input (the dataset's files, its robot description) or
+/// over one another.
+fn refuse_overwrites(a: &CalibrateArgs, ds: &Dataset) -> Result<()> {
     let mut inputs: Vec<PathBuf> = ds.files().to_vec();
     inputs.extend(ds.robot.clone());
     for out in [Some(&a.out), a.urdf.as_ref(), a.overlay.as_ref()]
@@ -563,31 +562,25 @@ fn calibrate_cmd(a: &CalibrateArgs) -> Result<()> {
         crate::output::refuse_overwrite_input(overlay, &others)
             .context("--overlay names the same file as another output")?;
     }
-    let robot = robot_of(&ds)?;
-    check_limits(&ds, &robot)?;
-    if !a.quiet {
-        eprintln!("{}", describe_robot(&robot));
-    }
-    let nominal = robot.nominal_model(ds.nominal_reflectors_mm);
-    let mut settings = settings_from(a);
-    for spec in &a.exclude {
-        let config = ds
-            .config_by_id(spec.trim())
-            .map_err(|e| anyhow::anyhow!("--exclude: {e}"))?;
-        if !settings.exclude.contains(&config) {
-            settings.exclude.push(config);
-        }
-    }
+    Ok(())
+}
+
+/// Calibrate, with `--auto-exclude` or with progress lines; the result and its screening.
+fn fit_and_screen(
+    a: &CalibrateArgs,
+    ds: &Dataset,
+    nominal: &crate::kinematics::DualArmModel,
+    settings: CalibrationSettings,
+    before: &quality::Screening,
+) -> Result<(CalibrationResult, quality::Screening)> {
     let screen_settings = quality::ScreenSettings::default();
-    let before = quality::screen(&ds, &nominal, &screen_settings);
-    report_findings(&before)?;
-    let (result, after) = if a.auto_exclude {
+    Ok(if a.auto_exclude {
         if !a.quiet {
             eprintln!(
                 "--auto-exclude: screening, fitting and screening again (progress not shown)"
             );
         }
-        let auto = quality::auto_exclude(&ds, &nominal, &settings, &screen_settings)?;
+        let auto = quality::auto_exclude(ds, nominal, &settings, &screen_settings)?;
         outln!(
             "--auto-exclude: {} configuration(s) left out after {} fit(s){}",
             auto.excluded.len(),
@@ -604,7 +597,7 @@ fn calibrate_cmd(a: &CalibrateArgs) -> Result<()> {
     } else {
         print_flags(
             "Suspect configurations before fitting (nominal model)",
-            &before,
+            before,
             &settings.exclude,
         );
         let mut progress = |e: &CalibrationEvent| {
@@ -612,21 +605,17 @@ fn calibrate_cmd(a: &CalibrateArgs) -> Result<()> {
                 print_event(e)
             }
         };
-        let result = Calibrator::new(&ds, &nominal)
+        let result = Calibrator::new(ds, nominal)
             .settings(settings)
             .observer(&mut progress)
             .run()?;
-        let after = quality::screen_result(&ds, &result, &screen_settings);
+        let after = quality::screen_result(ds, &result, &screen_settings);
         (result, after)
-    };
-    print_identifiability(&result);
-    let excluded = &result.settings.exclude;
-    outln!("\n{}", comparison_table(&ds.excluding(excluded), &result)?);
-    print_flags(
-        "Suspect configurations with the calibrated model",
-        &after,
-        excluded,
-    );
+    })
+}
+
+/// Warn about suspect configurations the calibration kept, and about whole-file findings.
+fn warn_suspects_kept(after: &quality::Screening, excluded: &[ConfigId]) {
     let suspects_kept: Vec<String> = after
         .worst_per_config()
         .iter()
@@ -650,18 +639,25 @@ fn calibrate_cmd(a: &CalibrateArgs) -> Result<()> {
     for f in &after.findings {
         eprintln!("warning: {f}");
     }
-    let mut file = ParamsFile::from_calibration(&result, &ds);
-    file.quality = serde_json::to_value(quality::QualityRecord::new(&ds, &after, excluded)).ok();
-    file.write(&a.out)?;
-    outln!("parameters written to {}", a.out.display());
+    for f in &after.findings {
+        eprintln!("warning: {f}");
+    }
+}
+
+/// The calibrated URDF and the overlay, if asked for.
+fn write_robot_exports(
+    a: &CalibrateArgs,
+    robot: &RobotDescription,
+    result: &CalibrationResult,
+) -> Result<()> {
     if let Some(path) = &a.urdf {
-        let text = crate::urdf_export::calibrated_urdf(&robot, &result.calibrated)?;
+        let text = crate::urdf_export::calibrated_urdf(robot, &result.calibrated)?;
         crate::output::write_atomic(path, text.as_bytes())
             .with_context(|| format!("writing {}", path.display()))?;
         outln!("calibrated URDF written to {}", path.display());
     }
     if let Some(path) = &a.overlay {
-        let overlay = crate::urdf_export::calibrated_overlay(&robot, &result.calibrated)?;
+        let overlay = crate::urdf_export::calibrated_overlay(robot, &result.calibrated)?;
         let json = path
             .extension()
             .is_some_and(|e| e.eq_ignore_ascii_case("json"));
@@ -674,6 +670,44 @@ fn calibrate_cmd(a: &CalibrateArgs) -> Result<()> {
             .with_context(|| format!("writing {}", path.display()))?;
         outln!("calibration overlay written to {}", path.display());
     }
+    Ok(())
+}
+
+fn calibrate_cmd(a: &CalibrateArgs) -> Result<()> {
+    let ds = load_dataset(&a.dataset)?;
+    refuse_overwrites(a, &ds)?;
+    let robot = robot_of(&ds)?;
+    check_limits(&ds, &robot)?;
+    if !a.quiet {
+        eprintln!("{}", describe_robot(&robot));
+    }
+    let nominal = robot.nominal_model(ds.nominal_reflectors_mm);
+    let mut settings = settings_from(a);
+    for spec in &a.exclude {
+        let config = ds
+            .config_by_id(spec.trim())
+            .map_err(|e| anyhow::anyhow!("--exclude: {e}"))?;
+        if !settings.exclude.contains(&config) {
+            settings.exclude.push(config);
+        }
+    }
+    let before = quality::screen(&ds, &nominal, &quality::ScreenSettings::default());
+    report_findings(&before)?;
+    let (result, after) = fit_and_screen(a, &ds, &nominal, settings, &before)?;
+    print_identifiability(&result);
+    let excluded = &result.settings.exclude;
+    outln!("\n{}", comparison_table(&ds.excluding(excluded), &result)?);
+    print_flags(
+        "Suspect configurations with the calibrated model",
+        &after,
+        excluded,
+    );
+    warn_suspects_kept(&after, excluded);
+    let mut file = ParamsFile::from_calibration(&result, &ds);
+    file.quality = serde_json::to_value(quality::QualityRecord::new(&ds, &after, excluded)).ok();
+    file.write(&a.out)?;
+    outln!("parameters written to {}", a.out.display());
+    write_robot_exports(a, &robot, &result)?;
     if !result.is_converged() {
         let how: Vec<String> = result
             .stages
