@@ -242,7 +242,8 @@ fn quick_study_holds_the_papers_orderings_on_geometric_data() {
         "left.ori_rms",
     ];
     let collab_rows = ["collab.pos_rms", "collab.ori_rms"];
-    let checks: [(&str, &[HashMap<String, String>], &[&str], bool); 3] = [
+    type Rows = [HashMap<String, String>];
+    let checks: [(&str, &Rows, &[&str], bool); 3] = [
         ("table5", &t5, &arm_rows, false),
         ("table8", &t8, &collab_rows, false),
         ("table6", &t6, &collab_rows, true),
@@ -426,7 +427,7 @@ fn engine_comparison_records_failures_and_cancels() {
     .unwrap();
     assert!(c.nominal.report(Split::Ver).is_some());
     for m in &c.methods {
-        let e = m.outcome.as_ref().err().expect("too few configurations");
+        let e = m.outcome.as_ref().expect_err("too few configurations");
         assert!(e.contains("configurations"), "{}: {e}", m.entry.key);
     }
 

@@ -86,13 +86,13 @@ impl Plan {
                 "--unmodelled, --joint-error-mrad and --compliance-mrad-per-m simulate; not with --dataset"
             );
         }
-        if a.dataset.is_none() {
-            if let Some(&n) = sizes.iter().find(|&&n| n > configs.1 || n < 2) {
-                bail!(
-                    "--sizes: {n} calibration configurations; the simulation has {} per arm",
-                    configs.1
-                );
-            }
+        if a.dataset.is_none()
+            && let Some(&n) = sizes.iter().find(|&&n| n > configs.1 || n < 2)
+        {
+            bail!(
+                "--sizes: {n} calibration configurations; the simulation has {} per arm",
+                configs.1
+            );
         }
         let methods = match &a.methods {
             None => comparison::METHODS.to_vec(),
