@@ -54,7 +54,7 @@ pub enum Observes {
 /// One compared method: a name, its column in the paper, and the settings that select it.
 #[derive(Clone, Copy, Debug)]
 pub struct MethodEntry {
-    /// Short name, as in the CLI's `--method`/`--base-method` values and the CSV files.
+    /// Short name: `reproduce paper --methods`, the CSV files' `column`.
     pub key: &'static str,
     /// What it is, for tables and legends.
     pub label: &'static str,
@@ -72,10 +72,11 @@ impl MethodEntry {
         (self.configure)(common.clone())
     }
 
-    /// `label [paper]`, e.g. `minimax (Our method)`.
+    /// The label with the paper's column: `minimax (Our method)`, `distance-single [26]`.
     pub fn title(&self) -> String {
         match self.paper {
-            Some(p) => format!("{} {p}", self.label),
+            Some(p) if p.starts_with('[') => format!("{} {p}", self.label),
+            Some(p) => format!("{} ({p})", self.label),
             None => self.label.to_owned(),
         }
     }
@@ -89,7 +90,10 @@ pub const METHODS: &[MethodEntry] = &[
         paper: Some("Our method"),
         role: Role::Both,
         observes: Observes::ThreeReflectors,
-        configure: |s| CalibrationSettings { method: Method::Minimax, ..s },
+        configure: |s| CalibrationSettings {
+            method: Method::Minimax,
+            ..s
+        },
     },
     MethodEntry {
         key: "lsq",
@@ -97,7 +101,10 @@ pub const METHODS: &[MethodEntry] = &[
         paper: None,
         role: Role::Arms,
         observes: Observes::ThreeReflectors,
-        configure: |s| CalibrationSettings { method: Method::LeastSquares, ..s },
+        configure: |s| CalibrationSettings {
+            method: Method::LeastSquares,
+            ..s
+        },
     },
 ];
 
@@ -156,7 +163,11 @@ pub fn worst_reflector_mm(samples: &PairSamples) -> Vec<f32> {
     samples
         .pos_mm
         .chunks_exact(3)
-        .map(|d| d.iter().copied().fold(0.0, |w: f32, x| if x.abs() > w.abs() { x } else { w }))
+        .map(|d| {
+            d.iter()
+                .copied()
+                .fold(0.0, |w: f32, x| if x.abs() > w.abs() { x } else { w })
+        })
         .collect()
 }
 

@@ -52,7 +52,13 @@ fn quick_study() -> &'static Path {
     let (_, out) = DIR.get_or_init(|| {
         let dir = tempfile::tempdir().unwrap();
         let out = dir.path().join("paper");
-        ok(&["reproduce", "paper", "--quick", "--out", out.to_str().unwrap()]);
+        ok(&[
+            "reproduce",
+            "paper",
+            "--quick",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
         (dir, out)
     });
     out
@@ -122,7 +128,9 @@ fn quick_study_writes_every_table_and_figure() {
         );
         assert!(!rows.is_empty(), "{t}");
         for r in &rows {
-            let mean: f64 = r["mean"].parse().unwrap_or_else(|e| panic!("{t}: {r:?}: {e}"));
+            let mean: f64 = r["mean"]
+                .parse()
+                .unwrap_or_else(|e| panic!("{t}: {r:?}: {e}"));
             assert!(mean.is_finite() && mean >= 0.0, "{t}: {r:?}");
             assert_eq!(r["n_seeds"], "1", "{t}: {r:?}");
             if !r["paper_value"].is_empty() {
@@ -131,7 +139,10 @@ fn quick_study_writes_every_table_and_figure() {
         }
         // Nominal, the true parameters and every method of the table's comparison are columns.
         let columns: Vec<&str> = rows.iter().map(|r| r["column"].as_str()).collect();
-        assert!(columns.contains(&"nominal") && columns.contains(&"truth"), "{t}");
+        assert!(
+            columns.contains(&"nominal") && columns.contains(&"truth"),
+            "{t}"
+        );
         let base = t.starts_with("table6");
         for m in METHODS {
             let expected = if base {
@@ -152,8 +163,10 @@ fn quick_study_writes_every_table_and_figure() {
 
     let (header, fig4) = read_csv(&dir.join("fig4_configurations.csv"));
     assert_eq!(header[0], "n_configs");
-    let sizes: std::collections::BTreeSet<&str> =
-        fig4.iter().map(|r| r["n_configs"].as_str()).collect();
+    let sizes: std::collections::BTreeSet<usize> = fig4
+        .iter()
+        .map(|r| r["n_configs"].parse().unwrap())
+        .collect();
     assert!(sizes.len() >= 3, "{sizes:?}");
     for r in &fig4 {
         let v: f64 = r["pos_rms_mm_mean"].parse().unwrap();
@@ -161,14 +174,21 @@ fn quick_study_writes_every_table_and_figure() {
     }
     // Fig. 4's verification error falls as configurations are added (geometric-only data): the
     // largest set's is below the smallest set's.
-    let ver = |n: &str| -> f64 {
+    let ver = |n: &usize| -> f64 {
         fig4.iter()
-            .filter(|r| r["n_configs"] == n && r["method"] == "minimax" && r["split"] == "ver")
+            .filter(|r| {
+                r["n_configs"] == n.to_string() && r["method"] == "minimax" && r["split"] == "ver"
+            })
             .map(|r| r["pos_rms_mm_mean"].parse::<f64>().unwrap())
             .fold(0.0, f64::max)
     };
     let (first, last) = (sizes.first().unwrap(), sizes.last().unwrap());
-    assert!(ver(last) < ver(first), "{first}: {} {last}: {}", ver(first), ver(last));
+    assert!(
+        ver(last) < ver(first),
+        "{first}: {} {last}: {}",
+        ver(first),
+        ver(last)
+    );
 
     for f in ["histograms.csv", "boxplots.csv", "runs.csv"] {
         let (_, rows) = read_csv(&dir.join(f));
@@ -176,10 +196,18 @@ fn quick_study_writes_every_table_and_figure() {
     }
     let (_, boxes) = read_csv(&dir.join("boxplots.csv"));
     for b in &boxes {
-        let v: Vec<f64> = ["min", "whisker_lo", "q1", "median", "q3", "whisker_hi", "max"]
-            .iter()
-            .map(|k| b[*k].parse().unwrap())
-            .collect();
+        let v: Vec<f64> = [
+            "min",
+            "whisker_lo",
+            "q1",
+            "median",
+            "q3",
+            "whisker_hi",
+            "max",
+        ]
+        .iter()
+        .map(|k| b[*k].parse().unwrap())
+        .collect();
         assert!(v.windows(2).all(|w| w[0] <= w[1]), "{b:?}");
     }
     for svg in [
@@ -190,7 +218,10 @@ fn quick_study_writes_every_table_and_figure() {
         "fig8_collaborative.svg",
     ] {
         let text = std::fs::read_to_string(dir.join(svg)).unwrap();
-        assert!(text.starts_with("<svg") && text.trim_end().ends_with("</svg>"), "{svg}");
+        assert!(
+            text.starts_with("<svg") && text.trim_end().ends_with("</svg>"),
+            "{svg}"
+        );
         assert!(text.contains("minimax"), "{svg} names the methods");
     }
     let report = std::fs::read_to_string(dir.join("report.md")).unwrap();
@@ -204,9 +235,15 @@ fn quick_study_holds_the_papers_orderings_on_geometric_data() {
     let (_, t8) = read_csv(&dir.join("table8_collaborative_accuracy.csv"));
     let (_, t6) = read_csv(&dir.join("table6_base_methods.csv"));
     // (table, rows of a position and an orientation RMS, methods in it)
-    let arm_rows = ["right.pos_rms", "right.ori_rms", "left.pos_rms", "left.ori_rms"];
+    let arm_rows = [
+        "right.pos_rms",
+        "right.ori_rms",
+        "left.pos_rms",
+        "left.ori_rms",
+    ];
     let collab_rows = ["collab.pos_rms", "collab.ori_rms"];
-    let checks: [(&str, &[HashMap<String, String>], &[&str], bool); 3] = [
+    type Rows = [HashMap<String, String>];
+    let checks: [(&str, &Rows, &[&str], bool); 3] = [
         ("table5", &t5, &arm_rows, false),
         ("table8", &t8, &collab_rows, false),
         ("table6", &t6, &collab_rows, true),
@@ -246,8 +283,17 @@ fn quick_study_holds_the_papers_orderings_on_geometric_data() {
 #[test]
 fn refuses_to_overwrite_and_explains_its_options() {
     let dir = quick_study();
-    let err = fails(&["reproduce", "paper", "--quick", "--out", dir.to_str().unwrap()]);
-    assert!(err.contains("already exists") && err.contains("--force"), "{err}");
+    let err = fails(&[
+        "reproduce",
+        "paper",
+        "--quick",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(
+        err.contains("already exists") && err.contains("--force"),
+        "{err}"
+    );
     let err = fails(&["reproduce", "paper", "--quick"]);
     assert!(err.contains("--out"), "{err}");
     let tmp = tempfile::tempdir().unwrap();
@@ -307,12 +353,17 @@ fn runs_on_a_dataset_of_the_users_and_replaces_with_force() {
     let (_, t5) = read_csv(&out.join("table5_relative_accuracy.csv"));
     let columns: Vec<&str> = t5.iter().map(|r| r["column"].as_str()).collect();
     assert!(columns.contains(&"minimax") && !columns.contains(&"truth"));
-    assert!(table_mean(&t5, "left.pos_rms", "minimax") < table_mean(&t5, "left.pos_rms", "nominal"));
+    assert!(
+        table_mean(&t5, "left.pos_rms", "minimax") < table_mean(&t5, "left.pos_rms", "nominal")
+    );
     // An earlier run's outputs are kept unless --force.
     std::fs::write(out.join("report.md"), "stale").unwrap();
     let err = fails(&args);
     assert!(err.contains("report.md"), "{err}");
-    assert_eq!(std::fs::read_to_string(out.join("report.md")).unwrap(), "stale");
+    assert_eq!(
+        std::fs::read_to_string(out.join("report.md")).unwrap(),
+        "stale"
+    );
     let mut forced = args.to_vec();
     forced.push("--force");
     ok(&forced);
@@ -344,11 +395,22 @@ fn engine_comparison_records_failures_and_cancels() {
     assert_eq!(c.methods.len(), METHODS.len());
     assert_eq!(events.len(), 2 * METHODS.len());
     assert!(!c.cancelled);
-    let nominal = c.nominal.report(Split::Ver).unwrap().relative_left.pos_rms_mm;
+    let nominal = c
+        .nominal
+        .report(Split::Ver)
+        .unwrap()
+        .relative_left
+        .pos_rms_mm;
     for m in &c.methods {
-        let run = m.run().unwrap_or_else(|| panic!("{}: {:?}", m.entry.key, m.outcome));
+        let run = m
+            .run()
+            .unwrap_or_else(|| panic!("{}: {:?}", m.entry.key, m.outcome));
         let ver = run.figures.report(Split::Ver).unwrap();
-        assert!(ver.relative_left.pos_rms_mm < 0.1 * nominal, "{}", m.entry.key);
+        assert!(
+            ver.relative_left.pos_rms_mm < 0.1 * nominal,
+            "{}",
+            m.entry.key
+        );
     }
 
     // Three calibration configurations per arm: the methods cannot run, the nominal figures can.
@@ -365,7 +427,7 @@ fn engine_comparison_records_failures_and_cancels() {
     .unwrap();
     assert!(c.nominal.report(Split::Ver).is_some());
     for m in &c.methods {
-        let e = m.outcome.as_ref().err().expect("too few configurations");
+        let e = m.outcome.as_ref().expect_err("too few configurations");
         assert!(e.contains("configurations"), "{}: {e}", m.entry.key);
     }
 

@@ -223,8 +223,8 @@ pub struct ReproduceArgs {
     /// Paper study: replace outputs that already exist in --out.
     #[arg(long)]
     pub force: bool,
-    /// Paper study: the quick version (one seed unless --seeds, 2 × (80 + 60) configurations, Fig. 4
-    /// at 20, 50 and 80 configurations) that the tests run.
+    /// Paper study: the quick version the tests run (one seed unless --seeds; Fig. 4 at 20, 60 and 120
+    /// calibration configurations instead of twelve sizes).
     #[arg(long)]
     pub quick: bool,
     /// Paper study: only these methods (keys of `comparison::METHODS`, comma separated) [default: all].

@@ -7,8 +7,9 @@
 //! the first n calibration configurations for Fig. 4. Then the tables (mean ± standard deviation over the
 //! seeds) go to CSV files and a Markdown report beside the paper's numbers, the figures to SVG files.
 //!
-//! `--quick` is the version the tests run: one seed unless `--seeds` says otherwise, 2 × (80 + 60)
-//! configurations, Fig. 4 at 20, 50 and 80 configurations.
+//! `--quick` is the version the tests run: one seed unless `--seeds` says otherwise (the paper's
+//! protocol, 220 configurations per arm), Fig. 4 at 20, 60 and 120 calibration configurations instead
+//! of twelve sizes.
 
 mod paper_values;
 mod plots;
@@ -31,10 +32,8 @@ use std::time::Instant;
 
 /// Configurations per arm of the paper's protocol (§4.1), and of them for calibration.
 const PAPER_CONFIGS: (usize, usize) = (220, 120);
-/// The same for `--quick`.
-const QUICK_CONFIGS: (usize, usize) = (140, 80);
 /// Fig. 4's calibration set sizes for `--quick`.
-const QUICK_SIZES: [usize; 3] = [20, 50, 80];
+const QUICK_SIZES: [usize; 3] = [20, 60, 120];
 
 /// Every file the study writes into `--out`.
 pub(crate) const OUTPUT_FILES: [&str; 15] = [
@@ -73,11 +72,7 @@ pub(crate) struct Plan {
 
 impl Plan {
     fn new(a: &ReproduceArgs) -> Result<Self> {
-        let configs = if a.quick {
-            QUICK_CONFIGS
-        } else {
-            PAPER_CONFIGS
-        };
+        let configs = PAPER_CONFIGS;
         let sizes = match &a.sizes {
             Some(s) => s.clone(),
             None if a.quick => QUICK_SIZES.to_vec(),
@@ -87,15 +82,17 @@ impl Plan {
             bail!("--seeds simulates; with --dataset the study runs once on that dataset");
         }
         if a.dataset.is_some() && a.joint_errors().is_some() {
-            bail!("--unmodelled, --joint-error-mrad and --compliance-mrad-per-m simulate; not with --dataset");
+            bail!(
+                "--unmodelled, --joint-error-mrad and --compliance-mrad-per-m simulate; not with --dataset"
+            );
         }
-        if a.dataset.is_none() {
-            if let Some(&n) = sizes.iter().find(|&&n| n > configs.1 || n < 2) {
-                bail!(
-                    "--sizes: {n} calibration configurations; the simulation has {} per arm",
-                    configs.1
-                );
-            }
+        if a.dataset.is_none()
+            && let Some(&n) = sizes.iter().find(|&&n| n > configs.1 || n < 2)
+        {
+            bail!(
+                "--sizes: {n} calibration configurations; the simulation has {} per arm",
+                configs.1
+            );
         }
         let methods = match &a.methods {
             None => comparison::METHODS.to_vec(),
@@ -110,9 +107,14 @@ impl Plan {
                 .collect::<Result<_>>()?,
         };
         let mut seeds = a.seeds.clone();
+        seeds.sort_unstable();
         seeds.dedup();
         Ok(Self {
-            seeds: if a.dataset.is_some() { Vec::new() } else { seeds },
+            seeds: if a.dataset.is_some() {
+                Vec::new()
+            } else {
+                seeds
+            },
             dataset: a.dataset.clone(),
             configs,
             sizes,
@@ -147,9 +149,11 @@ impl Plan {
             Some(p) => format!("the dataset {}", p.display()),
             None => {
                 let errors = match self.joint_errors {
-                    None => "geometric errors only (DH parameters, reflectors, base), tracker noise \
+                    None => {
+                        "geometric errors only (DH parameters, reflectors, base), tracker noise \
                              from its MPE"
-                        .to_owned(),
+                            .to_owned()
+                    }
                     Some(j) => format!(
                         "geometric errors, tracker noise, and unmodelled joint errors: a {} mrad gear \
                          error {} times per revolution on every joint and {} mrad/m compliance",
@@ -158,7 +162,11 @@ impl Plan {
                 };
                 format!(
                     "simulated{} ({}; {} configurations per arm, {} calibration + {} verification; seed{} {})",
-                    if self.quick { ", the quick version" } else { "" },
+                    if self.quick {
+                        ", the quick version"
+                    } else {
+                        ""
+                    },
                     errors,
                     self.configs.0,
                     self.configs.1,
@@ -223,7 +231,9 @@ pub(crate) struct SeedRun {
 
 pub(crate) fn run(a: &ReproduceArgs, robot: &RobotDescription) -> Result<()> {
     let Some(out_dir) = a.out.clone() else {
-        bail!("`reproduce paper` needs --out DIR (the tables, figures and report are written there)");
+        bail!(
+            "`reproduce paper` needs --out DIR (the tables, figures and report are written there)"
+        );
     };
     let plan = Plan::new(a)?;
     let overwrite = if a.force {
@@ -237,8 +247,7 @@ pub(crate) fn run(a: &ReproduceArgs, robot: &RobotDescription) -> Result<()> {
         overwrite,
     )
     .context("pass --force to replace the outputs of an earlier run")?;
-    std::fs::create_dir_all(&out_dir)
-        .with_context(|| format!("creating {}", out_dir.display()))?;
+    std::fs::create_dir_all(&out_dir).with_context(|| format!("creating {}", out_dir.display()))?;
 
     let started = Instant::now();
     let runs = match &plan.dataset {
@@ -314,16 +323,25 @@ fn run_one(
     let cancel = Arc::new(AtomicBool::new(false));
     let mut progress = |e: comparison::ComparisonEvent| {
         if let comparison::ComparisonEvent::MethodFinished {
-            key, error: Some(e), ..
+            key,
+            error: Some(e),
+            ..
         } = e
         {
             eprintln!("warning: {what}: {key}: {e}");
         }
     };
     let t = Instant::now();
-    let comparison =
-        comparison::compare(ds, nominal, truth, &plan.methods, &common, &cancel, &mut progress)
-            .with_context(|| format!("{what}: the comparison"))?;
+    let comparison = comparison::compare(
+        ds,
+        nominal,
+        truth,
+        &plan.methods,
+        &common,
+        &cancel,
+        &mut progress,
+    )
+    .with_context(|| format!("{what}: the comparison"))?;
     for m in &comparison.methods {
         if let Some(run) = m.run() {
             for w in run.result.warnings() {
@@ -342,12 +360,22 @@ fn run_one(
     let mut fig4 = Vec::new();
     for &n in &plan.sizes {
         if n > n_cal {
-            eprintln!("warning: {what}: Fig. 4 at {n} configurations skipped: only {n_cal} calibration configurations");
+            eprintln!(
+                "warning: {what}: Fig. 4 at {n} configurations skipped: only {n_cal} calibration configurations"
+            );
             continue;
         }
         let sub = ds.with_cal_subset(n);
-        let c = comparison::compare(&sub, nominal, None, &arm_methods, &common, &cancel, &mut |_| {})
-            .with_context(|| format!("{what}: Fig. 4 with {n} configurations"))?;
+        let c = comparison::compare(
+            &sub,
+            nominal,
+            None,
+            &arm_methods,
+            &common,
+            &cancel,
+            &mut |_| {},
+        )
+        .with_context(|| format!("{what}: Fig. 4 with {n} configurations"))?;
         for m in &c.methods {
             fig4.push(Fig4Point {
                 n,

@@ -160,7 +160,10 @@ mod tests {
                 "{a:?} twice"
             );
         }
-        assert_eq!(super::value("table5", "right.pos_rms", "[26]"), Some(0.3964));
+        assert_eq!(
+            super::value("table5", "right.pos_rms", "[26]"),
+            Some(0.3964)
+        );
         assert_eq!(super::value("table5", "right.pos_rms", "lsq"), None);
     }
 }

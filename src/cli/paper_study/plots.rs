@@ -165,7 +165,11 @@ fn indicator_key(i: Indicator) -> String {
 }
 
 fn unit(i: Indicator) -> &'static str {
-    if i.is_position() { "Δd (mm)" } else { "Δo (rad)" }
+    if i.is_position() {
+        "Δd (mm)"
+    } else {
+        "Δo (rad)"
+    }
 }
 
 /// The models of a figure for one indicator: nominal, the methods, and the true parameters if known.
@@ -195,12 +199,7 @@ fn series(f: &HistFigure, indicator: Indicator, runs: &[SeedRun]) -> Vec<Series>
         out.push(Series {
             name: "true parameters".into(),
             colour: colour(f.methods.len() + 1),
-            per_seed: per_seed(&|r| {
-                r.comparison
-                    .truth
-                    .as_ref()?
-                    .samples(Split::Ver, indicator)
-            }),
+            per_seed: per_seed(&|r| r.comparison.truth.as_ref()?.samples(Split::Ver, indicator)),
         });
     }
     out
@@ -330,15 +329,11 @@ fn hist_panel(
     n_seeds: usize,
 ) -> Result<()> {
     let width = (hi - lo) / bars.len().max(1) as f64;
-    let top = bars
-        .iter()
-        .map(|(m, sd)| m + sd)
-        .fold(1.0, f64::max)
-        * 1.1;
+    let top = bars.iter().map(|(m, sd)| m + sd).fold(1.0, f64::max) * 1.1;
     let mut chart = ChartBuilder::on(area)
         .caption(&s.name, (FONT, 13))
         .margin(6)
-        .x_label_area_size(32)
+        .x_label_area_size(40)
         .y_label_area_size(40)
         .build_cartesian_2d(lo..hi, 0.0..top)
         .map_err(err)?;
@@ -355,10 +350,7 @@ fn hist_panel(
         .map_err(err)?;
     // The paper's intervals (Tables 4 and 7).
     let marks: Vec<f64> = if indicator.is_position() {
-        POS_THRESHOLDS_MM
-            .iter()
-            .flat_map(|&t| [-t, t])
-            .collect()
+        POS_THRESHOLDS_MM.iter().flat_map(|&t| [-t, t]).collect()
     } else {
         ORI_THRESHOLDS_RAD.to_vec()
     };
@@ -380,7 +372,14 @@ fn hist_panel(
         chart
             .draw_series(bars.iter().enumerate().map(|(b, &(mean, sd))| {
                 let x = lo + (b as f64 + 0.5) * width;
-                ErrorBar::new_vertical(x, (mean - sd).max(0.0), mean, mean + sd, BLACK.stroke_width(1), 3)
+                ErrorBar::new_vertical(
+                    x,
+                    (mean - sd).max(0.0),
+                    mean,
+                    mean + sd,
+                    BLACK.stroke_width(1),
+                    3,
+                )
             }))
             .map_err(err)?;
     }
@@ -409,8 +408,8 @@ fn box_panel(
     let mut chart = ChartBuilder::on(area)
         .caption("box plots (1 … n: legend)", (FONT, 13))
         .margin(6)
-        .x_label_area_size(32)
-        .y_label_area_size(48)
+        .x_label_area_size(40)
+        .y_label_area_size(56)
         .build_cartesian_2d(-0.5..(n as f64 - 0.5), lo..hi)
         .map_err(err)?;
     chart
@@ -436,12 +435,21 @@ fn box_panel(
         let x = k as f64;
         let style = c.stroke_width(2);
         chart
-            .draw_series([Rectangle::new([(x - 0.3, b.q1), (x + 0.3, b.q3)], c.mix(0.3).filled())])
+            .draw_series([Rectangle::new(
+                [(x - 0.3, b.q1), (x + 0.3, b.q3)],
+                c.mix(0.3).filled(),
+            )])
             .map_err(err)?
             .label(format!("{} {name}", k + 1))
             .legend(move |(px, py)| Rectangle::new([(px, py - 4), (px + 10, py + 4)], c.filled()));
         for path in [
-            vec![(x - 0.3, b.q1), (x + 0.3, b.q1), (x + 0.3, b.q3), (x - 0.3, b.q3), (x - 0.3, b.q1)],
+            vec![
+                (x - 0.3, b.q1),
+                (x + 0.3, b.q1),
+                (x + 0.3, b.q3),
+                (x - 0.3, b.q3),
+                (x - 0.3, b.q1),
+            ],
             vec![(x - 0.3, b.median), (x + 0.3, b.median)],
             vec![(x, b.q3), (x, b.whisker_hi)],
             vec![(x, b.q1), (x, b.whisker_lo)],
@@ -524,7 +532,7 @@ fn fig4_svg(plan: &Plan, runs: &[SeedRun]) -> Result<String> {
                 let mut chart = ChartBuilder::on(&areas[r * 2 + c])
                     .caption(format!("{side} arm: {label}"), (FONT, 14))
                     .margin(8)
-                    .x_label_area_size(36)
+                    .x_label_area_size(44)
                     .y_label_area_size(56)
                     .build_cartesian_2d(0.0..x_hi, 0.0..top)
                     .map_err(err)?;
@@ -534,7 +542,8 @@ fn fig4_svg(plan: &Plan, runs: &[SeedRun]) -> Result<String> {
                     .y_desc(*label)
                     .label_style((FONT, 10))
                     .axis_desc_style((FONT, 11))
-                    .light_line_style(RGBColor(235, 235, 235))
+                    .bold_line_style(RGBColor(215, 215, 215))
+                    .light_line_style(RGBColor(240, 240, 240))
                     .draw()
                     .map_err(err)?;
                 for (k, title, split, points) in &lines {

@@ -301,7 +301,13 @@ impl Table {
         for row in &self.rows {
             for (c, col) in self.columns.iter().enumerate() {
                 let (mean, sd, min, max, n) = summary(&row.values[c]);
-                let num = |x: f64| if x.is_finite() { format!("{x}") } else { String::new() };
+                let num = |x: f64| {
+                    if x.is_finite() {
+                        format!("{x}")
+                    } else {
+                        String::new()
+                    }
+                };
                 w.write_record([
                     self.id.to_owned(),
                     row.id.clone(),
@@ -336,11 +342,13 @@ impl Table {
         out.push('\n');
         let mut section = "";
         for row in &self.rows {
+            // A `|` in a label would end the Markdown cell.
+            let label = row.label.replace('|', "\\|");
             let head = if row.section == section {
-                format!("{} ({})", row.label, row.unit.name())
+                format!("{label} ({})", row.unit.name())
             } else {
                 section = row.section;
-                format!("**{}** {} ({})", row.section, row.label, row.unit.name())
+                format!("**{}** {label} ({})", row.section, row.unit.name())
             };
             let _ = write!(out, "| {head} | simulation |");
             for v in &row.values {
@@ -511,8 +519,13 @@ fn fig4(plan: &Plan, runs: &[SeedRun]) -> (String, String) {
                                 })
                                 .collect();
                             let (om, osd, _, _, _) = summary(&ori);
-                            let num =
-                                |x: f64| if x.is_finite() { format!("{x}") } else { String::new() };
+                            let num = |x: f64| {
+                                if x.is_finite() {
+                                    format!("{x}")
+                                } else {
+                                    String::new()
+                                }
+                            };
                             let _ = w.write_record([
                                 n.to_string(),
                                 m.key.to_owned(),
@@ -540,7 +553,7 @@ fn fig4(plan: &Plan, runs: &[SeedRun]) -> (String, String) {
 }
 
 /// The columns of `runs.csv`.
-pub(crate) const RUNS_CSV_COLUMNS: [&str; 23] = [
+pub(crate) const RUNS_CSV_COLUMNS: [&str; 24] = [
     "seed",
     "model",
     "split",
@@ -563,6 +576,7 @@ pub(crate) const RUNS_CSV_COLUMNS: [&str; 23] = [
     "ori_within_0_005rad_frac",
     "ori_within_0_01rad_frac",
     "observes",
+    "reflector_used",
     "error",
 ];
 
@@ -571,14 +585,15 @@ pub(crate) fn runs_csv(runs: &[SeedRun]) -> Result<String> {
     let mut w = csv::Writer::from_writer(Vec::new());
     w.write_record(RUNS_CSV_COLUMNS)?;
     for r in runs {
-        let seed = r.seed.map_or_else(|| "dataset".to_owned(), |s| s.to_string());
+        let seed = r
+            .seed
+            .map_or_else(|| "dataset".to_owned(), |s| s.to_string());
         let c = &r.comparison;
-        let mut models: Vec<(String, Option<&crate::comparison::ModelFigures>, Vec<String>)> =
-            vec![(
-                "nominal".into(),
-                Some(&c.nominal),
-                vec![String::new(); 4],
-            )];
+        let mut models: Vec<(
+            String,
+            Option<&crate::comparison::ModelFigures>,
+            Vec<String>,
+        )> = vec![("nominal".into(), Some(&c.nominal), vec![String::new(); 4])];
         if let Some(t) = &c.truth {
             models.push(("truth".into(), Some(t), vec![String::new(); 4]));
         }
@@ -618,10 +633,12 @@ pub(crate) fn runs_csv(runs: &[SeedRun]) -> Result<String> {
             for split in [Split::Cal, Split::Ver] {
                 let Some(rep) = figures.and_then(|f| f.report(split)) else {
                     if !error.is_empty() && split == Split::Cal {
-                        let mut rec = vec![seed.clone(), name.clone(), String::new(), String::new()];
+                        let mut rec =
+                            vec![seed.clone(), name.clone(), String::new(), String::new()];
                         rec.extend(info.iter().cloned());
                         rec.extend(std::iter::repeat_n(String::new(), 13));
                         rec.push(observes.to_owned());
+                        rec.push(String::new());
                         rec.push(error.clone());
                         w.write_record(&rec)?;
                     }
@@ -658,6 +675,18 @@ pub(crate) fn runs_csv(runs: &[SeedRun]) -> Result<String> {
                         .map(|x| format!("{x}")),
                     );
                     rec.push(observes.to_owned());
+                    let used = |side: Side| {
+                        c.method(&name)
+                            .and_then(|m| m.run())
+                            .and_then(|run| run.result.reflector_used[side])
+                            .map_or("", |r| r.name())
+                    };
+                    rec.push(match pairs {
+                        "relative_left" => used(Side::Left).to_owned(),
+                        "relative_right" => used(Side::Right).to_owned(),
+                        _ if used(Side::Left).is_empty() => String::new(),
+                        _ => format!("{}/{}", used(Side::Left), used(Side::Right)),
+                    });
                     rec.push(error.clone());
                     w.write_record(&rec)?;
                 }
@@ -668,7 +697,11 @@ pub(crate) fn runs_csv(runs: &[SeedRun]) -> Result<String> {
 }
 
 /// The ratios `num / den` of the runs: `(mean, how many ≤ 1, how many)`.
-fn ratio_summary(runs: &[SeedRun], num: impl Fn(&SeedRun) -> Option<f64>, den: impl Fn(&SeedRun) -> Option<f64>) -> Option<(f64, usize, usize)> {
+fn ratio_summary(
+    runs: &[SeedRun],
+    num: impl Fn(&SeedRun) -> Option<f64>,
+    den: impl Fn(&SeedRun) -> Option<f64>,
+) -> Option<(f64, usize, usize)> {
     let ratios: Vec<f64> = runs
         .iter()
         .filter_map(|r| Some(num(r)? / den(r)?))
@@ -690,6 +723,15 @@ const THREE: [(Pairs, &str); 3] = [
     (Pairs::Relative(Side::Right), "R"),
     (Pairs::Collaborative, "collab"),
 ];
+
+/// The verification RMS of `side`'s relative `Δd` of the reflector the method `key` used on that arm,
+/// under `model`.
+fn own_reflector_rms(r: &SeedRun, key: &str, side: Side, model: Model) -> Option<f64> {
+    let k = r.comparison.method(key)?.run()?.result.reflector_used[side]?.index();
+    model
+        .report(&r.comparison, Split::Ver)
+        .map(|rep| rep.relative(side).pos_rms_per_reflector_mm[k])
+}
 
 fn ver_stat(r: &SeedRun, model: Model, pairs: Pairs, pick: Pick) -> Option<f64> {
     model
@@ -789,8 +831,8 @@ pub(crate) fn report(plan: &Plan, runs: &[SeedRun], tables: &Tables, elapsed_sec
         for (label, _) in &picks {
             let _ = write!(out, " {label} L / R / collab |");
         }
-        out.push_str("\n|---|---|");
-        out.push_str(&"---|".repeat(picks.len()));
+        out.push_str(" its reflector's pos RMS L / R |\n|---|---|");
+        out.push_str(&"---|".repeat(picks.len() + 1));
         out.push('\n');
         for m in &plan.methods {
             let _ = write!(
@@ -816,7 +858,27 @@ pub(crate) fn report(plan: &Plan, runs: &[SeedRun], tables: &Tables, elapsed_sec
                     .collect();
                 let _ = write!(out, " {} |", cells.join(" / "));
             }
-            out.push('\n');
+            // A one-reflector method is at the noise floor, if anywhere, on its own reflector.
+            let own: Vec<String> = Side::BOTH
+                .iter()
+                .map(|&side| {
+                    ratio_summary(
+                        runs,
+                        |r| own_reflector_rms(r, m.key, side, Model::Method(m.key)),
+                        |r| own_reflector_rms(r, m.key, side, Model::Truth),
+                    )
+                    .map_or("–".into(), |(mean, _, _)| format!("{mean:.2}"))
+                })
+                .collect();
+            let _ = writeln!(
+                out,
+                " {} |",
+                if m.observes == Observes::OneReflector {
+                    own.join(" / ")
+                } else {
+                    "–".into()
+                }
+            );
         }
         out.push('\n');
     }
