@@ -222,10 +222,11 @@ fn selecting_in_the_table_and_in_the_viewport() {
     let mut harness = harness([1400.0, 900.0], AppLaunch::default());
     loaded(&mut harness);
 
-    // "Select worst" picks the row with the largest |Δd| and poses that arm in it.
+    // "Select worst" picks the row with the largest |Δd| and poses that arm in it (the button above
+    // the table: the view options' one is below the fold of the settings panel at this size).
     harness
         .get_all_by_label("Select worst")
-        .next()
+        .last()
         .unwrap()
         .click();
     harness.step();
@@ -1276,8 +1277,9 @@ fn the_comparison_lists_each_method_and_adopting_one_changes_the_export() {
     assert!(nominal > 10.0 * minimax.max(lsq), "nominal {nominal} mm");
     // One row per method plus the nominal one, each with its figures shown.
     harness.get_by_role_and_label(eframe::egui::accesskit::Role::Label, "nominal");
-    for title in ["minimax Our method", "least squares"] {
-        harness.get_by_role_and_label(eframe::egui::accesskit::Role::Label, title);
+    for key in ["minimax", "lsq"] {
+        let title = dualcal::comparison::method(key).unwrap().title();
+        harness.get_by_role_and_label(eframe::egui::accesskit::Role::Label, &title);
     }
     for v in [nominal, minimax, lsq] {
         let text = format!("{v:.3}");
@@ -1341,7 +1343,9 @@ fn a_comparison_stepped_in_frames_shows_terminations_and_cancels() {
         app.compare_view_mut().pick(&["minimax", "lsq"]);
     }
     harness.state_mut().apply(Command::StartComparison);
-    harness.run_steps(3);
+    step_until(&mut harness, MAX_RUN_FRAMES, "the first method", |app| {
+        app.compare_view().progress.is_some()
+    });
     assert!(harness.state().is_comparing());
     harness.get_by_label("Cancel comparison").click();
     step_until(&mut harness, MAX_RUN_FRAMES, "cancellation", |app| {

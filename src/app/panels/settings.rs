@@ -18,13 +18,17 @@ impl WorkbenchApp {
             ui.separator();
             self.robot_section_ui(ui, commands);
             ui.separator();
-            ui.heading("Calibration");
+            ui.horizontal(|ui| {
+                ui.heading("Calibration");
+                self.compare_button_ui(ui, commands);
+            });
+            self.current_method_ui(ui);
             let running = self.calibration.is_some();
             ui.add_enabled_ui(!running, |ui| {
                 calibration_settings_ui(ui, &mut self.settings)
             });
             self.calibration_buttons_ui(ui, commands);
-            self.compare_button_ui(ui, commands);
+            // self.compare_button_ui(ui, commands);
             ui.separator();
             self.export_section_ui(ui, commands);
             ui.separator();
@@ -148,7 +152,7 @@ impl WorkbenchApp {
         });
     }
 
-    /// Open or close the comparison view; what the last comparison and the current calibration are.
+    /// Open or close the comparison view.
     fn compare_button_ui(&self, ui: &mut egui::Ui, commands: &mut Vec<Command>) {
         let open = self.compare.open;
         let text = if open {
@@ -166,6 +170,10 @@ impl WorkbenchApp {
         {
             commands.push(Command::ShowComparison(!open));
         }
+    }
+
+    /// The method of the current calibration.
+    fn current_method_ui(&self, ui: &mut egui::Ui) {
         if let Some(c) = self.session.as_ref().and_then(|s| s.calibrated.as_ref()) {
             ui.label(
                 RichText::new(format!(
@@ -545,8 +553,7 @@ pub(crate) fn base_method_help(method: BaseMethod) -> (&'static str, &'static st
 /// The step-1 method combo: every method, each with what it minimises and cannot see on hover.
 fn method_choice_ui(ui: &mut egui::Ui, settings: &mut CalibrationSettings) -> egui::Response {
     egui::ComboBox::from_id_salt("method")
-        .selected_text(method_help(settings.method).0)
-        .width(170.0)
+        .selected_text(settings.method.name())
         .show_ui(ui, |ui| {
             for m in Method::ALL {
                 let (name, help) = method_help(m);
@@ -561,8 +568,7 @@ fn method_choice_ui(ui: &mut egui::Ui, settings: &mut CalibrationSettings) -> eg
 /// The step-2 method combo.
 fn base_method_choice_ui(ui: &mut egui::Ui, base: &mut BaseMethod) -> egui::Response {
     egui::ComboBox::from_id_salt("base method")
-        .selected_text(base_method_help(*base).0)
-        .width(170.0)
+        .selected_text(base.name())
         .show_ui(ui, |ui| {
             for m in BaseMethod::ALL {
                 let (name, help) = base_method_help(m);
