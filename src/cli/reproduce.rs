@@ -8,7 +8,8 @@ use crate::robot::RobotDescription;
 use crate::side::Side;
 use crate::simulate::{self, SimOptions};
 use crate::solver::{
-    self, CalibrationResult, CalibrationSettings, Calibrator, Method, QpMethod, Termination,
+    self, BaseMethod, CalibrationResult, CalibrationSettings, Calibrator, Method, QpMethod,
+    Termination,
 };
 use anyhow::{Context, Result, bail};
 
@@ -219,8 +220,14 @@ fn robustness_study(a: &ReproduceArgs, robot: &RobotDescription) -> Result<()> {
             let sim = simulate::simulate_with_robot(&opts, robot)?;
             let mut values = Vec::new();
             for method in [Method::Minimax, Method::LeastSquares] {
+                // Least squares throughout (both steps), as the study compares the objectives.
+                let base_method = match method {
+                    Method::LeastSquares => BaseMethod::Distance,
+                    _ => BaseMethod::Minimax,
+                };
                 let settings = CalibrationSettings {
                     method,
+                    base_method,
                     ..CalibrationSettings::default()
                 };
                 let res = quiet_calibrate(&sim.dataset, &sim.nominal, &settings)?;
