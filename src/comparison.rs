@@ -142,14 +142,19 @@ const fn base(
     }
 }
 
-use Observes::ThreeReflectors as THREE;
+use Observes::{OneReflector as ONE, ThreeReflectors as THREE};
 
 /// The compared methods, in the paper's column order: one line per method (kept as a table, not
 /// formatted).
 #[rustfmt::skip]
 pub const METHODS: &[MethodEntry] = &[
     arms("minimax",         "minimax",           Some("Our method"), THREE, Method::Minimax).in_both(),
+    arms("distance-single", "one reflector",     Some("[26]"),       ONE,   Method::DistanceSingle),
+    arms("pose",            "full pose",         Some("[19]"),       THREE, Method::Pose),
+    arms("position",        "positions",         Some("[18]"),       THREE, Method::Position),
     arms("lsq",             "least squares",     None,               THREE, Method::LeastSquares),
+    base("base-distance",   "base by distances", Some("[26]"),       BaseMethod::Distance),
+    base("base-absolute",   "base by positions", Some("[28]"),       BaseMethod::Absolute),
 ];
 
 /// The entry of `key`.
