@@ -12,7 +12,7 @@ use crate::analysis::{Histogram, Indicator};
 use crate::dataset::{Dataset, Split};
 use crate::kinematics::DualArmModel;
 use crate::metrics::{self, AccuracyReport, MetricsError, PairSamples, SplitSweep};
-use crate::solver::{CalibrationResult, CalibrationSettings, Calibrator, Method};
+use crate::solver::{BaseMethod, CalibrationResult, CalibrationSettings, Calibrator, Method};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
@@ -51,8 +51,9 @@ pub enum Observes {
     OneReflector,
 }
 
-/// One compared method: a name, its column in the paper, and the settings that select it.
-#[derive(Clone, Copy, Debug)]
+/// One compared method: a name, its column in the paper, and the step-1 and step-2 methods that
+/// select it in [`CalibrationSettings`].
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MethodEntry {
     /// Short name: `reproduce paper --methods`, the CSV files' `column`.
     pub key: &'static str,
@@ -62,17 +63,25 @@ pub struct MethodEntry {
     pub paper: Option<&'static str>,
     pub role: Role,
     pub observes: Observes,
-    /// The settings of this method on top of the run's common ones (split, iteration limits).
-    pub configure: fn(CalibrationSettings) -> CalibrationSettings,
+    /// Step 1's method (the paper's minimax for a step-2 method).
+    pub method: Method,
+    /// Step 2's method (the paper's minimax for a step-1 method).
+    pub base_method: BaseMethod,
 }
 
 impl MethodEntry {
-    /// Its settings on top of `common`.
+    /// Its settings on top of `common` (split, iteration limits, QP; the reflector is left to the
+    /// method's default choice).
     pub fn settings(&self, common: &CalibrationSettings) -> CalibrationSettings {
-        (self.configure)(common.clone())
+        CalibrationSettings {
+            method: self.method,
+            base_method: self.base_method,
+            reflector: None,
+            ..common.clone()
+        }
     }
 
-    /// The label with the paper's column: `minimax (Our method)`, `distance-single [26]`.
+    /// The label with the paper's column: `minimax (Our method)`, `distance, one reflector [26]`.
     pub fn title(&self) -> String {
         match self.paper {
             Some(p) if p.starts_with('[') => format!("{} {p}", self.label),
@@ -82,30 +91,70 @@ impl MethodEntry {
     }
 }
 
-/// The compared methods, in the paper's column order. One entry per method.
-pub const METHODS: &[MethodEntry] = &[
+/// A step-1 method, with the paper's step 2.
+const fn arms(
+    key: &'static str,
+    label: &'static str,
+    paper: Option<&'static str>,
+    observes: Observes,
+    method: Method,
+) -> MethodEntry {
     MethodEntry {
-        key: "minimax",
-        label: "minimax",
-        paper: Some("Our method"),
-        role: Role::Both,
-        observes: Observes::ThreeReflectors,
-        configure: |s| CalibrationSettings {
-            method: Method::Minimax,
-            ..s
-        },
-    },
-    MethodEntry {
-        key: "lsq",
-        label: "least squares",
-        paper: None,
+        key,
+        label,
+        paper,
         role: Role::Arms,
+        observes,
+        method,
+        base_method: BaseMethod::Minimax,
+    }
+}
+
+impl MethodEntry {
+    /// The paper's own method: in both comparisons.
+    const fn in_both(self) -> Self {
+        Self {
+            role: Role::Both,
+            ..self
+        }
+    }
+}
+
+/// A step-2 method, on the paper's step 1.
+#[allow(
+    dead_code,
+    reason = "the step-2 methods of refs. [26] and [28] join METHODS when they land"
+)]
+const fn base(
+    key: &'static str,
+    label: &'static str,
+    paper: Option<&'static str>,
+    base_method: BaseMethod,
+) -> MethodEntry {
+    MethodEntry {
+        key,
+        label,
+        paper,
+        role: Role::Base,
         observes: Observes::ThreeReflectors,
-        configure: |s| CalibrationSettings {
-            method: Method::LeastSquares,
-            ..s
-        },
-    },
+        method: Method::Minimax,
+        base_method,
+    }
+}
+
+use Observes::{OneReflector as ONE, ThreeReflectors as THREE};
+
+/// The compared methods, in the paper's column order: one line per method (kept as a table, not
+/// formatted).
+#[rustfmt::skip]
+pub const METHODS: &[MethodEntry] = &[
+    arms("minimax",         "minimax",           Some("Our method"), THREE, Method::Minimax).in_both(),
+    arms("distance-single", "one reflector",     Some("[26]"),       ONE,   Method::DistanceSingle),
+    arms("pose",            "full pose",         Some("[19]"),       THREE, Method::Pose),
+    arms("position",        "positions",         Some("[18]"),       THREE, Method::Position),
+    arms("lsq",             "least squares",     None,               THREE, Method::LeastSquares),
+    base("base-distance",   "base by distances", Some("[26]"),       BaseMethod::Distance),
+    base("base-absolute",   "base by positions", Some("[28]"),       BaseMethod::Absolute),
 ];
 
 /// The entry of `key`.
@@ -399,11 +448,22 @@ mod tests {
         };
         let lsq = method("lsq").unwrap().settings(&common);
         assert_eq!(lsq.method, Method::LeastSquares);
+        assert_eq!(lsq.base_method, BaseMethod::Minimax);
         assert_eq!(lsq.max_iterations, 7, "the common settings are kept");
         assert_eq!(
             method("minimax").unwrap().settings(&common).method,
             Method::Minimax
         );
+        for m in METHODS {
+            let s = m.settings(&common);
+            // A step-1 method is compared on the paper's step 2, a step-2 method on its step 1.
+            if m.role == Role::Arms {
+                assert_eq!(s.base_method, BaseMethod::Minimax, "{}", m.key);
+            }
+            if m.role == Role::Base {
+                assert_eq!(s.method, Method::Minimax, "{}", m.key);
+            }
+        }
     }
 
     #[test]

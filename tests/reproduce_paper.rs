@@ -170,7 +170,8 @@ fn quick_study_writes_every_table_and_figure() {
     assert!(sizes.len() >= 3, "{sizes:?}");
     for r in &fig4 {
         let v: f64 = r["pos_rms_mm_mean"].parse().unwrap();
-        assert!(v > 0.0 && v < 1.0, "{r:?}");
+        let three = comparison::method(&r["method"]).unwrap().observes == Observes::ThreeReflectors;
+        assert!(v > 0.0 && (v < 0.1 || !three), "{r:?}");
     }
     // Fig. 4's verification error falls as configurations are added (geometric-only data): the
     // largest set's is below the smallest set's.
@@ -261,12 +262,11 @@ fn quick_study_holds_the_papers_orderings_on_geometric_data() {
                 let nominal = table_mean(rows, row, "nominal");
                 let truth = table_mean(rows, row, "truth");
                 assert!(
-                    v < 0.1 * nominal,
-                    "{name} {row}: {} {v} not well below nominal {nominal}",
+                    v < nominal,
+                    "{name} {row}: {} {v} not below nominal {nominal}",
                     m.key
                 );
-                let sees = m.observes == Observes::ThreeReflectors;
-                if sees {
+                if m.observes == Observes::ThreeReflectors {
                     assert!(
                         v <= 1.10 * truth,
                         "{name} {row}: {} {v} more than 10% above the true parameters' {truth}",
@@ -278,6 +278,50 @@ fn quick_study_holds_the_papers_orderings_on_geometric_data() {
     }
     // Minimax is the paper's method in both comparisons.
     assert_eq!(comparison::method("minimax").unwrap().role, Role::Both);
+
+    // A method that sees one reflector (ref. [26]) reaches the noise floor on that reflector's
+    // distances and cannot see the flange's orientation: its verification orientation RMS is at least
+    // twice minimax's, as in the paper's Tables 5 and 8.
+    let (_, runs) = read_csv(&dir.join("runs.csv"));
+    let run = |model: &str, pairs: &str| {
+        runs.iter()
+            .find(|r| r["model"] == model && r["split"] == "ver" && r["pairs"] == pairs)
+            .unwrap_or_else(|| panic!("runs.csv: no {model} {pairs}"))
+    };
+    for m in METHODS
+        .iter()
+        .filter(|m| m.observes == Observes::OneReflector)
+    {
+        for pairs in ["relative_left", "relative_right"] {
+            let own = &run(m.key, pairs)["reflector_used"];
+            let column = match own.as_str() {
+                "a" => "pos_rms_a_mm",
+                "b" => "pos_rms_b_mm",
+                "c" => "pos_rms_c_mm",
+                other => panic!("{} {pairs}: reflector_used `{other}`", m.key),
+            };
+            let v: f64 = run(m.key, pairs)[column].parse().unwrap();
+            let truth: f64 = run("truth", pairs)[column].parse().unwrap();
+            assert!(
+                v <= 1.10 * truth,
+                "{} {pairs}: its reflector {own}: {v} mm, true parameters {truth} mm",
+                m.key
+            );
+        }
+        for (rows, row) in [
+            (&t5, "right.ori_rms"),
+            (&t5, "left.ori_rms"),
+            (&t8, "collab.ori_rms"),
+        ] {
+            let v = table_mean(rows, row, m.key);
+            let minimax = table_mean(rows, row, "minimax");
+            assert!(
+                v >= 2.0 * minimax,
+                "{row}: {} {v} rad, not twice minimax's {minimax}",
+                m.key
+            );
+        }
+    }
 }
 
 #[test]
@@ -406,11 +450,11 @@ fn engine_comparison_records_failures_and_cancels() {
             .run()
             .unwrap_or_else(|| panic!("{}: {:?}", m.entry.key, m.outcome));
         let ver = run.figures.report(Split::Ver).unwrap();
-        assert!(
-            ver.relative_left.pos_rms_mm < 0.1 * nominal,
-            "{}",
-            m.entry.key
-        );
+        let bound = match m.entry.observes {
+            Observes::ThreeReflectors => 0.1 * nominal,
+            Observes::OneReflector => nominal,
+        };
+        assert!(ver.relative_left.pos_rms_mm < bound, "{}", m.entry.key);
     }
 
     // Three calibration configurations per arm: the methods cannot run, the nominal figures can.
