@@ -568,26 +568,29 @@ fn summary_table_ui(
                         }
                     }
                 }
-                let (mut termination, converged) = termination_text(method);
-                if let Some(run) = method.run() {
-                    let used: Vec<String> = Side::BOTH
-                        .iter()
-                        .filter_map(|&s| run.result.reflector_used[s].map(|r| format!("{s} {r}")))
-                        .collect();
-                    if !used.is_empty() {
-                        termination = format!("{termination}; reflector {}", used.join(", "));
-                    }
-                }
-                let shown = crate::textfile::excerpt_n(&termination, 70);
-                ui.label(RichText::new(shown).color(if converged {
-                    Color32::GRAY
-                } else {
-                    FAIL_COLOR
-                }))
-                .on_hover_text(termination);
+                termination_cell_ui(ui, method);
                 ui.end_row();
             }
         });
+}
+
+/// A method's termination (and, for distance-single, the reflector each arm used), red unless it
+/// converged.
+fn termination_cell_ui(ui: &mut egui::Ui, method: &MethodOutcome) {
+    let (mut termination, converged) = termination_text(method);
+    if let Some(run) = method.run() {
+        let used: Vec<String> = Side::BOTH
+            .iter()
+            .filter_map(|&s| run.result.reflector_used[s].map(|r| format!("{s} {r}")))
+            .collect();
+        if !used.is_empty() {
+            termination = format!("{termination}; reflector {}", used.join(", "));
+        }
+    }
+    let shown = crate::textfile::excerpt_n(&termination, 70);
+    let color = if converged { Color32::GRAY } else { FAIL_COLOR };
+    ui.label(RichText::new(shown).color(color))
+        .on_hover_text(termination);
 }
 
 /// Per method a histogram of the indicator's samples on the split, on one shared range, and a box
