@@ -1197,28 +1197,16 @@ fn the_method_picker_changes_the_method_used() {
     );
     calibrate(&mut harness);
     let app = harness.state();
-    match &app.session().unwrap().calibrated.as_ref().unwrap().result {
-        // The method ran: the result and the status say which reflector it used.
-        r if r.settings.method == Method::DistanceSingle => {
-            assert!(app.errors().is_empty(), "{:?}", app.errors());
-            assert_eq!(r.reflector_used.left, Some(Reflector::B));
-            shown(
-                &harness,
-                "method distance-single (reflector left b, right b)",
-            );
-        }
-        // Until the method is implemented the engine refuses it: the error is shown and the last
-        // calibration (least squares) stays.
-        r => {
-            assert_eq!(r.settings.method, Method::LeastSquares);
-            assert_eq!(app.errors().len(), 1, "{:?}", app.errors());
-            assert!(
-                app.errors()[0].contains("distance-single"),
-                "{:?}",
-                app.errors()
-            );
-        }
-    }
+    // The method ran: the result and the status say which reflector it used.
+    assert!(app.errors().is_empty(), "{:?}", app.errors());
+    let r = &app.session().unwrap().calibrated.as_ref().unwrap().result;
+    assert_eq!(r.settings.method, Method::DistanceSingle);
+    assert_eq!(r.reflector_used.left, Some(Reflector::B));
+    assert_eq!(r.reflector_used.right, Some(Reflector::B));
+    shown(
+        &harness,
+        "method distance-single (reflector left b, right b)",
+    );
     pick_in_combo(&mut harness, "Method", "minimax (paper, Algorithm I)");
     assert_eq!(harness.state_mut().settings_mut().reflector, None);
     assert!(harness.query_by_label("Reflector").is_none());
