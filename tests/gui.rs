@@ -222,10 +222,11 @@ fn selecting_in_the_table_and_in_the_viewport() {
     let mut harness = harness([1400.0, 900.0], AppLaunch::default());
     loaded(&mut harness);
 
-    // "Select worst" picks the row with the largest |Δd| and poses that arm in it.
+    // "Select worst" picks the row with the largest |Δd| and poses that arm in it (the button above
+    // the table: the view options' one is below the fold of the settings panel at this size).
     harness
         .get_all_by_label("Select worst")
-        .next()
+        .last()
         .unwrap()
         .click();
     harness.step();
@@ -1106,4 +1107,277 @@ fn workbench_screenshot() {
         image.width(),
         image.height()
     );
+}
+
+/// Some label contains `text` (the status line and the settings panel may both say it).
+fn shown(harness: &Harness<'_, WorkbenchApp>, text: &str) {
+    assert!(
+        harness.query_all_by_label_contains(text).count() >= 1,
+        "{text:?} is not shown"
+    );
+}
+
+/// Pick `choice` in the settings combo labelled `label`.
+fn pick_in_combo(harness: &mut Harness<'_, WorkbenchApp>, label: &str, choice: &str) {
+    harness
+        .get_by_role_and_label(eframe::egui::accesskit::Role::ComboBox, label)
+        .click();
+    harness.run_steps(2);
+    harness.get_by_label(choice).click();
+    harness.run_steps(2);
+}
+
+fn calibrate(harness: &mut Harness<'_, WorkbenchApp>) {
+    harness.get_by_label("Calibrate").click();
+    harness.step();
+    step_until(harness, MAX_RUN_FRAMES, "calibration result", |app| {
+        !app.is_calibrating()
+    });
+}
+
+/// The verification split's collaborative RMS* of the last calibration.
+fn calibrated_ver_collab(app: &WorkbenchApp) -> f64 {
+    let c = app
+        .session()
+        .unwrap()
+        .calibrated
+        .as_ref()
+        .expect("calibrated");
+    c.analysis.ver.report.unwrap().collaborative.pos_rms_mm
+}
+
+/// The `method` record of the parameter file the workbench exports.
+fn exported_method(app: &WorkbenchApp) -> serde_json::Value {
+    let bytes = dualcal::app::export::Export::Params
+        .contents(app.session().unwrap())
+        .expect("a calibration to export")
+        .expect("the parameter file");
+    let file: serde_json::Value = serde_json::from_slice(&bytes).unwrap();
+    file["method"].clone()
+}
+
+#[test]
+fn the_method_picker_changes_the_method_used() {
+    use dualcal::solver::{Method, Reflector};
+    let mut harness = harness([1400.0, 900.0], AppLaunch::default());
+    loaded(&mut harness);
+    calibrate(&mut harness);
+    assert!(
+        harness.state().errors().is_empty(),
+        "{:?}",
+        harness.state().errors()
+    );
+    let minimax = calibrated_ver_collab(harness.state());
+    shown(&harness, "method minimax, base minimax");
+
+    pick_in_combo(&mut harness, "Method", "least squares");
+    calibrate(&mut harness);
+    let app = harness.state();
+    assert!(app.errors().is_empty(), "{:?}", app.errors());
+    let result = &app.session().unwrap().calibrated.as_ref().unwrap().result;
+    assert_eq!(result.settings.method, Method::LeastSquares);
+    let lsq = calibrated_ver_collab(app);
+    assert!(
+        (lsq - minimax).abs() > 1e-6,
+        "least squares and minimax gave the same figures ({lsq} mm)"
+    );
+    shown(&harness, "method lsq, base minimax");
+    assert_eq!(
+        exported_method(harness.state())["objective"],
+        "LeastSquares"
+    );
+
+    // distance-single takes a reflector; any other method drops it (the solver refuses one).
+    assert!(harness.query_by_label("Reflector").is_none());
+    pick_in_combo(&mut harness, "Method", "distance, one reflector [26]");
+    pick_in_combo(&mut harness, "Reflector", "b");
+    assert_eq!(
+        harness.state_mut().settings_mut().reflector,
+        Some(Reflector::B)
+    );
+    calibrate(&mut harness);
+    let app = harness.state();
+    // The method ran: the result and the status say which reflector it used.
+    assert!(app.errors().is_empty(), "{:?}", app.errors());
+    let r = &app.session().unwrap().calibrated.as_ref().unwrap().result;
+    assert_eq!(r.settings.method, Method::DistanceSingle);
+    assert_eq!(r.reflector_used.left, Some(Reflector::B));
+    assert_eq!(r.reflector_used.right, Some(Reflector::B));
+    shown(
+        &harness,
+        "method distance-single (reflector left b, right b)",
+    );
+    pick_in_combo(&mut harness, "Method", "minimax (paper, Algorithm I)");
+    assert_eq!(harness.state_mut().settings_mut().reflector, None);
+    assert!(harness.query_by_label("Reflector").is_none());
+}
+
+/// The comparison view: the picked methods run in the background, one row each after the nominal
+/// one, with their own figures; adopting one makes it the calibration the exports write.
+#[test]
+fn the_comparison_lists_each_method_and_adopting_one_changes_the_export() {
+    use dualcal::solver::Method;
+    let mut harness = harness([1400.0, 900.0], AppLaunch::default());
+    loaded(&mut harness);
+    calibrate(&mut harness);
+    assert_eq!(exported_method(harness.state())["objective"], "Minimax");
+
+    harness.get_by_label("Compare methods…").click();
+    harness.run_steps(2);
+    harness.get_by_label("Pick methods and press Run comparison.");
+    harness.state_mut().compare_view_mut().pick(&["minimax"]);
+    harness.run_steps(2);
+    // The picker adds least squares.
+    harness.get_by_label("least squares").click();
+    harness.run_steps(2);
+    harness.get_by_label("Run comparison").click();
+    harness.step();
+    assert!(harness.state().is_comparing());
+    step_until(&mut harness, MAX_RUN_FRAMES, "comparison", |app| {
+        !app.is_comparing()
+    });
+    let app = harness.state();
+    assert!(app.errors().is_empty(), "{:?}", app.errors());
+    let comparison = app
+        .compare_view()
+        .comparison
+        .as_ref()
+        .expect("a comparison");
+    let keys: Vec<&str> = comparison.methods.iter().map(|m| m.entry.key).collect();
+    assert_eq!(keys, ["minimax", "lsq"]);
+    let ver_collab = |key: &str| {
+        comparison
+            .method(key)
+            .and_then(|m| m.figures())
+            .and_then(|f| f.report(dualcal::dataset::Split::Ver))
+            .expect("verification figures")
+            .collaborative
+            .pos_rms_mm
+    };
+    let (minimax, lsq) = (ver_collab("minimax"), ver_collab("lsq"));
+    assert!((minimax - lsq).abs() > 1e-6, "same figures {minimax} mm");
+    let nominal = comparison
+        .nominal
+        .report(dualcal::dataset::Split::Ver)
+        .unwrap()
+        .collaborative
+        .pos_rms_mm;
+    assert!(nominal > 10.0 * minimax.max(lsq), "nominal {nominal} mm");
+    // One row per method plus the nominal one, each with its figures shown.
+    harness.get_by_role_and_label(eframe::egui::accesskit::Role::Label, "nominal");
+    for key in ["minimax", "lsq"] {
+        let title = dualcal::comparison::method(key).unwrap().title();
+        harness.get_by_role_and_label(eframe::egui::accesskit::Role::Label, &title);
+    }
+    for v in [nominal, minimax, lsq] {
+        let text = format!("{v:.3}");
+        assert!(
+            harness.query_all_by_label(&text).count() >= 1,
+            "{text} not shown"
+        );
+    }
+    assert_eq!(
+        harness.query_all_by_label_contains("converged (").count(),
+        2
+    );
+    harness.get_by_label_contains("Comparison done");
+
+    // Move the pointer off Run comparison first: its tooltip covers the table's rows.
+    harness.get_by_label("Adopt lsq").hover();
+    harness.run_steps(2);
+    harness.get_by_label("Adopt lsq").click();
+    harness.step();
+    assert_eq!(harness.state().compare_view().adopted, Some("lsq"));
+    step_until(&mut harness, MAX_RUN_FRAMES, "adopting", |app| {
+        !app.is_calibrating()
+    });
+    let app = harness.state();
+    assert!(app.errors().is_empty(), "{:?}", app.errors());
+    let adopted = &app.session().unwrap().calibrated.as_ref().unwrap().result;
+    assert_eq!(adopted.settings.method, Method::LeastSquares);
+    assert!((calibrated_ver_collab(app) - lsq).abs() < 1e-9);
+    assert_eq!(exported_method(app)["objective"], "LeastSquares");
+    shown(&harness, "Adopted the compared result (method lsq");
+}
+
+/// Stepped in frames (a browser build): a method that stops at the iteration limit says so in its
+/// row. Cancelling stops the running method (its row says so) and skips the rest.
+#[test]
+fn a_comparison_stepped_in_frames_shows_terminations_and_cancels() {
+    let mut harness = harness([1400.0, 900.0], AppLaunch::default());
+    loaded(&mut harness);
+    harness
+        .state_mut()
+        .set_execution(dualcal::app::task::Execution::InFrames);
+    harness.state_mut().settings_mut().max_iterations = 1;
+    harness.state_mut().compare_view_mut().pick(&["minimax"]);
+    harness.state_mut().apply(Command::StartComparison);
+    step_until(&mut harness, MAX_RUN_FRAMES, "comparison", |app| {
+        !app.is_comparing()
+    });
+    assert!(harness.state().errors().is_empty());
+    harness.get_by_label_contains("iteration limit reached");
+    harness.get_by_label("Adopt minimax");
+
+    // The paper's subgradient QP with a huge budget: far longer than the test, until cancelled (on a
+    // thread: stepped in frames, one outer iteration of it would hold the frame).
+    {
+        let app = harness.state_mut();
+        app.set_execution(dualcal::app::task::Execution::Thread);
+        let s = app.settings_mut();
+        s.max_iterations = 100;
+        s.qp = dualcal::solver::QpMethod::Paper;
+        s.max_qp_iterations = 100_000_000;
+        app.compare_view_mut().pick(&["minimax", "lsq"]);
+    }
+    harness.state_mut().apply(Command::StartComparison);
+    step_until(&mut harness, MAX_RUN_FRAMES, "the first method", |app| {
+        app.compare_view().progress.is_some()
+    });
+    assert!(harness.state().is_comparing());
+    harness.get_by_label("Cancel comparison").click();
+    step_until(&mut harness, MAX_RUN_FRAMES, "cancellation", |app| {
+        !app.is_comparing()
+    });
+    let app = harness.state();
+    let comparison = app.compare_view().comparison.as_ref().unwrap();
+    assert!(comparison.cancelled);
+    assert_eq!(comparison.methods.len(), 1, "the rest is skipped");
+    shown(&harness, "Comparison cancelled");
+    shown(&harness, "(left arm): cancelled");
+}
+
+/// docs/compare-methods.png: the comparison view at 1280 × 800 on the bundled example, every method of
+/// the comparison table run. `DUALCAL_SCREENSHOT_OUT=docs/compare-methods.png cargo test --test gui
+/// compare_screenshot -- --ignored`.
+#[test]
+#[ignore]
+fn compare_screenshot() {
+    let out = std::env::var_os("DUALCAL_SCREENSHOT_OUT").map_or_else(
+        || "target/compare-methods.png".into(),
+        std::path::PathBuf::from,
+    );
+    let mut harness = Harness::builder()
+        .with_size(eframe::egui::Vec2::new(1280.0, 800.0))
+        .wgpu()
+        .build_eframe(|cc| WorkbenchApp::new(cc, AppLaunch::default()));
+    loaded(&mut harness);
+    harness.get_by_label("Compare methods…").click();
+    harness.run_steps(2);
+    harness.get_by_label("all").click();
+    harness.run_steps(2);
+    harness.get_by_label("Run comparison").click();
+    harness.step();
+    step_until(&mut harness, MAX_RUN_FRAMES, "comparison", |app| {
+        !app.is_comparing()
+    });
+    assert!(
+        harness.state().errors().is_empty(),
+        "{:?}",
+        harness.state().errors()
+    );
+    harness.run_steps(4);
+    let image = harness.render().expect("render");
+    image.save(&out).expect("write the PNG");
+    println!("wrote {}", out.display());
 }

@@ -9,7 +9,7 @@ use super::files::{self, FileReply, OpenKind, PathPrompt, PromptAction, SaveRequ
 use super::session::Session;
 use super::task::BackgroundTask;
 use super::work::{AutoExcludeWork, CalibrationWork, LiveRate, LoadWork};
-use super::{Status, WorkbenchApp, table};
+use super::{Status, WorkbenchApp, compare, table};
 use crate::side::ConfigId;
 use eframe::egui;
 use std::path::PathBuf;
@@ -50,6 +50,14 @@ pub enum Command {
     ClosePrompt,
     /// Remove the error message at this index.
     DismissError(usize),
+    /// Open (or close) the comparison view.
+    ShowComparison(bool),
+    /// Run the picked methods on the current dataset, one after another in the background.
+    StartComparison,
+    /// Stop the running comparison (finished methods stay listed).
+    CancelComparison,
+    /// Make the compared method's result (by its key) the current calibration.
+    AdoptCompared(&'static str),
 }
 
 impl Command {
@@ -133,7 +141,75 @@ impl WorkbenchApp {
                     self.errors.remove(k);
                 }
             }
+            Command::ShowComparison(open) => self.compare.open = open,
+            Command::StartComparison => self.start_comparison(),
+            Command::CancelComparison => {
+                if let Some(task) = &mut self.comparison {
+                    task.cancel();
+                }
+            }
+            Command::AdoptCompared(key) => self.adopt_compared(key),
         }
+    }
+
+    /// Run the picked methods on the session (with the current settings' split, limits and
+    /// tolerances and the session's exclusions); the last comparison is replaced as the new one's
+    /// rows arrive. Not while a calibration runs (the two would share the two cores).
+    fn start_comparison(&mut self) {
+        let Some(session) = &self.session else {
+            self.errors.push("Open a dataset first.".into());
+            return;
+        };
+        if self.calibration.is_some() || self.comparison.is_some() {
+            return;
+        }
+        if let Some(refusal) = refusal(session) {
+            self.errors.push(refusal);
+            return;
+        }
+        let entries = self.compare.picked_entries();
+        if entries.is_empty() {
+            self.errors
+                .push("Pick at least one method to compare.".into());
+            return;
+        }
+        let common = compare::common_settings(&self.settings, session);
+        let work = compare::ComparisonWork::new(session, entries, common);
+        match BackgroundTask::start("comparison", work, self.events.sender(), self.execution) {
+            Ok(task) => {
+                self.compare.open = true;
+                self.compare.adopted = None;
+                self.compare.progress = None;
+                self.status = Status::Idle("Comparing methods…".into());
+                self.comparison = Some(task);
+            }
+            Err(e) => self
+                .errors
+                .push(format!("cannot start the comparison thread: {e}")),
+        }
+    }
+
+    /// Take a compared method's result as the current calibration (its figures are computed in the
+    /// background, then it is shown and exported like a calibration of its own).
+    fn adopt_compared(&mut self, key: &'static str) {
+        let Some(session) = &self.session else {
+            return;
+        };
+        if self.calibration.is_some() || self.comparison.is_some() {
+            return;
+        }
+        let Some(run) = self
+            .compare
+            .comparison
+            .as_ref()
+            .and_then(|c| c.method(key))
+            .and_then(|m| m.run())
+        else {
+            return;
+        };
+        let work = compare::AdoptWork::new(session, run.result.clone());
+        self.compare.adopted = Some(key);
+        self.start_calibration_task_named("adopt", work);
     }
 
     /// Load on a background task; on failure the error is shown and the current session stays.
@@ -185,6 +261,10 @@ impl WorkbenchApp {
     }
 
     fn start_calibration_task(&mut self, work: impl super::task::Work) {
+        self.start_calibration_task_named("calibration", work);
+    }
+
+    fn start_calibration_task_named(&mut self, name: &str, work: impl super::task::Work) {
         // Dropping a running task cancels it.
         self.calibration = None;
         if let Some(session) = &mut self.session
@@ -192,7 +272,7 @@ impl WorkbenchApp {
         {
             self.generation += 1;
         }
-        match BackgroundTask::start("calibration", work, self.events.sender(), self.execution) {
+        match BackgroundTask::start(name, work, self.events.sender(), self.execution) {
             Ok(task) => {
                 self.history.clear();
                 self.status = Status::Running {

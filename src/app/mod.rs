@@ -11,6 +11,7 @@
 
 pub mod colormap;
 pub mod command;
+pub mod compare;
 pub mod events;
 mod example;
 pub mod export;
@@ -100,6 +101,10 @@ pub struct WorkbenchApp {
     /// Loading the session's robot meshes.
     mesh_loading: Option<BackgroundTask>,
     calibration: Option<BackgroundTask>,
+    /// Running a comparison of methods.
+    comparison: Option<BackgroundTask>,
+    /// The comparison view.
+    compare: compare::CompareView,
     /// Iterations of the current (or last) run.
     history: Vec<IterationRecord>,
     status: Status,
@@ -152,6 +157,8 @@ impl WorkbenchApp {
             loading: None,
             mesh_loading: None,
             calibration: None,
+            comparison: None,
+            compare: compare::CompareView::default(),
             history: Vec::new(),
             status: Status::Idle("Ready.".into()),
             errors: Vec::new(),
@@ -190,6 +197,20 @@ impl WorkbenchApp {
 
     pub fn is_calibrating(&self) -> bool {
         self.calibration.is_some()
+    }
+
+    /// Whether a comparison of methods is running.
+    pub fn is_comparing(&self) -> bool {
+        self.comparison.is_some()
+    }
+
+    /// The comparison view: the methods picked, the last comparison.
+    pub fn compare_view(&self) -> &compare::CompareView {
+        &self.compare
+    }
+
+    pub fn compare_view_mut(&mut self) -> &mut compare::CompareView {
+        &mut self.compare
     }
 
     /// Error messages currently shown.
@@ -332,10 +353,102 @@ impl WorkbenchApp {
                 }
                 TaskEvent::Calibrated(outcome) => outcome,
                 TaskEvent::Failed(message) => Outcome::Failed(message),
-                TaskEvent::Loaded(_) | TaskEvent::Meshes(_) => return,
+                TaskEvent::Loaded(_)
+                | TaskEvent::Meshes(_)
+                | TaskEvent::Comparison(_)
+                | TaskEvent::CompareNominal(_)
+                | TaskEvent::ComparedMethod(_)
+                | TaskEvent::Compared(_) => return,
             };
             if let Some(task) = self.calibration.take() {
                 self.on_calibration_end(outcome, &task);
+            }
+        } else if self.comparison.as_ref().is_some_and(|t| t.id() == id) {
+            self.on_comparison_event(event);
+        }
+    }
+
+    /// A running comparison's event: its progress, its nominal figures and each method's outcome fill
+    /// the view as they arrive.
+    fn on_comparison_event(&mut self, event: TaskEvent) {
+        let view = &mut self.compare;
+        let end = match event {
+            TaskEvent::Calibration(CalibrationEvent::StageStarted { stage, .. }) => {
+                if let Some(p) = &mut view.progress {
+                    p.stage = Some(stage);
+                    p.iteration = 0;
+                }
+                return;
+            }
+            TaskEvent::Calibration(CalibrationEvent::Iteration(record)) => {
+                if let Some(p) = &mut view.progress {
+                    p.stage = Some(record.stage);
+                    p.iteration = record.iteration;
+                }
+                return;
+            }
+            TaskEvent::Comparison(crate::comparison::ComparisonEvent::MethodStarted {
+                index,
+                total,
+                key,
+            }) => {
+                view.progress = Some(compare::CompareProgress {
+                    index,
+                    total,
+                    key,
+                    stage: None,
+                    iteration: 0,
+                });
+                return;
+            }
+            TaskEvent::CompareNominal(figures) => {
+                view.comparison = Some(crate::comparison::Comparison {
+                    nominal: *figures,
+                    truth: None,
+                    methods: Vec::new(),
+                    cancelled: false,
+                });
+                return;
+            }
+            TaskEvent::ComparedMethod(outcome) => {
+                if let Some(c) = &mut view.comparison {
+                    c.methods.push(*outcome);
+                }
+                return;
+            }
+            TaskEvent::Compared(end) => end,
+            TaskEvent::Failed(message) => Err(message),
+            _ => return,
+        };
+        view.progress = None;
+        let Some(task) = self.comparison.take() else {
+            return;
+        };
+        match end {
+            Ok(cancelled) => {
+                if let Some(c) = &mut view.comparison {
+                    c.cancelled = cancelled;
+                }
+                let (ran, failed) = view.comparison.as_ref().map_or((0, 0), |c| {
+                    (
+                        c.methods.len(),
+                        c.methods.iter().filter(|m| m.run().is_none()).count(),
+                    )
+                });
+                self.status = Status::Idle(format!(
+                    "Comparison {} after {:.1} s: {ran} method{} ran{}.",
+                    if cancelled { "cancelled" } else { "done" },
+                    task.elapsed_secs(),
+                    if ran == 1 { "" } else { "s" },
+                    match failed {
+                        0 => String::new(),
+                        n => format!(", {n} could not (see its row)"),
+                    }
+                ));
+            }
+            Err(message) => {
+                self.errors.push(format!("comparison: {message}"));
+                self.status = Status::Idle("Comparison failed.".into());
             }
         }
     }
@@ -347,6 +460,11 @@ impl WorkbenchApp {
             elapsed_secs,
         } = loaded;
         self.calibration = None;
+        // A comparison is of the dataset it ran on.
+        self.comparison = None;
+        self.compare.comparison = None;
+        self.compare.progress = None;
+        self.compare.adopted = None;
         self.history.clear();
         self.selection = None;
         self.urdf_override = urdf;
@@ -470,17 +588,27 @@ impl WorkbenchApp {
                     n => format!(" {n} configuration(s) left out."),
                 };
                 let advice = excluded + &advice;
+                let method = compare::method_used(&calibrated.result);
+                let took = calibrated.result.elapsed_secs;
                 if let Some(session) = &mut self.session {
                     session.exclude = calibrated.result.settings.exclude.clone();
                     session.calibrated = Some(*calibrated);
                     self.viewport.auto_scale(session);
                 }
                 self.generation += 1;
-                format!(
-                    "Calibration done in {:.1} s ({}).{advice}",
-                    task.elapsed_secs(),
-                    terms.join(", ")
-                )
+                if task.name() == "adopt" {
+                    format!(
+                        "Adopted the compared result ({method}; it took {:.1} s: {}).{advice}",
+                        took,
+                        terms.join(", ")
+                    )
+                } else {
+                    format!(
+                        "Calibration done in {:.1} s ({method}; {}).{advice}",
+                        task.elapsed_secs(),
+                        terms.join(", ")
+                    )
+                }
             }
             Outcome::Cancelled { stage, iterations } => {
                 let latency = task
@@ -531,6 +659,7 @@ impl WorkbenchApp {
             &mut self.loading,
             &mut self.mesh_loading,
             &mut self.calibration,
+            &mut self.comparison,
         ]
         .into_iter()
         .flatten()
@@ -569,15 +698,19 @@ impl eframe::App for WorkbenchApp {
         {
             commands.push(Command::ToggleExclude(config));
         }
-        egui::CentralPanel::default()
-            .frame(egui::Frame::NONE)
-            .show(ui, |ui| {
-                let session = self.session.as_ref();
-                let clicked = self
-                    .viewport
-                    .ui(ui, frame, session, self.generation, self.selection);
-                commands.extend(clicked);
-            });
+        if self.panels_visible && self.compare.open {
+            egui::CentralPanel::default().show(ui, |ui| self.compare_ui(ui, &mut commands));
+        } else {
+            egui::CentralPanel::default()
+                .frame(egui::Frame::NONE)
+                .show(ui, |ui| {
+                    let session = self.session.as_ref();
+                    let clicked =
+                        self.viewport
+                            .ui(ui, frame, session, self.generation, self.selection);
+                    commands.extend(clicked);
+                });
+        }
         if !commands.is_empty() {
             // Draw the new state in this frame: egui builds the UI again (with no input) instead
             // of showing this pass, so nothing is laid out a frame late.

@@ -11,6 +11,7 @@ use super::events::{AppEvent, EventSender};
 use super::session::{AutoExcludeSummary, LiveFigures, LoadedMeshes};
 use super::work::{Loaded, Outcome};
 use crate::analysis::Analysis;
+use crate::comparison::{ComparisonEvent, MethodOutcome, ModelFigures};
 use crate::solver::CalibrationEvent;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -35,6 +36,14 @@ pub enum TaskEvent {
     AutoExcluded(AutoExcludeSummary),
     /// A calibration ended.
     Calibrated(Outcome),
+    /// A comparison's progress: a method starts or ends.
+    Comparison(ComparisonEvent),
+    /// A comparison's nominal figures (its first step).
+    CompareNominal(Box<ModelFigures>),
+    /// A compared method ended (ran, failed, or was cancelled).
+    ComparedMethod(Box<MethodOutcome>),
+    /// A comparison ended: `Ok(cancelled)`, or why it could not run at all.
+    Compared(Result<bool, String>),
     /// The work stopped without reporting its end.
     Failed(String),
 }
@@ -48,6 +57,9 @@ impl TaskEvent {
                 | TaskEvent::Live(_)
                 | TaskEvent::Nominal(_)
                 | TaskEvent::AutoExcluded(_)
+                | TaskEvent::Comparison(_)
+                | TaskEvent::CompareNominal(_)
+                | TaskEvent::ComparedMethod(_)
         )
     }
 }
@@ -174,6 +186,11 @@ impl BackgroundTask {
 
     pub fn id(&self) -> TaskId {
         self.id
+    }
+
+    /// The name it was started with.
+    pub fn name(&self) -> &str {
+        &self.name
     }
 
     pub fn elapsed_secs(&self) -> f64 {

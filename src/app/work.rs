@@ -352,7 +352,7 @@ impl CalibrationWork {
 }
 
 /// A finished calibration with its figures and its screening.
-fn calibrated_outcome(
+pub(super) fn calibrated_outcome(
     dataset: &Dataset,
     result: CalibrationResult,
     analysis: anyhow::Result<Analysis>,

@@ -5,6 +5,8 @@
 mod settings;
 mod view_options;
 
+pub(crate) use settings::{base_method_help, method_help};
+
 use super::session::{self, After};
 use super::{Command, ERROR_COLOR, Status, WorkbenchApp, plots, table};
 
@@ -64,6 +66,10 @@ impl WorkbenchApp {
                 ui.set_min_width(ui.available_width());
                 self.settings_panel_ui(ui, commands)
             });
+        if self.compare.open {
+            // The comparison takes the rest of the window.
+            return;
+        }
         egui::Panel::bottom("plots")
             .default_size((window.y * 0.36).clamp(220.0, 420.0))
             .size_range(140.0..=(window.y * 0.6).max(200.0))

@@ -7,7 +7,7 @@ use crate::app::files::OpenKind;
 use crate::app::session::{RobotMeshes, Session};
 use crate::dataset::Split;
 use crate::side::Side;
-use crate::solver::{CalibrationSettings, Method, QpMethod};
+use crate::solver::{BaseMethod, CalibrationSettings, Method, QpMethod, Reflector};
 use eframe::egui::{self, Color32, RichText};
 use std::path::Path;
 
@@ -18,12 +18,17 @@ impl WorkbenchApp {
             ui.separator();
             self.robot_section_ui(ui, commands);
             ui.separator();
-            ui.heading("Calibration");
+            ui.horizontal(|ui| {
+                ui.heading("Calibration");
+                self.compare_button_ui(ui, commands);
+            });
+            self.current_method_ui(ui);
             let running = self.calibration.is_some();
             ui.add_enabled_ui(!running, |ui| {
                 calibration_settings_ui(ui, &mut self.settings)
             });
             self.calibration_buttons_ui(ui, commands);
+            // self.compare_button_ui(ui, commands);
             ui.separator();
             self.export_section_ui(ui, commands);
             ui.separator();
@@ -145,6 +150,40 @@ impl WorkbenchApp {
                 commands.push(Command::CancelCalibration);
             }
         });
+    }
+
+    /// Open or close the comparison view.
+    fn compare_button_ui(&self, ui: &mut egui::Ui, commands: &mut Vec<Command>) {
+        let open = self.compare.open;
+        let text = if open {
+            "Back to the 3D view"
+        } else {
+            "Compare methods…"
+        };
+        if ui
+            .add_enabled(self.session.is_some(), egui::Button::new(text))
+            .on_hover_text(
+                "Run several methods on this dataset and see their figures, histograms and box plots \
+                 side by side; adopt one as the calibration",
+            )
+            .clicked()
+        {
+            commands.push(Command::ShowComparison(!open));
+        }
+    }
+
+    /// The method of the current calibration.
+    fn current_method_ui(&self, ui: &mut egui::Ui) {
+        if let Some(c) = self.session.as_ref().and_then(|s| s.calibrated.as_ref()) {
+            ui.label(
+                RichText::new(format!(
+                    "current: {}",
+                    crate::app::compare::method_used(&c.result)
+                ))
+                .small()
+                .color(Color32::GRAY),
+            );
+        }
     }
 
     fn export_section_ui(&self, ui: &mut egui::Ui, commands: &mut Vec<Command>) {
@@ -366,15 +405,32 @@ fn calibration_settings_ui(ui: &mut egui::Ui, settings: &mut CalibrationSettings
         grid_row_ui(
             ui,
             "Method",
-            "Minimax: the paper's min over parameters of the max over reflectors of the summed squared distance errors.\nLeast squares: all distance errors (Levenberg–Marquardt), for comparison.",
-            |ui| {
-                choice_ui(
-                    ui,
-                    "method",
-                    &mut settings.method,
-                    &[(Method::Minimax, "minimax"), (Method::LeastSquares, "least squares")],
-                )
-            },
+            "Step 1, each arm's geometry: what the fit minimises (hover over a choice for what it \
+             minimises and what it cannot see)",
+            |ui| method_choice_ui(ui, settings),
+        );
+        if settings.method == Method::DistanceSingle {
+            grid_row_ui(
+                ui,
+                "Reflector",
+                "The one reflector whose distance errors ref. [26] fits. auto: per arm, the one with \
+                 the largest nominal error (the summary names the one used).",
+                |ui| {
+                    let mut choices = vec![(None, "auto")];
+                    choices.extend(Reflector::ALL.map(|r| (Some(r), r.name())));
+                    choice_ui(ui, "reflector", &mut settings.reflector, &choices)
+                },
+            );
+        } else {
+            // Only distance-single takes a reflector; the solver refuses one with any other method.
+            settings.reflector = None;
+        }
+        grid_row_ui(
+            ui,
+            "Base method",
+            "Step 2, the right-arm base in the left-arm base (hover over a choice for what it \
+             minimises and what it cannot see)",
+            |ui| base_method_choice_ui(ui, &mut settings.base_method),
         );
         grid_row_ui(
             ui,
@@ -436,6 +492,91 @@ fn calibration_settings_ui(ui: &mut egui::Ui, settings: &mut CalibrationSettings
             );
         }
     });
+}
+
+/// What each step-1 method minimises and what it cannot see (the choices' hover text; docs/solver.md).
+pub(crate) fn method_help(method: Method) -> (&'static str, &'static str) {
+    match method {
+        Method::Minimax => (
+            "minimax (paper, Algorithm I)",
+            "Minimises the largest of the three reflectors' summed squared distance errors (SQP). \
+             Distances only: the tracker-to-base transform and the parameters distances cannot \
+             see stay nominal.",
+        ),
+        Method::LeastSquares => (
+            "least squares",
+            "Minimises the sum of all three reflectors' squared distance errors \
+             (Levenberg–Marquardt). Distances only, like minimax; bounds the sum, not the worst \
+             reflector.",
+        ),
+        Method::DistanceSingle => (
+            "distance, one reflector [26]",
+            "Minimises one reflector's squared distance errors (Gauss–Newton). Cannot see the \
+             flange's orientation: the other two reflectors are not identified and stay nominal.",
+        ),
+        Method::Pose => (
+            "pose [19]",
+            "Minimises the pose error of a tool frame built from the three measured reflectors \
+             (linearised model, QR), identifying the tracker-to-base transform with the arm.",
+        ),
+        Method::Position => (
+            "position [18]",
+            "Minimises the three reflectors' absolute positioning errors in the tracker frame \
+             (Levenberg–Marquardt), the tracker-to-base transform identified jointly. Needs \
+             absolute tracker coordinates.",
+        ),
+    }
+}
+
+/// What each step-2 method minimises and what it cannot see.
+pub(crate) fn base_method_help(method: BaseMethod) -> (&'static str, &'static str) {
+    match method {
+        BaseMethod::Minimax => (
+            "minimax (paper, Algorithm II)",
+            "Minimises the largest collaborative distance error of left/right configuration pairs \
+             (SQP). Distances only.",
+        ),
+        BaseMethod::Distance => (
+            "distance [26]",
+            "Minimises the sum of squared collaborative distance errors (Gauss–Newton). Distances \
+             only; bounds the sum, not the worst pair.",
+        ),
+        BaseMethod::Absolute => (
+            "absolute [28]",
+            "Locates each arm's base in the tracker frame from its absolute positioning errors \
+             (step 1's arms held) and combines the two (Moore–Penrose inverse). Sees only what \
+             each arm's absolute errors show; never fits the collaborative distances themselves.",
+        ),
+    }
+}
+
+/// The step-1 method combo: every method, each with what it minimises and cannot see on hover.
+fn method_choice_ui(ui: &mut egui::Ui, settings: &mut CalibrationSettings) -> egui::Response {
+    egui::ComboBox::from_id_salt("method")
+        .selected_text(settings.method.name())
+        .show_ui(ui, |ui| {
+            for m in Method::ALL {
+                let (name, help) = method_help(m);
+                ui.selectable_value(&mut settings.method, m, name)
+                    .on_hover_text(help);
+            }
+        })
+        .response
+        .on_hover_text(method_help(settings.method).1)
+}
+
+/// The step-2 method combo.
+fn base_method_choice_ui(ui: &mut egui::Ui, base: &mut BaseMethod) -> egui::Response {
+    egui::ComboBox::from_id_salt("base method")
+        .selected_text(base.name())
+        .show_ui(ui, |ui| {
+            for m in BaseMethod::ALL {
+                let (name, help) = base_method_help(m);
+                ui.selectable_value(base, m, name).on_hover_text(help);
+            }
+        })
+        .response
+        .on_hover_text(base_method_help(*base).1)
 }
 
 /// A path's last component (the whole path when it has none).
