@@ -762,6 +762,44 @@ pub(crate) fn report(plan: &Plan, runs: &[SeedRun], tables: &Tables, elapsed_sec
             .join(", "),
         elapsed_secs
     );
+    out.push_str(&termination_table(plan, runs));
+    for t in &tables.tables {
+        out.push_str(&t.to_markdown());
+        out.push('\n');
+    }
+    let _ = writeln!(
+        out,
+        "#### Fig. 4 analogue: accuracy against the number of calibration configurations\n\n\
+         Each step-1 method on the first n calibration configurations of each arm; cal = those n, ver = \
+         the verification configurations.\n"
+    );
+    out.push_str(&tables.fig4_markdown);
+    out.push('\n');
+
+    // Each is empty where it does not apply (no true parameters; no minimax among the methods).
+    out.push_str(&truth_table(plan, runs));
+    out.push_str(&minimax_table(plan, runs));
+    let _ = writeln!(
+        out,
+        "Figures: [Fig. 4](fig4_configurations.svg), [Fig. 6 right arm](fig6_relative_right.svg), \
+         [Fig. 6 left arm](fig6_relative_left.svg), [Fig. 7](fig7_base_methods.svg), \
+         [Fig. 8](fig8_collaborative.svg); the numbers behind them in histograms.csv and boxplots.csv, \
+         every run's figures in runs.csv."
+    );
+    out
+}
+
+/// The indicators of the ratio tables.
+const PICKS: [(&str, Pick); 4] = [
+    ("pos RMS*", |s| s.pos_rms_mm),
+    ("pos max", |s| s.pos_max_mm),
+    ("ori RMS", |s| s.ori_rms_rad),
+    ("ori max", |s| s.ori_max_rad),
+];
+
+/// How each method ended: converged runs, iterations, time.
+fn termination_table(plan: &Plan, runs: &[SeedRun]) -> String {
+    let mut out = String::new();
     // How each method ended.
     let _ = writeln!(
         out,
@@ -800,26 +838,14 @@ pub(crate) fn report(plan: &Plan, runs: &[SeedRun], tables: &Tables, elapsed_sec
         );
     }
     out.push('\n');
-    for t in &tables.tables {
-        out.push_str(&t.to_markdown());
-        out.push('\n');
-    }
-    let _ = writeln!(
-        out,
-        "#### Fig. 4 analogue: accuracy against the number of calibration configurations\n\n\
-         Each step-1 method on the first n calibration configurations of each arm; cal = those n, ver = \
-         the verification configurations.\n"
-    );
-    out.push_str(&tables.fig4_markdown);
-    out.push('\n');
+    out
+}
 
+/// Every method's verification figures relative to the true parameters'.
+fn truth_table(plan: &Plan, runs: &[SeedRun]) -> String {
+    let mut out = String::new();
+    let picks = PICKS;
     let with_truth = runs.iter().all(|r| r.comparison.truth.is_some());
-    let picks: [(&str, Pick); 4] = [
-        ("pos RMS*", |s| s.pos_rms_mm),
-        ("pos max", |s| s.pos_max_mm),
-        ("ori RMS", |s| s.ori_rms_rad),
-        ("ori max", |s| s.ori_max_rad),
-    ];
     if with_truth {
         let _ = writeln!(
             out,
@@ -882,6 +908,13 @@ pub(crate) fn report(plan: &Plan, runs: &[SeedRun], tables: &Tables, elapsed_sec
         }
         out.push('\n');
     }
+    out
+}
+
+/// The paper's method against each other method.
+fn minimax_table(plan: &Plan, runs: &[SeedRun]) -> String {
+    let mut out = String::new();
+    let picks = PICKS;
     // The paper's method against each other method.
     if plan.methods.iter().any(|m| m.key == "minimax") {
         let _ = writeln!(
@@ -926,12 +959,5 @@ pub(crate) fn report(plan: &Plan, runs: &[SeedRun], tables: &Tables, elapsed_sec
         }
         out.push('\n');
     }
-    let _ = writeln!(
-        out,
-        "Figures: [Fig. 4](fig4_configurations.svg), [Fig. 6 right arm](fig6_relative_right.svg), \
-         [Fig. 6 left arm](fig6_relative_left.svg), [Fig. 7](fig7_base_methods.svg), \
-         [Fig. 8](fig8_collaborative.svg); the numbers behind them in histograms.csv and boxplots.csv, \
-         every run's figures in runs.csv."
-    );
     out
 }
