@@ -7,6 +7,7 @@ use crate::dataset::{self, Dataset};
 use crate::robot::RobotDescription;
 use crate::side::{ConfigId, Side};
 use crate::solver::{CalibrationResult, Stage};
+use crate::source::Files;
 use anyhow::Context as _;
 use nalgebra::Isometry3;
 use std::path::{Path, PathBuf};
@@ -89,14 +90,24 @@ impl Session {
     /// Load a dataset (directory or `dataset.toml`) with the given robot, or the one the dataset names,
     /// or the built-in IRB 14000.
     pub fn load(dataset_path: &Path, urdf: Option<&Path>) -> anyhow::Result<Self> {
-        let dataset = dataset::load(dataset_path)?;
+        Self::load_from(&Files::default(), dataset_path, urdf)
+    }
+
+    /// [`Session::load`] reading the files through `files` (in a browser: the files in memory).
+    pub fn load_from(
+        files: &Files,
+        dataset_path: &Path,
+        urdf: Option<&Path>,
+    ) -> anyhow::Result<Self> {
+        let (dataset, _) = dataset::load_from(&**files, dataset_path)?;
         let robot_path = urdf
             .map(Path::to_path_buf)
             .or_else(|| dataset.robot.clone());
-        let robot = RobotDescription::for_dataset_with(
+        let robot = RobotDescription::for_dataset_from(
             &dataset,
             robot_path.as_deref(),
             &Default::default(),
+            files,
         )?;
         Self::new(dataset, robot, robot_path)
     }

@@ -11,11 +11,13 @@ use crate::solver::{
     CalibrationEvent, CalibrationResult, CalibrationRun, CalibrationSettings, Calibrator,
     IterationRecord, Observer, Progress, Stage, StageSummary, Termination,
 };
+use crate::source::Files;
 use anyhow::Context as _;
 use nalgebra::Isometry3;
 use std::path::PathBuf;
 use std::sync::Arc;
-use std::time::{Duration, Instant};
+use std::time::Duration;
+use web_time::Instant;
 
 /// A dataset and robot loaded.
 pub struct Loaded {
@@ -29,12 +31,14 @@ pub struct Loaded {
 pub struct LoadWork {
     pub dataset: PathBuf,
     pub urdf: Option<PathBuf>,
+    /// Where the files are read from (the file system, or a browser's files in memory).
+    pub files: Files,
 }
 
 impl Work for LoadWork {
     fn step(&mut self, task: &TaskContext) -> Step {
-        let started = std::time::Instant::now();
-        let result = Session::load(&self.dataset, self.urdf.as_deref())
+        let started = Instant::now();
+        let result = Session::load_from(&self.files, &self.dataset, self.urdf.as_deref())
             .with_context(|| format!("cannot open dataset {}", self.dataset.display()))
             .map(|session| {
                 Box::new(Loaded {
@@ -297,6 +301,7 @@ mod tests {
         let load = LoadWork {
             dataset: Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/datasets/example"),
             urdf: None,
+            files: Files::default(),
         };
         let Some(AppEvent::Task(_, TaskEvent::Loaded(Ok(loaded)))) =
             run_in_frames(load, &channel).pop()

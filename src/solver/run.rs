@@ -20,7 +20,8 @@ use crate::side::{ConfigId, PerSide, Side};
 use nalgebra::{DMatrix, DVector, Vector3};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::Instant;
+// std's `Instant::now` panics in a browser (wasm32-unknown-unknown); web-time is std's on native targets.
+use web_time::Instant;
 
 /// Pairs per reflector sampled for identifiability, column scaling and the start Hessian.
 pub const IDENTIFIABILITY_PAIRS: usize = 3000;

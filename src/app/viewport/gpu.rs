@@ -39,7 +39,6 @@ struct GpuInstance {
 struct MeshRange {
     first_index: u32,
     index_count: u32,
-    base_vertex: i32,
 }
 
 /// A growable vertex/instance buffer.
@@ -302,14 +301,15 @@ impl UnitMeshes {
         let meshes = [unit_box(), unit_cylinder(32), unit_sphere(24, 16)];
         let mut vertices: Vec<MeshVertex> = Vec::new();
         let mut indices: Vec<u32> = Vec::new();
+        // The indices carry each mesh's vertex offset (WebGL2 has no base-vertex draws).
         let ranges = meshes.map(|(v, i)| {
             let range = MeshRange {
                 first_index: indices.len() as u32,
                 index_count: i.len() as u32,
-                base_vertex: vertices.len() as i32,
             };
+            let base_vertex = vertices.len() as u32;
             vertices.extend(v);
-            indices.extend(i);
+            indices.extend(i.into_iter().map(|index| index + base_vertex));
             range
         });
         Self {
@@ -513,7 +513,7 @@ impl ViewportGpu {
                 if !range.is_empty() {
                     pass.draw_indexed(
                         mesh.first_index..mesh.first_index + mesh.index_count,
-                        mesh.base_vertex,
+                        0,
                         range.clone(),
                     );
                 }
