@@ -6,11 +6,12 @@
 //! cargo run --release --example calibrate_in_frames [-- RUNS]
 //! ```
 //!
-//! Prints JSON: each run's compute time (s) and the median.
-use dualcal::app::events::EventChannel;
+//! Prints JSON: each run's compute time (s: the task's steps, solver and figures) and solver time (s:
+//! the solver's steps alone), and their medians.
+use dualcal::app::events::{AppEvent, EventChannel};
 use dualcal::app::session::Session;
-use dualcal::app::task::{BackgroundTask, Execution};
-use dualcal::app::work::{CalibrationWork, LiveRate};
+use dualcal::app::task::{BackgroundTask, Execution, TaskEvent};
+use dualcal::app::work::{CalibrationWork, LiveRate, Outcome};
 use dualcal::solver::CalibrationSettings;
 use std::path::Path;
 use std::time::Duration;
@@ -23,6 +24,7 @@ fn main() -> anyhow::Result<()> {
     let example = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/datasets/example");
     let session = Session::load(&example, None)?;
     let mut secs = Vec::new();
+    let mut solver_secs = Vec::new();
     for _ in 0..runs {
         let channel = EventChannel::new(None);
         let work = CalibrationWork::new(
@@ -35,16 +37,30 @@ fn main() -> anyhow::Result<()> {
         // An unlimited budget: the browser test's one-frame run (`?budget_ms=60000`).
         while task.needs_frames() {
             task.step_in_frame(Duration::from_secs(60));
-            channel.drain();
+            for event in channel.drain() {
+                if let AppEvent::Task(_, TaskEvent::Calibrated(outcome)) = event {
+                    match outcome {
+                        Outcome::Calibrated(c) => solver_secs.push(c.solver_secs),
+                        _ => anyhow::bail!("the example did not calibrate"),
+                    }
+                }
+            }
         }
         secs.push(task.slice_stats().busy_secs);
     }
-    let mut sorted = secs.clone();
-    sorted.sort_by(f64::total_cmp);
-    let median = sorted.get(sorted.len() / 2).copied().unwrap_or(f64::NAN);
+    let median = |xs: &[f64]| {
+        let mut sorted = xs.to_vec();
+        sorted.sort_by(f64::total_cmp);
+        sorted.get(sorted.len() / 2).copied().unwrap_or(f64::NAN)
+    };
     println!(
         "{}",
-        serde_json::json!({ "compute_s": secs, "median_compute_s": median })
+        serde_json::json!({
+            "compute_s": secs,
+            "median_compute_s": median(&secs),
+            "solver_s": solver_secs,
+            "median_solver_s": median(&solver_secs),
+        })
     );
     Ok(())
 }

@@ -150,7 +150,14 @@ mod tests {
             &session.body_from_left_base(),
         )
         .unwrap();
-        (session, Calibrated { result, analysis })
+        (
+            session,
+            Calibrated {
+                result,
+                analysis,
+                solver_secs: 0.0,
+            },
+        )
     }
 
     fn max_dh_difference(

@@ -18,6 +18,9 @@ use std::sync::Arc;
 pub struct Calibrated {
     pub result: CalibrationResult,
     pub analysis: Analysis,
+    /// Time the solver's own steps took, s: without the live figures, the final figures and (stepped
+    /// in frames) the frames between steps.
+    pub solver_secs: f64,
 }
 
 /// The model a running calibration has reached, with its figures: what the workbench shows instead of

@@ -52,6 +52,7 @@ impl WorkbenchApp {
                     "ver": c.analysis.ver.report,
                     "converged": c.result.is_converged(),
                     "solver_elapsed_s": c.result.elapsed_secs,
+                    "solver_compute_s": c.solver_secs,
                 })
             });
         let last_run = self.last_run.map(|t| {

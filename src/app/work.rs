@@ -193,6 +193,8 @@ pub struct CalibrationWork {
     body_from_left_base: Isometry3<f64>,
     run: Option<CalibrationRun>,
     live: LiveSchedule,
+    /// Time in the solver's steps so far.
+    solver: Duration,
 }
 
 impl CalibrationWork {
@@ -204,6 +206,7 @@ impl CalibrationWork {
             body_from_left_base: session.body_from_left_base(),
             run: None,
             live: LiveSchedule::new(rate),
+            solver: Duration::ZERO,
         }
     }
 
@@ -219,7 +222,11 @@ impl CalibrationWork {
             };
         }
         match Analysis::compute(&self.dataset, &result.calibrated, &self.body_from_left_base) {
-            Ok(analysis) => Outcome::Calibrated(Box::new(Calibrated { result, analysis })),
+            Ok(analysis) => Outcome::Calibrated(Box::new(Calibrated {
+                result,
+                analysis,
+                solver_secs: self.solver.as_secs_f64(),
+            })),
             Err(e) => Outcome::Failed(format!("calibrated model: {e:#}")),
         }
     }
@@ -228,10 +235,12 @@ impl CalibrationWork {
 impl Work for CalibrationWork {
     fn step(&mut self, task: &TaskContext) -> Step {
         let Some(run) = &mut self.run else {
+            let setup = Instant::now();
             let started = Calibrator::new(&self.dataset, &self.nominal)
                 .settings(self.settings.clone())
                 .cancel(task.cancel_flag().clone())
                 .start();
+            self.solver += setup.elapsed();
             return match started {
                 Ok(run) => {
                     self.run = Some(run);
@@ -267,7 +276,10 @@ impl Work for CalibrationWork {
             task,
             live: &mut self.live,
         };
-        let outcome = match run.step(&mut [&mut reporter]) {
+        let stepping = Instant::now();
+        let stepped = run.step(&mut [&mut reporter]);
+        self.solver += stepping.elapsed();
+        let outcome = match stepped {
             Ok(Progress::Running) => return Step::More,
             Ok(Progress::Finished(result)) => self.outcome(*result),
             Err(e) => Outcome::Failed(e.to_string()),
