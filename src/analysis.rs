@@ -173,6 +173,8 @@ pub struct ConfigRow {
     pub measured_body_mm: [Vector3<f64>; 3],
     /// Model points a, b, c in the body frame, mm.
     pub model_body_mm: [Vector3<f64>; 3],
+    /// Left out of the calibration and of the accuracy figures (its own errors are still listed).
+    pub excluded: bool,
 }
 
 impl ConfigRow {
@@ -226,6 +228,8 @@ pub struct Analysis {
     pub left_base_from_tracker: Isometry3<f64>,
     /// RMS of the registration residuals, mm.
     pub registration_rms_mm: f64,
+    /// The configurations left out of the figures (indices into the loaded dataset).
+    pub excluded: Vec<ConfigId>,
 }
 
 impl Analysis {
@@ -246,11 +250,31 @@ impl Analysis {
         model: &DualArmModel,
         body_from_left_base: &Isometry3<f64>,
     ) -> anyhow::Result<Self> {
+        Self::compute_excluding(dataset, model, body_from_left_base, &[])
+    }
+
+    /// [`compute`](Self::compute) with the configurations `exclude` left out of the accuracy figures
+    /// and of the registration (as `dualcal calibrate --exclude` leaves them out of its tables). Every
+    /// configuration still has its row, marked [`ConfigRow::excluded`], with its errors against the
+    /// others: an excluded outlier still shows why it was left out.
+    pub fn compute_excluding(
+        dataset: &Dataset,
+        model: &DualArmModel,
+        body_from_left_base: &Isometry3<f64>,
+        exclude: &[ConfigId],
+    ) -> anyhow::Result<Self> {
         let Sweep {
             per_config,
             cal,
             ver,
         } = metrics::sweep(dataset, model).context("accuracy figures")?;
+        let (cal, ver) = if exclude.is_empty() {
+            (cal, ver)
+        } else {
+            let kept = metrics::sweep(&dataset.excluding(exclude), model)
+                .context("accuracy figures without the excluded configurations")?;
+            (kept.cal, kept.ver)
+        };
 
         // Model points in the left base, and the registration of the tracker onto them.
         let mut model_left: Vec<[Vector3<f64>; 3]> = Vec::new();
@@ -274,8 +298,23 @@ impl Analysis {
                 .into_iter()
                 .flat_map(|side| &dataset.arm(side).measurements)
         };
-        let from: Vec<Vector3<f64>> = measured().flat_map(|m| m.tracker_points_mm).collect();
-        let to: Vec<Vector3<f64>> = model_left.iter().flatten().copied().collect();
+        // The registration uses the configurations kept (an outlier would pull every drawn point).
+        let kept = |side: Side, i: usize| !exclude.contains(&ConfigId::new(side, i));
+        let kept_flags: Vec<bool> = Side::BOTH
+            .into_iter()
+            .flat_map(|side| (0..dataset.arm(side).measurements.len()).map(move |i| kept(side, i)))
+            .collect();
+        let from: Vec<Vector3<f64>> = measured()
+            .zip(&kept_flags)
+            .filter(|(_, k)| **k)
+            .flat_map(|(m, _)| m.tracker_points_mm)
+            .collect();
+        let to: Vec<Vector3<f64>> = model_left
+            .iter()
+            .zip(&kept_flags)
+            .filter(|(_, k)| **k)
+            .flat_map(|(p, _)| *p)
+            .collect();
         let left_base_from_tracker = best_fit_rigid(&from, &to)
             .context("cannot register the tracker frame to the robot (degenerate points)")?;
         let sum_sq: f64 = from
@@ -307,6 +346,7 @@ impl Analysis {
                     .tracker_points_mm
                     .map(|p| (body_from_tracker * Point3::from(p)).coords),
                 model_body_mm: model_pts.map(|p| (body_from_left_base * Point3::from(p)).coords),
+                excluded: exclude.contains(&c.config),
             })
             .collect();
         Ok(Self {
@@ -316,6 +356,7 @@ impl Analysis {
             configs,
             left_base_from_tracker,
             registration_rms_mm,
+            excluded: exclude.to_vec(),
         })
     }
 }

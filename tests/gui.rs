@@ -1,5 +1,8 @@
 //! The workbench driven headlessly with egui_kittest on wgpu (Mesa lavapipe, no window, no GPU):
-//! start on the bundled example, calibrate, cancel, open a broken dataset, snapshot the viewport.
+//! start on the bundled example, calibrate, cancel, open a broken dataset, snapshot the viewport;
+//! the quality flags, excluding a configuration by a click or a key (re-solved at once), Auto-exclude,
+//! a panicking worker; a robot description of the user's own dropped on the window (its arms, joints,
+//! meshes and warnings in the Robot section).
 //! (Set `XDG_RUNTIME_DIR` to a mode-700 directory to silence a harmless warning; `.ci/run` does.)
 #![cfg(feature = "gui")]
 
@@ -7,6 +10,9 @@ use dualcal::app::{AppLaunch, Command, WorkbenchApp};
 use dualcal::side::{ConfigId, PerSide};
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
+
+#[path = "fixtures/robots.rs"]
+mod robots;
 
 /// Frame caps: generous, so a slow machine passes; they only stop a hung test.
 const MAX_LOAD_FRAMES: usize = 20_000;
@@ -242,8 +248,10 @@ fn selecting_in_the_table_and_in_the_viewport() {
 
     // Clicking another row's id selects it.
     // The table is sorted by |Δd| descending: the second row is on screen.
+    let flags = session.screening.by_config();
     let order = dualcal::app::table::sorted_rows(
         &session.nominal,
+        &flags,
         dualcal::app::table::TableState::default(),
     );
     let other = &session.nominal.configs[order[1]];
@@ -325,12 +333,36 @@ fn click_at(harness: &mut Harness<'_, WorkbenchApp>, pos: eframe::egui::Pos2) {
 /// Not a benchmark with a threshold: prints the time to build and render (lavapipe, no window) a
 /// 1400×900 frame with all 2 × 220 configurations' triangles and error vectors, the camera orbiting
 /// so the viewport re-renders every frame. Run with
-/// `cargo test --release --test gui frame_time -- --ignored --nocapture`.
+/// `cargo test --release --test gui frame_time -- --ignored --nocapture`; with
+/// `DUALCAL_FRAME_TIME_DATASET=DIR` on another dataset (e.g. one of the public YuMi, with its meshes).
 #[test]
 #[ignore]
 fn frame_time() {
-    let mut harness = harness([1400.0, 900.0], AppLaunch::default());
+    let dataset = std::env::var_os("DUALCAL_FRAME_TIME_DATASET").map(std::path::PathBuf::from);
+    let mut harness = harness(
+        [1400.0, 900.0],
+        AppLaunch {
+            dataset,
+            urdf: None,
+        },
+    );
     loaded(&mut harness);
+    step_until(&mut harness, MAX_LOAD_FRAMES, "loading the meshes", |app| {
+        !app.is_loading_meshes()
+    });
+    if let Some(dualcal::app::session::RobotMeshes::Loaded(m)) =
+        harness.state().session().map(|s| &s.meshes)
+    {
+        println!(
+            "robot meshes: {} files, {} triangles as loaded; packed {} meshes, {} vertices, {} triangles, in {:.3} s",
+            m.visual_files,
+            m.visual_triangles,
+            m.packed.mesh_count(),
+            m.packed.vertices.len(),
+            m.packed.indices.len() / 3,
+            m.elapsed_secs
+        );
+    }
     type Setup = fn(&mut dualcal::app::viewport::scene::SceneOptions);
     let variants: [(&str, bool, Setup); 4] = [
         ("whole window", true, |_| {}),
@@ -642,4 +674,436 @@ fn the_accuracy_tab_follows_a_running_calibration() {
 #[test]
 fn the_accuracy_tab_follows_a_calibration_stepped_in_frames() {
     accuracy_follows_a_running_calibration(Some(dualcal::app::task::Execution::InFrames));
+}
+
+/// A simulated dataset (built-in robot, `n` configurations per arm, `n_cal` for calibration) with a
+/// reflector misread by 3–5 mm in 2% of each arm's configurations, saved to `dir`; returns the
+/// injected configurations.
+fn dataset_with_misreads(dir: &std::path::Path, n: usize, n_cal: usize) -> Vec<(ConfigId, String)> {
+    let robot = dualcal::robot::RobotDescription::builtin_irb14000();
+    let mut opts = dualcal::simulate::paper_options(11, n, n_cal);
+    opts.gross_errors = Some(dualcal::simulate::GrossErrorModel {
+        misread_fraction: 0.02,
+        misread_mm: (3.0, 5.0),
+        swapped_labels_fraction: 0.0,
+        other_arm_fraction: 0.0,
+    });
+    let sim = dualcal::simulate::simulate_with_robot(&opts, &robot).expect("simulation");
+    dualcal::dataset::save(&sim.dataset, dir, dualcal::dataset::Units::MM_DEG).unwrap();
+    assert!(!sim.gross_errors.is_empty());
+    sim.gross_errors
+        .iter()
+        .map(|g| (g.config, g.id.clone()))
+        .collect()
+}
+
+fn open_at(dir: &std::path::Path) -> Harness<'static, WorkbenchApp> {
+    let mut harness = harness(
+        [1400.0, 900.0],
+        AppLaunch {
+            dataset: Some(dir.to_path_buf()),
+            urdf: None,
+        },
+    );
+    loaded(&mut harness);
+    harness
+}
+
+fn calibrated_ver_collab_rms(app: &WorkbenchApp) -> f64 {
+    let calibrated = app
+        .session()
+        .unwrap()
+        .calibrated
+        .as_ref()
+        .expect("a result");
+    calibrated
+        .analysis
+        .ver
+        .report
+        .unwrap()
+        .collaborative
+        .pos_rms_mm
+}
+
+/// The screening's flags are in the table (reason and size) and colour the 3D view; unticking a
+/// flagged row's box leaves it out and re-solves at once (the run starts in that frame, the nominal
+/// and calibrated figures then leave it out and change); X on the selection takes it back in.
+#[test]
+fn excluding_a_flagged_configuration_resolves_at_once_and_changes_the_figures() {
+    let dir = tempfile::tempdir().unwrap();
+    let injected = dataset_with_misreads(dir.path(), 150, 90);
+    let mut harness = open_at(dir.path());
+    let (flagged, flagged_id, flagged_reason) = {
+        let session = harness.state().session().unwrap();
+        let worst = session.screening.worst_per_config();
+        // The misreads are caught before fitting (the triangle test).
+        for (config, id) in &injected {
+            assert!(
+                worst.iter().any(|f| f.config == *config),
+                "injected misread {id} not flagged: {worst:?}"
+            );
+        }
+        let f = worst
+            .iter()
+            .max_by(|a, b| a.severity().total_cmp(&b.severity()))
+            .unwrap();
+        (
+            f.config,
+            f.id.clone(),
+            format!("{} {:.2}", f.kind.label(), f.size_mm),
+        )
+    };
+    // The count, and the flag column sorted most severe first.
+    harness.get_by_label_contains("flagged (nominal model), 0 excluded");
+    harness.get_by_label("flag (mm)").click();
+    harness.run_steps(2);
+    assert!(
+        harness.query_all_by_label_contains(&flagged_reason).count() >= 1,
+        "no {flagged_reason} flag shown"
+    );
+    // The 3D view draws the flagged configurations in their flag colour, outlined.
+    let flag_lines = |app: &WorkbenchApp| {
+        let session = app.session().unwrap();
+        let n = session.screening.suspects().len();
+        let scene = app.viewport().scene();
+        (n, scene.lines.len())
+    };
+    let (n_flagged, lines_with) = flag_lines(harness.state());
+    harness.state_mut().viewport_mut().options.show_flags = false;
+    harness.run_steps(2);
+    let (_, lines_without) = flag_lines(harness.state());
+    assert_eq!(
+        lines_with - lines_without,
+        6 * n_flagged,
+        "an outline per flagged triangle"
+    );
+    harness.state_mut().viewport_mut().options.show_flags = true;
+    harness.run_steps(2);
+
+    harness.get_by_label("Calibrate").click();
+    harness.step();
+    step_until(&mut harness, MAX_RUN_FRAMES, "calibration", |app| {
+        !app.is_calibrating()
+    });
+    assert!(
+        harness.state().errors().is_empty(),
+        "{:?}",
+        harness.state().errors()
+    );
+    let with_outlier = calibrated_ver_collab_rms(harness.state());
+    // The figures of the split the flagged configuration is in.
+    let split_rms = |analysis: &dualcal::analysis::Analysis, config: ConfigId| {
+        let row = analysis
+            .configs
+            .iter()
+            .find(|r| r.config == config)
+            .unwrap();
+        let figures = analysis.figures(row.split).unwrap();
+        figures.report.unwrap().collaborative.pos_rms_mm
+    };
+    let nominal_with = split_rms(&harness.state().session().unwrap().nominal, flagged);
+
+    // Untick the row's "use" box: the configuration is excluded and a calibration starts at once.
+    harness.get_by_label(&format!("use {flagged_id}")).click();
+    harness.step();
+    {
+        let app = harness.state();
+        assert!(app.is_calibrating(), "no re-solve started");
+        assert_eq!(app.session().unwrap().exclude, vec![flagged]);
+    }
+    step_until(&mut harness, MAX_RUN_FRAMES, "the re-solve", |app| {
+        !app.is_calibrating()
+    });
+    let app = harness.state();
+    assert!(app.errors().is_empty(), "{:?}", app.errors());
+    let session = app.session().unwrap();
+    let calibrated = session.calibrated.as_ref().unwrap();
+    assert_eq!(calibrated.result.settings.exclude, vec![flagged]);
+    assert_eq!(session.nominal.excluded, vec![flagged]);
+    assert!(
+        session
+            .nominal
+            .configs
+            .iter()
+            .any(|r| r.config == flagged && r.excluded),
+        "the row is still listed, marked excluded"
+    );
+    let without_outlier = calibrated_ver_collab_rms(app);
+    assert_ne!(without_outlier, with_outlier, "the figures did not change");
+    assert_ne!(
+        split_rms(&session.nominal, flagged),
+        nominal_with,
+        "the nominal figures still include the excluded configuration"
+    );
+    harness.get_by_label_contains("1 excluded");
+    harness.get_by_label_contains("1 configuration(s) left out");
+
+    // Select the row (click its id) and press X: it is used again, and calibrated again at once.
+    harness.get_by_label(&flagged_id).click();
+    harness.step();
+    assert_eq!(harness.state().selection(), Some(flagged));
+    harness.key_press(eframe::egui::Key::X);
+    harness.step();
+    assert!(harness.state().is_calibrating(), "X did not re-solve");
+    assert!(harness.state().session().unwrap().exclude.is_empty());
+    step_until(&mut harness, MAX_RUN_FRAMES, "the re-solve", |app| {
+        !app.is_calibrating()
+    });
+    let again = calibrated_ver_collab_rms(harness.state());
+    assert!(
+        (again - with_outlier).abs() < 1e-9,
+        "{again} vs {with_outlier}: the same data must give the same result"
+    );
+}
+
+/// Auto-exclude applies `quality::auto_exclude` and lists what it removed.
+#[test]
+fn auto_exclude_removes_the_misreads_and_lists_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let injected = dataset_with_misreads(dir.path(), 150, 90);
+    let mut harness = open_at(dir.path());
+    harness.get_by_label("Auto-exclude").click();
+    harness.step();
+    assert!(harness.state().is_calibrating());
+    step_until(&mut harness, MAX_RUN_FRAMES, "auto-exclude", |app| {
+        !app.is_calibrating()
+    });
+    let app = harness.state();
+    assert!(app.errors().is_empty(), "{:?}", app.errors());
+    let session = app.session().unwrap();
+    let auto = session.auto_exclusion.as_ref().expect("a summary");
+    for (config, id) in &injected {
+        assert!(session.exclude.contains(config), "{id} not excluded");
+        assert!(auto.excluded.iter().any(|f| f.config == *config));
+    }
+    assert_eq!(
+        session.calibrated.as_ref().unwrap().result.settings.exclude,
+        session.exclude
+    );
+    harness.get_by_label_contains(&format!(
+        "Auto-exclude removed {} configuration",
+        auto.excluded.len()
+    ));
+    for f in &auto.excluded {
+        harness.get_by_label_contains(&format!("{} {}:", f.config.side.name(), f.id));
+    }
+}
+
+/// A panic inside the calibration worker is caught and shown; the window stays usable and the next
+/// calibration runs. `execution`: on a thread, or stepped in frames (a browser).
+fn a_panicking_worker_is_shown(execution: dualcal::app::task::Execution) {
+    let mut harness = harness([1400.0, 900.0], AppLaunch::default());
+    loaded(&mut harness);
+    harness.state_mut().set_execution(execution);
+    harness.state_mut().inject_panic_in_next_calibration();
+    harness.get_by_label("Calibrate").click();
+    harness.step();
+    step_until(&mut harness, MAX_RUN_FRAMES, "the worker's end", |app| {
+        !app.is_calibrating()
+    });
+    let errors = harness.state().errors().to_vec();
+    assert_eq!(errors.len(), 1, "{errors:?}");
+    assert!(
+        errors[0].contains("stopped unexpectedly")
+            && errors[0].contains("fault injected into the calibration worker"),
+        "{errors:?}"
+    );
+    harness.get_by_label_contains("calibration worker stopped unexpectedly");
+    harness.get_by_label_contains("Calibration failed; the nominal model is shown again");
+    // Still usable: the next calibration runs to its result.
+    harness.get_by_label("Calibrate").click();
+    harness.step();
+    step_until(&mut harness, MAX_RUN_FRAMES, "calibration", |app| {
+        !app.is_calibrating()
+    });
+    assert!(harness.state().session().unwrap().calibrated.is_some());
+}
+
+#[test]
+fn a_panic_in_the_calibration_thread_is_shown() {
+    a_panicking_worker_is_shown(dualcal::app::task::Execution::Thread);
+}
+
+#[test]
+fn a_panic_in_calibration_work_stepped_in_frames_is_shown() {
+    a_panicking_worker_is_shown(dualcal::app::task::Execution::InFrames);
+}
+
+/// A URDF dropped on the window (the path a file dialog's choice takes too: `Command::OpenUrdf`)
+/// replaces the robot: the Robot section lists its arms (base → tip, joints), the missing mesh as a
+/// warning, and the 3D view draws its meshes; a broken URDF dropped next is an error and the robot
+/// stays.
+#[test]
+fn a_dropped_urdf_replaces_the_robot_and_the_robot_section_lists_its_arms() {
+    let mut harness = harness([1400.0, 900.0], AppLaunch::default());
+    loaded(&mut harness);
+    harness.get_by_label("built-in IRB 14000");
+    let dir = tempfile::tempdir().unwrap();
+    let urdf = robots::write_yumi_like(dir.path());
+    // One visual mesh missing: a warning and a stand-in, not a refused robot.
+    let pkg = dir.path().join("yumi_description");
+    std::fs::remove_file(pkg.join("meshes/link_3.stl")).unwrap();
+    harness
+        .input_mut()
+        .dropped_files
+        .push(std::sync::Arc::new(Dropped(urdf.clone())));
+    harness.step();
+    step_until(
+        &mut harness,
+        MAX_LOAD_FRAMES,
+        "loading with the URDF",
+        |app| !app.is_loading() && !app.is_loading_meshes(),
+    );
+    let app = harness.state();
+    assert!(app.errors().is_empty(), "{:?}", app.errors());
+    let session = app.session().unwrap();
+    assert_eq!(session.robot_source.as_deref(), Some(urdf.as_path()));
+    let dualcal::app::session::RobotMeshes::Loaded(meshes) = &session.meshes else {
+        panic!("meshes not loaded");
+    };
+    assert!(
+        meshes.visual_files >= 8,
+        "{} mesh files",
+        meshes.visual_files
+    );
+    assert_eq!(meshes.visual_missing, 1);
+    let drawn_meshes = app
+        .viewport()
+        .scene()
+        .instances
+        .iter()
+        .filter(|i| matches!(i.geometry, dualcal::app::viewport::scene::Geometry::Mesh(_)))
+        .count();
+    assert!(drawn_meshes >= 8, "{drawn_meshes} mesh instances drawn");
+    harness.get_by_label("yumi.urdf");
+    harness.get_by_label("yumi_body → yumi_link_7_l (7 joints)");
+    harness.get_by_label("yumi_body → yumi_link_7_r (7 joints)");
+    harness.get_by_label_contains("nominal model: the URDF's joint origins");
+    harness.get_by_label_contains("1 missing");
+    // The warnings name the missing file; the joints list opens with their limits.
+    let n_warnings = {
+        let session = harness.state().session().unwrap();
+        session.robot.warnings.len() + meshes_warnings(session)
+    };
+    harness
+        .get_by_label(&format!(
+            "{n_warnings} warning{}",
+            if n_warnings == 1 { "" } else { "s" }
+        ))
+        .click();
+    harness.run_steps(2);
+    assert!(harness.query_all_by_label_contains("link_3.stl").count() >= 1);
+    harness.get_by_label("left joints and parameters").click();
+    harness.run_steps(2);
+    harness.get_by_label("yumi_joint_7_l");
+    harness.get_by_label_contains("parameters,");
+
+    // A broken description: the error names it, the robot stays.
+    let broken = dir.path().join("broken.urdf");
+    std::fs::write(&broken, "<robot name=\"x\"><link name=\"a\"/>").unwrap();
+    harness
+        .input_mut()
+        .dropped_files
+        .push(std::sync::Arc::new(Dropped(broken)));
+    harness.step();
+    step_until(
+        &mut harness,
+        MAX_LOAD_FRAMES,
+        "loading the broken URDF",
+        |app| !app.is_loading(),
+    );
+    let app = harness.state();
+    assert_eq!(app.errors().len(), 1, "{:?}", app.errors());
+    assert!(
+        app.errors()[0].contains("broken.urdf"),
+        "{:?}",
+        app.errors()
+    );
+    assert_eq!(
+        app.session().unwrap().robot_source.as_deref(),
+        Some(urdf.as_path())
+    );
+    harness.get_by_label_contains("previous dataset stays, with its robot");
+}
+
+fn meshes_warnings(session: &dualcal::app::session::Session) -> usize {
+    match &session.meshes {
+        dualcal::app::session::RobotMeshes::Loaded(m) => m.warnings.len(),
+        _ => 0,
+    }
+}
+
+/// Not a test: the README's screenshot of the workbench on a dataset of your own (e.g. one simulated
+/// with the public YuMi description, see docs/performance.md), after Auto-exclude, the most severe
+/// flagged configuration selected (its row struck through in the table, its flag beside it). Writes a PNG (window size `DUALCAL_SCREENSHOT_SIZE`, default
+/// 1280x800). Run with
+/// `DUALCAL_SCREENSHOT_DATASET=DIR DUALCAL_SCREENSHOT_OUT=docs/workbench-yumi.png cargo test --release --test gui workbench_screenshot -- --ignored --nocapture`.
+#[test]
+#[ignore]
+fn workbench_screenshot() {
+    let dataset = std::env::var_os("DUALCAL_SCREENSHOT_DATASET")
+        .map(std::path::PathBuf::from)
+        .expect("set DUALCAL_SCREENSHOT_DATASET to a dataset directory");
+    let out = std::env::var_os("DUALCAL_SCREENSHOT_OUT")
+        .map_or_else(|| "target/workbench.png".into(), std::path::PathBuf::from);
+    let size = std::env::var("DUALCAL_SCREENSHOT_SIZE").unwrap_or_else(|_| "1280x800".into());
+    let (w, h) = size
+        .split_once('x')
+        .and_then(|(w, h)| Some((w.parse::<f32>().ok()?, h.parse::<f32>().ok()?)))
+        .expect("DUALCAL_SCREENSHOT_SIZE as WxH");
+    let mut harness = Harness::builder()
+        .with_size(eframe::egui::Vec2::new(w, h))
+        .wgpu()
+        .build_eframe(move |cc| {
+            WorkbenchApp::new(
+                cc,
+                AppLaunch {
+                    dataset: Some(dataset),
+                    urdf: None,
+                },
+            )
+        });
+    loaded(&mut harness);
+    step_until(&mut harness, MAX_LOAD_FRAMES, "loading the meshes", |app| {
+        !app.is_loading_meshes()
+    });
+    harness.get_by_label("Auto-exclude").click();
+    harness.step();
+    step_until(&mut harness, MAX_RUN_FRAMES, "auto-exclude", |app| {
+        !app.is_calibrating()
+    });
+    assert!(
+        harness.state().errors().is_empty(),
+        "{:?}",
+        harness.state().errors()
+    );
+    let worst = harness
+        .state()
+        .session()
+        .unwrap()
+        .screening
+        .worst_per_config()
+        .into_iter()
+        .max_by(|a, b| a.severity().total_cmp(&b.severity()))
+        .map(|f| f.config);
+    harness.state_mut().apply(Command::Select {
+        config: worst,
+        reveal_in_table: true,
+    });
+    {
+        // Closer to the robot, the verification configurations hidden: the robot and the flagged
+        // triangles stay readable at 1280 × 800.
+        let view = harness.state_mut().viewport_mut();
+        view.camera.distance_mm *= 0.7;
+        view.options.show_ver = false;
+    }
+    harness.run_steps(4);
+    let image = harness.render().expect("render");
+    image.save(&out).expect("write the PNG");
+    println!(
+        "wrote {} ({}x{})",
+        out.display(),
+        image.width(),
+        image.height()
+    );
 }

@@ -43,6 +43,29 @@ pub fn color32(t: f32) -> egui::Color32 {
     egui::Color32::from_rgb((r * 255.0) as u8, (g * 255.0) as u8, (b * 255.0) as u8)
 }
 
+/// Colour (sRGB, 0–1) of a quality flag of `severity` (its size over its threshold, ≥ 1): magenta
+/// just past the threshold to red at 8× and beyond (log scale) — hues the error map above never uses.
+pub fn flag_srgb(severity: f64) -> [f32; 3] {
+    let t = if severity.is_finite() {
+        (severity.max(1.0).log2() / 3.0).clamp(0.0, 1.0) as f32
+    } else {
+        1.0
+    };
+    let (a, b) = ([0.86, 0.38, 0.98], [1.0, 0.16, 0.16]);
+    std::array::from_fn(|i| a[i] + (b[i] - a[i]) * t)
+}
+
+/// [`flag_srgb`] in linear RGB.
+pub fn flag_linear(severity: f64) -> [f32; 3] {
+    flag_srgb(severity).map(srgb_to_linear)
+}
+
+/// [`flag_srgb`] for egui.
+pub fn flag_color32(severity: f64) -> egui::Color32 {
+    let [r, g, b] = flag_srgb(severity);
+    egui::Color32::from_rgb((r * 255.0) as u8, (g * 255.0) as u8, (b * 255.0) as u8)
+}
+
 pub fn srgb_to_linear(c: f32) -> f32 {
     if c <= 0.04045 {
         c / 12.92

@@ -6,8 +6,9 @@
 use super::events::AppEvent;
 use super::export::Export;
 use super::files::{self, FileReply, OpenKind, PathPrompt, PromptAction, SaveRequest};
+use super::session::Session;
 use super::task::BackgroundTask;
-use super::work::{CalibrationWork, LiveRate, LoadWork};
+use super::work::{AutoExcludeWork, CalibrationWork, LiveRate, LoadWork};
 use super::{Status, WorkbenchApp, table};
 use crate::side::ConfigId;
 use eframe::egui;
@@ -20,6 +21,8 @@ pub enum Command {
     OpenDataset(PathBuf),
     /// Reload the current dataset with another robot description (used for later datasets too).
     OpenUrdf(PathBuf),
+    /// Reload the current dataset with the robot it names (drop the one opened with [`Self::OpenUrdf`]).
+    UseDatasetRobot,
     /// Ask the user for a file to open: the native dialog, or the in-app path prompt without one.
     ChooseFile(OpenKind),
     /// Calibrate the current dataset with the current settings.
@@ -34,6 +37,13 @@ pub enum Command {
     },
     /// Select the configuration with the largest |Δd| of the current model.
     SelectWorst,
+    /// Leave a configuration out (or take it back in) and calibrate again at once.
+    ToggleExclude(ConfigId),
+    /// Take every excluded configuration back in and calibrate again.
+    ClearExclusions,
+    /// Apply the Auto-exclude rule (`dualcal calibrate --auto-exclude`): screen, leave the suspects
+    /// out, fit, screen again; its calibration becomes the current one.
+    AutoExclude,
     Export(Export),
     /// The path typed into the path prompt.
     ConfirmPrompt(PathBuf),
@@ -62,8 +72,43 @@ impl WorkbenchApp {
                 // Nothing to reload: the robot is used for the next dataset.
                 None => self.urdf_override = Some(path),
             },
+            Command::UseDatasetRobot => match &self.session {
+                Some(session) => self.start_load(session.dataset.dir.clone(), None),
+                None => self.urdf_override = None,
+            },
             Command::ChooseFile(kind) => self.choose_file(kind),
-            Command::StartCalibration => self.start_calibration(),
+            Command::StartCalibration => {
+                if self.calibration.is_none() {
+                    self.start_calibration();
+                }
+            }
+            Command::ToggleExclude(config) => {
+                let Some(session) = &mut self.session else {
+                    return;
+                };
+                match session.exclude.iter().position(|c| *c == config) {
+                    Some(k) => {
+                        session.exclude.remove(k);
+                    }
+                    None => session.exclude.push(config),
+                }
+                session.auto_exclusion = None;
+                self.generation += 1;
+                self.start_calibration();
+            }
+            Command::ClearExclusions => {
+                let Some(session) = &mut self.session else {
+                    return;
+                };
+                if session.exclude.is_empty() {
+                    return;
+                }
+                session.exclude.clear();
+                session.auto_exclusion = None;
+                self.generation += 1;
+                self.start_calibration();
+            }
+            Command::AutoExclude => self.start_auto_exclude(),
             Command::CancelCalibration => {
                 if let Some(task) = &mut self.calibration {
                     task.cancel();
@@ -108,19 +153,49 @@ impl WorkbenchApp {
         }
     }
 
+    /// Calibrate the session with the current settings and its exclusions; a running calibration is
+    /// replaced (its events are ignored from now on).
     fn start_calibration(&mut self) {
-        if self.calibration.is_some() {
-            return;
-        }
         let Some(session) = &self.session else {
             self.errors.push("Open a dataset first.".into());
             return;
         };
-        let work = CalibrationWork::new(
-            session,
-            self.settings.clone(),
-            LiveRate::for_execution(self.execution),
-        );
+        if let Some(refusal) = refusal(session) {
+            self.errors.push(refusal);
+            return;
+        }
+        let mut settings = self.settings.clone();
+        settings.exclude = session.exclude.clone();
+        let mut work =
+            CalibrationWork::new(session, settings, LiveRate::for_execution(self.execution));
+        work.panic_at_start = std::mem::take(&mut self.panic_in_next_calibration);
+        self.start_calibration_task(work);
+    }
+
+    /// Auto-exclude: the rule's calibration replaces the current one.
+    fn start_auto_exclude(&mut self) {
+        let Some(session) = &self.session else {
+            self.errors.push("Open a dataset first.".into());
+            return;
+        };
+        if let Some(refusal) = refusal(session) {
+            self.errors.push(refusal);
+            return;
+        }
+        let mut settings = self.settings.clone();
+        settings.exclude = session.exclude.clone();
+        let work = AutoExcludeWork::new(session, settings);
+        self.start_calibration_task(work);
+    }
+
+    fn start_calibration_task(&mut self, work: impl super::task::Work) {
+        // Dropping a running task cancels it.
+        self.calibration = None;
+        if let Some(session) = &mut self.session
+            && session.live.take().is_some()
+        {
+            self.generation += 1;
+        }
         match BackgroundTask::start("calibration", work, self.events.sender(), self.execution) {
             Ok(task) => {
                 self.history.clear();
@@ -213,4 +288,16 @@ impl WorkbenchApp {
             },
         }
     }
+}
+
+/// Why `dualcal calibrate` would refuse this session's data (the nominal screening's errors), if it
+/// would.
+fn refusal(session: &Session) -> Option<String> {
+    let refusals = session.refusals();
+    (!refusals.is_empty()).then(|| {
+        format!(
+            "calibration refused, as by dualcal calibrate: {}",
+            refusals.join("; ")
+        )
+    })
 }

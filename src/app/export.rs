@@ -96,9 +96,15 @@ pub fn export_csv(session: &Session) -> anyhow::Result<Vec<u8>> {
         "point_error_a_mm",
         "point_error_b_mm",
         "point_error_c_mm",
+        "excluded",
+        "flag",
+        "flag_size_mm",
+        "flag_reason",
     ])?;
+    let flags = session.current_screening().by_config();
     for row in &session.current().configs {
         let e = row.point_errors_mm();
+        let flag = flags.get(&row.config).map(|f| f[0]);
         w.write_record([
             row.id.clone(),
             row.config.side.name().to_string(),
@@ -109,14 +115,25 @@ pub fn export_csv(session: &Session) -> anyhow::Result<Vec<u8>> {
             format!("{:.6}", e[0]),
             format!("{:.6}", e[1]),
             format!("{:.6}", e[2]),
+            row.excluded.to_string(),
+            flag.map_or("", |f| f.kind.label()).to_string(),
+            flag.map_or_else(String::new, |f| format!("{:.6}", f.size_mm)),
+            flag.map_or_else(String::new, |f| f.reason.clone()),
         ])?;
     }
     w.into_inner().context("CSV buffer")
 }
 
-/// The calibrated model as a `dualcal-params/1` file (the same file `dualcal calibrate --out` writes).
+/// The calibrated model as a `dualcal-params/1` file (the same file `dualcal calibrate --out` writes:
+/// the excluded configurations in `method.excluded`, the screening in `quality`).
 pub fn export_params(session: &Session, cal: &session::Calibrated) -> anyhow::Result<Vec<u8>> {
-    let file = crate::params::ParamsFile::from_calibration(&cal.result, &session.dataset);
+    let mut file = crate::params::ParamsFile::from_calibration(&cal.result, &session.dataset);
+    file.quality = serde_json::to_value(crate::quality::QualityRecord::new(
+        &session.dataset,
+        &cal.screening,
+        &cal.result.settings.exclude,
+    ))
+    .ok();
     let mut text = serde_json::to_vec_pretty(&file)?;
     text.push(b'\n');
     Ok(text)
@@ -150,11 +167,14 @@ mod tests {
             &session.body_from_left_base(),
         )
         .unwrap();
+        let screening =
+            crate::quality::screen_result(&session.dataset, &result, &Default::default());
         (
             session,
             Calibrated {
                 result,
                 analysis,
+                screening,
                 solver_secs: 0.0,
             },
         )

@@ -86,7 +86,7 @@ impl FileAccess for NativeFiles {
                         .pick_file(),
                     OpenKind::Urdf => dialog
                         .set_title("Open robot description (URDF)")
-                        .add_filter("URDF", &["urdf", "xml"])
+                        .add_filter("URDF", &["urdf", "xml", "xacro"])
                         .pick_file(),
                 };
                 reply.send(AppEvent::File(match picked {

@@ -40,8 +40,9 @@ use events::{AppEvent, EventChannel};
 use files::{FileAccess, FileReply, PathPrompt};
 use frame_stats::FrameStats;
 use panels::PlotsView;
-use session::{LiveFigures, Session};
+use session::{LiveFigures, RobotMeshes, Session};
 use std::path::PathBuf;
+use std::sync::Arc;
 use task::{BackgroundTask, Execution, FrameBudget, SliceStats, TaskEvent, TaskId};
 use viewport::ViewportState;
 use work::{Loaded, Outcome};
@@ -107,6 +108,8 @@ pub struct WorkbenchApp {
     events: EventChannel,
     execution: Execution,
     loading: Option<BackgroundTask>,
+    /// Loading the session's robot meshes.
+    mesh_loading: Option<BackgroundTask>,
     calibration: Option<BackgroundTask>,
     /// Iterations of the current (or last) run.
     history: Vec<IterationRecord>,
@@ -131,6 +134,8 @@ pub struct WorkbenchApp {
     /// Side and bottom panels shown (off: the viewport fills the window).
     panels_visible: bool,
     frame_stats: Option<FrameStats>,
+    /// Fault injection for tests: the next calibration worker panics.
+    panic_in_next_calibration: bool,
 }
 
 impl WorkbenchApp {
@@ -175,6 +180,7 @@ impl WorkbenchApp {
             events: EventChannel::new(Some(cc.egui_ctx.clone())),
             execution: Execution::default(),
             loading: None,
+            mesh_loading: None,
             calibration: None,
             history: Vec::new(),
             status: Status::Idle("Ready.".into()),
@@ -194,6 +200,7 @@ impl WorkbenchApp {
             screenshot_pending: false,
             panels_visible: true,
             frame_stats: FrameStats::from_env(),
+            panic_in_next_calibration: false,
         };
         let dataset = launch.dataset.unwrap_or_else(platform::example_dataset);
         app.apply(Command::OpenDataset(dataset));
@@ -209,6 +216,11 @@ impl WorkbenchApp {
     /// Whether a dataset is being loaded.
     pub fn is_loading(&self) -> bool {
         self.loading.is_some()
+    }
+
+    /// Whether the robot's meshes are being loaded.
+    pub fn is_loading_meshes(&self) -> bool {
+        self.mesh_loading.is_some()
     }
 
     pub fn is_calibrating(&self) -> bool {
@@ -261,6 +273,13 @@ impl WorkbenchApp {
         self.files = files;
     }
 
+    /// Fault injection for tests: the next calibration's worker panics in its first step (a bug in
+    /// the engine, as the workbench would meet it).
+    #[doc(hidden)]
+    pub fn inject_panic_in_next_calibration(&mut self) {
+        self.panic_in_next_calibration = true;
+    }
+
     // ---- events ----------------------------------------------------------------------------------
 
     /// Handle everything the tasks, dialogs and screenshots reported since the last frame, and
@@ -273,7 +292,9 @@ impl WorkbenchApp {
                 AppEvent::Screenshot(image) => self.on_screenshot(&image),
             }
         }
-        // A URDF replaces the robot, anything else is taken as a dataset.
+        // A robot description (a `.urdf`; a `.xacro` too, to be told how to expand it) replaces the
+        // robot, anything else is taken as a dataset. (In a browser the file seam reads dropped files
+        // itself and answers with what to open.)
         let dropped_files = self.ctx.input(|i| i.raw.dropped_files.clone());
         let dropped: Vec<PathBuf> = if dropped_files.is_empty() {
             Vec::new()
@@ -282,10 +303,10 @@ impl WorkbenchApp {
                 .dropped(&dropped_files, self.events.sender().clone())
         };
         for path in dropped {
-            let is_urdf = path
+            let is_robot = path
                 .extension()
-                .is_some_and(|e| e.eq_ignore_ascii_case("urdf"));
-            self.apply(if is_urdf {
+                .is_some_and(|e| e.eq_ignore_ascii_case("urdf") || e.eq_ignore_ascii_case("xacro"));
+            self.apply(if is_robot {
                 Command::OpenUrdf(path)
             } else {
                 Command::OpenDataset(path)
@@ -305,24 +326,49 @@ impl WorkbenchApp {
             let result = match event {
                 TaskEvent::Loaded(result) => result.map(|loaded| *loaded),
                 TaskEvent::Failed(message) => Err(message),
-                TaskEvent::Calibration(_) | TaskEvent::Live(_) | TaskEvent::Calibrated(_) => return,
+                _ => return,
             };
             self.loading = None;
             match result {
                 Ok(loaded) => self.on_loaded(loaded),
                 Err(message) => {
-                    self.status =
-                        Status::Idle("Loading failed; the previous dataset stays.".into());
+                    self.status = Status::Idle(
+                        "Loading failed; the previous dataset stays, with its robot.".into(),
+                    );
                     self.errors.push(message);
                 }
+            }
+        } else if self.mesh_loading.as_ref().is_some_and(|t| t.id() == id) {
+            let meshes = match event {
+                TaskEvent::Meshes(loaded) => RobotMeshes::Loaded(Arc::new(*loaded)),
+                TaskEvent::Failed(message) => RobotMeshes::Failed(message),
+                _ => return,
+            };
+            self.mesh_loading = None;
+            if let Some(session) = &mut self.session {
+                session.meshes = meshes;
+                self.generation += 1;
             }
         } else if self.calibration.as_ref().is_some_and(|t| t.id() == id) {
             let outcome = match event {
                 TaskEvent::Calibration(progress) => return self.on_calibration_progress(progress),
                 TaskEvent::Live(live) => return self.on_live(*live),
+                TaskEvent::Nominal(analysis) => {
+                    if let Some(session) = &mut self.session {
+                        session.nominal = *analysis;
+                        self.generation += 1;
+                    }
+                    return;
+                }
+                TaskEvent::AutoExcluded(summary) => {
+                    if let Some(session) = &mut self.session {
+                        session.auto_exclusion = Some(summary);
+                    }
+                    return;
+                }
                 TaskEvent::Calibrated(outcome) => outcome,
                 TaskEvent::Failed(message) => Outcome::Failed(message),
-                TaskEvent::Loaded(_) => return,
+                TaskEvent::Loaded(_) | TaskEvent::Meshes(_) => return,
             };
             if let Some(task) = self.calibration.take() {
                 self.on_calibration_end(outcome, &task);
@@ -332,7 +378,7 @@ impl WorkbenchApp {
 
     fn on_loaded(&mut self, loaded: Loaded) {
         let Loaded {
-            session,
+            mut session,
             urdf,
             elapsed_secs,
         } = loaded;
@@ -342,17 +388,57 @@ impl WorkbenchApp {
         self.urdf_override = urdf;
         self.viewport.reset_poses();
         self.viewport.auto_scale(&session);
+        let same_robot = self.session.as_ref().is_some_and(|old| {
+            old.robot_source == session.robot_source && old.robot.text == session.robot.text
+        });
+        if !same_robot {
+            self.viewport.frame(&session);
+        }
+        self.start_mesh_loading(&mut session, same_robot);
         let d = &session.dataset;
+        let warnings = match session.robot.warnings.len() {
+            0 => String::new(),
+            1 => " The robot has a warning (see Robot).".into(),
+            n => format!(" The robot has {n} warnings (see Robot)."),
+        };
         self.status = Status::Idle(format!(
-            "Loaded {} ({} left + {} right configurations) in {elapsed_secs:.2} s.",
+            "Loaded {} ({} left + {} right configurations) in {elapsed_secs:.2} s.{warnings}",
             d.dir.display(),
             d.arms.left.measurements.len(),
             d.arms.right.measurements.len(),
         ));
-        self.errors
-            .extend(session.robot.warnings.iter().map(|w| format!("robot: {w}")));
         self.session = Some(session);
         self.generation += 1;
+    }
+
+    /// Load the new session's robot meshes on a background task (placeholders are drawn until they
+    /// arrive); the same robot as before keeps its meshes.
+    fn start_mesh_loading(&mut self, session: &mut Session, same_robot: bool) {
+        if same_robot && let Some(old) = &self.session {
+            session.meshes = old.meshes.clone();
+            if self.mesh_loading.is_some() {
+                // Still loading for the previous session: the event updates the new one.
+                return;
+            }
+            if !matches!(session.meshes, RobotMeshes::Failed(_)) {
+                return;
+            }
+        }
+        self.mesh_loading = None;
+        if !work::has_visual_meshes(&session.robot) {
+            session.meshes = RobotMeshes::None;
+            return;
+        }
+        let work = work::MeshWork {
+            robot: session.robot.clone(),
+        };
+        match BackgroundTask::start("meshes", work, self.events.sender(), self.execution) {
+            Ok(task) => {
+                session.meshes = RobotMeshes::Loading;
+                self.mesh_loading = Some(task);
+            }
+            Err(e) => session.meshes = RobotMeshes::Failed(format!("cannot start loading: {e}")),
+        }
     }
 
     fn on_calibration_progress(&mut self, event: CalibrationEvent) {
@@ -419,7 +505,13 @@ impl WorkbenchApp {
                     .collect();
                 // The solver's own history is complete even if progress events were dropped.
                 self.history = calibrated.result.history.clone();
+                let excluded = match calibrated.result.settings.exclude.len() {
+                    0 => String::new(),
+                    n => format!(" {n} configuration(s) left out."),
+                };
+                let advice = excluded + &advice;
                 if let Some(session) = &mut self.session {
+                    session.exclude = calibrated.result.settings.exclude.clone();
                     session.calibrated = Some(*calibrated);
                     self.viewport.auto_scale(session);
                 }
@@ -476,9 +568,13 @@ impl WorkbenchApp {
     /// Step the tasks that run in frames, within the frame's budget ([`FrameBudget`]).
     fn step_tasks_in_frame(&mut self) {
         let mut stepped = false;
-        for task in [&mut self.loading, &mut self.calibration]
-            .into_iter()
-            .flatten()
+        for task in [
+            &mut self.loading,
+            &mut self.mesh_loading,
+            &mut self.calibration,
+        ]
+        .into_iter()
+        .flatten()
         {
             if task.needs_frames() {
                 task.step_in_frame(self.frame_budget.next(web_time::Instant::now()));
@@ -512,6 +608,13 @@ impl eframe::App for WorkbenchApp {
         }
         if let Some(prompt) = &mut self.prompt {
             commands.extend(prompt.ui(ui.ctx()));
+        }
+        // X excludes (or includes again) the selected configuration, picked in the table or the view.
+        if let Some(config) = self.selection
+            && !ui.ctx().egui_wants_keyboard_input()
+            && ui.ctx().input(|i| i.key_pressed(egui::Key::X))
+        {
+            commands.push(Command::ToggleExclude(config));
         }
         egui::CentralPanel::default()
             .frame(egui::Frame::NONE)

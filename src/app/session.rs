@@ -2,10 +2,12 @@
 //! calibrated one and (during a run) the model the run has reached, each with its [`Analysis`]
 //! (accuracy figures, histograms and the per-configuration rows the panels show).
 
+use super::viewport::mesh_pack::PackedMeshes;
 use crate::analysis::{Analysis, ConfigRow};
 use crate::dataset::{self, Dataset};
+use crate::quality::{self, Flag, Screening};
 use crate::robot::RobotDescription;
-use crate::side::{ConfigId, Side};
+use crate::side::{ConfigId, PerSide, Side};
 use crate::solver::{CalibrationResult, Stage};
 use crate::source::Files;
 use anyhow::Context as _;
@@ -18,9 +20,22 @@ use std::sync::Arc;
 pub struct Calibrated {
     pub result: CalibrationResult,
     pub analysis: Analysis,
+    /// The configurations screened with the calibrated model ([`quality::screen_result`]).
+    pub screening: Screening,
     /// Time the solver's own steps took, s: without the live figures, the final figures and (stepped
     /// in frames) the frames between steps.
     pub solver_secs: f64,
+}
+
+/// What the last Auto-exclude did ([`quality::auto_exclude`]).
+#[derive(Clone, Debug)]
+pub struct AutoExcludeSummary {
+    /// The configurations it left out, each with the flag that removed it.
+    pub excluded: Vec<Flag>,
+    /// Fits it ran.
+    pub rounds: usize,
+    /// Why it stopped short of excluding every suspect, if it did.
+    pub stopped: Option<String>,
 }
 
 /// The model a running calibration has reached, with its figures: what the workbench shows instead of
@@ -75,6 +90,44 @@ impl<'a> After<'a> {
     }
 }
 
+/// The robot's meshes, loaded and packed off the UI thread after the robot ([`super::work::MeshWork`]).
+#[derive(Clone, Debug, Default)]
+pub enum RobotMeshes {
+    /// The description has no mesh geometry.
+    #[default]
+    None,
+    /// Being loaded: meshes are drawn as placeholder boxes.
+    Loading,
+    Loaded(Arc<LoadedMeshes>),
+    /// The loading stopped unexpectedly (why): meshes stay placeholder boxes.
+    Failed(String),
+}
+
+impl RobotMeshes {
+    /// The packed meshes, once loaded.
+    pub fn packed(&self) -> Option<&Arc<PackedMeshes>> {
+        match self {
+            RobotMeshes::Loaded(m) => Some(&m.packed),
+            _ => None,
+        }
+    }
+}
+
+/// A robot's visual meshes, packed for the GPU, and what could not be loaded.
+#[derive(Debug)]
+pub struct LoadedMeshes {
+    /// The visual meshes, and the collision meshes of links whose visual mesh is missing (stand-ins).
+    pub packed: Arc<PackedMeshes>,
+    /// Distinct visual mesh files loaded, and their triangles.
+    pub visual_files: usize,
+    pub visual_triangles: usize,
+    /// Visual mesh files that could not be loaded (each drawn as a stand-in or a placeholder).
+    pub visual_missing: usize,
+    /// Problems the robot's own warnings do not already name (unreadable, empty or unsupported files).
+    pub warnings: Vec<String>,
+    pub elapsed_secs: f64,
+}
+
 /// A loaded dataset with its robot and figures.
 #[derive(Clone)]
 pub struct Session {
@@ -82,7 +135,17 @@ pub struct Session {
     pub robot: Arc<RobotDescription>,
     /// Where the robot came from (`None`: built in).
     pub robot_source: Option<PathBuf>,
+    /// The robot's meshes (loaded after the session).
+    pub meshes: RobotMeshes,
+    /// The nominal model's figures (without the excluded configurations).
     pub nominal: Analysis,
+    /// The configurations screened with the nominal model when the dataset was loaded
+    /// ([`quality::screen`], as `dualcal calibrate` does before fitting).
+    pub screening: Screening,
+    /// Configurations left out of the calibration and the figures (indices into the dataset).
+    pub exclude: Vec<ConfigId>,
+    /// What the last Auto-exclude removed (cleared when the exclusions are edited by hand).
+    pub auto_exclusion: Option<AutoExcludeSummary>,
     /// The last finished calibration.
     pub calibrated: Option<Calibrated>,
     /// While a calibration runs: the model it has reached (cleared when it ends).
@@ -123,6 +186,9 @@ impl Session {
         // The description's own model: Table 3 for the built-in robot, the URDF's chains otherwise
         // (the same nominal model as `dualcal calibrate` and `evaluate --nominal`).
         robot.check_dataset(&dataset)?;
+        // Joint values outside the description's limits are refused, as by `dualcal calibrate`.
+        let limits = PerSide::from_fn(|side| robot.joint_limits_rad(side));
+        dataset::check_joint_limits(&dataset, &limits)?;
         let nominal_model = robot.nominal_model(dataset.nominal_reflectors_mm);
         let nominal = Analysis::compute(
             &dataset,
@@ -130,11 +196,16 @@ impl Session {
             &robot.body_from_arm_base(Side::Left),
         )
         .context("nominal accuracy")?;
+        let screening = quality::screen(&dataset, &nominal_model, &Default::default());
         Ok(Self {
             dataset: Arc::new(dataset),
             robot: Arc::new(robot),
             robot_source,
+            meshes: RobotMeshes::None,
             nominal,
+            screening,
+            exclude: Vec::new(),
+            auto_exclusion: None,
             calibrated: None,
             live: None,
         })
@@ -163,6 +234,24 @@ impl Session {
             Some(after) if calibrated => after.analysis(),
             _ => &self.nominal,
         }
+    }
+
+    /// The newest screening: the last finished calibration's, else the nominal one's.
+    pub fn current_screening(&self) -> &Screening {
+        match &self.calibrated {
+            Some(c) => &c.screening,
+            None => &self.screening,
+        }
+    }
+
+    /// Whole-file findings of the nominal screening that `dualcal calibrate` refuses to go on with.
+    pub fn refusals(&self) -> Vec<&str> {
+        self.screening
+            .findings
+            .iter()
+            .filter(|f| f.severity == quality::Severity::Error)
+            .map(|f| f.message.as_str())
+            .collect()
     }
 
     pub fn body_from_left_base(&self) -> Isometry3<f64> {

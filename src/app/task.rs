@@ -8,8 +8,9 @@
 //! Cancel is an `Arc<AtomicBool>` the work polls.
 
 use super::events::{AppEvent, EventSender};
-use super::session::LiveFigures;
+use super::session::{AutoExcludeSummary, LiveFigures, LoadedMeshes};
 use super::work::{Loaded, Outcome};
+use crate::analysis::Analysis;
 use crate::solver::CalibrationEvent;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -23,10 +24,16 @@ pub type TaskId = u64;
 pub enum TaskEvent {
     /// A dataset load ended.
     Loaded(Result<Box<Loaded>, String>),
+    /// A robot's meshes are loaded and packed.
+    Meshes(Box<LoadedMeshes>),
     /// A calibration's progress.
     Calibration(CalibrationEvent),
     /// The model a running calibration has reached, evaluated.
     Live(Box<LiveFigures>),
+    /// The nominal model's figures without the configurations a calibration leaves out.
+    Nominal(Box<Analysis>),
+    /// What Auto-exclude removed (before its [`TaskEvent::Calibrated`]).
+    AutoExcluded(AutoExcludeSummary),
     /// A calibration ended.
     Calibrated(Outcome),
     /// The work stopped without reporting its end.
@@ -36,7 +43,13 @@ pub enum TaskEvent {
 impl TaskEvent {
     /// Whether this is the task's last event.
     pub fn is_final(&self) -> bool {
-        !matches!(self, TaskEvent::Calibration(_) | TaskEvent::Live(_))
+        !matches!(
+            self,
+            TaskEvent::Calibration(_)
+                | TaskEvent::Live(_)
+                | TaskEvent::Nominal(_)
+                | TaskEvent::AutoExcluded(_)
+        )
     }
 }
 
@@ -165,6 +178,7 @@ pub struct SliceStats {
 /// A running task: the handle the app keeps. Dropping it cancels the work.
 pub struct BackgroundTask {
     id: TaskId,
+    name: String,
     started: Instant,
     slices: SliceStats,
     cancel: Arc<AtomicBool>,
@@ -205,6 +219,7 @@ impl BackgroundTask {
         };
         Ok(Self {
             id,
+            name: name.to_string(),
             started: Instant::now(),
             slices: SliceStats::default(),
             cancel,
@@ -258,10 +273,17 @@ impl BackgroundTask {
             let started = Instant::now();
             // At least one step, however small the budget.
             loop {
-                match work.step(context) {
-                    Step::More => {}
-                    Step::Show => break,
-                    Step::Done => *done = true,
+                // A panic in the work ends the task with a message; the frame loop goes on.
+                let step =
+                    std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| work.step(context)));
+                match step {
+                    Ok(Step::More) => {}
+                    Ok(Step::Show) => break,
+                    Ok(Step::Done) => *done = true,
+                    Err(payload) => {
+                        context.report(TaskEvent::Failed(panic_message(&self.name, &*payload)));
+                        *done = true;
+                    }
                 }
                 if *done || started.elapsed() >= budget {
                     break;
@@ -286,11 +308,23 @@ fn run_to_end(mut work: impl Work, context: &TaskContext, name: &str) {
     let ran = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
         while work.step(context) != Step::Done {}
     }));
-    if ran.is_err() {
-        context.report(TaskEvent::Failed(format!(
-            "the {name} thread stopped unexpectedly"
-        )));
+    if let Err(payload) = ran {
+        context.report(TaskEvent::Failed(panic_message(name, &*payload)));
     }
+}
+
+/// What the user is told of a panic in a task: which task, and the panic's own message (a bug to
+/// report; the window and the last good state stay).
+fn panic_message(name: &str, payload: &(dyn std::any::Any + Send)) -> String {
+    let what = payload
+        .downcast_ref::<&str>()
+        .map(|s| s.to_string())
+        .or_else(|| payload.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "no message".into());
+    format!(
+        "the {name} worker stopped unexpectedly (internal error: {}); please report it",
+        crate::textfile::excerpt_n(&what, 200)
+    )
 }
 
 #[cfg(test)]
@@ -396,6 +430,31 @@ mod tests {
     }
 
     #[test]
+    fn a_panic_in_work_stepped_in_frames_ends_the_task_not_the_frame_loop() {
+        let channel = EventChannel::new(None);
+        let mut task = BackgroundTask::start(
+            "count",
+            Counter {
+                n: 3,
+                panic_at: Some(1),
+            },
+            channel.sender(),
+            Execution::InFrames,
+        )
+        .unwrap();
+        while task.needs_frames() {
+            task.step_in_frame(Duration::from_millis(1));
+        }
+        match events_of(&channel, task.id()).last() {
+            Some(TaskEvent::Failed(message)) => {
+                assert!(message.contains("the count worker stopped"), "{message}");
+                assert!(message.contains("the work failed"), "{message}");
+            }
+            _ => panic!("no final event"),
+        }
+    }
+
+    #[test]
     fn a_panicking_thread_reports_that_it_stopped() {
         let channel = EventChannel::new(None);
         let task = BackgroundTask::start(
@@ -415,7 +474,10 @@ mod tests {
             std::thread::sleep(Duration::from_millis(5));
         }
         match events.last() {
-            Some(TaskEvent::Failed(message)) => assert!(message.contains("stopped unexpectedly")),
+            Some(TaskEvent::Failed(message)) => {
+                assert!(message.contains("stopped unexpectedly"), "{message}");
+                assert!(message.contains("the work failed"), "{message}");
+            }
             _ => panic!("no final event"),
         }
     }

@@ -1,12 +1,23 @@
-//! What the background tasks do: load a dataset into a [`Session`] (one step), and calibrate one (a
-//! [`CalibrationRun`], one outer iteration per step; now and then one more step evaluates the model
-//! the run has reached, for the live view: [`LiveRate`]).
+//! What the background tasks do: load a dataset into a [`Session`] (one step), load and pack its
+//! robot's meshes ([`MeshWork`], one step), and calibrate one (a [`CalibrationRun`], one outer
+//! iteration per step; now and then one more step evaluates the model the run has reached, for the
+//! live view: [`LiveRate`]), or apply the Auto-exclude rule ([`AutoExcludeWork`], one step).
+//!
+//! A calibration leaves out the session's excluded configurations (`CalibrationSettings::exclude`);
+//! when they differ from those of the nominal figures shown, its first step re-evaluates the nominal
+//! model without them ([`TaskEvent::Nominal`]), so "before" and "after" figures are of the same
+//! configurations, as in `dualcal calibrate --exclude`.
 
-use super::session::{Calibrated, LiveFigures, Session};
+use super::session::{AutoExcludeSummary, Calibrated, LiveFigures, LoadedMeshes, Session};
 use super::task::{Execution, Step, TaskContext, TaskEvent, Work};
+use super::viewport::mesh_pack::{MeshKey, PackedMeshes};
 use crate::analysis::Analysis;
 use crate::dataset::Dataset;
 use crate::kinematics::DualArmModel;
+use crate::meshes::{GeometryKind, MeshWarning};
+use crate::quality::{self, ScreenSettings};
+use crate::robot::{RobotDescription, ShapeKind};
+use crate::side::{ConfigId, Side};
 use crate::solver::{
     CalibrationEvent, CalibrationResult, CalibrationRun, CalibrationSettings, Calibrator,
     IterationRecord, Observer, Progress, Stage, StageSummary, Termination,
@@ -39,7 +50,14 @@ impl Work for LoadWork {
     fn step(&mut self, task: &TaskContext) -> Step {
         let started = Instant::now();
         let result = Session::load_from(&self.files, &self.dataset, self.urdf.as_deref())
-            .with_context(|| format!("cannot open dataset {}", self.dataset.display()))
+            .with_context(|| match &self.urdf {
+                Some(urdf) => format!(
+                    "cannot use robot description {} for dataset {}",
+                    urdf.display(),
+                    self.dataset.display()
+                ),
+                None => format!("cannot open dataset {}", self.dataset.display()),
+            })
             .map(|session| {
                 Box::new(Loaded {
                     session,
@@ -50,6 +68,104 @@ impl Work for LoadWork {
             .map_err(|e| format!("{e:#}"));
         task.report(TaskEvent::Loaded(result));
         Step::Done
+    }
+}
+
+/// Load a robot's visual meshes and pack them for the GPU. Links whose visual mesh cannot be loaded
+/// get their collision meshes loaded too (drawn as stand-ins).
+pub struct MeshWork {
+    pub robot: Arc<RobotDescription>,
+}
+
+impl Work for MeshWork {
+    fn step(&mut self, task: &TaskContext) -> Step {
+        task.report(TaskEvent::Meshes(Box::new(load_meshes(&self.robot))));
+        Step::Done
+    }
+}
+
+/// Does the robot draw any mesh?
+pub fn has_visual_meshes(robot: &RobotDescription) -> bool {
+    robot.urdf.links.iter().any(|l| {
+        l.visual
+            .iter()
+            .any(|v| matches!(v.geometry, urdf_rs::Geometry::Mesh { .. }))
+    })
+}
+
+/// The robot's visual meshes packed, with the collision meshes of the links whose visual mesh is
+/// missing.
+pub fn load_meshes(robot: &RobotDescription) -> LoadedMeshes {
+    let started = Instant::now();
+    let visual = robot.load_meshes(GeometryKind::Visual);
+    let home = |side| robot.home_q_rad(side);
+    let (ql, qr) = (home(Side::Left), home(Side::Right));
+    let missing_links: Vec<String> = robot
+        .shapes(&ql, &qr, GeometryKind::Visual)
+        .into_iter()
+        .filter(|s| match &s.kind {
+            ShapeKind::Mesh {
+                filename, scale, ..
+            } => visual.get(filename, (*scale).into()).is_none(),
+            _ => false,
+        })
+        .map(|s| s.link)
+        .collect();
+    let collision = if missing_links.is_empty() {
+        Default::default()
+    } else {
+        robot.load_meshes(GeometryKind::Collision)
+    };
+    let stand_ins: Vec<(MeshKey, &crate::meshes::TriangleMesh)> = robot
+        .shapes(&ql, &qr, GeometryKind::Collision)
+        .into_iter()
+        .filter(|s| missing_links.contains(&s.link))
+        .filter_map(|s| match s.kind {
+            ShapeKind::Mesh {
+                filename, scale, ..
+            } => {
+                let scale: [f64; 3] = scale.into();
+                let mesh = collision.get(&filename, scale)?;
+                Some((
+                    MeshKey::new(GeometryKind::Collision, &filename, scale),
+                    &**mesh,
+                ))
+            }
+            _ => None,
+        })
+        .collect();
+    let visual_meshes = visual.meshes.iter().map(|((filename, bits), mesh)| {
+        (
+            MeshKey {
+                kind: GeometryKind::Visual,
+                filename: filename.clone(),
+                scale_bits: *bits,
+            },
+            &**mesh,
+        )
+    });
+    let packed = PackedMeshes::pack(visual_meshes.chain(stand_ins));
+    // Files not found are named by the robot's own warnings already (per link).
+    let warnings = visual
+        .warnings
+        .iter()
+        .filter(|w| {
+            !matches!(
+                w,
+                MeshWarning::NotFound { .. }
+                    | MeshWarning::UnknownPackage { .. }
+                    | MeshWarning::UnsupportedScheme { .. }
+            )
+        })
+        .map(|w| format!("{w}; drawn as a placeholder"))
+        .collect();
+    LoadedMeshes {
+        packed: Arc::new(packed),
+        visual_files: visual.meshes.len(),
+        visual_triangles: visual.triangle_count(),
+        visual_missing: visual.warnings.len(),
+        warnings,
+        elapsed_secs: started.elapsed().as_secs_f64(),
     }
 }
 
@@ -184,17 +300,22 @@ impl Observer for Reporter<'_> {
 }
 
 /// The two-step calibration of a session's nominal model. The first step sets the run up (the
-/// identifiability analysis); each further step is one outer iteration, or the evaluation of a live
-/// snapshot ([`TaskEvent::Live`]).
+/// identifiability analysis; the nominal figures without the excluded configurations, if those
+/// changed); each further step is one outer iteration, or the evaluation of a live snapshot
+/// ([`TaskEvent::Live`]). The end screens the result ([`quality::screen_result`]).
 pub struct CalibrationWork {
     dataset: Arc<Dataset>,
     nominal: DualArmModel,
     settings: CalibrationSettings,
     body_from_left_base: Isometry3<f64>,
+    /// The exclusions of the nominal figures the session shows.
+    nominal_excluded: Vec<ConfigId>,
     run: Option<CalibrationRun>,
     live: LiveSchedule,
     /// Time in the solver's steps so far.
     solver: Duration,
+    /// Fault injection for tests: panic in the first step.
+    pub panic_at_start: bool,
 }
 
 impl CalibrationWork {
@@ -204,10 +325,21 @@ impl CalibrationWork {
             nominal: session.nominal.model.clone(),
             settings,
             body_from_left_base: session.body_from_left_base(),
+            nominal_excluded: session.nominal.excluded.clone(),
             run: None,
             live: LiveSchedule::new(rate),
             solver: Duration::ZERO,
+            panic_at_start: false,
         }
+    }
+
+    fn analysis(&self, model: &DualArmModel) -> anyhow::Result<Analysis> {
+        Analysis::compute_excluding(
+            &self.dataset,
+            model,
+            &self.body_from_left_base,
+            &self.settings.exclude,
+        )
     }
 
     fn outcome(&self, result: CalibrationResult) -> Outcome {
@@ -221,20 +353,60 @@ impl CalibrationWork {
                 iterations: s.iterations,
             };
         }
-        match Analysis::compute(&self.dataset, &result.calibrated, &self.body_from_left_base) {
-            Ok(analysis) => Outcome::Calibrated(Box::new(Calibrated {
+        let analysis = self.analysis(&result.calibrated);
+        calibrated_outcome(
+            &self.dataset,
+            result,
+            analysis,
+            None,
+            self.solver.as_secs_f64(),
+        )
+    }
+}
+
+/// A finished calibration with its figures and its screening.
+fn calibrated_outcome(
+    dataset: &Dataset,
+    result: CalibrationResult,
+    analysis: anyhow::Result<Analysis>,
+    screening: Option<quality::Screening>,
+    solver_secs: f64,
+) -> Outcome {
+    match analysis {
+        Ok(analysis) => {
+            let screening = screening.unwrap_or_else(|| {
+                quality::screen_result(dataset, &result, &ScreenSettings::default())
+            });
+            Outcome::Calibrated(Box::new(Calibrated {
                 result,
                 analysis,
-                solver_secs: self.solver.as_secs_f64(),
-            })),
-            Err(e) => Outcome::Failed(format!("calibrated model: {e:#}")),
+                screening,
+                solver_secs,
+            }))
         }
+        Err(e) => Outcome::Failed(format!("calibrated model: {e:#}")),
     }
 }
 
 impl Work for CalibrationWork {
     fn step(&mut self, task: &TaskContext) -> Step {
         let Some(run) = &mut self.run else {
+            assert!(
+                !self.panic_at_start,
+                "fault injected into the calibration worker"
+            );
+            if self.nominal_excluded != self.settings.exclude {
+                match self.analysis(&self.nominal) {
+                    Ok(analysis) => task.report(TaskEvent::Nominal(Box::new(analysis))),
+                    Err(e) => {
+                        task.report(TaskEvent::Calibrated(Outcome::Failed(format!(
+                            "nominal figures without the excluded configurations: {e:#}"
+                        ))));
+                        return Step::Done;
+                    }
+                }
+                self.nominal_excluded = self.settings.exclude.clone();
+            }
             let setup = Instant::now();
             let started = Calibrator::new(&self.dataset, &self.nominal)
                 .settings(self.settings.clone())
@@ -256,9 +428,12 @@ impl Work for CalibrationWork {
             let started = Instant::now();
             // A model the figures cannot be computed of (e.g. a degenerate reflector triangle on the
             // way) is not shown; the view keeps the previous one.
-            if let Ok(analysis) =
-                Analysis::compute(&self.dataset, &snapshot.model, &self.body_from_left_base)
-            {
+            if let Ok(analysis) = Analysis::compute_excluding(
+                &self.dataset,
+                &snapshot.model,
+                &self.body_from_left_base,
+                &self.settings.exclude,
+            ) {
                 let cost = started.elapsed();
                 task.report(TaskEvent::Live(Box::new(LiveFigures {
                     stage: snapshot.stage,
@@ -285,6 +460,75 @@ impl Work for CalibrationWork {
             Err(e) => Outcome::Failed(e.to_string()),
         };
         task.report(TaskEvent::Calibrated(outcome));
+        Step::Done
+    }
+}
+
+/// The Auto-exclude rule ([`quality::auto_exclude`], `dualcal calibrate --auto-exclude`): screen, leave
+/// the suspects out, fit, screen again, … in one step (a few fits; no live view, not cancellable
+/// midway). Reports the nominal figures without the configurations it removed, what it removed
+/// ([`TaskEvent::AutoExcluded`]) and the calibration it ended with.
+pub struct AutoExcludeWork {
+    dataset: Arc<Dataset>,
+    nominal: DualArmModel,
+    settings: CalibrationSettings,
+    body_from_left_base: Isometry3<f64>,
+}
+
+impl AutoExcludeWork {
+    /// `settings.exclude` (the user's own exclusions) is kept.
+    pub fn new(session: &Session, settings: CalibrationSettings) -> Self {
+        Self {
+            dataset: session.dataset.clone(),
+            nominal: session.nominal.model.clone(),
+            settings,
+            body_from_left_base: session.body_from_left_base(),
+        }
+    }
+}
+
+impl Work for AutoExcludeWork {
+    fn step(&mut self, task: &TaskContext) -> Step {
+        let started = Instant::now();
+        let auto = match quality::auto_exclude(
+            &self.dataset,
+            &self.nominal,
+            &self.settings,
+            &ScreenSettings::default(),
+        ) {
+            Ok(auto) => auto,
+            Err(e) => {
+                task.report(TaskEvent::Calibrated(Outcome::Failed(e.to_string())));
+                return Step::Done;
+            }
+        };
+        let solver_secs = started.elapsed().as_secs_f64();
+        let exclude = &auto.result.settings.exclude;
+        let figures = |model: &DualArmModel| {
+            Analysis::compute_excluding(&self.dataset, model, &self.body_from_left_base, exclude)
+        };
+        match figures(&self.nominal) {
+            Ok(nominal) => task.report(TaskEvent::Nominal(Box::new(nominal))),
+            Err(e) => {
+                task.report(TaskEvent::Calibrated(Outcome::Failed(format!(
+                    "nominal figures without the excluded configurations: {e:#}"
+                ))));
+                return Step::Done;
+            }
+        }
+        task.report(TaskEvent::AutoExcluded(AutoExcludeSummary {
+            excluded: auto.excluded.clone(),
+            rounds: auto.rounds,
+            stopped: auto.stopped.clone(),
+        }));
+        let analysis = figures(&auto.result.calibrated);
+        task.report(TaskEvent::Calibrated(calibrated_outcome(
+            &self.dataset,
+            auto.result,
+            analysis,
+            Some(auto.screening),
+            solver_secs,
+        )));
         Step::Done
     }
 }

@@ -9,7 +9,8 @@ use crate::robot::{ArmLinks, LoadOptions, RobotDescription};
 use crate::side::{ConfigId, PerSide, Side};
 use crate::simulate;
 use crate::solver::{
-    CalibrationEvent, CalibrationResult, CalibrationSettings, Calibrator, Method, QpMethod,
+    BaseMethod, CalibrationEvent, CalibrationResult, CalibrationSettings, Calibrator, Method,
+    QpMethod, Reflector,
 };
 use anyhow::{Context, Result, bail};
 use clap::{Args, Parser, Subcommand, ValueEnum};
@@ -135,8 +136,22 @@ pub struct CalibrateArgs {
     pub dataset: PathBuf,
     #[arg(long, value_enum, default_value_t = Split::Cal)]
     pub split: Split,
+    /// Step 1 (each arm): `minimax` (the paper's Algorithm I), `lsq` (least squares of all distance
+    /// errors), `distance-single` (ref. [26]: one reflector's distance errors, Gauss–Newton), `pose`
+    /// (ref. [19]: full-pose errors of a tool frame built from the three reflectors, QR), `position`
+    /// (ref. [18]: absolute positioning errors of the three reflectors, Levenberg–Marquardt). See
+    /// docs/solver.md.
     #[arg(long, value_enum, default_value_t = Method::Minimax)]
     pub method: Method,
+    /// Step 2 (the right-arm base in the left-arm base): `minimax` (the paper's Algorithm II),
+    /// `distance` (ref. [26]: collaborative distance errors, Gauss–Newton), `absolute` (ref. [28]:
+    /// each base in the tracker frame from absolute positioning errors, combined).
+    #[arg(long, value_enum, default_value_t = BaseMethod::Minimax)]
+    pub base_method: BaseMethod,
+    /// With `--method distance-single`: the reflector whose distances are fitted (default: the one
+    /// with the largest nominal error, per arm; the summary and the parameter file say which).
+    #[arg(long, value_enum)]
+    pub reflector: Option<Reflector>,
     #[arg(long, value_enum, default_value_t = QpMethod::Exact)]
     pub qp: QpMethod,
     /// Where to write the parameters (dualcal-params/1 JSON).
@@ -465,6 +480,8 @@ fn settings_from(a: &CalibrateArgs) -> CalibrationSettings {
     CalibrationSettings {
         split: a.split,
         method: a.method,
+        base_method: a.base_method,
+        reflector: a.reflector,
         qp: a.qp,
         max_iterations: a.max_iterations,
         step_tolerance: a.tolerance,

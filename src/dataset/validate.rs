@@ -207,19 +207,6 @@ pub(super) fn joint_magnitude(text: &str, value_rad: f64) -> Result<(), String> 
     Ok(())
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    if v.is_empty() {
-        return f64::NAN;
-    }
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
-}
-
 /// Does `ratio` lie within a factor 1.5 of `factor`?
 fn near(ratio: f64, factor: f64) -> bool {
     ratio > factor / 1.5 && ratio < factor * 1.5
@@ -235,10 +222,11 @@ pub(super) fn check_arm(
 ) -> Result<(), DatasetError> {
     let nominal_sides = sides(nominal_mm);
     let nominal_mean = nominal_sides.iter().sum::<f64>() / 3.0;
-    let measured_mean = median(
-        rows.iter()
+    let measured_mean = crate::quality::stats::median(
+        &rows
+            .iter()
             .map(|m| sides(&m.tracker_points_mm).iter().sum::<f64>() / 3.0)
-            .collect(),
+            .collect::<Vec<_>>(),
     );
     let ratio = measured_mean / nominal_mean;
     if !(TRIANGLE_SCALE_RANGE.0..=TRIANGLE_SCALE_RANGE.1).contains(&ratio) {

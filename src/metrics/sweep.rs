@@ -247,65 +247,69 @@ fn abs_max(dd: &[f64; 3]) -> f64 {
     dd[0].abs().max(dd[1].abs()).max(dd[2].abs())
 }
 
-/// The accuracy figures of both splits, every configuration's residuals, and every same-split pair's
-/// residuals as samples, of `model` on every configuration of `dataset`, visiting each pair once.
-pub fn sweep(dataset: &Dataset, model: &DualArmModel) -> Result<Sweep, MetricsError> {
-    let (left, right) = both_arms(dataset, model, Split::All)?;
-    let arms = PerSide::new(
-        Ordered::new(dataset, Side::Left, left.geom, left.indices),
-        Ordered::new(dataset, Side::Right, right.geom, right.indices),
-    );
-    let (n_left, n_right) = (arms.left.len(), arms.right.len());
-    let group_len = |side: Side, g: usize| arms[side].range(g).len();
-
-    // Sample buffers per split group and pair kind, cut into one slice per row.
-    let mut samples: [[PairSamples; 3]; 2] = std::array::from_fn(|g| {
-        let (l, r) = (group_len(Side::Left, g), group_len(Side::Right, g));
+/// Zeroed sample buffers per split group (calibration, verification) and pair kind (left relative,
+/// right relative, collaborative).
+fn sample_buffers(arms: &PerSide<Ordered>) -> [[PairSamples; 3]; 2] {
+    std::array::from_fn(|g| {
+        let (l, r) = (arms.left.range(g).len(), arms.right.range(g).len());
         [
             zeroed(l * l.saturating_sub(1) / 2),
             zeroed(r * r.saturating_sub(1) / 2),
             zeroed(l * r),
         ]
-    });
-    let mut rows: Vec<Row> = Vec::with_capacity(n_left + n_right);
-    {
-        let [cal, ver] = &mut samples;
-        let [cal_l, cal_r, cal_c] = cal;
-        let [ver_l, ver_r, ver_c] = ver;
-        let rel_left = relative_rows(&arms.left, cal_l, ver_l);
-        let rel_right = relative_rows(&arms.right, cal_r, ver_r);
-        let mut col = rows_of(cal_c, &vec![group_len(Side::Right, 0); arms.left.n_cal]);
-        col.extend(rows_of(
-            ver_c,
-            &vec![group_len(Side::Right, 1); n_left - arms.left.n_cal],
-        ));
-        for (p, (rel, col)) in rel_left.into_iter().zip(col).enumerate() {
-            rows.push(Row {
-                side: Side::Left,
-                p,
-                rel,
-                col,
-            });
-        }
-        for (p, rel) in rel_right.into_iter().enumerate() {
-            rows.push(Row {
-                side: Side::Right,
-                p,
-                rel,
-                col: SampleSlice {
-                    pos: &mut [],
-                    ori: &mut [],
-                },
-            });
-        }
-    }
+    })
+}
 
+/// The buffers cut into one row per configuration: left rows carry their relative and collaborative
+/// slices, right rows their relative slice only (collaborative pairs are visited from the left).
+fn sample_rows<'a>(
+    arms: &PerSide<Ordered>,
+    samples: &'a mut [[PairSamples; 3]; 2],
+) -> Vec<Row<'a>> {
+    let n_left = arms.left.len();
+    let mut rows: Vec<Row> = Vec::with_capacity(n_left + arms.right.len());
+    let [cal, ver] = samples;
+    let [cal_l, cal_r, cal_c] = cal;
+    let [ver_l, ver_r, ver_c] = ver;
+    let rel_left = relative_rows(&arms.left, cal_l, ver_l);
+    let rel_right = relative_rows(&arms.right, cal_r, ver_r);
+    let mut col = rows_of(cal_c, &vec![arms.right.range(0).len(); arms.left.n_cal]);
+    col.extend(rows_of(
+        ver_c,
+        &vec![arms.right.range(1).len(); n_left - arms.left.n_cal],
+    ));
+    for (p, (rel, col)) in rel_left.into_iter().zip(col).enumerate() {
+        rows.push(Row {
+            side: Side::Left,
+            p,
+            rel,
+            col,
+        });
+    }
+    for (p, rel) in rel_right.into_iter().enumerate() {
+        rows.push(Row {
+            side: Side::Right,
+            p,
+            rel,
+            col: SampleSlice {
+                pos: &mut [],
+                ori: &mut [],
+            },
+        });
+    }
+    rows
+}
+
+/// Visit every pair once, in parallel over rows: write the same-split samples into the rows' slices
+/// and accumulate the split figures and every configuration's worst residuals.
+fn accumulate(arms: &PerSide<Ordered>, rows: Vec<Row<'_>>) -> Partial {
+    let n_left = arms.left.len();
+    let n_configs = n_left + arms.right.len();
     let offset = PerSide::new(0, n_left);
-    let totals = rows
-        .into_par_iter()
+    rows.into_par_iter()
         .with_min_len(8)
         .fold(
-            || Partial::new(n_left + n_right),
+            || Partial::new(n_configs),
             |mut part, mut row| {
                 let side = row.side;
                 let a = &arms[side];
@@ -344,9 +348,18 @@ pub fn sweep(dataset: &Dataset, model: &DualArmModel) -> Result<Sweep, MetricsEr
                 part
             },
         )
-        .reduce(|| Partial::new(n_left + n_right), Partial::merge);
+        .reduce(|| Partial::new(n_configs), Partial::merge)
+}
 
-    // Rows in measurement order, left arm first.
+/// Every configuration's residual summary, in measurement order, left arm first.
+fn per_config_residuals(
+    dataset: &Dataset,
+    model: &DualArmModel,
+    arms: &PerSide<Ordered>,
+    totals: &Partial,
+) -> Vec<ConfigResiduals> {
+    let (n_left, n_right) = (arms.left.len(), arms.right.len());
+    let offset = PerSide::new(0, n_left);
     let mut per_config = Vec::with_capacity(n_left + n_right);
     for (side, n_other) in [(Side::Left, n_right), (Side::Right, n_left)] {
         let a = &arms[side];
@@ -376,10 +389,24 @@ pub fn sweep(dataset: &Dataset, model: &DualArmModel) -> Result<Sweep, MetricsEr
             });
         }
     }
+    per_config
+}
+
+/// The accuracy figures of both splits, every configuration's residuals, and every same-split pair's
+/// residuals as samples, of `model` on every configuration of `dataset`, visiting each pair once.
+pub fn sweep(dataset: &Dataset, model: &DualArmModel) -> Result<Sweep, MetricsError> {
+    let (left, right) = both_arms(dataset, model, Split::All)?;
+    let arms = PerSide::new(
+        Ordered::new(dataset, Side::Left, left.geom, left.indices),
+        Ordered::new(dataset, Side::Right, right.geom, right.indices),
+    );
+    let mut samples = sample_buffers(&arms);
+    let totals = accumulate(&arms, sample_rows(&arms, &mut samples));
+    let per_config = per_config_residuals(dataset, model, &arms, &totals);
 
     let [cal_samples, ver_samples] = samples;
     let split = |g: usize, samples: [PairSamples; 3]| -> Result<Option<SplitSweep>, MetricsError> {
-        let (l, r) = (group_len(Side::Left, g), group_len(Side::Right, g));
+        let (l, r) = (arms.left.range(g).len(), arms.right.range(g).len());
         if l < MIN_METRIC_CONFIGS || r < MIN_METRIC_CONFIGS {
             return Ok(None);
         }

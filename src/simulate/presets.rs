@@ -5,7 +5,6 @@ use crate::collision::CollisionWorld;
 use crate::robot::{ModelForm, RobotDescription};
 use crate::side::{PerSide, Side};
 use nalgebra::{UnitQuaternion, Vector3};
-use rand::Rng;
 
 /// Margin kept between the arms and the body or the other arm in simulated configurations, mm.
 const CLEARANCE_MM: f64 = 5.0;
@@ -64,16 +63,7 @@ pub fn resting_poses(
         attempts += 1;
         // Draw new poses for every arm in a collision (both for one between them).
         for s in Side::BOTH.into_iter().filter(|&s| colliding[s]) {
-            rest[s] = limits[s]
-                .iter()
-                .map(|&(lo, hi)| {
-                    if lo < hi {
-                        rng.random_range(lo..hi)
-                    } else {
-                        lo
-                    }
-                })
-                .collect();
+            rest[s] = super::sampling::uniform_within(&mut rng, &limits[s]);
         }
     }
     Ok(rest)

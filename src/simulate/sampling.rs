@@ -7,6 +7,21 @@ use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 use rand::Rng;
 
 /// The tracker pose relative to the left-arm base (see the module documentation).
+/// Joint values drawn uniformly within `(lower, upper)` limits, rad (a joint fixed by equal limits
+/// keeps its value).
+pub(super) fn uniform_within(rng: &mut impl Rng, limits: &[(f64, f64)]) -> Vec<f64> {
+    limits
+        .iter()
+        .map(|&(lo, hi)| {
+            if lo < hi {
+                rng.random_range(lo..hi)
+            } else {
+                lo
+            }
+        })
+        .collect()
+}
+
 pub(super) fn place_tracker(opts: &SimOptions) -> Isometry3<f64> {
     let mut rng = rng_for(opts.seed, STREAM_TRACKER);
     let (lo, hi) = opts.tracker_distance_m;
@@ -120,16 +135,7 @@ pub(super) fn sample_configurations(
             });
         }
         out.attempts += 1;
-        let q: Vec<f64> = limits
-            .iter()
-            .map(|&(lo, hi)| {
-                if lo < hi {
-                    rng.random_range(lo..hi)
-                } else {
-                    lo
-                }
-            })
-            .collect();
+        let q = uniform_within(&mut rng, &limits);
         if !faces(nominal_arm, &axis, &q, tracker_in_base_mm, cos_max) {
             out.rejected_for_facing += 1;
         } else if collides(side, &q) {

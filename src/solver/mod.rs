@@ -56,16 +56,127 @@ pub enum QpMethod {
     Exact,
 }
 
-/// Objective of the identification.
+/// Step 1 (each arm's parameters): the objective and its solver. The paper's method and the methods
+/// it compares against (its Table 1); see docs/solver.md for what each minimises and identifies.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]
 pub enum Method {
-    /// The paper's minimax of the three reflectors' summed squared distance errors.
+    /// The paper's Algorithm I: minimax of the three reflectors' summed squared distance errors (SQP).
     #[default]
     Minimax,
-    /// Ordinary least squares of all distance errors (Levenberg–Marquardt), for comparison.
+    /// Least squares of all three reflectors' distance errors (Levenberg–Marquardt), for comparison.
     #[value(name = "lsq")]
+    #[serde(alias = "lsq")]
     LeastSquares,
+    /// Ref. [26]: Gauss–Newton on the distance errors of one reflector (`--reflector`, default the
+    /// one with the largest nominal error). Cannot see the flange's orientation: the other two
+    /// reflectors' coordinates are not identified and stay nominal.
+    #[value(name = "distance-single")]
+    #[serde(rename = "distance-single")]
+    DistanceSingle,
+    /// Ref. [19]: full-pose calibration. A tool frame built from the three measured reflectors at each
+    /// configuration; the linearised pose-error model solved by QR decomposition (Gauss–Newton), the
+    /// tracker-from-base transform identified with the arm.
+    Pose,
+    /// Ref. [18]: Levenberg–Marquardt on the absolute positioning errors of the three reflectors in
+    /// the tracker frame, the tracker-from-base transform identified jointly.
+    Position,
+}
+
+impl Method {
+    /// Every step-1 method, the paper's first.
+    pub const ALL: [Method; 5] = [
+        Method::Minimax,
+        Method::LeastSquares,
+        Method::DistanceSingle,
+        Method::Pose,
+        Method::Position,
+    ];
+
+    /// The command-line name (`minimax`, `lsq`, `distance-single`, `pose`, `position`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Minimax => "minimax",
+            Method::LeastSquares => "lsq",
+            Method::DistanceSingle => "distance-single",
+            Method::Pose => "pose",
+            Method::Position => "position",
+        }
+    }
+
+    /// Does the method fit absolute (tracker-frame) measurements, identifying the tracker-from-base
+    /// transform with the arm?
+    pub fn is_absolute(self) -> bool {
+        matches!(self, Method::Pose | Method::Position)
+    }
+}
+
+/// Step 2 (the right-arm base in the left-arm base): the objective and its solver.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum BaseMethod {
+    /// The paper's Algorithm II: minimax of the collaborative distance errors (SQP).
+    #[default]
+    Minimax,
+    /// Ref. [26]: Gauss–Newton on all collaborative distance errors (least squares).
+    Distance,
+    /// Ref. [28]: each arm's base located in the tracker frame from its absolute positioning errors
+    /// (step 1's arm models held), combined as `tracker_from_left_base⁺ · tracker_from_right_base`
+    /// (Moore–Penrose inverse).
+    Absolute,
+}
+
+impl BaseMethod {
+    pub const ALL: [BaseMethod; 3] = [
+        BaseMethod::Minimax,
+        BaseMethod::Distance,
+        BaseMethod::Absolute,
+    ];
+
+    /// The command-line name (`minimax`, `distance`, `absolute`).
+    pub fn name(self) -> &'static str {
+        match self {
+            BaseMethod::Minimax => "minimax",
+            BaseMethod::Distance => "distance",
+            BaseMethod::Absolute => "absolute",
+        }
+    }
+}
+
+/// One of the three end-reflectors, `a`, `b` or `c` (the dataset's column order).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum Reflector {
+    A,
+    B,
+    C,
+}
+
+impl Reflector {
+    pub const ALL: [Reflector; 3] = [Reflector::A, Reflector::B, Reflector::C];
+
+    /// 0, 1, 2 for a, b, c.
+    pub fn index(self) -> usize {
+        match self {
+            Reflector::A => 0,
+            Reflector::B => 1,
+            Reflector::C => 2,
+        }
+    }
+
+    pub fn from_index(k: usize) -> Option<Reflector> {
+        Self::ALL.get(k).copied()
+    }
+
+    pub fn name(self) -> &'static str {
+        crate::kinematics::REFLECTOR_NAMES[self.index()]
+    }
+}
+
+impl std::fmt::Display for Reflector {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
 }
 
 /// Settings of a calibration run.
@@ -73,7 +184,15 @@ pub enum Method {
 pub struct CalibrationSettings {
     /// Configurations used for identification (`cal` or `all`).
     pub split: Split,
+    /// Step 1's method (each arm).
     pub method: Method,
+    /// Step 2's method (the right-arm base); files without it mean the paper's minimax.
+    #[serde(default)]
+    pub base_method: BaseMethod,
+    /// The reflector of [`Method::DistanceSingle`] (`None`: the one with the largest nominal error,
+    /// chosen per arm); refused with any other method.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reflector: Option<Reflector>,
     pub qp: QpMethod,
     /// Outer SQP iterations per stage.
     pub max_iterations: usize,
@@ -100,6 +219,8 @@ impl Default for CalibrationSettings {
         Self {
             split: Split::Cal,
             method: Method::Minimax,
+            base_method: BaseMethod::Minimax,
+            reflector: None,
             qp: QpMethod::Exact,
             max_iterations: 100,
             step_tolerance: 1e-8,
@@ -262,6 +383,20 @@ pub enum CalibrationError {
     RankDeficient { stage: Stage, detail: String },
     #[error("{stage}: non-finite value ({detail})")]
     NonFinite { stage: Stage, detail: String },
+    /// Settings that do not fit together (e.g. a reflector chosen for a method that uses all three).
+    #[error("invalid calibration settings: {0}")]
+    InvalidSettings(String),
+    /// The three measured reflectors of a configuration are (nearly) collinear or coincident, so no
+    /// tool frame can be built from them (the full-pose method needs one per configuration).
+    #[error(
+        "{side} arm: configuration `{id}`: the three measured reflectors are collinear (triangle \
+         area {area_mm2:.3e} mm²), no tool frame can be built from them"
+    )]
+    DegenerateReflectors {
+        side: Side,
+        id: String,
+        area_mm2: f64,
+    },
 }
 
 /// Summary of one stage.

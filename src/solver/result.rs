@@ -1,11 +1,14 @@
 //! What a calibration run returns, however it ended.
 
 use super::identifiability::IdentifiabilityReport;
-use super::{CalibrationSettings, IterationRecord, QpMethod, Stage, StageSummary, Termination};
+use super::{
+    CalibrationSettings, IterationRecord, QpMethod, Reflector, Stage, StageSummary, Termination,
+};
 use crate::dataset::{Dataset, Split};
 use crate::kinematics::DualArmModel;
 use crate::metrics::{ConfigResiduals, MetricsError, PairKind, PairResiduals};
 use crate::side::{PerSide, Side};
+use nalgebra::Isometry3;
 
 /// The stages of a two-step calibration, in the order they run.
 pub const STAGES: [Stage; 3] = [Stage::Arm(Side::Left), Stage::Arm(Side::Right), Stage::Base];
@@ -34,6 +37,14 @@ pub struct CalibrationResult {
     pub diagnostics: Vec<String>,
     /// Allowed deviation δ of the reflector triangle's sides (constraint 14, ε = δ²), mm, per arm.
     pub side_tolerance_mm: PerSide<f64>,
+    /// The reflector each arm's step 1 used, for [`super::Method::DistanceSingle`] (`None` otherwise
+    /// or for an arm whose stage did not start).
+    pub reflector_used: PerSide<Option<Reflector>>,
+    /// Each arm's model base in the tracker frame, where a method identified it (the absolute methods
+    /// [`super::Method::Pose`], [`super::Method::Position`] in step 1 and
+    /// [`super::BaseMethod::Absolute`] in step 2, which overrides step 1's); `None` for the distance
+    /// methods, which cannot see it.
+    pub tracker_from_base: PerSide<Option<Isometry3<f64>>>,
     pub elapsed_secs: f64,
 }
 

@@ -11,13 +11,13 @@ use super::result::CalibrationResult;
 use super::sqp::{SqpSettings, SqpState};
 use super::stage::StageSolver;
 use super::{
-    CalibrationError, CalibrationEvent, CalibrationSettings, IterationRecord, Method, Stage,
-    StageSummary, Termination,
+    BaseMethod, CalibrationError, CalibrationEvent, CalibrationSettings, IterationRecord, Method,
+    Reflector, Stage, StageSummary, Termination,
 };
 use crate::dataset::Dataset;
 use crate::kinematics::{ArmKinematics, DualArmModel};
 use crate::side::{ConfigId, PerSide, Side};
-use nalgebra::{DMatrix, DVector, Vector3};
+use nalgebra::{DMatrix, DVector, Isometry3, Vector3};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 // std's `Instant::now` panics in a browser (wasm32-unknown-unknown); web-time is std's on native targets.
@@ -164,6 +164,10 @@ pub struct CalibrationRun {
     identifiability_at_solution: PerSide<Option<IdentifiabilityReport>>,
     /// What went wrong and where, for the warnings (divergence, non-finite values, new dependencies).
     diagnostics: Vec<String>,
+    /// The reflector of each arm's single-reflector fit.
+    reflector_used: PerSide<Option<Reflector>>,
+    /// Each arm's base in the tracker frame, where the method identified it.
+    tracker_from_base: PerSide<Option<Isometry3<f64>>>,
     cancel: Arc<AtomicBool>,
     started: Instant,
 }
@@ -175,6 +179,7 @@ impl CalibrationRun {
         settings: CalibrationSettings,
         cancel: Arc<AtomicBool>,
     ) -> Result<Self, CalibrationError> {
+        check_settings(&settings)?;
         let inputs = PerSide::try_from_fn(|side| arm_input(dataset, nominal, side, &settings))?;
         let mut run = Self {
             settings,
@@ -187,6 +192,8 @@ impl CalibrationRun {
             identifiability: PerSide::default(),
             identifiability_at_solution: PerSide::default(),
             diagnostics: Vec::new(),
+            reflector_used: PerSide::default(),
+            tracker_from_base: PerSide::default(),
             cancel,
             started: Instant::now(),
         };
@@ -501,6 +508,12 @@ impl CalibrationRun {
                 },
             )?),
             Method::LeastSquares => Box::new(LmState::new(problem, self.settings.step_tolerance)),
+            other => {
+                return Err(CalibrationError::InvalidSettings(format!(
+                    "method `{}` is not implemented yet",
+                    other.name()
+                )));
+            }
         })
     }
 
@@ -623,9 +636,30 @@ impl CalibrationRun {
             identifiability_at_solution: self.identifiability_at_solution.clone(),
             diagnostics: self.diagnostics.clone(),
             side_tolerance_mm: self.inputs.as_ref().map(|_, i| i.side_tolerance_mm),
+            reflector_used: self.reflector_used,
+            tracker_from_base: self.tracker_from_base,
             elapsed_secs: self.started.elapsed().as_secs_f64(),
         }
     }
+}
+
+/// Settings that cannot work together are refused before any work.
+fn check_settings(settings: &CalibrationSettings) -> Result<(), CalibrationError> {
+    if let Some(r) = settings.reflector
+        && settings.method != Method::DistanceSingle
+    {
+        return Err(CalibrationError::InvalidSettings(format!(
+            "a reflector ({r}) can only be chosen for method `distance-single`; `{}` uses all three",
+            settings.method.name()
+        )));
+    }
+    if settings.base_method != BaseMethod::Minimax {
+        return Err(CalibrationError::InvalidSettings(format!(
+            "base method `{}` is not implemented yet",
+            settings.base_method.name()
+        )));
+    }
+    Ok(())
 }
 
 /// The selected split of one arm, checked.

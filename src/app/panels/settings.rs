@@ -1,9 +1,10 @@
 //! The left panel: dataset, robot, calibration settings and buttons, export, then the view options.
 
-use super::{Command, WorkbenchApp, choice_ui, grid_row_ui};
+use super::{Command, WARNING_COLOR, WorkbenchApp, choice_ui, grid_row_ui};
 use crate::app::bundled_example_path;
 use crate::app::export::Export;
 use crate::app::files::OpenKind;
+use crate::app::session::{RobotMeshes, Session};
 use crate::dataset::Split;
 use crate::side::Side;
 use crate::solver::{CalibrationSettings, Method, QpMethod};
@@ -72,17 +73,49 @@ impl WorkbenchApp {
         });
     }
 
+    /// Which robot and which arms the figures are of (the same as the command line's `robot:` line),
+    /// its meshes and its warnings.
     fn robot_section_ui(&self, ui: &mut egui::Ui, commands: &mut Vec<Command>) {
         ui.heading("Robot");
-        let source = self.session.as_ref().and_then(|s| s.robot_source.as_ref());
-        ui.label(source.map_or_else(|| "built-in IRB 14000".to_string(), |p| file_name(p)));
-        if ui
-            .button("Open URDF…")
-            .on_hover_text("Use another robot description (URDF) for this dataset")
-            .clicked()
-        {
-            commands.push(Command::ChooseFile(OpenKind::Urdf));
+        match &self.session {
+            Some(session) => robot_summary_ui(ui, session),
+            None => {
+                ui.label("built-in IRB 14000 (no dataset)");
+            }
         }
+        if let Some(urdf) = &self.urdf_override {
+            ui.label(
+                RichText::new(format!(
+                    "opened: {} (instead of the dataset's)",
+                    file_name(urdf)
+                ))
+                .small()
+                .color(Color32::GRAY),
+            )
+            .on_hover_text(urdf.display().to_string());
+        }
+        ui.horizontal(|ui| {
+            if ui
+                .add_enabled(self.loading.is_none(), egui::Button::new("Open URDF…"))
+                .on_hover_text(
+                    "Use another robot description (URDF) for this dataset; or drop a .urdf on the window",
+                )
+                .clicked()
+            {
+                commands.push(Command::ChooseFile(OpenKind::Urdf));
+            }
+            if self.urdf_override.is_some()
+                && ui
+                    .add_enabled(
+                        self.loading.is_none(),
+                        egui::Button::new("Dataset's robot"),
+                    )
+                    .on_hover_text("Go back to the robot the dataset names (or the built-in one)")
+                    .clicked()
+            {
+                commands.push(Command::UseDatasetRobot);
+            }
+        });
     }
 
     fn calibration_buttons_ui(&self, ui: &mut egui::Ui, commands: &mut Vec<Command>) {
@@ -158,6 +191,173 @@ impl WorkbenchApp {
             );
         });
     }
+}
+
+/// The session's robot: its file, each arm's chain, the nominal model, the meshes and the warnings.
+fn robot_summary_ui(ui: &mut egui::Ui, session: &Session) {
+    let robot = &session.robot;
+    let name = match &session.robot_source {
+        Some(path) => file_name(path),
+        None => "built-in IRB 14000".into(),
+    };
+    ui.label(RichText::new(name).strong())
+        .on_hover_text(robot.name());
+    // The chain in monospace: the proportional font has no arrow glyph.
+    for (side, arm) in robot.arms().iter() {
+        let hover = format!(
+            "The {side} arm: the chain from its base link to its tip link; its joints, in the CSV's order: {}",
+            arm.joint_names().join(", ")
+        );
+        ui.label(format!("{side} arm:")).on_hover_text(&hover);
+        ui.label(
+            RichText::new(format!("{} ({} joints)", arm.links, arm.chain.dof()))
+                .family(egui::FontFamily::Monospace)
+                .size(10.5),
+        )
+        .on_hover_text(hover);
+        egui::CollapsingHeader::new(format!("{side} joints and parameters"))
+            .id_salt(("robot arm", side.name()))
+            .show(ui, |ui| arm_details_ui(ui, session, side));
+    }
+    ui.label(
+        RichText::new(if robot.is_builtin() {
+            "nominal model: Table 3 (DH)"
+        } else {
+            "nominal model: the URDF's joint origins"
+        })
+        .color(Color32::GRAY),
+    );
+    let meshes = match &session.meshes {
+        RobotMeshes::None => None,
+        RobotMeshes::Loading => Some("meshes: loading…".to_string()),
+        RobotMeshes::Loaded(m) => Some(format!(
+            "meshes: {} files, {} triangles{} ({:.2} s)",
+            m.visual_files,
+            thousands(m.visual_triangles),
+            match m.visual_missing {
+                0 => String::new(),
+                n => format!(", {n} missing"),
+            },
+            m.elapsed_secs
+        )),
+        RobotMeshes::Failed(why) => Some(format!("meshes not loaded: {why}")),
+    };
+    if let Some(text) = meshes {
+        ui.label(RichText::new(text).color(Color32::GRAY))
+            .on_hover_text(
+                "The URDF's visual meshes, loaded in the background. A missing one is drawn as its \
+                 link's collision mesh in amber, or as a box.",
+            );
+    }
+    let mesh_warnings = match &session.meshes {
+        RobotMeshes::Loaded(m) => m.warnings.as_slice(),
+        _ => &[],
+    };
+    let warnings: Vec<&String> = robot.warnings.iter().chain(mesh_warnings).collect();
+    if !warnings.is_empty() {
+        egui::CollapsingHeader::new(
+            RichText::new(format!(
+                "{} warning{}",
+                warnings.len(),
+                if warnings.len() == 1 { "" } else { "s" }
+            ))
+            .color(WARNING_COLOR),
+        )
+        .id_salt("robot warnings")
+        .show(ui, |ui| {
+            for w in warnings {
+                ui.label(RichText::new(w.as_str()).small().color(WARNING_COLOR));
+            }
+        });
+    }
+}
+
+/// One arm's joints (chain order, the CSV's `q1 … qN`) with their limits, and its calibration
+/// parameters: how many, which distances cannot identify (and why), and after a calibration which
+/// were identified.
+fn arm_details_ui(ui: &mut egui::Ui, session: &Session, side: Side) {
+    let arm = &session.robot.arms()[side];
+    egui::Grid::new(("joints", side.name()))
+        .num_columns(3)
+        .striped(true)
+        .show(ui, |ui| {
+            for (k, (name, (lo, hi))) in arm
+                .joint_names()
+                .iter()
+                .zip(arm.joint_limits_rad())
+                .enumerate()
+            {
+                ui.label(RichText::new(format!("q{}", k + 1)).small());
+                ui.label(RichText::new(name.as_str()).small().monospace());
+                ui.label(
+                    RichText::new(format!("{:.1}° … {:.1}°", lo.to_degrees(), hi.to_degrees()))
+                        .small(),
+                )
+                .on_hover_text(format!("{lo:.4} … {hi:.4} rad"));
+                ui.end_row();
+            }
+        });
+    let model = session.nominal.model.arm(side);
+    let n = model.param_count();
+    let unidentifiable: Vec<(String, String)> = (0..n)
+        .filter_map(|k| {
+            model
+                .unidentifiable_reason(k)
+                .map(|why| (model.param_name(k), why))
+        })
+        .collect();
+    ui.label(
+        RichText::new(format!(
+            "{n} parameters, {} identifiable by distances, {} not:",
+            n - unidentifiable.len(),
+            unidentifiable.len()
+        ))
+        .small(),
+    )
+    .on_hover_text(
+        "The arm's calibration parameters (docs/solver.md): the kinematic ones and the nine reflector \
+         coordinates. Those distances between measured points cannot see are never identified.",
+    );
+    for (name, why) in &unidentifiable {
+        ui.label(
+            RichText::new(format!("{name}: {why}"))
+                .small()
+                .color(Color32::GRAY),
+        );
+    }
+    if let Some(c) = &session.calibrated
+        && let Some(report) = &c.result.identifiability[side]
+    {
+        ui.label(
+            RichText::new(format!(
+                "last calibration: {} of {n} identified (condition {:.2e} → {:.2e}); fixed:",
+                report.free.len(),
+                report.condition_before,
+                report.condition_after
+            ))
+            .small(),
+        );
+        for f in &report.fixed {
+            ui.label(
+                RichText::new(format!("{}: {}", f.name, f.reason))
+                    .small()
+                    .color(Color32::GRAY),
+            );
+        }
+    }
+}
+
+/// `295618` as `295 618`.
+fn thousands(n: usize) -> String {
+    let digits = n.to_string();
+    let mut out = String::new();
+    for (k, c) in digits.chars().enumerate() {
+        if k > 0 && (digits.len() - k).is_multiple_of(3) {
+            out.push(' ');
+        }
+        out.push(c);
+    }
+    out
 }
 
 /// The settings grid: method, QP solver, split, iteration limit, tolerances.

@@ -3,7 +3,6 @@
 
 use super::{Command, WorkbenchApp};
 use crate::app::session::Session;
-use crate::app::viewport::camera::OrbitCamera;
 use crate::app::viewport::scene::SceneOptions;
 use crate::side::{PerSide, Side};
 use eframe::egui::{self, Color32, RichText};
@@ -27,7 +26,7 @@ impl WorkbenchApp {
                 .on_hover_text("Also: double-click the viewport")
                 .clicked()
             {
-                view.camera = OrbitCamera::default();
+                view.camera = view.home_camera;
             }
             if ui
                 .button("Select worst")
@@ -60,6 +59,9 @@ fn layers_ui(ui: &mut egui::Ui, o: &mut SceneOptions) {
             .on_hover_text("Model reflector triangles (forward kinematics)");
         ui.checkbox(&mut o.show_vectors, "error vectors")
             .on_hover_text("From each model point towards the measured one, exaggerated");
+        ui.checkbox(&mut o.show_flags, "flags").on_hover_text(
+            "Configurations the screening flags in magenta to red by severity (size over threshold), outlined",
+        );
     });
     ui.horizontal(|ui| {
         ui.checkbox(&mut o.show_cal, "cal");

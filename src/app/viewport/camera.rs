@@ -76,8 +76,27 @@ impl OrbitCamera {
         self.projection(aspect) * self.view()
     }
 
-    /// Mouse input on the viewport: drag orbits, right/middle or shift-drag pans, the wheel zooms, a
-    /// double click resets the view.
+    /// Seen from the default direction, a camera whose view holds every point of `points_mm` (the
+    /// sphere around their bounding box).
+    pub fn framing(points_mm: &[Vector3<f32>]) -> Self {
+        let default = Self::default();
+        let Some(first) = points_mm.first() else {
+            return default;
+        };
+        let (lo, hi) = points_mm
+            .iter()
+            .fold((*first, *first), |(lo, hi), p| (lo.inf(p), hi.sup(p)));
+        let radius_mm = ((hi - lo).norm() * 0.5).max(100.0);
+        Self {
+            target_mm: (lo + hi) * 0.5,
+            distance_mm: (radius_mm / (default.fov_y_rad * 0.5).sin())
+                .clamp(MIN_DISTANCE_MM, MAX_DISTANCE_MM),
+            ..default
+        }
+    }
+
+    /// Mouse input on the viewport: drag orbits, right/middle or shift-drag pans, the wheel zooms (a
+    /// double click, handled by the viewport, resets the view).
     pub fn handle_input(&mut self, response: &egui::Response) {
         let (shift, scroll) = response
             .ctx
@@ -94,9 +113,6 @@ impl OrbitCamera {
         }
         if response.hovered() && scroll != 0.0 {
             self.zoom((-scroll * 0.002).exp());
-        }
-        if response.double_clicked() {
-            *self = Self::default();
         }
     }
 
@@ -185,6 +201,24 @@ mod tests {
         let clip = vp * Vector4::new(cam.target_mm.x, cam.target_mm.y, cam.target_mm.z, 1.0);
         let depth = clip.z / clip.w;
         assert!(depth > 0.0 && depth < 1.0, "{depth}");
+    }
+
+    #[test]
+    fn framing_sees_every_point() {
+        let points = [
+            Vector3::new(-400.0, 2000.0, -900.0),
+            Vector3::new(300.0, 2600.0, 700.0),
+            Vector3::new(0.0, 2300.0, 0.0),
+        ];
+        let cam = OrbitCamera::framing(&points);
+        for p in &points {
+            let [x, y] = cam.project(p, 800.0, 600.0).unwrap();
+            assert!(
+                (0.0..=800.0).contains(&x) && (0.0..=600.0).contains(&y),
+                "{p:?} at {x} {y}"
+            );
+        }
+        assert_eq!(OrbitCamera::framing(&[]), OrbitCamera::default());
     }
 
     #[test]

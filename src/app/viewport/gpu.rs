@@ -3,11 +3,17 @@
 //!
 //! Pipelines and buffers are created once and live in egui-wgpu's `callback_resources`; each frame a
 //! [`ViewportCallback`] uploads the scene when it changed, writes the camera uniform and records the
-//! render pass in `prepare`.
+//! render pass in `prepare`. The robot's meshes ([`PackedMeshes`]) are uploaded once per robot.
+//!
+//! **WebGL2-safe** (a browser build draws through wgpu's WebGL2 backend): no storage buffers (instances
+//! are vertex attributes), no base vertex (offsets are baked into the indices), no first instance (a
+//! group's instances are a slice of the instance buffer bound at its offset), 32-bit indices.
 
+use super::mesh_pack::PackedMeshes;
 use super::primitives::{MeshVertex, unit_box, unit_cylinder, unit_sphere};
-use super::scene::{ColorVertex, MeshInstance, Primitive, SceneData};
+use super::scene::{ColorVertex, Geometry, MeshInstance, Primitive, SceneData};
 use eframe::egui_wgpu::{self, wgpu};
+use std::ops::Range;
 use std::sync::Arc;
 use wgpu::util::DeviceExt;
 
@@ -32,13 +38,6 @@ struct GpuInstance {
     model: [[f32; 4]; 4],
     normal: [[f32; 4]; 3],
     color: [f32; 4],
-}
-
-/// A unit primitive's index range in the shared mesh buffers.
-#[derive(Clone, Copy, Debug)]
-struct MeshRange {
-    first_index: u32,
-    index_count: u32,
 }
 
 /// A growable vertex/instance buffer.
@@ -102,9 +101,11 @@ pub struct ViewportGpu {
     uniform_buffer: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
     meshes: UnitMeshes,
+    /// The robot's meshes (the pack of the last scene that had one).
+    robot_meshes: Option<RobotMeshesGpu>,
     instances: DynBuffer,
-    /// Instance ranges per primitive (box, cylinder, sphere).
-    instance_ranges: [std::ops::Range<u32>; 3],
+    /// What to draw: each geometry with its instances (a range of the instance buffer).
+    draws: Vec<(Geometry, Range<u32>)>,
     lines: DynBuffer,
     triangles: DynBuffer,
     scene_version: Option<u64>,
@@ -118,6 +119,47 @@ fn primitive_index(p: Primitive) -> usize {
         Primitive::Box => 0,
         Primitive::Cylinder => 1,
         Primitive::Sphere => 2,
+    }
+}
+
+/// A robot's packed meshes on the GPU.
+struct RobotMeshesGpu {
+    pack_id: u64,
+    vertices: wgpu::Buffer,
+    indices: wgpu::Buffer,
+    ranges: Vec<Range<u32>>,
+}
+
+impl RobotMeshesGpu {
+    fn new(device: &wgpu::Device, pack: &PackedMeshes) -> Self {
+        // An empty buffer cannot be created with contents: keep one vertex / one index.
+        let vertices: &[MeshVertex] = if pack.vertices.is_empty() {
+            &[MeshVertex {
+                position: [0.0; 3],
+                normal: [0.0, 0.0, 1.0],
+            }]
+        } else {
+            &pack.vertices
+        };
+        let indices: &[u32] = if pack.indices.is_empty() {
+            &[0]
+        } else {
+            &pack.indices
+        };
+        Self {
+            pack_id: pack.id,
+            vertices: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("viewport robot mesh vertices"),
+                contents: bytemuck::cast_slice(vertices),
+                usage: wgpu::BufferUsages::VERTEX,
+            }),
+            indices: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("viewport robot mesh indices"),
+                contents: bytemuck::cast_slice(indices),
+                usage: wgpu::BufferUsages::INDEX,
+            }),
+            ranges: pack.ranges.clone(),
+        }
     }
 }
 
@@ -288,12 +330,12 @@ impl Pipelines {
     }
 }
 
-/// The three unit primitives in one vertex and one index buffer.
+/// The three unit primitives in one vertex and one index buffer (vertex offsets baked in).
 struct UnitMeshes {
     vertices: wgpu::Buffer,
     indices: wgpu::Buffer,
     /// Index ranges of box, cylinder, sphere.
-    ranges: [MeshRange; 3],
+    ranges: [Range<u32>; 3],
 }
 
 impl UnitMeshes {
@@ -301,16 +343,12 @@ impl UnitMeshes {
         let meshes = [unit_box(), unit_cylinder(32), unit_sphere(24, 16)];
         let mut vertices: Vec<MeshVertex> = Vec::new();
         let mut indices: Vec<u32> = Vec::new();
-        // The indices carry each mesh's vertex offset (WebGL2 has no base-vertex draws).
         let ranges = meshes.map(|(v, i)| {
-            let range = MeshRange {
-                first_index: indices.len() as u32,
-                index_count: i.len() as u32,
-            };
-            let base_vertex = vertices.len() as u32;
+            let start = indices.len() as u32;
+            let offset = vertices.len() as u32;
             vertices.extend(v);
-            indices.extend(i.into_iter().map(|index| index + base_vertex));
-            range
+            indices.extend(i.iter().map(|k| k + offset));
+            start..indices.len() as u32
         });
         Self {
             vertices: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -364,8 +402,9 @@ impl ViewportGpu {
             uniform_buffer,
             bind_group,
             meshes: UnitMeshes::new(device),
+            robot_meshes: None,
             instances: DynBuffer::new(device, "viewport instances", wgpu::BufferUsages::VERTEX),
-            instance_ranges: [0..0, 0..0, 0..0],
+            draws: Vec::new(),
             lines: DynBuffer::new(device, "viewport lines", wgpu::BufferUsages::VERTEX),
             triangles: DynBuffer::new(device, "viewport triangles", wgpu::BufferUsages::VERTEX),
             scene_version: None,
@@ -435,13 +474,20 @@ impl ViewportGpu {
     }
 
     fn upload_scene(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, scene: &SceneData) {
+        if let Some(pack) = &scene.meshes
+            && self.robot_meshes.as_ref().map(|m| m.pack_id) != Some(pack.id)
+        {
+            self.robot_meshes = Some(RobotMeshesGpu::new(device, pack));
+        }
         let mut sorted: Vec<&MeshInstance> = scene.instances.iter().collect();
-        sorted.sort_by_key(|i| primitive_index(i.primitive));
-        let mut ranges = [0..0, 0..0, 0..0];
-        for (k, range) in ranges.iter_mut().enumerate() {
-            let start = sorted.partition_point(|i| primitive_index(i.primitive) < k) as u32;
-            let end = sorted.partition_point(|i| primitive_index(i.primitive) <= k) as u32;
-            *range = start..end;
+        sorted.sort_by_key(|i| i.geometry);
+        self.draws.clear();
+        for (k, instance) in sorted.iter().enumerate() {
+            let k = k as u32;
+            match self.draws.last_mut() {
+                Some((geometry, range)) if *geometry == instance.geometry => range.end = k + 1,
+                _ => self.draws.push((instance.geometry, k..k + 1)),
+            }
         }
         let gpu: Vec<GpuInstance> = sorted
             .iter()
@@ -453,7 +499,6 @@ impl ViewportGpu {
             .collect();
         self.instances
             .upload(device, queue, bytemuck::cast_slice(&gpu), gpu.len() as u32);
-        self.instance_ranges = ranges;
         self.lines.upload(
             device,
             queue,
@@ -506,17 +551,42 @@ impl ViewportGpu {
         pass.set_bind_group(0, &self.bind_group, &[]);
         if self.instances.len > 0 {
             pass.set_pipeline(&self.pipelines.mesh);
-            pass.set_vertex_buffer(0, self.meshes.vertices.slice(..));
-            pass.set_vertex_buffer(1, self.instances.buffer.slice(..));
-            pass.set_index_buffer(self.meshes.indices.slice(..), wgpu::IndexFormat::Uint32);
-            for (range, mesh) in self.instance_ranges.iter().zip(&self.meshes.ranges) {
-                if !range.is_empty() {
-                    pass.draw_indexed(
-                        mesh.first_index..mesh.first_index + mesh.index_count,
-                        0,
-                        range.clone(),
-                    );
+            let stride = std::mem::size_of::<GpuInstance>() as u64;
+            // Which buffers are bound: the unit primitives' (false) or the robot meshes' (true).
+            let mut bound: Option<bool> = None;
+            for (geometry, instances) in &self.draws {
+                let (robot, indices) = match *geometry {
+                    Geometry::Primitive(p) => {
+                        (false, self.meshes.ranges[primitive_index(p)].clone())
+                    }
+                    Geometry::Mesh(k) => {
+                        match self
+                            .robot_meshes
+                            .as_ref()
+                            .and_then(|m| m.ranges.get(k as usize))
+                        {
+                            Some(range) => (true, range.clone()),
+                            None => continue,
+                        }
+                    }
+                };
+                if bound != Some(robot) {
+                    let (vertices, index_buffer) = match (&self.robot_meshes, robot) {
+                        (Some(m), true) => (&m.vertices, &m.indices),
+                        _ => (&self.meshes.vertices, &self.meshes.indices),
+                    };
+                    pass.set_vertex_buffer(0, vertices.slice(..));
+                    pass.set_index_buffer(index_buffer.slice(..), wgpu::IndexFormat::Uint32);
+                    bound = Some(robot);
                 }
+                // The group's instances bound at their offset: no first instance needed.
+                pass.set_vertex_buffer(
+                    1,
+                    self.instances
+                        .buffer
+                        .slice(instances.start as u64 * stride..instances.end as u64 * stride),
+                );
+                pass.draw_indexed(indices, 0, 0..instances.len() as u32);
             }
         }
         if self.lines.len > 0 {

@@ -2,6 +2,7 @@
 
 pub mod camera;
 pub mod gpu;
+pub mod mesh_pack;
 mod primitives;
 pub mod scene;
 
@@ -36,6 +37,8 @@ pub fn install_gpu(render_state: Option<&egui_wgpu::RenderState>, sample_count: 
 /// View state of the viewport (camera, display options, cached scene).
 pub struct ViewportState {
     pub camera: OrbitCamera,
+    /// Where "Reset view" and a double click put the camera: framing the robot and its data.
+    pub home_camera: OrbitCamera,
     pub options: SceneOptions,
     /// Measurement index each arm is drawn in (`None`: home pose).
     pub poses: PerSide<Option<usize>>,
@@ -66,6 +69,7 @@ impl Default for ViewportState {
     fn default() -> Self {
         Self {
             camera: OrbitCamera::default(),
+            home_camera: OrbitCamera::default(),
             options: SceneOptions::default(),
             poses: FIRST_POSES,
             scene: Arc::new(SceneData::default()),
@@ -82,6 +86,38 @@ impl ViewportState {
     /// Draw each arm in its first configuration (a new dataset).
     pub fn reset_poses(&mut self) {
         self.poses = FIRST_POSES;
+    }
+
+    /// The scene last built (what the GPU draws).
+    pub fn scene(&self) -> &SceneData {
+        &self.scene
+    }
+
+    /// Frame a new robot and its data: the built-in robot's default view, any other robot seen from
+    /// the same direction at a distance that fits its links and the measured points.
+    pub fn frame(&mut self, session: &Session) {
+        self.home_camera = if session.robot.is_builtin() {
+            OrbitCamera::default()
+        } else {
+            let robot = &session.robot;
+            let q = PerSide::from_fn(|side| robot.home_q_rad(side));
+            let links = robot
+                .link_poses(&q.left, &q.right)
+                .into_iter()
+                .map(|(_, pose)| pose.translation.vector);
+            let measured = session
+                .nominal
+                .configs
+                .iter()
+                .flat_map(|r| r.measured_body_mm);
+            let points: Vec<nalgebra::Vector3<f32>> = links
+                .chain(measured)
+                .filter(|p| p.iter().all(|c| c.is_finite()))
+                .map(|p| p.cast())
+                .collect();
+            OrbitCamera::framing(&points)
+        };
+        self.camera = self.home_camera;
     }
 
     /// With auto scale on: draw the 95th-percentile point error as about 60 mm and put about 1.5
@@ -125,6 +161,9 @@ impl ViewportState {
             return None;
         }
         self.camera.handle_input(&response);
+        if response.double_clicked() {
+            self.camera = self.home_camera;
+        }
         self.update_scene(session, generation, selection);
         let view_proj = self.camera.view_proj(rect.width() / rect.height());
         let clicked = self.pick_ui(&response, session, &view_proj);
@@ -135,6 +174,7 @@ impl ViewportState {
         self.legends_ui(&painter, rect, session);
         if let Some(session) = session {
             self.model_label_ui(&painter, rect, session);
+            meshes_label_ui(&painter, rect, session);
         }
         if let (Some(session), Some(config)) = (session, selection) {
             self.selection_label_ui(&painter, rect, &view_proj, session, config);
@@ -408,6 +448,24 @@ impl ViewportState {
                 self.options.exaggeration, self.options.exaggeration
             ),
         );
+        if let Some(session) = session
+            && self.options.show_flags
+        {
+            let flagged = self.options.screening(session).suspects().len();
+            if flagged > 0 {
+                let at = Pos2::new(bar.left(), bg.top() - 6.0);
+                let galley = painter.layout_no_wrap(
+                    format!(
+                        "{flagged} flagged: magenta to red by severity; excluded: grey (X toggles)"
+                    ),
+                    egui::FontId::proportional(12.0),
+                    crate::app::colormap::flag_color32(2.0),
+                );
+                let r = Rect::from_min_size(at - Vec2::new(0.0, galley.size().y), galley.size());
+                painter.rect_filled(r.expand(4.0), 4.0, Color32::from_black_alpha(150));
+                painter.galley(r.min, galley, Color32::WHITE);
+            }
+        }
         if session.is_none() {
             painter.text(
                 Pos2::new(rect.center().x, rect.top() + rect.height() * 0.8),
@@ -424,6 +482,24 @@ impl ViewportState {
             egui::StrokeKind::Inside,
         );
     }
+}
+
+/// While the robot's meshes load (or if they could not be), a note in the top-right corner.
+fn meshes_label_ui(painter: &egui::Painter, rect: Rect, session: &Session) {
+    let text = match &session.meshes {
+        session::RobotMeshes::Loading => "loading meshes…",
+        session::RobotMeshes::Failed(_) => "meshes not loaded (see Robot)",
+        _ => return,
+    };
+    let color = Color32::from_gray(200);
+    let galley = painter.layout_no_wrap(text.into(), egui::FontId::proportional(13.0), color);
+    let pos = rect.right_top() + Vec2::new(-12.0 - galley.size().x, 10.0);
+    painter.rect_filled(
+        Rect::from_min_size(pos, galley.size()).expand(4.0),
+        3.0,
+        Color32::from_black_alpha(150),
+    );
+    painter.galley(pos, galley, color);
 }
 
 /// The colour map as a horizontal bar filling `bar`.

@@ -1,17 +1,24 @@
-//! What the viewport draws, built on the CPU: mesh instances for the robot, coloured line and
-//! triangle vertices for the grid, axes, reflector triangles and error vectors. Rebuilt only when the
-//! data or the display options change.
+//! What the viewport draws, built on the CPU: mesh instances for the robot (its URDF's meshes and
+//! primitives), coloured line and triangle vertices for the grid, axes, reflector triangles and error
+//! vectors. Rebuilt only when the data or the display options change.
+//!
+//! **Meshes** arrive after the robot (a background task loads and packs them, [`PackedMeshes`]); until
+//! then each mesh is a placeholder box. A visual mesh that could not be loaded is drawn as its link's
+//! collision geometry in a tinted colour (a *stand-in*), or as a box when that is missing too.
 
+use super::mesh_pack::PackedMeshes;
 use crate::analysis::{Analysis, ConfigRow};
 use crate::app::colormap;
 use crate::app::session::Session;
 use crate::dataset::Split;
+use crate::quality::Screening;
 use crate::robot::{GeometryKind, PlacedShape, RobotDescription, ShapeKind};
 use crate::side::{ConfigId, PerSide};
 use nalgebra::{Isometry3, Matrix3, Matrix4, Vector3};
+use std::sync::Arc;
 
 /// A unit primitive the mesh pipeline instances.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub enum Primitive {
     /// Cube [-1, 1]³.
     Box,
@@ -21,10 +28,24 @@ pub enum Primitive {
     Sphere,
 }
 
+/// What an instance draws: a unit primitive, or a mesh of the scene's [`PackedMeshes`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum Geometry {
+    Primitive(Primitive),
+    /// Index of the mesh in [`SceneData::meshes`] (vertices in metres).
+    Mesh(u32),
+}
+
+impl From<Primitive> for Geometry {
+    fn from(p: Primitive) -> Self {
+        Geometry::Primitive(p)
+    }
+}
+
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MeshInstance {
-    pub primitive: Primitive,
-    /// Unit primitive → body frame (mm), columns.
+    pub geometry: Geometry,
+    /// Geometry → body frame (mm), columns.
     pub model: [[f32; 4]; 4],
     /// Normal matrix columns (xyz, w unused).
     pub normal: [[f32; 4]; 3],
@@ -33,9 +54,9 @@ pub struct MeshInstance {
 }
 
 impl MeshInstance {
-    /// A primitive scaled per axis, then placed by `body_from_shape`.
+    /// A primitive or mesh scaled per axis, then placed by `body_from_shape`.
     pub fn new(
-        primitive: Primitive,
+        geometry: impl Into<Geometry>,
         body_from_shape: &Isometry3<f64>,
         scale: Vector3<f64>,
         color: [f32; 4],
@@ -55,7 +76,7 @@ impl MeshInstance {
         );
         let normal = rot * Matrix3::from_diagonal(&inv);
         Self {
-            primitive,
+            geometry: geometry.into(),
             model: std::array::from_fn(|c| std::array::from_fn(|r| model[(r, c)])),
             normal: std::array::from_fn(|c| [normal[(0, c)], normal[(1, c)], normal[(2, c)], 0.0]),
             color,
@@ -76,6 +97,8 @@ pub struct ColorVertex {
 pub struct SceneData {
     pub version: u64,
     pub instances: Vec<MeshInstance>,
+    /// The robot's meshes the instances refer to (uploaded once per pack).
+    pub meshes: Option<Arc<PackedMeshes>>,
     pub lines: Vec<ColorVertex>,
     pub triangles: Vec<ColorVertex>,
 }
@@ -99,6 +122,8 @@ pub struct SceneOptions {
     pub color_max_mm: f32,
     /// Draw the calibrated model (if any) rather than the nominal one.
     pub use_calibrated: bool,
+    /// Colour the configurations the screening flags by severity (else by their error).
+    pub show_flags: bool,
 }
 
 impl Default for SceneOptions {
@@ -115,6 +140,7 @@ impl Default for SceneOptions {
             exaggeration: 50.0,
             color_max_mm: 2.0,
             use_calibrated: true,
+            show_flags: true,
         }
     }
 }
@@ -133,6 +159,14 @@ impl SceneOptions {
     pub fn analysis<'a>(&self, session: &'a Session) -> &'a Analysis {
         session.analysis(self.use_calibrated)
     }
+
+    /// The screening that goes with the model drawn: the last calibration's, or the nominal one.
+    pub fn screening<'a>(&self, session: &'a Session) -> &'a Screening {
+        match (&session.calibrated, self.use_calibrated) {
+            (Some(c), true) => &c.screening,
+            _ => &session.screening,
+        }
+    }
 }
 
 fn srgb_linear(rgb: [u8; 3], alpha: f32) -> [f32; 4] {
@@ -140,61 +174,156 @@ fn srgb_linear(rgb: [u8; 3], alpha: f32) -> [f32; 4] {
     [r, g, b, alpha]
 }
 
-/// Convert the robot's shapes to mesh instances. Meshes (not drawable here) become small boxes.
-pub fn robot_instances(shapes: &[PlacedShape], out: &mut Vec<MeshInstance>) {
-    for shape in shapes {
-        let color = shape.rgba;
-        let pose = &shape.body_from_shape;
-        match &shape.kind {
-            ShapeKind::Box { half_extents_mm } => {
-                out.push(MeshInstance::new(
-                    Primitive::Box,
-                    pose,
-                    *half_extents_mm,
-                    color,
-                ));
-            }
-            ShapeKind::Cylinder {
-                radius_mm,
-                half_length_mm,
-            } => out.push(MeshInstance::new(
+/// Half size of the box drawn for a mesh that is loading or missing, mm.
+const PLACEHOLDER_HALF_MM: f64 = 20.0;
+/// Colour of a placeholder box while the meshes load.
+const LOADING_RGBA: [f32; 4] = [0.35, 0.36, 0.38, 1.0];
+/// Colour of a placeholder box for a mesh that could not be loaded.
+const MISSING_RGBA: [f32; 4] = [0.85, 0.5, 0.16, 1.0];
+
+/// A stand-in (a missing visual mesh drawn as its link's collision geometry): the visual's colour
+/// turned towards amber, so it reads as "not the real mesh".
+pub fn stand_in_rgba(rgba: [f32; 4]) -> [f32; 4] {
+    let amber = [0.85, 0.5, 0.16];
+    std::array::from_fn(|i| {
+        if i < 3 {
+            0.55 * rgba[i] + 0.45 * amber[i]
+        } else {
+            1.0
+        }
+    })
+}
+
+/// The robot's meshes as the scene sees them.
+#[derive(Clone, Copy, Debug)]
+pub enum MeshSource<'a> {
+    /// Not loaded (yet, or at all): every mesh is a placeholder box.
+    Placeholders,
+    /// Loaded: each mesh from the pack; one that is not in it is a stand-in.
+    Packed(&'a PackedMeshes),
+}
+
+/// One shape as instances: a primitive, or a mesh of `meshes` (of geometry `kind`). Returns false for
+/// a mesh that is not in `meshes` (nothing added).
+fn push_shape(
+    shape: &PlacedShape,
+    kind: GeometryKind,
+    meshes: Option<&PackedMeshes>,
+    color: [f32; 4],
+    out: &mut Vec<MeshInstance>,
+) -> bool {
+    let pose = &shape.body_from_shape;
+    match &shape.kind {
+        ShapeKind::Box { half_extents_mm } => {
+            out.push(MeshInstance::new(
+                Primitive::Box,
+                pose,
+                *half_extents_mm,
+                color,
+            ));
+        }
+        ShapeKind::Cylinder {
+            radius_mm,
+            half_length_mm,
+        } => out.push(MeshInstance::new(
+            Primitive::Cylinder,
+            pose,
+            Vector3::new(*radius_mm, *radius_mm, *half_length_mm),
+            color,
+        )),
+        ShapeKind::Capsule {
+            radius_mm,
+            half_length_mm,
+        } => {
+            out.push(MeshInstance::new(
                 Primitive::Cylinder,
                 pose,
                 Vector3::new(*radius_mm, *radius_mm, *half_length_mm),
                 color,
-            )),
-            ShapeKind::Capsule {
-                radius_mm,
-                half_length_mm,
-            } => {
+            ));
+            for z in [-half_length_mm, *half_length_mm] {
+                let end = pose * Isometry3::translation(0.0, 0.0, z);
                 out.push(MeshInstance::new(
-                    Primitive::Cylinder,
-                    pose,
-                    Vector3::new(*radius_mm, *radius_mm, *half_length_mm),
+                    Primitive::Sphere,
+                    &end,
+                    Vector3::repeat(*radius_mm),
                     color,
                 ));
-                for z in [-half_length_mm, *half_length_mm] {
-                    let end = pose * Isometry3::translation(0.0, 0.0, z);
-                    out.push(MeshInstance::new(
-                        Primitive::Sphere,
-                        &end,
-                        Vector3::repeat(*radius_mm),
-                        color,
-                    ));
-                }
             }
-            ShapeKind::Sphere { radius_mm } => out.push(MeshInstance::new(
-                Primitive::Sphere,
+        }
+        ShapeKind::Sphere { radius_mm } => out.push(MeshInstance::new(
+            Primitive::Sphere,
+            pose,
+            Vector3::repeat(*radius_mm),
+            color,
+        )),
+        ShapeKind::Mesh {
+            filename, scale, ..
+        } => {
+            let Some(index) = meshes.and_then(|m| m.index_of(kind, filename, (*scale).into()))
+            else {
+                return false;
+            };
+            // The mesh is in metres (its element's scale applied): scale it to mm.
+            out.push(MeshInstance::new(
+                Geometry::Mesh(index),
                 pose,
-                Vector3::repeat(*radius_mm),
+                Vector3::repeat(1000.0),
                 color,
-            )),
-            ShapeKind::Mesh { .. } => out.push(MeshInstance::new(
-                Primitive::Box,
-                pose,
-                Vector3::repeat(20.0),
-                [0.8, 0.3, 0.8, 1.0],
-            )),
+            ));
+        }
+    }
+    true
+}
+
+fn placeholder(shape: &PlacedShape, color: [f32; 4]) -> MeshInstance {
+    MeshInstance::new(
+        Primitive::Box,
+        &shape.body_from_shape,
+        Vector3::repeat(PLACEHOLDER_HALF_MM),
+        color,
+    )
+}
+
+/// The robot's visual shapes as instances. A mesh not in `meshes` is a placeholder box while they
+/// load; once loaded, a missing one is drawn as its link's `collision` shapes (a stand-in, tinted), or
+/// as a box. `collision` is only called when a stand-in is needed.
+pub fn robot_instances(
+    visual: &[PlacedShape],
+    meshes: MeshSource<'_>,
+    collision: impl FnOnce() -> Vec<PlacedShape>,
+    out: &mut Vec<MeshInstance>,
+) {
+    let packed = match meshes {
+        MeshSource::Placeholders => None,
+        MeshSource::Packed(p) => Some(p),
+    };
+    let mut missing: Vec<&PlacedShape> = Vec::new();
+    for shape in visual {
+        if !push_shape(shape, GeometryKind::Visual, packed, shape.rgba, out) {
+            match packed {
+                None => out.push(placeholder(shape, LOADING_RGBA)),
+                Some(_) => missing.push(shape),
+            }
+        }
+    }
+    if missing.is_empty() {
+        return;
+    }
+    let collision = collision();
+    let mut done: Vec<&str> = Vec::new();
+    for shape in missing {
+        if done.contains(&shape.link.as_str()) {
+            continue;
+        }
+        done.push(&shape.link);
+        let color = stand_in_rgba(shape.rgba);
+        let mut drawn = false;
+        for c in collision.iter().filter(|c| c.link == shape.link) {
+            drawn |= push_shape(c, GeometryKind::Collision, packed, color, out);
+        }
+        if !drawn {
+            out.push(placeholder(shape, MISSING_RGBA));
         }
     }
 }
@@ -267,17 +396,28 @@ pub fn builtin_robot() -> &'static RobotDescription {
 /// The robot with the arms in joint positions `q_rad`, and the grid.
 fn robot_scene(
     robot: &RobotDescription,
+    meshes: Option<&Arc<PackedMeshes>>,
     q_rad: PerSide<Vec<f64>>,
     options: &SceneOptions,
     version: u64,
 ) -> SceneData {
     let mut scene = SceneData {
         version,
+        meshes: meshes.cloned(),
         ..Default::default()
     };
     if options.show_robot {
         let shapes = robot.shapes(&q_rad.left, &q_rad.right, GeometryKind::Visual);
-        robot_instances(&shapes, &mut scene.instances);
+        let source = match meshes {
+            Some(m) => MeshSource::Packed(m),
+            None => MeshSource::Placeholders,
+        };
+        robot_instances(
+            &shapes,
+            source,
+            || robot.shapes(&q_rad.left, &q_rad.right, GeometryKind::Collision),
+            &mut scene.instances,
+        );
     }
     if options.show_grid {
         grid(&mut scene.lines);
@@ -293,6 +433,7 @@ pub fn build_robot_scene(
 ) -> SceneData {
     robot_scene(
         robot,
+        None,
         PerSide::from_fn(|side| robot.home_q_rad(side)),
         options,
         version,
@@ -311,9 +452,17 @@ pub fn build_scene(
         pose.and_then(|i| session.dataset.arm(side).measurements.get(i))
             .map_or_else(|| session.robot.home_q_rad(side), |m| m.q_rad.clone())
     });
-    let mut scene = robot_scene(&session.robot, q_rad, options, version);
+    let mut scene = robot_scene(
+        &session.robot,
+        session.meshes.packed(),
+        q_rad,
+        options,
+        version,
+    );
     let max = options.color_max_mm.max(1e-6);
     let model_color = [0.35, 0.37, 0.40, 0.8];
+    let excluded_color = [0.25, 0.25, 0.25, 0.5];
+    let flags = options.screening(session).by_config();
     for row in options
         .analysis(session)
         .configs
@@ -323,19 +472,42 @@ pub fn build_scene(
         let selected = selection == Some(row.config);
         let errors = row.point_errors_mm();
         let mean = (errors[0] + errors[1] + errors[2]) / 3.0;
+        // A flagged configuration in its flag's colour (severity), outlined; an excluded one grey.
+        let flag = flags
+            .get(&row.config)
+            .filter(|_| options.show_flags && !row.excluded)
+            .map(|f| colormap::flag_linear(f[0].severity()));
         if options.show_measured {
-            let [r, g, b] = colormap::linear(mean as f32 / max);
-            let alpha = if selected { 0.95 } else { 0.3 };
+            let ([r, g, b], alpha) = match (row.excluded, flag) {
+                (true, _) => ([0.3; 3], if selected { 0.8 } else { 0.15 }),
+                (false, Some(c)) => (c, if selected { 0.95 } else { 0.6 }),
+                (false, None) => (
+                    colormap::linear(mean as f32 / max),
+                    if selected { 0.95 } else { 0.3 },
+                ),
+            };
             for p in row.measured_body_mm {
                 scene.triangles.push(ColorVertex {
                     position: p.cast::<f32>().into(),
                     color: [r, g, b, alpha],
                 });
             }
+            if let Some([r, g, b]) = flag {
+                for k in 0..3 {
+                    line(
+                        &mut scene.lines,
+                        row.measured_body_mm[k],
+                        row.measured_body_mm[(k + 1) % 3],
+                        [r, g, b, 1.0],
+                    );
+                }
+            }
         }
         if options.show_model {
             let c = if selected {
                 [1.0, 1.0, 1.0, 1.0]
+            } else if row.excluded {
+                excluded_color
             } else {
                 model_color
             };
@@ -354,9 +526,14 @@ pub fn build_scene(
                 .zip(row.model_body_mm)
                 .zip(row.measured_body_mm)
             {
-                let [r, g, b] = colormap::linear(*error as f32 / max);
+                let color = if row.excluded {
+                    excluded_color
+                } else {
+                    let [r, g, b] = colormap::linear(*error as f32 / max);
+                    [r, g, b, 1.0]
+                };
                 let to = from + (measured - from) * options.exaggeration as f64;
-                line(&mut scene.lines, from, to, [r, g, b, 1.0]);
+                line(&mut scene.lines, from, to, color);
             }
         }
         if selected {
