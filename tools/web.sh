@@ -72,9 +72,12 @@ build() {
 browser_test() {
   local started=$SECONDS
   mkdir -p target/web-test
-  # The native command line's parameters of the example, to compare with the browser's.
+  # The native command line's parameters of the example, to compare with the browser's. The binary is
+  # the one `cargo test` builds (its dependencies' features are the tests'; `cargo run` would build
+  # them again without): up to date right after tools/test's `cargo test`.
+  cargo test --quiet --no-run --test cli 2>/dev/null
   rm -f target/web-test/params-native.json
-  cargo run --quiet -- calibrate assets/datasets/example --quiet \
+  target/debug/dualcal calibrate assets/datasets/example --quiet \
     --out target/web-test/params-native.json >target/web-test/calibrate-native.txt
   # The example as one .zip, for the drop test (written here, not committed).
   rm -f target/web-test/example.zip

@@ -196,7 +196,7 @@ try {
   check(await widget("button", "Parameters (JSON)…").count() > 0 &&
     (await widget("button", "Parameters (JSON)…").getAttribute("aria-disabled")) !== "true",
     "the accessibility tree shows the parameter export enabled");
-  metrics.stepped_run = s.last_run;
+  metrics.stepped_run = { ...s.last_run, solver_s: s.calibrated.solver_compute_s };
   metrics.iterations = s.iterations;
   fs.writeFileSync(path.join(out, "status.json"), JSON.stringify(s, null, 2));
   fs.writeFileSync(path.join(out, "params-browser.json"), JSON.stringify(s.calibrated.params, null, 2));
@@ -274,7 +274,7 @@ try {
   s = await waitFor("reopening the example", idleWith((s) => s.session), 120_000);
   await clickWidget("button", "Calibrate");
   s = await waitFor("the unlimited-budget run", idleWith((s) => s.calibrated), 120_000);
-  metrics.unlimited_budget_run = s.last_run;
+  metrics.unlimited_budget_run = { ...s.last_run, solver_s: s.calibrated.solver_compute_s };
   fs.writeFileSync(path.join(out, "params-browser-unlimited.json"), JSON.stringify(s.calibrated.params, null, 2));
 
   // ---- live curves and Cancel: one outer iteration per frame (?budget_ms=0) ----------------------
