@@ -9,7 +9,7 @@ mod robots;
 use criterion::{Criterion, criterion_group, criterion_main};
 use dualcal::robot::RobotDescription;
 use dualcal::simulate::{paper_options, simulate_with_robot};
-use dualcal::solver::{CalibrationSettings, Calibrator, Termination};
+use dualcal::solver::{BaseMethod, CalibrationSettings, Calibrator, Method, Termination};
 use std::hint::black_box;
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
@@ -47,6 +47,38 @@ fn bench(c: &mut Criterion) {
             black_box(r.calibrated)
         })
     });
+    group.finish();
+
+    // The paper's comparison methods on the paper's protocol (2 × 120 calibration configurations):
+    // each step-1 method with the paper's step 2, and each step-2 method with the paper's step 1.
+    let sim = simulate_with_robot(&paper_options(7, 220, 120), &robot).expect("simulation");
+    let ds = sim.dataset.with_cal_subset(120);
+    let mut group = c.benchmark_group("methods_120_configs_per_arm");
+    group.sample_size(10);
+    let combinations = Method::ALL
+        .into_iter()
+        .map(|m| (m, BaseMethod::Minimax))
+        .chain([
+            (Method::Minimax, BaseMethod::Distance),
+            (Method::Minimax, BaseMethod::Absolute),
+        ]);
+    for (method, base_method) in combinations {
+        let settings = CalibrationSettings {
+            method,
+            base_method,
+            ..CalibrationSettings::default()
+        };
+        group.bench_function(format!("{}+{}", method.name(), base_method.name()), |b| {
+            b.iter(|| {
+                let r = Calibrator::new(black_box(&ds), &sim.nominal)
+                    .settings(settings.clone())
+                    .run()
+                    .expect("calibration");
+                assert!(r.is_converged());
+                black_box(r.calibrated)
+            })
+        });
+    }
     group.finish();
 
     // Cancel latency: a run inside a practically endless paper-QP solve is cancelled; the time from

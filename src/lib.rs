@@ -10,6 +10,7 @@ pub mod analysis;
 pub mod app;
 pub mod cli;
 pub mod collision;
+pub mod comparison;
 pub mod dataset;
 pub mod finite_difference;
 pub mod kinematics;

@@ -10,7 +10,7 @@ use dualcal::side::{ConfigId, Side};
 use dualcal::simulate::{self, SimOptions, SimOutput};
 use dualcal::solver::{
     CalibrationError, CalibrationEvent, CalibrationSettings, Calibrator, DIVERGED_ANGLE_RAD,
-    DIVERGED_LENGTH_MM, Stage, Termination,
+    DIVERGED_LENGTH_MM, Method, Stage, Termination,
 };
 
 fn small(seed: u64, n: usize, cal: usize) -> SimOutput {
@@ -103,7 +103,8 @@ fn exclusions_are_left_out_and_too_few_are_refused() {
                 side: Side::Left,
                 found: 5,
                 needed: 6,
-                params: 31
+                params: 31,
+                method: Method::Minimax,
             }
         ),
         "{err}"

@@ -200,16 +200,9 @@ pub fn config_table_ui(
         .inner
 }
 
-fn table_ui(
-    ui: &mut egui::Ui,
-    analysis: &Analysis,
-    flags: &Flags,
-    state: &mut TableState,
-    selection: Option<ConfigId>,
-    scroll_to_selection: bool,
-) -> Option<TableAction> {
-    let mut clicked = None;
-    // The sort order in words (no arrow glyphs in the default fonts); the sorted title in colour.
+/// The sort order in words and the column titles, which sort when clicked.
+fn header_ui(ui: &mut egui::Ui, state: &mut TableState) {
+    // No arrow glyphs in the default fonts; the sorted title in colour.
     ui.label(
         RichText::new(format!(
             "sorted by {}, {} first — click a title to sort",
@@ -257,6 +250,72 @@ fn table_ui(
             }
         }
     });
+}
+
+/// One row's cells; whether its "use" box was clicked.
+fn row_cells(
+    ui: &mut egui::Ui,
+    row: &ConfigRow,
+    flags: &Flags,
+    style: &dyn Fn(String) -> RichText,
+    row_height: f32,
+) -> bool {
+    let flag = flags.get(&row.config).map(|f| f[0]);
+    let mut toggled = false;
+    for column in Column::ALL {
+        match column {
+            Column::Use => {
+                let mut used = !row.excluded;
+                let r = ui
+                    .add_sized(
+                        [column.width(), row_height],
+                        egui::Checkbox::without_text(&mut used),
+                    )
+                    .on_hover_text(if row.excluded {
+                        "Excluded: tick to use it again (and calibrate again)"
+                    } else {
+                        "Untick to leave it out and calibrate again (or press X)"
+                    });
+                let label = format!("use {}", row.id);
+                r.widget_info(|| {
+                    egui::WidgetInfo::selected(egui::Role::CheckBox, true, !row.excluded, &label)
+                });
+                toggled |= r.clicked();
+            }
+            Column::Flag => {
+                let mut text = style(column.text(row, flags));
+                if let Some(f) = flag
+                    && !row.excluded
+                {
+                    text = text.color(colormap::flag_color32(f.severity()));
+                }
+                let r = ui.add_sized(
+                    [column.width(), 18.0],
+                    egui::Label::new(text).truncate().halign(egui::Align::Min),
+                );
+                if let Some(f) = flag {
+                    r.on_hover_text(format!(
+                        "{} (line {}): {}\nsize {:.3} mm, threshold {:.3} mm",
+                        f.id, f.line, f.reason, f.size_mm, f.threshold_mm
+                    ));
+                }
+            }
+            _ => cell(ui, column.width(), style(column.text(row, flags))),
+        }
+    }
+    toggled
+}
+
+fn table_ui(
+    ui: &mut egui::Ui,
+    analysis: &Analysis,
+    flags: &Flags,
+    state: &mut TableState,
+    selection: Option<ConfigId>,
+    scroll_to_selection: bool,
+) -> Option<TableAction> {
+    let mut clicked = None;
+    header_ui(ui, state);
     ui.separator();
     let order = sorted_rows(analysis, flags, *state);
     let row_height = 20.0;
@@ -276,7 +335,6 @@ fn table_ui(
         for &i in &order[range] {
             let row = &analysis.configs[i];
             let selected = selection == Some(row.config);
-            let flag = flags.get(&row.config).map(|f| f[0]);
             let mut toggled = false;
             let response = ui
                 .horizontal(|ui| {
@@ -290,52 +348,7 @@ fn table_ui(
                         }
                         t
                     };
-                    for column in Column::ALL {
-                        match column {
-                            Column::Use => {
-                                let mut used = !row.excluded;
-                                let r = ui
-                                    .add_sized(
-                                        [column.width(), row_height],
-                                        egui::Checkbox::without_text(&mut used),
-                                    )
-                                    .on_hover_text(if row.excluded {
-                                        "Excluded: tick to use it again (and calibrate again)"
-                                    } else {
-                                        "Untick to leave it out and calibrate again (or press X)"
-                                    });
-                                let label = format!("use {}", row.id);
-                                r.widget_info(|| {
-                                    egui::WidgetInfo::selected(
-                                        egui::Role::CheckBox,
-                                        true,
-                                        !row.excluded,
-                                        &label,
-                                    )
-                                });
-                                toggled |= r.clicked();
-                            }
-                            Column::Flag => {
-                                let mut text = style(column.text(row, flags));
-                                if let Some(f) = flag
-                                    && !row.excluded
-                                {
-                                    text = text.color(colormap::flag_color32(f.severity()));
-                                }
-                                let r = ui.add_sized(
-                                    [column.width(), 18.0],
-                                    egui::Label::new(text).truncate().halign(egui::Align::Min),
-                                );
-                                if let Some(f) = flag {
-                                    r.on_hover_text(format!(
-                                        "{} (line {}): {}\nsize {:.3} mm, threshold {:.3} mm",
-                                        f.id, f.line, f.reason, f.size_mm, f.threshold_mm
-                                    ));
-                                }
-                            }
-                            _ => cell(ui, column.width(), style(column.text(row, flags))),
-                        }
-                    }
+                    toggled = row_cells(ui, row, flags, &style, row_height);
                 })
                 .response;
             if selected {

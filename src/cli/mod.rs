@@ -33,6 +33,7 @@ macro_rules! outln {
 }
 
 mod outlier_study;
+mod paper_study;
 mod reproduce;
 
 /// Two-step minimax kinematic calibration of dual-arm robots from laser-tracker data.
@@ -198,6 +199,9 @@ pub enum Study {
     /// Gross errors (misread reflectors, swapped labels, rows of the other arm): detection, false
     /// alarms, accuracy with and without exclusion (docs/reliability.md).
     Outliers,
+    /// The paper's comparison of methods: Tables 4–8 and Figs. 4, 6–8 as CSV, SVG and a Markdown
+    /// report in --out (docs/reproduction.md).
+    Paper,
 }
 
 #[derive(Args, Debug)]
@@ -207,16 +211,25 @@ pub struct ReproduceArgs {
     /// Simulation seed(s), comma separated.
     #[arg(long, value_delimiter = ',', default_value = "1")]
     pub seeds: Vec<u64>,
-    /// Calibration set sizes for fig4.
-    #[arg(
-        long,
-        value_delimiter = ',',
-        default_value = "10,20,30,40,50,60,70,80,90,100,110,120"
-    )]
-    pub sizes: Vec<usize>,
-    /// Use this dataset instead of simulating (fig4 only).
+    /// Calibration set sizes for fig4 and paper [default: 10,20,…,120; paper --quick: 20,60,120].
+    #[arg(long, value_delimiter = ',')]
+    pub sizes: Option<Vec<usize>>,
+    /// Use this dataset instead of simulating (fig4 and paper).
     #[arg(long)]
     pub dataset: Option<PathBuf>,
+    /// Paper study: the output directory (created) for the CSVs, the SVG figures and report.md.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Paper study: replace outputs that already exist in --out.
+    #[arg(long)]
+    pub force: bool,
+    /// Paper study: the quick version the tests run (one seed unless --seeds; Fig. 4 at 20, 60 and 120
+    /// calibration configurations instead of twelve sizes).
+    #[arg(long)]
+    pub quick: bool,
+    /// Paper study: only these methods (keys of `comparison::METHODS`, comma separated) [default: all].
+    #[arg(long, value_delimiter = ',')]
+    pub methods: Option<Vec<String>>,
     /// Simulate with unmodelled joint errors (1 mrad gear error, 0.5 mrad/m compliance) — a paper-like
     /// residual of ~0.4 mm after calibration (fig4 and qp).
     #[arg(long)]
@@ -535,10 +548,9 @@ impl NotConverged {
     pub const EXIT_CODE: u8 = 2;
 }
 
-fn calibrate_cmd(a: &CalibrateArgs) -> Result<()> {
-    let ds = load_dataset(&a.dataset)?;
-    // Never write over an input: the dataset's files, its robot description, or one output over
-    // another.
+/// Refuse outputs that would write over an input (the dataset's files, its robot description) or
+/// over one another.
+fn refuse_overwrites(a: &CalibrateArgs, ds: &Dataset) -> Result<()> {
     let mut inputs: Vec<PathBuf> = ds.files().to_vec();
     inputs.extend(ds.robot.clone());
     for out in [Some(&a.out), a.urdf.as_ref(), a.overlay.as_ref()]
@@ -563,31 +575,25 @@ fn calibrate_cmd(a: &CalibrateArgs) -> Result<()> {
         crate::output::refuse_overwrite_input(overlay, &others)
             .context("--overlay names the same file as another output")?;
     }
-    let robot = robot_of(&ds)?;
-    check_limits(&ds, &robot)?;
-    if !a.quiet {
-        eprintln!("{}", describe_robot(&robot));
-    }
-    let nominal = robot.nominal_model(ds.nominal_reflectors_mm);
-    let mut settings = settings_from(a);
-    for spec in &a.exclude {
-        let config = ds
-            .config_by_id(spec.trim())
-            .map_err(|e| anyhow::anyhow!("--exclude: {e}"))?;
-        if !settings.exclude.contains(&config) {
-            settings.exclude.push(config);
-        }
-    }
+    Ok(())
+}
+
+/// Calibrate, with `--auto-exclude` or with progress lines; the result and its screening.
+fn fit_and_screen(
+    a: &CalibrateArgs,
+    ds: &Dataset,
+    nominal: &crate::kinematics::DualArmModel,
+    settings: CalibrationSettings,
+    before: &quality::Screening,
+) -> Result<(CalibrationResult, quality::Screening)> {
     let screen_settings = quality::ScreenSettings::default();
-    let before = quality::screen(&ds, &nominal, &screen_settings);
-    report_findings(&before)?;
-    let (result, after) = if a.auto_exclude {
+    Ok(if a.auto_exclude {
         if !a.quiet {
             eprintln!(
                 "--auto-exclude: screening, fitting and screening again (progress not shown)"
             );
         }
-        let auto = quality::auto_exclude(&ds, &nominal, &settings, &screen_settings)?;
+        let auto = quality::auto_exclude(ds, nominal, &settings, &screen_settings)?;
         outln!(
             "--auto-exclude: {} configuration(s) left out after {} fit(s){}",
             auto.excluded.len(),
@@ -604,7 +610,7 @@ fn calibrate_cmd(a: &CalibrateArgs) -> Result<()> {
     } else {
         print_flags(
             "Suspect configurations before fitting (nominal model)",
-            &before,
+            before,
             &settings.exclude,
         );
         let mut progress = |e: &CalibrationEvent| {
@@ -612,21 +618,17 @@ fn calibrate_cmd(a: &CalibrateArgs) -> Result<()> {
                 print_event(e)
             }
         };
-        let result = Calibrator::new(&ds, &nominal)
+        let result = Calibrator::new(ds, nominal)
             .settings(settings)
             .observer(&mut progress)
             .run()?;
-        let after = quality::screen_result(&ds, &result, &screen_settings);
+        let after = quality::screen_result(ds, &result, &screen_settings);
         (result, after)
-    };
-    print_identifiability(&result);
-    let excluded = &result.settings.exclude;
-    outln!("\n{}", comparison_table(&ds.excluding(excluded), &result)?);
-    print_flags(
-        "Suspect configurations with the calibrated model",
-        &after,
-        excluded,
-    );
+    })
+}
+
+/// Warn about suspect configurations the calibration kept, and about whole-file findings.
+fn warn_suspects_kept(after: &quality::Screening, excluded: &[ConfigId]) {
     let suspects_kept: Vec<String> = after
         .worst_per_config()
         .iter()
@@ -650,18 +652,25 @@ fn calibrate_cmd(a: &CalibrateArgs) -> Result<()> {
     for f in &after.findings {
         eprintln!("warning: {f}");
     }
-    let mut file = ParamsFile::from_calibration(&result, &ds);
-    file.quality = serde_json::to_value(quality::QualityRecord::new(&ds, &after, excluded)).ok();
-    file.write(&a.out)?;
-    outln!("parameters written to {}", a.out.display());
+    for f in &after.findings {
+        eprintln!("warning: {f}");
+    }
+}
+
+/// The calibrated URDF and the overlay, if asked for.
+fn write_robot_exports(
+    a: &CalibrateArgs,
+    robot: &RobotDescription,
+    result: &CalibrationResult,
+) -> Result<()> {
     if let Some(path) = &a.urdf {
-        let text = crate::urdf_export::calibrated_urdf(&robot, &result.calibrated)?;
+        let text = crate::urdf_export::calibrated_urdf(robot, &result.calibrated)?;
         crate::output::write_atomic(path, text.as_bytes())
             .with_context(|| format!("writing {}", path.display()))?;
         outln!("calibrated URDF written to {}", path.display());
     }
     if let Some(path) = &a.overlay {
-        let overlay = crate::urdf_export::calibrated_overlay(&robot, &result.calibrated)?;
+        let overlay = crate::urdf_export::calibrated_overlay(robot, &result.calibrated)?;
         let json = path
             .extension()
             .is_some_and(|e| e.eq_ignore_ascii_case("json"));
@@ -674,6 +683,44 @@ fn calibrate_cmd(a: &CalibrateArgs) -> Result<()> {
             .with_context(|| format!("writing {}", path.display()))?;
         outln!("calibration overlay written to {}", path.display());
     }
+    Ok(())
+}
+
+fn calibrate_cmd(a: &CalibrateArgs) -> Result<()> {
+    let ds = load_dataset(&a.dataset)?;
+    refuse_overwrites(a, &ds)?;
+    let robot = robot_of(&ds)?;
+    check_limits(&ds, &robot)?;
+    if !a.quiet {
+        eprintln!("{}", describe_robot(&robot));
+    }
+    let nominal = robot.nominal_model(ds.nominal_reflectors_mm);
+    let mut settings = settings_from(a);
+    for spec in &a.exclude {
+        let config = ds
+            .config_by_id(spec.trim())
+            .map_err(|e| anyhow::anyhow!("--exclude: {e}"))?;
+        if !settings.exclude.contains(&config) {
+            settings.exclude.push(config);
+        }
+    }
+    let before = quality::screen(&ds, &nominal, &quality::ScreenSettings::default());
+    report_findings(&before)?;
+    let (result, after) = fit_and_screen(a, &ds, &nominal, settings, &before)?;
+    print_identifiability(&result);
+    let excluded = &result.settings.exclude;
+    outln!("\n{}", comparison_table(&ds.excluding(excluded), &result)?);
+    print_flags(
+        "Suspect configurations with the calibrated model",
+        &after,
+        excluded,
+    );
+    warn_suspects_kept(&after, excluded);
+    let mut file = ParamsFile::from_calibration(&result, &ds);
+    file.quality = serde_json::to_value(quality::QualityRecord::new(&ds, &after, excluded)).ok();
+    file.write(&a.out)?;
+    outln!("parameters written to {}", a.out.display());
+    write_robot_exports(a, &robot, &result)?;
     if !result.is_converged() {
         let how: Vec<String> = result
             .stages
@@ -687,18 +734,51 @@ fn calibrate_cmd(a: &CalibrateArgs) -> Result<()> {
 }
 
 fn print_identifiability(result: &CalibrationResult) {
+    let settings = &result.settings;
+    outln!(
+        "\nmethod: step 1 `{}`, step 2 `{}`",
+        settings.method.name(),
+        settings.base_method.name()
+    );
     for (side, rep) in result.identifiability.iter() {
         let Some(rep) = rep else { continue };
+        let extra = if settings.method.is_absolute() {
+            format!(" and the 6 of tracker_from_{}_base", side.name())
+        } else {
+            String::new()
+        };
         outln!(
-            "\n{side} arm: {} of {} parameters identified; condition number {:.3e} → {:.3e}",
+            "\n{side} arm: {} of {} parameters identified{extra}; condition number {:.3e} → {:.3e}",
             rep.free.len(),
             result.nominal.arm(side).param_count(),
             rep.condition_before,
             rep.condition_after
         );
+        if let Some(r) = result.reflector_used[side] {
+            outln!(
+                "  reflector {r} used (distance-single); the other two reflectors' coordinates are \
+                 nominal: the flange's orientation is not identified"
+            );
+        }
         for f in &rep.fixed {
             outln!("  fixed {:<8} {}", f.name, f.reason);
         }
+    }
+    for (side, t) in result.tracker_from_base.iter() {
+        let Some(t) = t else { continue };
+        let v = t.translation.vector;
+        let w = t.rotation.scaled_axis();
+        outln!(
+            "tracker_from_{}_base: translation ({:.3}, {:.3}, {:.3}) mm, rotation vector ({:.6}, \
+             {:.6}, {:.6}) rad",
+            side.name(),
+            v.x,
+            v.y,
+            v.z,
+            w.x,
+            w.y,
+            w.z
+        );
     }
     for s in &result.stages {
         outln!(

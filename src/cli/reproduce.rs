@@ -8,9 +8,13 @@ use crate::robot::RobotDescription;
 use crate::side::Side;
 use crate::simulate::{self, SimOptions};
 use crate::solver::{
-    self, CalibrationResult, CalibrationSettings, Calibrator, Method, QpMethod, Termination,
+    self, BaseMethod, CalibrationResult, CalibrationSettings, Calibrator, Method, QpMethod,
+    Termination,
 };
 use anyhow::{Context, Result, bail};
+
+/// The calibration set sizes of Fig. 4 (the paper's twelve subsets).
+pub(crate) const FIG4_SIZES: [usize; 12] = [10, 20, 30, 40, 50, 60, 70, 80, 90, 100, 110, 120];
 
 /// Calibrate without progress output. A stage that hits the iteration limit fails the study (its
 /// figures would not be those of the method); a stall is reported in the tables.
@@ -47,6 +51,18 @@ fn study_options(a: &ReproduceArgs, seed: u64) -> SimOptions {
 
 pub(crate) fn run(a: &ReproduceArgs) -> Result<()> {
     let robot = RobotDescription::builtin_irb14000();
+    if a.study != Study::Paper {
+        for (given, flag) in [
+            (a.out.is_some(), "--out"),
+            (a.force, "--force"),
+            (a.quick, "--quick"),
+            (a.methods.is_some(), "--methods"),
+        ] {
+            if given {
+                bail!("{flag} is an option of `reproduce paper`");
+            }
+        }
+    }
     match a.study {
         Study::Fig4 => {
             let (ds, nominal) = match &a.dataset {
@@ -69,7 +85,7 @@ pub(crate) fn run(a: &ReproduceArgs) -> Result<()> {
                 "| configs | left pos RMS cal / ver (mm) | right pos RMS cal / ver (mm) | left ori RMS cal / ver (rad) | right ori RMS cal / ver (rad) |"
             );
             outln!("|---:|---:|---:|---:|---:|");
-            for &n in &a.sizes {
+            for &n in a.sizes.as_deref().unwrap_or(&FIG4_SIZES) {
                 let sub = ds.with_cal_subset(n);
                 let res = quiet_calibrate(&sub, &nominal, &CalibrationSettings::default())
                     .with_context(|| format!("calibrating with {n} configurations"))?;
@@ -147,6 +163,7 @@ pub(crate) fn run(a: &ReproduceArgs) -> Result<()> {
         }
         Study::Robustness => robustness_study(a, &robot)?,
         Study::Outliers => super::outlier_study::run(a, &robot)?,
+        Study::Paper => super::paper_study::run(a, &robot)?,
     }
     Ok(())
 }
@@ -203,8 +220,14 @@ fn robustness_study(a: &ReproduceArgs, robot: &RobotDescription) -> Result<()> {
             let sim = simulate::simulate_with_robot(&opts, robot)?;
             let mut values = Vec::new();
             for method in [Method::Minimax, Method::LeastSquares] {
+                // Least squares throughout (both steps), as the study compares the objectives.
+                let base_method = match method {
+                    Method::LeastSquares => BaseMethod::Distance,
+                    _ => BaseMethod::Minimax,
+                };
                 let settings = CalibrationSettings {
                     method,
+                    base_method,
                     ..CalibrationSettings::default()
                 };
                 let res = quiet_calibrate(&sim.dataset, &sim.nominal, &settings)?;

@@ -352,3 +352,18 @@ pub fn rotation_angle_rad(r: &nalgebra::Rotation3<f64>) -> f64 {
     );
     (0.5 * s.norm()).atan2(cos)
 }
+
+/// The rotation closest to `m` (Frobenius norm) via the SVD, with the determinant forced to +1.
+pub fn nearest_rotation(m: &nalgebra::Matrix3<f64>) -> nalgebra::Rotation3<f64> {
+    let svd = m.svd(true, true);
+    match (svd.u, svd.v_t) {
+        (Some(u), Some(v_t)) => {
+            let mut d = nalgebra::Matrix3::identity();
+            if (u * v_t).determinant() < 0.0 {
+                d[(2, 2)] = -1.0;
+            }
+            nalgebra::Rotation3::from_matrix_unchecked(u * d * v_t)
+        }
+        _ => nalgebra::Rotation3::from_matrix(m),
+    }
+}

@@ -10,14 +10,14 @@
 mod arm;
 mod records;
 
-use crate::kinematics::{DualArmModel, N_PARAMS, PARAMS_PER_JOINT, param_name};
+use crate::kinematics::{DualArmModel, N_PARAMS, PARAMS_PER_JOINT, nearest_rotation, param_name};
 use crate::output::write_atomic;
 use crate::robot::RobotDescription;
 use crate::side::{PerSide, Side};
 pub use arm::{ArmParams, ChainParams, DhEntry, JointCorrection, ReflectorsEntry};
 pub use arm::{MAX_ANGLE_RAD, MAX_LENGTH_MM, MAX_REFLECTOR_MM};
 use arm::{Scale, arm_model, arm_model_for, arm_params, finite};
-use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Matrix3, Translation3, UnitQuaternion, Vector3};
 pub use records::{
     ConditioningRecord, ConfigRef, MethodRecord, Provenance, StatisticsRecord, utc_timestamp,
 };
@@ -134,6 +134,61 @@ pub struct BaseTransform {
     pub rotation: [[f64; 3]; 3],
 }
 
+/// Each arm's model base in the tracker frame, written by the methods that identify it (the absolute
+/// methods `pose`, `position` in step 1 and `absolute` in step 2): a point `p` of the arm's base maps
+/// to `rotation · p + translation` in the tracker frame. Informative: a model needs neither (the
+/// distance methods cannot see them), and `evaluate` reads the file the same with or without.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TrackerFrames {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tracker_from_left_base: Option<BaseTransform>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tracker_from_right_base: Option<BaseTransform>,
+    /// Which stage identified them, e.g. `step 1 (position)` or `step 2 (absolute)`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub identified_by: Option<String>,
+}
+
+impl BaseTransform {
+    /// The file form of a transform (mm).
+    pub fn from_isometry(iso: &Isometry3<f64>) -> BaseTransform {
+        let r = iso.rotation.to_rotation_matrix();
+        let m = r.matrix();
+        let t = iso.translation.vector;
+        BaseTransform {
+            translation: [t.x, t.y, t.z],
+            rotation: [0, 1, 2].map(|i| [m[(i, 0)], m[(i, 1)], m[(i, 2)]]),
+        }
+    }
+
+    /// Checked (finite, a rotation within [`ROTATION_TOLERANCE`], a plausible translation) and
+    /// re-orthonormalised; `field` names it in messages.
+    fn checked_isometry(&self, field: &str, scale: Scale) -> Result<Isometry3<f64>, ParamsError> {
+        finite(&format!("{field}.translation"), &self.translation)?;
+        finite(&format!("{field}.rotation"), self.rotation.as_flattened())?;
+        let m = Matrix3::from_fn(|i, j| self.rotation[i][j]);
+        let dev = (m.transpose() * m - Matrix3::identity()).abs().max();
+        let det = m.determinant();
+        if dev > ROTATION_TOLERANCE || det <= 0.0 {
+            return Err(invalid(
+                format!("{field}.rotation"),
+                format!(
+                    "not a rotation matrix: max |RᵀR − I| = {dev:.3e} (tolerance {ROTATION_TOLERANCE:e}), det = {det:.6}"
+                ),
+            ));
+        }
+        let rotation = UnitQuaternion::from_rotation_matrix(&nearest_rotation(&m));
+        let translation = Translation3::from(Vector3::from(self.translation) * scale.mm);
+        arm::plausible(
+            &format!("{field}.translation"),
+            translation.vector.as_slice(),
+            arm::MAX_LENGTH_MM,
+            "mm",
+        )?;
+        Ok(Isometry3::from_parts(translation, rotation))
+    }
+}
+
 /// A parameter held at its value during identification, and why.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct FixedParameter {
@@ -165,6 +220,9 @@ pub struct ParamsFile {
     pub method: Option<Value>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub fixed_parameters: Option<FixedParameters>,
+    /// Each arm's base in the tracker frame, where the method identified it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tracker_frames: Option<TrackerFrames>,
     /// Why the solver stopped, iterations, final objective (free form).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub termination: Option<Value>,
@@ -186,38 +244,17 @@ pub struct ParamsFile {
     pub extra: serde_json::Map<String, Value>,
 }
 
-/// The rotation closest to `m` (Frobenius norm) via the SVD, with the determinant forced to +1.
-fn nearest_rotation(m: &Matrix3<f64>) -> Rotation3<f64> {
-    let svd = m.svd(true, true);
-    match (svd.u, svd.v_t) {
-        (Some(u), Some(v_t)) => {
-            let mut d = Matrix3::identity();
-            if (u * v_t).determinant() < 0.0 {
-                d[(2, 2)] = -1.0;
-            }
-            Rotation3::from_matrix_unchecked(u * d * v_t)
-        }
-        _ => Rotation3::from_matrix(m),
-    }
-}
-
 impl ParamsFile {
     /// The file form of a model, in mm and rad, without the optional fields.
     pub fn from_model(model: &DualArmModel) -> ParamsFile {
-        let iso = &model.left_base_from_right_base;
-        let r = iso.rotation.to_rotation_matrix();
-        let m = r.matrix();
-        let t = iso.translation.vector;
         ParamsFile {
             format: PARAMS_FORMAT.to_string(),
             units: ParamsUnits::default(),
             arms: model.arms.as_ref().map(|_, arm| arm_params(arm)),
-            right_base_in_left: BaseTransform {
-                translation: [t.x, t.y, t.z],
-                rotation: [0, 1, 2].map(|i| [m[(i, 0)], m[(i, 1)], m[(i, 2)]]),
-            },
+            right_base_in_left: BaseTransform::from_isometry(&model.left_base_from_right_base),
             method: None,
             fixed_parameters: None,
+            tracker_frames: None,
             termination: None,
             statistics: None,
             converged: None,
@@ -270,29 +307,26 @@ impl ParamsFile {
     /// `right_base_in_left`, checked (finite, a rotation within [`ROTATION_TOLERANCE`]) and
     /// re-orthonormalised.
     fn base_transform(&self, scale: Scale) -> Result<Isometry3<f64>, ParamsError> {
-        let b = &self.right_base_in_left;
-        finite("right_base_in_left.translation", &b.translation)?;
-        finite("right_base_in_left.rotation", b.rotation.as_flattened())?;
-        let m = Matrix3::from_fn(|i, j| b.rotation[i][j]);
-        let dev = (m.transpose() * m - Matrix3::identity()).abs().max();
-        let det = m.determinant();
-        if dev > ROTATION_TOLERANCE || det <= 0.0 {
-            return Err(invalid(
-                "right_base_in_left.rotation",
-                format!(
-                    "not a rotation matrix: max |RᵀR − I| = {dev:.3e} (tolerance {ROTATION_TOLERANCE:e}), det = {det:.6}"
-                ),
-            ));
-        }
-        let rotation = UnitQuaternion::from_rotation_matrix(&nearest_rotation(&m));
-        let translation = Translation3::from(Vector3::from(b.translation) * scale.mm);
-        arm::plausible(
-            "right_base_in_left.translation",
-            translation.vector.as_slice(),
-            arm::MAX_LENGTH_MM,
-            "mm",
-        )?;
-        Ok(Isometry3::from_parts(translation, rotation))
+        self.right_base_in_left
+            .checked_isometry("right_base_in_left", scale)
+    }
+
+    /// The tracker frames, checked like `right_base_in_left`.
+    pub fn tracker_from_base(&self) -> Result<PerSide<Option<Isometry3<f64>>>, ParamsError> {
+        let scale = self.scale()?;
+        let Some(frames) = &self.tracker_frames else {
+            return Ok(PerSide::default());
+        };
+        Ok(PerSide::new(
+            frames
+                .tracker_from_left_base
+                .map(|b| b.checked_isometry("tracker_frames.tracker_from_left_base", scale))
+                .transpose()?,
+            frames
+                .tracker_from_right_base
+                .map(|b| b.checked_isometry("tracker_frames.tracker_from_right_base", scale))
+                .transpose()?,
+        ))
     }
 
     /// Every fixed-parameter name must be a parameter of its arm.
@@ -345,6 +379,7 @@ impl ParamsFile {
             arm::validate(side.name(), arm, scale)?;
         }
         self.base_transform(scale)?;
+        self.tracker_from_base()?;
         self.check_fixed_names()
     }
 
@@ -481,6 +516,7 @@ pub fn write_model(model: &DualArmModel, path: &Path) -> Result<(), ParamsError>
 #[cfg(test)]
 mod tests {
     use super::*;
+    use nalgebra::Rotation3;
 
     #[test]
     fn nearest_rotation_fixes_small_noise_and_keeps_exact_rotations() {

@@ -1,11 +1,11 @@
 //! The optional records of a parameter file: provenance, the method, conditioning and statistics,
 //! and the file of a calibration.
 
-use super::{FixedParameter, FixedParameters, ParamsFile};
+use super::{BaseTransform, FixedParameter, FixedParameters, ParamsFile, TrackerFrames};
 use crate::dataset::{Dataset, Split};
 use crate::metrics::AccuracyReport;
 use crate::side::{PerSide, Side};
-use crate::solver::CalibrationResult;
+use crate::solver::{BaseMethod, CalibrationResult, Method, Reflector};
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 use std::path::Path;
@@ -77,8 +77,19 @@ fn civil_from_days(days: i64) -> (i64, u32, u32) {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct MethodRecord {
     pub name: String,
-    /// `Minimax` or `LeastSquares`.
+    /// Step 1's method: `Minimax`, `LeastSquares`, `DistanceSingle`, `Pose` or `Position`.
     pub objective: String,
+    /// Step 1's method by its command-line name (`minimax`, `lsq`, `distance-single`, `pose`,
+    /// `position`); absent in files of earlier versions (minimax or lsq, as `objective` says).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub arm_method: Option<String>,
+    /// Step 2's method (`minimax`, `distance`, `absolute`); absent in files of earlier versions
+    /// (the paper's minimax).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub base_method: Option<String>,
+    /// The reflector each arm's `distance-single` fit used (`a`, `b` or `c`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reflector: Option<PerSide<Option<Reflector>>>,
     /// `Exact` or `Paper`.
     pub qp: String,
     /// `Cal`, `Ver` or `All`: the configurations used for identification.
@@ -133,6 +144,26 @@ fn record(value: &impl Serialize) -> Option<Value> {
     serde_json::to_value(value).ok()
 }
 
+/// What the `method.name` field says of a combination of methods.
+fn method_name(method: Method, base: BaseMethod) -> String {
+    if method == Method::Minimax && base == BaseMethod::Minimax {
+        return "two-step minimax calibration (paper Algorithms I and II)".into();
+    }
+    let step1 = match method {
+        Method::Minimax => "minimax (paper Algorithm I)",
+        Method::LeastSquares => "least squares of the distance errors",
+        Method::DistanceSingle => "one reflector's distance errors (ref. [26])",
+        Method::Pose => "full-pose errors (ref. [19])",
+        Method::Position => "absolute positioning errors (ref. [18])",
+    };
+    let step2 = match base {
+        BaseMethod::Minimax => "minimax (paper Algorithm II)",
+        BaseMethod::Distance => "collaborative distance errors (ref. [26])",
+        BaseMethod::Absolute => "bases in the tracker frame (ref. [28])",
+    };
+    format!("two-step calibration: step 1 {step1}, step 2 {step2}")
+}
+
 impl ParamsFile {
     /// The file of a calibration: the calibrated model plus method, fixed parameters and why, per-stage
     /// termination, accuracy on the cal and ver splits of `dataset`, conditioning and provenance, and
@@ -142,8 +173,11 @@ impl ParamsFile {
         let settings = &result.settings;
         let mut file = ParamsFile::from_model(&result.calibrated);
         file.method = record(&MethodRecord {
-            name: "two-step minimax calibration (paper Algorithms I and II)".into(),
+            name: method_name(settings.method, settings.base_method),
             objective: format!("{:?}", settings.method),
+            arm_method: Some(settings.method.name().to_string()),
+            base_method: Some(settings.base_method.name().to_string()),
+            reflector: (settings.method == Method::DistanceSingle).then_some(result.reflector_used),
             qp: format!("{:?}", settings.qp),
             split: format!("{:?}", settings.split),
             max_iterations: settings.max_iterations,
@@ -177,6 +211,18 @@ impl ParamsFile {
             right: fixed(Side::Right),
         });
         file.termination = record(&result.stages);
+        let frames = result.tracker_from_base;
+        if frames.values().any(Option::is_some) {
+            file.tracker_frames = Some(TrackerFrames {
+                tracker_from_left_base: frames.left.as_ref().map(BaseTransform::from_isometry),
+                tracker_from_right_base: frames.right.as_ref().map(BaseTransform::from_isometry),
+                identified_by: Some(if settings.base_method == BaseMethod::Absolute {
+                    "step 2 (absolute)".to_string()
+                } else {
+                    format!("step 1 ({})", settings.method.name())
+                }),
+            });
+        }
         // The figures leave the excluded configurations out, as the solver did.
         let kept = dataset.excluding(&settings.exclude);
         let accuracy = |split| crate::metrics::evaluate(&kept, &result.calibrated, split).ok();

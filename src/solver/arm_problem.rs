@@ -33,6 +33,9 @@ pub struct ArmProblem {
     mean_side_mm: [f64; 3],
     /// Allowed deviation δ of the model triangle's sides from the measured means, mm (ε = δ²).
     side_tolerance_mm: f64,
+    /// The reflectors whose distance errors enter the normal equations ([`MinimaxProblem::least_squares`]):
+    /// all three, or one for the single-reflector method of ref. [26].
+    reflectors: [bool; 3],
 }
 
 impl ArmProblem {
@@ -72,7 +75,15 @@ impl ArmProblem {
             scale,
             mean_side_mm,
             side_tolerance_mm,
+            reflectors: [true; 3],
         }
+    }
+
+    /// The same problem whose normal equations ([`MinimaxProblem::least_squares`]) sum the distance
+    /// errors of the reflectors in `reflectors` only (the minimax objectives stay those of all three).
+    pub fn with_reflectors(mut self, reflectors: [bool; 3]) -> Self {
+        self.reflectors = reflectors;
+        self
     }
 
     /// The same problem (data, start point, constraints) with another set of free parameters and their
@@ -202,7 +213,18 @@ impl ArmProblem {
     /// `max_pairs` pairs per reflector, one column per pair and reflector ([`pair_jacobian_columns`]).
     pub fn sample_pair_jacobian(&self, y: &DVector<f64>, max_pairs: usize) -> DMatrix<f64> {
         let model = self.model_at(y);
-        pair_jacobian_columns(&self.jac_all(&model), max_pairs)
+        pair_jacobian_columns(&self.jac_all(&model), max_pairs, self.reflectors)
+    }
+
+    /// F_k of the start model on this problem's data, mm² (sums of squared distance errors).
+    pub fn start_objectives_mm2(&self) -> [f64; 3] {
+        let model = self.model_at(&DVector::zeros(self.free.len()));
+        let points: Vec<[Vector3<f64>; 3]> = self
+            .fk_all(&model)
+            .into_iter()
+            .map(|f| f.points_mm)
+            .collect();
+        std::array::from_fn(|k| self.pair_sums(&points, k, None))
     }
 }
 
@@ -225,9 +247,13 @@ fn pair_row(
 }
 
 /// Rows −u_ijᵀ(J_i,k − J_j,k) of the pair Jacobian (all parameters, unscaled) for an evenly strided
-/// subset of at most `max_pairs` pairs per reflector, as the columns of a matrix (parameters × rows),
-/// so that `M Mᵀ` is the Gram matrix.
-pub fn pair_jacobian_columns(jac: &[ArmJacobians], max_pairs: usize) -> DMatrix<f64> {
+/// subset of at most `max_pairs` pairs per reflector (of the reflectors in `reflectors`), as the columns
+/// of a matrix (parameters × rows), so that `M Mᵀ` is the Gram matrix.
+pub fn pair_jacobian_columns(
+    jac: &[ArmJacobians],
+    max_pairs: usize,
+    reflectors: [bool; 3],
+) -> DMatrix<f64> {
     let n = jac.len();
     let n_pairs = n * n.saturating_sub(1) / 2;
     let stride = n_pairs.div_ceil(max_pairs.max(1)).max(1);
@@ -239,7 +265,7 @@ pub fn pair_jacobian_columns(jac: &[ArmJacobians], max_pairs: usize) -> DMatrix<
     for i in 0..n {
         for j in i + 1..n {
             if idx.is_multiple_of(stride) {
-                for k in 0..3 {
+                for k in (0..3).filter(|&k| reflectors[k]) {
                     let v = jac[i].fk.points_mm[k] - jac[j].fk.points_mm[k];
                     let dist = v.norm();
                     if dist > 0.0 {
@@ -347,7 +373,7 @@ impl MinimaxProblem for ArmProblem {
                 let base = i * n - i * (i + 1) / 2; // index of pair (i, i+1)
                 for j in i + 1..n {
                     let idx = base + (j - i - 1);
-                    for k in 0..3 {
+                    for k in (0..3).filter(|&k| self.reflectors[k]) {
                         let v = jac[i].fk.points_mm[k] - jac[j].fk.points_mm[k];
                         let dist = v.norm();
                         if dist <= 0.0 {

@@ -120,7 +120,7 @@ impl BaseProblem {
 }
 
 /// Left Jacobian of SO(3): `d Exp(ω) = [J_l(ω) dω]× Exp(ω)`.
-fn left_jacobian_so3(w: &Vector3<f64>) -> nalgebra::Matrix3<f64> {
+pub(super) fn left_jacobian_so3(w: &Vector3<f64>) -> nalgebra::Matrix3<f64> {
     let theta = w.norm();
     let k = w.cross_matrix();
     if theta < 1e-6 {

@@ -73,6 +73,18 @@ pub struct ParameterInfo<'a> {
     pub name: &'a dyn Fn(usize) -> String,
     /// Why a parameter is unidentifiable, when physics says so.
     pub reason: &'a dyn Fn(usize) -> Option<String>,
+    /// What the method fits, for the reasons: `distances` (the paper's and ref. [26]'s methods),
+    /// `absolute positions`, `poses`.
+    pub data: &'a str,
+    /// Why a parameter that is not `allowed` is fixed (e.g. `fixed by the user`).
+    pub not_allowed: &'a str,
+}
+
+impl ParameterInfo<'_> {
+    /// What the distance methods fit.
+    pub const DISTANCES: &'static str = "distances";
+    /// The reason of a parameter the user held.
+    pub const FIXED_BY_USER: &'static str = "fixed by the user";
 }
 
 /// Condition number of the scaled Gram submatrix of `idx` (the square root of its eigenvalue ratio).
@@ -139,7 +151,7 @@ pub fn analyse(gram: &DMatrix<f64>, info: &ParameterInfo) -> IdentifiabilityRepo
                 index: k,
                 name: (info.name)(k),
                 residual: f64::NAN,
-                reason: "fixed by the user".into(),
+                reason: info.not_allowed.into(),
             });
             continue;
         }
@@ -163,15 +175,15 @@ pub fn analyse(gram: &DMatrix<f64>, info: &ParameterInfo) -> IdentifiabilityRepo
             0.0
         };
         let reason = if res < UNIDENTIFIABLE_TOL {
+            let data = info.data;
             match (info.reason)(k) {
-                Some(why) => format!("unidentifiable from distances ({why})"),
+                Some(why) => format!("unidentifiable from {data} ({why})"),
                 None if !usable[k] => {
-                    "unidentifiable from distances: the distances do not depend on it".into()
+                    format!("unidentifiable from {data}: the {data} do not depend on it")
                 }
-                None => {
-                    "unidentifiable from distances: its column is a combination of the kept ones"
-                        .into()
-                }
+                None => format!(
+                    "unidentifiable from {data}: its column is a combination of the kept ones"
+                ),
             }
         } else {
             format!(

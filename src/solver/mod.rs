@@ -27,9 +27,11 @@
 //! A run that hits the iteration limit or is cancelled still returns its result: the model reached,
 //! the history, and per stage why it ended ([`Termination`]).
 
+pub mod absolute_problem;
 pub mod arm_problem;
 pub mod base_problem;
 pub mod identifiability;
+pub mod least_squares;
 pub mod lm;
 pub mod problem;
 pub mod qp;
@@ -101,6 +103,16 @@ impl Method {
             Method::DistanceSingle => "distance-single",
             Method::Pose => "pose",
             Method::Position => "position",
+        }
+    }
+
+    /// How many independent equations n configurations give the method, for messages.
+    pub fn count_rule(self) -> &'static str {
+        match self {
+            Method::Minimax | Method::LeastSquares => "9n − 18 independent distances",
+            Method::DistanceSingle => "3n − 6 independent distances of one reflector",
+            Method::Position => "9n coordinates, 6 of them for the tracker frame",
+            Method::Pose => "6n pose components, 6 of them for the tracker frame",
         }
     }
 
@@ -262,6 +274,21 @@ pub fn min_configurations(n_params: usize) -> usize {
     (n_params + 18).div_ceil(9).max(crate::dataset::MIN_CONFIGS)
 }
 
+/// The smallest number of calibration configurations per arm for `method` on `arm`: the distance
+/// methods as [`min_configurations`] (one reflector: `3n − 6` distances for the parameters less the
+/// other two reflectors' six), the absolute ones `9n` coordinates (position) or `6n` pose components
+/// for the parameters and the tracker-from-base transform's six.
+pub fn min_configurations_for(method: Method, arm: &crate::kinematics::ArmModel) -> usize {
+    let params = identifiable_params(arm);
+    let n = match method {
+        Method::Minimax | Method::LeastSquares => return min_configurations(params),
+        Method::DistanceSingle => (params.saturating_sub(6) + 6).div_ceil(3),
+        Method::Position => (params + 6).div_ceil(9),
+        Method::Pose => (params + 6).div_ceil(6),
+    };
+    n.max(crate::dataset::MIN_CONFIGS)
+}
+
 /// The parameters of an arm that distances can identify at most: all but those physics rules out (for
 /// the built-in robot `d1`, `θ1`, absorbed by the tracker frame, and the four of the last joint,
 /// absorbed by the reflector coordinates: 31 of 37).
@@ -360,15 +387,16 @@ pub enum CalibrationEvent {
 pub enum CalibrationError {
     #[error(
         "{side} arm: {found} configurations in the selected split (after exclusions), at least {needed} \
-         are needed to identify the arm's parameters from distances (9n − 18 independent distances \
-         for {params} parameters; the paper uses 120)"
+         are needed to identify the arm's parameters by method `{}` ({}; {params} parameters; the paper \
+         uses 120)", method.name(), method.count_rule()
     )]
     TooFewConfigurations {
         side: Side,
         found: usize,
         needed: usize,
-        /// The arm's identifiable parameters.
+        /// The arm's identifiable parameters (by distances).
         params: usize,
+        method: Method,
     },
     #[error(
         "{side} arm: configuration `{id}` has {found} joint values, the arm's model has {expected} joints"

@@ -55,6 +55,14 @@ impl CalibrationResult {
             && self.stages.iter().all(|s| s.termination.is_converged())
     }
 
+    /// Was `stage` solved by the paper's SQP (the minimax methods) rather than least squares?
+    pub fn uses_sqp(&self, stage: Stage) -> bool {
+        match stage {
+            Stage::Arm(_) => self.settings.method == super::Method::Minimax,
+            Stage::Base => self.settings.base_method == super::BaseMethod::Minimax,
+        }
+    }
+
     /// The summary of `stage`, if it ran.
     pub fn stage(&self, stage: Stage) -> Option<&StageSummary> {
         self.stages.iter().find(|s| s.stage == stage)
@@ -82,6 +90,12 @@ impl CalibrationResult {
                     "{} {} after {} iterations; the parameters are the last plausible ones, not a \
                      calibration",
                     s.stage, s.termination, s.iterations
+                ),
+                _ if !self.uses_sqp(s.stage) => format!(
+                    "{} stopped where the Gauss–Newton model still predicts a decrease of the cost \
+                     by more than {:.0e} of itself; the parameters are usable but not optimal",
+                    s.stage,
+                    super::least_squares::STATIONARY_RTOL,
                 ),
                 _ => format!(
                     "{} stopped where the exact QP still predicts a decrease of ψ by more than {:.0e} \

@@ -5,6 +5,7 @@
 use super::arm_problem::ArmProblem;
 use super::base_problem::BaseProblem;
 use super::identifiability::{self, IdentifiabilityReport};
+use super::least_squares::{DistanceLeastSquares, LsqAlgorithm, LsqState};
 use super::lm::LmState;
 use super::problem::{MinimaxProblem, StageParams};
 use super::result::CalibrationResult;
@@ -22,6 +23,8 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 // std's `Instant::now` panics in a browser (wasm32-unknown-unknown); web-time is std's on native targets.
 use web_time::Instant;
+
+mod methods;
 
 /// Pairs per reflector sampled for identifiability, column scaling and the start Hessian.
 pub const IDENTIFIABILITY_PAIRS: usize = 3000;
@@ -130,6 +133,8 @@ pub enum Progress {
 
 /// Per-arm measurements of the selected split.
 struct ArmInput {
+    /// The configurations' ids (for messages).
+    ids: Vec<String>,
     qs: Vec<Vec<f64>>,
     measured: Vec<[Vector3<f64>; 3]>,
     side_tolerance_mm: f64,
@@ -332,14 +337,26 @@ impl CalibrationRun {
         };
         if let Some(params) = params {
             apply(&mut self.committed, active.stage, params);
+            let frames = active.solver.tracker_frames();
+            for side in Side::BOTH {
+                let identified = match active.stage {
+                    Stage::Arm(s) => s == side,
+                    Stage::Base => true,
+                };
+                if identified && frames[side].is_some() {
+                    self.tracker_from_base[side] = frames[side];
+                }
+            }
         }
         let f_mm2 = if f_mm2.iter().all(|f| f.is_finite()) {
             f_mm2
         } else {
             self.stage_objectives(active.stage)
         };
+        // The distance analysis at the solution, for the methods that fit distances.
         if let Stage::Arm(side) = active.stage
             && termination != Termination::Cancelled
+            && !self.settings.method.is_absolute()
         {
             self.recheck_identifiability(side);
         }
@@ -395,9 +412,16 @@ impl CalibrationRun {
     }
 
     fn start_stage(&mut self, stage: Stage) -> Result<ActiveStage, CalibrationError> {
-        let solver = match stage {
-            Stage::Arm(side) => self.arm_solver(side)?,
-            Stage::Base => self.base_solver()?,
+        let solver = match (stage, self.settings.method, self.settings.base_method) {
+            (Stage::Arm(side), Method::Minimax | Method::LeastSquares, _) => {
+                self.arm_solver(side)?
+            }
+            (Stage::Arm(side), Method::DistanceSingle, _) => self.distance_single_solver(side)?,
+            (Stage::Arm(side), Method::Pose | Method::Position, _) => {
+                self.absolute_arm_solver(side)?
+            }
+            (Stage::Base, _, BaseMethod::Minimax | BaseMethod::Distance) => self.base_solver()?,
+            (Stage::Base, _, BaseMethod::Absolute) => self.absolute_base_solver()?,
         };
         Ok(ActiveStage {
             stage,
@@ -440,6 +464,8 @@ impl CalibrationRun {
                 allowed: &vec![true; n_params],
                 name: &|k| start.param_name(k),
                 reason: &|k| start.unidentifiable_reason(k),
+                data: identifiability::ParameterInfo::DISTANCES,
+                not_allowed: identifiability::ParameterInfo::FIXED_BY_USER,
             },
         );
         if report.free.is_empty() {
@@ -462,10 +488,17 @@ impl CalibrationRun {
         });
         let problem = probe.with_free(report.free.clone(), scale);
         self.identifiability[side] = Some(report);
-        self.solver(problem, stage, h0)
+        match self.settings.method {
+            Method::Minimax => self.sqp_solver(problem, stage, h0),
+            _ => Ok(Box::new(LmState::new(
+                problem,
+                self.settings.step_tolerance,
+            ))),
+        }
     }
 
-    /// Step 2: the right-arm base from the collaborative distances, with step 1's arms.
+    /// Step 2: the right-arm base from the collaborative distances, with step 1's arms: minimax (the
+    /// paper's Algorithm II) or Gauss–Newton on all of them (ref. [26]).
     fn base_solver(&mut self) -> Result<Box<dyn StageSolver>, CalibrationError> {
         let stage = Stage::Base;
         let model_points = |side: Side| -> Vec<[Vector3<f64>; 3]> {
@@ -490,31 +523,34 @@ impl CalibrationRun {
                 detail: format!("collaborative Jacobian singular values {:?}", sv.as_slice()),
             });
         }
-        self.solver(problem, stage, h0)
+        match self.settings.base_method {
+            BaseMethod::Distance => Ok(Box::new(LsqState::new(
+                DistanceLeastSquares {
+                    problem,
+                    reflectors: [true; 3],
+                },
+                LsqAlgorithm::GaussNewton,
+                self.settings.step_tolerance,
+            ))),
+            _ => self.sqp_solver(problem, stage, h0),
+        }
     }
 
-    /// The stage solver of the configured method on `problem`.
-    fn solver<P: MinimaxProblem + 'static>(
+    /// The paper's SQP on `problem`.
+    fn sqp_solver<P: MinimaxProblem + 'static>(
         &self,
         problem: P,
         stage: Stage,
         h0: DMatrix<f64>,
     ) -> Result<Box<dyn StageSolver>, CalibrationError> {
-        Ok(match self.settings.method {
-            Method::Minimax => Box::new(SqpState::new(problem, self.sqp_settings(), h0).map_err(
-                |_| CalibrationError::NonFinite {
+        Ok(Box::new(
+            SqpState::new(problem, self.sqp_settings(), h0).map_err(|_| {
+                CalibrationError::NonFinite {
                     stage,
                     detail: "objective or gradient at the start point".into(),
-                },
-            )?),
-            Method::LeastSquares => Box::new(LmState::new(problem, self.settings.step_tolerance)),
-            other => {
-                return Err(CalibrationError::InvalidSettings(format!(
-                    "method `{}` is not implemented yet",
-                    other.name()
-                )));
-            }
-        })
+                }
+            })?,
+        ))
     }
 
     /// Why step-1 parameters are implausible (moved too far from the nominal model), if they are.
@@ -603,6 +639,8 @@ impl CalibrationRun {
                 allowed: &allowed,
                 name: &|k| arm.param_name(k),
                 reason: &|k| arm.unidentifiable_reason(k),
+                data: identifiability::ParameterInfo::DISTANCES,
+                not_allowed: identifiability::ParameterInfo::FIXED_BY_USER,
             },
         );
         for f in &at_solution.fixed {
@@ -653,12 +691,6 @@ fn check_settings(settings: &CalibrationSettings) -> Result<(), CalibrationError
             settings.method.name()
         )));
     }
-    if settings.base_method != BaseMethod::Minimax {
-        return Err(CalibrationError::InvalidSettings(format!(
-            "base method `{}` is not implemented yet",
-            settings.base_method.name()
-        )));
-    }
     Ok(())
 }
 
@@ -680,13 +712,14 @@ fn arm_input(
         .map(|(_, m)| m)
         .collect();
     let params = super::identifiable_params(nominal.arm(side));
-    let needed = super::min_configurations(params);
+    let needed = super::min_configurations_for(settings.method, nominal.arm(side));
     if ms.len() < needed {
         return Err(CalibrationError::TooFewConfigurations {
             side,
             found: ms.len(),
             needed,
             params,
+            method: settings.method,
         });
     }
     let expected = nominal.arm(side).joint_count();
@@ -718,6 +751,7 @@ fn arm_input(
     let side_tolerance_mm =
         (dataset.tracker.mpe_um + dataset.tracker.mpe_um_per_m * mean_dist_m) / 1000.0;
     Ok(ArmInput {
+        ids: ms.iter().map(|m| m.id.clone()).collect(),
         qs,
         measured,
         side_tolerance_mm,

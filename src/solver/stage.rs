@@ -5,6 +5,8 @@ use super::Termination;
 use super::lm::LmState;
 use super::problem::{MinimaxProblem, StageParams};
 use super::sqp::SqpState;
+use crate::side::PerSide;
+use nalgebra::Isometry3;
 
 /// What one outer iteration reports.
 #[derive(Clone, Debug, PartialEq)]
@@ -33,8 +35,13 @@ pub trait StageSolver: Send {
     fn current(&self) -> StageParams;
     /// F_a, F_b, F_c at the current iterate, mm² (sums over all pairs).
     fn objectives_mm2(&self) -> [f64; 3];
-    /// Configuration pairs per reflector.
+    /// Configuration pairs per reflector (configurations, for the absolute methods).
     fn pair_count(&self) -> usize;
+    /// Each arm's model base in the tracker frame at the current iterate, where the method identifies
+    /// it (the absolute methods); none by default.
+    fn tracker_frames(&self) -> PerSide<Option<Isometry3<f64>>> {
+        PerSide::default()
+    }
 }
 
 impl<P: MinimaxProblem> StageSolver for SqpState<P> {

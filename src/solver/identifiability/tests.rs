@@ -34,7 +34,7 @@ fn columns(arm: &ArmModel, n: usize, rng: &mut ChaCha8Rng) -> DMatrix<f64> {
             arm.reflector_jacobians(&q)
         })
         .collect();
-    pair_jacobian_columns(&jacs, 3000)
+    pair_jacobian_columns(&jacs, 3000, [true; 3])
 }
 
 fn report(arm: &ArmModel, gram: &DMatrix<f64>) -> IdentifiabilityReport {
@@ -46,6 +46,8 @@ fn report(arm: &ArmModel, gram: &DMatrix<f64>) -> IdentifiabilityReport {
             allowed: &vec![true; arm.param_count()],
             name: &|k| arm.param_name(k),
             reason: &|k| arm.unidentifiable_reason(k),
+            data: ParameterInfo::DISTANCES,
+            not_allowed: ParameterInfo::FIXED_BY_USER,
         },
     )
 }
@@ -163,6 +165,8 @@ fn negligible_columns_are_unidentifiable_outright() {
             allowed: &[true; 3],
             name: &|k| format!("p{k}"),
             reason: &|_| None,
+            data: ParameterInfo::DISTANCES,
+            not_allowed: ParameterInfo::FIXED_BY_USER,
         },
     );
     assert_eq!(rep.free, [0, 1]);
@@ -193,6 +197,8 @@ fn user_fixed_and_near_dependent_parameters_are_reported() {
             allowed: &[true, false, true],
             name: &|k| format!("p{k}"),
             reason: &|_| None,
+            data: ParameterInfo::DISTANCES,
+            not_allowed: ParameterInfo::FIXED_BY_USER,
         },
     );
     assert_eq!(rep.free, [0]);
