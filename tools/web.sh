@@ -7,9 +7,9 @@
 #   tools/web.sh test          → build, then the browser test (web/tests/browser-test.mjs: Debian's
 #                                Chromium headless, driven by playwright-core from npm), comparing the
 #                                browser's calibrated parameters with the native command line's
-#   tools/web.sh measure       → test, plus the native release timing of the same work, and the
-#                                README's screenshot (docs/screenshot-web.png); prints the figures of
-#                                docs/performance.md
+#   tools/web.sh measure       → test, plus the native release command line's time for the same
+#                                calibration, and the README's screenshot (docs/screenshot-web.png);
+#                                prints the figures of docs/performance.md
 #
 # Needs the wasm32-unknown-unknown target (added here with rustup) and wasm-bindgen-cli at exactly the
 # version of the `wasm-bindgen` crate in Cargo.lock, installed from crates.io into
@@ -104,15 +104,14 @@ case "${1:-}" in
   measure)
     build
     browser_test
-    # The same work natively (release): the CLI's solver time, and the workbench's calibration task
-    # (solver and figures) stepped in frames as in the browser.
-    cargo build --release --quiet --bin dualcal --example calibrate_in_frames
+    # The same calibration natively: the release command line's solver time (`total time`), five
+    # runs. The engine alone (no workbench) is enough for that, and builds in a few minutes.
+    cargo build --release --quiet --no-default-features --bin dualcal
     for i in 1 2 3 4 5; do
       rm -f "target/web-test/native-$i.json"
       target/release/dualcal calibrate assets/datasets/example --out "target/web-test/native-$i.json" |
         awk '/^total time/ { print $3 }'
     done >target/web-test/native-cli-secs.txt
-    target/release/examples/calibrate_in_frames >target/web-test/native-in-frames.json
     if command -v convert >/dev/null 2>&1; then
       convert target/web-test/workbench.png -colors 256 PNG8:docs/screenshot-web.png
     else
