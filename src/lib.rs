@@ -23,6 +23,7 @@ pub mod robot;
 pub mod side;
 pub mod simulate;
 pub mod solver;
+pub mod source;
 pub mod textfile;
 pub mod urdf_export;
 

@@ -1,8 +1,9 @@
-//! `dualcal`: the workbench (no arguments, or `gui`) and the command line.
-use clap::Parser;
-use dualcal::cli::{Cli, Command};
-
+//! `dualcal`: the workbench (no arguments, or `gui`) and the command line; in a browser (wasm32), the
+//! workbench alone.
+#[cfg(not(target_arch = "wasm32"))]
 fn main() -> std::process::ExitCode {
+    use clap::Parser;
+    use dualcal::cli::{Cli, Command};
     let cli = Cli::parse();
     let result = match cli.command {
         None => run_gui(None, None),
@@ -21,7 +22,7 @@ fn main() -> std::process::ExitCode {
     }
 }
 
-#[cfg(feature = "gui")]
+#[cfg(all(feature = "gui", not(target_arch = "wasm32")))]
 fn run_gui(
     dataset: Option<std::path::PathBuf>,
     urdf: Option<std::path::PathBuf>,
@@ -29,7 +30,7 @@ fn run_gui(
     dualcal::app::run_native(dualcal::app::AppLaunch { dataset, urdf })
 }
 
-#[cfg(not(feature = "gui"))]
+#[cfg(all(not(feature = "gui"), not(target_arch = "wasm32")))]
 fn run_gui(
     _dataset: Option<std::path::PathBuf>,
     _urdf: Option<std::path::PathBuf>,
@@ -37,4 +38,12 @@ fn run_gui(
     anyhow::bail!(
         "this build of dualcal has no workbench (built without the `gui` feature); see `dualcal --help`"
     )
+}
+
+/// In a browser (`tools/web.sh build`): the workbench on the page's canvas; wasm-bindgen runs this on
+/// load.
+#[cfg(target_arch = "wasm32")]
+fn main() {
+    #[cfg(feature = "gui")]
+    dualcal::app::web::start();
 }

@@ -7,7 +7,6 @@
 //! is refused before it fills the memory. Messages quote a file's content only through [`excerpt`], so
 //! a wrong path never prints more than a few words of a file that is not the user's data.
 
-use std::io::Read;
 use std::path::Path;
 
 /// Largest text file dualcal reads: 256 MiB (a CSV of 100 000 configurations is about 30 MB).
@@ -113,22 +112,17 @@ pub fn decode(bytes: &[u8]) -> Result<String, TextProblem> {
 /// Read a text file (see the module documentation). Only regular files are read (not devices or
 /// pipes, whose length is unknown).
 pub fn read(path: &Path) -> Result<String, ReadError> {
-    let file = std::fs::File::open(path)?;
-    let meta = file.metadata()?;
-    if !meta.is_file() {
-        return Err(
-            std::io::Error::new(std::io::ErrorKind::InvalidInput, "not a regular file").into(),
-        );
-    }
-    if meta.len() > MAX_FILE_BYTES {
-        return Err(TextProblem::TooLarge.into());
-    }
-    let mut bytes = Vec::new();
-    // `take` bounds a file that grows while it is read.
-    file.take(MAX_FILE_BYTES + 1).read_to_end(&mut bytes)?;
-    if bytes.len() as u64 > MAX_FILE_BYTES {
-        return Err(TextProblem::TooLarge.into());
-    }
+    read_from(&crate::source::OsFiles, path)
+}
+
+/// [`read`] through `files` (the file system, or files in memory).
+pub fn read_from(files: &dyn crate::source::FileSource, path: &Path) -> Result<String, ReadError> {
+    let bytes = files
+        .read_limited(path, MAX_FILE_BYTES)
+        .map_err(|e| match e.kind() {
+            std::io::ErrorKind::FileTooLarge => ReadError::Text(TextProblem::TooLarge),
+            _ => ReadError::Io(e),
+        })?;
     Ok(decode(&bytes)?)
 }
 

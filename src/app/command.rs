@@ -215,7 +215,11 @@ impl WorkbenchApp {
     /// Load on a background task; on failure the error is shown and the current session stays.
     fn start_load(&mut self, dataset: PathBuf, urdf: Option<PathBuf>) {
         let status = format!("Loading {}…", dataset.display());
-        let work = LoadWork { dataset, urdf };
+        let work = LoadWork {
+            dataset,
+            urdf,
+            files: self.input_files.clone(),
+        };
         match BackgroundTask::start("load", work, self.events.sender(), self.execution) {
             Ok(task) => {
                 self.status = Status::Idle(status);

@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 
 /// The bundled example dataset, compiled into the binary (it is ours: `dualcal simulate --seed 1`).
-const EXAMPLE_FILES: [(&str, &[u8]); 4] = [
+pub(super) const EXAMPLE_FILES: [(&str, &[u8]); 4] = [
     (
         "dataset.toml",
         include_bytes!("../../assets/datasets/example/dataset.toml"),
@@ -23,10 +23,16 @@ const EXAMPLE_FILES: [(&str, &[u8]); 4] = [
     ),
 ];
 
+/// In a browser: where the compiled-in example is mounted in memory (`web.rs`).
+pub const IN_MEMORY_EXAMPLE_DIR: &str = "/example";
+
 /// The bundled example dataset: in the source tree when the binary runs from it (`cargo run`), else a
-/// copy of the compiled-in files in the user's cache directory (`$XDG_CACHE_HOME/dualcal` or
-/// `~/.cache/dualcal`), so an installed or moved binary opens it too.
+/// copy of the compiled-in files in the user's cache directory; in a browser, the files in memory
+/// ([`IN_MEMORY_EXAMPLE_DIR`]).
 pub fn bundled_example_path() -> PathBuf {
+    if cfg!(target_arch = "wasm32") {
+        return PathBuf::from(IN_MEMORY_EXAMPLE_DIR);
+    }
     let source = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/datasets/example");
     if source.join("dataset.toml").is_file() {
         return source;

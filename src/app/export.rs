@@ -175,6 +175,7 @@ mod tests {
                 result,
                 analysis,
                 screening,
+                solver_secs: 0.0,
             },
         )
     }

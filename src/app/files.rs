@@ -4,7 +4,9 @@
 //! Where no dialog is available the app asks for a path itself ([`PathPrompt`]).
 
 use super::command::Command;
-use super::events::{AppEvent, EventSender};
+#[cfg(not(target_arch = "wasm32"))]
+use super::events::AppEvent;
+use super::events::EventSender;
 use eframe::egui::{self, Color32, RichText};
 use std::path::PathBuf;
 
@@ -45,11 +47,19 @@ pub trait FileAccess {
     fn open(&self, kind: OpenKind, reply: EventSender);
     /// Ask the user where to save and write the bytes; the reply goes to `reply`.
     fn save(&self, request: SaveRequest, reply: EventSender);
+    /// Files dropped on the window: the paths to open now (on the desktop, where they are), or none
+    /// when the seam reads them itself and replies on `reply` later (a browser).
+    fn dropped(&self, files: &[egui::DroppedFileHandle], reply: EventSender) -> Vec<PathBuf> {
+        let _ = reply;
+        files.iter().map(|f| f.path().to_path_buf()).collect()
+    }
 }
 
 /// Native dialogs (rfd) run on a helper thread; writes are atomic.
+#[cfg(not(target_arch = "wasm32"))]
 pub struct NativeFiles;
 
+#[cfg(not(target_arch = "wasm32"))]
 impl FileAccess for NativeFiles {
     /// On Linux, rfd needs the desktop portal (on the session D-Bus) or `zenity`; a bare X server
     /// (e.g. Xvfb) has neither. `DUALCAL_PATH_PROMPT=1` forces the in-app path prompt.
@@ -117,6 +127,7 @@ pub fn write(path: &std::path::Path, bytes: &[u8]) -> FileReply {
     }
 }
 
+#[cfg(not(target_arch = "wasm32"))]
 fn on_path(program: &str) -> bool {
     std::env::var_os("PATH")
         .is_some_and(|paths| std::env::split_paths(&paths).any(|dir| dir.join(program).is_file()))

@@ -1,7 +1,8 @@
 //! Frame statistics printed to stderr when `DUALCAL_FRAME_STATS` is set (see docs/performance.md); the
 //! app then repaints continuously.
 
-use std::time::Instant;
+// std's `Instant::now` panics in a browser (wasm32-unknown-unknown); web-time is std's on native targets.
+use web_time::Instant;
 
 /// How many frames one printed line covers.
 const FRAME_STATS_WINDOW: usize = 30;

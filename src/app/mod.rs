@@ -18,11 +18,16 @@ pub mod export;
 pub mod files;
 mod frame_stats;
 mod panels;
+pub mod platform;
 pub mod plots;
 pub mod session;
+mod status;
 pub mod table;
 pub mod task;
+pub mod uploads;
 pub mod viewport;
+#[cfg(target_arch = "wasm32")]
+pub mod web;
 pub mod work;
 
 pub use command::Command;
@@ -30,15 +35,16 @@ pub use example::{bundled_example_path, unpack_example};
 
 use crate::side::{ConfigId, Side};
 use crate::solver::{CalibrationEvent, CalibrationSettings, IterationRecord, Stage};
+use crate::source::Files;
 use eframe::egui::{self, Color32};
 use events::{AppEvent, EventChannel};
-use files::{FileAccess, FileReply, NativeFiles, PathPrompt};
+use files::{FileAccess, FileReply, PathPrompt};
 use frame_stats::FrameStats;
 use panels::PlotsView;
 use session::{LiveFigures, RobotMeshes, Session};
 use std::path::PathBuf;
 use std::sync::Arc;
-use task::{BackgroundTask, Execution, TaskEvent, TaskId};
+use task::{BackgroundTask, Execution, FrameBudget, SliceStats, TaskEvent, TaskId};
 use viewport::ViewportState;
 use work::{Loaded, Outcome};
 
@@ -52,6 +58,7 @@ pub struct AppLaunch {
 }
 
 /// Open the workbench window (blocks until it is closed).
+#[cfg(not(target_arch = "wasm32"))]
 pub fn run_native(opts: AppLaunch) -> anyhow::Result<()> {
     let options = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default()
@@ -73,8 +80,12 @@ pub fn run_native(opts: AppLaunch) -> anyhow::Result<()> {
 /// Colour of error messages.
 const ERROR_COLOR: Color32 = Color32::from_rgb(255, 110, 100);
 
-/// How long a task stepped in frames may take of each frame.
-const FRAME_TASK_BUDGET: std::time::Duration = std::time::Duration::from_millis(12);
+/// How the last calibration went in time: the wall time, and (stepped in frames) the frames' work.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct RunTiming {
+    wall_secs: f64,
+    slices: SliceStats,
+}
 
 /// What the status bar says.
 #[derive(Clone, Debug, PartialEq)]
@@ -115,6 +126,14 @@ pub struct WorkbenchApp {
     table: table::TableState,
     plots: PlotsView,
     files: Box<dyn FileAccess>,
+    /// Where datasets and robots are read from (the file system; in a browser, files in memory).
+    input_files: Files,
+    /// The GPU adapter (name and backend), for the status a browser page publishes.
+    renderer: String,
+    frame_budget: FrameBudget,
+    last_run: Option<RunTiming>,
+    /// The status last published to the page (see [`platform::publish_status`]).
+    published_status: String,
     prompt: Option<PathPrompt>,
     screenshot_pending: bool,
     /// Side and bottom panels shown (off: the viewport fills the window).
@@ -135,10 +154,21 @@ impl WorkbenchApp {
         cc.egui_ctx.set_theme(egui::Theme::Dark);
         // 4× MSAA, except on a software renderer (lavapipe, llvmpipe) where it costs more than it
         // gives; `DUALCAL_MSAA=1` / `=4` override.
-        let software = cc
+        let adapter = cc
             .wgpu_render_state
             .as_ref()
-            .is_some_and(|rs| rs.adapter.get_info().device_type == eframe::wgpu::DeviceType::Cpu);
+            .map(|rs| rs.adapter.get_info());
+        // A browser's software WebGL2 (SwiftShader) reports no CPU device type.
+        let software = adapter.as_ref().is_some_and(|a| {
+            a.device_type == eframe::wgpu::DeviceType::Cpu
+                || a.name.to_ascii_lowercase().contains("swiftshader")
+        });
+        let renderer = adapter.map_or_else(
+            || "none".to_string(),
+            |a| format!("{:?}: {}", a.backend, a.name),
+        );
+        platform::init_context(&cc.egui_ctx);
+        let io = platform::io(&cc.egui_ctx);
         let samples = match std::env::var("DUALCAL_MSAA").ok().as_deref() {
             Some("1") => 1,
             Some("4") => 4,
@@ -167,14 +197,19 @@ impl WorkbenchApp {
             viewport: ViewportState::default(),
             table: table::TableState::default(),
             plots: PlotsView::default(),
-            files: Box::new(NativeFiles),
+            files: io.dialogs,
+            input_files: io.files,
+            renderer,
+            frame_budget: platform::frame_budget(),
+            last_run: None,
+            published_status: String::new(),
             prompt: None,
             screenshot_pending: false,
             panels_visible: true,
             frame_stats: FrameStats::from_env(),
             panic_in_next_calibration: false,
         };
-        let dataset = launch.dataset.unwrap_or_else(bundled_example_path);
+        let dataset = launch.dataset.unwrap_or_else(platform::example_dataset);
         app.apply(Command::OpenDataset(dataset));
         app
     }
@@ -279,14 +314,15 @@ impl WorkbenchApp {
             }
         }
         // A robot description (a `.urdf`; a `.xacro` too, to be told how to expand it) replaces the
-        // robot, anything else is taken as a dataset.
-        let dropped: Vec<PathBuf> = self.ctx.input(|i| {
-            i.raw
-                .dropped_files
-                .iter()
-                .map(|f| f.path().to_path_buf())
-                .collect()
-        });
+        // robot, anything else is taken as a dataset. (In a browser the file seam reads dropped files
+        // itself and answers with what to open.)
+        let dropped_files = self.ctx.input(|i| i.raw.dropped_files.clone());
+        let dropped: Vec<PathBuf> = if dropped_files.is_empty() {
+            Vec::new()
+        } else {
+            self.files
+                .dropped(&dropped_files, self.events.sender().clone())
+        };
         for path in dropped {
             let is_robot = path
                 .extension()
@@ -554,6 +590,10 @@ impl WorkbenchApp {
     }
 
     fn on_calibration_end(&mut self, outcome: Outcome, task: &BackgroundTask) {
+        self.last_run = Some(RunTiming {
+            wall_secs: task.elapsed_secs(),
+            slices: task.slice_stats(),
+        });
         let had_live = self.session.as_mut().and_then(|s| s.live.take()).is_some();
         if had_live {
             self.generation += 1;
@@ -653,8 +693,9 @@ impl WorkbenchApp {
         }
     }
 
-    /// Step the tasks that run in frames.
+    /// Step the tasks that run in frames, within the frame's budget ([`FrameBudget`]).
     fn step_tasks_in_frame(&mut self) {
+        let mut stepped = false;
         for task in [
             &mut self.loading,
             &mut self.mesh_loading,
@@ -665,10 +706,13 @@ impl WorkbenchApp {
         .flatten()
         {
             if task.needs_frames() {
-                task.step_in_frame(FRAME_TASK_BUDGET);
+                task.step_in_frame(self.frame_budget.next(web_time::Instant::now()));
+                stepped = true;
                 self.ctx.request_repaint();
             }
         }
+        self.frame_budget
+            .slice_done(stepped.then(web_time::Instant::now));
     }
 }
 
@@ -676,6 +720,9 @@ impl eframe::App for WorkbenchApp {
     fn logic(&mut self, _ctx: &egui::Context, _frame: &mut eframe::Frame) {
         self.step_tasks_in_frame();
         self.poll_events();
+        if platform::PUBLISHES_STATUS {
+            self.publish_status();
+        }
     }
 
     fn ui(&mut self, ui: &mut egui::Ui, frame: &mut eframe::Frame) {
@@ -683,7 +730,7 @@ impl eframe::App for WorkbenchApp {
             stats.frame_started(ui.ctx().cumulative_frame_nr(), self.calibration.is_some());
             ui.ctx().request_repaint();
         }
-        let ui_started = std::time::Instant::now();
+        let ui_started = web_time::Instant::now();
         let mut commands = Vec::new();
         if self.panels_visible {
             self.panels_ui(ui, &mut commands);

@@ -9,6 +9,7 @@ use crate::quality::{self, Flag, Screening};
 use crate::robot::RobotDescription;
 use crate::side::{ConfigId, PerSide, Side};
 use crate::solver::{CalibrationResult, Stage};
+use crate::source::Files;
 use anyhow::Context as _;
 use nalgebra::Isometry3;
 use std::path::{Path, PathBuf};
@@ -21,6 +22,9 @@ pub struct Calibrated {
     pub analysis: Analysis,
     /// The configurations screened with the calibrated model ([`quality::screen_result`]).
     pub screening: Screening,
+    /// Time the solver's own steps took, s: without the live figures, the final figures and (stepped
+    /// in frames) the frames between steps.
+    pub solver_secs: f64,
 }
 
 /// What the last Auto-exclude did ([`quality::auto_exclude`]).
@@ -152,14 +156,24 @@ impl Session {
     /// Load a dataset (directory or `dataset.toml`) with the given robot, or the one the dataset names,
     /// or the built-in IRB 14000.
     pub fn load(dataset_path: &Path, urdf: Option<&Path>) -> anyhow::Result<Self> {
-        let dataset = dataset::load(dataset_path)?;
+        Self::load_from(&Files::default(), dataset_path, urdf)
+    }
+
+    /// [`Session::load`] reading the files through `files` (in a browser: the files in memory).
+    pub fn load_from(
+        files: &Files,
+        dataset_path: &Path,
+        urdf: Option<&Path>,
+    ) -> anyhow::Result<Self> {
+        let (dataset, _) = dataset::load_from(&**files, dataset_path)?;
         let robot_path = urdf
             .map(Path::to_path_buf)
             .or_else(|| dataset.robot.clone());
-        let robot = RobotDescription::for_dataset_with(
+        let robot = RobotDescription::for_dataset_from(
             &dataset,
             robot_path.as_deref(),
             &Default::default(),
+            files,
         )?;
         Self::new(dataset, robot, robot_path)
     }

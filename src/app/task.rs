@@ -15,7 +15,8 @@ use crate::comparison::{ComparisonEvent, MethodOutcome, ModelFigures};
 use crate::solver::CalibrationEvent;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
-use std::time::{Duration, Instant};
+use std::time::Duration;
+use web_time::Instant;
 
 /// Tells one task's events from another's (a replaced task may still report).
 pub type TaskId = u64;
@@ -133,11 +134,65 @@ enum Runner {
     },
 }
 
+/// How long work stepped in frames may take of the next frame: as long as the rest of the last frame
+/// took (building the UI, painting, waiting for the display), between [`FrameBudget::MIN`] and
+/// [`FrameBudget::MAX`]. On a fast GPU at 60 Hz that is about half of each frame; on a slow renderer
+/// (a software WebGL2 takes ~350 ms a frame) the work gets up to `MAX` per frame instead of a few ms,
+/// so it ends in a few frames while the page keeps drawing (a frame at most `MAX` longer).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct FrameBudget {
+    /// A fixed budget instead (a browser test's `?budget_ms=N`).
+    fixed: Option<Duration>,
+    /// When the last slice ended (`None`: no work was stepped in the last frame).
+    last_slice_end: Option<Instant>,
+}
+
+impl FrameBudget {
+    pub const MIN: Duration = Duration::from_millis(8);
+    pub const MAX: Duration = Duration::from_millis(100);
+
+    /// Always `budget` (0: one step per frame).
+    pub fn fixed(budget: Duration) -> Self {
+        Self {
+            fixed: Some(budget),
+            last_slice_end: None,
+        }
+    }
+
+    /// The budget of a slice starting `now`.
+    pub fn next(&self, now: Instant) -> Duration {
+        match (self.fixed, self.last_slice_end) {
+            (Some(fixed), _) => fixed,
+            (None, Some(end)) => now
+                .saturating_duration_since(end)
+                .clamp(Self::MIN, Self::MAX),
+            (None, None) => Self::MIN,
+        }
+    }
+
+    /// A slice ended `now`; `None`: this frame stepped nothing (the next slice starts afresh).
+    pub fn slice_done(&mut self, now: Option<Instant>) {
+        self.last_slice_end = now;
+    }
+}
+
+/// Time a task stepped in frames spent working.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SliceStats {
+    /// Frames that stepped it.
+    pub slices: usize,
+    /// Time in its steps, s.
+    pub busy_secs: f64,
+    /// The longest slice, s.
+    pub longest_slice_secs: f64,
+}
+
 /// A running task: the handle the app keeps. Dropping it cancels the work.
 pub struct BackgroundTask {
     id: TaskId,
     name: String,
     started: Instant,
+    slices: SliceStats,
     cancel: Arc<AtomicBool>,
     cancel_requested: Option<Instant>,
     runner: Runner,
@@ -178,6 +233,7 @@ impl BackgroundTask {
             id,
             name: name.to_string(),
             started: Instant::now(),
+            slices: SliceStats::default(),
             cancel,
             cancel_requested: None,
             runner,
@@ -195,6 +251,11 @@ impl BackgroundTask {
 
     pub fn elapsed_secs(&self) -> f64 {
         self.started.elapsed().as_secs_f64()
+    }
+
+    /// Time spent in the frame loop's slices (zero for a thread's work).
+    pub fn slice_stats(&self) -> SliceStats {
+        self.slices
     }
 
     /// Ask the work to stop; it still reports its end.
@@ -227,7 +288,8 @@ impl BackgroundTask {
         } = &mut self.runner
         {
             let started = Instant::now();
-            while !*done && started.elapsed() < budget {
+            // At least one step, however small the budget.
+            loop {
                 // A panic in the work ends the task with a message; the frame loop goes on.
                 let step =
                     std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| work.step(context)));
@@ -240,7 +302,14 @@ impl BackgroundTask {
                         *done = true;
                     }
                 }
+                if *done || started.elapsed() >= budget {
+                    break;
+                }
             }
+            let slice = started.elapsed().as_secs_f64();
+            self.slices.slices += 1;
+            self.slices.busy_secs += slice;
+            self.slices.longest_slice_secs = self.slices.longest_slice_secs.max(slice);
         }
     }
 }
@@ -332,6 +401,49 @@ mod tests {
         let events = events_of(&channel, task.id());
         assert_eq!(events.len(), 4);
         assert!(events[3].is_final() && !events[0].is_final());
+    }
+
+    #[test]
+    fn the_frame_budget_follows_the_rest_of_the_frame_within_its_bounds() {
+        let t0 = Instant::now();
+        let mut budget = FrameBudget::default();
+        assert_eq!(budget.next(t0), FrameBudget::MIN);
+        budget.slice_done(Some(t0));
+        // A fast frame: the floor; a 30 ms frame: 30 ms; a software renderer's 400 ms: the cap.
+        assert_eq!(budget.next(t0 + Duration::from_millis(2)), FrameBudget::MIN);
+        assert_eq!(
+            budget.next(t0 + Duration::from_millis(30)),
+            Duration::from_millis(30)
+        );
+        assert_eq!(
+            budget.next(t0 + Duration::from_millis(400)),
+            FrameBudget::MAX
+        );
+        // A frame without work starts afresh.
+        budget.slice_done(None);
+        assert_eq!(budget.next(t0 + Duration::from_secs(5)), FrameBudget::MIN);
+        let fixed = FrameBudget::fixed(Duration::ZERO);
+        assert_eq!(fixed.next(t0), Duration::ZERO);
+    }
+
+    #[test]
+    fn a_zero_budget_still_takes_one_step_per_frame() {
+        let channel = EventChannel::new(None);
+        let mut task = BackgroundTask::start(
+            "count",
+            Counter {
+                n: 3,
+                panic_at: None,
+            },
+            channel.sender(),
+            Execution::InFrames,
+        )
+        .unwrap();
+        task.step_in_frame(Duration::ZERO);
+        assert_eq!(events_of(&channel, task.id()).len(), 1);
+        let stats = task.slice_stats();
+        assert_eq!(stats.slices, 1);
+        assert!(stats.busy_secs >= 0.0 && stats.longest_slice_secs == stats.busy_secs);
     }
 
     #[test]

@@ -22,11 +22,13 @@ use crate::solver::{
     CalibrationEvent, CalibrationResult, CalibrationRun, CalibrationSettings, Calibrator,
     IterationRecord, Observer, Progress, Stage, StageSummary, Termination,
 };
+use crate::source::Files;
 use anyhow::Context as _;
 use nalgebra::Isometry3;
 use std::path::PathBuf;
 use std::sync::Arc;
-use std::time::{Duration, Instant};
+use std::time::Duration;
+use web_time::Instant;
 
 /// A dataset and robot loaded.
 pub struct Loaded {
@@ -40,12 +42,14 @@ pub struct Loaded {
 pub struct LoadWork {
     pub dataset: PathBuf,
     pub urdf: Option<PathBuf>,
+    /// Where the files are read from (the file system, or a browser's files in memory).
+    pub files: Files,
 }
 
 impl Work for LoadWork {
     fn step(&mut self, task: &TaskContext) -> Step {
-        let started = std::time::Instant::now();
-        let result = Session::load(&self.dataset, self.urdf.as_deref())
+        let started = Instant::now();
+        let result = Session::load_from(&self.files, &self.dataset, self.urdf.as_deref())
             .with_context(|| match &self.urdf {
                 Some(urdf) => format!(
                     "cannot use robot description {} for dataset {}",
@@ -308,6 +312,8 @@ pub struct CalibrationWork {
     nominal_excluded: Vec<ConfigId>,
     run: Option<CalibrationRun>,
     live: LiveSchedule,
+    /// Time in the solver's steps so far.
+    solver: Duration,
     /// Fault injection for tests: panic in the first step.
     pub panic_at_start: bool,
 }
@@ -322,6 +328,7 @@ impl CalibrationWork {
             nominal_excluded: session.nominal.excluded.clone(),
             run: None,
             live: LiveSchedule::new(rate),
+            solver: Duration::ZERO,
             panic_at_start: false,
         }
     }
@@ -347,7 +354,13 @@ impl CalibrationWork {
             };
         }
         let analysis = self.analysis(&result.calibrated);
-        calibrated_outcome(&self.dataset, result, analysis, None)
+        calibrated_outcome(
+            &self.dataset,
+            result,
+            analysis,
+            None,
+            self.solver.as_secs_f64(),
+        )
     }
 }
 
@@ -357,6 +370,7 @@ pub(super) fn calibrated_outcome(
     result: CalibrationResult,
     analysis: anyhow::Result<Analysis>,
     screening: Option<quality::Screening>,
+    solver_secs: f64,
 ) -> Outcome {
     match analysis {
         Ok(analysis) => {
@@ -367,6 +381,7 @@ pub(super) fn calibrated_outcome(
                 result,
                 analysis,
                 screening,
+                solver_secs,
             }))
         }
         Err(e) => Outcome::Failed(format!("calibrated model: {e:#}")),
@@ -392,10 +407,12 @@ impl Work for CalibrationWork {
                 }
                 self.nominal_excluded = self.settings.exclude.clone();
             }
+            let setup = Instant::now();
             let started = Calibrator::new(&self.dataset, &self.nominal)
                 .settings(self.settings.clone())
                 .cancel(task.cancel_flag().clone())
                 .start();
+            self.solver += setup.elapsed();
             return match started {
                 Ok(run) => {
                     self.run = Some(run);
@@ -434,7 +451,10 @@ impl Work for CalibrationWork {
             task,
             live: &mut self.live,
         };
-        let outcome = match run.step(&mut [&mut reporter]) {
+        let stepping = Instant::now();
+        let stepped = run.step(&mut [&mut reporter]);
+        self.solver += stepping.elapsed();
+        let outcome = match stepped {
             Ok(Progress::Running) => return Step::More,
             Ok(Progress::Finished(result)) => self.outcome(*result),
             Err(e) => Outcome::Failed(e.to_string()),
@@ -469,6 +489,7 @@ impl AutoExcludeWork {
 
 impl Work for AutoExcludeWork {
     fn step(&mut self, task: &TaskContext) -> Step {
+        let started = Instant::now();
         let auto = match quality::auto_exclude(
             &self.dataset,
             &self.nominal,
@@ -481,6 +502,7 @@ impl Work for AutoExcludeWork {
                 return Step::Done;
             }
         };
+        let solver_secs = started.elapsed().as_secs_f64();
         let exclude = &auto.result.settings.exclude;
         let figures = |model: &DualArmModel| {
             Analysis::compute_excluding(&self.dataset, model, &self.body_from_left_base, exclude)
@@ -505,6 +527,7 @@ impl Work for AutoExcludeWork {
             auto.result,
             analysis,
             Some(auto.screening),
+            solver_secs,
         )));
         Step::Done
     }
@@ -534,6 +557,7 @@ mod tests {
         let load = LoadWork {
             dataset: Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/datasets/example"),
             urdf: None,
+            files: Files::default(),
         };
         let Some(AppEvent::Task(_, TaskEvent::Loaded(Ok(loaded)))) =
             run_in_frames(load, &channel).pop()

@@ -263,12 +263,13 @@ fn parse_row(
 
 /// Read one arm's CSV into measurements in mm and rad.
 pub(super) fn read_arm(
+    files: &dyn crate::source::FileSource,
     path: &Path,
     side: Side,
     units: Units,
     nominal_reflectors_mm: &[Vector3<f64>; 3],
 ) -> Result<Vec<Measurement>, DatasetError> {
-    let text = read_text(path)?;
+    let text = read_text(files, path)?;
     let mut reader = csv::ReaderBuilder::new()
         .has_headers(false)
         .comment(Some(b'#'))

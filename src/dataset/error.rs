@@ -181,9 +181,12 @@ pub(super) fn line_col(text: &str, offset: usize) -> (usize, usize, String) {
 }
 
 /// Read a text file: UTF-8, an optional byte-order mark is dropped (see [`crate::textfile`]).
-pub(super) fn read_text(path: &Path) -> Result<String, DatasetError> {
+pub(super) fn read_text(
+    files: &dyn crate::source::FileSource,
+    path: &Path,
+) -> Result<String, DatasetError> {
     use crate::textfile::{ReadError, TextProblem};
-    crate::textfile::read(path).map_err(|e| match e {
+    crate::textfile::read_from(files, path).map_err(|e| match e {
         ReadError::Io(source) => DatasetError::Io {
             path: path.to_path_buf(),
             source,

@@ -4,6 +4,7 @@ use super::error::{DatasetError, line_col};
 use super::units::{AngleUnit, LengthUnit, Units};
 use super::{ArmLinks, DATASET_FORMAT, TrackerSpec};
 use crate::side::{PerSide, Side};
+use crate::source::FileSource;
 use crate::textfile::excerpt;
 use nalgebra::Vector3;
 use std::path::{Path, PathBuf};
@@ -113,14 +114,19 @@ impl ManifestCtx<'_> {
 }
 
 /// Parse and validate `dataset.toml` (`path`, in directory `dir`, with contents `text`).
-pub(super) fn parse(path: &Path, dir: &Path, text: &str) -> Result<Manifest, DatasetError> {
+pub(super) fn parse(
+    files: &dyn FileSource,
+    path: &Path,
+    dir: &Path,
+    text: &str,
+) -> Result<Manifest, DatasetError> {
     let cx = ManifestCtx { path, text };
     // Syntax errors and the format tag first, so that a file of another format gets the right message.
     let head: RawFormatOnly = toml::from_str(text).map_err(|e| cx.toml_err(&e))?;
     check_format(&cx, head.format)?;
     let raw: RawManifest = toml::from_str(text).map_err(|e| cx.toml_err(&e))?;
     let units = parse_units(&cx, raw.units)?;
-    let robot = parse_robot(&cx, dir, raw.robot)?;
+    let robot = parse_robot(&cx, files, dir, raw.robot)?;
     let tracker = match raw.tracker {
         None => TrackerSpec::default(),
         Some(t) => parse_tracker(&cx, t)?,
@@ -212,6 +218,7 @@ fn parse_units(cx: &ManifestCtx, raw: Option<Spanned<RawUnits>>) -> Result<Units
 /// `robot`: a robot description relative to the dataset directory (absent: the built-in IRB 14000).
 fn parse_robot(
     cx: &ManifestCtx,
+    files: &dyn FileSource,
     dir: &Path,
     raw: Option<Spanned<String>>,
 ) -> Result<Option<PathBuf>, DatasetError> {
@@ -228,7 +235,7 @@ fn parse_robot(
     }
     super::validate::usable_path(r.get_ref()).map_err(|m| cx.err(line, "robot", m))?;
     let p = dir.join(r.get_ref());
-    if !p.is_file() {
+    if !files.is_file(&p) {
         return Err(cx.err(
             line,
             "robot",

@@ -11,6 +11,7 @@ mod validate;
 pub use crate::output::Overwrite;
 pub use crate::robot::ArmLinks;
 use crate::side::{ConfigId, PerSide, Side};
+use crate::source::FileSource;
 pub use error::DatasetError;
 use error::read_text;
 use nalgebra::Vector3;
@@ -224,8 +225,8 @@ pub fn csv_columns(joints: usize) -> Vec<String> {
 pub const SPLIT_COLUMN: &str = "split";
 
 /// Resolve a dataset path (its directory or its manifest) into (directory, manifest path).
-fn resolve(path: &Path) -> (PathBuf, PathBuf) {
-    if path.is_dir() {
+fn resolve(files: &dyn FileSource, path: &Path) -> (PathBuf, PathBuf) {
+    if files.is_dir(path) {
         (path.to_path_buf(), path.join(MANIFEST_FILE))
     } else {
         let dir = match path.parent() {
@@ -246,11 +247,17 @@ pub fn load(path: &Path) -> Result<Dataset, DatasetError> {
 
 /// Like [`load`], also returning the units the files were written in (to save back in the same units).
 pub fn load_with_units(path: &Path) -> Result<(Dataset, Units), DatasetError> {
-    let (dir, manifest_path) = resolve(path);
-    let text = read_text(&manifest_path)?;
-    let m = manifest::parse(&manifest_path, &dir, &text)?;
+    load_from(&crate::source::OsFiles, path)
+}
+
+/// Like [`load_with_units`], reading the files through `files` (the file system, or files in memory:
+/// a browser's uploads).
+pub fn load_from(files: &dyn FileSource, path: &Path) -> Result<(Dataset, Units), DatasetError> {
+    let (dir, manifest_path) = resolve(files, path);
+    let text = read_text(files, &manifest_path)?;
+    let m = manifest::parse(files, &manifest_path, &dir, &text)?;
     let arms = m.arms.try_map(|side, arm| {
-        let measurements = csv::read_arm(&arm.file, side, m.units, &m.reflectors_mm)?;
+        let measurements = csv::read_arm(files, &arm.file, side, m.units, &m.reflectors_mm)?;
         Ok::<_, DatasetError>(ArmData {
             side,
             file: arm.file,

@@ -16,6 +16,7 @@
 //!
 //! Every problem is a [`MeshWarning`] naming the file: the caller draws a placeholder and goes on.
 
+use crate::source::{FileSource, Files};
 use nalgebra::Vector3;
 use rayon::prelude::*;
 use std::collections::{BTreeMap, HashMap};
@@ -51,6 +52,8 @@ pub enum MeshWarning {
 /// Where mesh filenames are resolved from.
 #[derive(Clone, Debug, Default)]
 pub struct MeshResolver {
+    /// Where the files are looked for and read (default: the file system).
+    pub files: Files,
     /// The folder of the URDF file, if it was read from one.
     pub urdf_dir: Option<PathBuf>,
     pub packages: PackageMap,
@@ -59,8 +62,11 @@ pub struct MeshResolver {
 
 /// Does folder `dir` hold ROS package `pkg`? Its `package.xml` names it (`<name>pkg</name>`), or the
 /// folder is called `pkg` and has a `package.xml` (or a manifest.xml, ROS 1's old form).
-fn is_package(dir: &Path, pkg: &str) -> bool {
-    match std::fs::read_to_string(dir.join("package.xml")) {
+fn is_package(files: &dyn FileSource, dir: &Path, pkg: &str) -> bool {
+    let package_xml = files
+        .read_limited(&dir.join("package.xml"), 1 << 20)
+        .map(|bytes| String::from_utf8_lossy(&bytes).into_owned());
+    match package_xml {
         Ok(xml) => {
             let named = xml
                 .split_once("<name>")
@@ -68,7 +74,9 @@ fn is_package(dir: &Path, pkg: &str) -> bool {
                 .is_some_and(|(name, _)| name.trim() == pkg);
             named || dir.file_name().is_some_and(|n| n == pkg)
         }
-        Err(_) => dir.file_name().is_some_and(|n| n == pkg) && dir.join("manifest.xml").is_file(),
+        Err(_) => {
+            dir.file_name().is_some_and(|n| n == pkg) && files.is_file(&dir.join("manifest.xml"))
+        }
     }
 }
 
@@ -91,10 +99,17 @@ impl MeshResolver {
             }
         });
         Self {
+            files: Files::default(),
             urdf_dir,
             packages,
             ros_package_path,
         }
+    }
+
+    /// Look for the meshes in `files` instead of the file system.
+    pub fn with_files(mut self, files: Files) -> Self {
+        self.files = files;
+        self
     }
 
     /// The folder of package `pkg`, if it can be found.
@@ -104,44 +119,47 @@ impl MeshResolver {
         }
         if let Some(dir) = &self.urdf_dir {
             for anc in dir.ancestors() {
-                if is_package(anc, pkg) {
+                if is_package(&*self.files, anc, pkg) {
                     return Some(anc.to_path_buf());
                 }
                 let sub = anc.join(pkg);
-                if is_package(&sub, pkg) {
+                if is_package(&*self.files, &sub, pkg) {
                     return Some(sub);
                 }
             }
         }
         for entry in &self.ros_package_path {
-            if is_package(entry, pkg) {
+            if is_package(&*self.files, entry, pkg) {
                 return Some(entry.clone());
             }
             let sub = entry.join(pkg);
-            if is_package(&sub, pkg) {
+            if is_package(&*self.files, &sub, pkg) {
                 return Some(sub);
             }
             // A package folder under another name, or one level of grouping folders (a catkin
             // workspace's src/<repo>/<pkg>).
-            if let Ok(children) = std::fs::read_dir(entry) {
-                for child in children.flatten() {
-                    let child = child.path();
-                    if is_package(&child, pkg) {
-                        return Some(child);
-                    }
-                    let sub = child.join(pkg);
-                    if is_package(&sub, pkg) {
-                        return Some(sub);
-                    }
+            for child in self.files.read_dir(entry) {
+                if is_package(&*self.files, &child, pkg) {
+                    return Some(child);
+                }
+                let sub = child.join(pkg);
+                if is_package(&*self.files, &sub, pkg) {
+                    return Some(sub);
                 }
             }
         }
-        // Last resort, for a package copied without its package.xml: an ancestor called `pkg`.
-        self.urdf_dir.as_ref().and_then(|dir| {
-            dir.ancestors()
-                .find(|a| a.file_name().is_some_and(|n| n == pkg))
-                .map(Path::to_path_buf)
-        })
+        // Last resort, for a package copied without its package.xml: an ancestor called `pkg`, or a
+        // folder called `pkg` beside the URDF or in one of its ancestors (how a browser upload of
+        // loose mesh files is laid out).
+        let dir = self.urdf_dir.as_ref()?;
+        dir.ancestors()
+            .find(|a| a.file_name().is_some_and(|n| n == pkg))
+            .map(Path::to_path_buf)
+            .or_else(|| {
+                dir.ancestors()
+                    .map(|a| a.join(pkg))
+                    .find(|sub| self.files.is_dir(sub))
+            })
     }
 
     /// The file a URDF mesh filename refers to.
@@ -168,7 +186,7 @@ impl MeshResolver {
                 _ => p.to_path_buf(),
             }
         };
-        if path.is_file() {
+        if self.files.is_file(&path) {
             Ok(path)
         } else {
             Err(MeshWarning::NotFound {
@@ -276,8 +294,21 @@ fn convert(mesh: &mesh_loader::Mesh, scale: [f64; 3]) -> TriangleMesh {
     }
 }
 
+/// Most a mesh file may have: 512 MiB.
+pub const MAX_MESH_BYTES: u64 = 512 * 1024 * 1024;
+
 /// Load one mesh file (metres, `scale` applied).
 pub fn load_mesh(
+    filename: &str,
+    path: &Path,
+    scale: [f64; 3],
+) -> Result<TriangleMesh, MeshWarning> {
+    load_mesh_from(&crate::source::OsFiles, filename, path, scale)
+}
+
+/// [`load_mesh`] reading through `files`.
+pub fn load_mesh_from(
+    files: &dyn FileSource,
     filename: &str,
     path: &Path,
     scale: [f64; 3],
@@ -292,7 +323,9 @@ pub fn load_mesh(
         .and_then(|e| e.to_str())
         .unwrap_or("")
         .to_ascii_lowercase();
-    let bytes = std::fs::read(path).map_err(|e| unreadable(e.to_string()))?;
+    let bytes = files
+        .read_limited(path, MAX_MESH_BYTES)
+        .map_err(|e| unreadable(e.to_string()))?;
     let loader = mesh_loader::Loader::default().merge_meshes(true);
     let scene = match extension.as_str() {
         "stl" => loader.load_stl_from_slice(&bytes, path),
@@ -371,7 +404,7 @@ pub fn load_robot_meshes(
         .map(|(key, scale)| {
             let loaded = resolver
                 .resolve(&key.0)
-                .and_then(|path| load_mesh(&key.0, &path, scale));
+                .and_then(|path| load_mesh_from(&*resolver.files, &key.0, &path, scale));
             (key, loaded)
         })
         .collect();

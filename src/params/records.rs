@@ -35,15 +35,15 @@ impl Provenance {
             tool: env!("CARGO_PKG_NAME").to_string(),
             version: env!("CARGO_PKG_VERSION").to_string(),
             dataset: dataset.map(|p| p.display().to_string()),
-            date_utc: Some(utc_timestamp(std::time::SystemTime::now())),
+            date_utc: Some(utc_timestamp(web_time::SystemTime::now())),
             extra: Default::default(),
         }
     }
 }
 
 /// `YYYY-MM-DDTHH:MM:SSZ` of a system time (UTC, proleptic Gregorian calendar).
-pub fn utc_timestamp(t: std::time::SystemTime) -> String {
-    let secs: i64 = match t.duration_since(std::time::UNIX_EPOCH) {
+pub fn utc_timestamp(t: web_time::SystemTime) -> String {
+    let secs: i64 = match t.duration_since(web_time::UNIX_EPOCH) {
         Ok(d) => i64::try_from(d.as_secs()).unwrap_or(i64::MAX / 2),
         Err(e) => -i64::try_from(e.duration().as_secs()).unwrap_or(i64::MAX / 2),
     };
@@ -256,7 +256,7 @@ mod tests {
         assert_eq!(civil_from_days(11_016), (2000, 2, 29));
         assert_eq!(civil_from_days(11_017), (2000, 3, 1));
         assert_eq!(civil_from_days(19_723), (2024, 1, 1));
-        let t = std::time::UNIX_EPOCH + std::time::Duration::from_secs(1_700_000_000);
+        let t = web_time::UNIX_EPOCH + std::time::Duration::from_secs(1_700_000_000);
         assert_eq!(utc_timestamp(t), "2023-11-14T22:13:20Z");
     }
 }

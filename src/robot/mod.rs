@@ -210,6 +210,8 @@ pub struct PlacedShape {
 pub struct LoadOptions {
     pub arms: PerSide<Option<ArmLinks>>,
     pub packages: PackageMap,
+    /// Where the URDF and its meshes are read from (default: the file system).
+    pub files: crate::source::Files,
 }
 
 /// A loaded robot description.
@@ -336,7 +338,7 @@ impl RobotDescription {
                 path: path.to_path_buf(),
             });
         }
-        let text = crate::textfile::read(path).map_err(|e| match e {
+        let text = crate::textfile::read_from(&*options.files, path).map_err(|e| match e {
             crate::textfile::ReadError::Io(source) => RobotError::Io {
                 path: path.to_path_buf(),
                 source,
@@ -436,7 +438,8 @@ impl RobotDescription {
         };
         let yumi_defaults = options.arms.left.is_none() && options.arms.right.is_none() && yumi;
         let arms = arms::build_arms(&urdf, links, yumi_defaults, &msg)?;
-        let resolver = MeshResolver::new(source, options.packages.clone());
+        let resolver =
+            MeshResolver::new(source, options.packages.clone()).with_files(options.files.clone());
         warnings.extend(
             Side::BOTH
                 .iter()
@@ -468,12 +471,23 @@ impl RobotDescription {
         robot: Option<&Path>,
         packages: &PackageMap,
     ) -> Result<Self, RobotError> {
+        Self::for_dataset_from(dataset, robot, packages, &Default::default())
+    }
+
+    /// [`RobotDescription::for_dataset_with`] reading the robot file and its meshes through `files`.
+    pub fn for_dataset_from(
+        dataset: &crate::dataset::Dataset,
+        robot: Option<&Path>,
+        packages: &PackageMap,
+        files: &crate::source::Files,
+    ) -> Result<Self, RobotError> {
         let robot = match robot.or(dataset.robot.as_deref()) {
             Some(path) => Self::load_with(
                 path,
                 &LoadOptions {
                     arms: dataset.arms.as_ref().map(|_, a| a.links.clone()),
                     packages: packages.clone(),
+                    files: files.clone(),
                 },
             )?,
             None => {

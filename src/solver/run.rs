@@ -21,7 +21,8 @@ use crate::side::{ConfigId, PerSide, Side};
 use nalgebra::{DMatrix, DVector, Isometry3, Vector3};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::Instant;
+// std's `Instant::now` panics in a browser (wasm32-unknown-unknown); web-time is std's on native targets.
+use web_time::Instant;
 
 mod methods;
 
