@@ -294,7 +294,9 @@ impl Work for AdoptWork {
             &self.body_from_left_base,
             &result.settings.exclude,
         );
-        let outcome: Outcome = calibrated_outcome(&self.dataset, result, analysis, None);
+        let solver_secs = result.elapsed_secs;
+        let outcome: Outcome =
+            calibrated_outcome(&self.dataset, result, analysis, None, solver_secs);
         task.report(TaskEvent::Calibrated(outcome));
         Step::Done
     }
