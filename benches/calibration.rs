@@ -35,7 +35,9 @@ fn bench(c: &mut Criterion) {
     }
     // The same protocol on a URDF of the user's own: 7-joint chains, 51 parameters per arm (31 free).
     let dir = tempfile::tempdir().expect("temp dir");
-    let yumi_like = RobotDescription::load(&robots::write_yumi_like(dir.path())).expect("robot");
+    let yumi_like =
+        RobotDescription::load(&robots::write_yumi_like(dir.path()), &Default::default())
+            .expect("robot");
     let sim = simulate_with_robot(&paper_options(7, 220, 120), &yumi_like).expect("simulation");
     let ds = sim.dataset.with_cal_subset(120);
     group.bench_function("120_configs_per_arm_urdf_chains", |b| {
@@ -56,7 +58,8 @@ fn bench(c: &mut Criterion) {
     let mut group = c.benchmark_group("methods_120_configs_per_arm");
     group.sample_size(10);
     let combinations = Method::ALL
-        .into_iter()
+        .iter()
+        .copied()
         .map(|m| (m, BaseMethod::Minimax))
         .chain([
             (Method::Minimax, BaseMethod::Distance),
@@ -80,6 +83,8 @@ fn bench(c: &mut Criterion) {
         });
     }
     group.finish();
+
+    identifiability(c);
 
     // Cancel latency: a run inside a practically endless paper-QP solve is cancelled; the time from
     // setting the flag to the run returning is measured.
@@ -119,6 +124,52 @@ fn bench(c: &mut Criterion) {
             total
         })
     });
+}
+
+/// The identifiability analysis of one arm (the built-in robot's left arm, the calibration split):
+/// the start's Gram matrix by QR (the parallel Householder, bit-identical to nalgebra's `QR`, against
+/// nalgebra's own), and the whole re-check at a solution by one Gram product (what a run does) and by
+/// QR (what it did).
+fn identifiability(c: &mut Criterion) {
+    use dualcal::solver::arm_problem::pair_jacobian_columns;
+    use dualcal::solver::identifiability::{GramMethod, at_solution, gram_by_qr};
+    let robot = RobotDescription::builtin_irb14000();
+    let mut group = c.benchmark_group("identifiability");
+    group.sample_size(20);
+    for (configs, cal) in [(220usize, 120usize), (1100, 1000)] {
+        let sim = simulate_with_robot(&paper_options(7, configs, cal), &robot).expect("simulation");
+        let arm = sim.nominal.arm(dualcal::side::Side::Left);
+        let qs: Vec<Vec<f64>> = sim
+            .dataset
+            .arms
+            .left
+            .measurements
+            .iter()
+            .filter(|m| m.split == dualcal::dataset::Split::Cal)
+            .map(|m| m.q_rad.clone())
+            .collect();
+        let jac: Vec<_> = qs.iter().map(|q| arm.reflector_jacobians(q)).collect();
+        let columns = pair_jacobian_columns(&jac, 3000, [true; 3]);
+        group.bench_function(format!("start_gram_by_qr_{cal}"), |b| {
+            b.iter(|| black_box(gram_by_qr(black_box(&columns))))
+        });
+        group.bench_function(format!("start_gram_by_nalgebra_qr_{cal}"), |b| {
+            b.iter(|| {
+                let (p, count) = columns.shape();
+                let mut m = nalgebra::DMatrix::<f64>::zeros(count.max(p), p);
+                m.rows_mut(0, count).copy_from(&columns.transpose());
+                let r = m.qr().r();
+                black_box(r.transpose() * &r / count as f64)
+            })
+        });
+        let free: Vec<usize> = (0..arm.param_count()).collect();
+        for (name, how) in [("product", GramMethod::Product), ("qr", GramMethod::Qr)] {
+            group.bench_function(format!("recheck_by_{name}_{cal}"), |b| {
+                b.iter(|| black_box(at_solution(arm, black_box(&qs), &free, 3000, how)))
+            });
+        }
+    }
+    group.finish();
 }
 
 criterion_group!(benches, bench);

@@ -49,7 +49,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             cell(&truth.collaborative, &truth.collaborative)
         );
         let combos = Method::ALL
-            .into_iter()
+            .iter()
+            .copied()
             .map(|m| (m, BaseMethod::Minimax))
             .chain([
                 (Method::Minimax, BaseMethod::Distance),

@@ -1,15 +1,33 @@
-//! The figures of a model on a dataset, as the workbench shows them: accuracy reports and histograms
-//! of the calibration and verification splits, a row per configuration, and the tracker →
-//! robot registration that places the measured points next to the model's for drawing (the
-//! calibration itself never needs it: it works on distances).
+//! The figures of a model on a dataset — one type, [`Analysis`], for every view of them: the
+//! accuracy reports of the calibration and verification splits, their histograms and the paper's
+//! per-pair samples (for the comparison's histograms and box plots), a row per configuration, and
+//! the tracker → robot registration that places the measured points next to the model's for drawing
+//! (the calibration itself never needs it: it works on distances).
+//!
+//! The configurations left out of a calibration are part of what its figures are computed on
+//! ([`Analysis::compute_excluding`], [`Analysis::excluded`]): the workbench's calibration view, the
+//! comparison of methods and the command line's tables show a model's figures on the same
+//! configurations.
 
 use crate::dataset::{Dataset, Split};
 use crate::kinematics::DualArmModel;
-use crate::metrics::{self, AccuracyReport, PairKind, SplitSweep, Sweep};
+use crate::metrics::{
+    self, AccuracyReport, MetricsError, PairKind, PairSamples, SplitSweep, Sweep,
+};
 use crate::side::{ConfigId, Side};
-use anyhow::Context as _;
 use nalgebra::{Isometry3, Point3, Vector3};
 use rayon::prelude::*;
+
+/// Why a model's figures cannot be computed.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum AnalysisError {
+    /// The accuracy metrics (too few configurations, non-finite values).
+    #[error(transparent)]
+    Metrics(#[from] MetricsError),
+    /// The measured points are too few or (nearly) collinear to place the tracker frame.
+    #[error("cannot register the tracker frame to the robot (degenerate points)")]
+    Registration,
+}
 
 /// Which accuracy indicator: relative (one arm) or collaborative, position or orientation.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -184,37 +202,85 @@ impl ConfigRow {
     }
 }
 
-/// The figures of one split: its accuracy report and the histograms of its six indicators (neither
-/// when the split has too few configurations).
+/// One pair kind's residuals as the paper's histograms and box plots show them.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct WorstSamples {
+    /// Per pair the signed `Δd` of the reflector with the largest `|Δd|` ("the worst case among the
+    /// three errors", Figs. 6 and 8), mm.
+    pub pos_mm: Vec<f32>,
+    /// Per pair `Δo`, rad.
+    pub ori_rad: Vec<f32>,
+}
+
+/// The figures of one split: its accuracy report, the histograms of its six indicators and the
+/// paper's samples of each (none of them when the split has too few configurations).
 #[derive(Clone, Debug, Default)]
 pub struct SplitFigures {
     pub report: Option<AccuracyReport>,
     /// In [`Indicator::ALL`] order.
     histograms: Vec<Histogram>,
+    /// Left arm's relative pairs, the right arm's, the collaborative pairs.
+    worst: [WorstSamples; 3],
 }
 
 impl SplitFigures {
     fn of(split: Option<SplitSweep>) -> Self {
-        match split {
-            Some(split) => Self {
-                report: Some(split.report),
-                histograms: Indicator::ALL
-                    .iter()
-                    .map(|&i| Histogram::of_indicator(i, &split))
-                    .collect(),
-            },
-            None => Self::default(),
+        let Some(split) = split else {
+            return Self::default();
+        };
+        let histograms = Indicator::ALL
+            .iter()
+            .map(|&i| Histogram::of_indicator(i, &split))
+            .collect();
+        let SplitSweep { report, samples } = split;
+        Self {
+            report: Some(report),
+            histograms,
+            worst: samples.map(|s| WorstSamples {
+                pos_mm: worst_reflector_mm(&s),
+                ori_rad: s.ori_rad,
+            }),
         }
     }
 
-    /// The histogram of one indicator.
+    /// The histogram of one indicator (every reflector's signed `Δd`, or `Δo`, over the largest
+    /// magnitude).
     pub fn histogram(&self, indicator: Indicator) -> Option<&Histogram> {
         let k = Indicator::ALL.iter().position(|&i| i == indicator)?;
         self.histograms.get(k)
     }
+
+    /// The samples of `indicator` as the paper's histograms and box plots show them
+    /// ([`WorstSamples`]); `None` when the split has too few configurations.
+    pub fn samples(&self, indicator: Indicator) -> Option<&[f32]> {
+        self.report.as_ref()?;
+        let s = &self.worst[match indicator.pair_kind() {
+            PairKind::Relative(Side::Left) => 0,
+            PairKind::Relative(Side::Right) => 1,
+            PairKind::Collaborative => 2,
+        }];
+        Some(if indicator.is_position() {
+            &s.pos_mm
+        } else {
+            &s.ori_rad
+        })
+    }
 }
 
-/// Everything derived from one model on one dataset.
+/// Per pair, the signed `Δd` of largest magnitude among the three reflectors.
+pub fn worst_reflector_mm(samples: &PairSamples) -> Vec<f32> {
+    samples
+        .pos_mm
+        .par_chunks_exact(3)
+        .map(|d| {
+            d.iter()
+                .copied()
+                .fold(0.0, |w: f32, x| if x.abs() > w.abs() { x } else { w })
+        })
+        .collect()
+}
+
+/// The figures of one model on one dataset, without the configurations it [`excluded`](Self::excluded).
 #[derive(Clone, Debug)]
 pub struct Analysis {
     pub model: DualArmModel,
@@ -242,6 +308,17 @@ impl Analysis {
         }
     }
 
+    /// The accuracy report of `split` (`None` for `All` and for a split with too few configurations).
+    pub fn report(&self, split: Split) -> Option<&AccuracyReport> {
+        self.figures(split)?.report.as_ref()
+    }
+
+    /// The samples of `indicator` on `split` as the paper's histograms and box plots show them
+    /// ([`SplitFigures::samples`]).
+    pub fn samples(&self, split: Split, indicator: Indicator) -> Option<&[f32]> {
+        self.figures(split)?.samples(indicator)
+    }
+
     /// Compute the figures of `model` on `dataset`; `body_from_left_base` places the drawing. Every pair
     /// of configurations is visited once ([`metrics::sweep`]); this is what the workbench recomputes
     /// for the live view while a calibration runs (`cargo bench --bench analysis`).
@@ -249,7 +326,7 @@ impl Analysis {
         dataset: &Dataset,
         model: &DualArmModel,
         body_from_left_base: &Isometry3<f64>,
-    ) -> anyhow::Result<Self> {
+    ) -> Result<Self, AnalysisError> {
         Self::compute_excluding(dataset, model, body_from_left_base, &[])
     }
 
@@ -262,17 +339,16 @@ impl Analysis {
         model: &DualArmModel,
         body_from_left_base: &Isometry3<f64>,
         exclude: &[ConfigId],
-    ) -> anyhow::Result<Self> {
+    ) -> Result<Self, AnalysisError> {
         let Sweep {
             per_config,
             cal,
             ver,
-        } = metrics::sweep(dataset, model).context("accuracy figures")?;
+        } = metrics::sweep(dataset, model)?;
         let (cal, ver) = if exclude.is_empty() {
             (cal, ver)
         } else {
-            let kept = metrics::sweep(&dataset.excluding(exclude), model)
-                .context("accuracy figures without the excluded configurations")?;
+            let kept = metrics::sweep(&dataset.excluding(exclude), model)?;
             (kept.cal, kept.ver)
         };
 
@@ -315,8 +391,8 @@ impl Analysis {
             .filter(|(_, k)| **k)
             .flat_map(|(p, _)| *p)
             .collect();
-        let left_base_from_tracker = best_fit_rigid(&from, &to)
-            .context("cannot register the tracker frame to the robot (degenerate points)")?;
+        let left_base_from_tracker =
+            best_fit_rigid(&from, &to).ok_or(AnalysisError::Registration)?;
         let sum_sq: f64 = from
             .iter()
             .zip(&to)
@@ -325,12 +401,7 @@ impl Analysis {
         let registration_rms_mm = (sum_sq / from.len().max(1) as f64).sqrt();
 
         // The sweep lists every configuration, in the same order (left arm first).
-        anyhow::ensure!(
-            per_config.len() == model_left.len(),
-            "{} configuration rows for {} configurations",
-            per_config.len(),
-            model_left.len()
-        );
+        debug_assert_eq!(per_config.len(), model_left.len());
         let body_from_tracker = body_from_left_base * left_base_from_tracker;
         let configs = measured()
             .zip(per_config)
@@ -400,6 +471,15 @@ mod tests {
         let err = (fit.translation.vector - truth.translation.vector).norm();
         assert!(err < 0.05, "translation error {err} mm");
         assert!(fit.rotation.angle_to(&truth.rotation) < 1e-4);
+    }
+
+    #[test]
+    fn worst_reflector_keeps_the_sign_of_the_largest_magnitude() {
+        let s = PairSamples {
+            pos_mm: vec![0.1, -0.3, 0.2, 0.5, 0.0, -0.1, 0.0, 0.0, 0.0],
+            ori_rad: vec![0.0; 3],
+        };
+        assert_eq!(worst_reflector_mm(&s), vec![-0.3, 0.5, 0.0]);
     }
 
     #[test]

@@ -581,7 +581,7 @@ mod tests {
         // below the shoulders (a triangle surface).
         let dir = tempfile::tempdir().unwrap();
         let urdf = crate::test_robots::write_yumi_like(dir.path());
-        let robot = RobotDescription::load(&urdf).unwrap();
+        let robot = RobotDescription::load(&urdf, &Default::default()).unwrap();
         let world = CollisionWorld::new(&robot);
         assert!(world.warnings.is_empty(), "{:?}", world.warnings);
         let (l, r) = (robot.home_q_rad(Side::Left), robot.home_q_rad(Side::Right));
@@ -611,7 +611,7 @@ mod tests {
         assert!(arms.left && !arms.right);
         // A missing collision mesh is a warning, not a refused robot.
         std::fs::remove_file(dir.path().join("yumi_description/meshes/coarse/link_3.stl")).unwrap();
-        let robot = RobotDescription::load(&urdf).unwrap();
+        let robot = RobotDescription::load(&urdf, &Default::default()).unwrap();
         let world = CollisionWorld::new(&robot);
         assert!(
             world.warnings.iter().any(|w| w.contains("link_3")),

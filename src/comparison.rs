@@ -3,18 +3,22 @@
 //! view runs on the loaded dataset.
 //!
 //! Every method is driven the same way — [`CalibrationSettings`] through [`Calibrator`] — and the
-//! methods compared are the rows of one table, [`METHODS`]: adding a method to every comparison (the
-//! CLI's tables and figures, the workbench's view) is one entry there. Each method's calibrated model
-//! is evaluated by [`metrics::sweep`] (the paper's eqs. 5–8 on both splits, with every pair's
-//! residuals kept as samples for the histograms and box plots).
+//! methods compared are the rows of [`METHODS`], read from the methods' own table
+//! ([`crate::solver::methods`]): a method added there takes part in every comparison (the CLI's
+//! tables and figures, the workbench's view). Each method's calibrated model
+//! is evaluated as every model is, [`Analysis::compute_excluding`] (the paper's eqs. 5–8 on both
+//! splits, with every pair's residuals kept as samples for the histograms and box plots), on the
+//! configurations it was calibrated on.
 
-use crate::analysis::{Histogram, Indicator};
-use crate::dataset::{Dataset, Split};
+use crate::analysis::{Analysis, AnalysisError, Histogram, Indicator};
+use crate::dataset::Dataset;
 use crate::kinematics::DualArmModel;
-use crate::metrics::{self, AccuracyReport, MetricsError, PairSamples, SplitSweep};
-use crate::solver::{BaseMethod, CalibrationResult, CalibrationSettings, Calibrator, Method};
-use std::sync::Arc;
+use crate::solver::{
+    BaseMethod, CalibrationError, CalibrationResult, CalibrationSettings, Calibrator, Method,
+};
+use nalgebra::Isometry3;
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, LazyLock};
 
 /// Which of the paper's comparisons a method takes part in.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -41,15 +45,7 @@ impl Role {
     }
 }
 
-/// What a step-1 method's model can see of the flange: the studies hold a method to the noise floor
-/// only on what it can see.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Observes {
-    /// All three reflectors: their positions and so the flange's orientation.
-    ThreeReflectors,
-    /// One reflector's distances: its position only, nothing of the orientation or the other two.
-    OneReflector,
-}
+pub use crate::solver::Observes;
 
 /// One compared method: a name, its column in the paper, and the step-1 and step-2 methods that
 /// select it in [`CalibrationSettings`].
@@ -91,147 +87,79 @@ impl MethodEntry {
     }
 }
 
-/// A step-1 method, with the paper's step 2.
-const fn arms(
-    key: &'static str,
-    label: &'static str,
-    paper: Option<&'static str>,
-    observes: Observes,
-    method: Method,
-) -> MethodEntry {
-    MethodEntry {
-        key,
-        label,
-        paper,
-        role: Role::Arms,
-        observes,
-        method,
-        base_method: BaseMethod::Minimax,
-    }
-}
-
-impl MethodEntry {
-    /// The paper's own method: in both comparisons.
-    const fn in_both(self) -> Self {
-        Self {
-            role: Role::Both,
-            ..self
+/// The compared methods, read from the methods' tables ([`Method::ALL`], [`BaseMethod::ALL`]): every
+/// step-1 method on the paper's step 2 — the paper's columns first, in the table's order, then the
+/// others — and every step-2 method compared on its own, on the paper's step 1. The paper's own
+/// method (the default of both steps) takes part in both comparisons.
+pub static METHODS: LazyLock<Vec<MethodEntry>> = LazyLock::new(|| {
+    let (paper, others): (Vec<Method>, Vec<Method>) =
+        Method::ALL.iter().partition(|m| m.spec().paper.is_some());
+    let arms = paper.into_iter().chain(others).map(|method| {
+        let spec = method.spec();
+        MethodEntry {
+            key: spec.name,
+            label: spec.table_label,
+            paper: spec.paper,
+            role: if method == Method::default() {
+                Role::Both
+            } else {
+                Role::Arms
+            },
+            observes: spec.observes,
+            method,
+            base_method: BaseMethod::default(),
         }
-    }
-}
-
-/// A step-2 method, on the paper's step 1.
-#[allow(
-    dead_code,
-    reason = "the step-2 methods of refs. [26] and [28] join METHODS when they land"
-)]
-const fn base(
-    key: &'static str,
-    label: &'static str,
-    paper: Option<&'static str>,
-    base_method: BaseMethod,
-) -> MethodEntry {
-    MethodEntry {
-        key,
-        label,
-        paper,
-        role: Role::Base,
-        observes: Observes::ThreeReflectors,
-        method: Method::Minimax,
-        base_method,
-    }
-}
-
-use Observes::{OneReflector as ONE, ThreeReflectors as THREE};
-
-/// The compared methods, in the paper's column order: one line per method (kept as a table, not
-/// formatted).
-#[rustfmt::skip]
-pub const METHODS: &[MethodEntry] = &[
-    arms("minimax",         "minimax",           Some("Our method"), THREE, Method::Minimax).in_both(),
-    arms("distance-single", "one reflector",     Some("[26]"),       ONE,   Method::DistanceSingle),
-    arms("pose",            "full pose",         Some("[19]"),       THREE, Method::Pose),
-    arms("position",        "positions",         Some("[18]"),       THREE, Method::Position),
-    arms("lsq",             "least squares",     None,               THREE, Method::LeastSquares),
-    base("base-distance",   "base by distances", Some("[26]"),       BaseMethod::Distance),
-    base("base-absolute",   "base by positions", Some("[28]"),       BaseMethod::Absolute),
-];
+    });
+    let bases = BaseMethod::ALL.iter().filter_map(|&base_method| {
+        let spec = base_method.spec();
+        Some(MethodEntry {
+            key: spec.compared_as?,
+            label: spec.table_label,
+            paper: spec.paper,
+            role: Role::Base,
+            observes: Observes::ThreeReflectors,
+            method: Method::default(),
+            base_method,
+        })
+    });
+    arms.chain(bases).collect()
+});
 
 /// The entry of `key`.
 pub fn method(key: &str) -> Option<&'static MethodEntry> {
     METHODS.iter().find(|m| m.key == key)
 }
 
-/// The figures of one model on a dataset: each split's accuracy report and every same-split pair's
-/// residuals ([`metrics::sweep`]).
-#[derive(Clone, Debug)]
-pub struct ModelFigures {
-    pub cal: Option<SplitSweep>,
-    pub ver: Option<SplitSweep>,
+/// Why a compared method has no figures.
+#[derive(Clone, Debug, thiserror::Error)]
+pub enum MethodError {
+    /// The calibration could not run (too few configurations for its model, degenerate data).
+    #[error(transparent)]
+    Calibration(Arc<CalibrationError>),
+    /// The calibrated model's figures could not be computed.
+    #[error("the calibrated model's figures: {0}")]
+    Figures(AnalysisError),
 }
 
-impl ModelFigures {
-    /// Evaluate `model` on `dataset`.
-    pub fn of(dataset: &Dataset, model: &DualArmModel) -> Result<Self, MetricsError> {
-        let sweep = metrics::sweep(dataset, model)?;
-        Ok(Self {
-            cal: sweep.cal,
-            ver: sweep.ver,
-        })
+impl From<CalibrationError> for MethodError {
+    fn from(e: CalibrationError) -> Self {
+        MethodError::Calibration(Arc::new(e))
     }
-
-    /// The figures of `split` (`None` for [`Split::All`] and for a split with too few configurations).
-    pub fn split(&self, split: Split) -> Option<&SplitSweep> {
-        match split {
-            Split::Cal => self.cal.as_ref(),
-            Split::Ver => self.ver.as_ref(),
-            Split::All => None,
-        }
-    }
-
-    /// The accuracy report of `split`.
-    pub fn report(&self, split: Split) -> Option<&AccuracyReport> {
-        self.split(split).map(|s| &s.report)
-    }
-
-    /// The samples of `indicator` on `split`, as the paper's histograms and box plots show them:
-    /// per pair the signed `Δd` of the reflector with the largest `|Δd|` ("the worst case among the
-    /// three errors", Figs. 6 and 8), or `Δo`.
-    pub fn samples(&self, split: Split, indicator: Indicator) -> Option<Vec<f32>> {
-        let s = self.split(split)?.samples(indicator.pair_kind());
-        Some(if indicator.is_position() {
-            worst_reflector_mm(s)
-        } else {
-            s.ori_rad.clone()
-        })
-    }
-}
-
-/// Per pair, the signed `Δd` of largest magnitude among the three reflectors.
-pub fn worst_reflector_mm(samples: &PairSamples) -> Vec<f32> {
-    samples
-        .pos_mm
-        .chunks_exact(3)
-        .map(|d| {
-            d.iter()
-                .copied()
-                .fold(0.0, |w: f32, x| if x.abs() > w.abs() { x } else { w })
-        })
-        .collect()
 }
 
 /// How one method fared: its calibration and the figures of its model, or why it could not run.
 #[derive(Clone, Debug)]
 pub struct MethodOutcome {
     pub entry: MethodEntry,
-    pub outcome: Result<MethodRun, String>,
+    pub outcome: Result<MethodRun, MethodError>,
 }
 
-/// A method's calibration and the figures of the model it reached.
+/// A method's calibration and the figures of the model it reached, on the configurations it was
+/// calibrated on (without its excluded ones).
 #[derive(Clone, Debug)]
 pub struct MethodRun {
     pub result: CalibrationResult,
-    pub figures: ModelFigures,
+    pub figures: Analysis,
 }
 
 impl MethodOutcome {
@@ -241,7 +169,7 @@ impl MethodOutcome {
     }
 
     /// The figures of its model, if it ran.
-    pub fn figures(&self) -> Option<&ModelFigures> {
+    pub fn figures(&self) -> Option<&Analysis> {
         self.run().map(|r| &r.figures)
     }
 }
@@ -250,9 +178,9 @@ impl MethodOutcome {
 /// parameters': the noise floor).
 #[derive(Clone, Debug)]
 pub struct Comparison {
-    pub nominal: ModelFigures,
+    pub nominal: Analysis,
     /// The true model's figures, where it is known (simulation).
-    pub truth: Option<ModelFigures>,
+    pub truth: Option<Analysis>,
     pub methods: Vec<MethodOutcome>,
     /// Whether the run was cancelled before every method had run (those missing are not listed).
     pub cancelled: bool,
@@ -283,22 +211,43 @@ pub enum ComparisonEvent {
     },
 }
 
-/// Run `methods` on `dataset` one after another from `nominal`, each with its settings on top of
-/// `common`. A method that cannot run (too few configurations for its model, degenerate data) is
-/// recorded with its error and the others go on; the figures of the nominal model failing (no pairs
-/// to evaluate) is the error of the whole comparison. `cancel` stops the running method (its
-/// partial result is kept) and skips the rest.
+/// What a comparison runs on.
+#[derive(Clone, Copy, Debug)]
+pub struct CompareInput<'a> {
+    pub dataset: &'a Dataset,
+    /// The model every method starts from.
+    pub nominal: &'a DualArmModel,
+    /// The true model, where it is known (simulation): its figures are the noise floor.
+    pub truth: Option<&'a DualArmModel>,
+    /// The robot's body frame from the left arm's model base (where the figures' rows are drawn,
+    /// [`Analysis::compute`]).
+    pub body_from_left_base: Isometry3<f64>,
+}
+
+/// Run `methods` on `input.dataset` one after another from `input.nominal`, each with its settings
+/// on top of `common`. Every model's figures — the nominal, the true and each method's — are computed
+/// without `common.exclude`, the configurations the methods are calibrated without. A method that
+/// cannot run (too few configurations for its model, degenerate data) is recorded with its error and
+/// the others go on; the figures of the nominal model failing (no pairs to evaluate) is the error of
+/// the whole comparison. `cancel` stops the running method (its partial result is kept) and skips
+/// the rest.
 pub fn compare(
-    dataset: &Dataset,
-    nominal: &DualArmModel,
-    truth: Option<&DualArmModel>,
+    input: &CompareInput<'_>,
     methods: &[MethodEntry],
     common: &CalibrationSettings,
     cancel: &Arc<AtomicBool>,
     progress: &mut dyn FnMut(ComparisonEvent),
-) -> Result<Comparison, MetricsError> {
-    let nominal_figures = ModelFigures::of(dataset, nominal)?;
-    let truth = truth.map(|t| ModelFigures::of(dataset, t)).transpose()?;
+) -> Result<Comparison, AnalysisError> {
+    let figures = |model: &DualArmModel| {
+        Analysis::compute_excluding(
+            input.dataset,
+            model,
+            &input.body_from_left_base,
+            &common.exclude,
+        )
+    };
+    let nominal_figures = figures(input.nominal)?;
+    let truth = input.truth.map(figures).transpose()?;
     let mut out = Vec::with_capacity(methods.len());
     let mut cancelled = false;
     for (index, entry) in methods.iter().enumerate() {
@@ -311,12 +260,12 @@ pub fn compare(
             total: methods.len(),
             key: entry.key,
         });
-        let outcome = run_method(dataset, nominal, entry, common, cancel);
+        let outcome = run_method(input, entry, common, cancel);
         progress(ComparisonEvent::MethodFinished {
             index,
             key: entry.key,
             converged: outcome.as_ref().is_ok_and(|r| r.result.is_converged()),
-            error: outcome.as_ref().err().cloned(),
+            error: outcome.as_ref().err().map(ToString::to_string),
         });
         out.push(MethodOutcome {
             entry: *entry,
@@ -332,19 +281,22 @@ pub fn compare(
 }
 
 fn run_method(
-    dataset: &Dataset,
-    nominal: &DualArmModel,
+    input: &CompareInput<'_>,
     entry: &MethodEntry,
     common: &CalibrationSettings,
     cancel: &Arc<AtomicBool>,
-) -> Result<MethodRun, String> {
-    let result = Calibrator::new(dataset, nominal)
+) -> Result<MethodRun, MethodError> {
+    let result = Calibrator::new(input.dataset, input.nominal)
         .settings(entry.settings(common))
         .cancel(Arc::clone(cancel))
-        .run()
-        .map_err(|e| e.to_string())?;
-    let figures = ModelFigures::of(dataset, &result.calibrated)
-        .map_err(|e| format!("the calibrated model's figures: {e}"))?;
+        .run()?;
+    let figures = Analysis::compute_excluding(
+        input.dataset,
+        &result.calibrated,
+        &input.body_from_left_base,
+        &result.settings.exclude,
+    )
+    .map_err(MethodError::Figures)?;
     Ok(MethodRun { result, figures })
 }
 
@@ -438,6 +390,20 @@ mod tests {
         // The paper's own method is in both comparisons, and there is something to compare it with.
         assert_eq!(method("minimax").map(|m| m.role), Some(Role::Both));
         assert!(METHODS.iter().filter(|m| m.role.compares_arms()).count() >= 2);
+        // The paper's columns, in its order, then the others; the step-2 methods last.
+        let keys: Vec<&str> = METHODS.iter().map(|m| m.key).collect();
+        assert_eq!(
+            keys,
+            [
+                "minimax",
+                "distance-single",
+                "pose",
+                "position",
+                "lsq",
+                "base-distance",
+                "base-absolute"
+            ]
+        );
     }
 
     #[test]
@@ -454,7 +420,7 @@ mod tests {
             method("minimax").unwrap().settings(&common).method,
             Method::Minimax
         );
-        for m in METHODS {
+        for m in METHODS.iter() {
             let s = m.settings(&common);
             // A step-1 method is compared on the paper's step 2, a step-2 method on its step 1.
             if m.role == Role::Arms {
@@ -464,15 +430,6 @@ mod tests {
                 assert_eq!(s.method, Method::Minimax, "{}", m.key);
             }
         }
-    }
-
-    #[test]
-    fn worst_reflector_keeps_the_sign_of_the_largest_magnitude() {
-        let s = PairSamples {
-            pos_mm: vec![0.1, -0.3, 0.2, 0.5, 0.0, -0.1, 0.0, 0.0, 0.0],
-            ori_rad: vec![0.0; 3],
-        };
-        assert_eq!(worst_reflector_mm(&s), vec![-0.3, 0.5, 0.0]);
     }
 
     #[test]

@@ -12,6 +12,7 @@ pub mod cli;
 pub mod collision;
 pub mod comparison;
 pub mod dataset;
+pub mod exclusion;
 pub mod finite_difference;
 pub mod kinematics;
 pub mod meshes;
@@ -24,8 +25,10 @@ pub mod side;
 pub mod simulate;
 pub mod solver;
 pub mod source;
+pub mod stats;
 pub mod textfile;
 pub mod urdf_export;
+pub mod workspace;
 
 /// Robot descriptions and mesh files the tests write (shared with the integration tests).
 #[cfg(test)]

@@ -4,11 +4,96 @@
 //! paths stay the currency (errors name them; a manifest's CSV names, its `robot` entry and a URDF's
 //! mesh paths resolve against them as on disk), so files in memory are mounted under a made-up folder
 //! such as `/uploads/2/`.
+//!
+//! [`FileKind`] is the one rule for what a file is by its name (a robot description, a xacro source,
+//! a dataset manifest, a `.zip`, a mesh, a CSV): the loaders, the command line and the workbench
+//! (dropped files, uploads, file dialogs) all ask it.
 
 use std::collections::BTreeMap;
 use std::io::Read as _;
 use std::path::{Component, Path, PathBuf};
 use std::sync::{Arc, Mutex, PoisonError};
+
+/// A mesh file's format ([`FileKind::Mesh`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum MeshFormat {
+    /// `.stl` (binary or ASCII).
+    Stl,
+    /// `.dae` (Collada).
+    Collada,
+    /// `.obj` (Wavefront).
+    Obj,
+}
+
+/// What a file is to dualcal, by its name: the one rule every part of the program uses (the robot
+/// loader refuses a xacro source by it, the mesh loader picks its reader by it, the workbench opens a
+/// dropped or uploaded file by it and filters its file dialogs by it).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum FileKind {
+    /// A robot description: `.urdf` (or `.xml`, as URDF files are sometimes named).
+    Urdf,
+    /// A xacro source of a robot description (`.xacro`, `.urdf.xacro`): refused with the command
+    /// that expands it into a URDF.
+    Xacro,
+    /// A dataset manifest: `dataset.toml` ([`crate::dataset::MANIFEST_FILE`]) or another `.toml`.
+    DatasetManifest,
+    /// A `.zip` archive of inputs (unpacked into memory, [`unpack_zip`]).
+    Zip,
+    /// A mesh a robot description refers to.
+    Mesh(MeshFormat),
+    /// A `.csv` file (one arm's measurements).
+    Csv,
+    /// Anything else (a folder, a parameter file, a file without an extension).
+    Other,
+}
+
+/// The extensions of each kind (lower case; compared without regard to case).
+const KIND_EXTENSIONS: &[(FileKind, &[&str])] = &[
+    (FileKind::Urdf, &["urdf", "xml"]),
+    (FileKind::Xacro, &["xacro"]),
+    (FileKind::DatasetManifest, &["toml"]),
+    (FileKind::Zip, &["zip"]),
+    (FileKind::Mesh(MeshFormat::Stl), &["stl"]),
+    (FileKind::Mesh(MeshFormat::Collada), &["dae"]),
+    (FileKind::Mesh(MeshFormat::Obj), &["obj"]),
+    (FileKind::Csv, &["csv"]),
+];
+
+impl FileKind {
+    /// The kind of the file at `path`, by its extension (case-insensitive).
+    pub fn of(path: &Path) -> FileKind {
+        let Some(ext) = path.extension().and_then(|e| e.to_str()) else {
+            return FileKind::Other;
+        };
+        KIND_EXTENSIONS
+            .iter()
+            .find(|(_, exts)| exts.iter().any(|e| e.eq_ignore_ascii_case(ext)))
+            .map_or(FileKind::Other, |(kind, _)| *kind)
+    }
+
+    /// The extensions of this kind, lower case, without the dot (empty for [`FileKind::Other`]).
+    pub fn extensions(self) -> &'static [&'static str] {
+        KIND_EXTENSIONS
+            .iter()
+            .find(|(kind, _)| *kind == self)
+            .map_or(&[], |(_, exts)| exts)
+    }
+
+    /// A robot description or its xacro source: what opens as the robot (a xacro file then says how
+    /// to expand it).
+    pub fn is_robot(self) -> bool {
+        matches!(self, FileKind::Urdf | FileKind::Xacro)
+    }
+
+    /// The extensions of every robot kind ([`FileKind::is_robot`]), for a file dialog's filter.
+    pub fn robot_extensions() -> Vec<&'static str> {
+        KIND_EXTENSIONS
+            .iter()
+            .filter(|(kind, _)| kind.is_robot())
+            .flat_map(|(_, exts)| exts.iter().copied())
+            .collect()
+    }
+}
 
 /// Read-only access to files by path.
 pub trait FileSource: Send + Sync + std::fmt::Debug {
@@ -248,6 +333,40 @@ pub fn unpack_zip(
 mod tests {
     use super::*;
     use std::io::Write as _;
+
+    #[test]
+    fn file_kinds_by_name() {
+        let kind = |p: &str| FileKind::of(Path::new(p));
+        assert_eq!(kind("/a/robot.urdf"), FileKind::Urdf);
+        assert_eq!(kind("ROBOT.URDF"), FileKind::Urdf);
+        assert_eq!(kind("yumi.xml"), FileKind::Urdf);
+        assert_eq!(kind("yumi.urdf.xacro"), FileKind::Xacro);
+        assert_eq!(kind("data/dataset.toml"), FileKind::DatasetManifest);
+        assert_eq!(kind("other.TOML"), FileKind::DatasetManifest);
+        assert_eq!(kind("cell.zip"), FileKind::Zip);
+        assert_eq!(kind("m/link.STL"), FileKind::Mesh(MeshFormat::Stl));
+        assert_eq!(kind("m/link.dae"), FileKind::Mesh(MeshFormat::Collada));
+        assert_eq!(kind("m/link.obj"), FileKind::Mesh(MeshFormat::Obj));
+        assert_eq!(kind("left.csv"), FileKind::Csv);
+        assert_eq!(kind("params.json"), FileKind::Other);
+        assert_eq!(kind("/a/folder"), FileKind::Other);
+        assert_eq!(
+            kind("/a/.urdf"),
+            FileKind::Other,
+            "a hidden file has no extension"
+        );
+        assert!(kind("r.xacro").is_robot() && kind("r.urdf").is_robot());
+        assert!(!kind("dataset.toml").is_robot());
+        assert_eq!(FileKind::robot_extensions(), ["urdf", "xml", "xacro"]);
+        assert_eq!(FileKind::Other.extensions(), [] as [&str; 0]);
+        // Every kind's extensions lead back to it.
+        for (k, exts) in KIND_EXTENSIONS {
+            assert_eq!(k.extensions(), *exts);
+            for e in *exts {
+                assert_eq!(kind(&format!("f.{e}")), *k);
+            }
+        }
+    }
 
     #[test]
     fn memory_files_resolve_relative_parts_and_know_their_folders() {

@@ -1,7 +1,9 @@
 //! The solver's acceptance on the paper-size simulation (§4.1: 120 calibration + 100 verification
 //! configurations per arm, geometric errors only): the calibrated model's verification accuracy is within
 //! 10% of what the true parameters give (the measurement-noise floor), for the default QP; and the paper's
-//! subgradient QP reaches the same optimum (ψ within 1%).
+//! subgradient QP reaches the same optimum: each arm stage's ψ within 1e-6 (measured ≤ 4.2e-8), the
+//! base stage's within 1% (measured 0.5% and 0.003%: step 2 is solved over each run's own step-1 arms,
+//! and step 1's minimax optimum is flat in some directions — docs/solver.md).
 
 mod common;
 
@@ -9,7 +11,7 @@ use dualcal::dataset::Split;
 use dualcal::metrics::{AccuracyReport, AccuracyStats, evaluate};
 use dualcal::robot::RobotDescription;
 use dualcal::simulate::{paper_options, simulate_with_robot};
-use dualcal::solver::{CalibrationResult, CalibrationSettings, QpMethod};
+use dualcal::solver::{CalibrationResult, CalibrationSettings, QpMethod, STAGES};
 
 fn run(
     ds: &dualcal::dataset::Dataset,
@@ -70,8 +72,9 @@ fn paper_size_simulation_reaches_the_noise_floor() {
         for (e, p) in exact.stages.iter().zip(&paper.stages) {
             assert_eq!(e.stage, p.stage);
             let rel = (p.psi_mm2 - e.psi_mm2) / e.psi_mm2;
+            let tolerance = if e.stage == STAGES[2] { 0.01 } else { 1e-6 };
             assert!(
-                rel.abs() <= 0.01,
+                rel.abs() <= tolerance,
                 "seed {seed} {:?}: ψ paper {} vs exact {} ({:+.3}%)",
                 e.stage,
                 p.psi_mm2,

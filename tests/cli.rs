@@ -32,21 +32,14 @@ fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
 
+/// The command line's round trip on the paper's protocol (220 configurations per arm, 120 for
+/// calibration): the calibrated parameters bring the verification accuracy to the noise floor (the
+/// true parameters' figures), within 10% as every calibration test holds it.
 #[test]
 fn simulate_evaluate_calibrate_evaluate() {
     let dir = tempfile::tempdir().unwrap();
     let data = dir.path().join("sim");
-    ok(&[
-        "simulate",
-        "--out",
-        s(&data),
-        "--seed",
-        "3",
-        "--configs",
-        "60",
-        "--cal",
-        "40",
-    ]);
+    ok(&["simulate", "--out", s(&data), "--seed", "3"]);
     assert!(data.join("dataset.toml").is_file() && data.join("truth.json").is_file());
 
     // Refuses to overwrite without --force.
@@ -137,11 +130,6 @@ fn simulate_evaluate_calibrate_evaluate() {
         "ver",
         "--json",
     ]));
-    let after_rms = after["relative_left"]["pos_rms_mm"].as_f64().unwrap();
-    assert!(
-        after_rms < 0.2 * nominal_rms,
-        "calibration did not help: {nominal_rms} → {after_rms}"
-    );
     let truth = json(&ok(&[
         "evaluate",
         s(&data),
@@ -154,7 +142,10 @@ fn simulate_evaluate_calibrate_evaluate() {
     for key in ["relative_left", "relative_right", "collaborative"] {
         let t = truth[key]["pos_rms_mm"].as_f64().unwrap();
         let c = after[key]["pos_rms_mm"].as_f64().unwrap();
-        assert!(c < 1.5 * t + 0.005, "{key}: calibrated {c} vs truth {t}");
+        let n = nominal[key]["pos_rms_mm"].as_f64().unwrap();
+        // The nominal model starts far above the floor, so reaching it is the calibration's doing.
+        assert!(n > 50.0 * t, "{key}: nominal {n} vs truth {t}");
+        assert!(c <= 1.1 * t, "{key}: calibrated {c} vs truth {t}");
     }
 }
 

@@ -104,8 +104,8 @@ fn exclusions_are_left_out_and_too_few_are_refused() {
                 found: 5,
                 needed: 6,
                 params: 31,
-                method: Method::Minimax,
-            }
+                method,
+            } if method == Method::Minimax
         ),
         "{err}"
     );

@@ -472,7 +472,8 @@ fn feed(target: Target, dir: &Path, bytes: &[u8], nominal: &DualArmModel) -> Res
                     ..CalibrationSettings::default()
                 };
                 if let Ok(result) = Calibrator::new(&ds, &nominal).settings(settings).run() {
-                    let _ = quality::screen_result(&ds, &result, &ScreenSettings::default());
+                    let _ =
+                        dualcal::exclusion::screen_result(&ds, &result, &ScreenSettings::default());
                     let file = ParamsFile::from_calibration(&result, &ds);
                     let _ = file.to_model();
                     let _ = result.warnings();
@@ -506,7 +507,7 @@ fn feed(target: Target, dir: &Path, bytes: &[u8], nominal: &DualArmModel) -> Res
         Target::Urdf => {
             let p = dir.join("robot.urdf");
             std::fs::write(&p, &bytes).unwrap();
-            match RobotDescription::load(&p) {
+            match RobotDescription::load(&p, &Default::default()) {
                 Ok(robot) => {
                     for side in Side::BOTH {
                         let _ = robot.joint_limits_rad(side);
@@ -696,7 +697,9 @@ fn pipeline() {
     fuzz(Target::Pipeline);
 }
 
-/// Every crasher kept under `tests/fuzz_regressions/<target>/` is read again without a panic.
+/// Every crasher kept under `tests/fuzz_regressions/<target>/` is read again without a panic. Every
+/// file there is replayed (a folder that is no target's, or a file that is not read, fails), and
+/// there are some to replay.
 #[test]
 fn regressions_do_not_panic() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fuzz_regressions");
@@ -704,14 +707,32 @@ fn regressions_do_not_panic() {
     let valid = c.dir.path().join("valid");
     let work = c.dir.path().join("work");
     std::fs::create_dir(&work).unwrap();
-    let mut replayed = 0;
-    for target in [
+    let targets = [
         Target::DatasetManifest,
         Target::DatasetCsv,
         Target::ParamsJson,
         Target::Urdf,
         Target::Pipeline,
-    ] {
+    ];
+    // What is kept: every entry of the root is a target's folder of regular files.
+    let mut kept = 0;
+    for entry in std::fs::read_dir(&root).expect("tests/fuzz_regressions") {
+        let dir = entry.unwrap().path();
+        let name = dir.file_name().unwrap().to_string_lossy().into_owned();
+        assert!(
+            targets.iter().any(|t| t.name() == name),
+            "{}: not the folder of a fuzz target",
+            dir.display()
+        );
+        for file in std::fs::read_dir(&dir).unwrap() {
+            let file = file.unwrap().path();
+            assert!(file.is_file(), "{}: not a file", file.display());
+            kept += 1;
+        }
+    }
+    assert!(kept > 0, "no regression input under {}", root.display());
+    let mut replayed = 0;
+    for target in targets {
         let Ok(entries) = std::fs::read_dir(root.join(target.name())) else {
             continue;
         };
@@ -729,6 +750,7 @@ fn regressions_do_not_panic() {
         }
     }
     eprintln!("replayed {replayed} regression inputs");
+    assert_eq!(replayed, kept, "regression inputs kept but not replayed");
 }
 
 /// Inputs nested hundreds of thousands deep are refused, not a stack overflow (which no `catch_unwind`

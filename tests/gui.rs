@@ -857,7 +857,7 @@ fn excluding_a_flagged_configuration_resolves_at_once_and_changes_the_figures() 
     );
 }
 
-/// Auto-exclude applies `quality::auto_exclude` and lists what it removed.
+/// Auto-exclude applies `exclusion::auto_exclude` and lists what it removed.
 #[test]
 fn auto_exclude_removes_the_misreads_and_lists_them() {
     let dir = tempfile::tempdir().unwrap();

@@ -152,7 +152,8 @@ fn each_new_method_recovers_known_parameters_from_noise_free_data() {
 #[test]
 fn new_methods_work_on_a_urdf_chain() {
     let dir = tempfile::tempdir().unwrap();
-    let robot = RobotDescription::load(&robots::write_yumi_like(dir.path())).unwrap();
+    let robot =
+        RobotDescription::load(&robots::write_yumi_like(dir.path()), &Default::default()).unwrap();
     let mut opts = simulate::paper_options(5, 60, 40);
     opts.tracker.mpe_um = 1e-6;
     opts.tracker.mpe_um_per_m = 0.0;
@@ -294,7 +295,7 @@ fn identical_configurations_are_rank_deficient() {
             m.tracker_points_mm = first.tracker_points_mm;
         }
     }
-    for method in Method::ALL {
+    for &method in Method::ALL {
         let err = Calibrator::new(&sim.dataset, &sim.nominal)
             .settings(settings(method, BaseMethod::Minimax))
             .run()

@@ -3,6 +3,7 @@
 //! as without them, clean data raise no flag, and whole-file problems are findings.
 
 use dualcal::dataset::Split;
+use dualcal::exclusion;
 use dualcal::kinematics::DualArmModel;
 use dualcal::metrics;
 use dualcal::quality::{self, FlagKind, QualityRecord, ScreenSettings, Severity};
@@ -40,7 +41,7 @@ fn clean_data_raise_no_flag() {
         assert!(before.flags.is_empty(), "{:#?}", before.flags);
         assert!(before.findings.is_empty(), "{:#?}", before.findings);
         let result = Calibrator::new(&s.dataset, &s.nominal).run().unwrap();
-        let after = quality::screen_result(&s.dataset, &result, &ScreenSettings::default());
+        let after = exclusion::screen_result(&s.dataset, &result, &ScreenSettings::default());
         assert!(after.flags.is_empty(), "{:#?}", after.flags);
         assert!(after.findings.is_empty(), "{:#?}", after.findings);
     }
@@ -52,9 +53,10 @@ fn gross_errors_are_flagged_and_auto_excluded() {
     let clean = sim(3, None);
     let injected: BTreeSet<ConfigId> = s.gross_errors.iter().map(|r| r.config).collect();
     assert_eq!(injected.len(), 2 * 9);
-    let auto = quality::auto_exclude(
+    let auto = exclusion::auto_exclude(
         &s.dataset,
         &s.nominal,
+        None,
         &CalibrationSettings::default(),
         &ScreenSettings::default(),
     )
@@ -62,7 +64,10 @@ fn gross_errors_are_flagged_and_auto_excluded() {
     let excluded: BTreeSet<ConfigId> = auto.excluded.iter().map(|f| f.config).collect();
     assert_eq!(excluded, injected, "{:#?}", auto.excluded);
     assert!(auto.stopped.is_none());
-    // Each flag says what it was.
+    // Each flag says what it was. Every misread of this dataset moves its reflector by 0.5–3.7 mm,
+    // which changes the two triangle sides that meet at it by far more than the triangle check's
+    // threshold (~0.08 mm): the model-free check catches each and names the reflector. A row of the
+    // other arm is told as one (by its triangle or its distances), swapped labels as such.
     for r in &s.gross_errors {
         let f = auto.excluded.iter().find(|f| f.config == r.config).unwrap();
         match &r.error {
@@ -70,23 +75,15 @@ fn gross_errors_are_flagged_and_auto_excluded() {
                 reflector,
                 displacement_mm,
             } => {
-                assert!(
-                    matches!(f.kind, FlagKind::Triangle | FlagKind::Residual),
-                    "{f:?}"
-                );
-                if let Some(k) = f.reflector {
-                    assert_eq!(k, *reflector, "{f:?} for {r:?}");
-                }
+                assert_eq!(f.kind, FlagKind::Triangle, "{f:?} for {r:?}");
+                assert_eq!(f.reflector, Some(*reflector), "{f:?} for {r:?}");
                 assert!(f.size_mm <= displacement_mm.norm() * 1.05 + 0.05, "{f:?}");
             }
             GrossError::SwappedLabels { .. } => {
                 assert_eq!(f.kind, FlagKind::LabelsSwapped, "{f:?}")
             }
             GrossError::OtherArm { .. } => {
-                assert!(
-                    matches!(f.kind, FlagKind::OtherArm | FlagKind::Residual),
-                    "{f:?}"
-                )
+                assert_eq!(f.kind, FlagKind::OtherArm, "{f:?} for {r:?}")
             }
         }
     }
@@ -101,7 +98,8 @@ fn gross_errors_are_flagged_and_auto_excluded() {
             .pos_rms_mm
     };
     let (with, without) = (ver(&auto.result.calibrated), ver(&reference.calibrated));
-    assert!(with < 1.1 * without, "{with} vs {without}");
+    // Within 5% of the fit of the outlier-free data, as the README and docs/reliability.md say.
+    assert!(with <= 1.05 * without, "{with} vs {without}");
     // Without exclusion the minimax fit is far worse.
     let raw = Calibrator::new(&s.dataset, &s.nominal).run().unwrap();
     assert!(ver(&raw.calibrated) > 5.0 * without);
@@ -164,7 +162,7 @@ fn explanations_of_single_mistakes() {
     let normal = (p[1] - p[0]).cross(&(p[2] - p[0])).normalize();
     ds.arms.left.measurements[20].tracker_points_mm[2] += normal;
     let result = Calibrator::new(&ds, &s.nominal).run().unwrap();
-    let after = quality::screen_result(&ds, &result, &settings);
+    let after = exclusion::screen_result(&ds, &result, &settings);
     let f = after.worst_per_config();
     assert_eq!(f.len(), 1, "{f:#?}");
     assert_eq!(
@@ -195,7 +193,7 @@ fn whole_file_findings() {
         before.findings
     );
     let result = Calibrator::new(&ds, &s.nominal).run().unwrap();
-    let after = quality::screen_result(&ds, &result, &settings);
+    let after = exclusion::screen_result(&ds, &result, &settings);
     assert!(
         after
             .findings
@@ -212,7 +210,7 @@ fn whole_file_findings() {
         }
     }
     let result = Calibrator::new(&ds, &s.nominal).run().unwrap();
-    let after = quality::screen_result(&ds, &result, &settings);
+    let after = exclusion::screen_result(&ds, &result, &settings);
     assert!(
         after
             .findings

@@ -143,12 +143,23 @@ fn flagged(name: &str, case: &Case, ids: &[&str], words: &[&str]) {
 }
 
 /// Calibrated (exit 0) with a warning naming `words`.
+/// `calibrate` succeeds and warns with all of `words`, each warning once.
 fn warned(name: &str, case: &Case, words: &[&str]) {
     let (out, _) = case.calibrate(&[]);
     let (stdout, stderr) = text(&out);
     assert!(out.status.success(), "{name}: {stdout}\n{stderr}");
     for w in words {
         assert!(stderr.contains(w), "{name}: {w:?} not in\n{stderr}");
+    }
+    let warnings: Vec<&str> = stderr
+        .lines()
+        .filter(|l| l.starts_with("warning:"))
+        .collect();
+    for (k, w) in warnings.iter().enumerate() {
+        assert!(
+            !warnings[..k].contains(w),
+            "{name}: printed twice: {w}\n{stderr}"
+        );
     }
 }
 

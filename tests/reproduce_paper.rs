@@ -144,7 +144,7 @@ fn quick_study_writes_every_table_and_figure() {
             "{t}"
         );
         let base = t.starts_with("table6");
-        for m in METHODS {
+        for m in METHODS.iter() {
             let expected = if base {
                 m.role.compares_base()
             } else {
@@ -153,13 +153,31 @@ fn quick_study_writes_every_table_and_figure() {
             assert_eq!(columns.contains(&m.key), expected, "{t}: {}", m.key);
         }
     }
-    // The paper's numbers stand beside ours.
+    // The paper's numbers stand beside ours, each in its own row and column: a join that mixed up
+    // the arms, the figures or the methods puts another of the paper's numbers there.
     let (_, t5) = read_csv(&dir.join("table5_relative_accuracy.csv"));
-    let paper = t5
-        .iter()
-        .find(|r| r["row"] == "right.pos_rms" && r["column"] == "minimax")
-        .unwrap();
-    assert_eq!(paper["paper_value"], "0.296");
+    for (row, column, paper_value) in [
+        ("right.pos_rms", "minimax", "0.296"),
+        ("left.pos_rms", "minimax", "0.3239"),
+        ("right.pos_max", "minimax", "1.2701"),
+        ("right.ori_rms", "minimax", "0.0048"),
+        ("right.pos_rms", "distance-single", "0.3964"),
+        ("right.pos_rms", "pose", "0.3344"),
+        ("right.pos_rms", "position", "0.3347"),
+        ("right.pos_rms", "nominal", "5.5609"),
+    ] {
+        let r = t5
+            .iter()
+            .find(|r| r["row"] == row && r["column"] == column)
+            .unwrap_or_else(|| panic!("table 5 has no row {row} in column {column}"));
+        assert_eq!(r["paper_value"], paper_value, "{row} {column}");
+    }
+    // Where the paper published nothing (least squares is ours), the column is empty.
+    assert!(
+        t5.iter()
+            .filter(|r| r["column"] == "lsq")
+            .all(|r| r["paper_value"].is_empty())
+    );
 
     let (header, fig4) = read_csv(&dir.join("fig4_configurations.csv"));
     assert_eq!(header[0], "n_configs");
@@ -427,10 +445,13 @@ fn engine_comparison_records_failures_and_cancels() {
     let never = Arc::new(AtomicBool::new(false));
     let mut events = Vec::new();
     let c = comparison::compare(
-        &sim.dataset,
-        &sim.nominal,
-        Some(&sim.truth),
-        METHODS,
+        &comparison::CompareInput {
+            dataset: &sim.dataset,
+            nominal: &sim.nominal,
+            truth: Some(&sim.truth),
+            body_from_left_base: nalgebra::Isometry3::identity(),
+        },
+        &METHODS,
         &CalibrationSettings::default(),
         &never,
         &mut |e| events.push(e),
@@ -460,10 +481,13 @@ fn engine_comparison_records_failures_and_cancels() {
     // Three calibration configurations per arm: the methods cannot run, the nominal figures can.
     let tiny = sim.dataset.with_cal_subset(3);
     let c = comparison::compare(
-        &tiny,
-        &sim.nominal,
-        None,
-        METHODS,
+        &comparison::CompareInput {
+            dataset: &tiny,
+            nominal: &sim.nominal,
+            truth: None,
+            body_from_left_base: nalgebra::Isometry3::identity(),
+        },
+        &METHODS,
         &CalibrationSettings::default(),
         &never,
         &mut |_| {},
@@ -472,19 +496,77 @@ fn engine_comparison_records_failures_and_cancels() {
     assert!(c.nominal.report(Split::Ver).is_some());
     for m in &c.methods {
         let e = m.outcome.as_ref().expect_err("too few configurations");
-        assert!(e.contains("configurations"), "{}: {e}", m.entry.key);
+        assert!(
+            matches!(e, comparison::MethodError::Calibration(_))
+                && e.to_string().contains("configurations"),
+            "{}: {e}",
+            m.entry.key
+        );
     }
 
     let cancelled = Arc::new(AtomicBool::new(true));
     let c = comparison::compare(
-        &sim.dataset,
-        &sim.nominal,
-        None,
-        METHODS,
+        &comparison::CompareInput {
+            dataset: &sim.dataset,
+            nominal: &sim.nominal,
+            truth: None,
+            body_from_left_base: nalgebra::Isometry3::identity(),
+        },
+        &METHODS,
         &CalibrationSettings::default(),
         &cancelled,
         &mut |_| {},
     )
     .unwrap();
     assert!(c.cancelled && c.methods.is_empty());
+}
+
+/// A comparison with configurations left out computes every model's figures without them — the
+/// configurations each method was calibrated on — so a method's figures are those its calibration
+/// shows.
+#[test]
+fn comparison_figures_leave_out_the_excluded_configurations() {
+    let sim = simulate::simulate_with_robot(
+        &simulate::paper_options(12, 50, 30),
+        &dualcal::robot::RobotDescription::builtin_irb14000(),
+    )
+    .unwrap();
+    let exclude: Vec<dualcal::side::ConfigId> = (0..3)
+        .map(|i| dualcal::side::ConfigId::new(dualcal::side::Side::Left, i))
+        .collect();
+    let common = CalibrationSettings {
+        exclude: exclude.clone(),
+        ..CalibrationSettings::default()
+    };
+    let minimax = [*comparison::method("minimax").unwrap()];
+    let c = comparison::compare(
+        &comparison::CompareInput {
+            dataset: &sim.dataset,
+            nominal: &sim.nominal,
+            truth: Some(&sim.truth),
+            body_from_left_base: nalgebra::Isometry3::identity(),
+        },
+        &minimax,
+        &common,
+        &Arc::new(AtomicBool::new(false)),
+        &mut |_| {},
+    )
+    .unwrap();
+    let run = c.methods[0].run().expect("minimax runs");
+    assert_eq!(run.result.settings.exclude, exclude);
+    let kept = sim.dataset.excluding(&exclude);
+    for figures in [&c.nominal, c.truth.as_ref().unwrap(), &run.figures] {
+        assert_eq!(figures.excluded, exclude);
+        for split in [Split::Cal, Split::Ver] {
+            let want = dualcal::metrics::evaluate(&kept, &figures.model, split).unwrap();
+            let got = figures.report(split).unwrap();
+            assert_eq!(got.relative_left.n_configs, want.relative_left.n_configs);
+            assert_eq!(got.collaborative.n_pairs, want.collaborative.n_pairs);
+            let (a, b) = (got.relative_left.pos_rms_mm, want.relative_left.pos_rms_mm);
+            assert!((a - b).abs() <= 1e-12 * b, "{split:?}: {a} vs {b}");
+        }
+    }
+    // The excluded rows are still listed, marked.
+    let rows = &run.figures.configs;
+    assert!(rows.iter().filter(|r| r.excluded).count() == exclude.len());
 }

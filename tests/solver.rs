@@ -211,7 +211,8 @@ fn identifiability_names_joint1_d_theta_and_joint7() {
             rep.condition_before.is_infinite() || rep.condition_before > 1e8,
             "{rep:?}"
         );
-        assert!(rep.condition_after < 1e4, "{rep:?}");
+        // The README's "about 15": 13.9 (left) and 17.4 (right) on this dataset.
+        assert!(rep.condition_after < 25.0, "{rep:?}");
         assert!(rep.fixed.iter().all(|f| !f.reason.is_empty()));
     }
 }
@@ -232,7 +233,10 @@ fn accuracy(ds: &Dataset, model: &DualArmModel, split: Split) -> [(&'static str,
 /// (≈ 0.014 mm RMS of distance errors). Both QP solvers must take the nominal model (mm-level errors)
 /// down to that floor: on the calibration split each arm's worst-reflector RMS — the square root of
 /// the arm stage's minimax objective, of which the truth is one candidate — at or below the truth's;
-/// on the 100 verification configurations of each arm every RMS within 20% of the truth's.
+/// on the 100 verification configurations of each arm every position RMS within 10% of the truth's
+/// (measured: 1.03–1.09×) and every orientation RMS within 15% (measured 1.04–1.14×: with 80
+/// calibration configurations, fewer than the paper's 120, the reflector triangle's orientation is
+/// identified less well than its positions).
 #[test]
 fn noisy_data_reaches_the_noise_floor_with_both_qp_solvers() {
     let syn = synthetic(3, 180, 80, 0.01);
@@ -279,7 +283,7 @@ fn noisy_data_reaches_the_noise_floor_with_both_qp_solvers() {
         let calibrated = accuracy(ds, &res.calibrated, Split::Ver);
         for ((name, c, c_ori), (_, t, t_ori)) in calibrated.into_iter().zip(floor) {
             assert!(
-                c <= 1.2 * t && c_ori <= 1.2 * t_ori,
+                c <= 1.1 * t && c_ori <= 1.15 * t_ori,
                 "{qp} {name}, verification split: {c} mm, {c_ori} rad; noise floor {t} mm, {t_ori} rad"
             );
         }

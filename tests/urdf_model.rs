@@ -91,7 +91,14 @@ fn fk_check_detects_the_public_a3() {
         2,
     );
     assert_ne!(text, BUILTIN_IRB14000_URDF);
-    let robot = RobotDescription::from_str(&text, None).unwrap();
+    let robot = RobotDescription::load(
+        dualcal::robot::RobotSource::Text {
+            text: &text,
+            path: None,
+        },
+        &Default::default(),
+    )
+    .unwrap();
     let arm = ArmModel::nominal_irb14000(common::reflectors_mm());
     let (t, _) = max_fk_error(
         &robot,
@@ -193,7 +200,14 @@ fn calibrated_urdf_reproduces_the_model() {
     let raw = urdf_rs::read_from_string(&text).unwrap();
     assert!(raw.links.iter().any(|l| l.name == "reflector_c_r"));
 
-    let back = RobotDescription::from_str(&text, None).unwrap();
+    let back = RobotDescription::load(
+        dualcal::robot::RobotSource::Text {
+            text: &text,
+            path: None,
+        },
+        &Default::default(),
+    )
+    .unwrap();
     assert!(back.warnings.is_empty(), "{:?}", back.warnings);
     // The left base stays; the right base moves to the calibrated place.
     let (t, r) = pose_error(
@@ -294,7 +308,14 @@ fn dh_model_reads_the_urdf_back() {
     // A calibrated URDF gives back the calibrated model, reflectors included.
     let mut rng = ChaCha8Rng::seed_from_u64(5);
     let model = perturbed_model(&robot, &mut rng);
-    let back = RobotDescription::from_str(&calibrated_urdf(&robot, &model).unwrap(), None).unwrap();
+    let back = RobotDescription::load(
+        dualcal::robot::RobotSource::Text {
+            text: &calibrated_urdf(&robot, &model).unwrap(),
+            path: None,
+        },
+        &Default::default(),
+    )
+    .unwrap();
     assert_models_close(
         &back.dh_model(common::reflectors_mm()).unwrap(),
         &model,
@@ -310,10 +331,16 @@ fn dh_model_reads_the_urdf_back() {
         "<origin xyz=\"0.0405 0.01 0.2515\"",
         1,
     );
-    let err = RobotDescription::from_str(&text, None)
-        .unwrap()
-        .dh_model(common::reflectors_mm())
-        .unwrap_err();
+    let err = RobotDescription::load(
+        dualcal::robot::RobotSource::Text {
+            text: &text,
+            path: None,
+        },
+        &Default::default(),
+    )
+    .unwrap()
+    .dh_model(common::reflectors_mm())
+    .unwrap_err();
     assert!(err.to_string().contains("yumi_joint_3_l"), "{err}");
 }
 
@@ -347,7 +374,7 @@ fn missing_meshes_are_warnings() {
         with_meshes("package://missing/x.stl", "meshes/none.stl"),
     )
     .unwrap();
-    let robot = RobotDescription::load(&path).unwrap();
+    let robot = RobotDescription::load(&path, &Default::default()).unwrap();
     assert!(
         robot
             .warnings
@@ -406,7 +433,14 @@ fn meshes_resolve_through_package_map_and_relative_paths() {
     .unwrap();
     let mut packages = PackageMap::new();
     packages.insert("mypkg".into(), pkg.clone());
-    let robot = RobotDescription::load_with_packages(&path, &packages).unwrap();
+    let robot = RobotDescription::load(
+        &path,
+        &dualcal::robot::LoadOptions {
+            packages: packages.clone(),
+            ..Default::default()
+        },
+    )
+    .unwrap();
     assert!(robot.warnings.is_empty(), "{:?}", robot.warnings);
     let zero = [0.0; N_JOINTS];
     let resolved: Vec<_> = [GeometryKind::Visual, GeometryKind::Collision]
@@ -430,7 +464,7 @@ fn meshes_resolve_through_package_map_and_relative_paths() {
         ),
     )
     .unwrap();
-    let robot = RobotDescription::load(&path).unwrap();
+    let robot = RobotDescription::load(&path, &Default::default()).unwrap();
     assert!(robot.warnings.is_empty(), "{:?}", robot.warnings);
 }
 
@@ -443,7 +477,7 @@ fn malformed_xml_names_the_file() {
         "<robot name=\"x\">\n  <link name=\"a\">\n  <joint name=\"j\"\n</robot>\n",
     )
     .unwrap();
-    let err = RobotDescription::load(&path).unwrap_err();
+    let err = RobotDescription::load(&path, &Default::default()).unwrap_err();
     let msg = err.to_string();
     assert!(matches!(err, RobotError::Parse { .. }), "{msg}");
     assert!(msg.contains("broken.urdf"), "{msg}");
@@ -455,7 +489,7 @@ fn malformed_xml_names_the_file() {
         "<robot name=\"x\">\n  <link name=\"a\"/>\n  <link name=\"b\" =/>\n</robot>\n",
     )
     .unwrap();
-    let err = RobotDescription::load(&path).unwrap_err();
+    let err = RobotDescription::load(&path, &Default::default()).unwrap_err();
     match &err {
         RobotError::Parse { file, line, .. } => {
             assert!(file.ends_with("syntax.urdf"));
@@ -467,7 +501,8 @@ fn malformed_xml_names_the_file() {
     assert!(err.to_string().contains(", line "), "{err}");
 
     // A missing file is an I/O error naming the path.
-    let err = RobotDescription::load(&dir.path().join("nope.urdf")).unwrap_err();
+    let err =
+        RobotDescription::load(&dir.path().join("nope.urdf"), &Default::default()).unwrap_err();
     assert!(
         matches!(err, RobotError::Io { .. }) && err.to_string().contains("nope.urdf"),
         "{err}"
@@ -476,7 +511,7 @@ fn malformed_xml_names_the_file() {
     // Well-formed XML without the YuMi names asks which chains the arms are.
     let path = dir.path().join("other.urdf");
     std::fs::write(&path, "<robot name=\"other\"><link name=\"base\"/></robot>").unwrap();
-    let err = RobotDescription::load(&path).unwrap_err();
+    let err = RobotDescription::load(&path, &Default::default()).unwrap_err();
     let msg = err.to_string();
     assert!(matches!(err, RobotError::NoArms { .. }), "{msg}");
     assert!(
@@ -491,7 +526,7 @@ fn malformed_xml_names_the_file() {
          type=\"revolute\"><parent link=\"a\"/><child link=\"b\"/></joint></robot>",
     )
     .unwrap();
-    let err = RobotDescription::load(&path).unwrap_err();
+    let err = RobotDescription::load(&path, &Default::default()).unwrap_err();
     let msg = err.to_string();
     assert!(matches!(err, RobotError::MissingJoints { .. }), "{msg}");
     assert!(
@@ -510,7 +545,14 @@ fn malformed_xml_names_the_file() {
         "\u{0}\u{1}<<>>",
     ] {
         assert!(
-            RobotDescription::from_str(text, Some(Path::new("g.urdf"))).is_err(),
+            RobotDescription::load(
+                dualcal::robot::RobotSource::Text {
+                    text,
+                    path: Some(Path::new("g.urdf"))
+                },
+                &Default::default()
+            )
+            .is_err(),
             "{text:?}"
         );
     }
@@ -523,7 +565,14 @@ fn non_finite_origin_is_a_joint_error() {
         "<origin xyz=\"NaN 0 0.2515\"",
         1,
     );
-    let err = RobotDescription::from_str(&text, Some(Path::new("nan.urdf"))).unwrap_err();
+    let err = RobotDescription::load(
+        dualcal::robot::RobotSource::Text {
+            text: &text,
+            path: Some(Path::new("nan.urdf")),
+        },
+        &Default::default(),
+    )
+    .unwrap_err();
     match err {
         RobotError::BadJoint {
             joint, file, line, ..

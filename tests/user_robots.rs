@@ -108,7 +108,7 @@ fn run_flow(urdf_path: &Path, arms: [(&str, &str); 2], seed: u64, configs: (usiz
         arms: links(arms),
         ..Default::default()
     };
-    let robot = RobotDescription::load_with(urdf_path, &options).unwrap();
+    let robot = RobotDescription::load(urdf_path, &options).unwrap();
     let sim = simulate_with_robot(&paper_options(seed, configs.0, configs.1), &robot).unwrap();
     let mut ds = sim.dataset.clone();
     ds.robot = Some(urdf_path.to_path_buf());
@@ -118,7 +118,14 @@ fn run_flow(urdf_path: &Path, arms: [(&str, &str); 2], seed: u64, configs: (usiz
     let dir = urdf_path.parent().unwrap().join(format!("data-{seed}"));
     dataset::save(&ds, &dir, Units::MM_DEG).unwrap();
     let dataset = dataset::load(&dir).unwrap();
-    let robot = RobotDescription::for_dataset(&dataset).unwrap();
+    let robot = RobotDescription::load(
+        dualcal::robot::RobotSource::Dataset {
+            dataset: &dataset,
+            robot: None,
+        },
+        &Default::default(),
+    )
+    .unwrap();
     let nominal = robot.nominal_model(dataset.nominal_reflectors_mm);
     let settings = CalibrationSettings {
         max_iterations: 400,
@@ -216,7 +223,7 @@ fn assert_export(flow: &Flow, name: &str) {
         arms: flow.robot.arms().as_ref().map(|_, a| Some(a.links.clone())),
         ..Default::default()
     };
-    let back = RobotDescription::load_with(&out, &options).unwrap();
+    let back = RobotDescription::load(&out, &options).unwrap();
     let mut largest = (0.0f64, 0.0f64);
     for side in Side::BOTH {
         let arm = flow.calibrated.arm(side);

@@ -11,16 +11,25 @@
 #                                calibration, and the README's screenshot (docs/screenshot-web.png);
 #                                prints the figures of docs/performance.md
 #
-# Needs the wasm32-unknown-unknown target (added here with rustup) and wasm-bindgen-cli at exactly the
+# Needs the wasm32-unknown-unknown target (added here with rustup), wasm-bindgen-cli at exactly the
 # version of the `wasm-bindgen` crate in Cargo.lock, installed from crates.io into
-# target/tools/wasm-bindgen-<version>/ the first time (a few minutes). The test needs node/npm and
-# /usr/bin/chromium (tools/test installs Debian's `chromium`; CHROMIUM=path overrides).
+# <target>/tools/wasm-bindgen-<version>/ the first time (a few minutes), and Node.js/npm: the build
+# optimises the module for size with binaryen's wasm-opt at the version pinned in
+# web/tests/package-lock.json (never whatever wasm-opt the machine has: an old one, such as Debian 12's
+# binaryen 108, writes a module whose reference-type table the browser refuses at start-up). The test
+# needs /usr/bin/chromium (tools/test installs Debian's `chromium`; CHROMIUM=path overrides).
+# DUALCAL_WASM_OPT=0 skips wasm-opt (a faster build, a larger module).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-out=target/web
-wasm=target/wasm32-unknown-unknown/release/dualcal.wasm
 say() { printf 'tools/web.sh: %s\n' "$*" >&2; }
+# Cargo's target directory (CARGO_TARGET_DIR or the workspace's target/).
+target_dir=$(cargo metadata --format-version 1 --no-deps |
+  python3 -c 'import json, sys; print(json.load(sys.stdin)["target_directory"])')
+out=$target_dir/web
+wasm=$target_dir/wasm32-unknown-unknown/wasm-release/dualcal.wasm
+test_out=$target_dir/web-test
+export DUALCAL_WEB_SITE=$out DUALCAL_WEB_TEST_OUT=$test_out
 
 wasm_bindgen_version() {
   awk '$0 == "name = \"wasm-bindgen\"" { getline; gsub(/"/, "", $3); print $3; exit }' Cargo.lock
@@ -30,15 +39,28 @@ install_wasm_bindgen() {
   local version root
   version=$(wasm_bindgen_version)
   [ -n "$version" ] || { say "no wasm-bindgen in Cargo.lock"; exit 1; }
-  root=target/tools/wasm-bindgen-$version
+  root=$target_dir/tools/wasm-bindgen-$version
   if ! [ -x "$root/bin/wasm-bindgen" ]; then
     say "installing wasm-bindgen-cli $version into $root"
-    # --locked reproduces the CLI's own lockfile; if the registry lacks one of its pinned versions,
-    # resolve afresh (the same CLI version, its dependencies' newest compatible releases).
-    cargo install wasm-bindgen-cli --version "=$version" --locked --root "$root" --quiet ||
-      cargo install wasm-bindgen-cli --version "=$version" --root "$root" --quiet
+    # Not --locked: the CLI's own lockfile pins releases the registry no longer serves (webpki-roots
+    # 1.0.11 in 0.2.130's). The CLI's version is exact; its dependencies resolve to their newest
+    # compatible releases. Errors stay visible.
+    cargo install wasm-bindgen-cli --version "=$version" --root "$root"
   fi
   bindgen=$root/bin/wasm-bindgen
+}
+
+# web/tests' npm packages (playwright-core, binaryen), at the versions of its package-lock.json.
+npm_ci() {
+  if ! command -v npm >/dev/null 2>&1; then
+    say "npm not found: the browser build and test need Node.js 18+ and npm (tools/test installs them on Debian)"
+    exit 2
+  fi
+  if ! [ -f web/tests/node_modules/.package-lock.json ] ||
+    ! cmp -s web/tests/package-lock.json web/tests/node_modules/.dualcal-lock; then
+    (cd web/tests && npm ci --no-audit --no-fund --silent)
+    cp web/tests/package-lock.json web/tests/node_modules/.dualcal-lock
+  fi
 }
 
 build() {
@@ -47,15 +69,24 @@ build() {
     rustup target add wasm32-unknown-unknown
   fi
   install_wasm_bindgen
-  cargo build --release --target wasm32-unknown-unknown --bin dualcal
+  # Optimised for size (Cargo.toml's wasm-release profile).
+  cargo build --profile wasm-release --target wasm32-unknown-unknown --bin dualcal
   local tmp=$out.tmp
   rm -rf "$tmp"
   mkdir -p "$tmp"
   "$bindgen" --target web --no-typescript --out-dir "$tmp" --out-name dualcal "$wasm"
-  if command -v wasm-opt >/dev/null 2>&1; then
-    wasm-opt -O2 --enable-bulk-memory --enable-nontrapping-float-to-int --enable-sign-ext \
-      --enable-mutable-globals --enable-reference-types \
-      "$tmp/dualcal_bg.wasm" -o "$tmp/dualcal_bg.wasm"
+  local bindgen_bytes opt_secs=0
+  bindgen_bytes=$(stat -c %s "$tmp/dualcal_bg.wasm")
+  if [ "${DUALCAL_WASM_OPT:-1}" != 0 ]; then
+    npm_ci
+    local opt_started=$SECONDS
+    # The features rustc's wasm32 target enables by default (reference types: wasm-bindgen's
+    # externref table), so that wasm-opt keeps them as they are.
+    web/tests/node_modules/.bin/wasm-opt -Oz --enable-bulk-memory --enable-nontrapping-float-to-int \
+      --enable-sign-ext --enable-mutable-globals --enable-reference-types --enable-multivalue \
+      "$tmp/dualcal_bg.wasm" -o "$tmp/dualcal_bg.opt.wasm"
+    mv "$tmp/dualcal_bg.opt.wasm" "$tmp/dualcal_bg.wasm"
+    opt_secs=$((SECONDS - opt_started))
   fi
   cp web/index.html "$tmp/"
   rm -rf "$out"
@@ -63,27 +94,27 @@ build() {
   local raw gz
   raw=$(stat -c %s "$out/dualcal_bg.wasm")
   gz=$(gzip -9 -c "$out/dualcal_bg.wasm" | wc -c)
-  mkdir -p target/web-test
-  printf '{"wasm_bytes": %s, "wasm_gzip_bytes": %s, "build_secs": %s}\n' "$raw" "$gz" \
-    "$((SECONDS - started))" >target/web-test/build.json
-  say "built $out in $((SECONDS - started)) s: dualcal_bg.wasm $((raw / 1024)) KiB ($((gz / 1024)) KiB gzip -9)"
+  mkdir -p "$test_out"
+  printf '{"wasm_bytes": %s, "wasm_gzip_bytes": %s, "wasm_bindgen_bytes": %s, "wasm_opt_secs": %s, "build_secs": %s}\n' \
+    "$raw" "$gz" "$bindgen_bytes" "$opt_secs" "$((SECONDS - started))" >"$test_out/build.json"
+  say "built $out in $((SECONDS - started)) s (wasm-opt $opt_secs s): dualcal_bg.wasm $((raw / 1024)) KiB ($((gz / 1024)) KiB gzip -9; $((bindgen_bytes / 1024)) KiB before wasm-opt)"
 }
 
 browser_test() {
   local started=$SECONDS
-  mkdir -p target/web-test
+  mkdir -p "$test_out"
   # The native command line's parameters of the example, to compare with the browser's. The binary is
   # the one `cargo test` builds (its dependencies' features are the tests'; `cargo run` would build
   # them again without): up to date right after tools/test's `cargo test`.
-  cargo test --quiet --no-run --test cli 2>/dev/null
-  rm -f target/web-test/params-native.json
-  target/debug/dualcal calibrate assets/datasets/example --quiet \
-    --out target/web-test/params-native.json >target/web-test/calibrate-native.txt
+  cargo test --quiet --no-run --test cli
+  rm -f "$test_out/params-native.json"
+  "$target_dir/debug/dualcal" calibrate assets/datasets/example --quiet \
+    --out "$test_out/params-native.json" >"$test_out/calibrate-native.txt"
   # The example as one .zip, for the drop test (written here, not committed).
-  rm -f target/web-test/example.zip
-  (cd assets/datasets && python3 -m zipfile -c ../../target/web-test/example.zip example)
-  (cd web/tests && npm ci --no-audit --no-fund --silent)
-  node web/tests/browser-test.mjs --native-params target/web-test/params-native.json "$@"
+  rm -f "$test_out/example.zip"
+  python3 -m zipfile -c "$test_out/example.zip" assets/datasets/example
+  npm_ci
+  node web/tests/browser-test.mjs --native-params "$test_out/params-native.json" "$@"
   say "browser test done in $((SECONDS - started)) s (after the build)"
 }
 
@@ -108,14 +139,14 @@ case "${1:-}" in
     # runs. The engine alone (no workbench) is enough for that, and builds in a few minutes.
     cargo build --release --quiet --no-default-features --bin dualcal
     for i in 1 2 3 4 5; do
-      rm -f "target/web-test/native-$i.json"
-      target/release/dualcal calibrate assets/datasets/example --out "target/web-test/native-$i.json" |
+      rm -f "$test_out/native-$i.json"
+      "$target_dir/release/dualcal" calibrate assets/datasets/example --out "$test_out/native-$i.json" |
         awk '/^total time/ { print $3 }'
-    done >target/web-test/native-cli-secs.txt
+    done >"$test_out/native-cli-secs.txt"
     if command -v convert >/dev/null 2>&1; then
-      convert target/web-test/workbench.png -colors 256 PNG8:docs/screenshot-web.png
+      convert "$test_out/workbench.png" -colors 256 PNG8:docs/screenshot-web.png
     else
-      cp target/web-test/workbench.png docs/screenshot-web.png
+      cp "$test_out/workbench.png" docs/screenshot-web.png
     fi
     node web/tests/report.mjs
     ;;

@@ -306,7 +306,7 @@ impl WorkbenchApp {
             return;
         }
         let suggested = match (kind, &self.session) {
-            (OpenKind::Dataset, Some(s)) => s.dataset.dir.join("dataset.toml"),
+            (OpenKind::Dataset, Some(s)) => s.dataset.dir.join(crate::dataset::MANIFEST_FILE),
             (OpenKind::Urdf, Some(s)) => s.dataset.dir.join("robot.urdf"),
             (_, None) => std::env::current_dir().unwrap_or_default(),
         };

@@ -12,8 +12,8 @@ use super::task::{Step, TaskContext, TaskEvent, Work};
 use super::work::{Outcome, calibrated_outcome};
 use crate::analysis::{Analysis, Indicator};
 use crate::comparison::{
-    self, BoxStats, Comparison, ComparisonEvent, METHODS, MethodEntry, MethodOutcome, MethodRun,
-    ModelFigures,
+    self, BoxStats, Comparison, ComparisonEvent, METHODS, MethodEntry, MethodError, MethodOutcome,
+    MethodRun,
 };
 use crate::dataset::{Dataset, Split};
 use crate::kinematics::DualArmModel;
@@ -174,6 +174,7 @@ impl Observer for Reporter<'_> {
 pub struct ComparisonWork {
     dataset: Arc<Dataset>,
     nominal: DualArmModel,
+    body_from_left_base: Isometry3<f64>,
     entries: Vec<MethodEntry>,
     common: CalibrationSettings,
     nominal_done: bool,
@@ -186,6 +187,7 @@ impl ComparisonWork {
         Self {
             dataset: session.dataset.clone(),
             nominal: session.nominal.model.clone(),
+            body_from_left_base: session.body_from_left_base(),
             entries,
             common,
             nominal_done: false,
@@ -194,13 +196,13 @@ impl ComparisonWork {
         }
     }
 
-    fn finish_method(&mut self, task: &TaskContext, outcome: Result<MethodRun, String>) {
+    fn finish_method(&mut self, task: &TaskContext, outcome: Result<MethodRun, MethodError>) {
         let entry = self.entries[self.next];
         task.report(TaskEvent::Comparison(ComparisonEvent::MethodFinished {
             index: self.next,
             key: entry.key,
             converged: outcome.as_ref().is_ok_and(|r| r.result.is_converged()),
-            error: outcome.as_ref().err().cloned(),
+            error: outcome.as_ref().err().map(ToString::to_string),
         }));
         task.report(TaskEvent::ComparedMethod(Box::new(MethodOutcome {
             entry,
@@ -214,7 +216,8 @@ impl Work for ComparisonWork {
     fn step(&mut self, task: &TaskContext) -> Step {
         if !self.nominal_done {
             self.nominal_done = true;
-            return match ModelFigures::of(&self.dataset, &self.nominal) {
+            return match Analysis::compute(&self.dataset, &self.nominal, &self.body_from_left_base)
+            {
                 Ok(figures) => {
                     task.report(TaskEvent::CompareNominal(Box::new(figures)));
                     Step::Show
@@ -229,14 +232,14 @@ impl Work for ComparisonWork {
             let outcome = match run.step(&mut [&mut Reporter { task }]) {
                 Ok(Progress::Running) => return Step::More,
                 Ok(Progress::Finished(result)) => {
-                    ModelFigures::of(&self.dataset, &result.calibrated)
+                    Analysis::compute(&self.dataset, &result.calibrated, &self.body_from_left_base)
                         .map(|figures| MethodRun {
                             result: *result,
                             figures,
                         })
-                        .map_err(|e| format!("the calibrated model's figures: {e}"))
+                        .map_err(MethodError::Figures)
                 }
-                Err(e) => Err(e.to_string()),
+                Err(e) => Err(e.into()),
             };
             self.run = None;
             self.finish_method(task, outcome);
@@ -259,7 +262,7 @@ impl Work for ComparisonWork {
             .start();
         match started {
             Ok(run) => self.run = Some(run),
-            Err(e) => self.finish_method(task, Err(e.to_string())),
+            Err(e) => self.finish_method(task, Err(e.into())),
         }
         Step::More
     }
@@ -603,7 +606,7 @@ fn distributions_ui(
     split: Split,
     indicator: Indicator,
 ) {
-    let samples: Vec<(String, Vec<f32>)> = comparison
+    let samples: Vec<(String, &[f32])> = comparison
         .methods
         .iter()
         .filter_map(|m| {

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 /// The bundled example dataset, compiled into the binary (it is ours: `dualcal simulate --seed 1`).
 pub(super) const EXAMPLE_FILES: [(&str, &[u8]); 4] = [
     (
-        "dataset.toml",
+        crate::dataset::MANIFEST_FILE,
         include_bytes!("../../assets/datasets/example/dataset.toml"),
     ),
     (
@@ -34,7 +34,7 @@ pub fn bundled_example_path() -> PathBuf {
         return PathBuf::from(IN_MEMORY_EXAMPLE_DIR);
     }
     let source = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/datasets/example");
-    if source.join("dataset.toml").is_file() {
+    if source.join(crate::dataset::MANIFEST_FILE).is_file() {
         return source;
     }
     let cache_root = std::env::var_os("XDG_CACHE_HOME")

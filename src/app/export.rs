@@ -168,7 +168,7 @@ mod tests {
         )
         .unwrap();
         let screening =
-            crate::quality::screen_result(&session.dataset, &result, &Default::default());
+            crate::exclusion::screen_result(&session.dataset, &result, &Default::default());
         (
             session,
             Calibrated {
@@ -211,7 +211,14 @@ mod tests {
         assert!(file.termination.is_some() && file.method.is_some());
 
         let urdf = String::from_utf8(export_urdf(&session, &cal).unwrap()).unwrap();
-        let robot = crate::robot::RobotDescription::from_str(&urdf, None).unwrap();
+        let robot = crate::robot::RobotDescription::load(
+            crate::robot::RobotSource::Text {
+                text: &urdf,
+                path: None,
+            },
+            &Default::default(),
+        )
+        .unwrap();
         let back = robot
             .dh_model(session.dataset.nominal_reflectors_mm)
             .unwrap();

@@ -116,7 +116,7 @@ pub fn convergence_plot_ui(ui: &mut egui::Ui, history: &[IterationRecord], stage
                 l[0], l[1], l[2]
             )),
             last.step_norm,
-            last.kkt_residual
+            last.optimality_residual
         ));
     }
     let series = |f: &dyn Fn(&IterationRecord) -> f64| -> Vec<[f64; 2]> {
@@ -128,7 +128,7 @@ pub fn convergence_plot_ui(ui: &mut egui::Ui, history: &[IterationRecord], stage
     let psi = series(&|r| r.psi_mm2);
     let f: [Vec<[f64; 2]>; 3] = std::array::from_fn(|k| series(&|r| r.f_mm2[k]));
     let step = series(&|r| r.step_norm);
-    let kkt = series(&|r| r.kkt_residual);
+    let kkt = series(&|r| r.optimality_residual);
     ui.columns(2, |cols| {
         iteration_plot(("objective", stage), "mm² (log10)").show(&mut cols[0], |plot| {
             plot.line(Line::new("ψ = max F", psi).color(PSI_COLOR).width(2.5));

@@ -4,12 +4,13 @@
 
 use super::viewport::mesh_pack::PackedMeshes;
 use crate::analysis::{Analysis, ConfigRow};
-use crate::dataset::{self, Dataset};
-use crate::quality::{self, Flag, Screening};
+use crate::dataset::Dataset;
+use crate::quality::{Flag, Screening};
 use crate::robot::RobotDescription;
-use crate::side::{ConfigId, PerSide, Side};
+use crate::side::{ConfigId, Side};
 use crate::solver::{CalibrationResult, Stage};
 use crate::source::Files;
+use crate::workspace::{Workspace, WorkspaceOptions};
 use anyhow::Context as _;
 use nalgebra::Isometry3;
 use std::path::{Path, PathBuf};
@@ -20,14 +21,14 @@ use std::sync::Arc;
 pub struct Calibrated {
     pub result: CalibrationResult,
     pub analysis: Analysis,
-    /// The configurations screened with the calibrated model ([`quality::screen_result`]).
+    /// The configurations screened with the calibrated model ([`crate::exclusion::screen_result`]).
     pub screening: Screening,
     /// Time the solver's own steps took, s: without the live figures, the final figures and (stepped
     /// in frames) the frames between steps.
     pub solver_secs: f64,
 }
 
-/// What the last Auto-exclude did ([`quality::auto_exclude`]).
+/// What the last Auto-exclude did ([`crate::exclusion::auto_exclude`]).
 #[derive(Clone, Debug)]
 pub struct AutoExcludeSummary {
     /// The configurations it left out, each with the flag that removed it.
@@ -140,7 +141,7 @@ pub struct Session {
     /// The nominal model's figures (without the excluded configurations).
     pub nominal: Analysis,
     /// The configurations screened with the nominal model when the dataset was loaded
-    /// ([`quality::screen`], as `dualcal calibrate` does before fitting).
+    /// ([`crate::quality::screen`], as `dualcal calibrate` does before fitting).
     pub screening: Screening,
     /// Configurations left out of the calibration and the figures (indices into the dataset).
     pub exclude: Vec<ConfigId>,
@@ -165,17 +166,16 @@ impl Session {
         dataset_path: &Path,
         urdf: Option<&Path>,
     ) -> anyhow::Result<Self> {
-        let (dataset, _) = dataset::load_from(&**files, dataset_path)?;
+        let options = WorkspaceOptions {
+            robot: urdf.map(Path::to_path_buf),
+            files: files.clone(),
+            ..Default::default()
+        };
+        let ws = Workspace::load(dataset_path, &options)?;
         let robot_path = urdf
             .map(Path::to_path_buf)
-            .or_else(|| dataset.robot.clone());
-        let robot = RobotDescription::for_dataset_from(
-            &dataset,
-            robot_path.as_deref(),
-            &Default::default(),
-            files,
-        )?;
-        Self::new(dataset, robot, robot_path)
+            .or_else(|| ws.dataset.robot.clone());
+        Self::from_workspace(ws, robot_path)
     }
 
     pub fn new(
@@ -183,20 +183,25 @@ impl Session {
         robot: RobotDescription,
         robot_source: Option<PathBuf>,
     ) -> anyhow::Result<Self> {
-        // The description's own model: Table 3 for the built-in robot, the URDF's chains otherwise
-        // (the same nominal model as `dualcal calibrate` and `evaluate --nominal`).
-        robot.check_dataset(&dataset)?;
-        // Joint values outside the description's limits are refused, as by `dualcal calibrate`.
-        let limits = PerSide::from_fn(|side| robot.joint_limits_rad(side));
-        dataset::check_joint_limits(&dataset, &limits)?;
-        let nominal_model = robot.nominal_model(dataset.nominal_reflectors_mm);
+        let ws = Workspace::new(dataset, robot, &Default::default())?;
+        Self::from_workspace(ws, robot_source)
+    }
+
+    /// The session of a loaded workspace (the engine's load pipeline: checks, nominal model and
+    /// screening as `dualcal calibrate` does them), with the nominal model's figures.
+    pub fn from_workspace(ws: Workspace, robot_source: Option<PathBuf>) -> anyhow::Result<Self> {
+        let Workspace {
+            dataset,
+            robot,
+            nominal: nominal_model,
+            screening,
+        } = ws;
         let nominal = Analysis::compute(
             &dataset,
             &nominal_model,
             &robot.body_from_arm_base(Side::Left),
         )
         .context("nominal accuracy")?;
-        let screening = quality::screen(&dataset, &nominal_model, &Default::default());
         Ok(Self {
             dataset: Arc::new(dataset),
             robot: Arc::new(robot),
@@ -247,9 +252,7 @@ impl Session {
     /// Whole-file findings of the nominal screening that `dualcal calibrate` refuses to go on with.
     pub fn refusals(&self) -> Vec<&str> {
         self.screening
-            .findings
-            .iter()
-            .filter(|f| f.severity == quality::Severity::Error)
+            .errors()
             .map(|f| f.message.as_str())
             .collect()
     }

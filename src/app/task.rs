@@ -11,7 +11,7 @@ use super::events::{AppEvent, EventSender};
 use super::session::{AutoExcludeSummary, LiveFigures, LoadedMeshes};
 use super::work::{Loaded, Outcome};
 use crate::analysis::Analysis;
-use crate::comparison::{ComparisonEvent, MethodOutcome, ModelFigures};
+use crate::comparison::{ComparisonEvent, MethodOutcome};
 use crate::solver::CalibrationEvent;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -40,7 +40,7 @@ pub enum TaskEvent {
     /// A comparison's progress: a method starts or ends.
     Comparison(ComparisonEvent),
     /// A comparison's nominal figures (its first step).
-    CompareNominal(Box<ModelFigures>),
+    CompareNominal(Box<Analysis>),
     /// A compared method ended (ran, failed, or was cancelled).
     ComparedMethod(Box<MethodOutcome>),
     /// A comparison ended: `Ok(cancelled)`, or why it could not run at all.

@@ -11,7 +11,7 @@
 use super::session::{AutoExcludeSummary, Calibrated, LiveFigures, LoadedMeshes, Session};
 use super::task::{Execution, Step, TaskContext, TaskEvent, Work};
 use super::viewport::mesh_pack::{MeshKey, PackedMeshes};
-use crate::analysis::Analysis;
+use crate::analysis::{Analysis, AnalysisError};
 use crate::dataset::Dataset;
 use crate::kinematics::DualArmModel;
 use crate::meshes::{GeometryKind, MeshWarning};
@@ -302,7 +302,7 @@ impl Observer for Reporter<'_> {
 /// The two-step calibration of a session's nominal model. The first step sets the run up (the
 /// identifiability analysis; the nominal figures without the excluded configurations, if those
 /// changed); each further step is one outer iteration, or the evaluation of a live snapshot
-/// ([`TaskEvent::Live`]). The end screens the result ([`quality::screen_result`]).
+/// ([`TaskEvent::Live`]). The end screens the result ([`crate::exclusion::screen_result`]).
 pub struct CalibrationWork {
     dataset: Arc<Dataset>,
     nominal: DualArmModel,
@@ -333,7 +333,7 @@ impl CalibrationWork {
         }
     }
 
-    fn analysis(&self, model: &DualArmModel) -> anyhow::Result<Analysis> {
+    fn analysis(&self, model: &DualArmModel) -> Result<Analysis, AnalysisError> {
         Analysis::compute_excluding(
             &self.dataset,
             model,
@@ -368,14 +368,14 @@ impl CalibrationWork {
 pub(super) fn calibrated_outcome(
     dataset: &Dataset,
     result: CalibrationResult,
-    analysis: anyhow::Result<Analysis>,
+    analysis: Result<Analysis, AnalysisError>,
     screening: Option<quality::Screening>,
     solver_secs: f64,
 ) -> Outcome {
     match analysis {
         Ok(analysis) => {
             let screening = screening.unwrap_or_else(|| {
-                quality::screen_result(dataset, &result, &ScreenSettings::default())
+                crate::exclusion::screen_result(dataset, &result, &ScreenSettings::default())
             });
             Outcome::Calibrated(Box::new(Calibrated {
                 result,
@@ -464,7 +464,7 @@ impl Work for CalibrationWork {
     }
 }
 
-/// The Auto-exclude rule ([`quality::auto_exclude`], `dualcal calibrate --auto-exclude`): screen, leave
+/// The Auto-exclude rule ([`crate::exclusion::auto_exclude`], `dualcal calibrate --auto-exclude`): screen, leave
 /// the suspects out, fit, screen again, … in one step (a few fits; no live view, not cancellable
 /// midway). Reports the nominal figures without the configurations it removed, what it removed
 /// ([`TaskEvent::AutoExcluded`]) and the calibration it ended with.
@@ -490,9 +490,10 @@ impl AutoExcludeWork {
 impl Work for AutoExcludeWork {
     fn step(&mut self, task: &TaskContext) -> Step {
         let started = Instant::now();
-        let auto = match quality::auto_exclude(
+        let auto = match crate::exclusion::auto_exclude(
             &self.dataset,
             &self.nominal,
+            None,
             &self.settings,
             &ScreenSettings::default(),
         ) {

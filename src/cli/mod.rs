@@ -3,7 +3,7 @@
 use crate::dataset::{self, Dataset, Split};
 use crate::metrics;
 use crate::output::Overwrite;
-use crate::params::{ParamsFile, Provenance};
+use crate::params::{ParamsFile, Provenance, StatisticsRecord};
 use crate::quality;
 use crate::robot::{ArmLinks, LoadOptions, RobotDescription};
 use crate::side::{ConfigId, PerSide, Side};
@@ -12,6 +12,7 @@ use crate::solver::{
     BaseMethod, CalibrationEvent, CalibrationResult, CalibrationSettings, Calibrator, Method,
     QpMethod, Reflector,
 };
+use crate::workspace::{Workspace, WorkspaceOptions};
 use anyhow::{Context, Result, bail};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use std::path::{Path, PathBuf};
@@ -137,16 +138,10 @@ pub struct CalibrateArgs {
     pub dataset: PathBuf,
     #[arg(long, value_enum, default_value_t = Split::Cal)]
     pub split: Split,
-    /// Step 1 (each arm): `minimax` (the paper's Algorithm I), `lsq` (least squares of all distance
-    /// errors), `distance-single` (ref. [26]: one reflector's distance errors, Gauss–Newton), `pose`
-    /// (ref. [19]: full-pose errors of a tool frame built from the three reflectors, QR), `position`
-    /// (ref. [18]: absolute positioning errors of the three reflectors, Levenberg–Marquardt). See
-    /// docs/solver.md.
+    /// Step 1 (each arm): what is fitted, and how (the methods' table; see docs/solver.md).
     #[arg(long, value_enum, default_value_t = Method::Minimax)]
     pub method: Method,
-    /// Step 2 (the right-arm base in the left-arm base): `minimax` (the paper's Algorithm II),
-    /// `distance` (ref. [26]: collaborative distance errors, Gauss–Newton), `absolute` (ref. [28]:
-    /// each base in the tracker frame from absolute positioning errors, combined).
+    /// Step 2 (the right-arm base in the left-arm base): what is fitted, and how.
     #[arg(long, value_enum, default_value_t = BaseMethod::Minimax)]
     pub base_method: BaseMethod,
     /// With `--method distance-single`: the reflector whose distances are fitted (default: the one
@@ -288,10 +283,11 @@ fn simulate_cmd(a: &SimulateArgs) -> Result<()> {
     if a.cal > a.configs {
         bail!("--cal ({}) cannot exceed --configs ({})", a.cal, a.configs);
     }
-    if a.out.join("dataset.toml").exists() && !a.force {
+    if a.out.join(dataset::MANIFEST_FILE).exists() && !a.force {
         bail!(
-            "{} already holds a dataset (dataset.toml); pass --force to replace it",
-            a.out.display()
+            "{} already holds a dataset ({}); pass --force to replace it",
+            a.out.display(),
+            dataset::MANIFEST_FILE
         );
     }
     let mut opts = simulate::paper_options(a.seed, a.configs, a.cal);
@@ -317,7 +313,7 @@ fn simulate_cmd(a: &SimulateArgs) -> Result<()> {
         });
     }
     let robot = match &a.urdf {
-        Some(path) => RobotDescription::load_with(
+        Some(path) => RobotDescription::load(
             path,
             &LoadOptions {
                 arms: PerSide::new(a.left.clone(), a.right.clone()),
@@ -374,23 +370,24 @@ fn simulate_cmd(a: &SimulateArgs) -> Result<()> {
     Ok(())
 }
 
-pub(crate) fn load_dataset(path: &Path) -> Result<Dataset> {
-    Ok(dataset::load(path)?)
+/// The dataset at `path` with its robot, checked, its nominal model and screening
+/// ([`Workspace::load`]); the robot description's warnings printed.
+pub(crate) fn load_workspace(path: &Path) -> Result<Workspace> {
+    let ws = Workspace::load(path, &WorkspaceOptions::default())?;
+    for w in &ws.robot.warnings {
+        eprintln!("warning: {w}");
+    }
+    Ok(ws)
 }
 
-/// Print a screening's whole-file findings as warnings; `Err` with the errors among them.
-fn report_findings(screening: &quality::Screening) -> Result<()> {
-    for f in &screening.findings {
+/// Print the nominal screening's whole-file findings as warnings; `Err` with the refusals among them.
+fn report_findings(ws: &Workspace) -> Result<()> {
+    for f in &ws.screening.findings {
         if f.severity == quality::Severity::Warning {
             eprintln!("warning: {f}");
         }
     }
-    let errors: Vec<String> = screening
-        .findings
-        .iter()
-        .filter(|f| f.severity == quality::Severity::Error)
-        .map(|f| f.message.clone())
-        .collect();
+    let errors: Vec<&str> = ws.refusals().iter().map(|f| f.message.as_str()).collect();
     if errors.is_empty() {
         Ok(())
     } else {
@@ -425,22 +422,6 @@ fn print_flags(title: &str, screening: &quality::Screening, excluded: &[ConfigId
     }
 }
 
-/// The dataset's joint values against the robot's limits (docs/reliability.md).
-fn check_limits(ds: &Dataset, robot: &RobotDescription) -> Result<()> {
-    let limits = PerSide::from_fn(|s| robot.joint_limits_rad(s));
-    Ok(dataset::check_joint_limits(ds, &limits)?)
-}
-
-/// The dataset's robot description, checked against its CSVs.
-pub(crate) fn robot_of(ds: &Dataset) -> Result<RobotDescription> {
-    let robot = RobotDescription::for_dataset(ds)
-        .with_context(|| format!("loading the robot of {}", ds.dir.display()))?;
-    for w in &robot.warnings {
-        eprintln!("warning: {w}");
-    }
-    Ok(robot)
-}
-
 /// `robot: FILE; left arm BASE → TIP (N joints: …), right arm …; nominal model …`.
 pub fn describe_robot(robot: &RobotDescription) -> String {
     let arms: Vec<String> = robot
@@ -461,14 +442,17 @@ pub fn describe_robot(robot: &RobotDescription) -> String {
 }
 
 fn evaluate_cmd(a: &EvaluateArgs) -> Result<()> {
-    let ds = load_dataset(&a.dataset)?;
-    let robot = robot_of(&ds)?;
-    check_limits(&ds, &robot)?;
+    let Workspace {
+        dataset: ds,
+        robot,
+        nominal,
+        ..
+    } = load_workspace(&a.dataset)?;
     let model = match &a.params {
         Some(p) => ParamsFile::read(p)?
             .to_model_for(&robot)
             .map_err(|e| anyhow::anyhow!("{}: {e}", p.display()))?,
-        None => robot.nominal_model(ds.nominal_reflectors_mm),
+        None => nominal,
     };
     let report = metrics::evaluate(&ds, &model, a.split)?;
     if a.json {
@@ -526,7 +510,7 @@ pub fn print_event(event: &CalibrationEvent) {
                 r.f_mm2[1],
                 r.f_mm2[2],
                 r.step_norm,
-                r.kkt_residual,
+                r.optimality_residual,
                 r.elapsed_secs
             )
         }
@@ -593,7 +577,8 @@ fn fit_and_screen(
                 "--auto-exclude: screening, fitting and screening again (progress not shown)"
             );
         }
-        let auto = quality::auto_exclude(ds, nominal, &settings, &screen_settings)?;
+        let auto =
+            crate::exclusion::auto_exclude(ds, nominal, Some(before), &settings, &screen_settings)?;
         outln!(
             "--auto-exclude: {} configuration(s) left out after {} fit(s){}",
             auto.excluded.len(),
@@ -622,7 +607,7 @@ fn fit_and_screen(
             .settings(settings)
             .observer(&mut progress)
             .run()?;
-        let after = quality::screen_result(ds, &result, &screen_settings);
+        let after = crate::exclusion::screen_result(ds, &result, &screen_settings);
         (result, after)
     })
 }
@@ -648,9 +633,6 @@ fn warn_suspects_kept(after: &quality::Screening, excluded: &[ConfigId]) {
                 ""
             }
         );
-    }
-    for f in &after.findings {
-        eprintln!("warning: {f}");
     }
     for f in &after.findings {
         eprintln!("warning: {f}");
@@ -687,36 +669,47 @@ fn write_robot_exports(
 }
 
 fn calibrate_cmd(a: &CalibrateArgs) -> Result<()> {
-    let ds = load_dataset(&a.dataset)?;
-    refuse_overwrites(a, &ds)?;
-    let robot = robot_of(&ds)?;
-    check_limits(&ds, &robot)?;
+    let ws = load_workspace(&a.dataset)?;
+    refuse_overwrites(a, &ws.dataset)?;
     if !a.quiet {
-        eprintln!("{}", describe_robot(&robot));
+        eprintln!("{}", describe_robot(&ws.robot));
     }
-    let nominal = robot.nominal_model(ds.nominal_reflectors_mm);
     let mut settings = settings_from(a);
     for spec in &a.exclude {
-        let config = ds
+        let config = ws
+            .dataset
             .config_by_id(spec.trim())
             .map_err(|e| anyhow::anyhow!("--exclude: {e}"))?;
         if !settings.exclude.contains(&config) {
             settings.exclude.push(config);
         }
     }
-    let before = quality::screen(&ds, &nominal, &quality::ScreenSettings::default());
-    report_findings(&before)?;
+    report_findings(&ws)?;
+    let Workspace {
+        dataset: ds,
+        robot,
+        nominal,
+        screening: before,
+    } = ws;
     let (result, after) = fit_and_screen(a, &ds, &nominal, settings, &before)?;
     print_identifiability(&result);
     let excluded = &result.settings.exclude;
-    outln!("\n{}", comparison_table(&ds.excluding(excluded), &result)?);
+    let mut file = ParamsFile::from_calibration(&result, &ds);
+    // The calibrated model's figures are the ones the parameter file records (computed once).
+    let recorded: Option<StatisticsRecord> = file
+        .statistics
+        .clone()
+        .and_then(|v| serde_json::from_value(v).ok());
+    outln!(
+        "\n{}",
+        comparison_table(&ds.excluding(excluded), &result, recorded.as_ref())?
+    );
     print_flags(
         "Suspect configurations with the calibrated model",
         &after,
         excluded,
     );
     warn_suspects_kept(&after, excluded);
-    let mut file = ParamsFile::from_calibration(&result, &ds);
     file.quality = serde_json::to_value(quality::QualityRecord::new(&ds, &after, excluded)).ok();
     file.write(&a.out)?;
     outln!("parameters written to {}", a.out.display());
@@ -756,8 +749,9 @@ fn print_identifiability(result: &CalibrationResult) {
         );
         if let Some(r) = result.reflector_used[side] {
             outln!(
-                "  reflector {r} used (distance-single); the other two reflectors' coordinates are \
-                 nominal: the flange's orientation is not identified"
+                "  reflector {r} used ({}); the other two reflectors' coordinates are nominal: the \
+                 flange's orientation is not identified",
+                settings.method.name()
             );
         }
         for f in &rep.fixed {
@@ -796,8 +790,14 @@ fn print_identifiability(result: &CalibrationResult) {
     outln!("total time {:.3} s", result.elapsed_secs);
 }
 
-/// Nominal vs calibrated, on the calibration and verification splits.
-pub fn comparison_table(ds: &Dataset, result: &CalibrationResult) -> Result<String> {
+/// Nominal vs calibrated, on the calibration and verification splits of `ds`; the calibrated
+/// model's figures taken from `recorded` (the parameter file's record of them on `ds`) where it has
+/// them.
+pub fn comparison_table(
+    ds: &Dataset,
+    result: &CalibrationResult,
+    recorded: Option<&StatisticsRecord>,
+) -> Result<String> {
     let mut out = String::new();
     let has = |split: Split| {
         Side::BOTH.iter().all(|s| {
@@ -814,7 +814,11 @@ pub fn comparison_table(ds: &Dataset, result: &CalibrationResult) -> Result<Stri
             continue;
         }
         let before = metrics::evaluate(ds, &result.nominal, split)?;
-        let after = metrics::evaluate(ds, &result.calibrated, split)?;
+        let record = recorded.and_then(|r| if split == Split::Cal { r.cal } else { r.ver });
+        let after = match record {
+            Some(report) => report,
+            None => metrics::evaluate(ds, &result.calibrated, split)?,
+        };
         out.push_str(&format!(
             "Accuracy on the {name} configurations (nominal → calibrated)\n"
         ));

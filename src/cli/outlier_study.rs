@@ -118,9 +118,10 @@ fn one_seed(
     let injected: BTreeSet<ConfigId> = dirty.gross_errors.iter().map(|r| r.config).collect();
     let pre = quality::screen(&dirty.dataset, nominal, screen_settings);
     let pre_flagged: BTreeSet<ConfigId> = pre.suspects().into_iter().collect();
-    let auto = quality::auto_exclude(
+    let auto = crate::exclusion::auto_exclude(
         &dirty.dataset,
         nominal,
+        Some(&pre),
         &CalibrationSettings::default(),
         screen_settings,
     )?;

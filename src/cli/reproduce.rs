@@ -1,6 +1,6 @@
 //! `dualcal reproduce`: the studies of the paper and of docs/solver.md on simulated data.
 
-use super::{ReproduceArgs, Study, load_dataset};
+use super::{ReproduceArgs, Study, load_workspace};
 use crate::dataset::{Dataset, Split};
 use crate::kinematics::DualArmModel;
 use crate::metrics;
@@ -67,9 +67,8 @@ pub(crate) fn run(a: &ReproduceArgs) -> Result<()> {
         Study::Fig4 => {
             let (ds, nominal) = match &a.dataset {
                 Some(p) => {
-                    let ds = load_dataset(p)?;
-                    let nominal = super::robot_of(&ds)?.nominal_model(ds.nominal_reflectors_mm);
-                    (ds, nominal)
+                    let ws = load_workspace(p)?;
+                    (ws.dataset, ws.nominal)
                 }
                 None => {
                     let ds = simulate::simulate_with_robot(&study_options(a, a.seeds[0]), &robot)?
@@ -221,9 +220,10 @@ fn robustness_study(a: &ReproduceArgs, robot: &RobotDescription) -> Result<()> {
             let mut values = Vec::new();
             for method in [Method::Minimax, Method::LeastSquares] {
                 // Least squares throughout (both steps), as the study compares the objectives.
-                let base_method = match method {
-                    Method::LeastSquares => BaseMethod::Distance,
-                    _ => BaseMethod::Minimax,
+                let base_method = if method == Method::LeastSquares {
+                    BaseMethod::Distance
+                } else {
+                    BaseMethod::Minimax
                 };
                 let settings = CalibrationSettings {
                     method,
@@ -245,7 +245,8 @@ fn robustness_study(a: &ReproduceArgs, robot: &RobotDescription) -> Result<()> {
                         .map_or_else(|| "–".to_owned(), |l| f(l, 2).replace(" / ", "/"))
                 };
                 outln!(
-                    "| {seed} | {name} | {method:?} | {} | {} | {} | {} | {}; {} |",
+                    "| {seed} | {name} | {} | {} | {} | {} | {} | {}; {} |",
+                    method.spec().objective,
                     f(three(&ver, |s| s.pos_max_mm), 4),
                     f(three(&ver, |s| s.pos_rms_mm), 4),
                     f(three(&ver, |s| s.ori_max_rad), 5),

@@ -21,19 +21,18 @@ fn at(path: &Path, line: &Option<usize>) -> String {
 /// (1-based) and, where there is one, the field (CSV column or TOML key).
 #[derive(Debug, thiserror::Error)]
 pub enum DatasetError {
-    /// A file is missing or unreadable.
-    #[error("{path}: cannot read: {source}")]
+    /// A file is missing or unreadable. (The message includes `error`'s, so it is not also the
+    /// error's `source`, which `{:#}` would print a second time.)
+    #[error("{path}: cannot read: {error}")]
     Io {
         path: PathBuf,
-        #[source]
-        source: std::io::Error,
+        error: std::io::Error,
     },
     /// A file could not be written.
-    #[error("{path}: cannot write: {source}")]
+    #[error("{path}: cannot write: {error}")]
     Write {
         path: PathBuf,
-        #[source]
-        source: std::io::Error,
+        error: std::io::Error,
     },
     /// A file is not valid UTF-8 text.
     #[error("{path}:{line}: not valid UTF-8 text (byte {byte} of the file); save it as UTF-8")]
@@ -187,9 +186,9 @@ pub(super) fn read_text(
 ) -> Result<String, DatasetError> {
     use crate::textfile::{ReadError, TextProblem};
     crate::textfile::read_from(files, path).map_err(|e| match e {
-        ReadError::Io(source) => DatasetError::Io {
+        ReadError::Io(error) => DatasetError::Io {
             path: path.to_path_buf(),
-            source,
+            error,
         },
         ReadError::Text(TextProblem::InvalidUtf8 { line, byte }) => DatasetError::Encoding {
             path: path.to_path_buf(),

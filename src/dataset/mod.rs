@@ -8,8 +8,8 @@ mod save;
 mod units;
 mod validate;
 
+pub use crate::kinematics::ArmLinks;
 pub use crate::output::Overwrite;
-pub use crate::robot::ArmLinks;
 use crate::side::{ConfigId, PerSide, Side};
 use crate::source::FileSource;
 pub use error::DatasetError;

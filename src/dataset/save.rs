@@ -100,9 +100,9 @@ fn arm_csv(arm: &ArmData, path: &Path, units: Units) -> Result<Vec<u8>, DatasetE
             w.write_record(&row)
                 .map_err(|e| content_err(e.to_string()))?;
         }
-        w.flush().map_err(|source| DatasetError::Write {
+        w.flush().map_err(|error| DatasetError::Write {
             path: path.to_path_buf(),
-            source,
+            error,
         })?;
     }
     Ok(bytes)
@@ -192,18 +192,18 @@ pub fn save_with(
     // Build everything before touching the disk.
     let manifest = manifest_text(dataset, dir, &manifest_path, units)?;
     let csv = PerSide::try_from_fn(|s| arm_csv(&dataset.arms[s], &csv_paths[s], units))?;
-    std::fs::create_dir_all(dir).map_err(|source| DatasetError::Write {
+    std::fs::create_dir_all(dir).map_err(|error| DatasetError::Write {
         path: dir.to_path_buf(),
-        source,
+        error,
     })?;
     for (path, bytes) in [
         (&csv_paths.left, &csv.left[..]),
         (&csv_paths.right, &csv.right[..]),
         (&manifest_path, manifest.as_bytes()),
     ] {
-        write_atomic(path, bytes).map_err(|source| DatasetError::Write {
+        write_atomic(path, bytes).map_err(|error| DatasetError::Write {
             path: path.clone(),
-            source,
+            error,
         })?;
     }
     Ok(())

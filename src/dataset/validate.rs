@@ -222,7 +222,7 @@ pub(super) fn check_arm(
 ) -> Result<(), DatasetError> {
     let nominal_sides = sides(nominal_mm);
     let nominal_mean = nominal_sides.iter().sum::<f64>() / 3.0;
-    let measured_mean = crate::quality::stats::median(
+    let measured_mean = crate::stats::median(
         &rows
             .iter()
             .map(|m| sides(&m.tracker_points_mm).iter().sum::<f64>() / 3.0)

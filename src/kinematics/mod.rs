@@ -24,7 +24,7 @@ pub(crate) mod tests;
 
 use crate::side::{PerSide, Side};
 pub use chain::{
-    CORRECTION_NAMES, ChainError, ChainJoint, MovableKind, PARAMS_PER_JOINT, SerialChain,
+    ArmLinks, CORRECTION_NAMES, ChainError, ChainJoint, MovableKind, PARAMS_PER_JOINT, SerialChain,
     correction_transform, minimal_parameter_count,
 };
 pub use dh::{

@@ -16,7 +16,7 @@
 //!
 //! Every problem is a [`MeshWarning`] naming the file: the caller draws a placeholder and goes on.
 
-use crate::source::{FileSource, Files};
+use crate::source::{FileKind, FileSource, Files, MeshFormat};
 use nalgebra::Vector3;
 use rayon::prelude::*;
 use std::collections::{BTreeMap, HashMap};
@@ -318,25 +318,24 @@ pub fn load_mesh_from(
         path: path.to_path_buf(),
         message,
     };
-    let extension = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .unwrap_or("")
-        .to_ascii_lowercase();
+    let FileKind::Mesh(format) = FileKind::of(path) else {
+        return Err(MeshWarning::UnsupportedFormat {
+            filename: filename.into(),
+            extension: path
+                .extension()
+                .and_then(|e| e.to_str())
+                .unwrap_or("")
+                .to_ascii_lowercase(),
+        });
+    };
     let bytes = files
         .read_limited(path, MAX_MESH_BYTES)
         .map_err(|e| unreadable(e.to_string()))?;
     let loader = mesh_loader::Loader::default().merge_meshes(true);
-    let scene = match extension.as_str() {
-        "stl" => loader.load_stl_from_slice(&bytes, path),
-        "dae" => loader.load_collada_from_slice(&bytes, path),
-        "obj" => loader.load_obj_from_slice(&bytes, path),
-        _ => {
-            return Err(MeshWarning::UnsupportedFormat {
-                filename: filename.into(),
-                extension,
-            });
-        }
+    let scene = match format {
+        MeshFormat::Stl => loader.load_stl_from_slice(&bytes, path),
+        MeshFormat::Collada => loader.load_collada_from_slice(&bytes, path),
+        MeshFormat::Obj => loader.load_obj_from_slice(&bytes, path),
     }
     .map_err(|e| unreadable(e.to_string()))?;
     let mesh = match scene.meshes.first() {

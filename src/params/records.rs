@@ -1,11 +1,13 @@
 //! The optional records of a parameter file: provenance, the method, conditioning and statistics,
 //! and the file of a calibration.
 
-use super::{BaseTransform, FixedParameter, FixedParameters, ParamsFile, TrackerFrames};
+use super::{
+    BaseTransform, FixedParameter, FixedParameters, ParamsError, ParamsFile, TrackerFrames,
+};
 use crate::dataset::{Dataset, Split};
 use crate::metrics::AccuracyReport;
 use crate::side::{PerSide, Side};
-use crate::solver::{BaseMethod, CalibrationResult, Method, Reflector};
+use crate::solver::{BaseMethod, CalibrationResult, Method, QpMethod, Reflector};
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 use std::path::Path;
@@ -73,33 +75,129 @@ fn civil_from_days(days: i64) -> (i64, u32, u32) {
     (y, m, d)
 }
 
-/// The `method` record of a calibration's parameter file.
+/// The `method` record of a calibration's parameter file. Every method, QP solver and split is written
+/// and read by one explicit spelling (the ones earlier versions wrote), never by a Rust name.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct MethodRecord {
     pub name: String,
-    /// Step 1's method: `Minimax`, `LeastSquares`, `DistanceSingle`, `Pose` or `Position`.
-    pub objective: String,
+    /// Step 1's method by its [`crate::solver::MethodSpec::objective`] spelling: `Minimax`,
+    /// `LeastSquares`, `DistanceSingle`, `Pose` or `Position`.
+    #[serde(with = "objective_spelling")]
+    pub objective: Method,
     /// Step 1's method by its command-line name (`minimax`, `lsq`, `distance-single`, `pose`,
     /// `position`); absent in files of earlier versions (minimax or lsq, as `objective` says).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub arm_method: Option<String>,
+    pub arm_method: Option<Method>,
     /// Step 2's method (`minimax`, `distance`, `absolute`); absent in files of earlier versions
     /// (the paper's minimax).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub base_method: Option<String>,
+    pub base_method: Option<BaseMethod>,
     /// The reflector each arm's `distance-single` fit used (`a`, `b` or `c`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reflector: Option<PerSide<Option<Reflector>>>,
     /// `Exact` or `Paper`.
-    pub qp: String,
+    #[serde(with = "qp_spelling")]
+    pub qp: QpMethod,
     /// `Cal`, `Ver` or `All`: the configurations used for identification.
-    pub split: String,
+    #[serde(with = "split_spelling")]
+    pub split: Split,
     pub max_iterations: usize,
     pub step_tolerance: f64,
     pub progress_tolerance: f64,
     /// Configurations left out of the identification (`--exclude`, `--auto-exclude`, the workbench).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub excluded: Vec<ConfigRef>,
+}
+
+impl MethodRecord {
+    /// Step 1's method: `arm_method`, or in files of earlier versions `objective`.
+    pub fn method(&self) -> Method {
+        self.arm_method.unwrap_or(self.objective)
+    }
+
+    /// Step 2's method: `base_method`, or in files of earlier versions the paper's minimax.
+    pub fn base_method(&self) -> BaseMethod {
+        self.base_method.unwrap_or_default()
+    }
+}
+
+/// The parameter file's spelling of a QP solver (the one earlier versions wrote).
+pub fn qp_spelling(qp: QpMethod) -> &'static str {
+    match qp {
+        QpMethod::Exact => "Exact",
+        QpMethod::Paper => "Paper",
+    }
+}
+
+/// The parameter file's spelling of a split (the one earlier versions wrote).
+pub fn split_spelling(split: Split) -> &'static str {
+    match split {
+        Split::Cal => "Cal",
+        Split::Ver => "Ver",
+        Split::All => "All",
+    }
+}
+
+/// The value among `values` spelled `text`, or an error listing the spellings.
+fn by_spelling<T: Copy, E: serde::de::Error>(
+    values: &[T],
+    spelling: impl Fn(T) -> &'static str,
+    what: &str,
+    text: &str,
+) -> Result<T, E> {
+    values
+        .iter()
+        .copied()
+        .find(|&v| spelling(v) == text)
+        .ok_or_else(|| {
+            let known: Vec<&str> = values.iter().map(|&v| spelling(v)).collect();
+            E::custom(format!(
+                "unknown {what} `{text}` (known: {})",
+                known.join(", ")
+            ))
+        })
+}
+
+mod qp_spelling {
+    use super::*;
+    use clap::ValueEnum;
+
+    pub fn serialize<S: serde::Serializer>(qp: &QpMethod, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(qp_spelling(*qp))
+    }
+
+    pub fn deserialize<'de, D: serde::Deserializer<'de>>(d: D) -> Result<QpMethod, D::Error> {
+        let text = String::deserialize(d)?;
+        by_spelling(QpMethod::value_variants(), qp_spelling, "QP solver", &text)
+    }
+}
+
+mod split_spelling {
+    use super::*;
+    use clap::ValueEnum;
+
+    pub fn serialize<S: serde::Serializer>(split: &Split, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(split_spelling(*split))
+    }
+
+    pub fn deserialize<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Split, D::Error> {
+        let text = String::deserialize(d)?;
+        by_spelling(Split::value_variants(), split_spelling, "split", &text)
+    }
+}
+
+/// Step 1's method by its [`crate::solver::MethodSpec::objective`] spelling.
+mod objective_spelling {
+    use super::*;
+
+    pub fn serialize<S: serde::Serializer>(method: &Method, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(method.spec().objective)
+    }
+
+    pub fn deserialize<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Method, D::Error> {
+        let text = String::deserialize(d)?;
+        by_spelling(Method::ALL, |m| m.spec().objective, "objective", &text)
+    }
 }
 
 /// A configuration by arm and id, as in the dataset's CSV.
@@ -146,25 +244,30 @@ fn record(value: &impl Serialize) -> Option<Value> {
 
 /// What the `method.name` field says of a combination of methods.
 fn method_name(method: Method, base: BaseMethod) -> String {
-    if method == Method::Minimax && base == BaseMethod::Minimax {
+    if method == Method::default() && base == BaseMethod::default() {
         return "two-step minimax calibration (paper Algorithms I and II)".into();
     }
-    let step1 = match method {
-        Method::Minimax => "minimax (paper Algorithm I)",
-        Method::LeastSquares => "least squares of the distance errors",
-        Method::DistanceSingle => "one reflector's distance errors (ref. [26])",
-        Method::Pose => "full-pose errors (ref. [19])",
-        Method::Position => "absolute positioning errors (ref. [18])",
-    };
-    let step2 = match base {
-        BaseMethod::Minimax => "minimax (paper Algorithm II)",
-        BaseMethod::Distance => "collaborative distance errors (ref. [26])",
-        BaseMethod::Absolute => "bases in the tracker frame (ref. [28])",
-    };
-    format!("two-step calibration: step 1 {step1}, step 2 {step2}")
+    format!(
+        "two-step calibration: step 1 {}, step 2 {}",
+        method.spec().fits,
+        base.spec().fits
+    )
 }
 
 impl ParamsFile {
+    /// The `method` record of a calibration's file (`None` for a file without one or with a
+    /// free-form one that is no object); an error names the field that does not read.
+    pub fn method_record(&self) -> Option<Result<MethodRecord, ParamsError>> {
+        let value = self.method.as_ref().filter(|v| v.is_object())?;
+        Some(
+            MethodRecord::deserialize(value).map_err(|e| ParamsError::Invalid {
+                path: None,
+                field: "method".into(),
+                message: e.to_string(),
+            }),
+        )
+    }
+
     /// The file of a calibration: the calibrated model plus method, fixed parameters and why, per-stage
     /// termination, accuracy on the cal and ver splits of `dataset`, conditioning and provenance, and
     /// `converged: false` when the run did not converge. The command line and the workbench both
@@ -174,12 +277,16 @@ impl ParamsFile {
         let mut file = ParamsFile::from_model(&result.calibrated);
         file.method = record(&MethodRecord {
             name: method_name(settings.method, settings.base_method),
-            objective: format!("{:?}", settings.method),
-            arm_method: Some(settings.method.name().to_string()),
-            base_method: Some(settings.base_method.name().to_string()),
-            reflector: (settings.method == Method::DistanceSingle).then_some(result.reflector_used),
-            qp: format!("{:?}", settings.qp),
-            split: format!("{:?}", settings.split),
+            objective: settings.method,
+            arm_method: Some(settings.method),
+            base_method: Some(settings.base_method),
+            reflector: settings
+                .method
+                .spec()
+                .takes_reflector
+                .then_some(result.reflector_used),
+            qp: settings.qp,
+            split: settings.split,
             max_iterations: settings.max_iterations,
             step_tolerance: settings.step_tolerance,
             progress_tolerance: settings.progress_tolerance,
@@ -216,8 +323,8 @@ impl ParamsFile {
             file.tracker_frames = Some(TrackerFrames {
                 tracker_from_left_base: frames.left.as_ref().map(BaseTransform::from_isometry),
                 tracker_from_right_base: frames.right.as_ref().map(BaseTransform::from_isometry),
-                identified_by: Some(if settings.base_method == BaseMethod::Absolute {
-                    "step 2 (absolute)".to_string()
+                identified_by: Some(if settings.base_method.spec().identifies_tracker_frames {
+                    format!("step 2 ({})", settings.base_method.name())
                 } else {
                     format!("step 1 ({})", settings.method.name())
                 }),

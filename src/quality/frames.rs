@@ -2,12 +2,13 @@
 //! in one tracker frame, did the tracker move during one arm's measurements.
 
 use super::residual::ArmResiduals;
-use super::stats::median;
 use super::{Finding, ScreenSettings, Severity, mpe_mm};
 use crate::dataset::Dataset;
 use crate::kinematics::{ArmModel, DualArmModel, rotation_angle_rad};
 use crate::side::Side;
+use crate::stats::{median, median_in_place};
 use nalgebra::{Point3, Vector3};
+use rayon::prelude::*;
 
 /// The nominal model of a robot that matches its description is within a few millimetres of the
 /// measured distances (the paper's IRB 14000: 2.5 and 5.6 mm RMS); when the typical pair error (the
@@ -46,31 +47,15 @@ fn typical(
     pb: &[[Vector3<f64>; 3]],
     same: bool,
 ) -> f64 {
-    let (na, nb) = (ma.len(), mb.len());
-    let total = if same {
-        na * na.saturating_sub(1) / 2
-    } else {
-        na * nb
-    };
-    let stride = total.div_ceil(SAMPLE_PAIRS).max(1);
-    let mut worst = Vec::with_capacity(total / stride + 1);
-    let mut idx = 0usize;
-    for i in 0..na {
-        let start = if same { i + 1 } else { 0 };
-        for j in start..nb {
-            if idx.is_multiple_of(stride) {
-                worst.push(
-                    (0..3)
-                        .map(|k| {
-                            ((ma[i][k] - mb[j][k]).norm() - (pa[i][k] - pb[j][k]).norm()).abs()
-                        })
-                        .fold(0.0, f64::max),
-                );
-            }
-            idx += 1;
-        }
-    }
-    median(&worst)
+    let mut worst = Vec::new();
+    super::sampled_pairs(ma.len(), mb.len(), same, SAMPLE_PAIRS, |i, j| {
+        worst.push(
+            (0..3)
+                .map(|k| ((ma[i][k] - mb[j][k]).norm() - (pa[i][k] - pb[j][k]).norm()).abs())
+                .fold(0.0, f64::max),
+        );
+    });
+    median_in_place(&mut worst)
 }
 
 fn points(
@@ -214,8 +199,21 @@ pub fn tracker_moved(
     model: &DualArmModel,
     side: Side,
     suspects: &[usize],
+    settings: &ScreenSettings,
+) -> Option<Finding> {
+    let fit = ArmResiduals::new(dataset, model.arm(side), side);
+    tracker_moved_with(dataset, &fit, suspects, settings)
+}
+
+/// [`tracker_moved`] with the arm's points and scale under the model at hand
+/// ([`super::residual::fits`]).
+pub(crate) fn tracker_moved_with(
+    dataset: &Dataset,
+    fit: &ArmResiduals,
+    suspects: &[usize],
     _settings: &ScreenSettings,
 ) -> Option<Finding> {
+    let side = fit.side;
     let all = &dataset.arm(side).measurements;
     // Many suspects are no outliers: they may be what a moved tracker did; keep them then.
     let few = suspects.len() * 10 <= all.len();
@@ -227,36 +225,42 @@ pub fn tracker_moved(
         return None;
     }
     let ms: Vec<&crate::dataset::Measurement> = rows.iter().map(|&i| &all[i]).collect();
-    let full = ArmResiduals::new(dataset, model.arm(side), side);
-    let fit = ArmResiduals {
-        side,
-        measured: rows.iter().map(|&i| full.measured[i]).collect(),
-        model: rows.iter().map(|&i| full.model[i]).collect(),
-        sigma_mm: full.sigma_mm,
+    // The kept rows' points, per reflector and axis, for the pair loop.
+    let column = |points: &[[Vector3<f64>; 3]], k: usize, a: usize| -> Vec<f64> {
+        rows.iter().map(|&i| points[i][k][a]).collect()
     };
+    let measured: [[Vec<f64>; 3]; 3] =
+        std::array::from_fn(|k| std::array::from_fn(|a| column(&fit.measured, k, a)));
+    let model: [[Vec<f64>; 3]; 3] =
+        std::array::from_fn(|k| std::array::from_fn(|a| column(&fit.model, k, a)));
     // Squared worst-reflector errors, capped so a few gross outliers do not make a change point.
     let sigma = median(&fit.sigma_mm);
     let cap = (10.0 * sigma).powi(2);
-    let s = |i: usize, j: usize| -> f64 {
-        let worst = (0..3)
-            .map(|k| {
-                ((fit.measured[i][k] - fit.measured[j][k]).norm()
-                    - (fit.model[i][k] - fit.model[j][k]).norm())
-                .abs()
-            })
-            .fold(0.0, f64::max);
-        (worst * worst).min(cap)
-    };
-    // Row sums of the pair matrix towards earlier (`before`) and later (`after`) rows.
-    let mut before = vec![0.0; n];
-    let mut after = vec![0.0; n];
-    for (i, after_i) in after.iter_mut().enumerate() {
-        for (j, before_j) in before.iter_mut().enumerate().skip(i + 1) {
-            let v = s(i, j);
-            *after_i += v;
-            *before_j += v;
+    // Row i's values with every later row j, written to `out[j − i − 1]`.
+    let row = |i: usize, out: &mut Vec<f64>| {
+        out.clear();
+        out.resize(n - i - 1, 0.0);
+        for k in 0..3 {
+            let ([mx, my, mz], [px, py, pz]) = (&measured[k], &model[k]);
+            let (mx, my, mz) = (&mx[i + 1..], &my[i + 1..], &mz[i + 1..]);
+            let (px, py, pz) = (&px[i + 1..], &py[i + 1..], &pz[i + 1..]);
+            let (mi, pi) = (
+                [measured[k][0][i], measured[k][1][i], measured[k][2][i]],
+                [model[k][0][i], model[k][1][i], model[k][2][i]],
+            );
+            let out = &mut out[..mx.len()];
+            for j in 0..out.len() {
+                let (a, b, c) = (mi[0] - mx[j], mi[1] - my[j], mi[2] - mz[j]);
+                let (d, e, f) = (pi[0] - px[j], pi[1] - py[j], pi[2] - pz[j]);
+                let dd = ((a * a + b * b + c * c).sqrt() - (d * d + e * e + f * f).sqrt()).abs();
+                out[j] = out[j].max(dd);
+            }
         }
-    }
+        for v in out.iter_mut() {
+            *v = (*v * *v).min(cap);
+        }
+    };
+    let (before, after) = pair_row_sums(n, &row);
     // Split k: rows 0..k and k..n. Move row k-1 from the right part to the left one at a time.
     let mut cross = 0.0;
     let mut left = 0.0;
@@ -297,4 +301,46 @@ pub fn tracker_moved(
             ms[k].id
         ),
     })
+}
+
+/// Blocks of rows the pair sums of [`pair_row_sums`] are split into (a fixed number, so that the
+/// sums do not depend on the number of threads).
+const PAIR_BLOCKS: usize = 16;
+
+/// Row sums of the symmetric pair matrix `s(i, j)` (`i < j`) towards earlier rows (`before[j] = Σ_{i<j}
+/// s(i, j)`) and later ones (`after[i] = Σ_{j>i} s(i, j)`), each pair evaluated once: `row(i, out)`
+/// writes `s(i, j)` of every `j > i` to `out[j − i − 1]`. Blocks of rows of about equal pair counts
+/// run in parallel, each with its own `before` column, added in block order.
+fn pair_row_sums(n: usize, row: &(dyn Fn(usize, &mut Vec<f64>) + Sync)) -> (Vec<f64>, Vec<f64>) {
+    // Block c starts where the pairs before it are c/PAIR_BLOCKS of all: row i has n − i − 1 pairs.
+    let start = |c: usize| -> usize {
+        let left = 1.0 - c as f64 / PAIR_BLOCKS as f64;
+        ((n as f64 * (1.0 - left.sqrt())).round() as usize).min(n)
+    };
+    let blocks: Vec<(Vec<f64>, Vec<f64>)> = (0..PAIR_BLOCKS)
+        .into_par_iter()
+        .map(|c| {
+            let mut before = vec![0.0; n];
+            let mut values = Vec::with_capacity(n);
+            let after: Vec<f64> = (start(c)..start(c + 1))
+                .map(|i| {
+                    row(i, &mut values);
+                    for (b, v) in before[i + 1..].iter_mut().zip(&values) {
+                        *b += v;
+                    }
+                    values.iter().sum()
+                })
+                .collect();
+            (before, after)
+        })
+        .collect();
+    let mut before = vec![0.0; n];
+    let mut after = Vec::with_capacity(n);
+    for (b, a) in blocks {
+        for (x, y) in before.iter_mut().zip(b) {
+            *x += y;
+        }
+        after.extend(a);
+    }
+    (before, after)
 }

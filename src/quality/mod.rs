@@ -23,8 +23,10 @@
 //!   robot description's after), and a tracker that moved within one arm's measurements (distances
 //!   across one row far worse than on either side).
 //!
-//! [`screen`] runs them before fitting, [`screen_result`] after; [`auto_exclude`] applies the
-//! documented rule (`docs/reliability.md`). Configurations are left out of a calibration through
+//! [`screen`] runs them before fitting, [`screen_model`] after (with the fitted model); one round of
+//! the documented exclusion rule (`docs/reliability.md`) is [`exclusion_round`]. The screening is pure:
+//! it never runs the solver; the loop that fits, screens and fits again is
+//! [`crate::exclusion::auto_exclude`], above both. Configurations are left out of a calibration through
 //! [`crate::solver::CalibrationSettings::exclude`], and out of accuracy figures through
 //! [`crate::dataset::Dataset::excluding`].
 
@@ -35,7 +37,6 @@ pub mod triangle;
 use crate::dataset::{Dataset, Split};
 use crate::kinematics::DualArmModel;
 use crate::side::{ConfigId, Side};
-use crate::solver::{CalibrationError, CalibrationResult, CalibrationSettings, Calibrator};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
@@ -144,10 +145,10 @@ pub struct ScreenSettings {
     pub residual_k: f64,
     /// Neither threshold is taken below this many times the tracker's MPE at the measuring distance.
     pub mpe_floor: f64,
-    /// Largest fraction of an arm's configurations [`auto_exclude`] removes; beyond it the data are
-    /// not "a few outliers" and need a look instead.
+    /// Largest fraction of an arm's configurations [`crate::exclusion::auto_exclude`] removes; beyond
+    /// it the data are not "a few outliers" and need a look instead.
     pub max_excluded_fraction: f64,
-    /// Rounds of fit and screen in [`auto_exclude`].
+    /// Rounds of fit and screen in [`crate::exclusion::auto_exclude`].
     pub max_rounds: usize,
 }
 
@@ -209,11 +210,51 @@ impl Screening {
 
     /// Is there a finding of [`Severity::Error`]?
     pub fn has_errors(&self) -> bool {
-        self.findings.iter().any(|f| f.severity == Severity::Error)
+        self.errors().next().is_some()
+    }
+
+    /// The findings of [`Severity::Error`]: data that cannot give a meaningful calibration as they
+    /// are; the command line refuses to go on with them.
+    pub fn errors(&self) -> impl Iterator<Item = &Finding> {
+        self.findings
+            .iter()
+            .filter(|f| f.severity == Severity::Error)
     }
 
     fn sort(&mut self) {
         self.flags.sort_by_key(|f| (f.config, f.kind as u8));
+    }
+}
+
+/// Visit a regular sample of at most about `most` of the pairs `(i, j)` of `n_a` configurations with
+/// `n_b` others (`same`: one set, pairs `i < j`): every `stride`-th pair in row order, `stride` the
+/// smallest that keeps the sample within `most`. Jumps from sampled pair to sampled pair (no loop
+/// over the pairs left out).
+pub(crate) fn sampled_pairs(
+    n_a: usize,
+    n_b: usize,
+    same: bool,
+    most: usize,
+    mut visit: impl FnMut(usize, usize),
+) {
+    let total = if same {
+        n_a * n_a.saturating_sub(1) / 2
+    } else {
+        n_a * n_b
+    };
+    let stride = total.div_ceil(most.max(1)).max(1);
+    // `idx`: the running index of row i's first pair.
+    let mut idx = 0usize;
+    for i in 0..n_a {
+        let first_j = if same { i + 1 } else { 0 };
+        let row = n_b.saturating_sub(first_j);
+        let end = idx + row;
+        let mut t = idx.next_multiple_of(stride);
+        while t < end {
+            visit(i, first_j + (t - idx));
+            t += stride;
+        }
+        idx = end;
     }
 }
 
@@ -235,34 +276,32 @@ pub(crate) fn mpe_mm(dataset: &Dataset, side: Side) -> f64 {
 /// (the nominal model is millimetres off, so only gross errors show), and the whole-file checks.
 pub fn screen(dataset: &Dataset, nominal: &DualArmModel, settings: &ScreenSettings) -> Screening {
     let mut out = Screening::default();
+    let fits = residual::fits(dataset, nominal);
     for side in Side::BOTH {
         out.flags.extend(triangle::flags(dataset, side, settings));
-        out.flags
-            .extend(residual::flags(dataset, nominal, side, settings));
+        out.flags.extend(residual::flags_with(
+            dataset, nominal, &fits, side, settings,
+        ));
     }
     out.findings
         .extend(frames::nominal_findings(dataset, nominal));
     for side in Side::BOTH {
         let suspects = out.suspect_rows(side);
-        out.findings.extend(frames::tracker_moved(
-            dataset, nominal, side, &suspects, settings,
+        out.findings.extend(frames::tracker_moved_with(
+            dataset,
+            &fits[side],
+            &suspects,
+            settings,
         ));
     }
     out.sort();
     out
 }
 
-/// Screen a dataset with a calibrated model: triangle and residual flags, a tracker that moved within
-/// an arm, and a right-arm base far from the robot description's (the arms not in one tracker frame).
-pub fn screen_result(
-    dataset: &Dataset,
-    result: &CalibrationResult,
-    settings: &ScreenSettings,
-) -> Screening {
-    screen_model(dataset, &result.nominal, &result.calibrated, settings)
-}
-
-/// [`screen_result`] for any model and the nominal one it started from.
+/// Screen a dataset with a fitted `model` (and the `nominal` one it started from): triangle and
+/// residual flags, a tracker that moved within an arm, and a right-arm base far from the robot
+/// description's (the arms not in one tracker frame). The screening of a calibration's result is
+/// [`crate::exclusion::screen_result`].
 pub fn screen_model(
     dataset: &Dataset,
     nominal: &DualArmModel,
@@ -270,13 +309,17 @@ pub fn screen_model(
     settings: &ScreenSettings,
 ) -> Screening {
     let mut out = Screening::default();
+    let fits = residual::fits(dataset, model);
     for side in Side::BOTH {
         out.flags.extend(triangle::flags(dataset, side, settings));
         out.flags
-            .extend(residual::flags(dataset, model, side, settings));
+            .extend(residual::flags_with(dataset, model, &fits, side, settings));
         let suspects = out.suspect_rows(side);
-        out.findings.extend(frames::tracker_moved(
-            dataset, model, side, &suspects, settings,
+        out.findings.extend(frames::tracker_moved_with(
+            dataset,
+            &fits[side],
+            &suspects,
+            settings,
         ));
     }
     out.findings.extend(frames::base_deviation(nominal, model));
@@ -284,112 +327,56 @@ pub fn screen_model(
     out
 }
 
-/// What [`auto_exclude`] did.
-#[derive(Clone, Debug)]
-pub struct AutoExclusion {
-    /// The configurations left out, with the flag that removed each (most severe), in order.
-    pub excluded: Vec<Flag>,
-    /// The calibration without them.
-    pub result: CalibrationResult,
-    /// The screening of that calibration (flags of the excluded configurations included).
-    pub screening: Screening,
-    /// Fits run (1 when nothing was suspect after the first).
-    pub rounds: usize,
-    /// Why the rule stopped before every suspect was excluded (too many suspects in an arm), if it
-    /// did.
+/// One round of the `--auto-exclude` rule ([`crate::exclusion::auto_exclude`]) on a screening.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ExclusionRound {
+    /// The newly suspect configurations to leave out, each with its most severe flag: per arm, most
+    /// severe first.
+    pub new: Vec<Flag>,
+    /// Why the round left an arm's new suspects in (too many of them), if it did.
     pub stopped: Option<String>,
 }
 
-/// The `--auto-exclude` rule: screen with the nominal model and leave the flagged configurations out;
-/// fit; screen with the fitted model and leave the newly flagged out; repeat until nothing new is
-/// flagged or [`ScreenSettings::max_rounds`] fits have run. At most
-/// [`ScreenSettings::max_excluded_fraction`] of an arm's configurations are excluded: when a round
-/// would exclude more, it excludes none of its new suspects and the rule stops and says so (a moved
-/// tracker or a wrong robot is not cured by exclusion). `settings.exclude` (the user's own exclusions) is kept.
-pub fn auto_exclude(
-    dataset: &Dataset,
-    nominal: &DualArmModel,
-    settings: &CalibrationSettings,
-    screen_settings: &ScreenSettings,
-) -> Result<AutoExclusion, CalibrationError> {
-    let mut excluded: Vec<Flag> = Vec::new();
-    let mut settings = settings.clone();
-    let first = screen(dataset, nominal, screen_settings);
-    let mut stopped = take_new(
-        dataset,
-        &first,
-        &mut settings,
-        &mut excluded,
-        screen_settings,
-    );
-    let mut rounds = 0;
-    loop {
-        let result = Calibrator::new(dataset, nominal)
-            .settings(settings.clone())
-            .run()?;
-        rounds += 1;
-        let screening = screen_result(dataset, &result, screen_settings);
-        let before = excluded.len();
-        if stopped.is_none() && rounds < screen_settings.max_rounds {
-            stopped = take_new(
-                dataset,
-                &screening,
-                &mut settings,
-                &mut excluded,
-                screen_settings,
-            );
-        }
-        if excluded.len() == before {
-            excluded.sort_by_key(|f| f.config);
-            return Ok(AutoExclusion {
-                excluded,
-                result,
-                screening,
-                rounds,
-                stopped,
-            });
-        }
-    }
-}
-
-/// Add the newly suspect configurations of `screening` to the exclusions, within the per-arm cap;
-/// returns why it stopped short, if it did.
-fn take_new(
+/// The configurations of `screening` to leave out next: the suspects not already in `exclude`, arm by
+/// arm, unless they would take the configurations excluded automatically (`auto_excluded`, the
+/// flags of earlier rounds) beyond [`ScreenSettings::max_excluded_fraction`] of the arm — then none of
+/// that arm's, and the round says why. Pure: the loop that fits again lives above the solver.
+pub fn exclusion_round(
     dataset: &Dataset,
     screening: &Screening,
-    settings: &mut CalibrationSettings,
-    excluded: &mut Vec<Flag>,
-    screen_settings: &ScreenSettings,
-) -> Option<String> {
-    let mut stopped = None;
+    exclude: &[ConfigId],
+    auto_excluded: &[Flag],
+    settings: &ScreenSettings,
+) -> ExclusionRound {
+    let mut round = ExclusionRound::default();
     for side in Side::BOTH {
         let n = dataset.arm(side).measurements.len();
-        let cap = (screen_settings.max_excluded_fraction * n as f64).floor() as usize;
+        let cap = (settings.max_excluded_fraction * n as f64).floor() as usize;
         let mut new: Vec<&Flag> = screening
             .worst_per_config()
             .into_iter()
-            .filter(|f| f.config.side == side && !settings.exclude.contains(&f.config))
+            .filter(|f| f.config.side == side && !exclude.contains(&f.config))
             .collect();
         new.sort_by(|a, b| b.severity().total_cmp(&a.severity()));
-        let already = excluded.iter().filter(|f| f.config.side == side).count();
+        let already = auto_excluded
+            .iter()
+            .filter(|f| f.config.side == side)
+            .count();
         let room = cap.saturating_sub(already);
         if new.len() > room {
-            stopped = Some(format!(
+            round.stopped = Some(format!(
                 "{side} arm: {} more configurations are suspect, but at most {:.0}% of an arm's {n} \
                  configurations ({cap}) are excluded automatically, so none of them was; so many \
                  suspects suggest a problem with the whole measurement (a moved tracker, a wrong robot \
                  description, wrong units) rather than a few outliers: look at the flags",
                 new.len(),
-                100.0 * screen_settings.max_excluded_fraction
+                100.0 * settings.max_excluded_fraction
             ));
             continue;
         }
-        for f in new {
-            settings.exclude.push(f.config);
-            excluded.push(f.clone());
-        }
+        round.new.extend(new.into_iter().cloned());
     }
-    stopped
+    round
 }
 
 /// The `quality` record of a parameter file: the flags of the final screening and the configurations
@@ -433,30 +420,5 @@ impl QualityRecord {
             findings: screening.findings.clone(),
             excluded,
         }
-    }
-}
-
-/// Robust statistics shared by the checks.
-pub(crate) mod stats {
-    /// Median (NaN for no values).
-    pub fn median(values: &[f64]) -> f64 {
-        let mut v: Vec<f64> = values.iter().copied().filter(|x| !x.is_nan()).collect();
-        if v.is_empty() {
-            return f64::NAN;
-        }
-        v.sort_by(f64::total_cmp);
-        let n = v.len();
-        if n % 2 == 1 {
-            v[n / 2]
-        } else {
-            0.5 * (v[n / 2 - 1] + v[n / 2])
-        }
-    }
-
-    /// Robust standard deviation: 1.4826 × the median absolute deviation from the median.
-    pub fn mad_sigma(values: &[f64]) -> f64 {
-        let m = median(values);
-        let dev: Vec<f64> = values.iter().map(|x| (x - m).abs()).collect();
-        1.4826 * median(&dev)
     }
 }

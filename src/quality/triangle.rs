@@ -1,11 +1,11 @@
 //! The model-free check: every configuration's measured reflector triangle against the rigid triangle
 //! of the arm's other configurations (side lengths).
 
-use super::stats::{mad_sigma, median};
 use super::{Flag, FlagKind, ScreenSettings, mpe_mm};
 use crate::dataset::Dataset;
 use crate::kinematics::REFLECTOR_NAMES;
 use crate::side::{ConfigId, Side};
+use crate::stats::{mad_sigma, median};
 use nalgebra::Vector3;
 
 /// Fewer configurations than this give no reliable reference triangle.

@@ -3,43 +3,10 @@
 
 use super::dh::{ARM_JOINT_NUMBERS, arm_joint_name, flange_link_name};
 use super::{Messages, RobotError};
+pub use crate::kinematics::ArmLinks;
 use crate::kinematics::{ChainError, SerialChain};
 use crate::side::{PerSide, Side};
 use std::sync::Arc;
-
-/// The two links that delimit an arm's chain.
-#[derive(Clone, Debug, PartialEq, Eq, Hash)]
-pub struct ArmLinks {
-    pub base_link: String,
-    pub tip_link: String,
-}
-
-impl ArmLinks {
-    pub fn new(base_link: impl Into<String>, tip_link: impl Into<String>) -> Self {
-        Self {
-            base_link: base_link.into(),
-            tip_link: tip_link.into(),
-        }
-    }
-
-    /// Parse `BASE:TIP` (the command line's `--left`/`--right`).
-    pub fn parse(text: &str) -> Result<Self, String> {
-        match text.split_once(':') {
-            Some((base, tip)) if !base.trim().is_empty() && !tip.trim().is_empty() => {
-                Ok(Self::new(base.trim(), tip.trim()))
-            }
-            _ => Err(format!(
-                "`{text}` is not BASE:TIP (the arm's base link and tip link, e.g. yumi_body:yumi_link_7_l)"
-            )),
-        }
-    }
-}
-
-impl std::fmt::Display for ArmLinks {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{} → {}", self.base_link, self.tip_link)
-    }
-}
 
 /// One arm of a robot description: its links and its chain.
 #[derive(Clone, Debug, PartialEq)]
@@ -186,6 +153,6 @@ fn chain_error(msg: &Messages, side: Side, links: &ArmLinks, source: ChainError)
         line,
         side,
         links: Box::new(links.clone()),
-        source: Box::new(source),
+        problem: Box::new(source),
     }
 }

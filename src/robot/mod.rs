@@ -28,6 +28,8 @@ mod geometry;
 mod tests;
 mod tree;
 
+pub(crate) use crate::kinematics::chain::finite_pose;
+pub use crate::kinematics::chain::isometry_from_urdf_pose;
 use crate::kinematics::{ArmModel, ChainError, DualArmModel, REFLECTOR_NAMES};
 pub use crate::meshes::{GeometryKind, PackageMap};
 use crate::meshes::{MeshResolver, MeshSet};
@@ -37,7 +39,7 @@ pub use dh::{
     ARM_JOINT_NUMBERS, DH_BASE_BELOW_LINK1_MM, arm_joint_name, arm_link_name, dh_row_from_origin,
     flange_link_name, home_q_rad, joint1_from_dh_base, side_suffix,
 };
-use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Vector3};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 pub(crate) use tree::Kinematics;
@@ -53,11 +55,11 @@ fn at_line(line: &Option<usize>) -> String {
 /// / `<built-in>` when it was not read from a file.
 #[derive(Debug, thiserror::Error)]
 pub enum RobotError {
-    #[error("cannot read robot description {}: {source}", .path.display())]
+    /// The file cannot be read (its message includes `error`'s, so it is not also the `source`).
+    #[error("cannot read robot description {}: {error}", .path.display())]
     Io {
         path: PathBuf,
-        #[source]
-        source: std::io::Error,
+        error: std::io::Error,
     },
     /// Not UTF-8 text (UTF-16, binary data, bad bytes) or too large.
     #[error("{}: {problem}", .path.display())]
@@ -88,14 +90,15 @@ pub enum RobotError {
          each arm's base_link and tip_link (`[[arms]]` in dataset.toml, or --left/--right BASE:TIP)"
     )]
     NoArms { file: String },
-    #[error("{file}{}: the {side} arm ({links}): {source}", at_line(.line))]
+    /// The arm's chain cannot be built. The message includes `problem`'s (so it is not also the
+    /// error's `source`, which `{:#}` would print a second time).
+    #[error("{file}{}: the {side} arm ({links}): {problem}", at_line(.line))]
     Chain {
         file: String,
         line: Option<usize>,
         side: Side,
         links: Box<ArmLinks>,
-        #[source]
-        source: Box<ChainError>,
+        problem: Box<ChainError>,
     },
     #[error(
         "{}: {found} joint column(s) (q1 … q{found}) but the {side} arm {chain} has {expected} movable \
@@ -231,24 +234,6 @@ pub struct RobotDescription {
     pub(crate) kin: Kinematics,
 }
 
-/// Convert a URDF pose (m, rpy) to an isometry in mm.
-pub fn isometry_from_urdf_pose(pose: &urdf_rs::Pose) -> Isometry3<f64> {
-    let [x, y, z] = pose.xyz.0;
-    let [r, p, yaw] = pose.rpy.0;
-    Isometry3::from_parts(
-        Translation3::new(x * 1000.0, y * 1000.0, z * 1000.0),
-        UnitQuaternion::from_euler_angles(r, p, yaw),
-    )
-}
-
-pub(crate) fn finite_pose(pose: &urdf_rs::Pose) -> bool {
-    pose.xyz
-        .0
-        .iter()
-        .chain(pose.rpy.0.iter())
-        .all(|v| v.is_finite())
-}
-
 /// 1-based line of the first occurrence of `needle` in `text`.
 fn line_of(text: &str, needle: &str) -> Option<usize> {
     text.find(needle)
@@ -296,9 +281,49 @@ fn line_from_message(message: &str) -> Option<usize> {
     digits.parse().ok()
 }
 
+/// Where a robot description comes from: the one argument of [`RobotDescription::load`] besides its
+/// [`LoadOptions`]. A `&Path` converts into [`RobotSource::File`].
+#[derive(Clone, Copy, Debug)]
+pub enum RobotSource<'a> {
+    /// The built-in IRB 14000 (`assets/irb14000.urdf`): arms `yumi_body → yumi_flange_x`, nominal
+    /// model Table 3. Arms given in the options must be its own.
+    Builtin,
+    /// A URDF file, read through [`LoadOptions::files`]; `package://` meshes are looked up in
+    /// [`LoadOptions::packages`] first, then via the file's folder's ancestors and `ROS_PACKAGE_PATH`.
+    /// A `.xacro` file is refused with the command that expands it.
+    File(&'a Path),
+    /// URDF text; `path` (the file it came from, if any) names it in errors (`<string>` otherwise) and
+    /// anchors relative mesh paths.
+    Text {
+        text: &'a str,
+        path: Option<&'a Path>,
+    },
+    /// The robot of a dataset: the file `robot` if given, else the dataset's `robot` entry, else the
+    /// built-in IRB 14000; each arm's links are those of [`LoadOptions::arms`] where given, else the
+    /// dataset's. Each arm's joint count must match its CSV's joint columns
+    /// ([`RobotDescription::check_dataset`]).
+    Dataset {
+        dataset: &'a crate::dataset::Dataset,
+        robot: Option<&'a Path>,
+    },
+}
+
+impl<'a> From<&'a Path> for RobotSource<'a> {
+    fn from(path: &'a Path) -> Self {
+        RobotSource::File(path)
+    }
+}
+
+impl<'a> From<&'a PathBuf> for RobotSource<'a> {
+    fn from(path: &'a PathBuf) -> Self {
+        RobotSource::File(path)
+    }
+}
+
 impl RobotDescription {
     /// The built-in IRB 14000 description (`assets/irb14000.urdf`): arms `yumi_body → yumi_flange_x`,
-    /// nominal model Table 3.
+    /// nominal model Table 3. ([`RobotDescription::load`] of [`RobotSource::Builtin`] with the default
+    /// options, which cannot fail.)
     pub fn builtin_irb14000() -> Self {
         Self::parse(
             BUILTIN_IRB14000_URDF,
@@ -310,38 +335,75 @@ impl RobotDescription {
         .expect("the built-in IRB 14000 URDF is valid (checked by tests)")
     }
 
-    /// Load a URDF file with the default arms; `package://` meshes are looked up via the file's
-    /// folder's ancestors and `ROS_PACKAGE_PATH`.
-    pub fn load(path: &Path) -> Result<Self, RobotError> {
-        Self::load_with(path, &LoadOptions::default())
+    /// Load a robot description: the one entry for every source ([`RobotSource`]: the built-in robot,
+    /// a file, text, the robot of a dataset) with the arms, the package map and the file source of
+    /// `options`.
+    ///
+    /// ```no_run
+    /// use dualcal::robot::{LoadOptions, RobotDescription, RobotSource};
+    /// let robot = RobotDescription::load(std::path::Path::new("yumi.urdf"), &LoadOptions::default())?;
+    /// let text = std::fs::read_to_string("yumi.urdf")?;
+    /// let same = RobotDescription::load(RobotSource::Text { text: &text, path: None }, &LoadOptions::default())?;
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn load<'a>(
+        source: impl Into<RobotSource<'a>>,
+        options: &LoadOptions,
+    ) -> Result<Self, RobotError> {
+        match source.into() {
+            RobotSource::Builtin => Self::builtin_with(options, None),
+            RobotSource::File(path) => Self::load_file(path, options),
+            RobotSource::Text { text, path } => {
+                let file = path.map_or_else(|| "<string>".to_string(), |p| p.display().to_string());
+                Self::parse(text, path, &file, options, ModelForm::Chain)
+            }
+            RobotSource::Dataset { dataset, robot } => Self::for_dataset(dataset, robot, options),
+        }
     }
 
-    /// Load a URDF file with an explicit package map for `package://` mesh paths (tried first).
-    pub fn load_with_packages(path: &Path, packages: &PackageMap) -> Result<Self, RobotError> {
-        Self::load_with(
-            path,
-            &LoadOptions {
-                packages: packages.clone(),
-                ..Default::default()
-            },
-        )
+    /// The built-in robot, refusing arms other than its own (`dataset`: the manifest that gave them).
+    fn builtin_with(
+        options: &LoadOptions,
+        dataset: Option<&crate::dataset::Dataset>,
+    ) -> Result<Self, RobotError> {
+        let builtin = Self::builtin_irb14000();
+        for side in Side::BOTH {
+            if let Some(links) = &options.arms[side]
+                && links != &builtin.arms[side].links
+            {
+                let (file, given) = match dataset {
+                    Some(ds) => (
+                        ds.dir
+                            .join(crate::dataset::MANIFEST_FILE)
+                            .display()
+                            .to_string(),
+                        "is given without a `robot`",
+                    ),
+                    None => ("<built-in>".to_string(), "is given for the built-in robot"),
+                };
+                return Err(RobotError::Structure {
+                    file,
+                    message: format!(
+                        "the {side} arm's chain {links} {given}: the built-in IRB 14000's arms are {} \
+                         (its Table 3 model); name the robot description these links belong to",
+                        builtin.arms[side].links
+                    ),
+                });
+            }
+        }
+        Ok(builtin)
     }
 
-    /// Load a URDF file with the given arms and package map. A `.xacro` file is refused.
-    pub fn load_with(path: &Path, options: &LoadOptions) -> Result<Self, RobotError> {
-        let is_xacro = path
-            .extension()
-            .and_then(|e| e.to_str())
-            .is_some_and(|e| e.eq_ignore_ascii_case("xacro"));
-        if is_xacro {
+    fn load_file(path: &Path, options: &LoadOptions) -> Result<Self, RobotError> {
+        if crate::source::FileKind::of(path) == crate::source::FileKind::Xacro {
             return Err(RobotError::Xacro {
                 path: path.to_path_buf(),
             });
         }
         let text = crate::textfile::read_from(&*options.files, path).map_err(|e| match e {
-            crate::textfile::ReadError::Io(source) => RobotError::Io {
+            crate::textfile::ReadError::Io(error) => RobotError::Io {
                 path: path.to_path_buf(),
-                source,
+                error,
             },
             crate::textfile::ReadError::Text(problem) => RobotError::Text {
                 path: path.to_path_buf(),
@@ -352,36 +414,26 @@ impl RobotDescription {
         Self::parse(&text, Some(path), &file, options, ModelForm::Chain)
     }
 
-    /// Parse URDF text with the default arms; `source` (the file it came from, if any) names it in
-    /// errors and anchors relative mesh paths.
-    pub fn from_str(text: &str, source: Option<&Path>) -> Result<Self, RobotError> {
-        Self::from_str_with(text, source, &LoadOptions::default())
-    }
-
-    /// [`RobotDescription::from_str`] with an explicit package map.
-    pub fn from_str_with_packages(
-        text: &str,
-        source: Option<&Path>,
-        packages: &PackageMap,
-    ) -> Result<Self, RobotError> {
-        Self::from_str_with(
-            text,
-            source,
-            &LoadOptions {
-                packages: packages.clone(),
-                ..Default::default()
-            },
-        )
-    }
-
-    /// [`RobotDescription::from_str`] with the given arms and package map.
-    pub fn from_str_with(
-        text: &str,
-        source: Option<&Path>,
+    fn for_dataset(
+        dataset: &crate::dataset::Dataset,
+        robot: Option<&Path>,
         options: &LoadOptions,
     ) -> Result<Self, RobotError> {
-        let file = source.map_or_else(|| "<string>".to_string(), |p| p.display().to_string());
-        Self::parse(text, source, &file, options, ModelForm::Chain)
+        let options = LoadOptions {
+            arms: PerSide::from_fn(|side| {
+                options.arms[side]
+                    .clone()
+                    .or_else(|| dataset.arm(side).links.clone())
+            }),
+            ..options.clone()
+        };
+        let robot = match robot.or(dataset.robot.as_deref()) {
+            Some(path) => Self::load_file(path, &options)?,
+            // Links given without a robot file must be the built-in robot's own arms.
+            None => Self::builtin_with(&options, Some(dataset))?,
+        };
+        robot.check_dataset(dataset)?;
+        Ok(robot)
     }
 
     fn parse(
@@ -456,63 +508,6 @@ impl RobotDescription {
             resolver,
             kin,
         })
-    }
-
-    /// The robot description of a dataset: its `robot` entry with its arms' links, or the built-in
-    /// IRB 14000. Each arm's joint count must match its CSV's joint columns.
-    pub fn for_dataset(dataset: &crate::dataset::Dataset) -> Result<Self, RobotError> {
-        Self::for_dataset_with(dataset, dataset.robot.as_deref(), &PackageMap::new())
-    }
-
-    /// [`RobotDescription::for_dataset`] with another robot file (`None`: the dataset's, or the
-    /// built-in one) and a package map.
-    pub fn for_dataset_with(
-        dataset: &crate::dataset::Dataset,
-        robot: Option<&Path>,
-        packages: &PackageMap,
-    ) -> Result<Self, RobotError> {
-        Self::for_dataset_from(dataset, robot, packages, &Default::default())
-    }
-
-    /// [`RobotDescription::for_dataset_with`] reading the robot file and its meshes through `files`.
-    pub fn for_dataset_from(
-        dataset: &crate::dataset::Dataset,
-        robot: Option<&Path>,
-        packages: &PackageMap,
-        files: &crate::source::Files,
-    ) -> Result<Self, RobotError> {
-        let robot = match robot.or(dataset.robot.as_deref()) {
-            Some(path) => Self::load_with(
-                path,
-                &LoadOptions {
-                    arms: dataset.arms.as_ref().map(|_, a| a.links.clone()),
-                    packages: packages.clone(),
-                    files: files.clone(),
-                },
-            )?,
-            None => {
-                let builtin = Self::builtin_irb14000();
-                // Links given without a robot file must be the built-in robot's own arms.
-                for (side, arm) in dataset.arms.iter() {
-                    if let Some(links) = &arm.links
-                        && links != &builtin.arms[side].links
-                    {
-                        return Err(RobotError::Structure {
-                            file: dataset.dir.join("dataset.toml").display().to_string(),
-                            message: format!(
-                                "the {side} arm's chain {links} is given without a `robot`: the built-in \
-                                 IRB 14000's arms are {} (its Table 3 model); name the robot description \
-                                 these links belong to",
-                                builtin.arms[side].links
-                            ),
-                        });
-                    }
-                }
-                builtin
-            }
-        };
-        robot.check_dataset(dataset)?;
-        Ok(robot)
     }
 
     /// Refuse a dataset whose joint columns do not match the arms' joint counts.

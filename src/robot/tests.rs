@@ -43,7 +43,14 @@ fn missing_arm_joints_are_named() {
     let text = r#"<robot name="x"><link name="a"/><link name="b"/>
         <joint name="yumi_joint_1_l" type="revolute"><parent link="a"/><child link="b"/>
         <limit lower="-1" upper="1" effort="1" velocity="1"/></joint></robot>"#;
-    let err = RobotDescription::from_str(text, Some(Path::new("x.urdf"))).unwrap_err();
+    let err = RobotDescription::load(
+        RobotSource::Text {
+            text,
+            path: Some(Path::new("x.urdf")),
+        },
+        &Default::default(),
+    )
+    .unwrap_err();
     let msg = err.to_string();
     assert!(
         matches!(err, RobotError::MissingJoints { ref missing, .. } if missing.len() == 13),
@@ -65,7 +72,14 @@ fn broken_chain_is_reported_with_line() {
         1,
     );
     assert_ne!(text, BUILTIN_IRB14000_URDF);
-    let err = RobotDescription::from_str(&text, None).unwrap_err();
+    let err = RobotDescription::load(
+        RobotSource::Text {
+            text: &text,
+            path: None,
+        },
+        &Default::default(),
+    )
+    .unwrap_err();
     match &err {
         RobotError::BadJoint { joint, line, .. } => {
             assert_eq!(joint, "yumi_joint_4_r");
@@ -79,13 +93,61 @@ fn broken_chain_is_reported_with_line() {
 fn dataset_links_without_a_robot_must_be_the_builtin_arms() {
     let example = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/datasets/example");
     let mut ds = crate::dataset::load(&example).unwrap();
-    assert!(RobotDescription::for_dataset(&ds).unwrap().is_builtin());
+    fn load(dataset: &crate::dataset::Dataset) -> Result<RobotDescription, RobotError> {
+        RobotDescription::load(
+            RobotSource::Dataset {
+                dataset,
+                robot: None,
+            },
+            &LoadOptions::default(),
+        )
+    }
+    assert!(load(&ds).unwrap().is_builtin());
     ds.arms.left.links = Some(ArmLinks::new("yumi_body", "yumi_flange_l"));
-    assert!(RobotDescription::for_dataset(&ds).is_ok());
+    assert!(load(&ds).is_ok());
     ds.arms.left.links = Some(ArmLinks::new("yumi_body", "yumi_link_7_l"));
-    let err = RobotDescription::for_dataset(&ds).unwrap_err().to_string();
+    let err = load(&ds).unwrap_err().to_string();
     assert!(
         err.contains("yumi_link_7_l") && err.contains("robot"),
         "{err}"
+    );
+}
+
+/// A robot whose arms share a joint is refused in one sentence, however the error is printed (the
+/// command line and the workbench print the error with its causes, `{:#}`).
+#[test]
+fn shared_joint_refusal_says_it_once() {
+    let torso = crate::test_robots::yumi_like_urdf().replace(
+        "<joint name=\"yumi_base_link_to_body\" type=\"fixed\">",
+        "<joint name=\"yumi_base_link_to_body\" type=\"continuous\">\n    <axis xyz=\"0 0 1\"/>",
+    );
+    let options = LoadOptions {
+        arms: PerSide::new(
+            Some(ArmLinks::new("yumi_base_link", "yumi_link_7_l")),
+            Some(ArmLinks::new("yumi_base_link", "yumi_link_7_r")),
+        ),
+        ..Default::default()
+    };
+    let source = RobotSource::Text {
+        text: &torso,
+        path: Some(Path::new("torso.urdf")),
+    };
+    let err = RobotDescription::load(source, &options).unwrap_err();
+    let printed = format!("{:#}", anyhow::Error::new(err));
+    assert_eq!(
+        printed.matches("choose base links below it").count(),
+        1,
+        "{printed}"
+    );
+    assert_eq!(
+        printed.matches("is in both arm chains").count(),
+        1,
+        "{printed}"
+    );
+    assert!(
+        printed.starts_with("torso.urdf")
+            && printed.contains("yumi_base_link_to_body")
+            && printed.contains("the right arm"),
+        "{printed}"
     );
 }

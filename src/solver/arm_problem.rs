@@ -5,12 +5,16 @@
 //! ∇F_k = −2 Σ_{i<j} Δd u_ijᵀ (J_i,k − J_j,k) with u_ij the unit model direction (eq. 34, exact distances).
 //! The pair sum is regrouped per configuration, ∇F_k = −2 Σ_i J_i,kᵀ w_i,k with
 //! w_i,k = Σ_{j≠i} Δd_ij,k u_ij,k, so the Jacobians are computed once per configuration and iterate and
-//! no pair Jacobian is ever formed.
+//! no pair Jacobian is ever formed. The pair pass itself (distances, Σ Δd², the weights) is [`pairs`]:
+//! the measured distances are recomputed from the measured points, nothing is stored per pair.
 
 use super::problem::{Eval, LeastSquaresSystem, MinimaxProblem, StageParams};
 use crate::kinematics::{ArmJacobians, ArmModel, ReflectorFk};
 use nalgebra::{DMatrix, DVector, Vector3};
+use pairs::{Plan, Points};
 use rayon::prelude::*;
+
+pub(super) mod pairs;
 
 /// Side pairs of the reflector triangle, in the order of constraints (14): ab, bc, ca.
 pub const SIDES: [(usize, usize); 3] = [(0, 1), (1, 2), (2, 0)];
@@ -18,9 +22,11 @@ pub const SIDES: [(usize, usize); 3] = [(0, 1), (1, 2), (2, 0)];
 /// Step-1 problem of one arm.
 pub struct ArmProblem {
     qs: Vec<Vec<f64>>,
-    /// Measured distances per reflector, pairs i<j in row-major order.
-    measured_dist_mm: [Vec<f64>; 3],
+    /// Measured (tracker-frame) points per reflector, mm; the distances are recomputed per pass.
+    measured: [Points; 3],
     n_pairs: usize,
+    /// How the pair passes are cut ([`pairs::Plan::for_pairs`]).
+    plan: Plan,
     /// The start model (its form and chain; its parameters are `x0`).
     start: ArmModel,
     x0: DVector<f64>,
@@ -52,22 +58,15 @@ impl ArmProblem {
         assert_eq!(free.len(), scale.len());
         let n = qs.len();
         let n_pairs = n * n.saturating_sub(1) / 2;
-        let measured_dist_mm = std::array::from_fn(|k| {
-            let mut d = Vec::with_capacity(n_pairs);
-            for i in 0..n {
-                for j in i + 1..n {
-                    d.push((measured[i][k] - measured[j][k]).norm());
-                }
-            }
-            d
-        });
+        let measured_points = std::array::from_fn(|k| Points::from_fn(n, |i| measured[i][k]));
         let mean_side_mm = SIDES.map(|(a, b)| {
             measured.iter().map(|m| (m[a] - m[b]).norm()).sum::<f64>() / n.max(1) as f64
         });
         Self {
             qs,
-            measured_dist_mm,
+            measured: measured_points,
             n_pairs,
+            plan: Plan::for_pairs(n_pairs),
             start: start.clone(),
             x0: start.to_vector(),
             reflector_offset: start.reflector_offset(),
@@ -127,48 +126,16 @@ impl ArmProblem {
             .collect()
     }
 
-    /// F_k (sum of squares, mm²) and, optionally, the per-configuration weights w_i,k.
-    fn pair_sums(
-        &self,
-        points: &[[Vector3<f64>; 3]],
-        k: usize,
-        weights: Option<&mut [Vector3<f64>]>,
-    ) -> f64 {
-        let n = points.len();
-        let dm = &self.measured_dist_mm[k];
-        let mut sum = 0.0;
-        let mut idx = 0;
-        match weights {
-            Some(w) => {
-                for i in 0..n {
-                    let pi = points[i][k];
-                    let mut wi = Vector3::zeros();
-                    for j in i + 1..n {
-                        let v = pi - points[j][k];
-                        let dist = v.norm();
-                        let delta = dm[idx] - dist;
-                        idx += 1;
-                        sum += delta * delta;
-                        if dist > 0.0 {
-                            let t = v * (delta / dist);
-                            wi += t;
-                            w[j] -= t;
-                        }
-                    }
-                    w[i] += wi;
-                }
-            }
-            None => {
-                for (i, pi) in points.iter().enumerate() {
-                    for pj in &points[i + 1..] {
-                        let delta = dm[idx] - (pi[k] - pj[k]).norm();
-                        idx += 1;
-                        sum += delta * delta;
-                    }
-                }
-            }
-        }
-        sum
+    /// One reflector's model points of every configuration.
+    fn points(fk: impl Fn(usize) -> [Vector3<f64>; 3], n: usize) -> [Points; 3] {
+        std::array::from_fn(|k| Points::from_fn(n, |i| fk(i)[k]))
+    }
+
+    /// Pair passes in blocks and lanes whatever the size (tests of the blocked path on small data).
+    #[cfg(test)]
+    fn blocked(mut self) -> Self {
+        self.plan = Plan::Blocked;
+        self
     }
 
     fn constraints(&self, x: &DVector<f64>, with_grad: bool) -> (Vec<f64>, Vec<DVector<f64>>) {
@@ -219,12 +186,9 @@ impl ArmProblem {
     /// F_k of the start model on this problem's data, mm² (sums of squared distance errors).
     pub fn start_objectives_mm2(&self) -> [f64; 3] {
         let model = self.model_at(&DVector::zeros(self.free.len()));
-        let points: Vec<[Vector3<f64>; 3]> = self
-            .fk_all(&model)
-            .into_iter()
-            .map(|f| f.points_mm)
-            .collect();
-        std::array::from_fn(|k| self.pair_sums(&points, k, None))
+        let fk = self.fk_all(&model);
+        let points = Self::points(|i| fk[i].points_mm, fk.len());
+        pairs::triangle(&points, &self.measured, false, self.plan).map(|(f, _)| f)
     }
 }
 
@@ -305,20 +269,21 @@ impl MinimaxProblem for ArmProblem {
         let x = self.x_of(y);
         let model = self.start.with_vector(&x);
         let jac = self.jac_all(&model);
-        let points: Vec<[Vector3<f64>; 3]> = jac.iter().map(|j| j.fk.points_mm).collect();
+        let points = Self::points(|i| jac[i].fk.points_mm, jac.len());
         let norm = 1.0 / self.n_pairs.max(1) as f64;
-        let per_reflector: Vec<(f64, DVector<f64>)> = (0..3)
-            .into_par_iter()
-            .map(|k| {
-                let mut w = vec![Vector3::zeros(); points.len()];
-                let sum = self.pair_sums(&points, k, Some(&mut w));
+        let sums = pairs::triangle(&points, &self.measured, true, self.plan);
+        let per_reflector: Vec<(f64, DVector<f64>)> = sums
+            .par_iter()
+            .enumerate()
+            .map(|(k, (sum, w))| {
                 // ∇F_k = −2 Σ_i J_i,kᵀ w_i,k, on the free parameters only (the others are dropped by
                 // the restriction to y anyway).
                 let mut g = vec![0.0; self.free.len()];
-                for (wi, jk) in w.iter().zip(&jac) {
+                for (i, jk) in jac.iter().enumerate() {
                     let j = &jk.jacobians[k];
+                    let (wx, wy, wz) = (w.x[i], w.y[i], w.z[i]);
                     for (gc, &p) in g.iter_mut().zip(&self.free) {
-                        *gc -= (j[(0, p)] * wi.x + j[(1, p)] * wi.y + j[(2, p)] * wi.z) * 2.0;
+                        *gc -= (j[(0, p)] * wx + j[(1, p)] * wy + j[(2, p)] * wz) * 2.0;
                     }
                 }
                 let grad = DVector::from_iterator(
@@ -344,18 +309,12 @@ impl MinimaxProblem for ArmProblem {
     fn values(&self, y: &DVector<f64>) -> ([f64; 3], Vec<f64>) {
         let x = self.x_of(y);
         let model = self.start.with_vector(&x);
-        let points: Vec<[Vector3<f64>; 3]> = self
-            .fk_all(&model)
-            .into_iter()
-            .map(|f| f.points_mm)
-            .collect();
+        let fk = self.fk_all(&model);
+        let points = Self::points(|i| fk[i].points_mm, fk.len());
         let norm = 1.0 / self.n_pairs.max(1) as f64;
-        let f: Vec<f64> = (0..3)
-            .into_par_iter()
-            .map(|k| self.pair_sums(&points, k, None) * norm)
-            .collect();
+        let f = pairs::triangle(&points, &self.measured, false, self.plan).map(|(f, _)| f * norm);
         let (cons, _) = self.constraints(&x, false);
-        ([f[0], f[1], f[2]], cons)
+        (f, cons)
     }
     fn least_squares(&self, y: &DVector<f64>) -> LeastSquaresSystem {
         let model = self.model_at(y);
@@ -370,16 +329,14 @@ impl MinimaxProblem for ArmProblem {
                 let mut jtr = DVector::<f64>::zeros(m);
                 let mut cost = 0.0;
                 let mut row = DVector::<f64>::zeros(m);
-                let base = i * n - i * (i + 1) / 2; // index of pair (i, i+1)
                 for j in i + 1..n {
-                    let idx = base + (j - i - 1);
                     for k in (0..3).filter(|&k| self.reflectors[k]) {
                         let v = jac[i].fk.points_mm[k] - jac[j].fk.points_mm[k];
                         let dist = v.norm();
                         if dist <= 0.0 {
                             continue;
                         }
-                        let r = self.measured_dist_mm[k][idx] - dist;
+                        let r = self.measured[k].distance(i, j) - dist;
                         let u = v / dist;
                         pair_row(
                             &jac[i].jacobians[k],
@@ -459,6 +416,28 @@ mod tests {
     fn gradient_matches_finite_differences() {
         for nominal in nominals() {
             gradient_check(&setup(&nominal, 9));
+            gradient_check(&setup(&nominal, 9).blocked());
+        }
+    }
+
+    /// The blocked pair passes (beyond [`pairs::SEQUENTIAL_PAIRS`]) sum the same as the sequential one.
+    #[test]
+    fn blocked_and_sequential_passes_agree() {
+        for nominal in nominals() {
+            let (seq, blocked) = (setup(&nominal, 41), setup(&nominal, 41).blocked());
+            let y = DVector::from_fn(seq.dim(), |i, _| 0.05 * (i as f64 % 7.0 - 3.0));
+            let (a, b) = (seq.evaluate(&y), blocked.evaluate(&y));
+            for k in 0..3 {
+                assert!(
+                    (a.f[k] - b.f[k]).abs() <= 1e-13 * a.f[k],
+                    "{} {}",
+                    a.f[k],
+                    b.f[k]
+                );
+                let diff = (&a.grad[k] - &b.grad[k]).amax();
+                assert!(diff <= 1e-11 * a.grad[k].amax(), "{diff}");
+            }
+            assert_eq!(blocked.values(&y).0, b.f);
         }
     }
 

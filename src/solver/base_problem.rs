@@ -3,10 +3,19 @@
 //!
 //! `B(y) = (Exp(ω)·R₀, p₀ + δp)` with `y = (ω/s_rot, δp/s_trans)`; Δd_lr,k = |m_L,l,k − m_R,r,k| −
 //! |p_L,l,k − (R p_R,r,k + p)|.
+//!
+//! Up to [`pairs::SEQUENTIAL_PAIRS`] pairs per reflector (the paper's 14 400) the values, gradients and
+//! the Gauss–Newton matrix are sums of pair rows in the order of earlier releases. Beyond, the gradient
+//! is regrouped per right configuration like step 1's, ∇ = 2 Σ_r (−S_ω J_lᵀ (a_r × R q_r), S_p a_r)
+//! with a_r = Σ_l Δd_lr u_lr, and the Gauss–Newton matrix per right configuration from
+//! M_r = Σ_l u_lr u_lrᵀ: the pair loop does a distance and a few multiply-adds per pair, in the
+//! blocks and lanes of [`pairs`], and nothing is stored per pair.
 
+use super::arm_problem::pairs::{self, Plan, Points};
 use super::problem::{Eval, LeastSquaresSystem, MinimaxProblem, StageParams};
 use nalgebra::{
-    DMatrix, DVector, Isometry3, Rotation3, SVector, Translation3, UnitQuaternion, Vector3,
+    DMatrix, DVector, Isometry3, Matrix3, Rotation3, SMatrix, SVector, Translation3,
+    UnitQuaternion, Vector3,
 };
 use rayon::prelude::*;
 
@@ -15,11 +24,16 @@ pub struct BaseProblem {
     left_mm: Vec<[Vector3<f64>; 3]>,
     /// Model reflector points of the right arm in the right base frame.
     right_mm: Vec<[Vector3<f64>; 3]>,
-    /// Measured collaborative distances, index `l * n_right + r`.
-    measured_dist_mm: [Vec<f64>; 3],
+    /// The left arm's model points again, per reflector, struct-of-arrays.
+    left_points: [Points; 3],
+    /// Measured points of each arm per reflector (tracker frame), mm: the collaborative distances are
+    /// recomputed per pass.
+    measured_left: [Points; 3],
+    measured_right: [Points; 3],
     start: Isometry3<f64>,
     /// Scales of (ω, δp).
     scale: SVector<f64, 6>,
+    plan: Plan,
 }
 
 impl BaseProblem {
@@ -30,21 +44,19 @@ impl BaseProblem {
         measured_right: &[[Vector3<f64>; 3]],
         start: Isometry3<f64>,
     ) -> Self {
-        let measured_dist_mm = std::array::from_fn(|k| {
-            let mut d = Vec::with_capacity(measured_left.len() * measured_right.len());
-            for ml in measured_left {
-                for mr in measured_right {
-                    d.push((ml[k] - mr[k]).norm());
-                }
-            }
-            d
-        });
+        let soa = |points: &[[Vector3<f64>; 3]]| -> [Points; 3] {
+            std::array::from_fn(|k| Points::from_fn(points.len(), |i| points[i][k]))
+        };
+        let plan = Plan::for_pairs(left_mm.len() * right_mm.len());
         let mut p = Self {
+            left_points: soa(&left_mm),
+            measured_left: soa(measured_left),
+            measured_right: soa(measured_right),
             left_mm,
             right_mm,
-            measured_dist_mm,
             start,
             scale: SVector::from_element(1.0),
+            plan,
         };
         // Column scaling from the Gauss–Newton diagonal at the start.
         let h = p.gauss_newton(&DVector::zeros(6));
@@ -59,8 +71,13 @@ impl BaseProblem {
     /// matrix and the column scaling).
     pub fn gauss_newton(&self, y: &DVector<f64>) -> DMatrix<f64> {
         let mut h = nalgebra::SMatrix::<f64, 6, 6>::zeros();
-        for k in 0..3 {
-            self.for_each_row(y, k, |_, row| h += row * row.transpose());
+        match self.plan {
+            Plan::Sequential => {
+                for k in 0..3 {
+                    self.for_each_row(y, k, |_, row| h += row * row.transpose());
+                }
+            }
+            Plan::Blocked => h = self.gauss_newton_regrouped(y),
         }
         let h = h * (2.0 / (3.0 * self.n_pairs().max(1) as f64));
         DMatrix::from_column_slice(6, 6, h.as_slice())
@@ -81,6 +98,88 @@ impl BaseProblem {
         self.left_mm.len() * self.right_mm.len()
     }
 
+    /// The regrouped passes whatever the size (tests of the blocked path on small data).
+    #[cfg(test)]
+    fn blocked(mut self) -> Self {
+        self.plan = Plan::Blocked;
+        self
+    }
+
+    /// J_l(ω) and the right arm's points rotated into the left base (R q_r), per reflector.
+    fn rotated_right(&self, y: &DVector<f64>) -> (Isometry3<f64>, Matrix3<f64>, [Points; 3]) {
+        let b = self.transform_at(y);
+        let w = Vector3::new(y[0], y[1], y[2]).component_mul(&self.scale.fixed_rows::<3>(0));
+        let right = std::array::from_fn(|k| {
+            Points::from_fn(self.right_mm.len(), |r| b.rotation * self.right_mm[r][k])
+        });
+        (b, left_jacobian_so3(&w), right)
+    }
+
+    /// Values and gradients regrouped per right configuration (module docs), unnormalised:
+    /// (F_k, ∇F_k in y).
+    fn sums_regrouped(&self, y: &DVector<f64>) -> [(f64, SVector<f64, 6>); 3] {
+        let (b, jl, right) = self.rotated_right(y);
+        let t = b.translation.vector;
+        let sums = pairs::rectangle(
+            &self.left_points,
+            &right,
+            &t,
+            &self.measured_left,
+            &self.measured_right,
+        );
+        std::array::from_fn(|k| {
+            let (f, a) = &sums[k];
+            let (mut c, mut sp) = (Vector3::zeros(), Vector3::zeros());
+            for r in 0..a.len() {
+                let ar = a.get(r);
+                c += ar.cross(&right[k].get(r));
+                sp += ar;
+            }
+            let dw = jl.transpose() * c;
+            let s = &self.scale;
+            let g = SVector::<f64, 6>::new(
+                -dw.x * s[0],
+                -dw.y * s[1],
+                -dw.z * s[2],
+                sp.x * s[3],
+                sp.y * s[4],
+                sp.z * s[5],
+            ) * 2.0;
+            (*f, g)
+        })
+    }
+
+    /// Σ rows rowsᵀ regrouped: row = C_r u with C_r = [S_ω J_lᵀ [R q_r]×; S_p], so the sum over l is
+    /// C_r M_r C_rᵀ with M_r = Σ_l u uᵀ.
+    fn gauss_newton_regrouped(&self, y: &DVector<f64>) -> SMatrix<f64, 6, 6> {
+        let (b, jl, right) = self.rotated_right(y);
+        let t = b.translation.vector;
+        let s = &self.scale;
+        let sw = Matrix3::from_diagonal(&Vector3::new(s[0], s[1], s[2]));
+        let sp = Matrix3::from_diagonal(&Vector3::new(s[3], s[4], s[5]));
+        let per_reflector: Vec<SMatrix<f64, 6, 6>> = (0..3)
+            .into_par_iter()
+            .map(|k| {
+                let m = pairs::rectangle_directions(&self.left_points[k], &right[k], &t);
+                let mut h = SMatrix::<f64, 6, 6>::zeros();
+                #[allow(clippy::needless_range_loop)] // r indexes several arrays of the same length
+                for r in 0..right[k].len() {
+                    let mr = Matrix3::new(
+                        m[0][r], m[1][r], m[2][r], m[1][r], m[3][r], m[4][r], m[2][r], m[4][r],
+                        m[5][r],
+                    );
+                    let mut c = SMatrix::<f64, 6, 3>::zeros();
+                    c.fixed_view_mut::<3, 3>(0, 0)
+                        .copy_from(&(sw * jl.transpose() * right[k].get(r).cross_matrix()));
+                    c.fixed_view_mut::<3, 3>(3, 0).copy_from(&sp);
+                    h += c * mr * c.transpose();
+                }
+                h
+            })
+            .collect();
+        per_reflector.into_iter().sum()
+    }
+
     /// Calls `visit(k, residual, ∂Δd/∂y)` for every pair and reflector.
     fn for_each_row(
         &self,
@@ -91,14 +190,15 @@ impl BaseProblem {
         let b = self.transform_at(y);
         let w = Vector3::new(y[0], y[1], y[2]).component_mul(&self.scale.fixed_rows::<3>(0));
         let jl = left_jacobian_so3(&w);
-        let nr = self.right_mm.len();
         let mapped: Vec<Vector3<f64>> = self.right_mm.iter().map(|p| b.rotation * p[k]).collect();
         let t = b.translation.vector;
         for (l, pl) in self.left_mm.iter().enumerate() {
             for (r, rq) in mapped.iter().enumerate() {
                 let v = pl[k] - rq - t;
                 let dist = v.norm();
-                let res = self.measured_dist_mm[k][l * nr + r] - dist;
+                let measured =
+                    pairs::distance_between(&self.measured_left[k], l, &self.measured_right[k], r);
+                let res = measured - dist;
                 if dist <= 0.0 {
                     continue;
                 }
@@ -143,6 +243,17 @@ impl MinimaxProblem for BaseProblem {
 
     fn evaluate(&self, y: &DVector<f64>) -> Eval {
         let norm = 1.0 / self.n_pairs().max(1) as f64;
+        if self.plan == Plan::Blocked {
+            let [a, b, c] = self
+                .sums_regrouped(y)
+                .map(|(f, g)| (f * norm, DVector::from_column_slice((g * norm).as_slice())));
+            return Eval {
+                f: [a.0, b.0, c.0],
+                grad: [a.1, b.1, c.1],
+                cons: Vec::new(),
+                cons_grad: Vec::new(),
+            };
+        }
         let parts: Vec<(f64, DVector<f64>)> = (0..3)
             .into_par_iter()
             .map(|k| {
@@ -204,6 +315,41 @@ mod tests {
 
     #[test]
     fn gradient_matches_finite_differences() {
+        for blocked in [false, true] {
+            let p = problem(6, 5);
+            let p = if blocked { p.blocked() } else { p };
+            let y = DVector::from_fn(6, |i, _| 0.1 * (i as f64 - 2.5));
+            let e = p.evaluate(&y);
+            let analytic = DMatrix::from_fn(3, 6, |k, c| e.grad[k][c]);
+            let objectives = |y: &DVector<f64>| DVector::from_row_slice(&p.values(y).0);
+            check_jacobian(objectives, &y, &analytic, |_| 1e-6, Tolerance::rel(1e-6))
+                .unwrap_or_else(|m| panic!("objectives f0..f2 (blocked: {blocked}): {m}"));
+        }
+    }
+
+    /// Beyond [`pairs::SEQUENTIAL_PAIRS`] the values, gradients and Gauss–Newton matrix are regrouped
+    /// per right configuration: the same sums up to rounding.
+    #[test]
+    fn the_regrouped_passes_sum_the_pair_rows() {
+        let (seq, blocked) = (problem(23, 19), problem(23, 19).blocked());
+        let y = DVector::from_fn(6, |i, _| 0.03 * (i as f64 - 2.5));
+        let (a, b) = (seq.evaluate(&y), blocked.evaluate(&y));
+        for k in 0..3 {
+            assert!(
+                (a.f[k] - b.f[k]).abs() <= 1e-12 * a.f[k],
+                "{} {}",
+                a.f[k],
+                b.f[k]
+            );
+            let diff = (&a.grad[k] - &b.grad[k]).amax();
+            assert!(diff <= 1e-10 * a.grad[k].amax(), "{diff}");
+        }
+        let (ha, hb) = (seq.gauss_newton(&y), blocked.gauss_newton(&y));
+        assert!((&ha - &hb).amax() <= 1e-11 * ha.amax(), "{ha} {hb}");
+    }
+
+    /// Left and right model points, measurements of a true base, a start near it.
+    fn problem(n_left: usize, n_right: usize) -> BaseProblem {
         let mut rng = ChaCha8Rng::seed_from_u64(5);
         let mut pts = |n: usize| -> Vec<[Vector3<f64>; 3]> {
             (0..n)
@@ -218,8 +364,8 @@ mod tests {
                 })
                 .collect()
         };
-        let left = pts(6);
-        let right = pts(5);
+        let left = pts(n_left);
+        let right = pts(n_right);
         let truth = Isometry3::new(
             Vector3::new(60.0, -70.0, -30.0),
             Vector3::new(0.3, -1.2, 0.4),
@@ -236,12 +382,6 @@ mod tests {
             Vector3::new(62.0, -69.0, -33.0),
             Vector3::new(0.31, -1.19, 0.41),
         );
-        let p = BaseProblem::new(left, right, &ml, &mr, start);
-        let y = DVector::from_fn(6, |i, _| 0.1 * (i as f64 - 2.5));
-        let e = p.evaluate(&y);
-        let analytic = DMatrix::from_fn(3, 6, |k, c| e.grad[k][c]);
-        let objectives = |y: &DVector<f64>| DVector::from_row_slice(&p.values(y).0);
-        check_jacobian(objectives, &y, &analytic, |_| 1e-6, Tolerance::rel(1e-6))
-            .unwrap_or_else(|m| panic!("objectives f0..f2: {m}"));
+        BaseProblem::new(left, right, &ml, &mr, start)
     }
 }

@@ -56,12 +56,53 @@ pub fn gram_by_product(columns: &DMatrix<f64>) -> DMatrix<f64> {
 /// The mean Gram matrix `RᵀR / count` of `columns` through a thin QR of their transpose (`Mᵀ = Q R`).
 /// The same matrix as [`gram_by_product`] up to rounding; the built-in robot's calibrations use it so
 /// that they stay bit-identical to earlier releases.
+///
+/// The Householder QR is nalgebra's (`QR::new`, its own reflection axis and reflection per column), with
+/// the reflection of the trailing columns applied in parallel: each column's arithmetic is the same
+/// whatever the thread, so `R` is bit-identical to `DMatrix::qr().r()` (a unit test holds it).
 pub fn gram_by_qr(columns: &DMatrix<f64>) -> DMatrix<f64> {
     let (p, count) = columns.shape();
-    let mut m = DMatrix::<f64>::zeros(count.max(p), p);
+    let rows = count.max(p);
+    let mut m = DMatrix::<f64>::zeros(rows, p);
     m.rows_mut(0, count).copy_from(&columns.transpose());
-    let r = m.qr().r();
+    let diag = householder_in_place(&mut m);
+    // `QR::r()`: the upper triangle of the first min(rows, p) rows, |diagonal| on the diagonal.
+    let k = rows.min(p);
+    let r = DMatrix::from_fn(k, p, |i, j| match i.cmp(&j) {
+        std::cmp::Ordering::Less => m[(i, j)],
+        std::cmp::Ordering::Equal => diag[i].abs(),
+        std::cmp::Ordering::Greater => 0.0,
+    });
     r.transpose() * &r / count.max(1) as f64
+}
+
+/// nalgebra's `QR::new` on `m` in place (`householder::clear_column_unchecked` for every column),
+/// the trailing columns of each step reflected in parallel; returns the signed diagonal.
+fn householder_in_place(m: &mut DMatrix<f64>) -> Vec<f64> {
+    use nalgebra::linalg::householder::reflection_axis_mut;
+    use nalgebra::{DVectorViewMut, Reflection, Unit};
+    use rayon::prelude::*;
+    let (rows, p) = m.shape();
+    let mut diag = Vec::with_capacity(rows.min(p));
+    for i in 0..rows.min(p) {
+        let (head, tail) = m.as_mut_slice().split_at_mut((i + 1) * rows);
+        let mut axis = DVectorViewMut::from_slice(&mut head[i * rows + i..], rows - i);
+        let (norm, not_zero) = reflection_axis_mut(&mut axis);
+        diag.push(norm);
+        if !not_zero {
+            continue;
+        }
+        let refl = Reflection::new(Unit::new_unchecked(axis.clone_owned()), 0.0);
+        let sign = norm.signum();
+        // At least 4 columns per task: a column of a few thousand rows is microseconds of work.
+        tail.par_chunks_mut(rows)
+            .with_min_len(4)
+            .for_each(|column| {
+                let mut below = DVectorViewMut::from_slice(&mut column[i..], rows - i);
+                refl.reflect_with_sign(&mut below, sign);
+            });
+    }
+    diag
 }
 
 /// What the analysis needs to know about the parameters.
@@ -208,6 +249,9 @@ pub fn analyse(gram: &DMatrix<f64>, info: &ParameterInfo) -> IdentifiabilityRepo
         condition_after,
     }
 }
+
+mod recheck;
+pub use recheck::{GramMethod, at_solution};
 
 #[cfg(test)]
 mod tests;

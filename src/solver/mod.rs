@@ -32,7 +32,7 @@ pub mod arm_problem;
 pub mod base_problem;
 pub mod identifiability;
 pub mod least_squares;
-pub mod lm;
+pub mod methods;
 pub mod problem;
 pub mod qp;
 mod result;
@@ -42,6 +42,7 @@ mod stage;
 
 use crate::dataset::Split;
 use crate::side::{ConfigId, Side};
+pub use methods::{BaseMethod, BaseMethodSpec, Method, MethodSpec, Observes, SolverKind};
 pub use result::{CalibrationResult, STAGES};
 pub use run::{CalibrationRun, Calibrator, Observer, Progress};
 use serde::{Deserialize, Serialize};
@@ -56,103 +57,6 @@ pub enum QpMethod {
     /// An exact dual active-set solution of the same QP.
     #[default]
     Exact,
-}
-
-/// Step 1 (each arm's parameters): the objective and its solver. The paper's method and the methods
-/// it compares against (its Table 1); see docs/solver.md for what each minimises and identifies.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize, clap::ValueEnum)]
-#[serde(rename_all = "lowercase")]
-pub enum Method {
-    /// The paper's Algorithm I: minimax of the three reflectors' summed squared distance errors (SQP).
-    #[default]
-    Minimax,
-    /// Least squares of all three reflectors' distance errors (Levenberg–Marquardt), for comparison.
-    #[value(name = "lsq")]
-    #[serde(alias = "lsq")]
-    LeastSquares,
-    /// Ref. [26]: Gauss–Newton on the distance errors of one reflector (`--reflector`, default the
-    /// one with the largest nominal error). Cannot see the flange's orientation: the other two
-    /// reflectors' coordinates are not identified and stay nominal.
-    #[value(name = "distance-single")]
-    #[serde(rename = "distance-single")]
-    DistanceSingle,
-    /// Ref. [19]: full-pose calibration. A tool frame built from the three measured reflectors at each
-    /// configuration; the linearised pose-error model solved by QR decomposition (Gauss–Newton), the
-    /// tracker-from-base transform identified with the arm.
-    Pose,
-    /// Ref. [18]: Levenberg–Marquardt on the absolute positioning errors of the three reflectors in
-    /// the tracker frame, the tracker-from-base transform identified jointly.
-    Position,
-}
-
-impl Method {
-    /// Every step-1 method, the paper's first.
-    pub const ALL: [Method; 5] = [
-        Method::Minimax,
-        Method::LeastSquares,
-        Method::DistanceSingle,
-        Method::Pose,
-        Method::Position,
-    ];
-
-    /// The command-line name (`minimax`, `lsq`, `distance-single`, `pose`, `position`).
-    pub fn name(self) -> &'static str {
-        match self {
-            Method::Minimax => "minimax",
-            Method::LeastSquares => "lsq",
-            Method::DistanceSingle => "distance-single",
-            Method::Pose => "pose",
-            Method::Position => "position",
-        }
-    }
-
-    /// How many independent equations n configurations give the method, for messages.
-    pub fn count_rule(self) -> &'static str {
-        match self {
-            Method::Minimax | Method::LeastSquares => "9n − 18 independent distances",
-            Method::DistanceSingle => "3n − 6 independent distances of one reflector",
-            Method::Position => "9n coordinates, 6 of them for the tracker frame",
-            Method::Pose => "6n pose components, 6 of them for the tracker frame",
-        }
-    }
-
-    /// Does the method fit absolute (tracker-frame) measurements, identifying the tracker-from-base
-    /// transform with the arm?
-    pub fn is_absolute(self) -> bool {
-        matches!(self, Method::Pose | Method::Position)
-    }
-}
-
-/// Step 2 (the right-arm base in the left-arm base): the objective and its solver.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize, clap::ValueEnum)]
-#[serde(rename_all = "lowercase")]
-pub enum BaseMethod {
-    /// The paper's Algorithm II: minimax of the collaborative distance errors (SQP).
-    #[default]
-    Minimax,
-    /// Ref. [26]: Gauss–Newton on all collaborative distance errors (least squares).
-    Distance,
-    /// Ref. [28]: each arm's base located in the tracker frame from its absolute positioning errors
-    /// (step 1's arm models held), combined as `tracker_from_left_base⁺ · tracker_from_right_base`
-    /// (Moore–Penrose inverse).
-    Absolute,
-}
-
-impl BaseMethod {
-    pub const ALL: [BaseMethod; 3] = [
-        BaseMethod::Minimax,
-        BaseMethod::Distance,
-        BaseMethod::Absolute,
-    ];
-
-    /// The command-line name (`minimax`, `distance`, `absolute`).
-    pub fn name(self) -> &'static str {
-        match self {
-            BaseMethod::Minimax => "minimax",
-            BaseMethod::Distance => "distance",
-            BaseMethod::Absolute => "absolute",
-        }
-    }
 }
 
 /// One of the three end-reflectors, `a`, `b` or `c` (the dataset's column order).
@@ -274,21 +178,6 @@ pub fn min_configurations(n_params: usize) -> usize {
     (n_params + 18).div_ceil(9).max(crate::dataset::MIN_CONFIGS)
 }
 
-/// The smallest number of calibration configurations per arm for `method` on `arm`: the distance
-/// methods as [`min_configurations`] (one reflector: `3n − 6` distances for the parameters less the
-/// other two reflectors' six), the absolute ones `9n` coordinates (position) or `6n` pose components
-/// for the parameters and the tracker-from-base transform's six.
-pub fn min_configurations_for(method: Method, arm: &crate::kinematics::ArmModel) -> usize {
-    let params = identifiable_params(arm);
-    let n = match method {
-        Method::Minimax | Method::LeastSquares => return min_configurations(params),
-        Method::DistanceSingle => (params.saturating_sub(6) + 6).div_ceil(3),
-        Method::Position => (params + 6).div_ceil(9),
-        Method::Pose => (params + 6).div_ceil(6),
-    };
-    n.max(crate::dataset::MIN_CONFIGS)
-}
-
 /// The parameters of an arm that distances can identify at most: all but those physics rules out (for
 /// the built-in robot `d1`, `θ1`, absorbed by the tracker frame, and the four of the last joint,
 /// absorbed by the reflector coordinates: 31 of 37).
@@ -332,8 +221,13 @@ pub struct IterationRecord {
     pub f_mm2: [f64; 3],
     /// Norm of the scaled parameter step.
     pub step_norm: f64,
-    /// KKT residual of the QP solution.
-    pub kkt_residual: f64,
+    /// The stage's first-order optimality residual after this iteration: for an SQP stage the KKT
+    /// residual of the QP solution (relative to the gradient size, plus complementarity and
+    /// infeasibility); for a least-squares stage the largest component of the cost's gradient `Jᵀr`
+    /// in the scaled variables, mm² (the KKT condition of a problem without constraints). Read from
+    /// the name `kkt_residual` too, which earlier versions used.
+    #[serde(alias = "kkt_residual")]
+    pub optimality_residual: f64,
     /// Multipliers λ_a, λ_b, λ_c of the three reflectors' rows in this iteration's QP (summing to one):
     /// how much each reflector's F_k weighs in the step. `None` for methods without such weights
     /// (least squares), NaN when an SQP iteration solved no QP.

@@ -57,10 +57,11 @@ impl CalibrationResult {
 
     /// Was `stage` solved by the paper's SQP (the minimax methods) rather than least squares?
     pub fn uses_sqp(&self, stage: Stage) -> bool {
-        match stage {
-            Stage::Arm(_) => self.settings.method == super::Method::Minimax,
-            Stage::Base => self.settings.base_method == super::BaseMethod::Minimax,
-        }
+        let solver = match stage {
+            Stage::Arm(_) => self.settings.method.spec().solver,
+            Stage::Base => self.settings.base_method.spec().solver,
+        };
+        solver == super::SolverKind::Sqp
     }
 
     /// The summary of `stage`, if it ran.

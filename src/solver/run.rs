@@ -1,33 +1,26 @@
 //! The executor: [`Calibrator`] sets a run up, [`CalibrationRun`] runs the stages in turn — step 1 for
 //! the left arm, step 1 for the right arm, step 2 — one outer iteration per [`CalibrationRun::step`],
-//! reporting to [`Observer`]s and polling the cancel flag.
+//! reporting to [`Observer`]s and polling the cancel flag. It names no method: each stage is set up by
+//! the chosen method's entry of the table ([`super::methods`]).
 
-use super::arm_problem::ArmProblem;
-use super::base_problem::BaseProblem;
 use super::identifiability::{self, IdentifiabilityReport};
-use super::least_squares::{DistanceLeastSquares, LsqAlgorithm, LsqState};
-use super::lm::LmState;
-use super::problem::{MinimaxProblem, StageParams};
+use super::methods::Method;
+use super::methods::set_up::{ArmData, ArmSetUp, BaseSetUp, IDENTIFIABILITY_PAIRS};
+use super::problem::StageParams;
 use super::result::CalibrationResult;
-use super::sqp::{SqpSettings, SqpState};
 use super::stage::StageSolver;
 use super::{
-    BaseMethod, CalibrationError, CalibrationEvent, CalibrationSettings, IterationRecord, Method,
-    Reflector, Stage, StageSummary, Termination,
+    CalibrationError, CalibrationEvent, CalibrationSettings, IterationRecord, Reflector, Stage,
+    StageSummary, Termination,
 };
 use crate::dataset::Dataset;
-use crate::kinematics::{ArmKinematics, DualArmModel};
+use crate::kinematics::DualArmModel;
 use crate::side::{ConfigId, PerSide, Side};
-use nalgebra::{DMatrix, DVector, Isometry3, Vector3};
+use nalgebra::{Isometry3, Vector3};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 // std's `Instant::now` panics in a browser (wasm32-unknown-unknown); web-time is std's on native targets.
 use web_time::Instant;
-
-mod methods;
-
-/// Pairs per reflector sampled for identifiability, column scaling and the start Hessian.
-pub const IDENTIFIABILITY_PAIRS: usize = 3000;
 
 /// Watches a run. Every method defaults to doing nothing; a closure over [`CalibrationEvent`] is an
 /// observer too. The command line's progress lines, the workbench's live curves and the tests are
@@ -131,15 +124,6 @@ pub enum Progress {
     Finished(Box<CalibrationResult>),
 }
 
-/// Per-arm measurements of the selected split.
-struct ArmInput {
-    /// The configurations' ids (for messages).
-    ids: Vec<String>,
-    qs: Vec<Vec<f64>>,
-    measured: Vec<[Vector3<f64>; 3]>,
-    side_tolerance_mm: f64,
-}
-
 /// The stage being solved.
 struct ActiveStage {
     stage: Stage,
@@ -160,7 +144,7 @@ pub struct CalibrationRun {
     nominal: DualArmModel,
     /// The model with the parameters of the finished stages.
     committed: DualArmModel,
-    inputs: PerSide<ArmInput>,
+    inputs: PerSide<ArmData>,
     active: Option<ActiveStage>,
     history: Vec<IterationRecord>,
     stages: Vec<StageSummary>,
@@ -296,7 +280,7 @@ impl CalibrationRun {
                     psi_mm2,
                     f_mm2: state.f_mm2,
                     step_norm: state.step_norm,
-                    kkt_residual: state.residual,
+                    optimality_residual: state.residual,
                     lambda: state.lambda,
                     elapsed_secs: self.started.elapsed().as_secs_f64(),
                 };
@@ -402,26 +386,28 @@ impl CalibrationRun {
         }
     }
 
-    fn sqp_settings(&self) -> SqpSettings {
-        SqpSettings {
-            qp: self.settings.qp,
-            step_tolerance: self.settings.step_tolerance,
-            progress_tolerance: self.settings.progress_tolerance,
-            max_qp_iterations: self.settings.max_qp_iterations,
-        }
-    }
-
+    /// Set a stage up by the chosen method's entry of the table.
     fn start_stage(&mut self, stage: Stage) -> Result<ActiveStage, CalibrationError> {
-        let solver = match (stage, self.settings.method, self.settings.base_method) {
-            (Stage::Arm(side), Method::Minimax | Method::LeastSquares, _) => {
-                self.arm_solver(side)?
+        let solver = match stage {
+            Stage::Arm(side) => {
+                let set_up = ArmSetUp {
+                    data: &self.inputs[side],
+                    start: self.nominal.arm(side),
+                    settings: &self.settings,
+                };
+                let arm = (self.settings.method.spec().set_up)(&set_up)?;
+                self.identifiability[side] = Some(arm.identifiability);
+                self.reflector_used[side] = arm.reflector;
+                arm.solver
             }
-            (Stage::Arm(side), Method::DistanceSingle, _) => self.distance_single_solver(side)?,
-            (Stage::Arm(side), Method::Pose | Method::Position, _) => {
-                self.absolute_arm_solver(side)?
+            Stage::Base => {
+                let set_up = BaseSetUp {
+                    data: &self.inputs,
+                    model: &self.committed,
+                    settings: &self.settings,
+                };
+                (self.settings.base_method.spec().set_up)(&set_up)?
             }
-            (Stage::Base, _, BaseMethod::Minimax | BaseMethod::Distance) => self.base_solver()?,
-            (Stage::Base, _, BaseMethod::Absolute) => self.absolute_base_solver()?,
         };
         Ok(ActiveStage {
             stage,
@@ -431,126 +417,6 @@ impl CalibrationRun {
             announced: false,
             last_good: None,
         })
-    }
-
-    /// Step 1 of `side`: identifiability at the nominal model, column scaling, and the solver of the
-    /// chosen method on the identifiable parameters.
-    fn arm_solver(&mut self, side: Side) -> Result<Box<dyn StageSolver>, CalibrationError> {
-        let stage = Stage::Arm(side);
-        let input = &self.inputs[side];
-        let start = self.nominal.arm(side);
-        let n_params = start.param_count();
-        let probe = ArmProblem::new(
-            input.qs.clone(),
-            &input.measured,
-            start,
-            (0..n_params).collect(),
-            DVector::from_element(n_params, 1.0),
-            input.side_tolerance_mm,
-        );
-        // A few thousand pairs show every dependency (they are exact) and estimate the scaling well.
-        let columns = probe.sample_pair_jacobian(&DVector::zeros(n_params), IDENTIFIABILITY_PAIRS);
-        let gram = match start.kinematics {
-            // The built-in robot's Gram matrix as earlier releases computed it: its calibrations stay
-            // bit-identical.
-            ArmKinematics::Dh(_) => identifiability::gram_by_qr(&columns),
-            ArmKinematics::Chain { .. } => identifiability::gram_by_product(&columns),
-        };
-        let order = start.identifiability_order();
-        let report = identifiability::analyse(
-            &gram,
-            &identifiability::ParameterInfo {
-                order: &order,
-                allowed: &vec![true; n_params],
-                name: &|k| start.param_name(k),
-                reason: &|k| start.unidentifiable_reason(k),
-                data: identifiability::ParameterInfo::DISTANCES,
-                not_allowed: identifiability::ParameterInfo::FIXED_BY_USER,
-            },
-        );
-        if report.free.is_empty() {
-            return Err(CalibrationError::RankDeficient {
-                stage,
-                detail: "no parameter is identifiable from these configurations".into(),
-            });
-        }
-        // Scale every free parameter by its RMS sensitivity; H₀ is the Gauss–Newton matrix in those
-        // variables, 2·D·G·D with G the mean Gram matrix of the pair Jacobian.
-        let scale = DVector::from_iterator(
-            report.free.len(),
-            report
-                .free
-                .iter()
-                .map(|&k| 1.0 / gram[(k, k)].sqrt().max(1e-12)),
-        );
-        let h0 = DMatrix::from_fn(report.free.len(), report.free.len(), |i, j| {
-            2.0 * gram[(report.free[i], report.free[j])] * scale[i] * scale[j]
-        });
-        let problem = probe.with_free(report.free.clone(), scale);
-        self.identifiability[side] = Some(report);
-        match self.settings.method {
-            Method::Minimax => self.sqp_solver(problem, stage, h0),
-            _ => Ok(Box::new(LmState::new(
-                problem,
-                self.settings.step_tolerance,
-            ))),
-        }
-    }
-
-    /// Step 2: the right-arm base from the collaborative distances, with step 1's arms: minimax (the
-    /// paper's Algorithm II) or Gauss–Newton on all of them (ref. [26]).
-    fn base_solver(&mut self) -> Result<Box<dyn StageSolver>, CalibrationError> {
-        let stage = Stage::Base;
-        let model_points = |side: Side| -> Vec<[Vector3<f64>; 3]> {
-            self.inputs[side]
-                .qs
-                .iter()
-                .map(|q| self.committed.arm(side).reflector_fk(q).points_mm)
-                .collect()
-        };
-        let problem = BaseProblem::new(
-            model_points(Side::Left),
-            model_points(Side::Right),
-            &self.inputs.left.measured,
-            &self.inputs.right.measured,
-            self.nominal.left_base_from_right_base,
-        );
-        let h0 = problem.gauss_newton(&DVector::zeros(6));
-        let sv = h0.singular_values();
-        if sv.min() <= sv.max() * 1e-12 {
-            return Err(CalibrationError::RankDeficient {
-                stage,
-                detail: format!("collaborative Jacobian singular values {:?}", sv.as_slice()),
-            });
-        }
-        match self.settings.base_method {
-            BaseMethod::Distance => Ok(Box::new(LsqState::new(
-                DistanceLeastSquares {
-                    problem,
-                    reflectors: [true; 3],
-                },
-                LsqAlgorithm::GaussNewton,
-                self.settings.step_tolerance,
-            ))),
-            _ => self.sqp_solver(problem, stage, h0),
-        }
-    }
-
-    /// The paper's SQP on `problem`.
-    fn sqp_solver<P: MinimaxProblem + 'static>(
-        &self,
-        problem: P,
-        stage: Stage,
-        h0: DMatrix<f64>,
-    ) -> Result<Box<dyn StageSolver>, CalibrationError> {
-        Ok(Box::new(
-            SqpState::new(problem, self.sqp_settings(), h0).map_err(|_| {
-                CalibrationError::NonFinite {
-                    stage,
-                    detail: "objective or gradient at the start point".into(),
-                }
-            })?,
-        ))
     }
 
     /// Why step-1 parameters are implausible (moved too far from the nominal model), if they are.
@@ -580,27 +446,9 @@ impl CalibrationRun {
     /// unusable).
     fn stage_objectives(&self, stage: Stage) -> [f64; 3] {
         match stage {
-            Stage::Arm(side) => {
-                let input = &self.inputs[side];
-                let arm = self.committed.arm(side);
-                let pts: Vec<[Vector3<f64>; 3]> = input
-                    .qs
-                    .iter()
-                    .map(|q| arm.reflector_fk(q).points_mm)
-                    .collect();
-                let n = pts.len();
-                std::array::from_fn(|k| {
-                    let mut sum = 0.0;
-                    for i in 0..n {
-                        for j in i + 1..n {
-                            let dm = (input.measured[i][k] - input.measured[j][k]).norm();
-                            let dp = (pts[i][k] - pts[j][k]).norm();
-                            sum += (dm - dp) * (dm - dp);
-                        }
-                    }
-                    sum
-                })
-            }
+            Stage::Arm(side) => self.inputs[side]
+                .distance_probe(self.committed.arm(side))
+                .start_objectives_mm2(),
             Stage::Base => [f64::NAN; 3],
         }
     }
@@ -608,43 +456,23 @@ impl CalibrationRun {
     /// Repeat the identifiability analysis at `side`'s solution: a parameter that was identifiable at
     /// the start but is (nearly) dependent there is poorly determined by the data at the answer.
     fn recheck_identifiability(&mut self, side: Side) {
-        let Some(start) = self.identifiability[side].clone() else {
+        let Some(start) = &self.identifiability[side] else {
             return;
         };
-        let input = &self.inputs[side];
         let arm = self.committed.arm(side);
-        let n_params = arm.param_count();
-        let probe = ArmProblem::new(
-            input.qs.clone(),
-            &input.measured,
+        let input = &self.inputs[side];
+        // The start's sample of pairs at the solution; one Gram product (the verdicts are the QR's).
+        let at_solution = identifiability::at_solution(
             arm,
-            (0..n_params).collect(),
-            DVector::from_element(n_params, 1.0),
-            input.side_tolerance_mm,
+            &input.qs,
+            &start.free,
+            IDENTIFIABILITY_PAIRS,
+            identifiability::GramMethod::Product,
         );
-        let columns = probe.sample_pair_jacobian(&DVector::zeros(n_params), IDENTIFIABILITY_PAIRS);
-        let gram = match arm.kinematics {
-            ArmKinematics::Dh(_) => identifiability::gram_by_qr(&columns),
-            ArmKinematics::Chain { .. } => identifiability::gram_by_product(&columns),
-        };
-        let mut allowed = vec![false; n_params];
-        for &k in &start.free {
-            allowed[k] = true;
-        }
-        let order = arm.identifiability_order();
-        let at_solution = identifiability::analyse(
-            &gram,
-            &identifiability::ParameterInfo {
-                order: &order,
-                allowed: &allowed,
-                name: &|k| arm.param_name(k),
-                reason: &|k| arm.unidentifiable_reason(k),
-                data: identifiability::ParameterInfo::DISTANCES,
-                not_allowed: identifiability::ParameterInfo::FIXED_BY_USER,
-            },
-        );
+        let allowed = |k: usize| start.free.contains(&k);
+        let before = start.condition_after;
         for f in &at_solution.fixed {
-            if allowed[f.index] {
+            if allowed(f.index) {
                 self.diagnostics.push(format!(
                     "step 1 ({side} arm): at the solution {} is no longer identifiable from these \
                      configurations ({}); its value is poorly determined",
@@ -652,7 +480,7 @@ impl CalibrationRun {
                 ));
             }
         }
-        let (before, after) = (start.condition_after, at_solution.condition_after);
+        let after = at_solution.condition_after;
         if after.is_finite() && before.is_finite() && after > CONDITION_GROWTH * before {
             self.diagnostics.push(format!(
                 "step 1 ({side} arm): the scaled Jacobian's condition number grew from {before:.3e} at \
@@ -684,10 +512,16 @@ impl CalibrationRun {
 /// Settings that cannot work together are refused before any work.
 fn check_settings(settings: &CalibrationSettings) -> Result<(), CalibrationError> {
     if let Some(r) = settings.reflector
-        && settings.method != Method::DistanceSingle
+        && !settings.method.spec().takes_reflector
     {
+        let takers = Method::ALL
+            .iter()
+            .filter(|m| m.spec().takes_reflector)
+            .map(|m| format!("`{}`", m.name()))
+            .collect::<Vec<_>>()
+            .join(" or ");
         return Err(CalibrationError::InvalidSettings(format!(
-            "a reflector ({r}) can only be chosen for method `distance-single`; `{}` uses all three",
+            "a reflector ({r}) can only be chosen for method {takers}; `{}` uses all three",
             settings.method.name()
         )));
     }
@@ -700,7 +534,7 @@ fn arm_input(
     nominal: &DualArmModel,
     side: Side,
     settings: &CalibrationSettings,
-) -> Result<ArmInput, CalibrationError> {
+) -> Result<ArmData, CalibrationError> {
     let ms: Vec<&crate::dataset::Measurement> = dataset
         .arm(side)
         .measurements
@@ -712,7 +546,7 @@ fn arm_input(
         .map(|(_, m)| m)
         .collect();
     let params = super::identifiable_params(nominal.arm(side));
-    let needed = super::min_configurations_for(settings.method, nominal.arm(side));
+    let needed = settings.method.min_configurations(nominal.arm(side));
     if ms.len() < needed {
         return Err(CalibrationError::TooFewConfigurations {
             side,
@@ -750,7 +584,8 @@ fn arm_input(
         / 1000.0;
     let side_tolerance_mm =
         (dataset.tracker.mpe_um + dataset.tracker.mpe_um_per_m * mean_dist_m) / 1000.0;
-    Ok(ArmInput {
+    Ok(ArmData {
+        side,
         ids: ms.iter().map(|m| m.id.clone()).collect(),
         qs,
         measured,

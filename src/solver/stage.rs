@@ -2,7 +2,6 @@
 //! `Solver::next_iter`). [`super::CalibrationRun`] is the one executor that drives it.
 
 use super::Termination;
-use super::lm::LmState;
 use super::problem::{MinimaxProblem, StageParams};
 use super::sqp::SqpState;
 use crate::side::PerSide;
@@ -25,7 +24,8 @@ pub struct IterState {
     pub termination: Option<Termination>,
 }
 
-/// One stage's iterative solver (SQP with the exact or the paper's QP, Levenberg–Marquardt, …) on its
+/// One stage's iterative solver (SQP with the exact or the paper's QP, Gauss–Newton,
+/// Levenberg–Marquardt, …) on its
 /// problem. Implementations keep their own state between calls.
 pub trait StageSolver: Send {
     /// One outer iteration. `stop` is polled inside long iterations; when it answers yes the iteration
@@ -64,42 +64,6 @@ impl<P: MinimaxProblem> StageSolver for SqpState<P> {
     fn objectives_mm2(&self) -> [f64; 3] {
         let pairs = self.problem.pair_count() as f64;
         self.eval().f.map(|v| v * pairs)
-    }
-
-    fn pair_count(&self) -> usize {
-        self.problem.pair_count()
-    }
-}
-
-impl<P: MinimaxProblem> StageSolver for LmState<P> {
-    fn next_iter(&mut self, stop: &dyn Fn() -> bool) -> IterState {
-        if stop() {
-            return IterState {
-                f_mm2: self.objectives_mm2(),
-                step_norm: 0.0,
-                residual: f64::NAN,
-                lambda: None,
-                termination: Some(Termination::Cancelled),
-            };
-        }
-        let step = LmState::next_iter(self);
-        let pairs = self.problem.pair_count() as f64;
-        IterState {
-            f_mm2: step.f.map(|v| v * pairs),
-            step_norm: step.step_norm,
-            residual: step.gradient_norm,
-            lambda: None,
-            termination: step.termination,
-        }
-    }
-
-    fn current(&self) -> StageParams {
-        self.problem.params_at(&self.y)
-    }
-
-    fn objectives_mm2(&self) -> [f64; 3] {
-        let pairs = self.problem.pair_count() as f64;
-        self.problem.values(&self.y).0.map(|v| v * pairs)
     }
 
     fn pair_count(&self) -> usize {

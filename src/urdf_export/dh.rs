@@ -232,7 +232,13 @@ pub(super) fn calibrated_dh_urdf(
         from.replace("--", "- -"),
     );
     // The result must load back as a YuMi description.
-    RobotDescription::from_str(&text, None)
-        .map_err(|e| export_err(format!("the written URDF does not load back: {e}")))?;
+    RobotDescription::load(
+        crate::robot::RobotSource::Text {
+            text: &text,
+            path: None,
+        },
+        &Default::default(),
+    )
+    .map_err(|e| export_err(format!("the written URDF does not load back: {e}")))?;
     Ok(text)
 }

@@ -260,8 +260,14 @@ fn verify(robot: &RobotDescription, model: &DualArmModel, text: &str) -> Result<
         arms: robot.arms().as_ref().map(|_, a| Some(a.links.clone())),
         ..Default::default()
     };
-    let back = RobotDescription::from_str_with(text, robot.source.as_deref(), &options)
-        .map_err(|e| export_err(format!("the written URDF does not load back: {e}")))?;
+    let back = RobotDescription::load(
+        crate::robot::RobotSource::Text {
+            text,
+            path: robot.source.as_deref(),
+        },
+        &options,
+    )
+    .map_err(|e| export_err(format!("the written URDF does not load back: {e}")))?;
     let again = back.nominal_model(model.arm(Side::Left).reflectors_mm);
     for side in Side::BOTH {
         let limits = robot.joint_limits_rad(side);

@@ -21,8 +21,8 @@ import path from "node:path";
 import { fileURLToPath } from "node:url";
 
 const root = path.resolve(path.dirname(fileURLToPath(import.meta.url)), "../..");
-const site = path.join(root, "target/web");
-const out = path.join(root, "target/web-test");
+const site = process.env.DUALCAL_WEB_SITE ?? path.join(root, "target/web");
+const out = process.env.DUALCAL_WEB_TEST_OUT ?? path.join(root, "target/web-test");
 const chromiumPath = process.env.CHROMIUM ?? "/usr/bin/chromium";
 const args = process.argv.slice(2);
 const nativeParams = args.includes("--native-params") ? args[args.indexOf("--native-params") + 1] : null;

@@ -5,7 +5,7 @@ import fs from "node:fs";
 import path from "node:path";
 import { fileURLToPath } from "node:url";
 
-const dir = path.resolve(path.dirname(fileURLToPath(import.meta.url)), "../../target/web-test");
+const dir = process.env.DUALCAL_WEB_TEST_OUT ?? path.resolve(path.dirname(fileURLToPath(import.meta.url)), "../../target/web-test");
 const read = (f) => JSON.parse(fs.readFileSync(path.join(dir, f), "utf8"));
 const build = read("build.json");
 const m = read("metrics.json");

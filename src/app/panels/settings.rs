@@ -409,7 +409,7 @@ fn calibration_settings_ui(ui: &mut egui::Ui, settings: &mut CalibrationSettings
              minimises and what it cannot see)",
             |ui| method_choice_ui(ui, settings),
         );
-        if settings.method == Method::DistanceSingle {
+        if settings.method.spec().takes_reflector {
             grid_row_ui(
                 ui,
                 "Reflector",
@@ -422,7 +422,7 @@ fn calibration_settings_ui(ui: &mut egui::Ui, settings: &mut CalibrationSettings
                 },
             );
         } else {
-            // Only distance-single takes a reflector; the solver refuses one with any other method.
+            // Only a single-reflector method takes one; the solver refuses one with any other.
             settings.reflector = None;
         }
         grid_row_ui(
@@ -494,60 +494,15 @@ fn calibration_settings_ui(ui: &mut egui::Ui, settings: &mut CalibrationSettings
     });
 }
 
-/// What each step-1 method minimises and what it cannot see (the choices' hover text; docs/solver.md).
+/// A step-1 method's label and what it minimises and cannot see (the choices' hover text), from the
+/// methods' table.
 pub(crate) fn method_help(method: Method) -> (&'static str, &'static str) {
-    match method {
-        Method::Minimax => (
-            "minimax (paper, Algorithm I)",
-            "Minimises the largest of the three reflectors' summed squared distance errors (SQP). \
-             Distances only: the tracker-to-base transform and the parameters distances cannot \
-             see stay nominal.",
-        ),
-        Method::LeastSquares => (
-            "least squares",
-            "Minimises the sum of all three reflectors' squared distance errors \
-             (Levenberg–Marquardt). Distances only, like minimax; bounds the sum, not the worst \
-             reflector.",
-        ),
-        Method::DistanceSingle => (
-            "distance, one reflector [26]",
-            "Minimises one reflector's squared distance errors (Gauss–Newton). Cannot see the \
-             flange's orientation: the other two reflectors are not identified and stay nominal.",
-        ),
-        Method::Pose => (
-            "pose [19]",
-            "Minimises the pose error of a tool frame built from the three measured reflectors \
-             (linearised model, QR), identifying the tracker-to-base transform with the arm.",
-        ),
-        Method::Position => (
-            "position [18]",
-            "Minimises the three reflectors' absolute positioning errors in the tracker frame \
-             (Levenberg–Marquardt), the tracker-to-base transform identified jointly. Needs \
-             absolute tracker coordinates.",
-        ),
-    }
+    (method.spec().label, method.spec().summary)
 }
 
-/// What each step-2 method minimises and what it cannot see.
+/// A step-2 method's label and what it minimises and cannot see, from the methods' table.
 pub(crate) fn base_method_help(method: BaseMethod) -> (&'static str, &'static str) {
-    match method {
-        BaseMethod::Minimax => (
-            "minimax (paper, Algorithm II)",
-            "Minimises the largest collaborative distance error of left/right configuration pairs \
-             (SQP). Distances only.",
-        ),
-        BaseMethod::Distance => (
-            "distance [26]",
-            "Minimises the sum of squared collaborative distance errors (Gauss–Newton). Distances \
-             only; bounds the sum, not the worst pair.",
-        ),
-        BaseMethod::Absolute => (
-            "absolute [28]",
-            "Locates each arm's base in the tracker frame from its absolute positioning errors \
-             (step 1's arms held) and combines the two (Moore–Penrose inverse). Sees only what \
-             each arm's absolute errors show; never fits the collaborative distances themselves.",
-        ),
-    }
+    (method.spec().label, method.spec().summary)
 }
 
 /// The step-1 method combo: every method, each with what it minimises and cannot see on hover.
@@ -555,7 +510,7 @@ fn method_choice_ui(ui: &mut egui::Ui, settings: &mut CalibrationSettings) -> eg
     egui::ComboBox::from_id_salt("method")
         .selected_text(settings.method.name())
         .show_ui(ui, |ui| {
-            for m in Method::ALL {
+            for &m in Method::ALL {
                 let (name, help) = method_help(m);
                 ui.selectable_value(&mut settings.method, m, name)
                     .on_hover_text(help);
@@ -570,7 +525,7 @@ fn base_method_choice_ui(ui: &mut egui::Ui, base: &mut BaseMethod) -> egui::Resp
     egui::ComboBox::from_id_salt("base method")
         .selected_text(base.name())
         .show_ui(ui, |ui| {
-            for m in BaseMethod::ALL {
+            for &m in BaseMethod::ALL {
                 let (name, help) = base_method_help(m);
                 ui.selectable_value(base, m, name).on_hover_text(help);
             }

@@ -15,13 +15,13 @@ mod paper_values;
 mod plots;
 mod tables;
 
-use super::{ReproduceArgs, load_dataset};
+use super::{ReproduceArgs, load_workspace};
 use crate::comparison::{self, Comparison, MethodEntry};
 use crate::dataset::{Dataset, Split};
-use crate::kinematics::DualArmModel;
 use crate::metrics::AccuracyReport;
 use crate::output::{Overwrite, refuse_existing, write_atomic};
 use crate::robot::RobotDescription;
+use crate::side::Side;
 use crate::simulate::{self, JointErrorModel, SimOptions};
 use crate::solver::CalibrationSettings;
 use anyhow::{Context, Result, bail};
@@ -252,10 +252,14 @@ pub(crate) fn run(a: &ReproduceArgs, robot: &RobotDescription) -> Result<()> {
     let started = Instant::now();
     let runs = match &plan.dataset {
         Some(path) => {
-            let ds = load_dataset(path)?;
-            let robot = super::robot_of(&ds)?;
-            let nominal = robot.nominal_model(ds.nominal_reflectors_mm);
-            vec![run_one(&plan, None, &ds, &nominal, None)?]
+            let ws = load_workspace(path)?;
+            let input = comparison::CompareInput {
+                dataset: &ws.dataset,
+                nominal: &ws.nominal,
+                truth: None,
+                body_from_left_base: ws.robot.body_from_arm_base(Side::Left),
+            };
+            vec![run_one(&plan, None, input)?]
         }
         None => plan
             .seeds
@@ -267,13 +271,13 @@ pub(crate) fn run(a: &ReproduceArgs, robot: &RobotDescription) -> Result<()> {
                 };
                 let sim = simulate::simulate_with_robot(&opts, robot)
                     .with_context(|| format!("simulating seed {seed}"))?;
-                run_one(
-                    &plan,
-                    Some(seed),
-                    &sim.dataset,
-                    &sim.nominal,
-                    Some(&sim.truth),
-                )
+                let input = comparison::CompareInput {
+                    dataset: &sim.dataset,
+                    nominal: &sim.nominal,
+                    truth: Some(&sim.truth),
+                    body_from_left_base: robot.body_from_arm_base(Side::Left),
+                };
+                run_one(&plan, Some(seed), input)
             })
             .collect::<Result<Vec<_>>>()?,
     };
@@ -311,13 +315,8 @@ pub(crate) fn run(a: &ReproduceArgs, robot: &RobotDescription) -> Result<()> {
 }
 
 /// The comparison and Fig. 4 on one dataset.
-fn run_one(
-    plan: &Plan,
-    seed: Option<u64>,
-    ds: &Dataset,
-    nominal: &DualArmModel,
-    truth: Option<&DualArmModel>,
-) -> Result<SeedRun> {
+fn run_one(plan: &Plan, seed: Option<u64>, input: comparison::CompareInput<'_>) -> Result<SeedRun> {
+    let ds = input.dataset;
     let what = seed.map_or_else(|| "dataset".to_owned(), |s| format!("seed {s}"));
     let common = CalibrationSettings::default();
     let cancel = Arc::new(AtomicBool::new(false));
@@ -332,16 +331,8 @@ fn run_one(
         }
     };
     let t = Instant::now();
-    let comparison = comparison::compare(
-        ds,
-        nominal,
-        truth,
-        &plan.methods,
-        &common,
-        &cancel,
-        &mut progress,
-    )
-    .with_context(|| format!("{what}: the comparison"))?;
+    let comparison = comparison::compare(&input, &plan.methods, &common, &cancel, &mut progress)
+        .with_context(|| format!("{what}: the comparison"))?;
     for m in &comparison.methods {
         if let Some(run) = m.run() {
             for w in run.result.warnings() {
@@ -366,16 +357,13 @@ fn run_one(
             continue;
         }
         let sub = ds.with_cal_subset(n);
-        let c = comparison::compare(
-            &sub,
-            nominal,
-            None,
-            &arm_methods,
-            &common,
-            &cancel,
-            &mut |_| {},
-        )
-        .with_context(|| format!("{what}: Fig. 4 with {n} configurations"))?;
+        let input = comparison::CompareInput {
+            dataset: &sub,
+            truth: None,
+            ..input
+        };
+        let c = comparison::compare(&input, &arm_methods, &common, &cancel, &mut |_| {})
+            .with_context(|| format!("{what}: Fig. 4 with {n} configurations"))?;
         for m in &c.methods {
             fig4.push(Fig4Point {
                 n,

@@ -180,7 +180,12 @@ fn series(f: &HistFigure, indicator: Indicator, runs: &[SeedRun]) -> Vec<Series>
     let mut out = vec![Series {
         name: "nominal".into(),
         colour: colour(0),
-        per_seed: per_seed(&|r| r.comparison.nominal.samples(Split::Ver, indicator)),
+        per_seed: per_seed(&|r| {
+            r.comparison
+                .nominal
+                .samples(Split::Ver, indicator)
+                .map(<[f32]>::to_vec)
+        }),
     }];
     for (k, m) in f.methods.iter().enumerate() {
         let key = m.key;
@@ -192,6 +197,7 @@ fn series(f: &HistFigure, indicator: Indicator, runs: &[SeedRun]) -> Vec<Series>
                     .method(key)?
                     .figures()?
                     .samples(Split::Ver, indicator)
+                    .map(<[f32]>::to_vec)
             }),
         });
     }
@@ -199,7 +205,13 @@ fn series(f: &HistFigure, indicator: Indicator, runs: &[SeedRun]) -> Vec<Series>
         out.push(Series {
             name: "true parameters".into(),
             colour: colour(f.methods.len() + 1),
-            per_seed: per_seed(&|r| r.comparison.truth.as_ref()?.samples(Split::Ver, indicator)),
+            per_seed: per_seed(&|r| {
+                r.comparison
+                    .truth
+                    .as_ref()?
+                    .samples(Split::Ver, indicator)
+                    .map(<[f32]>::to_vec)
+            }),
         });
     }
     out

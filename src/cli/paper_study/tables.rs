@@ -592,11 +592,8 @@ pub(crate) fn runs_csv(runs: &[SeedRun]) -> Result<String> {
             .seed
             .map_or_else(|| "dataset".to_owned(), |s| s.to_string());
         let c = &r.comparison;
-        let mut models: Vec<(
-            String,
-            Option<&crate::comparison::ModelFigures>,
-            Vec<String>,
-        )> = vec![("nominal".into(), Some(&c.nominal), vec![String::new(); 4])];
+        let mut models: Vec<(String, Option<&crate::analysis::Analysis>, Vec<String>)> =
+            vec![("nominal".into(), Some(&c.nominal), vec![String::new(); 4])];
         if let Some(t) = &c.truth {
             models.push(("truth".into(), Some(t), vec![String::new(); 4]));
         }
@@ -631,7 +628,7 @@ pub(crate) fn runs_csv(runs: &[SeedRun]) -> Result<String> {
             };
             let error = c
                 .method(&name)
-                .and_then(|m| m.outcome.as_ref().err().cloned())
+                .and_then(|m| m.outcome.as_ref().err().map(ToString::to_string))
                 .unwrap_or_default();
             for split in [Split::Cal, Split::Ver] {
                 let Some(rep) = figures.and_then(|f| f.report(split)) else {

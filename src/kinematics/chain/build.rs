@@ -1,9 +1,27 @@
 //! Building a [`SerialChain`] from a parsed URDF.
 
 use super::{ChainError, ChainJoint, MovableKind, SerialChain};
-use crate::robot::{finite_pose, isometry_from_urdf_pose};
 use nalgebra::{Isometry3, Translation3, Unit, UnitQuaternion, Vector3};
 use std::collections::HashMap;
+
+/// Convert a URDF pose (m, rpy) to an isometry in mm.
+pub fn isometry_from_urdf_pose(pose: &urdf_rs::Pose) -> Isometry3<f64> {
+    let [x, y, z] = pose.xyz.0;
+    let [r, p, yaw] = pose.rpy.0;
+    Isometry3::from_parts(
+        Translation3::new(x * 1000.0, y * 1000.0, z * 1000.0),
+        UnitQuaternion::from_euler_angles(r, p, yaw),
+    )
+}
+
+/// Whether every number of a URDF pose is finite.
+pub(crate) fn finite_pose(pose: &urdf_rs::Pose) -> bool {
+    pose.xyz
+        .0
+        .iter()
+        .chain(pose.rpy.0.iter())
+        .all(|v| v.is_finite())
+}
 
 /// The rotation taking +z to `axis` (identity for +z, a half turn about x for −z).
 fn aligned_rotation(axis: &Unit<Vector3<f64>>) -> UnitQuaternion<f64> {

@@ -38,7 +38,8 @@ mod build;
 mod tests;
 
 use super::{ArmJacobians, REFLECTOR_NAMES, ReflectorFk};
-pub use build::check_disjoint;
+pub(crate) use build::finite_pose;
+pub use build::{check_disjoint, isometry_from_urdf_pose};
 use nalgebra::{Isometry3, Matrix3xX, Translation3, Unit, UnitQuaternion, Vector3};
 
 /// Correction parameters per movable joint: `tx, ty, tz` (mm), `rx, ry, rz` (rad).
@@ -97,6 +98,40 @@ impl ChainError {
             | ChainError::BadLimits { joint, .. }
             | ChainError::SharedJoint { joint } => Some(joint),
         }
+    }
+}
+
+/// The two links that delimit an arm's chain.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub struct ArmLinks {
+    pub base_link: String,
+    pub tip_link: String,
+}
+
+impl ArmLinks {
+    pub fn new(base_link: impl Into<String>, tip_link: impl Into<String>) -> Self {
+        Self {
+            base_link: base_link.into(),
+            tip_link: tip_link.into(),
+        }
+    }
+
+    /// Parse `BASE:TIP` (the command line's `--left`/`--right`).
+    pub fn parse(text: &str) -> Result<Self, String> {
+        match text.split_once(':') {
+            Some((base, tip)) if !base.trim().is_empty() && !tip.trim().is_empty() => {
+                Ok(Self::new(base.trim(), tip.trim()))
+            }
+            _ => Err(format!(
+                "`{text}` is not BASE:TIP (the arm's base link and tip link, e.g. yumi_body:yumi_link_7_l)"
+            )),
+        }
+    }
+}
+
+impl std::fmt::Display for ArmLinks {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{} → {}", self.base_link, self.tip_link)
     }
 }
 

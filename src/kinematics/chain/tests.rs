@@ -3,7 +3,6 @@
 
 use super::*;
 use crate::kinematics::ArmModel;
-use crate::robot::isometry_from_urdf_pose;
 use crate::test_robots::{DUAL_UR_ARMS, dual_ur_like_urdf, yumi_like_urdf};
 use nalgebra::DVector;
 use rand::{Rng, SeedableRng};

@@ -205,3 +205,127 @@ fn user_fixed_and_near_dependent_parameters_are_reported() {
     assert_eq!(rep.fixed[0].reason, "fixed by the user");
     assert!(rep.fixed[1].reason.contains("near-dependent") && rep.fixed[1].reason.contains("p0"));
 }
+
+#[test]
+fn the_parallel_qr_is_nalgebras_to_the_bit() {
+    let mut rng = ChaCha8Rng::seed_from_u64(12);
+    let yumi = chain(&yumi_like_urdf(), "yumi_body", "yumi_link_7_l");
+    let mut samples = vec![
+        columns(&ArmModel::nominal_irb14000(reflectors()), 120, &mut rng),
+        columns(&ArmModel::nominal_chain(yumi, reflectors()), 40, &mut rng),
+        // Fewer rows than columns, and a zero column (no reflection at that step).
+        DMatrix::from_fn(6, 4, |r, c| (r as f64 + 1.0) * (c as f64 - 1.5)),
+        DMatrix::from_fn(5, 30, |r, c| if r == 2 { 0.0 } else { (r * c) as f64 }),
+    ];
+    samples.push(DMatrix::from_fn(9, 700, |_, _| rng.random_range(-1.0..1.0)));
+    for m in samples {
+        // What earlier releases computed: nalgebra's QR of the zero-padded transpose.
+        let (p, count) = m.shape();
+        let mut padded = DMatrix::<f64>::zeros(count.max(p), p);
+        padded.rows_mut(0, count).copy_from(&m.transpose());
+        let r = padded.qr().r();
+        let reference = r.transpose() * &r / count.max(1) as f64;
+        let ours = gram_by_qr(&m);
+        assert_eq!(ours.shape(), reference.shape());
+        for (a, b) in ours.iter().zip(reference.iter()) {
+            assert_eq!(a.to_bits(), b.to_bits(), "{a} vs {b} ({p} × {count})");
+        }
+    }
+}
+
+/// The re-check at the solution forms its Gram matrix by one product; the start's analysis of the
+/// built-in robot (and the re-check before) by QR. Their verdicts — which parameters stay free, which
+/// are fixed, whether the condition number grew beyond `CONDITION_GROWTH` — agree at the solutions of
+/// every distance method on every test robot.
+#[test]
+fn the_recheck_by_product_gives_the_qr_verdicts() {
+    use crate::dataset::Split;
+    use crate::robot::{ArmLinks, LoadOptions, RobotDescription, RobotSource};
+    use crate::side::{PerSide, Side};
+    use crate::simulate::{paper_options, simulate_with_robot};
+    use crate::solver::methods::set_up::IDENTIFIABILITY_PAIRS;
+    use crate::solver::run::CONDITION_GROWTH;
+    use crate::solver::{CalibrationSettings, Calibrator, Method};
+    let urdf = |text: String, arms: [(&str, &str); 2]| {
+        let options = LoadOptions {
+            arms: PerSide::new(
+                Some(ArmLinks::new(arms[0].0, arms[0].1)),
+                Some(ArmLinks::new(arms[1].0, arms[1].1)),
+            ),
+            ..LoadOptions::default()
+        };
+        RobotDescription::load(
+            RobotSource::Text {
+                text: &text,
+                path: None,
+            },
+            &options,
+        )
+        .expect("test robot")
+    };
+    let robots = [
+        RobotDescription::builtin_irb14000(),
+        urdf(yumi_like_urdf(), crate::test_robots::YUMI_LIKE_ARMS),
+        urdf(dual_ur_like_urdf(), crate::test_robots::DUAL_UR_ARMS),
+    ];
+    let mut checked = 0;
+    for (r, robot) in robots.iter().enumerate() {
+        let sim = simulate_with_robot(&paper_options(20 + r as u64, 70, 50), robot).unwrap();
+        for method in [
+            Method::Minimax,
+            Method::LeastSquares,
+            Method::DistanceSingle,
+        ] {
+            let settings = CalibrationSettings {
+                method,
+                ..CalibrationSettings::default()
+            };
+            let result = Calibrator::new(&sim.dataset, &sim.nominal)
+                .settings(settings.clone())
+                .run()
+                .unwrap();
+            for side in Side::BOTH {
+                let start = result.identifiability[side].as_ref().unwrap();
+                let fast = result.identifiability_at_solution[side].as_ref().unwrap();
+                let qs: Vec<Vec<f64>> = sim
+                    .dataset
+                    .arm(side)
+                    .measurements
+                    .iter()
+                    .filter(|m| m.split == Split::Cal)
+                    .map(|m| m.q_rad.clone())
+                    .collect();
+                let arm = result.calibrated.arm(side);
+                let at = |how| at_solution(arm, &qs, &start.free, IDENTIFIABILITY_PAIRS, how);
+                let (product, qr) = (at(GramMethod::Product), at(GramMethod::Qr));
+                let case = format!("robot {r}, {}, {side} arm", method.name());
+                let fixed = |rep: &IdentifiabilityReport| -> Vec<(usize, String)> {
+                    rep.fixed
+                        .iter()
+                        .map(|f| (f.index, f.reason.clone()))
+                        .collect()
+                };
+                // (Residuals of parameters fixed by the user are NaN: no `==` on whole reports.)
+                assert_eq!(
+                    fast.free, product.free,
+                    "{case}: the run's re-check is the product's"
+                );
+                assert_eq!(fixed(fast), fixed(&product), "{case}");
+                assert_eq!(fast.condition_after, product.condition_after, "{case}");
+                assert_eq!(product.free, qr.free, "{case}");
+                assert_eq!(fixed(&product), fixed(&qr), "{case}");
+                let grew = |rep: &IdentifiabilityReport| {
+                    rep.condition_after > CONDITION_GROWTH * start.condition_after
+                };
+                assert_eq!(grew(&product), grew(&qr), "{case}");
+                let rel = product.condition_after / qr.condition_after - 1.0;
+                assert!(
+                    rel.abs() < 1e-8,
+                    "{case}: condition numbers differ by {rel:e}"
+                );
+                checked += 1;
+            }
+        }
+    }
+    assert_eq!(checked, 18);
+}

@@ -1,0 +1,55 @@
+//! The identifiability analysis repeated at a step-1 solution: the distance Jacobian of the calibrated
+//! arm on the start's sample of pairs (the same evenly strided pairs), with the parameters the start
+//! left free as the only allowed ones. Its Gram matrix is one product ([`gram_by_product`]) whatever the
+//! robot: only its verdicts are used (a parameter no longer identifiable, a grown condition number),
+//! and they are those of the QR the start uses for the built-in robot (a test holds them on the test
+//! robots and the distance methods).
+
+use super::{IdentifiabilityReport, ParameterInfo, analyse, gram_by_product, gram_by_qr};
+use crate::kinematics::{ArmJacobians, ArmModel};
+use crate::solver::arm_problem::pair_jacobian_columns;
+use nalgebra::DMatrix;
+use rayon::prelude::*;
+
+/// How the re-check forms the Gram matrix of the sampled pair Jacobian.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GramMethod {
+    /// One matrix product `MMᵀ / count` (what the re-check uses).
+    Product,
+    /// `RᵀR / count` of a QR of `Mᵀ` (the start's analysis of the built-in robot; for comparison).
+    Qr,
+}
+
+/// The analysis of `arm` at the configurations `qs` (one arm's calibration split), on at most
+/// `max_pairs` evenly strided pairs per reflector, with only `allowed_free` allowed to be free.
+pub fn at_solution(
+    arm: &ArmModel,
+    qs: &[Vec<f64>],
+    allowed_free: &[usize],
+    max_pairs: usize,
+    method: GramMethod,
+) -> IdentifiabilityReport {
+    let jac: Vec<ArmJacobians> = qs.par_iter().map(|q| arm.reflector_jacobians(q)).collect();
+    let columns = pair_jacobian_columns(&jac, max_pairs, [true; 3]);
+    let gram: DMatrix<f64> = match method {
+        GramMethod::Product => gram_by_product(&columns),
+        GramMethod::Qr => gram_by_qr(&columns),
+    };
+    let n_params = arm.param_count();
+    let mut allowed = vec![false; n_params];
+    for &k in allowed_free {
+        allowed[k] = true;
+    }
+    let order = arm.identifiability_order();
+    analyse(
+        &gram,
+        &ParameterInfo {
+            order: &order,
+            allowed: &allowed,
+            name: &|k| arm.param_name(k),
+            reason: &|k| arm.unidentifiable_reason(k),
+            data: ParameterInfo::DISTANCES,
+            not_allowed: ParameterInfo::FIXED_BY_USER,
+        },
+    )
+}

@@ -1,0 +1,41 @@
+//! Least squares of all three reflectors' distance errors by Levenberg–Marquardt: the baseline the
+//! minimax objective is compared with (it bounds the sum, not the worst reflector, and ignores the
+//! reflector-triangle constraints).
+
+use super::set_up::{ArmSetUp, ArmStage, least_squares_solver};
+use super::{MethodSpec, Observes, SolverKind};
+use crate::solver::CalibrationError;
+use crate::solver::least_squares::{DistanceLeastSquares, LsqAlgorithm};
+
+pub const LSQ: MethodSpec = MethodSpec {
+    name: "lsq",
+    objective: "LeastSquares",
+    aliases: &["leastsquares"],
+    label: "least squares",
+    summary: "Minimises the sum of all three reflectors' squared distance errors \
+              (Levenberg–Marquardt). Distances only, like minimax; bounds the sum, not the worst \
+              reflector.",
+    fits: "least squares of the distance errors",
+    table_label: "least squares",
+    paper: None,
+    observes: Observes::ThreeReflectors,
+    count_rule: "9n − 18 independent distances",
+    min_configurations: crate::solver::min_configurations,
+    identifies_tracker_frame: false,
+    takes_reflector: false,
+    solver: SolverKind::LeastSquares,
+    set_up,
+};
+
+fn set_up(s: &ArmSetUp) -> Result<ArmStage, CalibrationError> {
+    let start = s.all_distances()?;
+    let problem = DistanceLeastSquares {
+        problem: start.problem,
+        reflectors: [true; 3],
+    };
+    Ok(ArmStage {
+        solver: least_squares_solver(problem, LsqAlgorithm::LevenbergMarquardt, s.settings),
+        identifiability: start.report,
+        reflector: None,
+    })
+}

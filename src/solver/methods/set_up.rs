@@ -1,0 +1,322 @@
+//! What a method's set-up works with — its stage's data, the start model, the settings — and the steps
+//! the methods share: the distance identifiability analysis (the one prologue of the set-ups and of
+//! the executor's re-check at the solution), column scaling, the start of the tracker frame, and the
+//! solvers.
+
+use super::super::absolute_problem::{
+    AbsoluteData, AbsoluteProblem, moore_penrose_fit, triangle_area_mm2,
+};
+use super::super::arm_problem::ArmProblem;
+use super::super::base_problem::BaseProblem;
+use super::super::identifiability::{self, IdentifiabilityReport, ParameterInfo};
+use super::super::least_squares::{LeastSquaresProblem, LsqAlgorithm, LsqState};
+use super::super::problem::MinimaxProblem;
+use super::super::sqp::{SqpSettings, SqpState};
+use super::super::{CalibrationError, CalibrationSettings, Reflector, Stage, StageSolver};
+use crate::kinematics::{ArmKinematics, ArmModel, DualArmModel};
+use crate::side::{PerSide, Side};
+use nalgebra::{DMatrix, DVector, Isometry3, Vector3};
+
+/// Pairs per reflector sampled for identifiability, column scaling and the start Hessian.
+pub const IDENTIFIABILITY_PAIRS: usize = 3000;
+
+/// One arm's measurements of the selected split (exclusions left out), checked.
+#[derive(Clone, Debug)]
+pub struct ArmData {
+    pub side: Side,
+    /// The configurations' ids (for messages).
+    pub ids: Vec<String>,
+    pub qs: Vec<Vec<f64>>,
+    /// Tracker-frame reflector positions, one triple per configuration, mm.
+    pub measured: Vec<[Vector3<f64>; 3]>,
+    /// Allowed deviation δ of the reflector triangle's sides (constraint 14, ε = δ²), mm.
+    pub side_tolerance_mm: f64,
+}
+
+impl ArmData {
+    /// The distance problem of `arm` on these data with every parameter free at unit scale (the
+    /// probe of the identifiability analysis; [`ArmProblem::with_free`] makes it the stage's).
+    pub fn distance_probe(&self, arm: &ArmModel) -> ArmProblem {
+        let n_params = arm.param_count();
+        ArmProblem::new(
+            self.qs.clone(),
+            &self.measured,
+            arm,
+            (0..n_params).collect(),
+            DVector::from_element(n_params, 1.0),
+            self.side_tolerance_mm,
+        )
+    }
+
+    /// The start of `tracker_from_base` for `arm`: the Moore–Penrose fit of its model points to the
+    /// measured ones.
+    pub fn tracker_start(&self, arm: &ArmModel) -> Result<Isometry3<f64>, CalibrationError> {
+        let model: Vec<Vector3<f64>> = self
+            .qs
+            .iter()
+            .flat_map(|q| arm.reflector_fk(q).points_mm)
+            .collect();
+        let measured: Vec<Vector3<f64>> = self.measured.iter().flatten().copied().collect();
+        moore_penrose_fit(&model, &measured).ok_or_else(|| CalibrationError::NonFinite {
+            stage: Stage::Arm(self.side),
+            detail: "the tracker-from-base fit of the start model".into(),
+        })
+    }
+
+    /// An absolute problem of `arm` on these data with the parameters `free` (unit scales), or the
+    /// typed error of a configuration whose measured reflectors are collinear (pose data).
+    pub fn absolute_probe(
+        &self,
+        data: AbsoluteData,
+        arm: &ArmModel,
+        free: Vec<usize>,
+    ) -> Result<AbsoluteProblem, CalibrationError> {
+        let t0 = self.tracker_start(arm)?;
+        let scale = DVector::from_element(free.len() + 6, 1.0);
+        AbsoluteProblem::new(
+            data,
+            self.side,
+            self.qs.clone(),
+            self.measured.clone(),
+            arm,
+            t0,
+            free,
+            scale,
+        )
+        .map_err(|i| CalibrationError::DegenerateReflectors {
+            side: self.side,
+            id: self.ids[i].clone(),
+            area_mm2: triangle_area_mm2(&self.measured[i]).0,
+        })
+    }
+}
+
+/// How the mean Gram matrix of the sampled pair Jacobian is formed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GramForm {
+    /// By a QR decomposition for the built-in robot (its calibrations stay bit-identical to earlier
+    /// releases), as one product for a URDF chain.
+    OfModel,
+    /// As one product for either model (the single-reflector set-up has always formed it so).
+    Product,
+}
+
+/// What the distance identifiability analysis is told.
+pub struct DistanceAnalysis<'a> {
+    /// Parameters that may be free at all.
+    pub allowed: &'a [bool],
+    /// What the method fits, for the reasons.
+    pub data: &'a str,
+    /// Why a parameter that is not allowed is fixed.
+    pub not_allowed: &'a str,
+    pub gram: GramForm,
+}
+
+impl DistanceAnalysis<'_> {
+    /// Every parameter allowed, the distances of all three reflectors.
+    pub fn all(allowed: &[bool]) -> DistanceAnalysis<'_> {
+        DistanceAnalysis {
+            allowed,
+            data: ParameterInfo::DISTANCES,
+            not_allowed: ParameterInfo::FIXED_BY_USER,
+            gram: GramForm::OfModel,
+        }
+    }
+}
+
+/// The identifiability analysis of `arm`'s distances on `probe` (its every parameter free at unit
+/// scale, [`ArmData::distance_probe`], restricted to the reflectors it fits): the mean Gram matrix of
+/// [`IDENTIFIABILITY_PAIRS`] sampled pairs per reflector — a few thousand show every dependency (they
+/// are exact) and estimate the scaling well — and the report. The set-ups of the distance methods run
+/// it at the start model, the executor again at the solution.
+pub fn distance_identifiability(
+    probe: &ArmProblem,
+    arm: &ArmModel,
+    analysis: &DistanceAnalysis,
+) -> (DMatrix<f64>, IdentifiabilityReport) {
+    let n_params = arm.param_count();
+    let columns = probe.sample_pair_jacobian(&DVector::zeros(n_params), IDENTIFIABILITY_PAIRS);
+    let gram = match (analysis.gram, &arm.kinematics) {
+        (GramForm::OfModel, ArmKinematics::Dh(_)) => identifiability::gram_by_qr(&columns),
+        _ => identifiability::gram_by_product(&columns),
+    };
+    let order = arm.identifiability_order();
+    let report = identifiability::analyse(
+        &gram,
+        &ParameterInfo {
+            order: &order,
+            allowed: analysis.allowed,
+            name: &|k| arm.param_name(k),
+            reason: &|k| arm.unidentifiable_reason(k),
+            data: analysis.data,
+            not_allowed: analysis.not_allowed,
+        },
+    );
+    (gram, report)
+}
+
+/// Scales `1/√G_kk` of the columns `idx` of a mean Gram matrix (unit RMS sensitivity).
+pub fn column_scales(gram: &DMatrix<f64>, idx: impl Iterator<Item = usize>) -> Vec<f64> {
+    idx.map(|k| 1.0 / gram[(k, k)].max(0.0).sqrt().max(1e-12))
+        .collect()
+}
+
+/// `RankDeficient` unless some kinematic parameter (not a reflector coordinate) is free: data in
+/// which every configuration is the same show nothing of the arm.
+pub fn require_kinematics(
+    stage: Stage,
+    arm: &ArmModel,
+    report: &IdentifiabilityReport,
+) -> Result<(), CalibrationError> {
+    if report.free.iter().any(|&k| k < arm.reflector_offset()) {
+        return Ok(());
+    }
+    Err(CalibrationError::RankDeficient {
+        stage,
+        detail:
+            "no kinematic parameter is identifiable from these configurations (are they all the \
+                 same?)"
+                .into(),
+    })
+}
+
+/// The reflector `distance-single` uses by default: the one whose distance errors the nominal model
+/// fits worst (largest F_k), as ref. [26] is compared in the paper.
+pub fn worst_reflector(objectives_mm2: [f64; 3]) -> Reflector {
+    let k = (0..3)
+        .max_by(|&a, &b| objectives_mm2[a].total_cmp(&objectives_mm2[b]))
+        .unwrap_or(0);
+    Reflector::from_index(k).unwrap_or(Reflector::A)
+}
+
+/// The paper's SQP on `problem` from the start Hessian `h0`, with the settings' QP and tolerances.
+pub fn sqp_solver<P: MinimaxProblem + 'static>(
+    problem: P,
+    stage: Stage,
+    h0: DMatrix<f64>,
+    settings: &CalibrationSettings,
+) -> Result<Box<dyn StageSolver>, CalibrationError> {
+    let sqp = SqpSettings {
+        qp: settings.qp,
+        step_tolerance: settings.step_tolerance,
+        progress_tolerance: settings.progress_tolerance,
+        max_qp_iterations: settings.max_qp_iterations,
+    };
+    Ok(Box::new(SqpState::new(problem, sqp, h0).map_err(|_| {
+        CalibrationError::NonFinite {
+            stage,
+            detail: "objective or gradient at the start point".into(),
+        }
+    })?))
+}
+
+/// `algorithm` on the least-squares `problem`, with the settings' step tolerance.
+pub fn least_squares_solver<P: LeastSquaresProblem + 'static>(
+    problem: P,
+    algorithm: LsqAlgorithm,
+    settings: &CalibrationSettings,
+) -> Box<dyn StageSolver> {
+    Box::new(LsqState::new(problem, algorithm, settings.step_tolerance))
+}
+
+/// What a step-1 method's set-up is given: the arm's data, its start model, the settings.
+pub struct ArmSetUp<'a> {
+    pub data: &'a ArmData,
+    /// The arm's start (nominal) model.
+    pub start: &'a ArmModel,
+    pub settings: &'a CalibrationSettings,
+}
+
+/// What a step-1 method's set-up returns: the stage's solver and what it identifies.
+pub struct ArmStage {
+    pub solver: Box<dyn StageSolver>,
+    /// Which of the arm's parameters the solver identifies and which it holds, and why.
+    pub identifiability: IdentifiabilityReport,
+    /// The reflector a single-reflector method fits.
+    pub reflector: Option<Reflector>,
+}
+
+/// The distance problem of all three reflectors on the identifiable parameters, scaled, with the
+/// Gauss–Newton start Hessian.
+pub struct DistanceStart {
+    pub problem: ArmProblem,
+    /// `2·D·G·D`, G the mean Gram matrix of the pair Jacobian, D the column scales.
+    pub h0: DMatrix<f64>,
+    pub report: IdentifiabilityReport,
+}
+
+impl ArmSetUp<'_> {
+    pub fn stage(&self) -> Stage {
+        Stage::Arm(self.data.side)
+    }
+
+    /// The set-up of the methods that fit all three reflectors' distances: identifiability at the
+    /// start model, every free parameter scaled by its RMS sensitivity, and H₀ the Gauss–Newton matrix
+    /// in those variables.
+    pub fn all_distances(&self) -> Result<DistanceStart, CalibrationError> {
+        let start = self.start;
+        let probe = self.data.distance_probe(start);
+        let allowed = vec![true; start.param_count()];
+        let (gram, report) =
+            distance_identifiability(&probe, start, &DistanceAnalysis::all(&allowed));
+        if report.free.is_empty() {
+            return Err(CalibrationError::RankDeficient {
+                stage: self.stage(),
+                detail: "no parameter is identifiable from these configurations".into(),
+            });
+        }
+        let scale = DVector::from_iterator(
+            report.free.len(),
+            report
+                .free
+                .iter()
+                .map(|&k| 1.0 / gram[(k, k)].sqrt().max(1e-12)),
+        );
+        let h0 = DMatrix::from_fn(report.free.len(), report.free.len(), |i, j| {
+            2.0 * gram[(report.free[i], report.free[j])] * scale[i] * scale[j]
+        });
+        Ok(DistanceStart {
+            problem: probe.with_free(report.free.clone(), scale),
+            h0,
+            report,
+        })
+    }
+}
+
+/// What a step-2 method's set-up is given: both arms' data, the model with step 1's arms (and the
+/// nominal base, the start), the settings.
+pub struct BaseSetUp<'a> {
+    pub data: &'a PerSide<ArmData>,
+    pub model: &'a DualArmModel,
+    pub settings: &'a CalibrationSettings,
+}
+
+impl BaseSetUp<'_> {
+    /// The collaborative distance problem on step 1's arms from the model's base, and its
+    /// Gauss–Newton matrix (the SQP's start Hessian); `RankDeficient` when that is singular.
+    pub fn collaborative_distances(&self) -> Result<(BaseProblem, DMatrix<f64>), CalibrationError> {
+        let model_points = |side: Side| -> Vec<[Vector3<f64>; 3]> {
+            self.data[side]
+                .qs
+                .iter()
+                .map(|q| self.model.arm(side).reflector_fk(q).points_mm)
+                .collect()
+        };
+        let problem = BaseProblem::new(
+            model_points(Side::Left),
+            model_points(Side::Right),
+            &self.data.left.measured,
+            &self.data.right.measured,
+            self.model.left_base_from_right_base,
+        );
+        let h0 = problem.gauss_newton(&DVector::zeros(6));
+        let sv = h0.singular_values();
+        if sv.min() <= sv.max() * 1e-12 {
+            return Err(CalibrationError::RankDeficient {
+                stage: Stage::Base,
+                detail: format!("collaborative Jacobian singular values {:?}", sv.as_slice()),
+            });
+        }
+        Ok((problem, h0))
+    }
+}

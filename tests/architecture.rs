@@ -1,0 +1,132 @@
+//! The engine's layers (docs/architecture.md): every module of the crate uses only modules of the
+//! layers below its own, so no arrow runs back up — the screening never calls the solver, the data
+//! never reach for the robot, the engine never for the workbench. Read from the source: every
+//! `crate::module` a module's code (not its comments, not its tests) names.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::{Path, PathBuf};
+
+/// Bottom first. A module may use the modules of the layers before its own.
+const LAYERS: &[&[&str]] = &[
+    // Leaves: values, statistics, where files come from and what they are, atomic writes.
+    &["side", "stats", "source", "output", "finite_difference"],
+    // Text files, the arm models (DH and URDF chains), meshes.
+    &["textfile", "kinematics", "meshes"],
+    // Measurements.
+    &["dataset"],
+    // The robot description (URDF, arms, shapes).
+    &["robot"],
+    // What is computed from a model and the data, and what is exported of a robot.
+    &["metrics", "collision", "urdf_export"],
+    // The screening, the solver, the simulator, the figures of a model.
+    &["quality", "solver", "simulate", "analysis"],
+    // What combines them: the load pipeline, exclusion and re-fit, the comparison, the parameter file.
+    &["workspace", "exclusion", "comparison", "params"],
+    // The command line, then the workbench.
+    &["cli"],
+    &["app"],
+];
+
+fn layer_of(module: &str) -> Option<usize> {
+    LAYERS.iter().position(|l| l.contains(&module))
+}
+
+/// The `.rs` files of a module (its file, or every file under its folder), tests left out.
+fn files_of(src: &Path, module: &str) -> Vec<PathBuf> {
+    let file = src.join(format!("{module}.rs"));
+    let dir = src.join(module);
+    let mut out = Vec::new();
+    if file.is_file() {
+        out.push(file);
+    }
+    let mut stack = vec![dir];
+    while let Some(d) = stack.pop() {
+        let Ok(entries) = std::fs::read_dir(&d) else {
+            continue;
+        };
+        for e in entries {
+            let p = e.unwrap().path();
+            let name = p.file_name().unwrap().to_string_lossy().into_owned();
+            if p.is_dir() {
+                if name != "tests" {
+                    stack.push(p);
+                }
+            } else if name.ends_with(".rs") && name != "tests.rs" {
+                out.push(p);
+            }
+        }
+    }
+    out
+}
+
+/// The crate's modules a file's code names (`crate::x`), comments and its inline test module left out.
+fn uses(text: &str) -> BTreeSet<String> {
+    let code = match text.find("#[cfg(test)]\nmod tests {") {
+        Some(k) => &text[..k],
+        None => text,
+    };
+    let mut out = BTreeSet::new();
+    for line in code.lines() {
+        let line = match line.find("//") {
+            Some(k) => &line[..k],
+            None => line,
+        };
+        let mut rest = line;
+        while let Some(k) = rest.find("crate::") {
+            rest = &rest[k + "crate::".len()..];
+            let name: String = rest
+                .chars()
+                .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
+                .collect();
+            if !name.is_empty() {
+                out.insert(name);
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn no_module_uses_one_of_a_higher_layer() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let lib = std::fs::read_to_string(src.join("lib.rs")).unwrap();
+    let modules: Vec<String> = lib
+        .lines()
+        .filter_map(|l| l.trim().strip_prefix("pub mod "))
+        .map(|m| m.trim_end_matches(';').to_string())
+        .collect();
+    assert!(modules.len() > 10, "{modules:?}");
+    let mut problems = Vec::new();
+    let mut arrows: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
+    for m in &modules {
+        let Some(own) = layer_of(m) else {
+            problems.push(format!(
+                "`{m}` is in no layer: add it to LAYERS and docs/architecture.md"
+            ));
+            continue;
+        };
+        for file in files_of(&src, m) {
+            let text = std::fs::read_to_string(&file).unwrap();
+            for used in uses(&text) {
+                if &used == m || !modules.contains(&used) {
+                    continue;
+                }
+                arrows.entry(m.clone()).or_default().insert(used.clone());
+                match layer_of(&used) {
+                    Some(l) if l < own => {}
+                    _ => problems.push(format!(
+                        "{}: `{m}` (layer {own}) uses `{used}` (layer {:?})",
+                        file.strip_prefix(&src).unwrap().display(),
+                        layer_of(&used)
+                    )),
+                }
+            }
+        }
+    }
+    assert!(problems.is_empty(), "{}", problems.join("\n"));
+    // The arrows the docs speak of are there (the test reads what it claims to read).
+    assert!(arrows["workspace"].contains("quality") && arrows["workspace"].contains("robot"));
+    assert!(arrows["exclusion"].contains("solver") && arrows["exclusion"].contains("quality"));
+    assert!(!arrows["quality"].contains("solver"));
+    assert!(!arrows["dataset"].contains("robot") && !arrows["dataset"].contains("quality"));
+}
