@@ -6,7 +6,7 @@
 //! The pair sum is regrouped per configuration, ∇F_k = −2 Σ_i J_i,kᵀ w_i,k with
 //! w_i,k = Σ_{j≠i} Δd_ij,k u_ij,k, so the Jacobians are computed once per configuration and iterate and
 //! no pair Jacobian is ever formed. The pair pass itself (distances, Σ Δd², the weights) is [`pairs`]:
-//! the measured distances are recomputed from the measured points, nothing is stored per pair.
+//! the measured distances are kept up to `pairs::KEPT_DISTANCE_PAIRS` pairs per reflector, recomputed beyond.
 
 use super::problem::{Eval, LeastSquaresSystem, MinimaxProblem, StageParams};
 use crate::kinematics::{ArmJacobians, ArmModel, ReflectorFk};
@@ -22,8 +22,11 @@ pub const SIDES: [(usize, usize); 3] = [(0, 1), (1, 2), (2, 0)];
 /// Step-1 problem of one arm.
 pub struct ArmProblem {
     qs: Vec<Vec<f64>>,
-    /// Measured (tracker-frame) points per reflector, mm; the distances are recomputed per pass.
+    /// Measured (tracker-frame) points per reflector, mm.
     measured: [Points; 3],
+    /// Their pairwise distances, kept up to [`pairs::KEPT_DISTANCE_PAIRS`] pairs per reflector;
+    /// recomputed per pass beyond.
+    kept_distances: Option<[Vec<f64>; 3]>,
     n_pairs: usize,
     /// How the pair passes are cut ([`pairs::Plan::for_pairs`]).
     plan: Plan,
@@ -64,6 +67,7 @@ impl ArmProblem {
         });
         Self {
             qs,
+            kept_distances: pairs::kept_triangle_distances(&measured_points),
             measured: measured_points,
             n_pairs,
             plan: Plan::for_pairs(n_pairs),
@@ -188,7 +192,14 @@ impl ArmProblem {
         let model = self.model_at(&DVector::zeros(self.free.len()));
         let fk = self.fk_all(&model);
         let points = Self::points(|i| fk[i].points_mm, fk.len());
-        pairs::triangle(&points, &self.measured, false, self.plan).map(|(f, _)| f)
+        pairs::triangle(
+            &points,
+            &self.measured,
+            self.kept_distances.as_ref(),
+            false,
+            self.plan,
+        )
+        .map(|(f, _)| f)
     }
 }
 
@@ -271,7 +282,13 @@ impl MinimaxProblem for ArmProblem {
         let jac = self.jac_all(&model);
         let points = Self::points(|i| jac[i].fk.points_mm, jac.len());
         let norm = 1.0 / self.n_pairs.max(1) as f64;
-        let sums = pairs::triangle(&points, &self.measured, true, self.plan);
+        let sums = pairs::triangle(
+            &points,
+            &self.measured,
+            self.kept_distances.as_ref(),
+            true,
+            self.plan,
+        );
         let per_reflector: Vec<(f64, DVector<f64>)> = sums
             .par_iter()
             .enumerate()
@@ -312,7 +329,14 @@ impl MinimaxProblem for ArmProblem {
         let fk = self.fk_all(&model);
         let points = Self::points(|i| fk[i].points_mm, fk.len());
         let norm = 1.0 / self.n_pairs.max(1) as f64;
-        let f = pairs::triangle(&points, &self.measured, false, self.plan).map(|(f, _)| f * norm);
+        let f = pairs::triangle(
+            &points,
+            &self.measured,
+            self.kept_distances.as_ref(),
+            false,
+            self.plan,
+        )
+        .map(|(f, _)| f * norm);
         let (cons, _) = self.constraints(&x, false);
         (f, cons)
     }

@@ -30,6 +30,9 @@ pub struct BaseProblem {
     /// recomputed per pass.
     measured_left: [Points; 3],
     measured_right: [Points; 3],
+    /// Their pairwise (left × right) distances, kept up to [`pairs::KEPT_DISTANCE_PAIRS`] pairs per
+    /// reflector when the passes are blocked; recomputed per pass otherwise.
+    kept_distances: Option<[Vec<f64>; 3]>,
     start: Isometry3<f64>,
     /// Scales of (ω, δp).
     scale: SVector<f64, 6>,
@@ -48,10 +51,16 @@ impl BaseProblem {
             std::array::from_fn(|k| Points::from_fn(points.len(), |i| points[i][k]))
         };
         let plan = Plan::for_pairs(left_mm.len() * right_mm.len());
+        let (measured_left, measured_right) = (soa(measured_left), soa(measured_right));
+        let kept_distances = match plan {
+            Plan::Blocked => pairs::kept_rectangle_distances(&measured_left, &measured_right),
+            Plan::Sequential => None,
+        };
         let mut p = Self {
             left_points: soa(&left_mm),
-            measured_left: soa(measured_left),
-            measured_right: soa(measured_right),
+            measured_left,
+            measured_right,
+            kept_distances,
             left_mm,
             right_mm,
             start,
@@ -126,6 +135,7 @@ impl BaseProblem {
             &t,
             &self.measured_left,
             &self.measured_right,
+            self.kept_distances.as_ref(),
         );
         std::array::from_fn(|k| {
             let (f, a) = &sums[k];

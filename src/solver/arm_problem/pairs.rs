@@ -1,7 +1,8 @@
 //! The pair passes of the distance problems — the only part of an SQP iteration that grows as n².
 //!
 //! Per pair and reflector: the model distance d = |p_i − p_j|, the measured one d_m = |m_i − m_j|
-//! (recomputed, not stored: no per-pair memory), Δd = d_m − d, Σ Δd², and the per-configuration
+//! (kept up to [`KEPT_DISTANCE_PAIRS`] pairs per reflector, recomputed beyond: bounded memory),
+//! Δd = d_m − d, Σ Δd², and the per-configuration
 //! weights `t_ij = (p_i − p_j) Δd / d` that the gradients are regrouped by (eq. 34; step 2 likewise).
 //! Points are kept as struct-of-arrays ([`Points`]) so the inner loop runs in SIMD lanes.
 //!
@@ -17,6 +18,12 @@ use std::ops::Range;
 
 /// Pairs per reflector up to which a pass is one sequential sum in the order of earlier releases.
 pub const SEQUENTIAL_PAIRS: usize = 1 << 17;
+/// Pairs per reflector up to which the measured distances are computed once and kept (8 bytes a
+/// pair: 32 MiB per reflector at most; n ≈ 2 900 configurations per arm). Beyond, each pass recomputes
+/// them from the measured points (no per-pair memory: 2 × 5000 configurations peak at ~40 MB instead
+/// of ~0.9 GB), at the cost of a second square root per pair. Kept or recomputed, a distance is the
+/// same number ([`Points::distance`]), so the sums are the same to the bit.
+pub const KEPT_DISTANCE_PAIRS: usize = 1 << 22;
 /// Row blocks of a larger pass.
 pub const BLOCKS: usize = 16;
 /// Partial sums per block (SIMD lanes).
@@ -157,11 +164,48 @@ fn fold<const L: usize>(lanes: &[f64; L]) -> f64 {
     s
 }
 
+/// The measured distances |m_i − m_j| of every pair (i < j), row by row, per reflector — when there are
+/// at most [`KEPT_DISTANCE_PAIRS`] pairs per reflector; `None` beyond (the passes recompute them).
+pub fn kept_triangle_distances(measured: &[Points; 3]) -> Option<[Vec<f64>; 3]> {
+    let n = measured[0].len();
+    if n * n.saturating_sub(1) / 2 > KEPT_DISTANCE_PAIRS {
+        return None;
+    }
+    Some(std::array::from_fn(|k| {
+        let m = &measured[k];
+        (0..n)
+            .flat_map(|i| (i + 1..n).map(move |j| m.distance(i, j)))
+            .collect()
+    }))
+}
+
+/// The measured distances |m_l − n_r| of every pair (l, r), row by row, per reflector, when there are at
+/// most [`KEPT_DISTANCE_PAIRS`] pairs per reflector.
+pub fn kept_rectangle_distances(left: &[Points; 3], right: &[Points; 3]) -> Option<[Vec<f64>; 3]> {
+    let (nl, nr) = (left[0].len(), right[0].len());
+    if nl * nr > KEPT_DISTANCE_PAIRS {
+        return None;
+    }
+    Some(std::array::from_fn(|k| {
+        (0..nl)
+            .flat_map(|l| (0..nr).map(move |r| distance_between(&left[k], l, &right[k], r)))
+            .collect()
+    }))
+}
+
+/// Index of the pair (i, i + 1) in the row-by-row list of the pairs (i < j) of n points.
+#[inline(always)]
+fn row_start(i: usize, n: usize) -> usize {
+    i * n - i * (i + 1) / 2
+}
+
 /// Σ Δd² over the pairs (i, j > i) with i in `rows`, in `L` lanes; with `W`, `w_i += Σ_j t_ij` and
-/// `w_j −= t_ij` into `w`.
-fn triangle_rows<const L: usize, const W: bool>(
+/// `w_j −= t_ij` into `w`. With `K`, the measured distances are read from `kept` (row by row, as
+/// [`kept_triangle_distances`]) instead of recomputed.
+fn triangle_rows<const L: usize, const W: bool, const K: bool>(
     p: &Points,
     m: &Points,
+    kept: &[f64],
     rows: Range<usize>,
     w: &mut Points,
 ) -> f64 {
@@ -170,11 +214,22 @@ fn triangle_rows<const L: usize, const W: bool>(
     for i in rows {
         let (pix, piy, piz) = (p.x[i], p.y[i], p.z[i]);
         let (mix, miy, miz) = (m.x[i], m.y[i], m.z[i]);
+        // kept_row[j − i − 1] = |m_i − m_j| for j > i.
+        let kept_row = if K {
+            let start = row_start(i, n);
+            &kept[start..start + (n - 1 - i)]
+        } else {
+            &[][..]
+        };
         let (mut wx, mut wy, mut wz) = ([0.0; L], [0.0; L], [0.0; L]);
         let mut lane = |l: usize, j: usize, sum: &mut [f64; L], w: &mut Points| {
             let (vx, vy, vz) = (pix - p.x[j], piy - p.y[j], piz - p.z[j]);
             let dist = norm(vx, vy, vz);
-            let dm = norm(mix - m.x[j], miy - m.y[j], miz - m.z[j]);
+            let dm = if K {
+                kept_row[j - i - 1]
+            } else {
+                norm(mix - m.x[j], miy - m.y[j], miz - m.z[j])
+            };
             let delta = dm - dist;
             sum[l] += delta * delta;
             if W {
@@ -209,9 +264,11 @@ fn triangle_rows<const L: usize, const W: bool>(
 
 /// The pass of one arm's step-1 problem over every pair (i < j) of each reflector: F_k = Σ Δd² and,
 /// with `weights`, w_i,k = Σ_{j≠i} t_ij (signed so that ∇F_k = −2 Σ_i J_i,kᵀ w_i,k).
+/// `kept`: the measured distances from [`kept_triangle_distances`], if kept.
 pub fn triangle(
     model: &[Points; 3],
     measured: &[Points; 3],
+    kept: Option<&[Vec<f64>; 3]>,
     weights: bool,
     plan: Plan,
 ) -> [(f64, Points); 3] {
@@ -223,11 +280,28 @@ pub fn triangle(
     let run = |(k, rows): &(usize, Range<usize>)| {
         let (p, m) = (&model[*k], &measured[*k]);
         let mut w = Points::zeros(if weights { n } else { 0 });
-        let f = match (plan, weights) {
-            (Plan::Sequential, true) => triangle_rows::<1, true>(p, m, rows.clone(), &mut w),
-            (Plan::Sequential, false) => triangle_rows::<1, false>(p, m, rows.clone(), &mut w),
-            (Plan::Blocked, true) => triangle_rows::<LANES, true>(p, m, rows.clone(), &mut w),
-            (Plan::Blocked, false) => triangle_rows::<LANES, false>(p, m, rows.clone(), &mut w),
+        let r = rows.clone();
+        let f = match (kept.map(|d| &d[*k][..]), plan, weights) {
+            (None, Plan::Sequential, true) => triangle_rows::<1, true, false>(p, m, &[], r, &mut w),
+            (None, Plan::Sequential, false) => {
+                triangle_rows::<1, false, false>(p, m, &[], r, &mut w)
+            }
+            (None, Plan::Blocked, true) => {
+                triangle_rows::<LANES, true, false>(p, m, &[], r, &mut w)
+            }
+            (None, Plan::Blocked, false) => {
+                triangle_rows::<LANES, false, false>(p, m, &[], r, &mut w)
+            }
+            (Some(d), Plan::Sequential, true) => triangle_rows::<1, true, true>(p, m, d, r, &mut w),
+            (Some(d), Plan::Sequential, false) => {
+                triangle_rows::<1, false, true>(p, m, d, r, &mut w)
+            }
+            (Some(d), Plan::Blocked, true) => {
+                triangle_rows::<LANES, true, true>(p, m, d, r, &mut w)
+            }
+            (Some(d), Plan::Blocked, false) => {
+                triangle_rows::<LANES, false, true>(p, m, d, r, &mut w)
+            }
         };
         (f, w)
     };
@@ -250,13 +324,16 @@ fn reduce(parts: Vec<(f64, Points)>, per_reflector: usize) -> [(f64, Points); 3]
 }
 
 /// Σ Δd² over the pairs (l, r) with l in `rows`, Δd = |m_l − n_r| − |(p_l − t) − q_r|, in `L` lanes;
-/// `a_r += t_lr` into `a`.
-fn rectangle_rows<const L: usize>(
+/// `a_r += t_lr` into `a`. With `K`, the measured distances are read from `kept` (row by row, as
+/// [`kept_rectangle_distances`]).
+#[allow(clippy::too_many_arguments)] // the pass's inputs, each a different array
+fn rectangle_rows<const L: usize, const K: bool>(
     left: &Points,
     right: &Points,
     t: &Vector3<f64>,
     measured_left: &Points,
     measured_right: &Points,
+    kept: &[f64],
     rows: Range<usize>,
     a: &mut Points,
 ) -> f64 {
@@ -265,14 +342,23 @@ fn rectangle_rows<const L: usize>(
     for l in rows {
         let (px, py, pz) = (left.x[l] - t.x, left.y[l] - t.y, left.z[l] - t.z);
         let (mx, my, mz) = (measured_left.x[l], measured_left.y[l], measured_left.z[l]);
+        let kept_row = if K {
+            &kept[l * nr..(l + 1) * nr]
+        } else {
+            &[][..]
+        };
         let lane = |k: usize, r: usize, sum: &mut [f64; L], a: &mut Points| {
             let (vx, vy, vz) = (px - right.x[r], py - right.y[r], pz - right.z[r]);
             let dist = norm(vx, vy, vz);
-            let dm = norm(
-                mx - measured_right.x[r],
-                my - measured_right.y[r],
-                mz - measured_right.z[r],
-            );
+            let dm = if K {
+                kept_row[r]
+            } else {
+                norm(
+                    mx - measured_right.x[r],
+                    my - measured_right.y[r],
+                    mz - measured_right.z[r],
+                )
+            };
             let delta = dm - dist;
             sum[k] += delta * delta;
             let s = if dist > 0.0 { delta / dist } else { 0.0 };
@@ -298,12 +384,14 @@ fn rectangle_rows<const L: usize>(
 /// with `left` the left arm's model points, `right` the right arm's rotated into the left base
 /// (R q_r) and `t` the translation (the model point of r is R q_r + t). Always blocked: the sequential
 /// order of earlier releases is [`super::base_problem`]'s own.
+/// `kept`: the measured distances from [`kept_rectangle_distances`], if kept.
 pub fn rectangle(
     left: &[Points; 3],
     right: &[Points; 3],
     t: &Vector3<f64>,
     measured_left: &[Points; 3],
     measured_right: &[Points; 3],
+    kept: Option<&[Vec<f64>; 3]>,
 ) -> [(f64, Points); 3] {
     let blocks = rectangle_blocks(left[0].len(), Plan::Blocked);
     let nr = right[0].len();
@@ -314,15 +402,18 @@ pub fn rectangle(
         .par_iter()
         .map(|(k, rows)| {
             let mut a = Points::zeros(nr);
-            let f = rectangle_rows::<LANES>(
+            let (p, q, ml, mr) = (
                 &left[*k],
                 &right[*k],
-                t,
                 &measured_left[*k],
                 &measured_right[*k],
-                rows.clone(),
-                &mut a,
             );
+            let f = match kept {
+                Some(d) => {
+                    rectangle_rows::<LANES, true>(p, q, t, ml, mr, &d[*k], rows.clone(), &mut a)
+                }
+                None => rectangle_rows::<LANES, false>(p, q, t, ml, mr, &[], rows.clone(), &mut a),
+            };
             (f, a)
         })
         .collect();
@@ -427,9 +518,19 @@ mod tests {
         let n = 203;
         let model: [Points; 3] = std::array::from_fn(|k| cloud(n, k as u64));
         let measured: [Points; 3] = std::array::from_fn(|k| cloud(n, 10 + k as u64));
+        let kept = kept_triangle_distances(&measured).unwrap();
         for plan in [Plan::Sequential, Plan::Blocked] {
-            let with = triangle(&model, &measured, true, plan);
-            let without = triangle(&model, &measured, false, plan);
+            let with = triangle(&model, &measured, None, true, plan);
+            let without = triangle(&model, &measured, None, false, plan);
+            // Kept or recomputed, the measured distances are the same numbers: the same sums.
+            for weights in [true, false] {
+                let recomputed = triangle(&model, &measured, None, weights, plan);
+                let read = triangle(&model, &measured, Some(&kept), weights, plan);
+                for k in 0..3 {
+                    assert_eq!(read[k].0.to_bits(), recomputed[k].0.to_bits());
+                    assert_eq!(read[k].1, recomputed[k].1);
+                }
+            }
             for k in 0..3 {
                 let (f, w) = direct(&model[k], &measured[k]);
                 assert!((with[k].0 - f).abs() < 1e-12 * f, "{plan:?}");
@@ -445,7 +546,7 @@ mod tests {
             }
         }
         // The sequential plan is the pair loop of earlier releases, to the bit.
-        let seq = triangle(&model, &measured, true, Plan::Sequential);
+        let seq = triangle(&model, &measured, None, true, Plan::Sequential);
         for k in 0..3 {
             let (f, _) = direct(&model[k], &measured[k]);
             assert_eq!(seq[k].0.to_bits(), f.to_bits());
@@ -460,7 +561,13 @@ mod tests {
         let ml: [Points; 3] = std::array::from_fn(|k| cloud(nl, 10 + k as u64));
         let mr: [Points; 3] = std::array::from_fn(|k| cloud(nr, 15 + k as u64));
         let t = Vector3::new(10.0, -20.0, 5.0);
-        let got = rectangle(&left, &right, &t, &ml, &mr);
+        let got = rectangle(&left, &right, &t, &ml, &mr, None);
+        let kept = kept_rectangle_distances(&ml, &mr).unwrap();
+        let read = rectangle(&left, &right, &t, &ml, &mr, Some(&kept));
+        for k in 0..3 {
+            assert_eq!(read[k].0.to_bits(), got[k].0.to_bits());
+            assert_eq!(read[k].1, got[k].1);
+        }
         let dirs = rectangle_directions(&left[1], &right[1], &t);
         for k in 0..3 {
             let mut f = 0.0;
