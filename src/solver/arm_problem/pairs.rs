@@ -199,6 +199,51 @@ fn row_start(i: usize, n: usize) -> usize {
     i * n - i * (i + 1) / 2
 }
 
+/// Row i of a pass: its model and measured points and, if kept, its measured distances
+/// (`kept[j − first]` for the pair (i, j)).
+struct Row<'a> {
+    p: [f64; 3],
+    m: [f64; 3],
+    kept: &'a [f64],
+    first: usize,
+}
+
+/// The pair (i, j) of `row` into lane `l`: Σ Δd² into `sum` and, with `W`, t_ij into `wi` (row i's
+/// lanes) and −t_ij into `w[j]`. A function of its own (not a closure) so that it is always inlined
+/// into the loops: a call per pair doubled the pass's instructions.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)] // the loop's state, passed apart to keep the borrows disjoint
+fn triangle_pair<const L: usize, const W: bool, const K: bool>(
+    row: &Row,
+    p: &Points,
+    m: &Points,
+    j: usize,
+    l: usize,
+    sum: &mut [f64; L],
+    wi: &mut [[f64; L]; 3],
+    w: &mut Points,
+) {
+    let (vx, vy, vz) = (row.p[0] - p.x[j], row.p[1] - p.y[j], row.p[2] - p.z[j]);
+    let dist = norm(vx, vy, vz);
+    let dm = if K {
+        row.kept[j - row.first]
+    } else {
+        norm(row.m[0] - m.x[j], row.m[1] - m.y[j], row.m[2] - m.z[j])
+    };
+    let delta = dm - dist;
+    sum[l] += delta * delta;
+    if W {
+        let s = if dist > 0.0 { delta / dist } else { 0.0 };
+        let (tx, ty, tz) = (vx * s, vy * s, vz * s);
+        wi[0][l] += tx;
+        wi[1][l] += ty;
+        wi[2][l] += tz;
+        w.x[j] -= tx;
+        w.y[j] -= ty;
+        w.z[j] -= tz;
+    }
+}
+
 /// Σ Δd² over the pairs (i, j > i) with i in `rows`, in `L` lanes; with `W`, `w_i += Σ_j t_ij` and
 /// `w_j −= t_ij` into `w`. With `K`, the measured distances are read from `kept` (row by row, as
 /// [`kept_triangle_distances`]) instead of recomputed.
@@ -221,42 +266,27 @@ fn triangle_rows<const L: usize, const W: bool, const K: bool>(
         } else {
             &[][..]
         };
-        let (mut wx, mut wy, mut wz) = ([0.0; L], [0.0; L], [0.0; L]);
-        let mut lane = |l: usize, j: usize, sum: &mut [f64; L], w: &mut Points| {
-            let (vx, vy, vz) = (pix - p.x[j], piy - p.y[j], piz - p.z[j]);
-            let dist = norm(vx, vy, vz);
-            let dm = if K {
-                kept_row[j - i - 1]
-            } else {
-                norm(mix - m.x[j], miy - m.y[j], miz - m.z[j])
-            };
-            let delta = dm - dist;
-            sum[l] += delta * delta;
-            if W {
-                let s = if dist > 0.0 { delta / dist } else { 0.0 };
-                let (tx, ty, tz) = (vx * s, vy * s, vz * s);
-                wx[l] += tx;
-                wy[l] += ty;
-                wz[l] += tz;
-                w.x[j] -= tx;
-                w.y[j] -= ty;
-                w.z[j] -= tz;
-            }
+        let row = Row {
+            p: [pix, piy, piz],
+            m: [mix, miy, miz],
+            kept: kept_row,
+            first: i + 1,
         };
+        let mut wi = [[0.0; L]; 3];
         let mut j = i + 1;
         while j + L <= n {
             for l in 0..L {
-                lane(l, j + l, &mut sum, w);
+                triangle_pair::<L, W, K>(&row, p, m, j + l, l, &mut sum, &mut wi, w);
             }
             j += L;
         }
         for (l, j) in (j..n).enumerate() {
-            lane(l, j, &mut sum, w);
+            triangle_pair::<L, W, K>(&row, p, m, j, l, &mut sum, &mut wi, w);
         }
         if W {
-            w.x[i] += fold(&wx);
-            w.y[i] += fold(&wy);
-            w.z[i] += fold(&wz);
+            w.x[i] += fold(&wi[0]);
+            w.y[i] += fold(&wi[1]);
+            w.z[i] += fold(&wi[2]);
         }
     }
     fold(&sum)
@@ -323,6 +353,41 @@ fn reduce(parts: Vec<(f64, Points)>, per_reflector: usize) -> [(f64, Points); 3]
     })
 }
 
+/// The pair (l, r) of `row` (its model point already less t) into lane `k`: Σ Δd² into `sum`,
+/// `a_r += t_lr` into `a`. Always inlined, as [`triangle_pair`].
+#[inline(always)]
+fn rectangle_pair<const L: usize, const K: bool>(
+    row: &Row,
+    right: &Points,
+    measured_right: &Points,
+    r: usize,
+    k: usize,
+    sum: &mut [f64; L],
+    a: &mut Points,
+) {
+    let (vx, vy, vz) = (
+        row.p[0] - right.x[r],
+        row.p[1] - right.y[r],
+        row.p[2] - right.z[r],
+    );
+    let dist = norm(vx, vy, vz);
+    let dm = if K {
+        row.kept[r - row.first]
+    } else {
+        norm(
+            row.m[0] - measured_right.x[r],
+            row.m[1] - measured_right.y[r],
+            row.m[2] - measured_right.z[r],
+        )
+    };
+    let delta = dm - dist;
+    sum[k] += delta * delta;
+    let s = if dist > 0.0 { delta / dist } else { 0.0 };
+    a.x[r] += vx * s;
+    a.y[r] += vy * s;
+    a.z[r] += vz * s;
+}
+
 /// Σ Δd² over the pairs (l, r) with l in `rows`, Δd = |m_l − n_r| − |(p_l − t) − q_r|, in `L` lanes;
 /// `a_r += t_lr` into `a`. With `K`, the measured distances are read from `kept` (row by row, as
 /// [`kept_rectangle_distances`]).
@@ -347,34 +412,21 @@ fn rectangle_rows<const L: usize, const K: bool>(
         } else {
             &[][..]
         };
-        let lane = |k: usize, r: usize, sum: &mut [f64; L], a: &mut Points| {
-            let (vx, vy, vz) = (px - right.x[r], py - right.y[r], pz - right.z[r]);
-            let dist = norm(vx, vy, vz);
-            let dm = if K {
-                kept_row[r]
-            } else {
-                norm(
-                    mx - measured_right.x[r],
-                    my - measured_right.y[r],
-                    mz - measured_right.z[r],
-                )
-            };
-            let delta = dm - dist;
-            sum[k] += delta * delta;
-            let s = if dist > 0.0 { delta / dist } else { 0.0 };
-            a.x[r] += vx * s;
-            a.y[r] += vy * s;
-            a.z[r] += vz * s;
+        let row = Row {
+            p: [px, py, pz],
+            m: [mx, my, mz],
+            kept: kept_row,
+            first: 0,
         };
         let mut r = 0;
         while r + L <= nr {
             for k in 0..L {
-                lane(k, r + k, &mut sum, a);
+                rectangle_pair::<L, K>(&row, right, measured_right, r + k, k, &mut sum, a);
             }
             r += L;
         }
         for (k, r) in (r..nr).enumerate() {
-            lane(k, r, &mut sum, a);
+            rectangle_pair::<L, K>(&row, right, measured_right, r, k, &mut sum, a);
         }
     }
     fold(&sum)
