@@ -8,8 +8,8 @@
 
 use super::command::Command;
 use super::session::Session;
-use super::task::{Step, TaskContext, TaskEvent, Work};
-use super::work::{Outcome, calibrated_outcome};
+use super::task::{Step, TaskContext, Work};
+use super::work::{Outcome, Reporter, RunEvent, calibrated_outcome};
 use crate::analysis::{Analysis, Indicator};
 use crate::comparison::{
     self, BoxStats, Comparison, ComparisonEvent, METHODS, MethodEntry, MethodError, MethodOutcome,
@@ -21,7 +21,7 @@ use crate::metrics::AccuracyStats;
 use crate::side::Side;
 use crate::solver::{
     BaseMethod, CalibrationEvent, CalibrationResult, CalibrationRun, CalibrationSettings,
-    Calibrator, IterationRecord, Method, Observer, Progress, Stage,
+    Calibrator, Method, Progress, Stage,
 };
 use eframe::egui::{self, Color32, RichText};
 use egui_plot::{Bar, BarChart, BoxElem, BoxPlot, BoxSpread, Plot};
@@ -132,38 +132,35 @@ impl CompareProgress {
     }
 }
 
-/// The settings the comparison's methods share: the user's split, limits and tolerances and the
-/// session's exclusions; each entry sets its own method on top.
-pub fn common_settings(settings: &CalibrationSettings, session: &Session) -> CalibrationSettings {
+/// The settings the comparison's methods share: a run's settings (the user's split, limits and
+/// tolerances and the session's exclusions: [`Session::run_settings`]); each entry sets its own method
+/// on top.
+pub fn common_settings(run: &CalibrationSettings) -> CalibrationSettings {
     CalibrationSettings {
         method: Method::Minimax,
         base_method: BaseMethod::Minimax,
         reflector: None,
-        exclude: session.exclude.clone(),
-        ..settings.clone()
+        ..run.clone()
     }
 }
 
-/// Progress of the method running: its stages and iterations, for the status line.
-struct Reporter<'a> {
-    task: &'a TaskContext,
+/// What a comparison reports.
+pub enum CompareEvent {
+    /// The running method's stages and iterations.
+    Progress(CalibrationEvent),
+    /// A method starts or ends.
+    Method(ComparisonEvent),
+    /// Its nominal figures (its first step).
+    Nominal(Box<Analysis>),
+    /// A compared method ended (ran, failed, or was cancelled).
+    MethodEnded(Box<MethodOutcome>),
+    /// It ended (its last event): `Ok(cancelled)`, or why it could not run at all.
+    Ended(Result<bool, String>),
 }
 
-impl Observer for Reporter<'_> {
-    fn stage_started(&mut self, stage: Stage, n_configs: usize, n_pairs: usize) {
-        self.task
-            .report_progress(TaskEvent::Calibration(CalibrationEvent::StageStarted {
-                stage,
-                n_configs,
-                n_pairs,
-            }));
-    }
-
-    fn iteration(&mut self, record: &IterationRecord, _run: &CalibrationRun) {
-        self.task
-            .report_progress(TaskEvent::Calibration(CalibrationEvent::Iteration(
-                record.clone(),
-            )));
+impl From<CalibrationEvent> for CompareEvent {
+    fn from(event: CalibrationEvent) -> Self {
+        CompareEvent::Progress(event)
     }
 }
 
@@ -196,15 +193,19 @@ impl ComparisonWork {
         }
     }
 
-    fn finish_method(&mut self, task: &TaskContext, outcome: Result<MethodRun, MethodError>) {
+    fn finish_method(
+        &mut self,
+        task: &TaskContext<CompareEvent>,
+        outcome: Result<MethodRun, MethodError>,
+    ) {
         let entry = self.entries[self.next];
-        task.report(TaskEvent::Comparison(ComparisonEvent::MethodFinished {
+        task.report(CompareEvent::Method(ComparisonEvent::MethodFinished {
             index: self.next,
             key: entry.key,
             converged: outcome.as_ref().is_ok_and(|r| r.result.is_converged()),
             error: outcome.as_ref().err().map(ToString::to_string),
         }));
-        task.report(TaskEvent::ComparedMethod(Box::new(MethodOutcome {
+        task.report(CompareEvent::MethodEnded(Box::new(MethodOutcome {
             entry,
             outcome,
         })));
@@ -213,23 +214,25 @@ impl ComparisonWork {
 }
 
 impl Work for ComparisonWork {
-    fn step(&mut self, task: &TaskContext) -> Step {
+    type Event = CompareEvent;
+
+    fn step(&mut self, task: &TaskContext<CompareEvent>) -> Step {
         if !self.nominal_done {
             self.nominal_done = true;
             return match Analysis::compute(&self.dataset, &self.nominal, &self.body_from_left_base)
             {
                 Ok(figures) => {
-                    task.report(TaskEvent::CompareNominal(Box::new(figures)));
+                    task.report(CompareEvent::Nominal(Box::new(figures)));
                     Step::Show
                 }
                 Err(e) => {
-                    task.report(TaskEvent::Compared(Err(format!("nominal figures: {e}"))));
+                    task.report(CompareEvent::Ended(Err(format!("nominal figures: {e}"))));
                     Step::Done
                 }
             };
         }
         if let Some(run) = &mut self.run {
-            let outcome = match run.step(&mut [&mut Reporter { task }]) {
+            let outcome = match run.step(&mut [&mut Reporter { task, live: None }]) {
                 Ok(Progress::Running) => return Step::More,
                 Ok(Progress::Finished(result)) => {
                     Analysis::compute(&self.dataset, &result.calibrated, &self.body_from_left_base)
@@ -247,11 +250,11 @@ impl Work for ComparisonWork {
         }
         let cancelled = task.cancel_flag().load(Ordering::Relaxed);
         if cancelled || self.next == self.entries.len() {
-            task.report(TaskEvent::Compared(Ok(cancelled)));
+            task.report(CompareEvent::Ended(Ok(cancelled)));
             return Step::Done;
         }
         let entry = self.entries[self.next];
-        task.report(TaskEvent::Comparison(ComparisonEvent::MethodStarted {
+        task.report(CompareEvent::Method(ComparisonEvent::MethodStarted {
             index: self.next,
             total: self.entries.len(),
             key: entry.key,
@@ -269,7 +272,7 @@ impl Work for ComparisonWork {
 }
 
 /// Make a compared method's result the current calibration: its figures and screening computed off
-/// the frame, then it is taken like a finished calibration ([`TaskEvent::Calibrated`]).
+/// the frame, then it is taken like a finished calibration ([`RunEvent::Calibrated`]).
 pub struct AdoptWork {
     dataset: Arc<Dataset>,
     result: Option<CalibrationResult>,
@@ -287,7 +290,9 @@ impl AdoptWork {
 }
 
 impl Work for AdoptWork {
-    fn step(&mut self, task: &TaskContext) -> Step {
+    type Event = RunEvent;
+
+    fn step(&mut self, task: &TaskContext<RunEvent>) -> Step {
         let Some(result) = self.result.take() else {
             return Step::Done;
         };
@@ -300,7 +305,7 @@ impl Work for AdoptWork {
         let solver_secs = result.elapsed_secs;
         let outcome: Outcome =
             calibrated_outcome(&self.dataset, result, analysis, None, solver_secs);
-        task.report(TaskEvent::Calibrated(outcome));
+        task.report(RunEvent::Calibrated(outcome));
         Step::Done
     }
 }
@@ -350,8 +355,8 @@ fn row_figures(report: Option<&crate::metrics::AccuracyReport>) -> Option<[f64; 
 impl super::WorkbenchApp {
     /// The comparison view (instead of the 3D view, the table and the plots).
     pub(super) fn compare_ui(&mut self, ui: &mut egui::Ui, commands: &mut Vec<Command>) {
-        let running = self.comparison.is_some();
-        let busy = running || self.calibration.is_some();
+        let running = self.is_comparing();
+        let busy = running || self.is_calibrating();
         let has_session = self.session.is_some();
         ui.horizontal_wrapped(|ui| {
             ui.heading("Compare methods");

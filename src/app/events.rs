@@ -7,7 +7,7 @@
 //! UI that falls behind only loses points of its curves (the final result carries the whole history).
 
 use super::files::FileReply;
-use super::task::{TaskEvent, TaskId};
+use super::task::{TaskId, TaskReport};
 use eframe::egui;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -19,7 +19,7 @@ pub const MAX_QUEUED_DROPPABLE: usize = 512;
 /// Something that happened off the frame.
 pub enum AppEvent {
     /// A background task reported.
-    Task(TaskId, TaskEvent),
+    Task(TaskId, TaskReport),
     /// A file dialog answered.
     File(FileReply),
     /// The window's picture, as requested for "Export plots as PNG".

@@ -6,14 +6,7 @@ use super::session::{self, Session};
 use anyhow::Context as _;
 use eframe::egui;
 
-/// What to export.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Export {
-    Params,
-    Urdf,
-    Csv,
-    PlotPng,
-}
+pub use super::command::Export;
 
 impl Export {
     /// The file's contents from the session; `None` where there is nothing to export (a model

@@ -4,20 +4,12 @@
 //! Where no dialog is available the app asks for a path itself ([`PathPrompt`]).
 
 use super::command::Command;
+pub use super::command::OpenKind;
 #[cfg(not(target_arch = "wasm32"))]
 use super::events::AppEvent;
 use super::events::EventSender;
 use eframe::egui::{self, Color32, RichText};
 use std::path::PathBuf;
-
-/// What the user wants to open.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum OpenKind {
-    /// A `dataset.toml` (or its directory).
-    Dataset,
-    /// A robot description.
-    Urdf,
-}
 
 /// The answer to a request.
 #[derive(Debug)]

@@ -7,8 +7,9 @@
 //! Each frame: [`logic`](eframe::App::logic) drains the one event channel ([`events`]) that the
 //! background tasks ([`task`]: loading, calibrating), file dialogs and screenshots report to; then the
 //! panels and the viewport are drawn and return [`Command`]s, applied in one place
-//! ([`WorkbenchApp::apply`], in [`command`]).
+//! ([`WorkbenchApp::apply`], in [`apply`]). Background work runs as jobs ([`job`]), one file each.
 
+mod apply;
 pub mod colormap;
 pub mod command;
 pub mod compare;
@@ -17,6 +18,7 @@ mod example;
 pub mod export;
 pub mod files;
 mod frame_stats;
+pub mod job;
 mod panels;
 pub mod platform;
 pub mod plots;
@@ -34,19 +36,22 @@ pub use command::Command;
 pub use example::{bundled_example_path, unpack_example};
 
 use crate::side::{ConfigId, Side};
-use crate::solver::{CalibrationEvent, CalibrationSettings, IterationRecord, Stage};
+use crate::solver::{CalibrationSettings, IterationRecord, Stage};
 use crate::source::Files;
 use eframe::egui::{self, Color32};
 use events::{AppEvent, EventChannel};
 use files::{FileAccess, FileReply, PathPrompt};
 use frame_stats::FrameStats;
+use job::Jobs;
+use job::calibration::CalibrationJob;
+use job::comparison::ComparisonJob;
+use job::load::LoadJob;
+use job::meshes::MeshJob;
 use panels::PlotsView;
-use session::{LiveFigures, RobotMeshes, Session};
+use session::Session;
 use std::path::PathBuf;
-use std::sync::Arc;
-use task::{BackgroundTask, Execution, FrameBudget, SliceStats, TaskEvent, TaskId};
+use task::{Execution, FrameBudget, SliceStats};
 use viewport::ViewportState;
-use work::{Loaded, Outcome};
 
 /// What the window opens with.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
@@ -101,19 +106,16 @@ enum Status {
 pub struct WorkbenchApp {
     ctx: egui::Context,
     session: Option<Session>,
-    /// Bumped whenever the session or its models change (the viewport rebuilds its scene).
+    /// The scene's revision: bumped by [`Self::scene_mut`], the one way to change the session (the
+    /// viewport rebuilds its scene when it changes).
     generation: u64,
     settings: CalibrationSettings,
     /// The robot description used instead of the dataset's (set by a successful "Open URDF").
     urdf_override: Option<PathBuf>,
     events: EventChannel,
     execution: Execution,
-    loading: Option<BackgroundTask>,
-    /// Loading the session's robot meshes.
-    mesh_loading: Option<BackgroundTask>,
-    calibration: Option<BackgroundTask>,
-    /// Running a comparison of methods.
-    comparison: Option<BackgroundTask>,
+    /// The background jobs running (loading, meshes, calibrating, comparing).
+    jobs: Jobs,
     /// The comparison view.
     compare: compare::CompareView,
     /// Iterations of the current (or last) run.
@@ -184,10 +186,7 @@ impl WorkbenchApp {
             urdf_override: launch.urdf,
             events: EventChannel::new(Some(cc.egui_ctx.clone())),
             execution: Execution::default(),
-            loading: None,
-            mesh_loading: None,
-            calibration: None,
-            comparison: None,
+            jobs: Jobs::default(),
             compare: compare::CompareView::default(),
             history: Vec::new(),
             status: Status::Idle("Ready.".into()),
@@ -222,21 +221,37 @@ impl WorkbenchApp {
 
     /// Whether a dataset is being loaded.
     pub fn is_loading(&self) -> bool {
-        self.loading.is_some()
+        self.jobs.is_running(LoadJob::lane())
     }
 
     /// Whether the robot's meshes are being loaded.
     pub fn is_loading_meshes(&self) -> bool {
-        self.mesh_loading.is_some()
+        self.jobs.is_running(MeshJob::lane())
     }
 
     pub fn is_calibrating(&self) -> bool {
-        self.calibration.is_some()
+        self.jobs.is_running(CalibrationJob::lane())
     }
 
     /// Whether a comparison of methods is running.
     pub fn is_comparing(&self) -> bool {
-        self.comparison.is_some()
+        self.jobs.is_running(ComparisonJob::lane())
+    }
+
+    // ---- the scene -------------------------------------------------------------------------------
+
+    /// The session, to change it: the one way to do so, so the scene's revision follows every change.
+    fn scene_mut(&mut self) -> Option<&mut Session> {
+        if self.session.is_some() {
+            self.generation += 1;
+        }
+        self.session.as_mut()
+    }
+
+    /// A new session replaces the current one.
+    fn set_session(&mut self, session: Session) {
+        self.generation += 1;
+        self.session = Some(session);
     }
 
     /// The comparison view: the methods picked, the last comparison.
@@ -308,7 +323,7 @@ impl WorkbenchApp {
     fn poll_events(&mut self) {
         for event in self.events.drain() {
             match event {
-                AppEvent::Task(id, event) => self.on_task_event(id, event),
+                AppEvent::Task(id, report) => self.on_task_report(id, report),
                 AppEvent::File(reply) => self.on_file_reply(reply),
                 AppEvent::Screenshot(image) => self.on_screenshot(&image),
             }
@@ -341,332 +356,6 @@ impl WorkbenchApp {
         }
     }
 
-    /// Route a task's event; events of a task that was replaced or dropped are ignored.
-    fn on_task_event(&mut self, id: TaskId, event: TaskEvent) {
-        if self.loading.as_ref().is_some_and(|t| t.id() == id) {
-            let result = match event {
-                TaskEvent::Loaded(result) => result.map(|loaded| *loaded),
-                TaskEvent::Failed(message) => Err(message),
-                _ => return,
-            };
-            self.loading = None;
-            match result {
-                Ok(loaded) => self.on_loaded(loaded),
-                Err(message) => {
-                    self.status = Status::Idle(
-                        "Loading failed; the previous dataset stays, with its robot.".into(),
-                    );
-                    self.errors.push(message);
-                }
-            }
-        } else if self.mesh_loading.as_ref().is_some_and(|t| t.id() == id) {
-            let meshes = match event {
-                TaskEvent::Meshes(loaded) => RobotMeshes::Loaded(Arc::new(*loaded)),
-                TaskEvent::Failed(message) => RobotMeshes::Failed(message),
-                _ => return,
-            };
-            self.mesh_loading = None;
-            if let Some(session) = &mut self.session {
-                session.meshes = meshes;
-                self.generation += 1;
-            }
-        } else if self.calibration.as_ref().is_some_and(|t| t.id() == id) {
-            let outcome = match event {
-                TaskEvent::Calibration(progress) => return self.on_calibration_progress(progress),
-                TaskEvent::Live(live) => return self.on_live(*live),
-                TaskEvent::Nominal(analysis) => {
-                    if let Some(session) = &mut self.session {
-                        session.nominal = *analysis;
-                        self.generation += 1;
-                    }
-                    return;
-                }
-                TaskEvent::AutoExcluded(summary) => {
-                    if let Some(session) = &mut self.session {
-                        session.auto_exclusion = Some(summary);
-                    }
-                    return;
-                }
-                TaskEvent::Calibrated(outcome) => outcome,
-                TaskEvent::Failed(message) => Outcome::Failed(message),
-                TaskEvent::Loaded(_)
-                | TaskEvent::Meshes(_)
-                | TaskEvent::Comparison(_)
-                | TaskEvent::CompareNominal(_)
-                | TaskEvent::ComparedMethod(_)
-                | TaskEvent::Compared(_) => return,
-            };
-            if let Some(task) = self.calibration.take() {
-                self.on_calibration_end(outcome, &task);
-            }
-        } else if self.comparison.as_ref().is_some_and(|t| t.id() == id) {
-            self.on_comparison_event(event);
-        }
-    }
-
-    /// A running comparison's event: its progress, its nominal figures and each method's outcome fill
-    /// the view as they arrive.
-    fn on_comparison_event(&mut self, event: TaskEvent) {
-        let view = &mut self.compare;
-        let end = match event {
-            TaskEvent::Calibration(CalibrationEvent::StageStarted { stage, .. }) => {
-                if let Some(p) = &mut view.progress {
-                    p.stage = Some(stage);
-                    p.iteration = 0;
-                }
-                return;
-            }
-            TaskEvent::Calibration(CalibrationEvent::Iteration(record)) => {
-                if let Some(p) = &mut view.progress {
-                    p.stage = Some(record.stage);
-                    p.iteration = record.iteration;
-                }
-                return;
-            }
-            TaskEvent::Comparison(crate::comparison::ComparisonEvent::MethodStarted {
-                index,
-                total,
-                key,
-            }) => {
-                view.progress = Some(compare::CompareProgress {
-                    index,
-                    total,
-                    key,
-                    stage: None,
-                    iteration: 0,
-                });
-                return;
-            }
-            TaskEvent::CompareNominal(figures) => {
-                view.comparison = Some(crate::comparison::Comparison {
-                    nominal: *figures,
-                    truth: None,
-                    methods: Vec::new(),
-                    cancelled: false,
-                });
-                return;
-            }
-            TaskEvent::ComparedMethod(outcome) => {
-                if let Some(c) = &mut view.comparison {
-                    c.methods.push(*outcome);
-                }
-                return;
-            }
-            TaskEvent::Compared(end) => end,
-            TaskEvent::Failed(message) => Err(message),
-            _ => return,
-        };
-        view.progress = None;
-        let Some(task) = self.comparison.take() else {
-            return;
-        };
-        match end {
-            Ok(cancelled) => {
-                if let Some(c) = &mut view.comparison {
-                    c.cancelled = cancelled;
-                }
-                let (ran, failed) = view.comparison.as_ref().map_or((0, 0), |c| {
-                    (
-                        c.methods.len(),
-                        c.methods.iter().filter(|m| m.run().is_none()).count(),
-                    )
-                });
-                self.status = Status::Idle(format!(
-                    "Comparison {} after {:.1} s: {ran} method{} ran{}.",
-                    if cancelled { "cancelled" } else { "done" },
-                    task.elapsed_secs(),
-                    if ran == 1 { "" } else { "s" },
-                    match failed {
-                        0 => String::new(),
-                        n => format!(", {n} could not (see its row)"),
-                    }
-                ));
-            }
-            Err(message) => {
-                self.errors.push(format!("comparison: {message}"));
-                self.status = Status::Idle("Comparison failed.".into());
-            }
-        }
-    }
-
-    fn on_loaded(&mut self, loaded: Loaded) {
-        let Loaded {
-            mut session,
-            urdf,
-            elapsed_secs,
-        } = loaded;
-        self.calibration = None;
-        // A comparison is of the dataset it ran on.
-        self.comparison = None;
-        self.compare.comparison = None;
-        self.compare.progress = None;
-        self.compare.adopted = None;
-        self.history.clear();
-        self.selection = None;
-        self.urdf_override = urdf;
-        self.viewport.reset_poses();
-        self.viewport.auto_scale(&session);
-        let same_robot = self.session.as_ref().is_some_and(|old| {
-            old.robot_source == session.robot_source && old.robot.text == session.robot.text
-        });
-        if !same_robot {
-            self.viewport.frame(&session);
-        }
-        self.start_mesh_loading(&mut session, same_robot);
-        let d = &session.dataset;
-        let warnings = match session.robot.warnings.len() {
-            0 => String::new(),
-            1 => " The robot has a warning (see Robot).".into(),
-            n => format!(" The robot has {n} warnings (see Robot)."),
-        };
-        self.status = Status::Idle(format!(
-            "Loaded {} ({} left + {} right configurations) in {elapsed_secs:.2} s.{warnings}",
-            d.dir.display(),
-            d.arms.left.measurements.len(),
-            d.arms.right.measurements.len(),
-        ));
-        self.session = Some(session);
-        self.generation += 1;
-    }
-
-    /// Load the new session's robot meshes on a background task (placeholders are drawn until they
-    /// arrive); the same robot as before keeps its meshes.
-    fn start_mesh_loading(&mut self, session: &mut Session, same_robot: bool) {
-        if same_robot && let Some(old) = &self.session {
-            session.meshes = old.meshes.clone();
-            if self.mesh_loading.is_some() {
-                // Still loading for the previous session: the event updates the new one.
-                return;
-            }
-            if !matches!(session.meshes, RobotMeshes::Failed(_)) {
-                return;
-            }
-        }
-        self.mesh_loading = None;
-        if !work::has_visual_meshes(&session.robot) {
-            session.meshes = RobotMeshes::None;
-            return;
-        }
-        let work = work::MeshWork {
-            robot: session.robot.clone(),
-        };
-        match BackgroundTask::start("meshes", work, self.events.sender(), self.execution) {
-            Ok(task) => {
-                session.meshes = RobotMeshes::Loading;
-                self.mesh_loading = Some(task);
-            }
-            Err(e) => session.meshes = RobotMeshes::Failed(format!("cannot start loading: {e}")),
-        }
-    }
-
-    fn on_calibration_progress(&mut self, event: CalibrationEvent) {
-        match event {
-            CalibrationEvent::StageStarted { stage, .. } => {
-                self.status = Status::Running {
-                    stage: Some(stage),
-                    iteration: 0,
-                };
-                self.plots.stage = stage;
-            }
-            CalibrationEvent::Iteration(record) => {
-                self.status = Status::Running {
-                    stage: Some(record.stage),
-                    iteration: record.iteration,
-                };
-                self.history.push(record);
-            }
-            CalibrationEvent::StageFinished { .. } => {}
-        }
-    }
-
-    /// The model the running calibration has reached: shown instead of the last finished calibration
-    /// (the table, the Accuracy and Summary tabs, the viewport) until the run ends. The display scale
-    /// stays, so the error vectors visibly shrink; it follows the errors again at the end.
-    fn on_live(&mut self, live: LiveFigures) {
-        if let Some(session) = &mut self.session {
-            session.live = Some(live);
-            self.generation += 1;
-        }
-    }
-
-    fn on_calibration_end(&mut self, outcome: Outcome, task: &BackgroundTask) {
-        self.last_run = Some(RunTiming {
-            wall_secs: task.elapsed_secs(),
-            slices: task.slice_stats(),
-        });
-        let had_live = self.session.as_mut().and_then(|s| s.live.take()).is_some();
-        if had_live {
-            self.generation += 1;
-        }
-        let kept = if self
-            .session
-            .as_ref()
-            .is_some_and(|s| s.calibrated.is_some())
-        {
-            "the previous calibration is shown again"
-        } else {
-            "the nominal model is shown again"
-        };
-        self.status = Status::Idle(match outcome {
-            Outcome::Calibrated(calibrated) => {
-                let terms: Vec<String> = calibrated
-                    .result
-                    .stages
-                    .iter()
-                    .map(|s| format!("{}: {} after {}", s.stage, s.termination, s.iterations))
-                    .collect();
-                let advice: String = calibrated
-                    .result
-                    .warnings()
-                    .iter()
-                    .map(|w| format!(" Warning: {w}."))
-                    .collect();
-                // The solver's own history is complete even if progress events were dropped.
-                self.history = calibrated.result.history.clone();
-                let excluded = match calibrated.result.settings.exclude.len() {
-                    0 => String::new(),
-                    n => format!(" {n} configuration(s) left out."),
-                };
-                let advice = excluded + &advice;
-                let method = compare::method_used(&calibrated.result);
-                let took = calibrated.result.elapsed_secs;
-                if let Some(session) = &mut self.session {
-                    session.exclude = calibrated.result.settings.exclude.clone();
-                    session.calibrated = Some(*calibrated);
-                    self.viewport.auto_scale(session);
-                }
-                self.generation += 1;
-                if task.name() == "adopt" {
-                    format!(
-                        "Adopted the compared result ({method}; it took {:.1} s: {}).{advice}",
-                        took,
-                        terms.join(", ")
-                    )
-                } else {
-                    format!(
-                        "Calibration done in {:.1} s ({method}; {}).{advice}",
-                        task.elapsed_secs(),
-                        terms.join(", ")
-                    )
-                }
-            }
-            Outcome::Cancelled { stage, iterations } => {
-                let latency = task
-                    .since_cancel()
-                    .map(|t| format!(", {:.0} ms after Cancel", t.as_secs_f64() * 1e3))
-                    .unwrap_or_default();
-                format!(
-                    "Calibration cancelled after iteration {iterations} of {stage}{latency}; the model \
-                     it reached is discarded and {kept}."
-                )
-            }
-            Outcome::Failed(message) => {
-                self.errors.push(format!("calibration: {message}"));
-                format!("Calibration failed; {kept}.")
-            }
-        });
-    }
-
     fn on_file_reply(&mut self, reply: FileReply) {
         match reply {
             FileReply::Open(kind, path) => self.apply(Command::open(kind, path)),
@@ -695,21 +384,12 @@ impl WorkbenchApp {
 
     /// Step the tasks that run in frames, within the frame's budget ([`FrameBudget`]).
     fn step_tasks_in_frame(&mut self) {
-        let mut stepped = false;
-        for task in [
-            &mut self.loading,
-            &mut self.mesh_loading,
-            &mut self.calibration,
-            &mut self.comparison,
-        ]
-        .into_iter()
-        .flatten()
-        {
-            if task.needs_frames() {
-                task.step_in_frame(self.frame_budget.next(web_time::Instant::now()));
-                stepped = true;
-                self.ctx.request_repaint();
-            }
+        let budget = &self.frame_budget;
+        let stepped = self
+            .jobs
+            .step_in_frame(|| budget.next(web_time::Instant::now()));
+        if stepped {
+            self.ctx.request_repaint();
         }
         self.frame_budget
             .slice_done(stepped.then(web_time::Instant::now));
@@ -726,8 +406,9 @@ impl eframe::App for WorkbenchApp {
     }
 
     fn ui(&mut self, ui: &mut egui::Ui, frame: &mut eframe::Frame) {
+        let calibrating = self.is_calibrating();
         if let Some(stats) = &mut self.frame_stats {
-            stats.frame_started(ui.ctx().cumulative_frame_nr(), self.calibration.is_some());
+            stats.frame_started(ui.ctx().cumulative_frame_nr(), calibrating);
             ui.ctx().request_repaint();
         }
         let ui_started = web_time::Instant::now();

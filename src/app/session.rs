@@ -8,7 +8,7 @@ use crate::dataset::Dataset;
 use crate::quality::{Flag, Screening};
 use crate::robot::RobotDescription;
 use crate::side::{ConfigId, Side};
-use crate::solver::{CalibrationResult, Stage};
+use crate::solver::{CalibrationResult, CalibrationSettings, Stage};
 use crate::source::Files;
 use crate::workspace::{Workspace, WorkspaceOptions};
 use anyhow::Context as _;
@@ -219,7 +219,7 @@ impl Session {
     /// The newest model's figures: the running calibration's iterate, else the last finished
     /// calibration, else the nominal model.
     pub fn current(&self) -> &Analysis {
-        self.analysis(true)
+        self.newest_or_nominal(true)
     }
 
     /// The newest model other than the nominal one: the live iterate while a calibration runs, else
@@ -232,12 +232,22 @@ impl Session {
         }
     }
 
-    /// The newest model's figures when `calibrated` is asked for and there are any ([`Self::after`]),
-    /// else the nominal model's.
-    pub fn analysis(&self, calibrated: bool) -> &Analysis {
+    /// The figures the view shows: the newest model's ([`Self::after`]: the running calibration's
+    /// iterate, else the last finished calibration) when `newest` is asked for and there is one, else
+    /// the nominal model's.
+    pub fn newest_or_nominal(&self, newest: bool) -> &Analysis {
         match self.after() {
-            Some(after) if calibrated => after.analysis(),
+            Some(after) if newest => after.analysis(),
             _ => &self.nominal,
+        }
+    }
+
+    /// The settings a run starts with: the user's `settings`, leaving out the session's excluded
+    /// configurations (the session owns them; the run and its figures derive from it).
+    pub fn run_settings(&self, settings: &CalibrationSettings) -> CalibrationSettings {
+        CalibrationSettings {
+            exclude: self.exclude.clone(),
+            ..settings.clone()
         }
     }
 

@@ -9,9 +9,9 @@ use serde_json::{Value, json};
 impl WorkbenchApp {
     /// The state as JSON (see the module documentation).
     pub fn status_json(&self) -> Value {
-        let phase = if self.loading.is_some() {
+        let phase = if self.is_loading() {
             "loading"
-        } else if self.calibration.is_some() {
+        } else if self.is_calibrating() {
             "calibrating"
         } else {
             "idle"

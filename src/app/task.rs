@@ -1,18 +1,16 @@
 //! Work done off the frame: loading a dataset and calibrating are [`BackgroundTask`]s.
 //!
 //! A task's [`Work`] advances in steps ([`super::work`]: a load is one step, a calibration one outer
-//! iteration per step) and reports [`TaskEvent`]s on the app's event channel. A native build runs
+//! iteration per step) and reports events of its own type ([`Work::Event`]) on the app's event
+//! channel. A native build runs
 //! each task on its own thread; where there are no threads (a browser build) the same work is stepped
 //! from the frame loop ([`Execution::InFrames`], [`BackgroundTask::step_in_frame`]), and a step that
 //! reported something to show ([`Step::Show`]: a calibration's live view) ends the frame's slice.
 //! Cancel is an `Arc<AtomicBool>` the work polls.
 
 use super::events::{AppEvent, EventSender};
-use super::session::{AutoExcludeSummary, LiveFigures, LoadedMeshes};
-use super::work::{Loaded, Outcome};
-use crate::analysis::Analysis;
-use crate::comparison::{ComparisonEvent, MethodOutcome};
-use crate::solver::CalibrationEvent;
+use std::any::Any;
+use std::marker::PhantomData;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::Duration;
@@ -21,48 +19,12 @@ use web_time::Instant;
 /// Tells one task's events from another's (a replaced task may still report).
 pub type TaskId = u64;
 
-/// What a task reports.
-pub enum TaskEvent {
-    /// A dataset load ended.
-    Loaded(Result<Box<Loaded>, String>),
-    /// A robot's meshes are loaded and packed.
-    Meshes(Box<LoadedMeshes>),
-    /// A calibration's progress.
-    Calibration(CalibrationEvent),
-    /// The model a running calibration has reached, evaluated.
-    Live(Box<LiveFigures>),
-    /// The nominal model's figures without the configurations a calibration leaves out.
-    Nominal(Box<Analysis>),
-    /// What Auto-exclude removed (before its [`TaskEvent::Calibrated`]).
-    AutoExcluded(AutoExcludeSummary),
-    /// A calibration ended.
-    Calibrated(Outcome),
-    /// A comparison's progress: a method starts or ends.
-    Comparison(ComparisonEvent),
-    /// A comparison's nominal figures (its first step).
-    CompareNominal(Box<Analysis>),
-    /// A compared method ended (ran, failed, or was cancelled).
-    ComparedMethod(Box<MethodOutcome>),
-    /// A comparison ended: `Ok(cancelled)`, or why it could not run at all.
-    Compared(Result<bool, String>),
-    /// The work stopped without reporting its end.
+/// What a task sends on the app's channel: one of its own events (of its [`Work::Event`] type, which
+/// the job that started it reads back: [`super::job`]), or that it stopped without reporting its end.
+pub enum TaskReport {
+    Event(Box<dyn Any + Send>),
+    /// The work panicked (always the task's last report).
     Failed(String),
-}
-
-impl TaskEvent {
-    /// Whether this is the task's last event.
-    pub fn is_final(&self) -> bool {
-        !matches!(
-            self,
-            TaskEvent::Calibration(_)
-                | TaskEvent::Live(_)
-                | TaskEvent::Nominal(_)
-                | TaskEvent::AutoExcluded(_)
-                | TaskEvent::Comparison(_)
-                | TaskEvent::CompareNominal(_)
-                | TaskEvent::ComparedMethod(_)
-        )
-    }
 }
 
 /// What a step of work says about the next one.
@@ -79,25 +41,36 @@ pub enum Step {
 
 /// A task's work, in steps.
 pub trait Work: Send + 'static {
+    /// What it reports (its own type: the job that started it reads it).
+    type Event: Send + 'static;
+
     /// Do the next piece of work, reporting through `task`.
-    fn step(&mut self, task: &TaskContext) -> Step;
+    fn step(&mut self, task: &TaskContext<Self::Event>) -> Step;
 }
 
-/// What a step of work sees: where to report, and the task's cancel flag.
-pub struct TaskContext {
+/// What a step of work sees: where to report its events, and the task's cancel flag.
+pub struct TaskContext<E> {
     id: TaskId,
     events: EventSender,
     cancel: Arc<AtomicBool>,
+    event: PhantomData<fn(E)>,
 }
 
-impl TaskContext {
-    pub fn report(&self, event: TaskEvent) {
-        self.events.send(AppEvent::Task(self.id, event));
+impl<E: Send + 'static> TaskContext<E> {
+    pub fn report(&self, event: E) {
+        self.events
+            .send(AppEvent::Task(self.id, TaskReport::Event(Box::new(event))));
     }
 
     /// Report progress that may be dropped while the UI is behind.
-    pub fn report_progress(&self, event: TaskEvent) {
-        self.events.send_droppable(AppEvent::Task(self.id, event));
+    pub fn report_progress(&self, event: E) {
+        self.events
+            .send_droppable(AppEvent::Task(self.id, TaskReport::Event(Box::new(event))));
+    }
+
+    fn report_failed(&self, message: String) {
+        self.events
+            .send(AppEvent::Task(self.id, TaskReport::Failed(message)));
     }
 
     pub fn cancel_flag(&self) -> &Arc<AtomicBool> {
@@ -124,12 +97,32 @@ impl Default for Execution {
     }
 }
 
+/// Work with its context, its event type hidden (for the frame loop).
+trait Stepped {
+    fn step(&mut self) -> Step;
+    fn failed(&self, message: String);
+}
+
+struct Bound<W: Work> {
+    work: W,
+    context: TaskContext<W::Event>,
+}
+
+impl<W: Work> Stepped for Bound<W> {
+    fn step(&mut self) -> Step {
+        self.work.step(&self.context)
+    }
+
+    fn failed(&self, message: String) {
+        self.context.report_failed(message);
+    }
+}
+
 enum Runner {
     /// The thread reports by itself; it is not joined (a dropped task's thread ends on its own).
     Thread,
     InFrames {
-        work: Box<dyn Work>,
-        context: TaskContext,
+        work: Box<dyn Stepped>,
         done: bool,
     },
 }
@@ -202,18 +195,19 @@ static NEXT_TASK_ID: AtomicU64 = AtomicU64::new(1);
 
 impl BackgroundTask {
     /// Start `work`; its events go to `events`. `name` names its thread.
-    pub fn start(
+    pub fn start<W: Work>(
         name: &str,
-        work: impl Work,
+        work: W,
         events: &EventSender,
         execution: Execution,
     ) -> std::io::Result<Self> {
         let id = NEXT_TASK_ID.fetch_add(1, Ordering::Relaxed);
         let cancel = Arc::new(AtomicBool::new(false));
-        let context = TaskContext {
+        let context = TaskContext::<W::Event> {
             id,
             events: events.clone(),
             cancel: cancel.clone(),
+            event: PhantomData,
         };
         let runner = match execution {
             Execution::Thread => {
@@ -224,8 +218,7 @@ impl BackgroundTask {
                 Runner::Thread
             }
             Execution::InFrames => Runner::InFrames {
-                work: Box::new(work),
-                context,
+                work: Box::new(Bound { work, context }),
                 done: false,
             },
         };
@@ -281,24 +274,18 @@ impl BackgroundTask {
     /// Advance work that runs in frames for about `budget`, or until a step has something to show
     /// (nothing for a thread's).
     pub fn step_in_frame(&mut self, budget: Duration) {
-        if let Runner::InFrames {
-            work,
-            context,
-            done,
-        } = &mut self.runner
-        {
+        if let Runner::InFrames { work, done } = &mut self.runner {
             let started = Instant::now();
             // At least one step, however small the budget.
             loop {
                 // A panic in the work ends the task with a message; the frame loop goes on.
-                let step =
-                    std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| work.step(context)));
+                let step = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| work.step()));
                 match step {
                     Ok(Step::More) => {}
                     Ok(Step::Show) => break,
                     Ok(Step::Done) => *done = true,
                     Err(payload) => {
-                        context.report(TaskEvent::Failed(panic_message(&self.name, &*payload)));
+                        work.failed(panic_message(&self.name, &*payload));
                         *done = true;
                     }
                 }
@@ -321,12 +308,12 @@ impl Drop for BackgroundTask {
 }
 
 /// A task thread's body: every step, then — if the work panicked — a final event saying so.
-fn run_to_end(mut work: impl Work, context: &TaskContext, name: &str) {
+fn run_to_end<W: Work>(mut work: W, context: &TaskContext<W::Event>, name: &str) {
     let ran = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
         while work.step(context) != Step::Done {}
     }));
     if let Err(payload) = ran {
-        context.report(TaskEvent::Failed(panic_message(name, &*payload)));
+        context.report_failed(panic_message(name, &*payload));
     }
 }
 
@@ -355,23 +342,36 @@ mod tests {
         panic_at: Option<usize>,
     }
 
+    /// The counter's events: a tick, then the end.
+    #[derive(Debug, PartialEq)]
+    enum Count {
+        Tick,
+        Done,
+    }
+
     impl Work for Counter {
-        fn step(&mut self, task: &TaskContext) -> Step {
+        type Event = Count;
+
+        fn step(&mut self, task: &TaskContext<Count>) -> Step {
             assert_ne!(Some(self.n), self.panic_at, "the work failed");
             if self.n == 0 || task.cancel_flag().load(Ordering::Relaxed) {
-                task.report(TaskEvent::Failed("done".into()));
+                task.report(Count::Done);
                 return Step::Done;
             }
             self.n -= 1;
-            task.report_progress(TaskEvent::Calibration(CalibrationEvent::StageFinished {
-                stage: crate::solver::Stage::Base,
-                termination: crate::solver::Termination::Converged,
-            }));
+            task.report_progress(Count::Tick);
             Step::More
         }
     }
 
-    fn events_of(channel: &EventChannel, id: TaskId) -> Vec<TaskEvent> {
+    fn is_final(report: &TaskReport) -> bool {
+        match report {
+            TaskReport::Event(event) => event.downcast_ref::<Count>() == Some(&Count::Done),
+            TaskReport::Failed(_) => true,
+        }
+    }
+
+    fn events_of(channel: &EventChannel, id: TaskId) -> Vec<TaskReport> {
         channel
             .drain()
             .into_iter()
@@ -400,7 +400,7 @@ mod tests {
         }
         let events = events_of(&channel, task.id());
         assert_eq!(events.len(), 4);
-        assert!(events[3].is_final() && !events[0].is_final());
+        assert!(is_final(&events[3]) && !is_final(&events[0]));
     }
 
     #[test]
@@ -463,7 +463,7 @@ mod tests {
             task.step_in_frame(Duration::from_millis(1));
         }
         match events_of(&channel, task.id()).last() {
-            Some(TaskEvent::Failed(message)) => {
+            Some(TaskReport::Failed(message)) => {
                 assert!(message.contains("the count worker stopped"), "{message}");
                 assert!(message.contains("the work failed"), "{message}");
             }
@@ -486,12 +486,12 @@ mod tests {
         .unwrap();
         let deadline = Instant::now() + Duration::from_secs(20);
         let mut events = Vec::new();
-        while !events.last().is_some_and(TaskEvent::is_final) && Instant::now() < deadline {
+        while !events.last().is_some_and(is_final) && Instant::now() < deadline {
             events.extend(events_of(&channel, task.id()));
             std::thread::sleep(Duration::from_millis(5));
         }
         match events.last() {
-            Some(TaskEvent::Failed(message)) => {
+            Some(TaskReport::Failed(message)) => {
                 assert!(message.contains("stopped unexpectedly"), "{message}");
                 assert!(message.contains("the work failed"), "{message}");
             }

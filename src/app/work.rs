@@ -5,11 +5,11 @@
 //!
 //! A calibration leaves out the session's excluded configurations (`CalibrationSettings::exclude`);
 //! when they differ from those of the nominal figures shown, its first step re-evaluates the nominal
-//! model without them ([`TaskEvent::Nominal`]), so "before" and "after" figures are of the same
+//! model without them ([`RunEvent::Nominal`]), so "before" and "after" figures are of the same
 //! configurations, as in `dualcal calibrate --exclude`.
 
 use super::session::{AutoExcludeSummary, Calibrated, LiveFigures, LoadedMeshes, Session};
-use super::task::{Execution, Step, TaskContext, TaskEvent, Work};
+use super::task::{Execution, Step, TaskContext, Work};
 use super::viewport::mesh_pack::{MeshKey, PackedMeshes};
 use crate::analysis::{Analysis, AnalysisError};
 use crate::dataset::Dataset;
@@ -38,6 +38,29 @@ pub struct Loaded {
     pub elapsed_secs: f64,
 }
 
+/// What a load reports: the loaded dataset, or why it could not load.
+pub type LoadEvent = Result<Box<Loaded>, String>;
+
+/// What a calibration (a plain one, Auto-exclude, or a compared result being adopted) reports.
+pub enum RunEvent {
+    /// Its progress.
+    Progress(CalibrationEvent),
+    /// The model it has reached, evaluated.
+    Live(Box<LiveFigures>),
+    /// The nominal model's figures without the configurations it leaves out.
+    Nominal(Box<Analysis>),
+    /// What Auto-exclude removed (before its [`RunEvent::Calibrated`]).
+    AutoExcluded(AutoExcludeSummary),
+    /// It ended (its last event).
+    Calibrated(Outcome),
+}
+
+impl From<CalibrationEvent> for RunEvent {
+    fn from(event: CalibrationEvent) -> Self {
+        RunEvent::Progress(event)
+    }
+}
+
 /// Load a dataset (directory or `dataset.toml`), with `urdf` overriding its robot.
 pub struct LoadWork {
     pub dataset: PathBuf,
@@ -47,7 +70,9 @@ pub struct LoadWork {
 }
 
 impl Work for LoadWork {
-    fn step(&mut self, task: &TaskContext) -> Step {
+    type Event = LoadEvent;
+
+    fn step(&mut self, task: &TaskContext<LoadEvent>) -> Step {
         let started = Instant::now();
         let result = Session::load_from(&self.files, &self.dataset, self.urdf.as_deref())
             .with_context(|| match &self.urdf {
@@ -66,7 +91,7 @@ impl Work for LoadWork {
                 })
             })
             .map_err(|e| format!("{e:#}"));
-        task.report(TaskEvent::Loaded(result));
+        task.report(result);
         Step::Done
     }
 }
@@ -78,8 +103,10 @@ pub struct MeshWork {
 }
 
 impl Work for MeshWork {
-    fn step(&mut self, task: &TaskContext) -> Step {
-        task.report(TaskEvent::Meshes(Box::new(load_meshes(&self.robot))));
+    type Event = Box<LoadedMeshes>;
+
+    fn step(&mut self, task: &TaskContext<Box<LoadedMeshes>>) -> Step {
+        task.report(Box::new(load_meshes(&self.robot)));
         Step::Done
     }
 }
@@ -221,7 +248,7 @@ struct Snapshot {
 }
 
 /// When the next live view is due, and the one waiting to be evaluated.
-struct LiveSchedule {
+pub struct LiveSchedule {
     rate: LiveRate,
     /// When the last live view was sent (or the run started).
     last: Instant,
@@ -249,30 +276,33 @@ impl LiveSchedule {
     }
 }
 
-/// The run's observer: progress events for the status bar and the curves, and the live snapshots.
-struct Reporter<'a> {
-    task: &'a TaskContext,
-    live: &'a mut LiveSchedule,
+/// A run's observer: progress events for the status bar and the curves (a calibration's and a
+/// comparison's), and — given a schedule — the live snapshots.
+pub struct Reporter<'a, E> {
+    pub task: &'a TaskContext<E>,
+    pub live: Option<&'a mut LiveSchedule>,
 }
 
-impl Observer for Reporter<'_> {
+impl<E: From<CalibrationEvent> + Send + 'static> Observer for Reporter<'_, E> {
     fn stage_started(&mut self, stage: Stage, n_configs: usize, n_pairs: usize) {
-        self.task
-            .report(TaskEvent::Calibration(CalibrationEvent::StageStarted {
+        self.task.report(
+            CalibrationEvent::StageStarted {
                 stage,
                 n_configs,
                 n_pairs,
-            }));
+            }
+            .into(),
+        );
     }
 
     /// Iterations arrive when the UI keeps up (they are many); a snapshot when one is due.
     fn iteration(&mut self, record: &IterationRecord, run: &CalibrationRun) {
         self.task
-            .report_progress(TaskEvent::Calibration(CalibrationEvent::Iteration(
-                record.clone(),
-            )));
-        if self.live.due() {
-            self.live.pending = Some(Snapshot {
+            .report_progress(CalibrationEvent::Iteration(record.clone()).into());
+        if let Some(live) = &mut self.live
+            && live.due()
+        {
+            live.pending = Some(Snapshot {
                 stage: record.stage,
                 iteration: record.iteration,
                 stage_finished: false,
@@ -283,13 +313,17 @@ impl Observer for Reporter<'_> {
 
     /// Stage boundaries always arrive, with the stage's final model (unless it was cancelled).
     fn stage_finished(&mut self, summary: &StageSummary, run: &CalibrationRun) {
-        self.task
-            .report(TaskEvent::Calibration(CalibrationEvent::StageFinished {
+        self.task.report(
+            CalibrationEvent::StageFinished {
                 stage: summary.stage,
                 termination: summary.termination,
-            }));
-        if summary.termination != Termination::Cancelled {
-            self.live.pending = Some(Snapshot {
+            }
+            .into(),
+        );
+        if summary.termination != Termination::Cancelled
+            && let Some(live) = &mut self.live
+        {
+            live.pending = Some(Snapshot {
                 stage: summary.stage,
                 iteration: summary.iterations,
                 stage_finished: true,
@@ -302,7 +336,7 @@ impl Observer for Reporter<'_> {
 /// The two-step calibration of a session's nominal model. The first step sets the run up (the
 /// identifiability analysis; the nominal figures without the excluded configurations, if those
 /// changed); each further step is one outer iteration, or the evaluation of a live snapshot
-/// ([`TaskEvent::Live`]). The end screens the result ([`crate::exclusion::screen_result`]).
+/// ([`RunEvent::Live`]). The end screens the result ([`crate::exclusion::screen_result`]).
 pub struct CalibrationWork {
     dataset: Arc<Dataset>,
     nominal: DualArmModel,
@@ -389,7 +423,9 @@ pub(super) fn calibrated_outcome(
 }
 
 impl Work for CalibrationWork {
-    fn step(&mut self, task: &TaskContext) -> Step {
+    type Event = RunEvent;
+
+    fn step(&mut self, task: &TaskContext<RunEvent>) -> Step {
         let Some(run) = &mut self.run else {
             assert!(
                 !self.panic_at_start,
@@ -397,9 +433,9 @@ impl Work for CalibrationWork {
             );
             if self.nominal_excluded != self.settings.exclude {
                 match self.analysis(&self.nominal) {
-                    Ok(analysis) => task.report(TaskEvent::Nominal(Box::new(analysis))),
+                    Ok(analysis) => task.report(RunEvent::Nominal(Box::new(analysis))),
                     Err(e) => {
-                        task.report(TaskEvent::Calibrated(Outcome::Failed(format!(
+                        task.report(RunEvent::Calibrated(Outcome::Failed(format!(
                             "nominal figures without the excluded configurations: {e:#}"
                         ))));
                         return Step::Done;
@@ -419,7 +455,7 @@ impl Work for CalibrationWork {
                     Step::More
                 }
                 Err(e) => {
-                    task.report(TaskEvent::Calibrated(Outcome::Failed(e.to_string())));
+                    task.report(RunEvent::Calibrated(Outcome::Failed(e.to_string())));
                     Step::Done
                 }
             };
@@ -435,7 +471,7 @@ impl Work for CalibrationWork {
                 &self.settings.exclude,
             ) {
                 let cost = started.elapsed();
-                task.report(TaskEvent::Live(Box::new(LiveFigures {
+                task.report(RunEvent::Live(Box::new(LiveFigures {
                     stage: snapshot.stage,
                     iteration: snapshot.iteration,
                     stage_finished: snapshot.stage_finished,
@@ -449,7 +485,7 @@ impl Work for CalibrationWork {
         }
         let mut reporter = Reporter {
             task,
-            live: &mut self.live,
+            live: Some(&mut self.live),
         };
         let stepping = Instant::now();
         let stepped = run.step(&mut [&mut reporter]);
@@ -459,7 +495,7 @@ impl Work for CalibrationWork {
             Ok(Progress::Finished(result)) => self.outcome(*result),
             Err(e) => Outcome::Failed(e.to_string()),
         };
-        task.report(TaskEvent::Calibrated(outcome));
+        task.report(RunEvent::Calibrated(outcome));
         Step::Done
     }
 }
@@ -467,7 +503,7 @@ impl Work for CalibrationWork {
 /// The Auto-exclude rule ([`crate::exclusion::auto_exclude`], `dualcal calibrate --auto-exclude`): screen, leave
 /// the suspects out, fit, screen again, … in one step (a few fits; no live view, not cancellable
 /// midway). Reports the nominal figures without the configurations it removed, what it removed
-/// ([`TaskEvent::AutoExcluded`]) and the calibration it ended with.
+/// ([`RunEvent::AutoExcluded`]) and the calibration it ended with.
 pub struct AutoExcludeWork {
     dataset: Arc<Dataset>,
     nominal: DualArmModel,
@@ -488,7 +524,9 @@ impl AutoExcludeWork {
 }
 
 impl Work for AutoExcludeWork {
-    fn step(&mut self, task: &TaskContext) -> Step {
+    type Event = RunEvent;
+
+    fn step(&mut self, task: &TaskContext<RunEvent>) -> Step {
         let started = Instant::now();
         let auto = match crate::exclusion::auto_exclude(
             &self.dataset,
@@ -499,7 +537,7 @@ impl Work for AutoExcludeWork {
         ) {
             Ok(auto) => auto,
             Err(e) => {
-                task.report(TaskEvent::Calibrated(Outcome::Failed(e.to_string())));
+                task.report(RunEvent::Calibrated(Outcome::Failed(e.to_string())));
                 return Step::Done;
             }
         };
@@ -509,21 +547,21 @@ impl Work for AutoExcludeWork {
             Analysis::compute_excluding(&self.dataset, model, &self.body_from_left_base, exclude)
         };
         match figures(&self.nominal) {
-            Ok(nominal) => task.report(TaskEvent::Nominal(Box::new(nominal))),
+            Ok(nominal) => task.report(RunEvent::Nominal(Box::new(nominal))),
             Err(e) => {
-                task.report(TaskEvent::Calibrated(Outcome::Failed(format!(
+                task.report(RunEvent::Calibrated(Outcome::Failed(format!(
                     "nominal figures without the excluded configurations: {e:#}"
                 ))));
                 return Step::Done;
             }
         }
-        task.report(TaskEvent::AutoExcluded(AutoExcludeSummary {
+        task.report(RunEvent::AutoExcluded(AutoExcludeSummary {
             excluded: auto.excluded.clone(),
             rounds: auto.rounds,
             stopped: auto.stopped.clone(),
         }));
         let analysis = figures(&auto.result.calibrated);
-        task.report(TaskEvent::Calibrated(calibrated_outcome(
+        task.report(RunEvent::Calibrated(calibrated_outcome(
             &self.dataset,
             auto.result,
             analysis,
@@ -538,17 +576,26 @@ impl Work for AutoExcludeWork {
 mod tests {
     use super::*;
     use crate::app::events::{AppEvent, EventChannel};
-    use crate::app::task::{BackgroundTask, Execution};
+    use crate::app::task::{BackgroundTask, Execution, TaskReport};
     use std::path::Path;
     use std::time::Duration;
 
-    fn run_in_frames(work: impl Work, channel: &EventChannel) -> Vec<AppEvent> {
+    /// The work's events, stepped in frames to its end.
+    fn run_in_frames<W: Work>(work: W, channel: &EventChannel) -> Vec<W::Event> {
         let mut task =
             BackgroundTask::start("work", work, channel.sender(), Execution::InFrames).unwrap();
         while task.needs_frames() {
             task.step_in_frame(Duration::from_millis(5));
         }
-        channel.drain()
+        channel
+            .drain()
+            .into_iter()
+            .map(|event| match event {
+                AppEvent::Task(_, TaskReport::Event(event)) => *event.downcast().unwrap(),
+                AppEvent::Task(_, TaskReport::Failed(message)) => panic!("{message}"),
+                _ => panic!("not a task's event"),
+            })
+            .collect()
     }
 
     /// Without threads: the example loads and calibrates when stepped from a frame loop.
@@ -560,9 +607,7 @@ mod tests {
             urdf: None,
             files: Files::default(),
         };
-        let Some(AppEvent::Task(_, TaskEvent::Loaded(Ok(loaded)))) =
-            run_in_frames(load, &channel).pop()
-        else {
+        let Some(Ok(loaded)) = run_in_frames(load, &channel).pop() else {
             panic!("the example did not load");
         };
         let calibration = CalibrationWork::new(
@@ -573,18 +618,13 @@ mod tests {
         let events = run_in_frames(calibration, &channel);
         let iterations = events
             .iter()
-            .filter(|e| {
-                matches!(
-                    e,
-                    AppEvent::Task(_, TaskEvent::Calibration(CalibrationEvent::Iteration(_)))
-                )
-            })
+            .filter(|e| matches!(e, RunEvent::Progress(CalibrationEvent::Iteration(_))))
             .count();
         // The live views: at least the end of both arms' stages (the last stage's result follows).
         let live: Vec<&LiveFigures> = events
             .iter()
             .filter_map(|e| match e {
-                AppEvent::Task(_, TaskEvent::Live(live)) => Some(&**live),
+                RunEvent::Live(live) => Some(&**live),
                 _ => None,
             })
             .collect();
@@ -604,7 +644,7 @@ mod tests {
         let after_left = live.iter().find(|l| l.stage_finished).unwrap();
         assert!(nominal_rms(&after_left.analysis) < 0.1 * nominal_rms(&loaded.session.nominal));
         match events.last() {
-            Some(AppEvent::Task(_, TaskEvent::Calibrated(Outcome::Calibrated(c)))) => {
+            Some(RunEvent::Calibrated(Outcome::Calibrated(c))) => {
                 assert!(c.result.is_converged());
                 assert_eq!(iterations, c.result.history.len());
                 // The left arm's stage ended with the model the run then kept.

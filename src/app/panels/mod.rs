@@ -7,6 +7,7 @@ mod view_options;
 
 pub(crate) use settings::{base_method_help, method_help};
 
+use super::job::calibration::CalibrationJob;
 use super::session::{self, After};
 use super::{Command, ERROR_COLOR, Status, WorkbenchApp, plots, table};
 
@@ -249,7 +250,7 @@ impl WorkbenchApp {
             );
             if ui
                 .add_enabled(
-                    self.loading.is_none(),
+                    !self.is_loading(),
                     egui::Button::new("Auto-exclude"),
                 )
                 .on_hover_text(
@@ -325,14 +326,14 @@ impl WorkbenchApp {
         ui.horizontal(|ui| {
             match &self.status {
                 Status::Idle(text) => {
-                    if self.loading.is_some() {
+                    if self.is_loading() {
                         ui.spinner();
                     }
                     ui.label(text);
                 }
                 Status::Running { stage, iteration } => {
                     ui.spinner();
-                    let task = self.calibration.as_ref();
+                    let task = self.jobs.task(CalibrationJob::lane());
                     let elapsed = task.map_or(0.0, |t| t.elapsed_secs());
                     let cancelling = task.is_some_and(|t| t.is_cancelling());
                     ui.label(match stage {

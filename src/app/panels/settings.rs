@@ -23,7 +23,7 @@ impl WorkbenchApp {
                 self.compare_button_ui(ui, commands);
             });
             self.current_method_ui(ui);
-            let running = self.calibration.is_some();
+            let running = self.is_calibrating();
             ui.add_enabled_ui(!running, |ui| {
                 calibration_settings_ui(ui, &mut self.settings)
             });
@@ -69,7 +69,7 @@ impl WorkbenchApp {
                 commands.push(Command::ChooseFile(OpenKind::Dataset));
             }
             if ui
-                .add_enabled(self.loading.is_none(), egui::Button::new("Example"))
+                .add_enabled(!self.is_loading(), egui::Button::new("Example"))
                 .on_hover_text("Open the bundled simulated example dataset")
                 .clicked()
             {
@@ -101,7 +101,7 @@ impl WorkbenchApp {
         }
         ui.horizontal(|ui| {
             if ui
-                .add_enabled(self.loading.is_none(), egui::Button::new("Open URDF…"))
+                .add_enabled(!self.is_loading(), egui::Button::new("Open URDF…"))
                 .on_hover_text(
                     "Use another robot description (URDF) for this dataset; or drop a .urdf on the window",
                 )
@@ -112,7 +112,7 @@ impl WorkbenchApp {
             if self.urdf_override.is_some()
                 && ui
                     .add_enabled(
-                        self.loading.is_none(),
+                        !self.is_loading(),
                         egui::Button::new("Dataset's robot"),
                     )
                     .on_hover_text("Go back to the robot the dataset names (or the built-in one)")
@@ -124,7 +124,7 @@ impl WorkbenchApp {
     }
 
     fn calibration_buttons_ui(&self, ui: &mut egui::Ui, commands: &mut Vec<Command>) {
-        let running = self.calibration.is_some();
+        let running = self.is_calibrating();
         ui.horizontal(|ui| {
             let calibrate =
                 egui::Button::new(RichText::new("Calibrate").strong().color(Color32::WHITE))

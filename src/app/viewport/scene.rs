@@ -157,7 +157,7 @@ impl SceneOptions {
 
     /// The figures of the model drawn: the calibrated one if chosen and there is one.
     pub fn analysis<'a>(&self, session: &'a Session) -> &'a Analysis {
-        session.analysis(self.use_calibrated)
+        session.newest_or_nominal(self.use_calibrated)
     }
 
     /// The screening that goes with the model drawn: the last calibration's, or the nominal one.

@@ -1,0 +1,270 @@
+//! What the user asks for — in a panel, in the viewport, in the path prompt, through a file dialog or
+//! by dropping a file — is a [`Command`], and [`WorkbenchApp::apply`] is the one place that carries
+//! commands out (after the frame's UI is built). Widgets bound to view state (display options, plot
+//! tabs, the calibration settings) edit it in place.
+
+use super::command::{Command, Export, OpenKind};
+use super::compare;
+use super::events::AppEvent;
+use super::files::{self, FileReply, PathPrompt, PromptAction, SaveRequest};
+use super::job::calibration::{CalibrationJob, RunKind};
+use super::job::comparison::ComparisonJob;
+use super::session::Session;
+use super::work::{AutoExcludeWork, CalibrationWork, LiveRate};
+use super::{Status, WorkbenchApp, table};
+use crate::side::ConfigId;
+use eframe::egui;
+use std::path::PathBuf;
+
+impl WorkbenchApp {
+    /// Carry out a command.
+    pub fn apply(&mut self, command: Command) {
+        match command {
+            Command::OpenDataset(path) => self.start_load(path, self.urdf_override.clone()),
+            Command::OpenUrdf(path) => match &self.session {
+                Some(session) => self.start_load(session.dataset.dir.clone(), Some(path)),
+                // Nothing to reload: the robot is used for the next dataset.
+                None => self.urdf_override = Some(path),
+            },
+            Command::UseDatasetRobot => match &self.session {
+                Some(session) => self.start_load(session.dataset.dir.clone(), None),
+                None => self.urdf_override = None,
+            },
+            Command::ChooseFile(kind) => self.choose_file(kind),
+            Command::StartCalibration => {
+                if !self.jobs.is_running(CalibrationJob::lane()) {
+                    self.start_calibration();
+                }
+            }
+            Command::ToggleExclude(config) => {
+                let Some(session) = self.scene_mut() else {
+                    return;
+                };
+                match session.exclude.iter().position(|c| *c == config) {
+                    Some(k) => {
+                        session.exclude.remove(k);
+                    }
+                    None => session.exclude.push(config),
+                }
+                session.auto_exclusion = None;
+                self.start_calibration();
+            }
+            Command::ClearExclusions => {
+                if self.session.as_ref().is_none_or(|s| s.exclude.is_empty()) {
+                    return;
+                }
+                if let Some(session) = self.scene_mut() {
+                    session.exclude.clear();
+                    session.auto_exclusion = None;
+                }
+                self.start_calibration();
+            }
+            Command::AutoExclude => self.start_auto_exclude(),
+            Command::CancelCalibration => self.jobs.cancel(CalibrationJob::lane()),
+            Command::Select {
+                config,
+                reveal_in_table,
+            } => self.select(config, reveal_in_table),
+            Command::SelectWorst => {
+                if let Some(session) = &self.session {
+                    let worst = table::worst(session.current());
+                    self.select(worst, true);
+                }
+            }
+            Command::Export(Export::PlotPng) => self.request_screenshot(),
+            Command::Export(what) => self.export(what),
+            Command::ConfirmPrompt(path) => self.confirm_prompt(path),
+            Command::ClosePrompt => self.prompt = None,
+            Command::DismissError(k) => {
+                if k < self.errors.len() {
+                    self.errors.remove(k);
+                }
+            }
+            Command::ShowComparison(open) => self.compare.open = open,
+            Command::StartComparison => self.start_comparison(),
+            Command::CancelComparison => self.jobs.cancel(ComparisonJob::lane()),
+            Command::AdoptCompared(key) => self.adopt_compared(key),
+        }
+    }
+
+    /// Run the picked methods on the session (with the current settings' split, limits and
+    /// tolerances and the session's exclusions); the last comparison is replaced as the new one's
+    /// rows arrive. Not while a calibration runs (the two would share the two cores).
+    fn start_comparison(&mut self) {
+        let Some(session) = &self.session else {
+            self.errors.push("Open a dataset first.".into());
+            return;
+        };
+        if self.is_calibrating() || self.is_comparing() {
+            return;
+        }
+        if let Some(refusal) = refusal(session) {
+            self.errors.push(refusal);
+            return;
+        }
+        let entries = self.compare.picked_entries();
+        if entries.is_empty() {
+            self.errors
+                .push("Pick at least one method to compare.".into());
+            return;
+        }
+        let common = compare::common_settings(&session.run_settings(&self.settings));
+        let work = compare::ComparisonWork::new(session, entries, common);
+        match self.start_job("comparison", ComparisonJob, work) {
+            Ok(()) => {
+                self.compare.open = true;
+                self.compare.adopted = None;
+                self.compare.progress = None;
+                self.status = Status::Idle("Comparing methods…".into());
+            }
+            Err(e) => self
+                .errors
+                .push(format!("cannot start the comparison thread: {e}")),
+        }
+    }
+
+    /// Take a compared method's result as the current calibration (its figures are computed in the
+    /// background, then it is shown and exported like a calibration of its own).
+    fn adopt_compared(&mut self, key: &'static str) {
+        let Some(session) = &self.session else {
+            return;
+        };
+        if self.is_calibrating() || self.is_comparing() {
+            return;
+        }
+        let Some(run) = self
+            .compare
+            .comparison
+            .as_ref()
+            .and_then(|c| c.method(key))
+            .and_then(|m| m.run())
+        else {
+            return;
+        };
+        let work = compare::AdoptWork::new(session, run.result.clone());
+        self.compare.adopted = Some(key);
+        self.start_run(RunKind::Adopt, work);
+    }
+
+    /// Calibrate the session with the current settings and its exclusions; a running calibration is
+    /// replaced (its events are ignored from now on).
+    fn start_calibration(&mut self) {
+        let Some(session) = &self.session else {
+            self.errors.push("Open a dataset first.".into());
+            return;
+        };
+        if let Some(refusal) = refusal(session) {
+            self.errors.push(refusal);
+            return;
+        }
+        let settings = session.run_settings(&self.settings);
+        let mut work =
+            CalibrationWork::new(session, settings, LiveRate::for_execution(self.execution));
+        work.panic_at_start = std::mem::take(&mut self.panic_in_next_calibration);
+        self.start_run(RunKind::Calibration, work);
+    }
+
+    /// Auto-exclude: the rule's calibration replaces the current one.
+    fn start_auto_exclude(&mut self) {
+        let Some(session) = &self.session else {
+            self.errors.push("Open a dataset first.".into());
+            return;
+        };
+        if let Some(refusal) = refusal(session) {
+            self.errors.push(refusal);
+            return;
+        }
+        let work = AutoExcludeWork::new(session, session.run_settings(&self.settings));
+        self.start_run(RunKind::Calibration, work);
+    }
+
+    /// Select a configuration and pose its arm in it.
+    fn select(&mut self, config: Option<ConfigId>, reveal_in_table: bool) {
+        self.selection = config;
+        if let Some(config) = config {
+            self.viewport.poses[config.side] = Some(config.index);
+        }
+        self.scroll_table_to_selection = reveal_in_table;
+    }
+
+    fn choose_file(&mut self, kind: OpenKind) {
+        if self.files.dialogs_available() {
+            self.files.open(kind, self.events.sender().clone());
+            return;
+        }
+        let suggested = match (kind, &self.session) {
+            (OpenKind::Dataset, Some(s)) => s.dataset.dir.join(crate::dataset::MANIFEST_FILE),
+            (OpenKind::Urdf, Some(s)) => s.dataset.dir.join("robot.urdf"),
+            (_, None) => std::env::current_dir().unwrap_or_default(),
+        };
+        self.prompt = Some(PathPrompt::new(PromptAction::Open(kind), suggested));
+    }
+
+    /// Ask where to save: the native dialog, or the in-app path prompt without one.
+    pub(super) fn save(&mut self, request: SaveRequest) {
+        if self.files.dialogs_available() {
+            self.files.save(request, self.events.sender().clone());
+        } else {
+            let suggested = std::env::current_dir()
+                .unwrap_or_default()
+                .join(&request.file_name);
+            self.prompt = Some(PathPrompt::new(PromptAction::Save(request), suggested));
+        }
+    }
+
+    fn export(&mut self, what: Export) {
+        let Some(session) = &self.session else {
+            return;
+        };
+        match what.contents(session) {
+            Some(Ok(bytes)) => self.save(what.save_request(bytes)),
+            Some(Err(e)) => self.errors.push(format!("export: {e:#}")),
+            None => {}
+        }
+    }
+
+    /// "Export plots as PNG": the screenshot is taken when the next frame is painted and arrives as
+    /// an event.
+    fn request_screenshot(&mut self) {
+        if self.session.is_none() {
+            return;
+        }
+        self.screenshot_pending = true;
+        let events = self.events.sender().clone();
+        self.ctx
+            .send_viewport_cmd(egui::ViewportCommand::Screenshot(
+                egui::ScreenshotCallback::new(move |image| {
+                    events.send(AppEvent::Screenshot(image))
+                }),
+            ));
+        self.ctx.request_repaint();
+    }
+
+    fn confirm_prompt(&mut self, path: PathBuf) {
+        let Some(mut prompt) = self.prompt.take() else {
+            return;
+        };
+        match &prompt.action {
+            PromptAction::Open(kind) => self.apply(Command::open(*kind, path)),
+            PromptAction::Save(request) => match files::write(&path, &request.bytes) {
+                FileReply::Failed(e) => {
+                    prompt.error = Some(e);
+                    self.prompt = Some(prompt);
+                }
+                reply => self.on_file_reply(reply),
+            },
+        }
+    }
+}
+
+/// Why `dualcal calibrate` would refuse this session's data (the nominal screening's errors), if it
+/// would.
+fn refusal(session: &Session) -> Option<String> {
+    let refusals = session.refusals();
+    (!refusals.is_empty()).then(|| {
+        format!(
+            "calibration refused, as by dualcal calibrate: {}",
+            refusals.join("; ")
+        )
+    })
+}
