@@ -265,50 +265,46 @@ fn selecting_in_the_table_and_in_the_viewport() {
     // Clicking a configuration in the viewport selects it (viewport alone fills the window).
     harness.state_mut().set_panels_visible(false);
     harness.step();
+    // The target: the configuration whose anchor lies farthest, on screen, from every other one's (at
+    // least 20 points), so that the nearest configuration to a click on it is it alone.
     let (target, at) = {
         let app = harness.state();
         let camera = app.viewport().camera;
-        let row = app
-            .session()
-            .unwrap()
-            .nominal
-            .configs
+        let rows = &app.session().unwrap().nominal.configs;
+        let screen: Vec<_> = rows
             .iter()
-            .find(|r| r.config != other_sel)
-            .unwrap();
-        let anchor = dualcal::app::viewport::scene::pick_anchor(row);
-        let [x, y] = camera.project(&anchor, 1400.0, 900.0).unwrap();
-        (row.config, eframe::egui::pos2(x, y))
+            .map(|r| {
+                let anchor = dualcal::app::viewport::scene::pick_anchor(r);
+                camera
+                    .project(&anchor, 1400.0, 900.0)
+                    .filter(|[x, y]| (20.0..1380.0).contains(x) && (20.0..880.0).contains(y))
+                    .map(|[x, y]| eframe::egui::pos2(x, y))
+            })
+            .collect();
+        let isolation = |i: usize| {
+            let p = screen[i]?;
+            let nearest = screen
+                .iter()
+                .enumerate()
+                .filter(|&(j, q)| j != i && q.is_some())
+                .map(|(_, q)| (q.unwrap() - p).length())
+                .fold(f32::INFINITY, f32::min);
+            Some(nearest)
+        };
+        let (best, gap) = (0..rows.len())
+            .filter(|&i| rows[i].config != other_sel)
+            .filter_map(|i| isolation(i).map(|g| (i, g)))
+            .max_by(|a, b| a.1.total_cmp(&b.1))
+            .expect("configurations on screen");
+        assert!(gap >= 20.0, "no isolated configuration on screen (best gap {gap} points)");
+        (rows[best].config, screen[best].unwrap())
     };
     click_at(&mut harness, at);
-    let picked = harness
-        .state()
-        .selection()
-        .expect("a configuration was picked");
-    // The nearest configuration to the click is picked: the target or one drawn on top of it.
-    let app = harness.state();
-    let camera = app.viewport().camera;
-    let picked_row = app
-        .session()
-        .unwrap()
-        .nominal
-        .configs
-        .iter()
-        .find(|r| r.config == picked)
-        .unwrap();
-    let [x, y] = camera
-        .project(
-            &dualcal::app::viewport::scene::pick_anchor(picked_row),
-            1400.0,
-            900.0,
-        )
-        .unwrap();
-    let distance = (eframe::egui::pos2(x, y) - at).length();
-    assert!(
-        picked == target || distance < 14.0,
-        "picked {picked:?} {distance} points from the click"
+    assert_eq!(
+        harness.state().selection(),
+        Some(target),
+        "a click on an isolated configuration's anchor picks it"
     );
-    assert_ne!(harness.state().selection(), Some(other_sel));
 }
 
 fn click_at(harness: &mut Harness<'_, WorkbenchApp>, pos: eframe::egui::Pos2) {
@@ -1380,4 +1376,37 @@ fn compare_screenshot() {
     let image = harness.render().expect("render");
     image.save(&out).expect("write the PNG");
     println!("wrote {}", out.display());
+}
+
+/// At 1280 × 800 with a URDF robot (its Robot section lists arms, meshes and joints), the left panel's
+/// last row ("Model: nominal / calibrated") can be brought into view above the status bar: the panel
+/// scrolls (or fits).
+#[test]
+fn the_left_panel_reaches_its_last_row_at_1280x800_with_a_urdf_robot() {
+    let mut harness = harness([1280.0, 800.0], AppLaunch::default());
+    loaded(&mut harness);
+    let dir = tempfile::tempdir().unwrap();
+    let urdf = robots::write_yumi_like(dir.path());
+    harness
+        .input_mut()
+        .dropped_files
+        .push(std::sync::Arc::new(Dropped(urdf)));
+    harness.step();
+    step_until(
+        &mut harness,
+        MAX_LOAD_FRAMES,
+        "loading with the URDF",
+        |app| !app.is_loading() && !app.is_loading_meshes(),
+    );
+    harness.get_by_label("yumi.urdf");
+    harness.get_by_label("Model:").scroll_to_me();
+    for _ in 0..5 {
+        harness.step();
+    }
+    let row = harness.get_by_label("Model:").rect();
+    // The status bar is at least one text line (~24 points) at the window's bottom.
+    assert!(
+        row.min.y >= 0.0 && row.max.y <= 800.0 - 24.0,
+        "the Model row is at {row:?}, not within the panel above the status bar"
+    );
 }
