@@ -159,7 +159,7 @@ mod tests {
         assert!(full > 39_000);
         let simplified = simplify(&positions, &indices, 2_000, MAX_RELATIVE_ERROR).unwrap();
         let n = simplified.len() / 3;
-        assert!(n <= 2_000 && n >= 500, "{n} triangles of {full}");
+        assert!((500..=2_000).contains(&n), "{n} triangles of {full}");
         assert!(simplified.iter().all(|&i| (i as usize) < positions.len()));
         // The bounding box within 2% of the extent (0.1 m) of the full one.
         let (lo, hi) = bounds(&positions, &indices).unwrap();

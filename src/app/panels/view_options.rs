@@ -113,7 +113,7 @@ fn mesh_detail_ui(ui: &mut egui::Ui, o: &mut SceneOptions, software_renderer: bo
                 MeshDetail::Auto => "Full: this adapter is a GPU (simplified on a software renderer)",
                 MeshDetail::Full => "The robot's meshes as loaded",
                 MeshDetail::Simplified => {
-                    "A simplified copy of each mesh (about 20 000 triangles per robot); collision checks and exports keep the full meshes"
+                    "A simplified copy of each mesh (about 20 000 triangles per robot; not in the browser build); collision checks and exports keep the full meshes"
                 }
             };
             ui.selectable_value(&mut o.mesh_detail, detail, detail.label())

@@ -612,6 +612,20 @@ pub fn pick_anchor(row: &ConfigRow) -> Vector3<f32> {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn mesh_detail_parses_and_auto_follows_the_adapter() {
+        assert_eq!(MeshDetail::parse("full"), Some(MeshDetail::Full));
+        assert_eq!(
+            MeshDetail::parse(" Simplified "),
+            Some(MeshDetail::Simplified)
+        );
+        assert_eq!(MeshDetail::parse("auto"), Some(MeshDetail::Auto));
+        assert_eq!(MeshDetail::parse("coarse"), None);
+        assert!(MeshDetail::Auto.simplified(true));
+        assert!(!MeshDetail::Auto.simplified(false));
+        assert!(!MeshDetail::Full.simplified(true));
+        assert!(MeshDetail::Simplified.simplified(false));
+    }
 
     #[test]
     fn without_a_dataset_the_robot_alone_is_drawn() {
