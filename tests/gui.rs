@@ -351,13 +351,29 @@ fn frame_time() {
         harness.state().session().map(|s| &s.meshes)
     {
         println!(
-            "robot meshes: {} files, {} triangles as loaded; packed {} meshes, {} vertices, {} triangles, in {:.3} s",
+            "robot meshes: {} files, {} triangles as loaded; packed {} meshes, {} vertices, {} triangles, in {:.3} s (simplified copy included)",
             m.visual_files,
             m.visual_triangles,
             m.packed.mesh_count(),
             m.packed.vertices.len(),
             m.packed.indices.len() / 3,
             m.elapsed_secs
+        );
+        if let Some(s) = &m.simplified {
+            println!(
+                "simplified copy: {} vertices, {} triangles",
+                s.vertices.len(),
+                s.indices.len() / 3
+            );
+        }
+        println!(
+            "meshes drawn: {} (DUALCAL_MESH_DETAIL={:?})",
+            if harness.state().viewport().draws_simplified_meshes() {
+                "simplified"
+            } else {
+                "full"
+            },
+            std::env::var("DUALCAL_MESH_DETAIL").ok()
         );
     }
     type Setup = fn(&mut dualcal::app::viewport::scene::SceneOptions);
@@ -972,6 +988,29 @@ fn a_dropped_urdf_replaces_the_robot_and_the_robot_section_lists_its_arms() {
         .filter(|i| matches!(i.geometry, dualcal::app::viewport::scene::Geometry::Mesh(_)))
         .count();
     assert!(drawn_meshes >= 8, "{drawn_meshes} mesh instances drawn");
+    // On this software adapter (lavapipe) "auto" draws the simplified copy; "full" the meshes as
+    // loaded, which stay the session's for everything else.
+    let simplified = meshes.simplified.clone().expect("a simplified copy");
+    let full = meshes.packed.clone();
+    assert_eq!(simplified.mesh_count(), full.mesh_count());
+    assert!(app.viewport().draws_simplified_meshes());
+    let drawn_pack = |h: &Harness<'_, WorkbenchApp>| h.state().viewport().scene().meshes.clone();
+    assert!(std::sync::Arc::ptr_eq(
+        &drawn_pack(&harness).unwrap(),
+        &simplified
+    ));
+    harness.get_by_label("full").click();
+    harness.run_steps(2);
+    assert!(std::sync::Arc::ptr_eq(
+        &drawn_pack(&harness).unwrap(),
+        &full
+    ));
+    harness.get_by_label("simplified").click();
+    harness.run_steps(2);
+    assert!(std::sync::Arc::ptr_eq(
+        &drawn_pack(&harness).unwrap(),
+        &simplified
+    ));
     harness.get_by_label("yumi.urdf");
     harness.get_by_label("yumi_body → yumi_link_7_l (7 joints)");
     harness.get_by_label("yumi_body → yumi_link_7_r (7 joints)");
@@ -1102,6 +1141,61 @@ fn workbench_screenshot() {
         out.display(),
         image.width(),
         image.height()
+    );
+}
+
+/// Not a test: a picture of the robot's meshes as the viewport draws them, the viewport alone (no
+/// panels), only the robot and the grid, with the mesh detail `DUALCAL_MESH_DETAIL` chooses (see
+/// docs/performance.md). Run with `DUALCAL_SCREENSHOT_DATASET=DIR DUALCAL_MESH_DETAIL=simplified
+/// DUALCAL_SCREENSHOT_OUT=docs/yumi-simplified.png cargo test --test gui meshes_screenshot -- --ignored
+/// --nocapture` (size `DUALCAL_SCREENSHOT_SIZE`, default 640x480).
+#[test]
+#[ignore]
+fn meshes_screenshot() {
+    let dataset = std::env::var_os("DUALCAL_SCREENSHOT_DATASET")
+        .map(std::path::PathBuf::from)
+        .expect("set DUALCAL_SCREENSHOT_DATASET to a dataset directory");
+    let out = std::env::var_os("DUALCAL_SCREENSHOT_OUT")
+        .map_or_else(|| "target/meshes.png".into(), std::path::PathBuf::from);
+    let size = std::env::var("DUALCAL_SCREENSHOT_SIZE").unwrap_or_else(|_| "640x480".into());
+    let (w, h) = size
+        .split_once('x')
+        .and_then(|(w, h)| Some((w.parse::<f32>().ok()?, h.parse::<f32>().ok()?)))
+        .expect("DUALCAL_SCREENSHOT_SIZE as WxH");
+    let mut harness = harness(
+        [w, h],
+        AppLaunch {
+            dataset: Some(dataset),
+            urdf: None,
+        },
+    );
+    loaded(&mut harness);
+    step_until(&mut harness, MAX_LOAD_FRAMES, "loading the meshes", |app| {
+        !app.is_loading_meshes()
+    });
+    harness.state_mut().set_panels_visible(false);
+    {
+        let view = harness.state_mut().viewport_mut();
+        view.poses = dualcal::side::PerSide::new(None, None);
+        view.options.show_measured = false;
+        view.options.show_model = false;
+        view.options.show_vectors = false;
+        view.options.show_grid = false;
+        view.camera.distance_mm *= 0.4;
+    }
+    harness.run_steps(4);
+    let image = harness.render().expect("render");
+    image.save(&out).expect("write the PNG");
+    println!(
+        "wrote {} ({}x{}), meshes drawn: {}",
+        out.display(),
+        image.width(),
+        image.height(),
+        if harness.state().viewport().draws_simplified_meshes() {
+            "simplified"
+        } else {
+            "full"
+        }
     );
 }
 

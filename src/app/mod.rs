@@ -178,6 +178,11 @@ impl WorkbenchApp {
             _ => 1,
         };
         viewport::install_gpu(cc.wgpu_render_state.as_ref(), samples);
+        let mut viewport = ViewportState::default();
+        viewport.software_renderer = software;
+        if let Some(detail) = viewport::scene::MeshDetail::from_env() {
+            viewport.options.mesh_detail = detail;
+        }
         let mut app = Self {
             ctx: cc.egui_ctx.clone(),
             session: None,
@@ -193,7 +198,7 @@ impl WorkbenchApp {
             errors: Vec::new(),
             selection: None,
             scroll_table_to_selection: false,
-            viewport: ViewportState::default(),
+            viewport,
             table: table::TableState::default(),
             plots: PlotsView::default(),
             files: io.dialogs,

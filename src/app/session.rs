@@ -112,6 +112,15 @@ impl RobotMeshes {
             _ => None,
         }
     }
+
+    /// The packed meshes to draw, once loaded: with `simplified`, the simplified copy where there is
+    /// one (else the full meshes).
+    pub fn packed_for(&self, simplified: bool) -> Option<&Arc<PackedMeshes>> {
+        match self {
+            RobotMeshes::Loaded(m) if simplified => m.simplified.as_ref().or(Some(&m.packed)),
+            _ => self.packed(),
+        }
+    }
 }
 
 /// A robot's visual meshes, packed for the GPU, and what could not be loaded.
@@ -119,6 +128,9 @@ impl RobotMeshes {
 pub struct LoadedMeshes {
     /// The visual meshes, and the collision meshes of links whose visual mesh is missing (stand-ins).
     pub packed: Arc<PackedMeshes>,
+    /// The same meshes simplified (`crate::meshes::lod`), drawn on software renderers; `None` where
+    /// the build has no simplifier (the browser).
+    pub simplified: Option<Arc<PackedMeshes>>,
     /// Distinct visual mesh files loaded, and their triangles.
     pub visual_files: usize,
     pub visual_triangles: usize,

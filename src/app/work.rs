@@ -14,7 +14,7 @@ use super::viewport::mesh_pack::{MeshKey, PackedMeshes};
 use crate::analysis::{Analysis, AnalysisError};
 use crate::dataset::Dataset;
 use crate::kinematics::DualArmModel;
-use crate::meshes::{GeometryKind, MeshWarning};
+use crate::meshes::{GeometryKind, MeshWarning, lod};
 use crate::quality::{self, ScreenSettings};
 use crate::robot::{RobotDescription, ShapeKind};
 use crate::side::{ConfigId, Side};
@@ -121,7 +121,7 @@ pub fn has_visual_meshes(robot: &RobotDescription) -> bool {
 }
 
 /// The robot's visual meshes packed, with the collision meshes of the links whose visual mesh is
-/// missing.
+/// missing; and a simplified copy of that pack for software renderers (not in the browser).
 pub fn load_meshes(robot: &RobotDescription) -> LoadedMeshes {
     let started = Instant::now();
     let visual = robot.load_meshes(GeometryKind::Visual);
@@ -171,7 +171,8 @@ pub fn load_meshes(robot: &RobotDescription) -> LoadedMeshes {
             &**mesh,
         )
     });
-    let packed = PackedMeshes::pack(visual_meshes.chain(stand_ins));
+    let (packed, simplified) =
+        PackedMeshes::pack_with_lod(visual_meshes.chain(stand_ins), lod::ROBOT_TRIANGLES);
     // Files not found are named by the robot's own warnings already (per link).
     let warnings = visual
         .warnings
@@ -188,6 +189,7 @@ pub fn load_meshes(robot: &RobotDescription) -> LoadedMeshes {
         .collect();
     LoadedMeshes {
         packed: Arc::new(packed),
+        simplified: simplified.map(Arc::new),
         visual_files: visual.meshes.len(),
         visual_triangles: visual.triangle_count(),
         visual_missing: visual.warnings.len(),

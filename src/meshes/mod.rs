@@ -16,6 +16,8 @@
 //!
 //! Every problem is a [`MeshWarning`] naming the file: the caller draws a placeholder and goes on.
 
+pub mod lod;
+
 use crate::source::{FileKind, FileSource, Files, MeshFormat};
 use nalgebra::Vector3;
 use rayon::prelude::*;

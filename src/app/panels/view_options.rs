@@ -3,7 +3,7 @@
 
 use super::{Command, WorkbenchApp};
 use crate::app::session::Session;
-use crate::app::viewport::scene::SceneOptions;
+use crate::app::viewport::scene::{MeshDetail, SceneOptions};
 use crate::side::{PerSide, Side};
 use eframe::egui::{self, Color32, RichText};
 
@@ -14,6 +14,7 @@ impl WorkbenchApp {
         let view = &mut self.viewport;
         layers_ui(ui, &mut view.options);
         model_choice_ui(ui, &mut view.options, has_cal);
+        mesh_detail_ui(ui, &mut view.options, view.software_renderer);
         ui.checkbox(&mut view.auto_scale, "auto scale")
             .on_hover_text("Set the vector exaggeration and colour range from the current errors whenever a model is loaded or calibrated");
         error_scale_ui(ui, &mut view.options);
@@ -96,6 +97,28 @@ fn model_choice_ui(ui: &mut egui::Ui, o: &mut SceneOptions, has_cal: bool) {
                 o.use_calibrated = true;
             }
         });
+    });
+}
+
+/// Which copy of the robot's meshes is drawn: auto (simplified on a software renderer), full or
+/// simplified.
+fn mesh_detail_ui(ui: &mut egui::Ui, o: &mut SceneOptions, software_renderer: bool) {
+    ui.horizontal(|ui| {
+        ui.label("Meshes:");
+        for detail in MeshDetail::ALL {
+            let hover = match detail {
+                MeshDetail::Auto if software_renderer => {
+                    "Simplified: this adapter renders on the CPU"
+                }
+                MeshDetail::Auto => "Full: this adapter is a GPU (simplified on a software renderer)",
+                MeshDetail::Full => "The robot's meshes as loaded",
+                MeshDetail::Simplified => {
+                    "A simplified copy of each mesh (about 20 000 triangles per robot; not in the browser build); collision checks and exports keep the full meshes"
+                }
+            };
+            ui.selectable_value(&mut o.mesh_detail, detail, detail.label())
+                .on_hover_text(hover);
+        }
     });
 }
 

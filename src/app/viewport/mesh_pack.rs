@@ -9,7 +9,7 @@
 //! shaded smooth), sharper edges keep one vertex per side (they stay sharp).
 
 use super::primitives::MeshVertex;
-use crate::meshes::{GeometryKind, MeshSet, TriangleMesh};
+use crate::meshes::{GeometryKind, MeshSet, TriangleMesh, lod};
 use std::collections::HashMap;
 use std::ops::Range;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -56,23 +56,58 @@ static NEXT_PACK_ID: AtomicU64 = AtomicU64::new(1);
 impl PackedMeshes {
     /// Pack `meshes` (each once), welding each one.
     pub fn pack<'a>(meshes: impl IntoIterator<Item = (MeshKey, &'a TriangleMesh)>) -> Self {
+        Self::from_welded(weld_distinct(meshes))
+    }
+
+    /// Pack `meshes` (each once) as [`pack`](Self::pack) does, and a second pack of the same meshes
+    /// simplified together to about `robot_triangles` triangles ([`crate::meshes::lod`]; the same
+    /// keys and mesh indices). The second is `None` where this build has no simplifier (the
+    /// browser).
+    pub fn pack_with_lod<'a>(
+        meshes: impl IntoIterator<Item = (MeshKey, &'a TriangleMesh)>,
+        robot_triangles: usize,
+    ) -> (Self, Option<Self>) {
+        let welded = weld_distinct(meshes);
+        let simplified = lod::available()
+            .then(|| {
+                let counts: Vec<usize> = welded.iter().map(|w| w.indices.len() / 3).collect();
+                let budgets = lod::budgets(&counts, robot_triangles);
+                welded
+                    .iter()
+                    .zip(budgets)
+                    .map(|(w, budget)| {
+                        let positions: Vec<[f32; 3]> =
+                            w.vertices.iter().map(|v| v.position).collect();
+                        let mut indices =
+                            lod::simplify(&positions, &w.indices, budget, lod::MAX_RELATIVE_ERROR)?;
+                        let vertices = lod::compact(&w.vertices, &mut indices);
+                        Some(Welded {
+                            key: w.key.clone(),
+                            vertices,
+                            triangles: indices.len() / 3,
+                            indices,
+                        })
+                    })
+                    .collect::<Option<Vec<_>>>()
+            })
+            .flatten()
+            .map(Self::from_welded);
+        (Self::from_welded(welded), simplified)
+    }
+
+    fn from_welded(welded: Vec<Welded>) -> Self {
         let mut pack = Self {
             id: NEXT_PACK_ID.fetch_add(1, Ordering::Relaxed),
             ..Default::default()
         };
-        let cos_crease = CREASE_ANGLE_DEG.to_radians().cos();
-        for (key, mesh) in meshes {
-            if pack.keys.contains_key(&key) {
-                continue;
-            }
-            let (vertices, indices) = weld(mesh, cos_crease);
+        for w in welded {
             let offset = pack.vertices.len() as u32;
             let start = pack.indices.len() as u32;
-            pack.vertices.extend(vertices);
-            pack.indices.extend(indices.iter().map(|i| i + offset));
+            pack.vertices.extend(w.vertices);
+            pack.indices.extend(w.indices.iter().map(|i| i + offset));
             pack.ranges.push(start..pack.indices.len() as u32);
-            pack.triangles += mesh.triangle_count();
-            pack.keys.insert(key, pack.ranges.len() as u32 - 1);
+            pack.triangles += w.triangles;
+            pack.keys.insert(w.key, pack.ranges.len() as u32 - 1);
         }
         pack
     }
@@ -103,6 +138,35 @@ impl PackedMeshes {
     pub fn mesh_count(&self) -> usize {
         self.ranges.len()
     }
+}
+
+/// One distinct mesh, welded.
+struct Welded {
+    key: MeshKey,
+    vertices: Vec<MeshVertex>,
+    indices: Vec<u32>,
+    /// Triangles of the mesh as loaded (the welded mesh has as many).
+    triangles: usize,
+}
+
+/// Weld each distinct mesh once, in order of first appearance.
+fn weld_distinct<'a>(meshes: impl IntoIterator<Item = (MeshKey, &'a TriangleMesh)>) -> Vec<Welded> {
+    let cos_crease = CREASE_ANGLE_DEG.to_radians().cos();
+    let mut seen = std::collections::HashSet::new();
+    let mut out = Vec::new();
+    for (key, mesh) in meshes {
+        if !seen.insert(key.clone()) {
+            continue;
+        }
+        let (vertices, indices) = weld(mesh, cos_crease);
+        out.push(Welded {
+            key,
+            vertices,
+            indices,
+            triangles: mesh.triangle_count(),
+        });
+    }
+    out
 }
 
 fn sub(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
@@ -301,5 +365,88 @@ mod tests {
         );
         let other = PackedMeshes::pack([(key("a"), &a)]);
         assert_ne!(pack.id, other.id);
+    }
+
+    /// A UV sphere as an STL loads it (three unshared corners per triangle).
+    fn sphere(rings: u32, segments: u32) -> TriangleMesh {
+        let point = |i: u32, j: u32| {
+            let theta = std::f32::consts::PI * i as f32 / rings as f32;
+            let phi = std::f32::consts::TAU * j as f32 / segments as f32;
+            [
+                theta.sin() * phi.cos(),
+                theta.sin() * phi.sin(),
+                theta.cos(),
+            ]
+        };
+        let mut mesh = TriangleMesh::default();
+        for i in 0..rings {
+            for j in 0..segments {
+                let (a, b, c, d) = (
+                    point(i, j),
+                    point(i, j + 1),
+                    point(i + 1, j),
+                    point(i + 1, j + 1),
+                );
+                for tri in [[a, c, b], [b, c, d]] {
+                    let Some(n) = normalized(cross(sub(tri[1], tri[0]), sub(tri[2], tri[0])))
+                    else {
+                        continue;
+                    };
+                    let base = mesh.positions_m.len() as u32;
+                    mesh.positions_m.extend(tri);
+                    mesh.normals.extend([n; 3]);
+                    mesh.indices.extend([base, base + 1, base + 2]);
+                }
+            }
+        }
+        mesh
+    }
+
+    #[test]
+    fn the_simplified_copy_has_the_same_meshes_with_fewer_triangles_and_the_full_pack_is_untouched()
+    {
+        let fine = sphere(80, 160);
+        let small = cube();
+        let key = |name: &str| MeshKey::new(GeometryKind::Visual, name, [1.0; 3]);
+        let meshes = || [(key("fine"), &fine), (key("small"), &small)];
+        let (full, simplified) = PackedMeshes::pack_with_lod(meshes(), 2_000);
+        let plain = PackedMeshes::pack(meshes());
+        // Full mode: exactly what packing alone gives.
+        assert_eq!(full.indices, plain.indices);
+        assert_eq!(full.ranges, plain.ranges);
+        assert_eq!(full.triangles, plain.triangles);
+        assert_eq!(full.vertices.len(), plain.vertices.len());
+        let simplified = simplified.expect("a simplifier in native builds");
+        assert_ne!(simplified.id, full.id);
+        for name in ["fine", "small"] {
+            assert_eq!(
+                simplified.index_of(GeometryKind::Visual, name, [1.0; 3]),
+                full.index_of(GeometryKind::Visual, name, [1.0; 3])
+            );
+        }
+        let fine_range = |p: &PackedMeshes| p.ranges[0].len() / 3;
+        assert!(fine_range(&full) > 20_000);
+        assert!(
+            fine_range(&simplified) <= 2_000 && fine_range(&simplified) > 200,
+            "{} triangles",
+            fine_range(&simplified)
+        );
+        // The cube (12 triangles) is under its minimum budget: kept whole.
+        assert_eq!(simplified.ranges[1].len(), 36);
+        assert_eq!(simplified.triangles, simplified.indices.len() / 3);
+        assert!(simplified.vertices.len() < full.vertices.len() / 5);
+        assert!(
+            simplified
+                .indices
+                .iter()
+                .all(|&i| (i as usize) < simplified.vertices.len())
+        );
+        // Every vertex drawn is one of the full mesh's (none moved): still on the unit sphere.
+        for &i in &simplified.indices
+            [simplified.ranges[0].start as usize..simplified.ranges[0].end as usize]
+        {
+            let p = simplified.vertices[i as usize].position;
+            assert!((dot(p, p).sqrt() - 1.0).abs() < 1e-5);
+        }
     }
 }

@@ -50,6 +50,9 @@ pub struct ViewportState {
     pub auto_scale: bool,
     /// The configuration under the pointer.
     pub hovered_config: Option<ConfigId>,
+    /// The adapter renders on the CPU (lavapipe, llvmpipe, SwiftShader): `MeshDetail::Auto` draws
+    /// the simplified meshes.
+    pub software_renderer: bool,
 }
 
 /// What the cached scene was built from.
@@ -78,6 +81,7 @@ impl Default for ViewportState {
             texture: None,
             hovered_config: None,
             auto_scale: true,
+            software_renderer: false,
         }
     }
 }
@@ -86,6 +90,11 @@ impl ViewportState {
     /// Draw each arm in its first configuration (a new dataset).
     pub fn reset_poses(&mut self) {
         self.poses = FIRST_POSES;
+    }
+
+    /// Whether the simplified meshes are drawn (the choice, resolved for this adapter).
+    pub fn draws_simplified_meshes(&self) -> bool {
+        self.options.mesh_detail.simplified(self.software_renderer)
     }
 
     /// The scene last built (what the GPU draws).
@@ -213,9 +222,14 @@ impl ViewportState {
         }
         self.version += 1;
         self.scene = Arc::new(match session {
-            Some(session) => {
-                scene::build_scene(session, &self.options, self.poses, selection, self.version)
-            }
+            Some(session) => scene::build_scene(
+                session,
+                &self.options,
+                self.poses,
+                selection,
+                self.software_renderer,
+                self.version,
+            ),
             None => scene::build_robot_scene(scene::builtin_robot(), &self.options, self.version),
         });
         self.scene_key = Some(key);

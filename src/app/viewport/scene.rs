@@ -124,6 +124,55 @@ pub struct SceneOptions {
     pub use_calibrated: bool,
     /// Colour the configurations the screening flags by severity (else by their error).
     pub show_flags: bool,
+    /// Which copy of the robot's meshes is drawn.
+    pub mesh_detail: MeshDetail,
+}
+
+/// Which copy of the robot's meshes the viewport draws: the full meshes, or the simplified copy
+/// ([`crate::meshes::lod`]; collision checks and exports always use the full ones). `Auto`: the
+/// simplified copy on a software renderer (lavapipe, llvmpipe, SwiftShader), the full meshes on a
+/// GPU. `DUALCAL_MESH_DETAIL=auto|full|simplified` sets the choice the workbench starts with.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum MeshDetail {
+    #[default]
+    Auto,
+    Full,
+    Simplified,
+}
+
+impl MeshDetail {
+    pub const ALL: [MeshDetail; 3] = [MeshDetail::Auto, MeshDetail::Full, MeshDetail::Simplified];
+
+    pub fn label(self) -> &'static str {
+        match self {
+            MeshDetail::Auto => "auto",
+            MeshDetail::Full => "full",
+            MeshDetail::Simplified => "simplified",
+        }
+    }
+
+    /// `auto`, `full` or `simplified` (any case).
+    pub fn parse(text: &str) -> Option<Self> {
+        Self::ALL
+            .into_iter()
+            .find(|d| d.label().eq_ignore_ascii_case(text.trim()))
+    }
+
+    /// The choice `DUALCAL_MESH_DETAIL` names, if it is set to one.
+    pub fn from_env() -> Option<Self> {
+        std::env::var("DUALCAL_MESH_DETAIL")
+            .ok()
+            .and_then(|v| Self::parse(&v))
+    }
+
+    /// Whether to draw the simplified copy, on a software renderer or not.
+    pub fn simplified(self, software_renderer: bool) -> bool {
+        match self {
+            MeshDetail::Auto => software_renderer,
+            MeshDetail::Full => false,
+            MeshDetail::Simplified => true,
+        }
+    }
 }
 
 impl Default for SceneOptions {
@@ -141,6 +190,7 @@ impl Default for SceneOptions {
             color_max_mm: 2.0,
             use_calibrated: true,
             show_flags: true,
+            mesh_detail: MeshDetail::default(),
         }
     }
 }
@@ -440,12 +490,14 @@ pub fn build_robot_scene(
     )
 }
 
-/// Build the whole scene. `poses` holds the measurement index each arm is drawn in (`None`: home).
+/// Build the whole scene. `poses` holds the measurement index each arm is drawn in (`None`: home);
+/// `software_renderer` resolves [`MeshDetail::Auto`].
 pub fn build_scene(
     session: &Session,
     options: &SceneOptions,
     poses: PerSide<Option<usize>>,
     selection: Option<ConfigId>,
+    software_renderer: bool,
     version: u64,
 ) -> SceneData {
     let q_rad = poses.map(|side, pose| {
@@ -454,7 +506,9 @@ pub fn build_scene(
     });
     let mut scene = robot_scene(
         &session.robot,
-        session.meshes.packed(),
+        session
+            .meshes
+            .packed_for(options.mesh_detail.simplified(software_renderer)),
         q_rad,
         options,
         version,
@@ -558,6 +612,20 @@ pub fn pick_anchor(row: &ConfigRow) -> Vector3<f32> {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn mesh_detail_parses_and_auto_follows_the_adapter() {
+        assert_eq!(MeshDetail::parse("full"), Some(MeshDetail::Full));
+        assert_eq!(
+            MeshDetail::parse(" Simplified "),
+            Some(MeshDetail::Simplified)
+        );
+        assert_eq!(MeshDetail::parse("auto"), Some(MeshDetail::Auto));
+        assert_eq!(MeshDetail::parse("coarse"), None);
+        assert!(MeshDetail::Auto.simplified(true));
+        assert!(!MeshDetail::Auto.simplified(false));
+        assert!(!MeshDetail::Full.simplified(true));
+        assert!(MeshDetail::Simplified.simplified(false));
+    }
 
     #[test]
     fn without_a_dataset_the_robot_alone_is_drawn() {
