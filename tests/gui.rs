@@ -296,7 +296,10 @@ fn selecting_in_the_table_and_in_the_viewport() {
             .filter_map(|i| isolation(i).map(|g| (i, g)))
             .max_by(|a, b| a.1.total_cmp(&b.1))
             .expect("configurations on screen");
-        assert!(gap >= 20.0, "no isolated configuration on screen (best gap {gap} points)");
+        assert!(
+            gap >= 20.0,
+            "no isolated configuration on screen (best gap {gap} points)"
+        );
         (rows[best].config, screen[best].unwrap())
     };
     click_at(&mut harness, at);
