@@ -74,11 +74,14 @@ impl FileAccess for NativeFiles {
                 let picked = match kind {
                     OpenKind::Dataset => dialog
                         .set_title("Open dataset (dataset.toml)")
-                        .add_filter("dualcal dataset", &["toml"])
+                        .add_filter(
+                            "dualcal dataset",
+                            crate::source::FileKind::DatasetManifest.extensions(),
+                        )
                         .pick_file(),
                     OpenKind::Urdf => dialog
                         .set_title("Open robot description (URDF)")
-                        .add_filter("URDF", &["urdf", "xml", "xacro"])
+                        .add_filter("URDF", crate::source::FileKind::robot_extensions().as_slice())
                         .pick_file(),
                 };
                 reply.send(AppEvent::File(match picked {

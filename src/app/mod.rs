@@ -344,9 +344,7 @@ impl WorkbenchApp {
                 .dropped(&dropped_files, self.events.sender().clone())
         };
         for path in dropped {
-            let is_robot = path
-                .extension()
-                .is_some_and(|e| e.eq_ignore_ascii_case("urdf") || e.eq_ignore_ascii_case("xacro"));
+            let is_robot = crate::source::FileKind::of(&path).is_robot();
             self.apply(if is_robot {
                 Command::OpenUrdf(path)
             } else {

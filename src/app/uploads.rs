@@ -10,7 +10,7 @@
 
 use super::files::{FileReply, OpenKind};
 use crate::meshes::{MeshResolver, PackageMap};
-use crate::source::{Files, MemoryFiles};
+use crate::source::{FileKind, Files, MemoryFiles};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -22,9 +22,17 @@ pub struct Upload {
     pub bytes: Vec<u8>,
 }
 
-fn has_extension(path: &Path, ext: &str) -> bool {
-    path.extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case(ext))
+/// Among robot descriptions, whatever their depth: a `.urdf` first, then a `.xacro` (which the loader
+/// refuses with the command that expands it), then a `.xml` (a ROS package's `package.xml` is one).
+fn robot_rank(path: &Path) -> u8 {
+    let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("");
+    if ext.eq_ignore_ascii_case("urdf") {
+        0
+    } else if FileKind::of(path) == FileKind::Xacro {
+        1
+    } else {
+        2
+    }
 }
 
 /// Mount `uploads` under `dir` in `memory` and decide what to open: a dataset (its `dataset.toml`,
@@ -40,7 +48,7 @@ pub fn mount(
     let mut mounted = Vec::new();
     for upload in uploads {
         let relative = Path::new(&upload.path);
-        if has_extension(relative, "zip") {
+        if FileKind::of(relative) == FileKind::Zip {
             match crate::source::unpack_zip(memory, dir, &upload.path, &upload.bytes) {
                 Ok(paths) => mounted.extend(paths),
                 Err(e) => return FileReply::Failed(e.to_string()),
@@ -56,18 +64,20 @@ pub fn mount(
             mounted.push(path);
         }
     }
-    let shallowest = |ext: &str| {
-        let mut found: Vec<&PathBuf> = mounted.iter().filter(|p| has_extension(p, ext)).collect();
+    // The one rule for what a file is (`source::FileKind`); the shallowest of a kind wins.
+    let shallowest = |is: fn(FileKind) -> bool, rank: fn(&Path) -> u8| {
+        let mut found: Vec<&PathBuf> = mounted.iter().filter(|p| is(FileKind::of(p))).collect();
         found.sort_by_key(|p| {
             (
+                rank(p),
                 p.components().count(),
                 p.file_name() != Some(crate::dataset::MANIFEST_FILE.as_ref()),
             )
         });
         found.first().map(|p| p.to_path_buf())
     };
-    let manifest = shallowest("toml");
-    let urdf = shallowest("urdf");
+    let manifest = shallowest(|k| k == FileKind::DatasetManifest, |_| 0);
+    let urdf = shallowest(FileKind::is_robot, robot_rank);
     if let Some(urdf) = &urdf {
         place_loose_meshes(memory, urdf, &mounted);
     }
@@ -247,6 +257,31 @@ mod tests {
             None,
         );
         assert!(matches!(reply, FileReply::Failed(m) if m.starts_with("broken.zip")));
+    }
+
+    /// A ROS package uploaded whole: its `package.xml` (an `.xml`, which may be a URDF) lies above
+    /// `urdf/robot.urdf`; the `.urdf` is the robot.
+    #[test]
+    fn a_urdf_wins_over_a_shallower_package_xml() {
+        let reply = mount(
+            &MemoryFiles::new(),
+            Path::new("/uploads/5"),
+            vec![
+                Upload {
+                    path: "r_description/package.xml".into(),
+                    bytes: b"<package/>".to_vec(),
+                },
+                Upload {
+                    path: "r_description/urdf/robot.urdf".into(),
+                    bytes: b"<robot name=\"r\"/>".to_vec(),
+                },
+            ],
+            None,
+        );
+        let FileReply::Open(OpenKind::Urdf, path) = reply else {
+            panic!("{reply:?}");
+        };
+        assert_eq!(path, Path::new("/uploads/5/r_description/urdf/robot.urdf"));
     }
 
     #[test]
