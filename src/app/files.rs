@@ -81,7 +81,10 @@ impl FileAccess for NativeFiles {
                         .pick_file(),
                     OpenKind::Urdf => dialog
                         .set_title("Open robot description (URDF)")
-                        .add_filter("URDF", crate::source::FileKind::robot_extensions().as_slice())
+                        .add_filter(
+                            "URDF",
+                            crate::source::FileKind::robot_extensions().as_slice(),
+                        )
                         .pick_file(),
                 };
                 reply.send(AppEvent::File(match picked {
