@@ -143,7 +143,7 @@ case "${1:-}" in
       "$target_dir/release/dualcal" calibrate assets/datasets/example --out "$test_out/native-$i.json" |
         awk '/^total time/ { print $3 }'
     done >"$test_out/native-cli-secs.txt"
-    if command -v convert >/dev/null 2>&1; then
+    if convert -version >/dev/null 2>&1; then
       convert "$test_out/workbench.png" -colors 256 PNG8:docs/screenshot-web.png
     else
       cp "$test_out/workbench.png" docs/screenshot-web.png
