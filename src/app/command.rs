@@ -78,3 +78,13 @@ impl Command {
         }
     }
 }
+
+/// The answer to a file request (a dialog, a browser upload, a typed path).
+#[derive(Debug)]
+pub enum FileReply {
+    Open(OpenKind, PathBuf),
+    Saved(PathBuf),
+    Failed(String),
+    /// The user closed the dialog.
+    Cancelled,
+}

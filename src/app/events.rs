@@ -6,15 +6,26 @@
 //! [`EventSender::send_droppable`] and dropped while [`MAX_QUEUED_DROPPABLE`] of them are waiting, so a
 //! UI that falls behind only loses points of its curves (the final result carries the whole history).
 
-use super::files::FileReply;
-use super::task::{TaskId, TaskReport};
+pub use super::command::FileReply;
 use eframe::egui;
+use std::any::Any;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::mpsc::{Receiver, Sender, channel};
 
 /// How many droppable events may wait before more are dropped.
 pub const MAX_QUEUED_DROPPABLE: usize = 512;
+
+/// Tells one task's events from another's (a replaced task may still report).
+pub type TaskId = u64;
+
+/// What a task sends on the app's channel: one of its own events (of its `Work::Event` type, which
+/// the job that started it reads back: `super::job`), or that it stopped without reporting its end.
+pub enum TaskReport {
+    Event(Box<dyn Any + Send>),
+    /// The work panicked (always the task's last report).
+    Failed(String),
+}
 
 /// Something that happened off the frame.
 pub enum AppEvent {

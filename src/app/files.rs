@@ -4,22 +4,12 @@
 //! Where no dialog is available the app asks for a path itself ([`PathPrompt`]).
 
 use super::command::Command;
-pub use super::command::OpenKind;
+pub use super::command::{FileReply, OpenKind};
 #[cfg(not(target_arch = "wasm32"))]
 use super::events::AppEvent;
 use super::events::EventSender;
 use eframe::egui::{self, Color32, RichText};
 use std::path::PathBuf;
-
-/// The answer to a request.
-#[derive(Debug)]
-pub enum FileReply {
-    Open(OpenKind, PathBuf),
-    Saved(PathBuf),
-    Failed(String),
-    /// The user closed the dialog.
-    Cancelled,
-}
 
 /// A file to save: suggested name, filter and contents.
 pub struct SaveRequest {

@@ -9,23 +9,12 @@
 //! Cancel is an `Arc<AtomicBool>` the work polls.
 
 use super::events::{AppEvent, EventSender};
-use std::any::Any;
+pub use super::events::{TaskId, TaskReport};
 use std::marker::PhantomData;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::Duration;
 use web_time::Instant;
-
-/// Tells one task's events from another's (a replaced task may still report).
-pub type TaskId = u64;
-
-/// What a task sends on the app's channel: one of its own events (of its [`Work::Event`] type, which
-/// the job that started it reads back: [`super::job`]), or that it stopped without reporting its end.
-pub enum TaskReport {
-    Event(Box<dyn Any + Send>),
-    /// The work panicked (always the task's last report).
-    Failed(String),
-}
 
 /// What a step of work says about the next one.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
