@@ -497,7 +497,8 @@ impl RobotDescription {
                 .iter()
                 .flat_map(|&s| arms[s].chain.warnings.clone()),
         );
-        let kin = tree::compile(&urdf, tree, &arms, form, &msg, &resolver, &mut warnings)?;
+        let mut kin = tree::compile(tree, &arms, form, &msg, &mut warnings)?;
+        geometry::compile_shapes(&urdf, &resolver, &mut kin, &mut warnings);
         Ok(Self {
             urdf,
             source: source.map(Path::to_path_buf),

@@ -3,11 +3,9 @@
 
 use super::arms::ArmSpec;
 use super::dh::joint1_from_dh_base;
-use super::geometry::compile_shapes;
 use super::{
     Messages, ModelForm, Owner, RobotError, ShapeKind, finite_pose, isometry_from_urdf_pose,
 };
-use crate::meshes::MeshResolver;
 use crate::side::{PerSide, Side};
 use nalgebra::{Isometry3, Translation3, Unit, UnitQuaternion, Vector3};
 use std::collections::HashMap;
@@ -204,15 +202,13 @@ pub(crate) fn parse_tree(
     })
 }
 
-/// Compile the tree with its arms into the kinematics: the arms' joints, tips, the body link, the
-/// model base frames and the shapes.
+/// Compile the tree with its arms into the kinematics: the arms' joints, tips, the body link and the
+/// model base frames (the shapes are `geometry::compile_shapes`' part).
 pub(crate) fn compile(
-    urdf: &urdf_rs::Robot,
     mut tree: Tree,
     arms: &PerSide<ArmSpec>,
     form: ModelForm,
     msg: &Messages,
-    resolver: &MeshResolver,
     warnings: &mut Vec<String>,
 ) -> Result<Kinematics, RobotError> {
     // Each arm's movable joints with their chain position.
@@ -288,7 +284,6 @@ pub(crate) fn compile(
         ModelForm::Chain => bases.map(|side, b| kin.body_from_link(b, side, &[])),
         ModelForm::Dh => dh_base_frames(&kin, arms),
     };
-    compile_shapes(urdf, resolver, &mut kin, warnings);
     Ok(kin)
 }
 
