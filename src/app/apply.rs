@@ -149,14 +149,12 @@ impl WorkbenchApp {
     /// Calibrate the session with the current settings and its exclusions; a running calibration is
     /// replaced (its events are ignored from now on).
     fn start_calibration(&mut self) {
-        let Some(session) = &self.session else {
-            self.errors.push("Open a dataset first.".into());
-            return;
-        };
-        if let Some(refusal) = refusal(session) {
-            self.errors.push(refusal);
+        if !self.calibration_allowed() {
             return;
         }
+        let Some(session) = &self.session else {
+            return;
+        };
         let settings = session.run_settings(&self.settings);
         let mut work =
             CalibrationWork::new(session, settings, LiveRate::for_execution(self.execution));
@@ -166,14 +164,12 @@ impl WorkbenchApp {
 
     /// Auto-exclude: the rule's calibration replaces the current one.
     fn start_auto_exclude(&mut self) {
-        let Some(session) = &self.session else {
-            self.errors.push("Open a dataset first.".into());
-            return;
-        };
-        if let Some(refusal) = refusal(session) {
-            self.errors.push(refusal);
+        if !self.calibration_allowed() {
             return;
         }
+        let Some(session) = &self.session else {
+            return;
+        };
         let work = AutoExcludeWork::new(session, session.run_settings(&self.settings));
         self.start_run(RunKind::Calibration, work);
     }
@@ -259,6 +255,21 @@ impl WorkbenchApp {
 
 /// Why `dualcal calibrate` would refuse this session's data (the nominal screening's errors), if it
 /// would.
+impl WorkbenchApp {
+    /// Whether there is a session the screening does not refuse; if not, the reason is shown.
+    fn calibration_allowed(&mut self) -> bool {
+        let reason = match &self.session {
+            None => "Open a dataset first.".to_string(),
+            Some(session) => match refusal(session) {
+                None => return true,
+                Some(refusal) => refusal,
+            },
+        };
+        self.errors.push(reason);
+        false
+    }
+}
+
 fn refusal(session: &Session) -> Option<String> {
     let refusals = session.refusals();
     (!refusals.is_empty()).then(|| {
