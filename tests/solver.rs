@@ -7,8 +7,8 @@ use dualcal::kinematics::{ArmModel, DualArmModel, N_PARAMS, joint_limits_rad, pa
 use dualcal::metrics::evaluate;
 use dualcal::side::{PerSide, Side};
 use dualcal::solver::{
-    CalibrationError, CalibrationEvent, CalibrationSettings, Calibrator, Method, QpMethod, Stage,
-    Termination,
+    CalibrationError, CalibrationEvent, CalibrationRun, CalibrationSettings, Calibrator,
+    IterationRecord, Method, Observer, Progress, QpMethod, Stage, StageSummary, Termination,
 };
 use nalgebra::{Isometry3, Vector3};
 use rand::{Rng, SeedableRng};
@@ -358,6 +358,98 @@ fn events_arrive_in_order_and_cancel_stops_the_run() {
         "the model reached is kept"
     );
     assert_eq!(res.calibrated.arms.right, nominal.arms.right);
+}
+
+/// Everything an observer is shown: the events, and the model at each iteration and stage end.
+#[derive(Default)]
+struct Seen {
+    events: Vec<String>,
+    models: Vec<DualArmModel>,
+}
+
+impl Observer for Seen {
+    fn stage_started(&mut self, stage: Stage, n_configs: usize, n_pairs: usize) {
+        self.events
+            .push(format!("start {stage} {n_configs} {n_pairs}"));
+    }
+    fn iteration(&mut self, r: &IterationRecord, run: &CalibrationRun) {
+        self.events.push(format!(
+            "iteration {} {} ψ {:e} step {:e} history {}",
+            r.stage,
+            r.iteration,
+            r.psi_mm2,
+            r.step_norm,
+            run.history().len()
+        ));
+        self.models.push(run.current_model());
+    }
+    fn stage_finished(&mut self, s: &StageSummary, run: &CalibrationRun) {
+        self.events.push(format!(
+            "end {} {} {}",
+            s.stage, s.termination, s.iterations
+        ));
+        self.models.push(run.current_model());
+    }
+}
+
+/// `Calibrator::run` on a machine with two cores solves the two arms' step 1 at once (the right arm's
+/// events replayed after the left arm's): the observers must see, and the result must hold, exactly
+/// what a run stepped one stage at a time gives.
+#[test]
+fn arms_solved_at_once_report_and_return_what_a_stepped_run_does() {
+    let syn = synthetic(11, 60, 60, 0.01);
+    let nominal = nominal();
+    // Two threads whatever the machine, so that the arms are solved at once.
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .unwrap();
+    let (at_once, seen_at_once) = pool.install(|| {
+        let mut seen = Seen::default();
+        let result = Calibrator::new(&syn.dataset, &nominal)
+            .observer(&mut seen)
+            .run()
+            .expect("calibration");
+        (result, seen)
+    });
+    let mut seen = Seen::default();
+    let mut run = Calibrator::new(&syn.dataset, &nominal)
+        .start()
+        .expect("start");
+    let stepped = loop {
+        if let Progress::Finished(result) = run.step(&mut [&mut seen]).expect("step") {
+            break *result;
+        }
+    };
+    assert!(stepped.is_converged());
+    assert_eq!(seen_at_once.events, seen.events);
+    assert_eq!(seen_at_once.models, seen.models);
+    assert_eq!(at_once.calibrated, stepped.calibrated);
+    assert_eq!(at_once.stages, stepped.stages);
+    assert_eq!(at_once.diagnostics, stepped.diagnostics);
+    let without_clock = |h: &[IterationRecord]| -> Vec<IterationRecord> {
+        h.iter()
+            .map(|r| IterationRecord {
+                elapsed_secs: 0.0,
+                ..r.clone()
+            })
+            .collect()
+    };
+    assert_eq!(
+        without_clock(&at_once.history),
+        without_clock(&stepped.history)
+    );
+    for side in Side::BOTH {
+        let (a, b) = (
+            &at_once.identifiability_at_solution[side],
+            &stepped.identifiability_at_solution[side],
+        );
+        assert_eq!(
+            a.as_ref().map(|r| (&r.free, r.condition_after)),
+            b.as_ref().map(|r| (&r.free, r.condition_after)),
+            "{side}"
+        );
+    }
 }
 
 #[test]

@@ -266,8 +266,23 @@ impl ReproduceArgs {
     }
 }
 
-/// Run a non-GUI command.
+/// Run a non-GUI command, on a thread of a work pool (rayon's): the engine's parallel loops then share
+/// their work with the pool's other threads directly. Called from a thread outside a pool, every loop
+/// hands its work over and sleeps until it is done — at the paper's size that costs more than the loops
+/// save. `RAYON_NUM_THREADS` sets the pool's size as usual.
 pub fn run(command: Command) -> Result<()> {
+    match rayon::ThreadPoolBuilder::new()
+        .thread_name(|i| format!("dualcal-work-{i}"))
+        // The main thread's stack size: the readers recurse into nested files and markup.
+        .stack_size(8 << 20)
+        .build()
+    {
+        Ok(pool) => pool.install(|| run_command(command)),
+        Err(_) => run_command(command),
+    }
+}
+
+fn run_command(command: Command) -> Result<()> {
     match command {
         Command::Gui { .. } => {
             bail!("this build of dualcal has no workbench (built without the `gui` feature)")

@@ -310,29 +310,59 @@ impl Accumulator {
     }
 }
 
-pub(super) fn relative_accumulate(g: &[ConfigGeom]) -> Accumulator {
-    (0..g.len())
+/// Blocks a parallel sum over configurations is cut into (fixed: see [`ordered_sum`]).
+pub(super) const SUM_BLOCKS: usize = 32;
+
+/// `fold` every index of `0..n` into a value per block of [`SUM_BLOCKS`] consecutive indices, in
+/// parallel, then `merge` the blocks' values in block order. The blocks do not depend on the threads,
+/// so the floating-point sums are the same on every run and machine — a rayon `fold`/`reduce` splits
+/// where its scheduler did, which moves a figure's last bits from one run to the next.
+pub(super) fn ordered_sum<A: Send>(
+    n: usize,
+    init: impl Fn() -> A + Sync + Send,
+    fold: impl Fn(&mut A, usize) + Sync + Send,
+    merge: impl Fn(A, A) -> A,
+) -> A {
+    let per_block = n.div_ceil(SUM_BLOCKS).max(1);
+    let parts: Vec<A> = (0..n.div_ceil(per_block))
         .into_par_iter()
-        .fold(Accumulator::default, |mut acc, i| {
+        .map(|b| {
+            let mut acc = init();
+            for i in b * per_block..((b + 1) * per_block).min(n) {
+                fold(&mut acc, i);
+            }
+            acc
+        })
+        .collect();
+    parts.into_iter().fold(init(), merge)
+}
+
+pub(super) fn relative_accumulate(g: &[ConfigGeom]) -> Accumulator {
+    ordered_sum(
+        g.len(),
+        Accumulator::default,
+        |acc, i| {
             for b in &g[i + 1..] {
                 let (dd, o) = pair_residual(&g[i], b);
                 acc.add(&dd, o);
             }
-            acc
-        })
-        .reduce(Accumulator::default, Accumulator::merge)
+        },
+        Accumulator::merge,
+    )
 }
 
 pub(super) fn collaborative_accumulate(left: &[ConfigGeom], right: &[ConfigGeom]) -> Accumulator {
-    left.par_iter()
-        .fold(Accumulator::default, |mut acc, l| {
+    ordered_sum(
+        left.len(),
+        Accumulator::default,
+        |acc, i| {
             for r in right {
-                let (dd, o) = pair_residual(l, r);
+                let (dd, o) = pair_residual(&left[i], r);
                 acc.add(&dd, o);
             }
-            acc
-        })
-        .reduce(Accumulator::default, Accumulator::merge)
+        },
+        Accumulator::merge,
+    )
 }
 
 /// Both arms' geometry with the model expressed in the left-arm base frame.

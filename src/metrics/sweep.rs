@@ -10,7 +10,9 @@
 //! histograms. Each arm's configurations are visited calibration first, so a row's same-split partners
 //! are contiguous and its samples go to a slice of their own, written in parallel without locks.
 
-use super::geometry::{Accumulator, ConfigGeom, both_arms, pair_residual, triangle_sides};
+use super::geometry::{
+    Accumulator, ConfigGeom, SUM_BLOCKS, both_arms, pair_residual, triangle_sides,
+};
 use super::{AccuracyReport, ConfigResiduals, MIN_METRIC_CONFIGS, MetricsError, PairKind};
 use crate::dataset::{Dataset, Split};
 use crate::kinematics::DualArmModel;
@@ -306,49 +308,57 @@ fn accumulate(arms: &PerSide<Ordered>, rows: Vec<Row<'_>>) -> Partial {
     let n_left = arms.left.len();
     let n_configs = n_left + arms.right.len();
     let offset = PerSide::new(0, n_left);
-    rows.into_par_iter()
-        .with_min_len(8)
-        .fold(
-            || Partial::new(n_configs),
-            |mut part, mut row| {
-                let side = row.side;
-                let a = &arms[side];
-                let (p, g) = (row.p, a.group(row.p));
-                let own = &a.geom[p];
-                let rel_slot = kind_slot(PairKind::Relative(side));
-                let mut mine = ConfigAcc::default();
-                // Relative pairs (p, q), q after p: same split up to the end of p's group.
-                let same_end = a.range(g).end;
-                for q in p + 1..a.len() {
-                    let (dd, ori) = pair_residual(own, &a.geom[q]);
-                    let w = abs_max(&dd);
-                    mine.add_relative(w, ori);
-                    part.configs[offset[side] + q].add_relative(w, ori);
-                    if q < same_end {
-                        row.rel.write(q - p - 1, &dd, ori);
-                        part.acc[g][rel_slot].add(&dd, ori);
-                    }
-                }
-                // Collaborative pairs, visited from the left arm.
-                if side == Side::Left {
-                    let r_arm = &arms.right;
-                    let same = r_arm.range(g);
-                    for (r, other) in r_arm.geom.iter().enumerate() {
-                        let (dd, ori) = pair_residual(own, other);
+    // Fixed blocks of rows, their partial sums merged in order: the same figures on every run (see
+    // `geometry::ordered_sum`).
+    let per_block = rows.len().div_ceil(SUM_BLOCKS).max(1);
+    let parts: Vec<Partial> = rows
+        .into_par_iter()
+        .chunks(per_block)
+        .map(|block| {
+            block
+                .into_iter()
+                .fold(Partial::new(n_configs), |mut part, mut row| {
+                    let side = row.side;
+                    let a = &arms[side];
+                    let (p, g) = (row.p, a.group(row.p));
+                    let own = &a.geom[p];
+                    let rel_slot = kind_slot(PairKind::Relative(side));
+                    let mut mine = ConfigAcc::default();
+                    // Relative pairs (p, q), q after p: same split up to the end of p's group.
+                    let same_end = a.range(g).end;
+                    for q in p + 1..a.len() {
+                        let (dd, ori) = pair_residual(own, &a.geom[q]);
                         let w = abs_max(&dd);
-                        mine.add_collaborative(w, ori);
-                        part.configs[n_left + r].add_collaborative(w, ori);
-                        if same.contains(&r) {
-                            row.col.write(r - same.start, &dd, ori);
-                            part.acc[g][COLLAB].add(&dd, ori);
+                        mine.add_relative(w, ori);
+                        part.configs[offset[side] + q].add_relative(w, ori);
+                        if q < same_end {
+                            row.rel.write(q - p - 1, &dd, ori);
+                            part.acc[g][rel_slot].add(&dd, ori);
                         }
                     }
-                }
-                part.configs[offset[side] + p].merge(&mine);
-                part
-            },
-        )
-        .reduce(|| Partial::new(n_configs), Partial::merge)
+                    // Collaborative pairs, visited from the left arm.
+                    if side == Side::Left {
+                        let r_arm = &arms.right;
+                        let same = r_arm.range(g);
+                        for (r, other) in r_arm.geom.iter().enumerate() {
+                            let (dd, ori) = pair_residual(own, other);
+                            let w = abs_max(&dd);
+                            mine.add_collaborative(w, ori);
+                            part.configs[n_left + r].add_collaborative(w, ori);
+                            if same.contains(&r) {
+                                row.col.write(r - same.start, &dd, ori);
+                                part.acc[g][COLLAB].add(&dd, ori);
+                            }
+                        }
+                    }
+                    part.configs[offset[side] + p].merge(&mine);
+                    part
+                })
+        })
+        .collect();
+    parts
+        .into_iter()
+        .fold(Partial::new(n_configs), Partial::merge)
 }
 
 /// Every configuration's residual summary, in measurement order, left arm first.

@@ -40,17 +40,17 @@ fn prefix(path: &Option<PathBuf>) -> String {
 
 #[derive(Debug, thiserror::Error)]
 pub enum ParamsError {
-    #[error("{path}: cannot read: {source}")]
+    // The I/O error is in the message and not a `source`: `{:#}` (the command line's error chain)
+    // would print it twice.
+    #[error("{path}: cannot read: {error}")]
     Io {
         path: PathBuf,
-        #[source]
-        source: std::io::Error,
+        error: std::io::Error,
     },
-    #[error("{path}: cannot write: {source}")]
+    #[error("{path}: cannot write: {error}")]
     Write {
         path: PathBuf,
-        #[source]
-        source: std::io::Error,
+        error: std::io::Error,
     },
     /// Not UTF-8 text (UTF-16, binary data, bad bytes) or too large.
     #[error("{path}: {problem}")]
@@ -418,9 +418,9 @@ impl ParamsFile {
     pub fn read(path: &Path) -> Result<ParamsFile, ParamsError> {
         use crate::textfile::ReadError;
         let text = crate::textfile::read(path).map_err(|e| match e {
-            ReadError::Io(source) => ParamsError::Io {
+            ReadError::Io(error) => ParamsError::Io {
                 path: path.to_path_buf(),
-                source,
+                error,
             },
             ReadError::Text(problem) => ParamsError::Text {
                 path: path.to_path_buf(),
@@ -484,12 +484,12 @@ impl ParamsFile {
         self.validate().map_err(|e| e.in_file(path))?;
         let mut bytes = serde_json::to_vec_pretty(self).map_err(|e| ParamsError::Write {
             path: path.to_path_buf(),
-            source: std::io::Error::other(e),
+            error: std::io::Error::other(e),
         })?;
         bytes.push(b'\n');
-        write_atomic(path, &bytes).map_err(|source| ParamsError::Write {
+        write_atomic(path, &bytes).map_err(|error| ParamsError::Write {
             path: path.to_path_buf(),
-            source,
+            error,
         })
     }
 }

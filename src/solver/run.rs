@@ -17,6 +17,7 @@ use crate::dataset::Dataset;
 use crate::kinematics::DualArmModel;
 use crate::side::{ConfigId, PerSide, Side};
 use nalgebra::{Isometry3, Vector3};
+use std::collections::VecDeque;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 // std's `Instant::now` panics in a browser (wasm32-unknown-unknown); web-time is std's on native targets.
@@ -25,6 +26,8 @@ use web_time::Instant;
 /// Watches a run. Every method defaults to doing nothing; a closure over [`CalibrationEvent`] is an
 /// observer too. The command line's progress lines, the workbench's live curves and the tests are
 /// observers.
+mod arms_at_once;
+
 pub trait Observer {
     /// A stage begins: `n_configs` configurations (both arms' for step 2) and `n_pairs` pairs per
     /// reflector.
@@ -101,7 +104,10 @@ impl<'a> Calibrator<'a> {
     /// result too; `Err` is for input the calibration cannot use.
     pub fn run(mut self) -> Result<CalibrationResult, CalibrationError> {
         let mut observers = std::mem::take(&mut self.observers);
-        let mut run = self.start()?;
+        let mut run = CalibrationRun::new(self.dataset, self.nominal, self.settings, self.cancel)?;
+        if !run.arms_at_once(&mut observers)? {
+            run.start_next()?;
+        }
         loop {
             if let Progress::Finished(result) = run.step(&mut observers)? {
                 return Ok(*result);
@@ -113,7 +119,9 @@ impl<'a> Calibrator<'a> {
     /// frame loop, or the browser, where there are no threads). Observers given to the calibrator are
     /// not used: pass them to each step.
     pub fn start(self) -> Result<CalibrationRun, CalibrationError> {
-        CalibrationRun::new(self.dataset, self.nominal, self.settings, self.cancel)
+        let mut run = CalibrationRun::new(self.dataset, self.nominal, self.settings, self.cancel)?;
+        run.start_next()?;
+        Ok(run)
     }
 }
 
@@ -146,6 +154,11 @@ pub struct CalibrationRun {
     committed: DualArmModel,
     inputs: PerSide<ArmData>,
     active: Option<ActiveStage>,
+    /// The stages after the active one, in order.
+    plan: VecDeque<Stage>,
+    /// While [`CalibrationRun::arms_at_once`] replays the right arm's iterations: the stage and its
+    /// parameters at the iteration replayed ([`CalibrationRun::current_model`] shows them).
+    replaying: Option<(Stage, StageParams)>,
     history: Vec<IterationRecord>,
     stages: Vec<StageSummary>,
     identifiability: PerSide<Option<IdentifiabilityReport>>,
@@ -170,12 +183,14 @@ impl CalibrationRun {
     ) -> Result<Self, CalibrationError> {
         check_settings(&settings)?;
         let inputs = PerSide::try_from_fn(|side| arm_input(dataset, nominal, side, &settings))?;
-        let mut run = Self {
+        Ok(Self {
             settings,
             nominal: nominal.clone(),
             committed: nominal.clone(),
             inputs,
             active: None,
+            plan: VecDeque::from([Stage::Arm(Side::Left), Stage::Arm(Side::Right), Stage::Base]),
+            replaying: None,
             history: Vec::new(),
             stages: Vec::new(),
             identifiability: PerSide::default(),
@@ -185,9 +200,15 @@ impl CalibrationRun {
             tracker_from_base: PerSide::default(),
             cancel,
             started: Instant::now(),
-        };
-        run.active = Some(run.start_stage(Stage::Arm(Side::Left))?);
-        Ok(run)
+        })
+    }
+
+    /// Set the plan's next stage up (the first, when the run has not started).
+    fn start_next(&mut self) -> Result<(), CalibrationError> {
+        if let Some(stage) = self.plan.pop_front() {
+            self.active = Some(self.start_stage(stage)?);
+        }
+        Ok(())
     }
 
     /// The flag that cancels this run (set it from anywhere; the next step ends the run).
@@ -218,7 +239,9 @@ impl CalibrationRun {
     /// The model as it stands: the finished stages' parameters and the current stage's iterate.
     pub fn current_model(&self) -> DualArmModel {
         let mut model = self.committed.clone();
-        if let Some(active) = &self.active {
+        if let Some((stage, params)) = &self.replaying {
+            apply(&mut model, *stage, params.clone());
+        } else if let Some(active) = &self.active {
             apply(&mut model, active.stage, active.solver.current());
         }
         model
@@ -357,11 +380,10 @@ impl CalibrationRun {
         for o in observers.iter_mut() {
             o.stage_finished(&summary, self);
         }
-        let next = match active.stage {
-            _ if termination == Termination::Cancelled => None,
-            Stage::Arm(Side::Left) => Some(Stage::Arm(Side::Right)),
-            Stage::Arm(Side::Right) => Some(Stage::Base),
-            Stage::Base => None,
+        let next = if termination == Termination::Cancelled {
+            None
+        } else {
+            self.plan.pop_front()
         };
         match next {
             Some(stage) => {
