@@ -237,6 +237,54 @@ fn bundled_example_is_reproducible() {
     }
 }
 
+/// `--timings` adds where the time went, on standard error, and changes nothing else.
+#[test]
+fn calibrate_timings_name_every_phase_and_change_nothing_else() {
+    let example = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/datasets/example");
+    let dir = tempfile::tempdir().unwrap();
+    let (plain, timed) = (dir.path().join("a.json"), dir.path().join("b.json"));
+    let a = dualcal(&["calibrate", s(&example), "--out", s(&plain), "--quiet"]);
+    let b = dualcal(&[
+        "calibrate",
+        s(&example),
+        "--out",
+        s(&timed),
+        "--quiet",
+        "--timings",
+    ]);
+    assert!(a.status.success() && b.status.success());
+    let err = String::from_utf8_lossy(&b.stderr);
+    let phases = [
+        "load, checks, nominal model, screening",
+        "calibration and the screening of its result",
+        "of which the calibration",
+        "accuracy tables",
+        "writing",
+        "total",
+    ];
+    let ms = |line: &str| -> f64 {
+        let figure = line.split_whitespace().last().unwrap();
+        figure.parse().unwrap_or_else(|_| panic!("{line}"))
+    };
+    for phase in phases {
+        let line = err
+            .lines()
+            .find(|l| l.trim_start().starts_with(phase))
+            .unwrap_or_else(|| panic!("no `{phase}` line in:\n{err}"));
+        assert!(ms(line) >= 0.0, "{line}");
+    }
+    assert!(!String::from_utf8_lossy(&a.stderr).contains("timings"));
+    // Standard output is the same but for the reported times and the file name.
+    let strip = |o: &Output, out: &Path| -> Vec<String> {
+        String::from_utf8_lossy(&o.stdout)
+            .lines()
+            .filter(|l| !l.starts_with("total time"))
+            .map(|l| l.replace(s(out), "OUT"))
+            .collect()
+    };
+    assert_eq!(strip(&a, &plain), strip(&b, &timed));
+}
+
 /// `dualcal … | head`: a reader that goes away ends the command quietly (exit 141, like a Unix tool
 /// killed by SIGPIPE), not with a panic.
 #[test]

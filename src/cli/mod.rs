@@ -181,6 +181,10 @@ pub struct CalibrateArgs {
     /// flags before fitting, then after each fit, at most 10% of an arm.
     #[arg(long)]
     pub auto_exclude: bool,
+    /// Print where the time went (load and screening, calibration, screening of the result, tables,
+    /// writing) to standard error at the end (docs/performance.md).
+    #[arg(long)]
+    pub timings: bool,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum, PartialEq, Eq)]
@@ -683,8 +687,47 @@ fn write_robot_exports(
     Ok(())
 }
 
+/// Wall time per phase of a command, for `--timings`.
+struct Phases {
+    started: std::time::Instant,
+    last: std::time::Instant,
+    done: Vec<(&'static str, std::time::Duration)>,
+}
+
+impl Phases {
+    fn new() -> Self {
+        let now = std::time::Instant::now();
+        Self {
+            started: now,
+            last: now,
+            done: Vec::new(),
+        }
+    }
+
+    /// The phase `name` ends now.
+    fn end(&mut self, name: &'static str) {
+        let now = std::time::Instant::now();
+        self.done.push((name, now - self.last));
+        self.last = now;
+    }
+
+    fn print(&self) {
+        eprintln!("timings (wall, ms):");
+        for (name, d) in &self.done {
+            eprintln!("  {name:<50} {:9.1}", d.as_secs_f64() * 1e3);
+        }
+        eprintln!(
+            "  {:<50} {:9.1}",
+            "total (from the start of the command)",
+            self.started.elapsed().as_secs_f64() * 1e3
+        );
+    }
+}
+
 fn calibrate_cmd(a: &CalibrateArgs) -> Result<()> {
+    let mut phases = Phases::new();
     let ws = load_workspace(&a.dataset)?;
+    phases.end("load, checks, nominal model, screening");
     refuse_overwrites(a, &ws.dataset)?;
     if !a.quiet {
         eprintln!("{}", describe_robot(&ws.robot));
@@ -707,6 +750,11 @@ fn calibrate_cmd(a: &CalibrateArgs) -> Result<()> {
         screening: before,
     } = ws;
     let (result, after) = fit_and_screen(a, &ds, &nominal, settings, &before)?;
+    phases.end("calibration and the screening of its result");
+    phases.done.push((
+        "  of which the calibration (two steps, re-checks)",
+        std::time::Duration::from_secs_f64(result.elapsed_secs),
+    ));
     print_identifiability(&result);
     let excluded = &result.settings.exclude;
     let mut file = ParamsFile::from_calibration(&result, &ds);
@@ -726,9 +774,14 @@ fn calibrate_cmd(a: &CalibrateArgs) -> Result<()> {
     );
     warn_suspects_kept(&after, excluded);
     file.quality = serde_json::to_value(quality::QualityRecord::new(&ds, &after, excluded)).ok();
+    phases.end("accuracy tables and the parameter file's figures");
     file.write(&a.out)?;
     outln!("parameters written to {}", a.out.display());
     write_robot_exports(a, &robot, &result)?;
+    phases.end("writing");
+    if a.timings {
+        phases.print();
+    }
     if !result.is_converged() {
         let how: Vec<String> = result
             .stages
