@@ -173,9 +173,22 @@ pub fn kept_triangle_distances(measured: &[Points; 3]) -> Option<[Vec<f64>; 3]> 
     }
     Some(std::array::from_fn(|k| {
         let m = &measured[k];
-        (0..n)
-            .flat_map(|i| (i + 1..n).map(move |j| m.distance(i, j)))
-            .collect()
+        let mut out = vec![0.0; n * n.saturating_sub(1) / 2];
+        // Row i (the pairs (i, j), j > i) is n − i − 1 long: split the list into its rows, fill them
+        // in parallel.
+        let mut rows = Vec::with_capacity(n);
+        let mut rest = &mut out[..];
+        for i in 0..n {
+            let (row, tail) = rest.split_at_mut(n - i - 1);
+            rows.push(row);
+            rest = tail;
+        }
+        rows.into_par_iter().enumerate().for_each(|(i, row)| {
+            for (d, j) in row.iter_mut().zip(i + 1..n) {
+                *d = m.distance(i, j);
+            }
+        });
+        out
     }))
 }
 
@@ -187,9 +200,16 @@ pub fn kept_rectangle_distances(left: &[Points; 3], right: &[Points; 3]) -> Opti
         return None;
     }
     Some(std::array::from_fn(|k| {
-        (0..nl)
-            .flat_map(|l| (0..nr).map(move |r| distance_between(&left[k], l, &right[k], r)))
-            .collect()
+        let mut out = vec![0.0; nl * nr];
+        // Row l (the pairs (l, r)) is nr long: the rows filled in parallel.
+        if nr > 0 {
+            out.par_chunks_mut(nr).enumerate().for_each(|(l, row)| {
+                for (r, d) in row.iter_mut().enumerate() {
+                    *d = distance_between(&left[k], l, &right[k], r);
+                }
+            });
+        }
+        out
     }))
 }
 
