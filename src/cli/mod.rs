@@ -36,6 +36,7 @@ macro_rules! outln {
 mod outlier_study;
 mod paper_study;
 mod reproduce;
+mod timings;
 
 /// Two-step minimax kinematic calibration of dual-arm robots from laser-tracker data.
 #[derive(Parser, Debug)]
@@ -687,45 +688,8 @@ fn write_robot_exports(
     Ok(())
 }
 
-/// Wall time per phase of a command, for `--timings`.
-struct Phases {
-    started: std::time::Instant,
-    last: std::time::Instant,
-    done: Vec<(&'static str, std::time::Duration)>,
-}
-
-impl Phases {
-    fn new() -> Self {
-        let now = std::time::Instant::now();
-        Self {
-            started: now,
-            last: now,
-            done: Vec::new(),
-        }
-    }
-
-    /// The phase `name` ends now.
-    fn end(&mut self, name: &'static str) {
-        let now = std::time::Instant::now();
-        self.done.push((name, now - self.last));
-        self.last = now;
-    }
-
-    fn print(&self) {
-        eprintln!("timings (wall, ms):");
-        for (name, d) in &self.done {
-            eprintln!("  {name:<50} {:9.1}", d.as_secs_f64() * 1e3);
-        }
-        eprintln!(
-            "  {:<50} {:9.1}",
-            "total (from the start of the command)",
-            self.started.elapsed().as_secs_f64() * 1e3
-        );
-    }
-}
-
 fn calibrate_cmd(a: &CalibrateArgs) -> Result<()> {
-    let mut phases = Phases::new();
+    let mut phases = timings::Phases::new();
     let ws = load_workspace(&a.dataset)?;
     phases.end("load, checks, nominal model, screening");
     refuse_overwrites(a, &ws.dataset)?;
