@@ -28,7 +28,9 @@ use web_time::Instant;
 /// observers.
 mod arms_at_once;
 
-pub trait Observer {
+/// What a run reports as it goes. `Send`: [`Calibrator::run`] moves the run onto a thread of the work
+/// pool.
+pub trait Observer: Send {
     /// A stage begins: `n_configs` configurations (both arms' for step 2) and `n_pairs` pairs per
     /// reflector.
     fn stage_started(&mut self, _stage: Stage, _n_configs: usize, _n_pairs: usize) {}
@@ -39,7 +41,7 @@ pub trait Observer {
     fn stage_finished(&mut self, _summary: &StageSummary, _run: &CalibrationRun) {}
 }
 
-impl<F: FnMut(&CalibrationEvent)> Observer for F {
+impl<F: FnMut(&CalibrationEvent) + Send> Observer for F {
     fn stage_started(&mut self, stage: Stage, n_configs: usize, n_pairs: usize) {
         self(&CalibrationEvent::StageStarted {
             stage,
@@ -102,7 +104,18 @@ impl<'a> Calibrator<'a> {
 
     /// Run every stage to its end. A run that hits the iteration limit or is cancelled returns its
     /// result too; `Err` is for input the calibration cannot use.
-    pub fn run(mut self) -> Result<CalibrationResult, CalibrationError> {
+    pub fn run(self) -> Result<CalibrationResult, CalibrationError> {
+        // Called from a thread outside rayon's pool, every parallel loop of the run would hand its
+        // work over and sleep on a latch until it is done (at the paper's size that costs more than
+        // the loop saves): the run moves onto a pool thread, whose loops share their work with the
+        // other threads directly, and this thread waits for it once.
+        if !cfg!(target_arch = "wasm32") && rayon::current_thread_index().is_none() {
+            return rayon::scope(|_| self.run_here());
+        }
+        self.run_here()
+    }
+
+    fn run_here(mut self) -> Result<CalibrationResult, CalibrationError> {
         let mut observers = std::mem::take(&mut self.observers);
         let mut run = CalibrationRun::new(self.dataset, self.nominal, self.settings, self.cancel)?;
         if !run.arms_at_once(&mut observers)? {
