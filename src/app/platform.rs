@@ -6,7 +6,6 @@
 
 use super::files::Io;
 use super::task::FrameBudget;
-use crate::source::Files;
 use eframe::egui;
 use std::path::PathBuf;
 
@@ -14,7 +13,7 @@ use std::path::PathBuf;
 #[cfg(not(target_arch = "wasm32"))]
 pub fn io(_ctx: &egui::Context) -> Io {
     Io {
-        files: Files::default(),
+        files: crate::source::Files::default(),
         dialogs: Box::new(super::files::NativeFiles),
     }
 }
