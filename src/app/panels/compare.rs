@@ -2,6 +2,7 @@
 //! first, the best figure of each column highlighted, an Adopt button per method), a histogram and a
 //! box plot per method. Its state is [`CompareView`]; the comparison is run by its job.
 
+use super::indicator_choice_ui;
 use super::settings::{base_method_help, method_help};
 use crate::analysis::Indicator;
 use crate::app::command::Command;
@@ -137,17 +138,12 @@ pub fn compare_ui(
         ui.selectable_value(&mut view.split, Split::Ver, "ver split");
         ui.selectable_value(&mut view.split, Split::Cal, "cal split");
         ui.separator();
-        let label = ui.label("Histograms and box plots of:");
-        egui::ComboBox::from_id_salt("compare indicator")
-            .selected_text(view.indicator.label())
-            .width(230.0)
-            .show_ui(ui, |ui| {
-                for f in Indicator::ALL {
-                    ui.selectable_value(&mut view.indicator, f, f.label());
-                }
-            })
-            .response
-            .labelled_by(label.id);
+        indicator_choice_ui(
+            ui,
+            "Histograms and box plots of:",
+            "compare indicator",
+            &mut view.indicator,
+        );
     });
     ui.separator();
     let Some(comparison) = &view.comparison else {

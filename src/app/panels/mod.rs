@@ -85,17 +85,7 @@ impl PlotsView {
                 return;
             }
             if view.tab == PlotTab::Accuracy {
-                let label = ui.label("Figure:");
-                egui::ComboBox::from_id_salt("figure")
-                    .selected_text(view.indicator.label())
-                    .width(230.0)
-                    .show_ui(ui, |ui| {
-                        for f in Indicator::ALL {
-                            ui.selectable_value(&mut view.indicator, f, f.label());
-                        }
-                    })
-                    .response
-                    .labelled_by(label.id);
+                indicator_choice_ui(ui, "Figure:", "figure", &mut view.indicator);
             }
             ui.selectable_value(&mut view.split, Split::Cal, "cal split");
             ui.selectable_value(&mut view.split, Split::Ver, "ver split");
@@ -110,6 +100,21 @@ impl PlotsView {
             }
         }
     }
+}
+
+/// A labelled combo box choosing an accuracy indicator.
+fn indicator_choice_ui(ui: &mut egui::Ui, label: &str, id: &str, indicator: &mut Indicator) {
+    let label = ui.label(label);
+    egui::ComboBox::from_id_salt(id)
+        .selected_text(indicator.label())
+        .width(230.0)
+        .show_ui(ui, |ui| {
+            for f in Indicator::ALL {
+                ui.selectable_value(indicator, f, f.label());
+            }
+        })
+        .response
+        .labelled_by(label.id);
 }
 
 /// One row of a two-column grid: a label (with a tooltip) and the widget `add` puts beside it,
