@@ -76,6 +76,11 @@ fn calibrate_shows_calibrated_figures() {
         let session = app.session().unwrap();
         let calibrated = session.calibrated.as_ref().expect("a calibrated result");
         assert!(!app.history().is_empty(), "no convergence history");
+        // One owner: once the run ended, the history shown is the calibration result's own.
+        assert!(
+            std::ptr::eq(app.history(), calibrated.result.history.as_slice()),
+            "the history shown is not the calibration's"
+        );
 
         // The table now lists the calibrated model's errors, and the accuracy panel shows both columns.
         harness.get_by_label("errors of the calibrated model");
@@ -148,6 +153,12 @@ fn cancel_stops_the_run_and_keeps_the_previous_state() {
     assert!(
         app.session().unwrap().calibrated.is_none(),
         "a cancelled run must not replace the current result"
+    );
+    // Its iterations went with its job: the history shown is the last finished calibration's (none).
+    assert!(
+        app.history().is_empty(),
+        "{} iterations",
+        app.history().len()
     );
     assert!(app.errors().is_empty(), "{:?}", app.errors());
     // The status says what is shown: the last finished calibration, here none (the nominal model).

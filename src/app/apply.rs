@@ -10,8 +10,9 @@ use super::files::{self, FileReply, PathPrompt, PromptAction, SaveRequest};
 use super::job::calibration::{CalibrationJob, RunKind};
 use super::job::comparison::ComparisonJob;
 use super::session::Session;
+use super::status::Status;
 use super::work::{AutoExcludeWork, CalibrationWork, LiveRate};
-use super::{Status, WorkbenchApp, table};
+use super::{WorkbenchApp, table};
 use crate::side::ConfigId;
 use eframe::egui;
 use std::path::PathBuf;
@@ -251,11 +252,7 @@ impl WorkbenchApp {
             },
         }
     }
-}
 
-/// Why `dualcal calibrate` would refuse this session's data (the nominal screening's errors), if it
-/// would.
-impl WorkbenchApp {
     /// Whether there is a session the screening does not refuse; if not, the reason is shown.
     fn calibration_allowed(&mut self) -> bool {
         let reason = match &self.session {
@@ -270,6 +267,8 @@ impl WorkbenchApp {
     }
 }
 
+/// Why `dualcal calibrate` would refuse this session's data (the nominal screening's errors), if it
+/// would.
 fn refusal(session: &Session) -> Option<String> {
     let refusals = session.refusals();
     (!refusals.is_empty()).then(|| {

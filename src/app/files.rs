@@ -20,6 +20,15 @@ pub struct SaveRequest {
     pub bytes: Vec<u8>,
 }
 
+/// How the app reads datasets and robot descriptions, and how it asks the user for files (the
+/// platform's: [`super::platform::io`]).
+pub struct Io {
+    /// Where datasets, URDFs and meshes are read from.
+    pub files: crate::source::Files,
+    /// File dialogs (or a browser's file picker and downloads).
+    pub dialogs: Box<dyn FileAccess>,
+}
+
 pub trait FileAccess {
     /// Whether this seam can show dialogs at all; when it cannot, the app asks for a path itself.
     fn dialogs_available(&self) -> bool {

@@ -36,9 +36,9 @@ pub use command::Command;
 pub use example::{bundled_example_path, unpack_example};
 
 use crate::side::{ConfigId, Side};
-use crate::solver::{CalibrationSettings, IterationRecord, Stage};
+use crate::solver::{CalibrationSettings, IterationRecord};
 use crate::source::Files;
-use eframe::egui::{self, Color32};
+use eframe::egui;
 use events::{AppEvent, EventChannel};
 use files::{FileAccess, FileReply, PathPrompt};
 use frame_stats::FrameStats;
@@ -49,8 +49,9 @@ use job::load::LoadJob;
 use job::meshes::MeshJob;
 use panels::PlotsView;
 use session::Session;
+use status::{RunTiming, Status, StatusReport};
 use std::path::PathBuf;
-use task::{Execution, FrameBudget, SliceStats};
+use task::{Execution, FrameBudget};
 use viewport::ViewportState;
 
 /// What the window opens with.
@@ -82,26 +83,6 @@ pub fn run_native(opts: AppLaunch) -> anyhow::Result<()> {
     .map_err(|e| anyhow::anyhow!("cannot open the workbench window: {e}"))
 }
 
-/// Colour of error messages.
-const ERROR_COLOR: Color32 = Color32::from_rgb(255, 110, 100);
-
-/// How the last calibration went in time: the wall time, and (stepped in frames) the frames' work.
-#[derive(Clone, Copy, Debug, PartialEq)]
-struct RunTiming {
-    wall_secs: f64,
-    slices: SliceStats,
-}
-
-/// What the status bar says.
-#[derive(Clone, Debug, PartialEq)]
-enum Status {
-    Idle(String),
-    Running {
-        stage: Option<Stage>,
-        iteration: usize,
-    },
-}
-
 /// The workbench application.
 pub struct WorkbenchApp {
     ctx: egui::Context,
@@ -118,8 +99,6 @@ pub struct WorkbenchApp {
     jobs: Jobs,
     /// The comparison view.
     compare: compare::CompareView,
-    /// Iterations of the current (or last) run.
-    history: Vec<IterationRecord>,
     status: Status,
     errors: Vec<String>,
     selection: Option<ConfigId>,
@@ -193,7 +172,6 @@ impl WorkbenchApp {
             execution: Execution::default(),
             jobs: Jobs::default(),
             compare: compare::CompareView::default(),
-            history: Vec::new(),
             status: Status::Idle("Ready.".into()),
             errors: Vec::new(),
             selection: None,
@@ -277,8 +255,34 @@ impl WorkbenchApp {
         self.selection
     }
 
+    /// The convergence history shown: the running calibration's iterations so far, else the
+    /// session's calibration's ([`job::calibration::history`]).
     pub fn history(&self) -> &[IterationRecord] {
-        &self.history
+        job::calibration::history(&self.jobs, self.session.as_ref())
+    }
+
+    /// The state as JSON, as a browser page publishes it ([`status`]).
+    pub fn status_json(&self) -> serde_json::Value {
+        StatusReport {
+            loading: self.is_loading(),
+            calibrating: self.is_calibrating(),
+            status: &self.status,
+            errors: &self.errors,
+            renderer: &self.renderer,
+            iterations: self.history().len(),
+            session: self.session.as_ref(),
+            last_run: self.last_run,
+        }
+        .json()
+    }
+
+    /// Publish the state when it changed.
+    fn publish_status(&mut self) {
+        let text = self.status_json().to_string();
+        if text != self.published_status {
+            platform::publish_status(&text);
+            self.published_status = text;
+        }
     }
 
     /// Run background tasks on threads (native) or stepped in frames (as in a browser).
@@ -385,6 +389,71 @@ impl WorkbenchApp {
         }
     }
 
+    /// The panels around the viewport, each given the state it shows ([`panels`]): the status bar;
+    /// settings on the left at full height (a long form); the plots below the viewport and the table
+    /// (the histograms and the summary table need the width); the table on the right. Default sizes
+    /// follow the window (1280 × 800 up to 1920 × 1080 and beyond); every panel is resizable within
+    /// limits that leave the viewport a usable size.
+    fn panels_ui(&mut self, ui: &mut egui::Ui, commands: &mut Vec<Command>) {
+        let window = ui.available_size();
+        let loading = self.is_loading();
+        let calibrating = self.is_calibrating();
+        let session = self.session.as_ref();
+        egui::Panel::bottom("status bar").show(ui, |ui| {
+            panels::StatusBar {
+                errors: &self.errors,
+                status: &self.status,
+                loading,
+                calibration: self.jobs.task(CalibrationJob::lane()),
+                session,
+            }
+            .ui(ui, commands)
+        });
+        egui::Panel::left("settings")
+            .default_size((window.x * 0.19).clamp(230.0, 300.0))
+            .size_range(200.0..=(window.x * 0.3).max(240.0))
+            .resizable(true)
+            .show(ui, |ui| {
+                // A side panel is as wide as its contents: fill it, or it shrinks to them.
+                ui.set_min_width(ui.available_width());
+                panels::LeftPanel {
+                    session,
+                    urdf_override: self.urdf_override.as_deref(),
+                    loading,
+                    calibrating,
+                    compare_open: self.compare.open,
+                    settings: &mut self.settings,
+                    viewport: &mut self.viewport,
+                }
+                .ui(ui, commands)
+            });
+        if self.compare.open {
+            // The comparison takes the rest of the window.
+            return;
+        }
+        let history = job::calibration::history(&self.jobs, session);
+        egui::Panel::bottom("plots")
+            .default_size((window.y * 0.36).clamp(220.0, 420.0))
+            .size_range(140.0..=(window.y * 0.6).max(200.0))
+            .resizable(true)
+            .show(ui, |ui| self.plots.ui(ui, session, history));
+        egui::Panel::right("table")
+            .default_size((window.x * 0.36).clamp(320.0, 480.0))
+            .size_range(220.0..=(window.x * 0.4).max(260.0))
+            .resizable(true)
+            .show(ui, |ui| {
+                ui.set_min_width(ui.available_width());
+                panels::TablePanel {
+                    session,
+                    selection: self.selection,
+                    table: &mut self.table,
+                    reveal_selection: &mut self.scroll_table_to_selection,
+                    loading,
+                }
+                .ui(ui, commands)
+            });
+    }
+
     /// Step the tasks that run in frames, within the frame's budget ([`FrameBudget`]).
     fn step_tasks_in_frame(&mut self) {
         let budget = &self.frame_budget;
@@ -430,7 +499,14 @@ impl eframe::App for WorkbenchApp {
             commands.push(Command::ToggleExclude(config));
         }
         if self.panels_visible && self.compare.open {
-            egui::CentralPanel::default().show(ui, |ui| self.compare_ui(ui, &mut commands));
+            let state = panels::CompareState {
+                has_session: self.session.is_some(),
+                comparing: self.is_comparing(),
+                calibrating: self.is_calibrating(),
+            };
+            egui::CentralPanel::default().show(ui, |ui| {
+                panels::compare_ui(ui, &mut self.compare, state, &mut commands)
+            });
         } else {
             egui::CentralPanel::default()
                 .frame(egui::Frame::NONE)

@@ -4,25 +4,16 @@
 //! tests ([`publish_status`]). Threads or frames is [`super::task::Execution`]'s business. The rest of
 //! the app is the same code on both.
 
-use super::files::FileAccess;
+use super::files::Io;
 use super::task::FrameBudget;
-use crate::source::Files;
 use eframe::egui;
 use std::path::PathBuf;
-
-/// How the app reads datasets and robot descriptions, and how it asks the user for files.
-pub struct Io {
-    /// Where datasets, URDFs and meshes are read from.
-    pub files: Files,
-    /// File dialogs (or a browser's file picker and downloads).
-    pub dialogs: Box<dyn FileAccess>,
-}
 
 /// The desktop: the file system and native dialogs.
 #[cfg(not(target_arch = "wasm32"))]
 pub fn io(_ctx: &egui::Context) -> Io {
     Io {
-        files: Files::default(),
+        files: crate::source::Files::default(),
         dialogs: Box::new(super::files::NativeFiles),
     }
 }

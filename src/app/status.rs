@@ -1,29 +1,64 @@
-//! The workbench's state as JSON, for a page that embeds it and for the browser test (published to
-//! `#dualcal-status` by [`super::platform::publish_status`] whenever it changes): what it is doing,
-//! the status line and errors, the renderer, the last run's timing and, after a calibration, its
-//! parameters (`dualcal-params/1`, the same numbers "Parameters (JSON)…" exports) and accuracy.
+//! What the workbench is doing: the status line ([`Status`]), the last run's timing ([`RunTiming`]),
+//! and the state as JSON ([`StatusReport`]) for a page that embeds the workbench and for the browser
+//! test (published to `#dualcal-status` by [`super::platform::publish_status`] whenever it changes):
+//! what it is doing, the status line and errors, the renderer, the last run's timing and, after a
+//! calibration, its parameters (`dualcal-params/1`, the same numbers "Parameters (JSON)…" exports)
+//! and accuracy.
 
-use super::{Status, WorkbenchApp};
+use super::session::Session;
+use super::task::SliceStats;
+use crate::solver::Stage;
 use serde_json::{Value, json};
 
-impl WorkbenchApp {
+/// What the status bar says.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Status {
+    Idle(String),
+    Running {
+        stage: Option<Stage>,
+        iteration: usize,
+    },
+}
+
+/// How the last calibration went in time: the wall time, and (stepped in frames) the frames' work.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RunTiming {
+    pub wall_secs: f64,
+    pub slices: SliceStats,
+}
+
+/// What the JSON status is made of, borrowed from the app.
+pub struct StatusReport<'a> {
+    pub loading: bool,
+    pub calibrating: bool,
+    pub status: &'a Status,
+    pub errors: &'a [String],
+    /// The GPU adapter (name and backend).
+    pub renderer: &'a str,
+    /// Iterations of the convergence history shown (the running calibration's, else the last one's).
+    pub iterations: usize,
+    pub session: Option<&'a Session>,
+    pub last_run: Option<RunTiming>,
+}
+
+impl StatusReport<'_> {
     /// The state as JSON (see the module documentation).
-    pub fn status_json(&self) -> Value {
-        let phase = if self.is_loading() {
+    pub fn json(&self) -> Value {
+        let phase = if self.loading {
             "loading"
-        } else if self.is_calibrating() {
+        } else if self.calibrating {
             "calibrating"
         } else {
             "idle"
         };
-        let status = match &self.status {
+        let status = match self.status {
             Status::Idle(text) => text.clone(),
             Status::Running { stage, iteration } => match stage {
                 Some(stage) => format!("Calibrating: {stage}, iteration {iteration}"),
                 None => "Calibrating…".into(),
             },
         };
-        let session = self.session.as_ref().map(|s| {
+        let session = self.session.map(|s| {
             let d = &s.dataset;
             json!({
                 "dataset": d.dir.display().to_string(),
@@ -40,7 +75,6 @@ impl WorkbenchApp {
         });
         let calibrated = self
             .session
-            .as_ref()
             .and_then(|s| Some((s, s.calibrated.as_ref()?)))
             .map(|(s, c)| {
                 let mut params = crate::params::ParamsFile::from_calibration(&c.result, &s.dataset);
@@ -68,19 +102,10 @@ impl WorkbenchApp {
             "status": status,
             "errors": self.errors,
             "renderer": self.renderer,
-            "iterations": self.history.len(),
+            "iterations": self.iterations,
             "session": session,
             "calibrated": calibrated,
             "last_run": last_run,
         })
-    }
-
-    /// Publish the state when it changed.
-    pub(super) fn publish_status(&mut self) {
-        let text = self.status_json().to_string();
-        if text != self.published_status {
-            super::platform::publish_status(&text);
-            self.published_status = text;
-        }
     }
 }

@@ -8,8 +8,7 @@
 //! and `<div id="dualcal-a11y">`.
 
 use super::events::{AppEvent, EventSender};
-use super::files::{FileAccess, FileReply, OpenKind, SaveRequest};
-use super::platform::Io;
+use super::files::{FileAccess, FileReply, Io, OpenKind, SaveRequest};
 use super::uploads::{Upload, mount};
 use super::{AppLaunch, WorkbenchApp};
 use crate::source::{Files, MemoryFiles};

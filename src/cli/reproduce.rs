@@ -1,5 +1,6 @@
 //! `dualcal reproduce`: the studies of the paper and of docs/solver.md on simulated data.
 
+use super::paper_study::FIG4_SIZES;
 use super::{ReproduceArgs, Study, load_workspace};
 use crate::dataset::{Dataset, Split};
 use crate::kinematics::DualArmModel;
@@ -12,9 +13,6 @@ use crate::solver::{
     Termination,
 };
 use anyhow::{Context, Result, bail};
-
-/// The calibration set sizes of Fig. 4 (the paper's twelve subsets).
-pub(crate) const FIG4_SIZES: [usize; 12] = [10, 20, 30, 40, 50, 60, 70, 80, 90, 100, 110, 120];
 
 /// Calibrate without progress output. A stage that hits the iteration limit fails the study (its
 /// figures would not be those of the method); a stall is reported in the tables.

@@ -2,15 +2,18 @@
 //! ([`AutoExcludeWork`]), or a compared result being adopted ([`crate::app::compare::AdoptWork`]) —
 //! one lane, so each replaces the other. Its progress fills the status bar and the convergence
 //! curves, the model it reaches is shown live, and its end becomes the session's calibration.
+//!
+//! The convergence history has one owner at a time ([`history`]): the running job holds the
+//! iterations reported so far; a finished run's result holds its whole history, and the session's
+//! calibration is that result.
 
-use super::super::session::LiveFigures;
-use super::super::task::Work;
+use super::super::session::{Calibrated, LiveFigures, Session};
+use super::super::status::{RunTiming, Status};
+use super::super::task::{BackgroundTask, Work};
 use super::super::work::{Outcome, RunEvent};
-use super::super::{RunTiming, Status, WorkbenchApp, compare};
-use super::{Flow, Job, Lane};
-use crate::app::session::Calibrated;
-use crate::app::task::BackgroundTask;
-use crate::solver::CalibrationEvent;
+use super::super::{WorkbenchApp, compare};
+use super::{Flow, Job, Jobs, Lane};
+use crate::solver::{CalibrationEvent, IterationRecord};
 
 /// Which kind of run it is (the status line says so at the end).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -22,11 +25,45 @@ pub enum RunKind {
 
 pub struct CalibrationJob {
     pub kind: RunKind,
+    /// The iterations reported so far (the convergence curves while it runs).
+    history: Vec<IterationRecord>,
 }
 
 impl CalibrationJob {
     pub fn lane() -> Lane {
         Lane::of::<Self>()
+    }
+
+    /// Its stages and iterations: the status line, the plotted stage, the live history.
+    fn on_progress(&mut self, app: &mut WorkbenchApp, event: CalibrationEvent) {
+        match event {
+            CalibrationEvent::StageStarted { stage, .. } => {
+                app.status = Status::Running {
+                    stage: Some(stage),
+                    iteration: 0,
+                };
+                app.plots.stage = stage;
+            }
+            CalibrationEvent::Iteration(record) => {
+                app.status = Status::Running {
+                    stage: Some(record.stage),
+                    iteration: record.iteration,
+                };
+                self.history.push(record);
+            }
+            CalibrationEvent::StageFinished { .. } => {}
+        }
+    }
+}
+
+/// The convergence history to show: the running calibration's iterations so far, else the whole
+/// history of the session's calibration (none before the first).
+pub fn history<'a>(jobs: &'a Jobs, session: Option<&'a Session>) -> &'a [IterationRecord] {
+    match jobs.get::<CalibrationJob>() {
+        Some(job) => &job.history,
+        None => session
+            .and_then(|s| s.calibrated.as_ref())
+            .map_or(&[], |c| &c.result.history),
     }
 }
 
@@ -35,7 +72,7 @@ impl Job for CalibrationJob {
 
     fn on_event(&mut self, app: &mut WorkbenchApp, task: &BackgroundTask, event: RunEvent) -> Flow {
         match event {
-            RunEvent::Progress(progress) => app.on_calibration_progress(progress),
+            RunEvent::Progress(progress) => self.on_progress(app, progress),
             RunEvent::Live(live) => app.on_live(*live),
             RunEvent::Nominal(analysis) => {
                 if let Some(session) = app.scene_mut() {
@@ -70,9 +107,12 @@ impl WorkbenchApp {
             RunKind::Calibration => "calibration",
             RunKind::Adopt => "adopt",
         };
-        match self.start_job(name, CalibrationJob { kind }, work) {
+        let job = CalibrationJob {
+            kind,
+            history: Vec::new(),
+        };
+        match self.start_job(name, job, work) {
             Ok(()) => {
-                self.history.clear();
                 self.status = Status::Running {
                     stage: None,
                     iteration: 0,
@@ -81,26 +121,6 @@ impl WorkbenchApp {
             Err(e) => self
                 .errors
                 .push(format!("cannot start the calibration thread: {e}")),
-        }
-    }
-
-    fn on_calibration_progress(&mut self, event: CalibrationEvent) {
-        match event {
-            CalibrationEvent::StageStarted { stage, .. } => {
-                self.status = Status::Running {
-                    stage: Some(stage),
-                    iteration: 0,
-                };
-                self.plots.stage = stage;
-            }
-            CalibrationEvent::Iteration(record) => {
-                self.status = Status::Running {
-                    stage: Some(record.stage),
-                    iteration: record.iteration,
-                };
-                self.history.push(record);
-            }
-            CalibrationEvent::StageFinished { .. } => {}
         }
     }
 
@@ -168,10 +188,10 @@ impl WorkbenchApp {
         }
     }
 
-    /// A finished run becomes the session's calibration: its history (complete even if progress
-    /// events were dropped), the exclusions it ran with (Auto-exclude adds its own), its model.
+    /// A finished run becomes the session's calibration: its result with its whole history (the one
+    /// shown from now on, complete even if progress events were dropped), the exclusions it ran with
+    /// (Auto-exclude adds its own), its model.
     fn take_calibration(&mut self, calibrated: Calibrated) {
-        self.history = calibrated.result.history.clone();
         if let Some(session) = self.scene_mut() {
             session.exclude = calibrated.result.settings.exclude.clone();
             session.calibrated = Some(calibrated);

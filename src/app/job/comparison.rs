@@ -1,8 +1,9 @@
 //! Comparing methods ([`ComparisonWork`]): its progress, its nominal figures and each method's
 //! outcome fill the comparison view as they arrive.
 
+use super::super::WorkbenchApp;
 use super::super::compare::{self, CompareEvent};
-use super::super::{Status, WorkbenchApp};
+use super::super::status::Status;
 use super::{Flow, Job, Lane};
 use crate::app::task::BackgroundTask;
 use crate::comparison::{Comparison, ComparisonEvent};

@@ -1,8 +1,9 @@
 //! Loading a dataset with its robot ([`LoadWork`]): on success the new session replaces the current
 //! one (and the jobs of the old one are dropped); on failure the current one stays.
 
+use super::super::WorkbenchApp;
+use super::super::status::Status;
 use super::super::work::{LoadEvent, LoadWork, Loaded};
-use super::super::{Status, WorkbenchApp};
 use super::{Flow, Job, Lane};
 use crate::app::task::BackgroundTask;
 use std::path::PathBuf;
@@ -67,7 +68,6 @@ impl WorkbenchApp {
         self.compare.comparison = None;
         self.compare.progress = None;
         self.compare.adopted = None;
-        self.history.clear();
         self.selection = None;
         self.urdf_override = urdf;
         self.viewport.reset_poses();

@@ -16,7 +16,7 @@ pub mod meshes;
 
 use super::WorkbenchApp;
 use super::task::{BackgroundTask, TaskId, TaskReport, Work};
-use std::any::TypeId;
+use std::any::{Any, TypeId};
 use std::time::Duration;
 
 /// Which jobs replace each other: one job runs per lane.
@@ -66,6 +66,9 @@ pub trait Job: Sized + 'static {
 
 /// A job with its event type hidden.
 trait AnyJob {
+    /// The job itself, to be told apart by its type ([`Jobs::get`]).
+    fn as_any(&self) -> &dyn Any;
+
     fn on_report(
         &mut self,
         app: &mut WorkbenchApp,
@@ -75,6 +78,10 @@ trait AnyJob {
 }
 
 impl<J: Job> AnyJob for J {
+    fn as_any(&self) -> &dyn Any {
+        self
+    }
+
     fn on_report(
         &mut self,
         app: &mut WorkbenchApp,
@@ -115,6 +122,13 @@ impl Jobs {
             .iter()
             .find(|r| r.lane == lane)
             .map(|r| &r.task)
+    }
+
+    /// The running job of type `J` (its own state: a calibration's live history, say).
+    pub fn get<J: Job>(&self) -> Option<&J> {
+        self.running
+            .iter()
+            .find_map(|r| r.job.as_any().downcast_ref::<J>())
     }
 
     pub fn is_running(&self, lane: Lane) -> bool {

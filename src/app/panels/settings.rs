@@ -1,18 +1,34 @@
 //! The left panel: dataset, robot, calibration settings and buttons, export, then the view options.
 
-use super::{Command, WARNING_COLOR, WorkbenchApp, choice_ui, grid_row_ui};
+use super::view_options::view_options_ui;
+use super::{WARNING_COLOR, choice_ui, grid_row_ui};
 use crate::app::bundled_example_path;
-use crate::app::export::Export;
-use crate::app::files::OpenKind;
+use crate::app::command::{Command, Export, OpenKind};
+use crate::app::compare::method_used;
 use crate::app::session::{RobotMeshes, Session};
+use crate::app::viewport::ViewportState;
 use crate::dataset::Split;
 use crate::side::Side;
 use crate::solver::{BaseMethod, CalibrationSettings, Method, QpMethod, Reflector};
 use eframe::egui::{self, Color32, RichText};
 use std::path::Path;
 
-impl WorkbenchApp {
-    pub(super) fn settings_panel_ui(&mut self, ui: &mut egui::Ui, commands: &mut Vec<Command>) {
+/// The left panel and the state it shows: it edits the calibration settings and the view options in
+/// place and pushes a [`Command`] for everything else.
+pub struct LeftPanel<'a> {
+    pub session: Option<&'a Session>,
+    /// The robot description opened instead of the dataset's.
+    pub urdf_override: Option<&'a Path>,
+    pub loading: bool,
+    pub calibrating: bool,
+    /// Whether the comparison view is open.
+    pub compare_open: bool,
+    pub settings: &'a mut CalibrationSettings,
+    pub viewport: &'a mut ViewportState,
+}
+
+impl LeftPanel<'_> {
+    pub fn ui(self, ui: &mut egui::Ui, commands: &mut Vec<Command>) {
         egui::ScrollArea::vertical().show(ui, |ui| {
             self.dataset_section_ui(ui, commands);
             ui.separator();
@@ -23,22 +39,20 @@ impl WorkbenchApp {
                 self.compare_button_ui(ui, commands);
             });
             self.current_method_ui(ui);
-            let running = self.is_calibrating();
-            ui.add_enabled_ui(!running, |ui| {
-                calibration_settings_ui(ui, &mut self.settings)
+            ui.add_enabled_ui(!self.calibrating, |ui| {
+                calibration_settings_ui(ui, &mut *self.settings)
             });
             self.calibration_buttons_ui(ui, commands);
-            // self.compare_button_ui(ui, commands);
             ui.separator();
             self.export_section_ui(ui, commands);
             ui.separator();
-            self.view_options_ui(ui, commands);
+            view_options_ui(ui, self.session, &mut *self.viewport, commands);
         });
     }
 
     fn dataset_section_ui(&self, ui: &mut egui::Ui, commands: &mut Vec<Command>) {
         ui.heading("Dataset");
-        match &self.session {
+        match self.session {
             Some(s) => {
                 let d = &s.dataset;
                 ui.label(RichText::new(file_name(&d.dir)).strong())
@@ -69,7 +83,7 @@ impl WorkbenchApp {
                 commands.push(Command::ChooseFile(OpenKind::Dataset));
             }
             if ui
-                .add_enabled(!self.is_loading(), egui::Button::new("Example"))
+                .add_enabled(!self.loading, egui::Button::new("Example"))
                 .on_hover_text("Open the bundled simulated example dataset")
                 .clicked()
             {
@@ -82,13 +96,13 @@ impl WorkbenchApp {
     /// its meshes and its warnings.
     fn robot_section_ui(&self, ui: &mut egui::Ui, commands: &mut Vec<Command>) {
         ui.heading("Robot");
-        match &self.session {
+        match self.session {
             Some(session) => robot_summary_ui(ui, session),
             None => {
                 ui.label("built-in IRB 14000 (no dataset)");
             }
         }
-        if let Some(urdf) = &self.urdf_override {
+        if let Some(urdf) = self.urdf_override {
             ui.label(
                 RichText::new(format!(
                     "opened: {} (instead of the dataset's)",
@@ -101,7 +115,7 @@ impl WorkbenchApp {
         }
         ui.horizontal(|ui| {
             if ui
-                .add_enabled(!self.is_loading(), egui::Button::new("Open URDF…"))
+                .add_enabled(!self.loading, egui::Button::new("Open URDF…"))
                 .on_hover_text(
                     "Use another robot description (URDF) for this dataset; or drop a .urdf on the window",
                 )
@@ -111,10 +125,7 @@ impl WorkbenchApp {
             }
             if self.urdf_override.is_some()
                 && ui
-                    .add_enabled(
-                        !self.is_loading(),
-                        egui::Button::new("Dataset's robot"),
-                    )
+                    .add_enabled(!self.loading, egui::Button::new("Dataset's robot"))
                     .on_hover_text("Go back to the robot the dataset names (or the built-in one)")
                     .clicked()
             {
@@ -124,7 +135,7 @@ impl WorkbenchApp {
     }
 
     fn calibration_buttons_ui(&self, ui: &mut egui::Ui, commands: &mut Vec<Command>) {
-        let running = self.is_calibrating();
+        let running = self.calibrating;
         ui.horizontal(|ui| {
             let calibrate =
                 egui::Button::new(RichText::new("Calibrate").strong().color(Color32::WHITE))
@@ -154,7 +165,7 @@ impl WorkbenchApp {
 
     /// Open or close the comparison view.
     fn compare_button_ui(&self, ui: &mut egui::Ui, commands: &mut Vec<Command>) {
-        let open = self.compare.open;
+        let open = self.compare_open;
         let text = if open {
             "Back to the 3D view"
         } else {
@@ -174,24 +185,18 @@ impl WorkbenchApp {
 
     /// The method of the current calibration.
     fn current_method_ui(&self, ui: &mut egui::Ui) {
-        if let Some(c) = self.session.as_ref().and_then(|s| s.calibrated.as_ref()) {
+        if let Some(c) = self.session.and_then(|s| s.calibrated.as_ref()) {
             ui.label(
-                RichText::new(format!(
-                    "current: {}",
-                    crate::app::compare::method_used(&c.result)
-                ))
-                .small()
-                .color(Color32::GRAY),
+                RichText::new(format!("current: {}", method_used(&c.result)))
+                    .small()
+                    .color(Color32::GRAY),
             );
         }
     }
 
     fn export_section_ui(&self, ui: &mut egui::Ui, commands: &mut Vec<Command>) {
         ui.heading("Export");
-        let has_cal = self
-            .session
-            .as_ref()
-            .is_some_and(|s| s.calibrated.is_some());
+        let has_cal = self.session.is_some_and(|s| s.calibrated.is_some());
         let mut button = |ui: &mut egui::Ui, label: &str, hover: &str, what: Export| {
             let mut response = ui.button(label).on_hover_text(hover);
             if matches!(what, Export::Params | Export::Urdf) {
@@ -496,12 +501,12 @@ fn calibration_settings_ui(ui: &mut egui::Ui, settings: &mut CalibrationSettings
 
 /// A step-1 method's label and what it minimises and cannot see (the choices' hover text), from the
 /// methods' table.
-pub(crate) fn method_help(method: Method) -> (&'static str, &'static str) {
+pub(super) fn method_help(method: Method) -> (&'static str, &'static str) {
     (method.spec().label, method.spec().summary)
 }
 
 /// A step-2 method's label and what it minimises and cannot see, from the methods' table.
-pub(crate) fn base_method_help(method: BaseMethod) -> (&'static str, &'static str) {
+pub(super) fn base_method_help(method: BaseMethod) -> (&'static str, &'static str) {
     (method.spec().label, method.spec().summary)
 }
 

@@ -1,52 +1,54 @@
 //! The "View" section of the left panel: what the viewport draws, which model, how errors are
 //! scaled, the pose each arm is drawn in.
 
-use super::{Command, WorkbenchApp};
+use crate::app::command::Command;
 use crate::app::session::Session;
+use crate::app::viewport::ViewportState;
 use crate::app::viewport::scene::{MeshDetail, SceneOptions};
 use crate::side::{PerSide, Side};
 use eframe::egui::{self, Color32, RichText};
 
-impl WorkbenchApp {
-    pub(super) fn view_options_ui(&mut self, ui: &mut egui::Ui, commands: &mut Vec<Command>) {
-        ui.heading("View");
-        let has_cal = self.session.as_ref().is_some_and(|s| s.after().is_some());
-        let view = &mut self.viewport;
-        layers_ui(ui, &mut view.options);
-        model_choice_ui(ui, &mut view.options, has_cal);
-        mesh_detail_ui(ui, &mut view.options, view.software_renderer);
-        ui.checkbox(&mut view.auto_scale, "auto scale")
+/// The view options of `view` (edited in place) for the `session` shown.
+pub(super) fn view_options_ui(
+    ui: &mut egui::Ui,
+    session: Option<&Session>,
+    view: &mut ViewportState,
+    commands: &mut Vec<Command>,
+) {
+    ui.heading("View");
+    let has_cal = session.is_some_and(|s| s.after().is_some());
+    layers_ui(ui, &mut view.options);
+    model_choice_ui(ui, &mut view.options, has_cal);
+    mesh_detail_ui(ui, &mut view.options, view.software_renderer);
+    ui.checkbox(&mut view.auto_scale, "auto scale")
             .on_hover_text("Set the vector exaggeration and colour range from the current errors whenever a model is loaded or calibrated");
-        error_scale_ui(ui, &mut view.options);
-        if let Some(session) = &self.session {
-            arm_poses_ui(ui, session, &mut view.poses);
-        }
-        ui.horizontal(|ui| {
-            if ui
-                .button("Reset view")
-                .on_hover_text("Also: double-click the viewport")
-                .clicked()
-            {
-                view.camera = view.home_camera;
-            }
-            if ui
-                .button("Select worst")
-                .on_hover_text(
-                    "Select the configuration with the largest |Δd| of the current model",
-                )
-                .clicked()
-            {
-                commands.push(Command::SelectWorst);
-            }
-        });
-        ui.label(
-            RichText::new(
-                "drag: orbit · right/middle or shift-drag: pan · wheel: zoom · click: select",
-            )
-            .small()
-            .color(Color32::GRAY),
-        );
+    error_scale_ui(ui, &mut view.options);
+    if let Some(session) = session {
+        arm_poses_ui(ui, session, &mut view.poses);
     }
+    ui.horizontal(|ui| {
+        if ui
+            .button("Reset view")
+            .on_hover_text("Also: double-click the viewport")
+            .clicked()
+        {
+            view.camera = view.home_camera;
+        }
+        if ui
+            .button("Select worst")
+            .on_hover_text("Select the configuration with the largest |Δd| of the current model")
+            .clicked()
+        {
+            commands.push(Command::SelectWorst);
+        }
+    });
+    ui.label(
+        RichText::new(
+            "drag: orbit · right/middle or shift-drag: pan · wheel: zoom · click: select",
+        )
+        .small()
+        .color(Color32::GRAY),
+    );
 }
 
 /// What is drawn: robot, grid, reflector triangles, error vectors; which splits and arms.

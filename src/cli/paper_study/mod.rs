@@ -32,6 +32,8 @@ use std::time::Instant;
 
 /// Configurations per arm of the paper's protocol (§4.1), and of them for calibration.
 const PAPER_CONFIGS: (usize, usize) = (220, 120);
+/// The calibration set sizes of Fig. 4 (the paper's twelve subsets).
+pub(crate) const FIG4_SIZES: [usize; 12] = [10, 20, 30, 40, 50, 60, 70, 80, 90, 100, 110, 120];
 /// Fig. 4's calibration set sizes for `--quick`.
 const QUICK_SIZES: [usize; 3] = [20, 60, 120];
 
@@ -76,7 +78,7 @@ impl Plan {
         let sizes = match &a.sizes {
             Some(s) => s.clone(),
             None if a.quick => QUICK_SIZES.to_vec(),
-            None => super::reproduce::FIG4_SIZES.to_vec(),
+            None => FIG4_SIZES.to_vec(),
         };
         if a.dataset.is_some() && a.seeds != [1] {
             bail!("--seeds simulates; with --dataset the study runs once on that dataset");
