@@ -390,14 +390,97 @@ fn reflector_with_a_string_or_nan() {
     }
 }
 
+/// A manifest without `c` declares two reflectors: the CSV's `cx, cy, cz` columns are then unknown.
 #[test]
-fn missing_reflector() {
+fn columns_of_an_undeclared_reflector() {
     let manifest = MANIFEST.replace("c = [-25.0, -40.0, 40]\n", "");
     let err = Fixture::with_manifest(&manifest).load().unwrap_err();
     assert!(
-        matches!(err, DatasetError::Manifest { line: Some(9), ref field, .. } if field == "reflectors.c")
+        matches!(err, DatasetError::Header { line: 3, ref field, .. } if field == "cx"),
+        "{err}"
     );
-    assert_names(&err, &["dataset.toml:9", "reflectors.c", "missing"]);
+    assert_names(&err, &["left.csv:3", "cx", "bz"]);
+}
+
+/// A declared reflector whose columns the CSV lacks.
+#[test]
+fn reflector_declared_but_its_columns_missing() {
+    let manifest = MANIFEST.replace("c = [-25.0, -40.0, 40]\n", "c = [-25.0, -40.0, 40]\nd = [0, 0, 90]\n");
+    let err = Fixture::with_manifest(&manifest).load().unwrap_err();
+    assert!(
+        matches!(err, DatasetError::Header { line: 3, ref field, .. } if field == "dx" || field == "split"),
+        "{err}"
+    );
+    assert_names(&err, &["left.csv:3", "dx"]);
+}
+
+#[test]
+fn reflector_names_and_an_empty_table_are_checked() {
+    let manifest = MANIFEST.replace("b = [", "2b = [");
+    let err = Fixture::with_manifest(&manifest).load().unwrap_err();
+    assert!(matches!(err, DatasetError::Toml { .. } | DatasetError::Manifest { .. }), "{err}");
+    let manifest = MANIFEST.replace("b = [", "\"b-2\" = [");
+    let err = Fixture::with_manifest(&manifest).load().unwrap_err();
+    assert!(
+        matches!(err, DatasetError::Manifest { line: Some(11), ref field, .. } if field == "reflectors.b-2"),
+        "{err}"
+    );
+    assert_names(&err, &["dataset.toml:11", "letter"]);
+    let start = MANIFEST.find("a = [").unwrap();
+    let end = MANIFEST.find("[[arms]]").unwrap();
+    let manifest = format!("{}{}", &MANIFEST[..start], &MANIFEST[end..]);
+    let err = Fixture::with_manifest(&manifest).load().unwrap_err();
+    assert!(
+        matches!(err, DatasetError::Manifest { ref field, .. } if field == "reflectors"),
+        "{err}"
+    );
+    assert_names(&err, &["no reflector"]);
+}
+
+/// One reflector per arm: `a` alone, its three columns.
+#[test]
+fn a_one_reflector_dataset_loads() {
+    let start = MANIFEST.find("b = [").unwrap();
+    let end = MANIFEST.find("[[arms]]").unwrap();
+    let manifest = format!("{}{}", &MANIFEST[..start], &MANIFEST[end..]);
+    let keep_a = |text: &str| -> String {
+        text.lines()
+            .map(|l| {
+                if l.starts_with('#') {
+                    return l.to_string();
+                }
+                let f: Vec<&str> = l.split(',').collect();
+                let mut out: Vec<&str> = f[..11].to_vec();
+                out.push(f[17]);
+                out.join(",")
+            })
+            .collect::<Vec<_>>()
+            .join("\n")
+            + "\n"
+    };
+    let fx = Fixture::new(&manifest, &keep_a(&csv_text(6, 1)), &keep_a(&csv_text(5, 2)));
+    let ds = fx.load().unwrap();
+    assert_eq!(ds.reflector_count(), 1);
+    assert_eq!(&ds.reflector_names[..], &["a".to_string()]);
+    assert_eq!(ds.arms.left.measurements[0].tracker_points_mm.len(), 1);
+    assert!(ds.one_tracker_frame());
+}
+
+#[test]
+fn stations_on_both_arms_or_neither() {
+    let manifest = MANIFEST.replace("file = \"left.csv\"\n", "file = \"left.csv\"\nstation = \"east\"\n");
+    let err = Fixture::with_manifest(&manifest).load().unwrap_err();
+    assert!(
+        matches!(err, DatasetError::Manifest { line: Some(16), ref field, .. } if field == "arms.station"),
+        "{err}"
+    );
+    assert_names(&err, &["dataset.toml:16", "arms.station", "left arm"]);
+    let both = manifest.replace("file = \"right.csv\"\n", "file = \"right.csv\"\nstation = \"west\"\n");
+    let ds = Fixture::with_manifest(&both).load().unwrap();
+    assert_eq!(ds.arms.left.station.as_deref(), Some("east"));
+    assert!(!ds.one_tracker_frame());
+    let same = both.replace("\"west\"", "\"east\"");
+    assert!(Fixture::with_manifest(&same).load().unwrap().one_tracker_frame());
 }
 
 #[test]

@@ -8,8 +8,13 @@ use crate::textfile::excerpt;
 use nalgebra::Vector3;
 use std::path::Path;
 
-/// Names of the reflector columns, in order.
-const POINT_COLUMNS: [&str; 9] = ["ax", "ay", "az", "bx", "by", "bz", "cx", "cy", "cz"];
+/// Names of the reflector columns, in order: `<name>x, <name>y, <name>z` per reflector.
+fn point_columns(reflectors: &[String]) -> Vec<String> {
+    reflectors
+        .iter()
+        .flat_map(|r| ["x", "y", "z"].map(|c| format!("{r}{c}")))
+        .collect()
+}
 
 /// The joint number of a column named `q<N>` (N ≥ 1).
 fn joint_column(name: &str) -> Option<usize> {
@@ -19,10 +24,10 @@ fn joint_column(name: &str) -> Option<usize> {
 }
 
 /// The columns of a header with `joints` joint columns (without `split`).
-pub(super) fn columns(joints: usize) -> Vec<String> {
+pub(super) fn columns(joints: usize, reflectors: &[String]) -> Vec<String> {
     let mut out = vec!["id".to_string()];
     out.extend((1..=joints).map(|j| format!("q{j}")));
-    out.extend(POINT_COLUMNS.iter().map(|c| c.to_string()));
+    out.extend(point_columns(reflectors));
     out
 }
 
@@ -31,14 +36,16 @@ fn check_header(
     path: &Path,
     line: usize,
     header: &csv::StringRecord,
+    reflectors: &[String],
 ) -> Result<(usize, bool), DatasetError> {
+    let point_columns = point_columns(reflectors);
     let err = |field: &str, message: String| DatasetError::Header {
         path: path.to_path_buf(),
         line,
         field: field.to_string(),
         message,
     };
-    let expected = format!("id,q1,…,qN,{},[{SPLIT_COLUMN}]", POINT_COLUMNS.join(","));
+    let expected = format!("id,q1,…,qN,{},[{SPLIT_COLUMN}]", point_columns.join(","));
     if header.len() == 1 {
         let only = &excerpt(header.get(0).unwrap_or(""));
         if let Some(sep) = [';', '\t', ' '].into_iter().find(|&c| only.contains(c)) {
@@ -53,7 +60,7 @@ fn check_header(
         .take_while(|&i| header.get(i).and_then(joint_column) == Some(i))
         .count();
     // With no joint column at all, q1 is what is missing.
-    let wanted = columns(joints.max(1));
+    let wanted = columns(joints.max(1), reflectors);
     for (i, want) in wanted.iter().map(String::as_str).enumerate() {
         let Some(got) = header.get(i) else {
             return Err(err(
@@ -72,7 +79,7 @@ fn check_header(
                 i + 1,
                 joints + 1
             )
-        } else if POINT_COLUMNS.contains(&got.as_str()) || got == SPLIT_COLUMN || got == "id" {
+        } else if point_columns.contains(got) || got == SPLIT_COLUMN || got == "id" {
             format!(
                 "column `{got}` is in position {}, where `{want}` belongs; the header must be {expected} in this order",
                 i + 1
@@ -104,8 +111,9 @@ fn check_header(
             Err(err(
                 got,
                 format!(
-                    "unknown column `{got}` in position {}; only `{SPLIT_COLUMN}` may follow `cz` (header {expected})",
-                    n + 1
+                    "unknown column `{got}` in position {}; only `{SPLIT_COLUMN}` may follow `{}` (header {expected})",
+                    n + 1,
+                    point_columns.last().map_or("", String::as_str)
                 ),
             ))
         }
@@ -204,6 +212,7 @@ fn parse_row(
     rec: &csv::StringRecord,
     names: &[String],
     joints: usize,
+    reflectors: usize,
     has_split: bool,
     units: Units,
 ) -> Result<Measurement, DatasetError> {
@@ -225,7 +234,7 @@ fn parse_row(
             Ok(q)
         })
         .collect::<Result<Vec<f64>, DatasetError>>()?;
-    let mut tracker_points_mm = [Vector3::zeros(); 3];
+    let mut tracker_points_mm = vec![Vector3::zeros(); reflectors];
     for (k, p) in tracker_points_mm.iter_mut().enumerate() {
         for c in 0..3 {
             let col = 1 + joints + 3 * k + c;
@@ -267,7 +276,8 @@ pub(super) fn read_arm(
     path: &Path,
     side: Side,
     units: Units,
-    nominal_reflectors_mm: &[Vector3<f64>; 3],
+    nominal_reflectors_mm: &[Vector3<f64>],
+    reflector_names: &[String],
 ) -> Result<Vec<Measurement>, DatasetError> {
     let text = read_text(files, path)?;
     let mut reader = csv::ReaderBuilder::new()
@@ -304,7 +314,7 @@ pub(super) fn read_arm(
                     } else {
                         ""
                     },
-                    POINT_COLUMNS.join(",")
+                    point_columns(reflector_names).join(",")
                 ),
             });
         }
@@ -315,8 +325,8 @@ pub(super) fn read_arm(
         }
     };
     let header_line = line_at(header.position(), 1);
-    let (joints, has_split) = check_header(path, header_line, &header)?;
-    let names = columns(joints);
+    let (joints, has_split) = check_header(path, header_line, &header, reflector_names)?;
+    let names = columns(joints, reflector_names);
 
     let mut out = Vec::new();
     let mut first_line_of_id: std::collections::HashMap<String, usize> = Default::default();
@@ -358,7 +368,14 @@ pub(super) fn read_arm(
         }
         first_line_of_id.insert(id.to_string(), line);
         out.push(parse_row(
-            path, line, &rec, &names, joints, has_split, units,
+            path,
+            line,
+            &rec,
+            &names,
+            joints,
+            reflector_names.len(),
+            has_split,
+            units,
         )?);
     }
     if out.len() < MIN_CONFIGS {
@@ -369,7 +386,13 @@ pub(super) fn read_arm(
             min: MIN_CONFIGS,
         });
     }
-    validate::check_arm(path, &out, units.length, nominal_reflectors_mm)?;
+    validate::check_arm(
+        path,
+        &out,
+        units.length,
+        nominal_reflectors_mm,
+        reflector_names,
+    )?;
     Ok(out)
 }
 

@@ -43,13 +43,11 @@ struct RawTracker {
     mpe_um_per_m: Option<Spanned<f64>>,
 }
 
-#[derive(serde::Deserialize)]
-#[serde(deny_unknown_fields)]
-struct RawReflectors {
-    a: Option<Spanned<toml::Value>>,
-    b: Option<Spanned<toml::Value>>,
-    c: Option<Spanned<toml::Value>>,
-}
+/// `[reflectors]`: any names, each an `[x, y, z]`; their file order is recovered from the spans.
+type RawReflectors = std::collections::BTreeMap<Spanned<String>, Spanned<toml::Value>>;
+
+/// The longest reflector name.
+const MAX_REFLECTOR_NAME: usize = 32;
 
 #[derive(serde::Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -58,12 +56,15 @@ struct RawArm {
     file: Option<Spanned<String>>,
     base_link: Option<Spanned<String>>,
     tip_link: Option<Spanned<String>>,
+    station: Option<Spanned<String>>,
 }
 
-/// One `[[arms]]` entry: its CSV and, optionally, its chain in the robot description.
+/// One `[[arms]]` entry: its CSV and, optionally, its chain in the robot description and the tracker
+/// station it was measured from.
 pub(super) struct ManifestArm {
     pub file: PathBuf,
     pub links: Option<ArmLinks>,
+    pub station: Option<String>,
 }
 
 /// What `dataset.toml` says, validated and in mm.
@@ -71,7 +72,9 @@ pub(super) struct Manifest {
     pub units: Units,
     pub robot: Option<PathBuf>,
     pub tracker: TrackerSpec,
-    pub reflectors_mm: [Vector3<f64>; 3],
+    pub reflectors_mm: Vec<Vector3<f64>>,
+    /// The reflectors' names, in the manifest's order (the CSV's column order).
+    pub reflector_names: Vec<String>,
     /// CSV path and chain links of each arm.
     pub arms: PerSide<ManifestArm>,
 }
@@ -131,13 +134,14 @@ pub(super) fn parse(
         None => TrackerSpec::default(),
         Some(t) => parse_tracker(&cx, t)?,
     };
-    let reflectors_mm = parse_reflectors(&cx, raw.reflectors, units.length)?;
+    let (reflector_names, reflectors_mm) = parse_reflectors(&cx, raw.reflectors, units.length)?;
     let arms = parse_arms(&cx, dir, raw.arms.unwrap_or_default())?;
     Ok(Manifest {
         units,
         robot,
         tracker,
         reflectors_mm,
+        reflector_names,
         arms,
     })
 }
@@ -287,28 +291,63 @@ fn parse_tracker(cx: &ManifestCtx, t: Spanned<RawTracker>) -> Result<TrackerSpec
     })
 }
 
-/// `[reflectors]`: the nominal coordinates `a`, `b`, `c` in the tip frame, converted to mm.
+/// Is `name` usable as a reflector name (its CSV columns are `<name>x`, `<name>y`, `<name>z`)?
+fn reflector_name_problem(name: &str) -> Option<String> {
+    if name.is_empty() {
+        return Some("an empty reflector name".into());
+    }
+    if name.len() > MAX_REFLECTOR_NAME {
+        return Some(format!(
+            "a reflector name of {} bytes; at most {MAX_REFLECTOR_NAME}",
+            name.len()
+        ));
+    }
+    let first_ok = name.starts_with(|c: char| c.is_ascii_alphabetic());
+    if !first_ok || !name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') {
+        return Some(format!(
+            "reflector name `{}`: a name is a letter followed by letters, digits or `_` (its CSV \
+             columns are `<name>x`, `<name>y`, `<name>z`)",
+            excerpt(name)
+        ));
+    }
+    None
+}
+
+/// `[reflectors]`: one or more named reflectors (`a = [x, y, z]`, in the tip link's frame), in the
+/// file's order, converted to mm.
 fn parse_reflectors(
     cx: &ManifestCtx,
     raw: Option<Spanned<RawReflectors>>,
     length: LengthUnit,
-) -> Result<[Vector3<f64>; 3], DatasetError> {
+) -> Result<(Vec<String>, Vec<Vector3<f64>>), DatasetError> {
     let Some(refl) = raw else {
         return Err(cx.err(
             None,
             "reflectors",
-            "missing [reflectors] table with the nominal coordinates a, b, c in the tip link's frame",
+            "missing [reflectors] table with the nominal coordinates of each reflector in the tip \
+             link's frame (e.g. a = [x, y, z]; the paper's set-up has a, b, c)",
         ));
     };
     let refl_line = Some(cx.line_of(refl.span()));
-    let refl = refl.into_inner();
-    let mut reflectors_mm = [Vector3::zeros(); 3];
-    for (k, v) in [refl.a, refl.b, refl.c].into_iter().enumerate() {
-        let field = format!("reflectors.{}", crate::kinematics::REFLECTOR_NAMES[k]);
+    let mut entries: Vec<(Spanned<String>, Spanned<toml::Value>)> =
+        refl.into_inner().into_iter().collect();
+    entries.sort_by_key(|(k, _)| k.span().start);
+    if entries.is_empty() {
+        return Err(cx.err(
+            refl_line,
+            "reflectors",
+            "no reflector; expected at least one, e.g. a = [x, y, z] in the tip link's frame",
+        ));
+    }
+    let mut names = Vec::with_capacity(entries.len());
+    let mut reflectors_mm = Vec::with_capacity(entries.len());
+    for (key, v) in entries {
+        let name = key.get_ref().clone();
+        let field = format!("reflectors.{}", excerpt(&name));
+        if let Some(problem) = reflector_name_problem(&name) {
+            return Err(cx.err(Some(cx.line_of(key.span())), &field, problem));
+        }
         let expected = format!("expected 3 numbers [x, y, z] in {}", length.name());
-        let Some(v) = v else {
-            return Err(cx.err(refl_line, &field, format!("missing; {expected}")));
-        };
         let line = Some(cx.line_of(v.span()));
         let bad = |found: &str| {
             cx.err(
@@ -323,6 +362,7 @@ fn parse_reflectors(
         if items.len() != 3 {
             return Err(bad(&format!("{} values", items.len())));
         }
+        let mut p = Vector3::zeros();
         for (c, item) in items.iter().enumerate() {
             let x = match item {
                 toml::Value::Float(x) => *x,
@@ -332,13 +372,15 @@ fn parse_reflectors(
             if !x.is_finite() {
                 return Err(bad(&format!("{x}")));
             }
-            reflectors_mm[k][c] = length.to_mm(x);
+            p[c] = length.to_mm(x);
         }
+        names.push(name);
+        reflectors_mm.push(p);
     }
     if let Err(message) = super::validate::nominal_triangle(&reflectors_mm, length) {
         return Err(cx.err(refl_line, "reflectors", message));
     }
-    Ok(reflectors_mm)
+    Ok((names, reflectors_mm))
 }
 
 /// `base_link` and `tip_link` of an `[[arms]]` entry: both or neither, non-empty.
@@ -383,6 +425,7 @@ fn parse_arms(
 ) -> Result<PerSide<ManifestArm>, DatasetError> {
     let mut files: PerSide<Option<ManifestArm>> = PerSide::default();
     let mut arm_lines: PerSide<usize> = PerSide::default();
+    let mut station_lines: PerSide<usize> = PerSide::default();
     for arm in arms {
         let line = cx.line_of(arm.span());
         let arm = arm.into_inner();
@@ -436,10 +479,29 @@ fn parse_arms(
         let path = super::validate::data_file_in(dir, file.get_ref())
             .map_err(|message| cx.err(Some(cx.line_of(file.span())), "arms.file", message))?;
         let links = parse_links(cx, line, arm.base_link, arm.tip_link)?;
-        files[side] = Some(ManifestArm { file: path, links });
+        let station = match arm.station {
+            None => None,
+            Some(s) => {
+                let text = s.get_ref().trim();
+                if text.is_empty() || text.len() > 255 || text.chars().any(char::is_control) {
+                    return Err(cx.err(
+                        Some(cx.line_of(s.span())),
+                        "arms.station",
+                        "expected the name of the tracker station (1 to 255 characters, one line)",
+                    ));
+                }
+                station_lines[side] = cx.line_of(s.span());
+                Some(text.to_string())
+            }
+        };
+        files[side] = Some(ManifestArm {
+            file: path,
+            links,
+            station,
+        });
         arm_lines[side] = name_line;
     }
-    files.try_map(|side, file| {
+    let arms = files.try_map(|side, file| {
         file.ok_or_else(|| {
             cx.err(
                 None,
@@ -447,5 +509,20 @@ fn parse_arms(
                 format!("missing [[arms]] entry with name = \"{side}\"; both arms are needed"),
             )
         })
-    })
+    })?;
+    // Stations: on both arms or on neither (one station, as files without the key).
+    for side in Side::BOTH {
+        let other = side.other();
+        if arms[side].station.is_some() && arms[other].station.is_none() {
+            return Err(cx.err(
+                Some(station_lines[side]),
+                "arms.station",
+                format!(
+                    "the {side} arm names a tracker station, the {other} arm none; name both arms' \
+                     stations (the same name when one station measured both) or neither"
+                ),
+            ));
+        }
+    }
+    Ok(arms)
 }

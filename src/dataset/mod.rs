@@ -17,6 +17,7 @@ use error::read_text;
 use nalgebra::Vector3;
 pub use save::{save, save_with};
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 pub use units::{AngleUnit, LengthUnit, Units};
 pub use validate::{
     JOINT_LIMIT_TOLERANCE_RAD, MAX_COORDINATE_MM, MAX_JOINT_RAD, check_joint_limits,
@@ -72,8 +73,9 @@ pub struct Measurement {
     pub id: String,
     /// Joint values in chain order (the CSV's `q1 … qN`), rad.
     pub q_rad: Vec<f64>,
-    /// Measured reflector positions a, b, c in the tracker frame, mm.
-    pub tracker_points_mm: [Vector3<f64>; 3],
+    /// Measured reflector positions in the tracker frame, mm: one per reflector of the dataset, in
+    /// the order of [`Dataset::reflector_names`] (a, b, c in the paper's set-up).
+    pub tracker_points_mm: Vec<Vector3<f64>>,
     /// `Cal` or `Ver` (never `All`); rows without a split column are `Cal`.
     pub split: Split,
     /// 1-based line number in the CSV (for messages).
@@ -105,6 +107,9 @@ pub struct ArmData {
     /// The arm's chain in the robot description (`base_link`, `tip_link` in the manifest); `None`:
     /// the description's default arms (the built-in robot, or the YuMi joint names).
     pub links: Option<ArmLinks>,
+    /// The tracker station the arm was measured from (`[[arms]] station`): `None` on both arms means
+    /// one station, as files without the key.
+    pub station: Option<String>,
     pub measurements: Vec<Measurement>,
 }
 
@@ -130,12 +135,28 @@ pub struct Dataset {
     /// Robot description (resolved path), or `None` for the built-in IRB 14000.
     pub robot: Option<PathBuf>,
     pub tracker: TrackerSpec,
-    /// Nominal reflector coordinates in the tip link's frame (the flange for the built-in robot), mm.
-    pub nominal_reflectors_mm: [Vector3<f64>; 3],
+    /// Nominal reflector coordinates in the tip link's frame (the flange for the built-in robot), mm:
+    /// one or more, in the order of `reflector_names`.
+    pub nominal_reflectors_mm: Vec<Vector3<f64>>,
+    /// The reflectors' names (the manifest's `[reflectors]` keys, in its order): `a`, `b`, `c` in the
+    /// paper's set-up.
+    pub reflector_names: Arc<[String]>,
     pub arms: PerSide<ArmData>,
 }
 
 impl Dataset {
+    /// Number of reflectors per arm.
+    pub fn reflector_count(&self) -> usize {
+        self.nominal_reflectors_mm.len()
+    }
+
+    /// Were both arms measured in one tracker frame (one station, or the same station named on both
+    /// arms)? Only then do distances between the two arms' reflectors mean anything: step 2 and the
+    /// collaborative figures need it.
+    pub fn one_tracker_frame(&self) -> bool {
+        self.arms.left.station == self.arms.right.station
+    }
+
     pub fn arm(&self, side: Side) -> &ArmData {
         &self.arms[side]
     }
@@ -216,10 +237,10 @@ impl Dataset {
     }
 }
 
-/// The CSV columns of an arm with `joints` joints, in order (`split`, optional, comes last):
-/// `id, q1 … qN, ax, ay, az, bx, by, bz, cx, cy, cz`.
-pub fn csv_columns(joints: usize) -> Vec<String> {
-    csv::columns(joints)
+/// The CSV columns of an arm with `joints` joints and the reflectors `reflectors`, in order (`split`,
+/// optional, comes last): `id, q1 … qN, ax, ay, az, bx, by, bz, cx, cy, cz` for a, b, c.
+pub fn csv_columns(joints: usize, reflectors: &[String]) -> Vec<String> {
+    csv::columns(joints, reflectors)
 }
 /// The optional last CSV column.
 pub const SPLIT_COLUMN: &str = "split";
@@ -257,11 +278,19 @@ pub fn load_from(files: &dyn FileSource, path: &Path) -> Result<(Dataset, Units)
     let text = read_text(files, &manifest_path)?;
     let m = manifest::parse(files, &manifest_path, &dir, &text)?;
     let arms = m.arms.try_map(|side, arm| {
-        let measurements = csv::read_arm(files, &arm.file, side, m.units, &m.reflectors_mm)?;
+        let measurements = csv::read_arm(
+            files,
+            &arm.file,
+            side,
+            m.units,
+            &m.reflectors_mm,
+            &m.reflector_names,
+        )?;
         Ok::<_, DatasetError>(ArmData {
             side,
             file: arm.file,
             links: arm.links,
+            station: arm.station,
             measurements,
         })
     })?;
@@ -272,6 +301,7 @@ pub fn load_from(files: &dyn FileSource, path: &Path) -> Result<(Dataset, Units)
             robot: m.robot,
             tracker: m.tracker,
             nominal_reflectors_mm: m.reflectors_mm,
+            reflector_names: m.reflector_names.into(),
             arms,
         },
         m.units,
@@ -302,7 +332,9 @@ mod tests {
                             rng.random_range(-3.0..3.0)
                         }));
                     let centre = Vector3::from_fn(|_, _| rng.random_range(-3000.0..3000.0));
-                    crate::simulate::SimOptions::default_reflectors().map(|p| turn * p + centre)
+                    crate::simulate::SimOptions::default_reflectors()
+                        .map(|p| turn * p + centre)
+                        .to_vec()
                 },
                 split: if rng.random_bool(0.3) {
                     Split::Ver
@@ -316,6 +348,7 @@ mod tests {
             side,
             file: PathBuf::new(),
             links: None,
+            station: None,
             measurements,
         }
     }
@@ -330,7 +363,9 @@ mod tests {
                 mpe_um_per_m: 1.25,
             },
             nominal_reflectors_mm: crate::simulate::SimOptions::default_reflectors()
-                .map(|p| p + Vector3::from_fn(|_, _| rng.random_range(-5.0..5.0))),
+                .map(|p| p + Vector3::from_fn(|_, _| rng.random_range(-5.0..5.0)))
+                .to_vec(),
+            reflector_names: crate::kinematics::default_reflector_names(3),
             arms: PerSide::new(
                 random_arm(&mut rng, Side::Left, 9, 7),
                 random_arm(&mut rng, Side::Right, 7, 7),

@@ -29,7 +29,12 @@ fn check_finite(path: &Path, what: &str, values: &[f64]) -> Result<(), DatasetEr
     Ok(())
 }
 
-fn arm_csv(arm: &ArmData, path: &Path, units: Units) -> Result<Vec<u8>, DatasetError> {
+fn arm_csv(
+    arm: &ArmData,
+    reflectors: &[String],
+    path: &Path,
+    units: Units,
+) -> Result<Vec<u8>, DatasetError> {
     let content_err = |message: String| DatasetError::Content {
         path: path.to_path_buf(),
         message,
@@ -50,10 +55,16 @@ fn arm_csv(arm: &ArmData, path: &Path, units: Units) -> Result<Vec<u8>, DatasetE
         Some(links) => format!("the chain order of {links}"),
     };
     let mut bytes = format!(
-        "# {DATASET_FORMAT}: {} arm. q1..q{joints} in {order}, {}; reflectors a, b, c in the \
-         tracker frame, {}.\n",
+        "# {DATASET_FORMAT}: {} arm. q1..q{joints} in {order}, {}; {} {} in the tracker frame, \
+         {}.\n",
         arm.side,
         units.angle.name(),
+        if reflectors.len() == 1 {
+            "reflector"
+        } else {
+            "reflectors"
+        },
+        reflectors.join(", "),
         units.length.name()
     )
     .into_bytes();
@@ -61,7 +72,7 @@ fn arm_csv(arm: &ArmData, path: &Path, units: Units) -> Result<Vec<u8>, DatasetE
         let mut w = csv::WriterBuilder::new()
             .has_headers(false)
             .from_writer(&mut bytes);
-        let mut header = csv_columns(joints);
+        let mut header = csv_columns(joints, reflectors);
         header.push(SPLIT_COLUMN.to_string());
         w.write_record(&header)
             .map_err(|e| content_err(e.to_string()))?;
@@ -83,6 +94,14 @@ fn arm_csv(arm: &ArmData, path: &Path, units: Units) -> Result<Vec<u8>, DatasetE
                 )));
             }
             check_finite(path, &format!("configuration `{id}`"), &m.q_rad)?;
+            if m.tracker_points_mm.len() != reflectors.len() {
+                return Err(content_err(format!(
+                    "cannot save configuration `{id}`: {} reflector positions, the dataset has {} \
+                     reflectors",
+                    m.tracker_points_mm.len(),
+                    reflectors.len()
+                )));
+            }
             for p in &m.tracker_points_mm {
                 check_finite(path, &format!("configuration `{id}`"), p.as_slice())?;
             }
@@ -143,7 +162,8 @@ fn manifest_text(
         num(t.mpe_um_per_m)
     );
     s += "\n[reflectors]\n";
-    for (name, r) in crate::kinematics::REFLECTOR_NAMES
+    for (name, r) in dataset
+        .reflector_names
         .iter()
         .zip(&dataset.nominal_reflectors_mm)
     {
@@ -163,6 +183,9 @@ fn manifest_text(
                 toml_str(&links.base_link),
                 toml_str(&links.tip_link)
             );
+        }
+        if let Some(station) = &dataset.arms[side].station {
+            s += &format!("station = {}\n", toml_str(station));
         }
     }
     Ok(s)
@@ -191,7 +214,12 @@ pub fn save_with(
     )?;
     // Build everything before touching the disk.
     let manifest = manifest_text(dataset, dir, &manifest_path, units)?;
-    let csv = PerSide::try_from_fn(|s| arm_csv(&dataset.arms[s], &csv_paths[s], units))?;
+    let csv = PerSide::try_from_fn(|s| arm_csv(
+            &dataset.arms[s],
+            &dataset.reflector_names,
+            &csv_paths[s],
+            units,
+        ))?;
     std::fs::create_dir_all(dir).map_err(|error| DatasetError::Write {
         path: dir.to_path_buf(),
         error,

@@ -9,6 +9,7 @@ use super::units::LengthUnit;
 use super::{ArmData, Dataset, Measurement};
 use crate::side::PerSide;
 use crate::textfile::excerpt;
+use crate::kinematics::reflector_pairs;
 use nalgebra::Vector3;
 use std::collections::HashMap;
 use std::path::{Component, Path, PathBuf};
@@ -113,23 +114,31 @@ pub(super) fn data_file_in(dir: &Path, file: &str) -> Result<PathBuf, String> {
     Ok(path)
 }
 
-/// Side lengths |ab|, |bc|, |ca|.
-pub(crate) fn sides(p: &[Vector3<f64>; 3]) -> [f64; 3] {
-    [
-        (p[0] - p[1]).norm(),
-        (p[1] - p[2]).norm(),
-        (p[2] - p[0]).norm(),
-    ]
+/// Distances between the reflectors, in the order of [`reflector_pairs`]: |ab|, |bc|, |ca| for three.
+pub(crate) fn sides(p: &[Vector3<f64>]) -> Vec<f64> {
+    reflector_pairs(p.len())
+        .into_iter()
+        .map(|(i, j)| (p[i] - p[j]).norm())
+        .collect()
 }
 
-/// Smallest height of a triangle (twice its area over its longest side), mm; 0 when degenerate.
-pub(crate) fn min_height(p: &[Vector3<f64>; 3]) -> f64 {
+/// Smallest height of a triangle (twice its area over its longest side), mm; 0 when degenerate; for
+/// other than three points, infinite (no triangle to be flat).
+pub(crate) fn min_height(p: &[Vector3<f64>]) -> f64 {
+    if p.len() != 3 {
+        return f64::INFINITY;
+    }
     let longest = sides(p).into_iter().fold(0.0, f64::max);
     if longest > 0.0 {
         (p[1] - p[0]).cross(&(p[2] - p[0])).norm() / longest
     } else {
         0.0
     }
+}
+
+/// "a and b", the names of a pair of reflectors.
+fn pair_name(names: &[String], (i, j): (usize, usize)) -> String {
+    format!("{} and {}", names[i], names[j])
 }
 
 fn fmt_len(x_mm: f64) -> String {
@@ -143,18 +152,18 @@ fn fmt_len(x_mm: f64) -> String {
 /// The nominal reflector triangle of the manifest (mm; `unit` is the declared length unit): sides of at
 /// least [`MIN_NOMINAL_SIDE_MM`], reflectors within [`MAX_NOMINAL_REFLECTOR_MM`] of the flange, not
 /// collinear.
-pub(super) fn nominal_triangle(t: &[Vector3<f64>; 3], unit: LengthUnit) -> Result<(), String> {
+pub(super) fn nominal_triangle(t: &[Vector3<f64>], unit: LengthUnit) -> Result<(), String> {
     let s = sides(t);
-    let shortest = s.into_iter().fold(f64::INFINITY, f64::min);
+    let shortest = s.iter().copied().fold(f64::INFINITY, f64::min);
     let farthest = t.iter().map(|p| p.norm()).fold(0.0, f64::max);
-    if shortest < MIN_NOMINAL_SIDE_MM {
+    if !s.is_empty() && shortest < MIN_NOMINAL_SIDE_MM {
         let hint = if unit == LengthUnit::Mm && s.iter().all(|&x| x < MIN_NOMINAL_SIDE_MM) {
             ": are these metres? (`units.length` says mm)"
         } else {
             ": two reflectors coincide"
         };
         return Err(format!(
-            "the nominal reflector triangle has a side of {}{hint}",
+            "two nominal reflectors are {} apart{hint}",
             fmt_len(shortest)
         ));
     }
@@ -218,18 +227,26 @@ pub(super) fn check_arm(
     path: &Path,
     rows: &[Measurement],
     unit: LengthUnit,
-    nominal_mm: &[Vector3<f64>; 3],
+    nominal_mm: &[Vector3<f64>],
+    names: &[String],
 ) -> Result<(), DatasetError> {
     let nominal_sides = sides(nominal_mm);
-    let nominal_mean = nominal_sides.iter().sum::<f64>() / 3.0;
-    let measured_mean = crate::stats::median(
-        &rows
-            .iter()
-            .map(|m| sides(&m.tracker_points_mm).iter().sum::<f64>() / 3.0)
-            .collect::<Vec<_>>(),
-    );
+    let pairs = reflector_pairs(nominal_mm.len());
+    let mean = |s: &[f64]| s.iter().sum::<f64>() / s.len() as f64;
+    // With one reflector there is no distance on the flange to check the unit by.
+    let nominal_mean = mean(&nominal_sides);
+    let measured_mean = if pairs.is_empty() {
+        nominal_mean
+    } else {
+        crate::stats::median(
+            &rows
+                .iter()
+                .map(|m| mean(&sides(&m.tracker_points_mm)))
+                .collect::<Vec<_>>(),
+        )
+    };
     let ratio = measured_mean / nominal_mean;
-    if !(TRIANGLE_SCALE_RANGE.0..=TRIANGLE_SCALE_RANGE.1).contains(&ratio) {
+    if !pairs.is_empty() && !(TRIANGLE_SCALE_RANGE.0..=TRIANGLE_SCALE_RANGE.1).contains(&ratio) {
         let declared = unit.name();
         let hint = if near(ratio, 1e-3) && unit == LengthUnit::Mm {
             "the coordinates look like metres while `units.length` in dataset.toml says mm"
@@ -260,11 +277,10 @@ pub(super) fn check_arm(
     }
     let nominal_shortest = nominal_sides.iter().copied().fold(f64::INFINITY, f64::min);
     let nominal_height = min_height(nominal_mm);
-    let mut seen: HashMap<[u64; 9], &Measurement> = HashMap::new();
+    let mut seen: HashMap<Vec<u64>, &Measurement> = HashMap::new();
     for m in rows {
         let p = &m.tracker_points_mm;
         let s = sides(p);
-        let names = ["a and b", "b and c", "c and a"];
         let (k, shortest) = s
             .iter()
             .copied()
@@ -275,15 +291,16 @@ pub(super) fn check_arm(
             );
         let degenerate = if shortest < DEGENERATE_FRACTION * nominal_shortest {
             Some(format!(
-                "reflectors {} are {} apart (the nominal triangle's shortest side is {}): the same \
-                 reflector measured twice?",
-                names[k],
+                "reflectors {} are {} apart (the nominal reflectors' shortest distance is {}): the \
+                 same reflector measured twice?",
+                pair_name(names, pairs[k]),
                 fmt_len(shortest),
                 fmt_len(nominal_shortest)
             ))
         } else if min_height(p) < DEGENERATE_FRACTION * nominal_height {
             Some(format!(
-                "reflectors a, b, c are (nearly) collinear: the triangle's smallest height is {} (nominal {})",
+                "reflectors {} are (nearly) collinear: the triangle's smallest height is {} (nominal {})",
+                names.join(", "),
                 fmt_len(min_height(p)),
                 fmt_len(nominal_height)
             ))
@@ -304,9 +321,12 @@ pub(super) fn check_arm(
     Ok(())
 }
 
-/// The bit patterns of a row's nine coordinates (what a paste repeats exactly).
-fn key(m: &Measurement) -> [u64; 9] {
-    std::array::from_fn(|i| m.tracker_points_mm[i / 3][i % 3].to_bits())
+/// The bit patterns of a row's reflector coordinates (what a paste repeats exactly).
+fn key(m: &Measurement) -> Vec<u64> {
+    m.tracker_points_mm
+        .iter()
+        .flat_map(|p| p.iter().map(|x| x.to_bits()))
+        .collect()
 }
 
 fn duplicate(path: &Path, m: &Measurement, first_path: &Path, first: &Measurement) -> DatasetError {
@@ -322,7 +342,7 @@ fn duplicate(path: &Path, m: &Measurement, first_path: &Path, first: &Measuremen
 
 /// No row of the right arm repeats a row of the left arm (a row pasted into the other arm's file).
 pub(super) fn check_both(arms: &PerSide<ArmData>) -> Result<(), DatasetError> {
-    let left: HashMap<[u64; 9], &Measurement> =
+    let left: HashMap<Vec<u64>, &Measurement> =
         arms.left.measurements.iter().map(|m| (key(m), m)).collect();
     for m in &arms.right.measurements {
         if let Some(first) = left.get(&key(m)) {

@@ -7,8 +7,8 @@
 //! Frame 0 is the arm's DH base frame, frame 7 the flange; the three reflectors `t_a, t_b, t_c` are
 //! constant points in frame 7.
 
-use super::{REFLECTOR_NAMES, ReflectorFk};
-use nalgebra::{Isometry3, SMatrix, SVector, Translation3, UnitQuaternion, Vector3};
+use super::{ArmJacobians, REFLECTOR_NAMES, ReflectorFk};
+use nalgebra::{Isometry3, Matrix3xX, SMatrix, SVector, Translation3, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 use std::f64::consts::FRAC_PI_2;
 
@@ -103,21 +103,26 @@ pub fn param_is_angle(k: usize) -> bool {
     k < N_DH && (k % 4 == 2 || k % 4 == 3)
 }
 
-/// Flatten a DH table and reflectors into the 37-vector.
+/// Flatten a DH table and three reflectors into the 37-vector.
 pub fn to_vector(dh: &[DhRow; N_JOINTS], reflectors_mm: &[Vector3<f64>; 3]) -> ParamVector {
     let mut v = ParamVector::zeros();
-    for (i, row) in dh.iter().enumerate() {
-        v[4 * i] = row.a_mm;
-        v[4 * i + 1] = row.d_mm;
-        v[4 * i + 2] = row.theta_rad;
-        v[4 * i + 3] = row.alpha_rad;
-    }
+    write_dh(dh, v.as_mut_slice());
     for (r, t) in reflectors_mm.iter().enumerate() {
         for c in 0..3 {
             v[N_DH + 3 * r + c] = t[c];
         }
     }
     v
+}
+
+/// Write the 28 DH values into the first 28 entries of `v`.
+pub fn write_dh(dh: &[DhRow; N_JOINTS], v: &mut [f64]) {
+    for (i, row) in dh.iter().enumerate() {
+        v[4 * i] = row.a_mm;
+        v[4 * i + 1] = row.d_mm;
+        v[4 * i + 2] = row.theta_rad;
+        v[4 * i + 3] = row.alpha_rad;
+    }
 }
 
 /// Joint `i`'s value; a missing one (a vector of the wrong length, refused before it gets here)
@@ -145,21 +150,25 @@ pub fn base_from_flange(dh: &[DhRow; N_JOINTS], q_rad: &[f64]) -> Isometry3<f64>
         })
 }
 
-/// Reflector positions and their analytic Jacobians with respect to all 37 parameters (eq. 4).
+/// Reflector positions and their analytic Jacobians with respect to all `28 + 3r` parameters (eq. 4).
 ///
 /// For standard DH the columns are, with `o_i`, `x_i`, `z_i` the origin and axes of frame i:
 /// `∂p/∂θ_i = z_{i−1} × (p − o_{i−1})`, `∂p/∂d_i = z_{i−1}`, `∂p/∂a_i = x_i`,
 /// `∂p/∂α_i = x_i × (p − o_i)`, and `∂p_k/∂t_k = R_7`.
 pub fn reflector_jacobians(
     dh: &[DhRow; N_JOINTS],
-    reflectors_mm: &[Vector3<f64>; 3],
+    reflectors_mm: &[Vector3<f64>],
     q_rad: &[f64],
-) -> (ReflectorFk, [PointJacobian; 3]) {
+) -> ArmJacobians {
     let frames = frames(dh, q_rad);
     let flange = frames[N_JOINTS];
-    let points_mm = reflectors_mm.map(|t| flange.transform_point(&t.into()).coords);
+    let points_mm: Vec<Vector3<f64>> = reflectors_mm
+        .iter()
+        .map(|t| flange.transform_point(&(*t).into()).coords)
+        .collect();
     let r7 = flange.rotation.to_rotation_matrix().into_inner();
-    let mut jac = [PointJacobian::zeros(); 3];
+    let cols = N_DH + 3 * reflectors_mm.len();
+    let mut jac = vec![Matrix3xX::zeros(cols); reflectors_mm.len()];
     for i in 0..N_JOINTS {
         let prev = &frames[i];
         let cur = &frames[i + 1];
@@ -178,19 +187,19 @@ pub fn reflector_jacobians(
     for (k, j) in jac.iter_mut().enumerate() {
         j.fixed_view_mut::<3, 3>(0, N_DH + 3 * k).copy_from(&r7);
     }
-    (
-        ReflectorFk {
+    ArmJacobians {
+        fk: ReflectorFk {
             points_mm,
             base_from_flange: flange,
         },
-        jac,
-    )
+        jacobians: jac,
+    }
 }
 
 /// Preferred order of the identifiability analysis: the reflector coordinates, joints 2 … 6, joint 1
 /// (a, alpha, then d, theta), joint 7.
-pub fn preference_order() -> Vec<usize> {
-    let mut order: Vec<usize> = (N_DH..N_PARAMS).collect();
+pub fn preference_order(reflectors: usize) -> Vec<usize> {
+    let mut order: Vec<usize> = (N_DH..N_DH + 3 * reflectors).collect();
     order.extend(4..24); // joints 2..6
     order.extend([0, 3, 1, 2]); // joint 1: a, alpha, then d, theta
     order.extend(24..28); // joint 7

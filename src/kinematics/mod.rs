@@ -10,11 +10,12 @@
 //!   them, and a small correction of each joint origin as the calibration parameters ([`chain`]).
 //!
 //! Either way the model's base frame is the arm's *model base* (the DH frame 0, or the chain's base
-//! link), its tip the flange (DH frame 7) or the tip link, and the three reflectors `t_a, t_b, t_c` are
-//! constant points in the tip frame. Lengths in mm, angles in rad; joint values in chain order.
+//! link), its tip the flange (DH frame 7) or the tip link, and its reflectors (one or more, named:
+//! `t_a, t_b, t_c` in the paper's set-up) are constant points in the tip frame. Lengths in mm, angles
+//! in rad; joint values in chain order.
 //!
 //! The parameter vector of an arm ([`ArmModel::to_vector`]) is the kinematic parameters followed by
-//! the nine reflector coordinates; [`ArmModel::param_name`] names them and [`ArmModel::with_vector`]
+//! three coordinates per reflector; [`ArmModel::param_name`] names them and [`ArmModel::with_vector`]
 //! builds the model back.
 
 pub mod chain;
@@ -34,8 +35,31 @@ pub use dh::{
 use nalgebra::{DVector, Isometry3, Matrix3xX, Vector3};
 use std::sync::Arc;
 
-/// Reflector labels in file order.
+/// Reflector labels of the paper's set-up, in file order.
 pub const REFLECTOR_NAMES: [&str; 3] = ["a", "b", "c"];
+
+/// The pairs of `n` reflectors whose distances the data and the constraints use: the triangle's sides
+/// `ab, bc, ca` for three (the paper's constraints (14), in this order), every pair `i < j` otherwise
+/// (none for one reflector).
+pub fn reflector_pairs(n: usize) -> Vec<(usize, usize)> {
+    if n == 3 {
+        vec![(0, 1), (1, 2), (2, 0)]
+    } else {
+        (0..n)
+            .flat_map(|i| (i + 1..n).map(move |j| (i, j)))
+            .collect()
+    }
+}
+
+/// The default names of `n` reflectors: `a`, `b`, `c`, … (`r27`, … beyond the alphabet).
+pub fn default_reflector_names(n: usize) -> Arc<[String]> {
+    (0..n)
+        .map(|k| match u8::try_from(k) {
+            Ok(k) if k < 26 => char::from(b'a' + k).to_string(),
+            _ => format!("r{}", k + 1),
+        })
+        .collect()
+}
 
 /// The kinematic part of one arm's model.
 #[derive(Clone, Debug, PartialEq)]
@@ -58,16 +82,18 @@ pub enum ArmKinematics {
 #[derive(Clone, Debug, PartialEq)]
 pub struct ArmModel {
     pub kinematics: ArmKinematics,
-    /// Reflector coordinates `t_a, t_b, t_c` in the tip frame (the flange, DH frame 7, for the
-    /// built-in robot; the tip link for a chain), mm.
-    pub reflectors_mm: [Vector3<f64>; 3],
+    /// Reflector coordinates (`t_a, t_b, t_c` in the paper's set-up; one or more) in the tip frame
+    /// (the flange, DH frame 7, for the built-in robot; the tip link for a chain), mm.
+    pub reflectors_mm: Vec<Vector3<f64>>,
+    /// The reflectors' names, one per entry of `reflectors_mm` (the dataset's `[reflectors]` keys).
+    pub reflector_names: Arc<[String]>,
 }
 
 /// Reflector positions and tip pose of one configuration.
 #[derive(Clone, Debug)]
 pub struct ReflectorFk {
-    /// Reflector positions in the arm's model base frame, mm.
-    pub points_mm: [Vector3<f64>; 3],
+    /// Reflector positions in the arm's model base frame, mm (one per reflector of the model).
+    pub points_mm: Vec<Vector3<f64>>,
     /// Tip (flange) pose in the model base frame.
     pub base_from_flange: Isometry3<f64>,
 }
@@ -76,24 +102,43 @@ pub struct ReflectorFk {
 #[derive(Clone, Debug)]
 pub struct ArmJacobians {
     pub fk: ReflectorFk,
-    /// `∂p_k/∂x`, 3 × [`ArmModel::param_count`] each.
-    pub jacobians: [Matrix3xX<f64>; 3],
+    /// `∂p_k/∂x`, 3 × [`ArmModel::param_count`] each, one per reflector.
+    pub jacobians: Vec<Matrix3xX<f64>>,
 }
 
 impl ArmModel {
     /// The nominal IRB 14000 arm (Table 3) with the given reflector coordinates.
-    pub fn nominal_irb14000(reflectors_mm: [Vector3<f64>; 3]) -> Self {
+    pub fn nominal_irb14000(reflectors_mm: impl Into<Vec<Vector3<f64>>>) -> Self {
+        let reflectors_mm = reflectors_mm.into();
         Self {
             kinematics: ArmKinematics::Dh(IRB14000_NOMINAL_DH),
+            reflector_names: default_reflector_names(reflectors_mm.len()),
             reflectors_mm,
         }
     }
 
+    /// The same model with the reflectors named `names` (as many as it has reflectors).
+    pub fn with_reflector_names(mut self, names: Arc<[String]>) -> Self {
+        debug_assert_eq!(names.len(), self.reflectors_mm.len());
+        self.reflector_names = names;
+        self
+    }
+
+    /// Number of reflectors.
+    pub fn reflector_count(&self) -> usize {
+        self.reflectors_mm.len()
+    }
+
     /// The nominal model of a chain (no corrections) with the given reflector coordinates.
-    pub fn nominal_chain(chain: Arc<SerialChain>, reflectors_mm: [Vector3<f64>; 3]) -> Self {
+    pub fn nominal_chain(
+        chain: Arc<SerialChain>,
+        reflectors_mm: impl Into<Vec<Vector3<f64>>>,
+    ) -> Self {
+        let reflectors_mm = reflectors_mm.into();
         let corrections = vec![[0.0; PARAMS_PER_JOINT]; chain.dof()];
         Self {
             kinematics: ArmKinematics::Chain { chain, corrections },
+            reflector_names: default_reflector_names(reflectors_mm.len()),
             reflectors_mm,
         }
     }
@@ -149,9 +194,9 @@ impl ArmModel {
         }
     }
 
-    /// Number of parameters: the kinematic ones and the nine reflector coordinates.
+    /// Number of parameters: the kinematic ones and three coordinates per reflector.
     pub fn param_count(&self) -> usize {
-        self.reflector_offset() + 9
+        self.reflector_offset() + 3 * self.reflector_count()
     }
 
     /// Index of the first reflector coordinate in the parameter vector.
@@ -165,6 +210,14 @@ impl ArmModel {
     /// Name of parameter `k`: `a1 … alpha7` (DH) or `<joint>.tx … <joint>.rz` (chain), then
     /// `t_a.x … t_c.z`.
     pub fn param_name(&self, k: usize) -> String {
+        let off = self.reflector_offset();
+        if k >= off && k < self.param_count() {
+            return format!(
+                "t_{}.{}",
+                self.reflector_names[(k - off) / 3],
+                ["x", "y", "z"][(k - off) % 3]
+            );
+        }
         match &self.kinematics {
             ArmKinematics::Dh(_) => param_name(k),
             ArmKinematics::Chain { chain, .. } => chain.param_name(k),
@@ -181,27 +234,24 @@ impl ArmModel {
 
     /// The parameter vector: kinematic parameters, then `t_a, t_b, t_c`.
     pub fn to_vector(&self) -> DVector<f64> {
+        let off = self.reflector_offset();
+        let mut v = DVector::zeros(self.param_count());
         match &self.kinematics {
-            ArmKinematics::Dh(dh) => {
-                let v = dh::to_vector(dh, &self.reflectors_mm);
-                DVector::from_column_slice(v.as_slice())
-            }
+            ArmKinematics::Dh(dh) => dh::write_dh(dh, v.as_mut_slice()),
             ArmKinematics::Chain { corrections, .. } => {
-                let n = corrections.len();
-                let mut v = DVector::zeros(PARAMS_PER_JOINT * n + 9);
                 for (k, c) in corrections.iter().enumerate() {
                     for (i, x) in c.iter().enumerate() {
                         v[PARAMS_PER_JOINT * k + i] = *x;
                     }
                 }
-                for (r, t) in self.reflectors_mm.iter().enumerate() {
-                    for c in 0..3 {
-                        v[PARAMS_PER_JOINT * n + 3 * r + c] = t[c];
-                    }
-                }
-                v
             }
         }
+        for (r, t) in self.reflectors_mm.iter().enumerate() {
+            for c in 0..3 {
+                v[off + 3 * r + c] = t[c];
+            }
+        }
+        v
     }
 
     /// The model of the same form (and chain) with the parameters `x` ([`ArmModel::to_vector`]'s
@@ -209,9 +259,9 @@ impl ArmModel {
     pub fn with_vector(&self, x: &DVector<f64>) -> Self {
         let at = |k: usize| x.get(k).copied().unwrap_or(0.0);
         let off = self.reflector_offset();
-        let reflectors_mm = std::array::from_fn(|r| {
-            Vector3::new(at(off + 3 * r), at(off + 3 * r + 1), at(off + 3 * r + 2))
-        });
+        let reflectors_mm = (0..self.reflector_count())
+            .map(|r| Vector3::new(at(off + 3 * r), at(off + 3 * r + 1), at(off + 3 * r + 2)))
+            .collect();
         let kinematics = match &self.kinematics {
             ArmKinematics::Dh(_) => ArmKinematics::Dh(std::array::from_fn(|i| {
                 DhRow::new(at(4 * i), at(4 * i + 1), at(4 * i + 2), at(4 * i + 3))
@@ -226,6 +276,7 @@ impl ArmModel {
         Self {
             kinematics,
             reflectors_mm,
+            reflector_names: self.reflector_names.clone(),
         }
     }
 
@@ -251,7 +302,9 @@ impl ArmModel {
         let base_from_flange = self.base_from_flange(q_rad);
         let points_mm = self
             .reflectors_mm
-            .map(|t| base_from_flange.transform_point(&t.into()).coords);
+            .iter()
+            .map(|t| base_from_flange.transform_point(&(*t).into()).coords)
+            .collect();
         ReflectorFk {
             points_mm,
             base_from_flange,
@@ -263,11 +316,7 @@ impl ArmModel {
     pub fn reflector_jacobians(&self, q_rad: &[f64]) -> ArmJacobians {
         match &self.kinematics {
             ArmKinematics::Dh(dh) => {
-                let (fk, jac) = dh::reflector_jacobians(dh, &self.reflectors_mm, q_rad);
-                ArmJacobians {
-                    fk,
-                    jacobians: jac.map(|j| Matrix3xX::from_column_slice(j.as_slice())),
-                }
+                dh::reflector_jacobians(dh, &self.reflectors_mm, q_rad)
             }
             ArmKinematics::Chain { chain, corrections } => {
                 chain.reflector_jacobians(corrections, &self.reflectors_mm, q_rad)
@@ -289,8 +338,8 @@ impl ArmModel {
     /// base first (see [`SerialChain::preference_order`]).
     pub fn identifiability_order(&self) -> Vec<usize> {
         match &self.kinematics {
-            ArmKinematics::Dh(_) => dh::preference_order(),
-            ArmKinematics::Chain { chain, .. } => chain.preference_order(),
+            ArmKinematics::Dh(_) => dh::preference_order(self.reflector_count()),
+            ArmKinematics::Chain { chain, .. } => chain.preference_order(self.reflector_count()),
         }
     }
 

@@ -116,6 +116,11 @@ pub fn tool_frame(p: &[Vector3<f64>; 3]) -> Option<ToolFrame> {
     tool_frame_with_derivatives(p).map(|(f, _, _)| f)
 }
 
+/// The three points of a configuration as a triangle; `None` for any other number of reflectors.
+pub fn as_triangle(p: &[Vector3<f64>]) -> Option<&[Vector3<f64>; 3]> {
+    p.try_into().ok()
+}
+
 /// `measured ≈ T · model` over all points, as ref. [28] computes it: the affine map from the
 /// Moore–Penrose inverse of the homogeneous model points, `X = M · P⁺` (3 × 4), its linear part
 /// projected onto the nearest rotation and the translation refitted to the centroids. `None` when the
@@ -202,7 +207,9 @@ pub struct AbsoluteProblem {
     data: AbsoluteData,
     side: Side,
     qs: Vec<Vec<f64>>,
-    measured: Vec<[Vector3<f64>; 3]>,
+    measured: Vec<Vec<Vector3<f64>>>,
+    /// Number of reflectors per configuration.
+    reflectors: usize,
     /// Tool frames of the measured points (pose data only).
     measured_frames: Vec<ToolFrame>,
     /// The measured reflector triangle in its own tool frame, averaged over the configurations (pose
@@ -229,13 +236,13 @@ pub fn transform_param_name(side: Side, c: usize) -> String {
 impl AbsoluteProblem {
     /// `measured` in the tracker frame; `t0` the start of `tracker_from_base`. For pose data the
     /// measured tool frames are built here: `Err(index)` names a configuration whose measured
-    /// reflectors are collinear.
+    /// reflectors are collinear (or not three: pose data need three reflectors).
     #[allow(clippy::too_many_arguments)]
     pub fn new(
         data: AbsoluteData,
         side: Side,
         qs: Vec<Vec<f64>>,
-        measured: Vec<[Vector3<f64>; 3]>,
+        measured: Vec<Vec<Vector3<f64>>>,
         start: &ArmModel,
         t0: Isometry3<f64>,
         free: Vec<usize>,
@@ -248,7 +255,7 @@ impl AbsoluteProblem {
             AbsoluteData::Pose { .. } => measured
                 .iter()
                 .enumerate()
-                .map(|(i, m)| tool_frame(m).ok_or(i))
+                .map(|(i, m)| as_triangle(m).and_then(tool_frame).ok_or(i))
                 .collect::<Result<_, _>>()?,
         };
         let tool_points_mm = (!measured_frames.is_empty()).then(|| {
@@ -257,7 +264,7 @@ impl AbsoluteProblem {
                 measured
                     .iter()
                     .zip(&measured_frames)
-                    .map(|(m, f)| f.rotation.inverse() * (m[k] - f.origin_mm))
+                    .map(|(m, f): (&Vec<Vector3<f64>>, _)| f.rotation.inverse() * (m[k] - f.origin_mm))
                     .sum::<Vector3<f64>>()
                     / n
             })
@@ -266,6 +273,7 @@ impl AbsoluteProblem {
             data,
             side,
             qs,
+            reflectors: start.reflector_count(),
             measured,
             measured_frames,
             tool_points_mm,
@@ -287,13 +295,14 @@ impl AbsoluteProblem {
 
     /// The weight of rotation errors for pose data: the RMS distance of the nominal reflectors from
     /// their centroid, mm per rad.
-    pub fn rotation_weight_mm(reflectors_mm: &[Vector3<f64>; 3]) -> f64 {
-        let c = reflectors_mm.iter().sum::<Vector3<f64>>() / 3.0;
+    pub fn rotation_weight_mm(reflectors_mm: &[Vector3<f64>]) -> f64 {
+        let n = reflectors_mm.len().max(1) as f64;
+        let c = reflectors_mm.iter().sum::<Vector3<f64>>() / n;
         (reflectors_mm
             .iter()
             .map(|t| (t - c).norm_squared())
             .sum::<f64>()
-            / 3.0)
+            / n)
             .sqrt()
     }
 
@@ -323,9 +332,12 @@ impl AbsoluteProblem {
     pub fn reported_model_at(&self, y: &DVector<f64>) -> ArmModel {
         let mut model = self.model_at(y);
         if let Some(tool) = &self.tool_points_mm
-            && let Some(frame) = tool_frame(&model.reflectors_mm)
+            && let Some(frame) = as_triangle(&model.reflectors_mm).and_then(tool_frame)
         {
-            model.reflectors_mm = tool.map(|t| frame.rotation * t + frame.origin_mm);
+            model.reflectors_mm = tool
+                .iter()
+                .map(|t| frame.rotation * t + frame.origin_mm)
+                .collect();
         }
         model
     }
@@ -349,13 +361,13 @@ impl AbsoluteProblem {
     /// Rows of residuals per configuration.
     fn rows_per_config(&self) -> usize {
         match self.data {
-            AbsoluteData::Position => 9,
+            AbsoluteData::Position => 3 * self.reflectors,
             AbsoluteData::Pose { .. } => 6,
         }
     }
 
     /// Model points of `model` in the tracker frame at y, per configuration.
-    fn tracker_points(&self, model: &ArmModel, y: &DVector<f64>) -> Vec<[Vector3<f64>; 3]> {
+    fn tracker_points(&self, model: &ArmModel, y: &DVector<f64>) -> Vec<Vec<Vector3<f64>>> {
         let t = self.transform_at(y);
         self.qs
             .par_iter()
@@ -363,23 +375,25 @@ impl AbsoluteProblem {
                 model
                     .reflector_fk(q)
                     .points_mm
-                    .map(|p| t.transform_point(&p.into()).coords)
+                    .iter()
+                    .map(|p| t.transform_point(&(*p).into()).coords)
+                    .collect()
             })
             .collect()
     }
 
     /// Residuals of one configuration from its model points.
-    fn config_residuals(&self, i: usize, q: &[Vector3<f64>; 3], out: &mut [f64]) {
+    fn config_residuals(&self, i: usize, q: &[Vector3<f64>], out: &mut [f64]) {
         match self.data {
             AbsoluteData::Position => {
-                for k in 0..3 {
+                for k in 0..self.reflectors {
                     let r = self.measured[i][k] - q[k];
                     out[3 * k..3 * k + 3].copy_from_slice(r.as_slice());
                 }
             }
             AbsoluteData::Pose { rotation_weight_mm } => {
                 let m = &self.measured_frames[i];
-                match tool_frame(q) {
+                match as_triangle(q).and_then(tool_frame) {
                     Some(f) => {
                         let ro = m.origin_mm - f.origin_mm;
                         let rr = rotation_vector(&(m.rotation * f.rotation.inverse()))
@@ -418,10 +432,10 @@ impl AbsoluteProblem {
             .into_par_iter()
             .map(|i| {
                 let jac = model.reflector_jacobians(&self.qs[i]);
-                // dq (9 × dim): the model points' derivatives, reflector by reflector.
-                let mut dq = DMatrix::<f64>::zeros(9, dim);
-                let mut q = [Vector3::zeros(); 3];
-                for k in 0..3 {
+                // dq (3r × dim): the model points' derivatives, reflector by reflector.
+                let mut dq = DMatrix::<f64>::zeros(3 * self.reflectors, dim);
+                let mut q = vec![Vector3::zeros(); self.reflectors];
+                for k in 0..self.reflectors {
                     let rp = rot * jac.fk.points_mm[k];
                     q[k] = rp + t.translation.vector;
                     for (c, &p) in self.free.iter().enumerate() {
@@ -441,7 +455,9 @@ impl AbsoluteProblem {
                     AbsoluteData::Position => -dq,
                     AbsoluteData::Pose { rotation_weight_mm } => {
                         let mut j = DMatrix::<f64>::zeros(6, dim);
-                        if let Some((f, d_origin, d_omega)) = tool_frame_with_derivatives(&q) {
+                        if let Some((f, d_origin, d_omega)) =
+                            as_triangle(&q).and_then(tool_frame_with_derivatives)
+                        {
                             let e = rotation_vector(
                                 &(self.measured_frames[i].rotation * f.rotation.inverse()),
                             );
@@ -474,14 +490,16 @@ impl AbsoluteProblem {
     }
 
     /// Per reflector, Σ_i |m_ik − q_ik|² of the reported model, mm².
-    fn reflector_sums(&self, y: &DVector<f64>) -> [f64; 3] {
+    fn reflector_sums(&self, y: &DVector<f64>) -> Vec<f64> {
         let pts = self.tracker_points(&self.reported_model_at(y), y);
-        std::array::from_fn(|k| {
-            pts.iter()
-                .zip(&self.measured)
-                .map(|(q, m)| (m[k] - q[k]).norm_squared())
-                .sum()
-        })
+        (0..self.reflectors)
+            .map(|k| {
+                pts.iter()
+                    .zip(&self.measured)
+                    .map(|(q, m)| (m[k] - q[k]).norm_squared())
+                    .sum()
+            })
+            .collect()
     }
 
     /// The mean Gram matrix `JᵀJ / rows` of the unscaled Jacobian at the start, every arm parameter
@@ -506,7 +524,7 @@ impl LeastSquaresProblem for AbsoluteProblem {
         self.residuals(y).norm_squared()
     }
 
-    fn objectives_mm2(&self, y: &DVector<f64>) -> [f64; 3] {
+    fn objectives_mm2(&self, y: &DVector<f64>) -> Vec<f64> {
         self.reflector_sums(y)
     }
 
@@ -568,13 +586,13 @@ impl LeastSquaresProblem for BaseAbsoluteProblem {
         Side::BOTH.iter().map(|&s| self.arms[s].cost(&ys[s])).sum()
     }
 
-    fn objectives_mm2(&self, y: &DVector<f64>) -> [f64; 3] {
+    fn objectives_mm2(&self, y: &DVector<f64>) -> Vec<f64> {
         let ys = Self::split(y);
         let (l, r) = (
             self.arms.left.objectives_mm2(&ys.left),
             self.arms.right.objectives_mm2(&ys.right),
         );
-        std::array::from_fn(|k| l[k] + r[k])
+        l.iter().zip(&r).map(|(a, b)| a + b).collect()
     }
 
     fn normal_equations(&self, y: &DVector<f64>) -> LeastSquaresSystem {

@@ -9,24 +9,25 @@
 //! the measured distances are kept up to `pairs::KEPT_DISTANCE_PAIRS` pairs per reflector, recomputed beyond.
 
 use super::problem::{Eval, LeastSquaresSystem, MinimaxProblem, StageParams};
-use crate::kinematics::{ArmJacobians, ArmModel, ReflectorFk};
+use crate::kinematics::{ArmJacobians, ArmModel, ReflectorFk, reflector_pairs};
 use nalgebra::{DMatrix, DVector, Vector3};
 use pairs::{Plan, Points};
 use rayon::prelude::*;
 
 pub(super) mod pairs;
 
-/// Side pairs of the reflector triangle, in the order of constraints (14): ab, bc, ca.
+/// Side pairs of the reflector triangle, in the order of constraints (14): ab, bc, ca (three
+/// reflectors; [`reflector_pairs`] for any number).
 pub const SIDES: [(usize, usize); 3] = [(0, 1), (1, 2), (2, 0)];
 
 /// Step-1 problem of one arm.
 pub struct ArmProblem {
     qs: Vec<Vec<f64>>,
     /// Measured (tracker-frame) points per reflector, mm.
-    measured: [Points; 3],
+    measured: Vec<Points>,
     /// Their pairwise distances, kept up to [`pairs::KEPT_DISTANCE_PAIRS`] pairs per reflector;
     /// recomputed per pass beyond.
-    kept_distances: Option<[Vec<f64>; 3]>,
+    kept_distances: Option<Vec<Vec<f64>>>,
     n_pairs: usize,
     /// How the pair passes are cut ([`pairs::Plan::for_pairs`]).
     plan: Plan,
@@ -38,20 +39,23 @@ pub struct ArmProblem {
     free: Vec<usize>,
     /// x = x0 + scatter(scale ∘ y).
     scale: DVector<f64>,
-    /// Mean measured reflector-to-reflector distances (ab, bc, ca), mm.
-    mean_side_mm: [f64; 3],
+    /// The reflector pairs of the distance constraints ([`reflector_pairs`]: ab, bc, ca for three).
+    sides: Vec<(usize, usize)>,
+    /// Mean measured reflector-to-reflector distances of `sides`, mm.
+    mean_side_mm: Vec<f64>,
     /// Allowed deviation δ of the model triangle's sides from the measured means, mm (ε = δ²).
     side_tolerance_mm: f64,
     /// The reflectors whose distance errors enter the normal equations ([`MinimaxProblem::least_squares`]):
-    /// all three, or one for the single-reflector method of ref. [26].
-    reflectors: [bool; 3],
+    /// all, or one for the single-reflector method of ref. [26].
+    reflectors: Vec<bool>,
 }
 
 impl ArmProblem {
-    /// `measured` are tracker-frame reflector positions, one triple per configuration.
+    /// `measured` are tracker-frame reflector positions, one per reflector of `start` per
+    /// configuration.
     pub fn new(
         qs: Vec<Vec<f64>>,
-        measured: &[[Vector3<f64>; 3]],
+        measured: &[Vec<Vector3<f64>>],
         start: &ArmModel,
         free: Vec<usize>,
         scale: DVector<f64>,
@@ -61,10 +65,17 @@ impl ArmProblem {
         assert_eq!(free.len(), scale.len());
         let n = qs.len();
         let n_pairs = n * n.saturating_sub(1) / 2;
-        let measured_points = std::array::from_fn(|k| Points::from_fn(n, |i| measured[i][k]));
-        let mean_side_mm = SIDES.map(|(a, b)| {
-            measured.iter().map(|m| (m[a] - m[b]).norm()).sum::<f64>() / n.max(1) as f64
-        });
+        let reflectors = start.reflector_count();
+        let measured_points: Vec<Points> = (0..reflectors)
+            .map(|k| Points::from_fn(n, |i| measured[i][k]))
+            .collect();
+        let sides = reflector_pairs(reflectors);
+        let mean_side_mm = sides
+            .iter()
+            .map(|&(a, b)| {
+                measured.iter().map(|m| (m[a] - m[b]).norm()).sum::<f64>() / n.max(1) as f64
+            })
+            .collect();
         Self {
             qs,
             kept_distances: pairs::kept_triangle_distances(&measured_points),
@@ -76,15 +87,17 @@ impl ArmProblem {
             reflector_offset: start.reflector_offset(),
             free,
             scale,
+            sides,
             mean_side_mm,
             side_tolerance_mm,
-            reflectors: [true; 3],
+            reflectors: vec![true; reflectors],
         }
     }
 
     /// The same problem whose normal equations ([`MinimaxProblem::least_squares`]) sum the distance
     /// errors of the reflectors in `reflectors` only (the minimax objectives stay those of all three).
-    pub fn with_reflectors(mut self, reflectors: [bool; 3]) -> Self {
+    pub fn with_reflectors(mut self, reflectors: Vec<bool>) -> Self {
+        debug_assert_eq!(reflectors.len(), self.measured.len());
         self.reflectors = reflectors;
         self
     }
@@ -130,11 +143,6 @@ impl ArmProblem {
             .collect()
     }
 
-    /// One reflector's model points of every configuration.
-    fn points(fk: impl Fn(usize) -> [Vector3<f64>; 3], n: usize) -> [Points; 3] {
-        std::array::from_fn(|k| Points::from_fn(n, |i| fk(i)[k]))
-    }
-
     /// Pair passes in blocks and lanes whatever the size (tests of the blocked path on small data).
     #[cfg(test)]
     fn blocked(mut self) -> Self {
@@ -146,9 +154,9 @@ impl ArmProblem {
         let off = self.reflector_offset;
         let t = |r: usize| x.fixed_rows::<3>(off + 3 * r).into_owned();
         let eps = self.side_tolerance_mm * self.side_tolerance_mm;
-        let mut cons = Vec::with_capacity(3);
+        let mut cons = Vec::with_capacity(self.sides.len());
         let mut grads = Vec::new();
-        for (l, &(a, b)) in SIDES.iter().enumerate() {
+        for (l, &(a, b)) in self.sides.iter().enumerate() {
             let v = t(a) - t(b);
             let len = v.norm();
             let dev = len - self.mean_side_mm[l];
@@ -184,23 +192,40 @@ impl ArmProblem {
     /// `max_pairs` pairs per reflector, one column per pair and reflector ([`pair_jacobian_columns`]).
     pub fn sample_pair_jacobian(&self, y: &DVector<f64>, max_pairs: usize) -> DMatrix<f64> {
         let model = self.model_at(y);
-        pair_jacobian_columns(&self.jac_all(&model), max_pairs, self.reflectors)
+        pair_jacobian_columns(&self.jac_all(&model), max_pairs, &self.reflectors)
     }
 
-    /// F_k of the start model on this problem's data, mm² (sums of squared distance errors).
-    pub fn start_objectives_mm2(&self) -> [f64; 3] {
+    /// F_k of the start model on this problem's data, mm² (sums of squared distance errors), one per
+    /// reflector.
+    pub fn start_objectives_mm2(&self) -> Vec<f64> {
         let model = self.model_at(&DVector::zeros(self.free.len()));
         let fk = self.fk_all(&model);
-        let points = Self::points(|i| fk[i].points_mm, fk.len());
+        let points = model_points(fk.iter().map(|f| &f.points_mm), fk.len(), self.measured.len());
         pairs::triangle(
             &points,
             &self.measured,
-            self.kept_distances.as_ref(),
+            self.kept_distances.as_deref(),
             false,
             self.plan,
         )
+        .into_iter()
         .map(|(f, _)| f)
+        .collect()
     }
+}
+
+/// Each reflector's model points of every configuration (`per_config` yields the `n`
+/// configurations' points, `reflectors` each).
+fn model_points<'a>(
+    per_config: impl Iterator<Item = &'a Vec<Vector3<f64>>> + Clone,
+    n: usize,
+    reflectors: usize,
+) -> Vec<Points> {
+    let configs: Vec<&Vec<Vector3<f64>>> = per_config.collect();
+    debug_assert_eq!(configs.len(), n);
+    (0..reflectors)
+        .map(|k| Points::from_fn(n, |i| configs[i][k]))
+        .collect()
 }
 
 /// `out[c] = −((J_i − J_j)ᵀ u)[p]` for every parameter `p = params[c]`: one row of the distance
@@ -227,7 +252,7 @@ fn pair_row(
 pub fn pair_jacobian_columns(
     jac: &[ArmJacobians],
     max_pairs: usize,
-    reflectors: [bool; 3],
+    reflectors: &[bool],
 ) -> DMatrix<f64> {
     let n = jac.len();
     let n_pairs = n * n.saturating_sub(1) / 2;
@@ -240,7 +265,7 @@ pub fn pair_jacobian_columns(
     for i in 0..n {
         for j in i + 1..n {
             if idx.is_multiple_of(stride) {
-                for k in (0..3).filter(|&k| reflectors[k]) {
+                for k in (0..reflectors.len()).filter(|&k| reflectors[k]) {
                     let v = jac[i].fk.points_mm[k] - jac[j].fk.points_mm[k];
                     let dist = v.norm();
                     if dist > 0.0 {
@@ -280,12 +305,16 @@ impl MinimaxProblem for ArmProblem {
         let x = self.x_of(y);
         let model = self.start.with_vector(&x);
         let jac = self.jac_all(&model);
-        let points = Self::points(|i| jac[i].fk.points_mm, jac.len());
+        let points = model_points(
+            jac.iter().map(|j| &j.fk.points_mm),
+            jac.len(),
+            self.measured.len(),
+        );
         let norm = 1.0 / self.n_pairs.max(1) as f64;
         let sums = pairs::triangle(
             &points,
             &self.measured,
-            self.kept_distances.as_ref(),
+            self.kept_distances.as_deref(),
             true,
             self.plan,
         );
@@ -311,32 +340,31 @@ impl MinimaxProblem for ArmProblem {
             })
             .collect();
         let (cons, cons_grad) = self.constraints(&x, true);
-        let mut it = per_reflector.into_iter();
-        let (f0, g0) = it.next().unwrap_or_default();
-        let (f1, g1) = it.next().unwrap_or_default();
-        let (f2, g2) = it.next().unwrap_or_default();
+        let (f, grad) = per_reflector.into_iter().unzip();
         Eval {
-            f: [f0, f1, f2],
-            grad: [g0, g1, g2],
+            f,
+            grad,
             cons,
             cons_grad,
         }
     }
 
-    fn values(&self, y: &DVector<f64>) -> ([f64; 3], Vec<f64>) {
+    fn values(&self, y: &DVector<f64>) -> (Vec<f64>, Vec<f64>) {
         let x = self.x_of(y);
         let model = self.start.with_vector(&x);
         let fk = self.fk_all(&model);
-        let points = Self::points(|i| fk[i].points_mm, fk.len());
+        let points = model_points(fk.iter().map(|f| &f.points_mm), fk.len(), self.measured.len());
         let norm = 1.0 / self.n_pairs.max(1) as f64;
         let f = pairs::triangle(
             &points,
             &self.measured,
-            self.kept_distances.as_ref(),
+            self.kept_distances.as_deref(),
             false,
             self.plan,
         )
-        .map(|(f, _)| f * norm);
+        .into_iter()
+        .map(|(f, _)| f * norm)
+        .collect();
         let (cons, _) = self.constraints(&x, false);
         (f, cons)
     }
@@ -354,7 +382,7 @@ impl MinimaxProblem for ArmProblem {
                 let mut cost = 0.0;
                 let mut row = DVector::<f64>::zeros(m);
                 for j in i + 1..n {
-                    for k in (0..3).filter(|&k| self.reflectors[k]) {
+                    for k in (0..self.reflectors.len()).filter(|&k| self.reflectors[k]) {
                         let v = jac[i].fk.points_mm[k] - jac[j].fk.points_mm[k];
                         let dist = v.norm();
                         if dist <= 0.0 {
@@ -451,7 +479,7 @@ mod tests {
             let (seq, blocked) = (setup(&nominal, 41), setup(&nominal, 41).blocked());
             let y = DVector::from_fn(seq.dim(), |i, _| 0.05 * (i as f64 % 7.0 - 3.0));
             let (a, b) = (seq.evaluate(&y), blocked.evaluate(&y));
-            for k in 0..3 {
+            for k in 0..a.f.len() {
                 assert!(
                     (a.f[k] - b.f[k]).abs() <= 1e-13 * a.f[k],
                     "{} {}",

@@ -21,18 +21,20 @@ use rayon::prelude::*;
 
 pub struct BaseProblem {
     /// Model reflector points of the left arm in the left base frame.
-    left_mm: Vec<[Vector3<f64>; 3]>,
+    left_mm: Vec<Vec<Vector3<f64>>>,
     /// Model reflector points of the right arm in the right base frame.
-    right_mm: Vec<[Vector3<f64>; 3]>,
+    right_mm: Vec<Vec<Vector3<f64>>>,
+    /// Number of reflectors (on each arm: the same reflectors of both arms are paired).
+    reflectors: usize,
     /// The left arm's model points again, per reflector, struct-of-arrays.
-    left_points: [Points; 3],
+    left_points: Vec<Points>,
     /// Measured points of each arm per reflector (tracker frame), mm: the collaborative distances are
     /// recomputed per pass.
-    measured_left: [Points; 3],
-    measured_right: [Points; 3],
+    measured_left: Vec<Points>,
+    measured_right: Vec<Points>,
     /// Their pairwise (left × right) distances, kept up to [`pairs::KEPT_DISTANCE_PAIRS`] pairs per
     /// reflector when the passes are blocked; recomputed per pass otherwise.
-    kept_distances: Option<[Vec<f64>; 3]>,
+    kept_distances: Option<Vec<Vec<f64>>>,
     start: Isometry3<f64>,
     /// Scales of (ω, δp).
     scale: SVector<f64, 6>,
@@ -40,15 +42,20 @@ pub struct BaseProblem {
 }
 
 impl BaseProblem {
+    /// `left_mm`, `right_mm`, `measured_left`, `measured_right`: per configuration the points of the
+    /// same `reflectors` reflectors.
     pub fn new(
-        left_mm: Vec<[Vector3<f64>; 3]>,
-        right_mm: Vec<[Vector3<f64>; 3]>,
-        measured_left: &[[Vector3<f64>; 3]],
-        measured_right: &[[Vector3<f64>; 3]],
+        left_mm: Vec<Vec<Vector3<f64>>>,
+        right_mm: Vec<Vec<Vector3<f64>>>,
+        measured_left: &[Vec<Vector3<f64>>],
+        measured_right: &[Vec<Vector3<f64>>],
+        reflectors: usize,
         start: Isometry3<f64>,
     ) -> Self {
-        let soa = |points: &[[Vector3<f64>; 3]]| -> [Points; 3] {
-            std::array::from_fn(|k| Points::from_fn(points.len(), |i| points[i][k]))
+        let soa = |points: &[Vec<Vector3<f64>>]| -> Vec<Points> {
+            (0..reflectors)
+                .map(|k| Points::from_fn(points.len(), |i| points[i][k]))
+                .collect()
         };
         let plan = Plan::for_pairs(left_mm.len() * right_mm.len());
         let (measured_left, measured_right) = (soa(measured_left), soa(measured_right));
@@ -63,6 +70,7 @@ impl BaseProblem {
             kept_distances,
             left_mm,
             right_mm,
+            reflectors,
             start,
             scale: SVector::from_element(1.0),
             plan,
@@ -76,19 +84,19 @@ impl BaseProblem {
         p
     }
 
-    /// Gauss–Newton approximation of the Hessian of the mean of the three f_i (the initial BFGS
-    /// matrix and the column scaling).
+    /// Gauss–Newton approximation of the Hessian of the mean of the f_i (the initial BFGS matrix and
+    /// the column scaling).
     pub fn gauss_newton(&self, y: &DVector<f64>) -> DMatrix<f64> {
         let mut h = nalgebra::SMatrix::<f64, 6, 6>::zeros();
         match self.plan {
             Plan::Sequential => {
-                for k in 0..3 {
+                for k in 0..self.reflectors {
                     self.for_each_row(y, k, |_, row| h += row * row.transpose());
                 }
             }
             Plan::Blocked => h = self.gauss_newton_regrouped(y),
         }
-        let h = h * (2.0 / (3.0 * self.n_pairs().max(1) as f64));
+        let h = h * (2.0 / (self.reflectors as f64 * self.n_pairs().max(1) as f64));
         DMatrix::from_column_slice(6, 6, h.as_slice())
     }
 
@@ -115,18 +123,18 @@ impl BaseProblem {
     }
 
     /// J_l(ω) and the right arm's points rotated into the left base (R q_r), per reflector.
-    fn rotated_right(&self, y: &DVector<f64>) -> (Isometry3<f64>, Matrix3<f64>, [Points; 3]) {
+    fn rotated_right(&self, y: &DVector<f64>) -> (Isometry3<f64>, Matrix3<f64>, Vec<Points>) {
         let b = self.transform_at(y);
         let w = Vector3::new(y[0], y[1], y[2]).component_mul(&self.scale.fixed_rows::<3>(0));
-        let right = std::array::from_fn(|k| {
-            Points::from_fn(self.right_mm.len(), |r| b.rotation * self.right_mm[r][k])
-        });
+        let right = (0..self.reflectors)
+            .map(|k| Points::from_fn(self.right_mm.len(), |r| b.rotation * self.right_mm[r][k]))
+            .collect();
         (b, left_jacobian_so3(&w), right)
     }
 
     /// Values and gradients regrouped per right configuration (module docs), unnormalised:
     /// (F_k, ∇F_k in y).
-    fn sums_regrouped(&self, y: &DVector<f64>) -> [(f64, SVector<f64, 6>); 3] {
+    fn sums_regrouped(&self, y: &DVector<f64>) -> Vec<(f64, SVector<f64, 6>)> {
         let (b, jl, right) = self.rotated_right(y);
         let t = b.translation.vector;
         let sums = pairs::rectangle(
@@ -135,9 +143,9 @@ impl BaseProblem {
             &t,
             &self.measured_left,
             &self.measured_right,
-            self.kept_distances.as_ref(),
+            self.kept_distances.as_deref(),
         );
-        std::array::from_fn(|k| {
+        (0..self.reflectors).map(|k| {
             let (f, a) = &sums[k];
             let (mut c, mut sp) = (Vector3::zeros(), Vector3::zeros());
             for r in 0..a.len() {
@@ -156,7 +164,7 @@ impl BaseProblem {
                 sp.z * s[5],
             ) * 2.0;
             (*f, g)
-        })
+        }).collect()
     }
 
     /// Σ rows rowsᵀ regrouped: row = C_r u with C_r = [S_ω J_lᵀ [R q_r]×; S_p], so the sum over l is
@@ -167,7 +175,7 @@ impl BaseProblem {
         let s = &self.scale;
         let sw = Matrix3::from_diagonal(&Vector3::new(s[0], s[1], s[2]));
         let sp = Matrix3::from_diagonal(&Vector3::new(s[3], s[4], s[5]));
-        let per_reflector: Vec<SMatrix<f64, 6, 6>> = (0..3)
+        let per_reflector: Vec<SMatrix<f64, 6, 6>> = (0..self.reflectors)
             .into_par_iter()
             .map(|k| {
                 let m = pairs::rectangle_directions(&self.left_points[k], &right[k], &t);
@@ -254,17 +262,19 @@ impl MinimaxProblem for BaseProblem {
     fn evaluate(&self, y: &DVector<f64>) -> Eval {
         let norm = 1.0 / self.n_pairs().max(1) as f64;
         if self.plan == Plan::Blocked {
-            let [a, b, c] = self
+            let (f, grad) = self
                 .sums_regrouped(y)
-                .map(|(f, g)| (f * norm, DVector::from_column_slice((g * norm).as_slice())));
+                .into_iter()
+                .map(|(f, g)| (f * norm, DVector::from_column_slice((g * norm).as_slice())))
+                .unzip();
             return Eval {
-                f: [a.0, b.0, c.0],
-                grad: [a.1, b.1, c.1],
+                f,
+                grad,
                 cons: Vec::new(),
                 cons_grad: Vec::new(),
             };
         }
-        let parts: Vec<(f64, DVector<f64>)> = (0..3)
+        let parts: Vec<(f64, DVector<f64>)> = (0..self.reflectors)
             .into_par_iter()
             .map(|k| {
                 let mut f = 0.0;
@@ -276,19 +286,16 @@ impl MinimaxProblem for BaseProblem {
                 (f * norm, DVector::from_column_slice((g * norm).as_slice()))
             })
             .collect();
-        let mut it = parts.into_iter();
-        let (f0, g0) = it.next().unwrap_or_default();
-        let (f1, g1) = it.next().unwrap_or_default();
-        let (f2, g2) = it.next().unwrap_or_default();
+        let (f, grad) = parts.into_iter().unzip();
         Eval {
-            f: [f0, f1, f2],
-            grad: [g0, g1, g2],
+            f,
+            grad,
             cons: Vec::new(),
             cons_grad: Vec::new(),
         }
     }
 
-    fn values(&self, y: &DVector<f64>) -> ([f64; 3], Vec<f64>) {
+    fn values(&self, y: &DVector<f64>) -> (Vec<f64>, Vec<f64>) {
         let e = self.evaluate(y);
         (e.f, e.cons)
     }
@@ -301,7 +308,7 @@ impl MinimaxProblem for BaseProblem {
         let mut jtj = nalgebra::SMatrix::<f64, 6, 6>::zeros();
         let mut jtr = SVector::<f64, 6>::zeros();
         let mut cost = 0.0;
-        for k in 0..3 {
+        for k in 0..self.reflectors {
             self.for_each_row(y, k, |r, row| {
                 jtj += row * row.transpose();
                 jtr += row * r;
@@ -361,16 +368,18 @@ mod tests {
     /// Left and right model points, measurements of a true base, a start near it.
     fn problem(n_left: usize, n_right: usize) -> BaseProblem {
         let mut rng = ChaCha8Rng::seed_from_u64(5);
-        let mut pts = |n: usize| -> Vec<[Vector3<f64>; 3]> {
+        let mut pts = |n: usize| -> Vec<Vec<Vector3<f64>>> {
             (0..n)
                 .map(|_| {
-                    std::array::from_fn(|_| {
-                        Vector3::new(
-                            rng.random_range(-400.0..400.0),
-                            rng.random_range(-400.0..400.0),
-                            rng.random_range(-400.0..400.0),
-                        )
-                    })
+                    (0..3)
+                        .map(|_| {
+                            Vector3::new(
+                                rng.random_range(-400.0..400.0),
+                                rng.random_range(-400.0..400.0),
+                                rng.random_range(-400.0..400.0),
+                            )
+                        })
+                        .collect()
                 })
                 .collect()
         };
@@ -383,15 +392,16 @@ mod tests {
         let ml = left.clone();
         let mr: Vec<_> = right
             .iter()
-            .map(|p| {
-                p.map(|v| truth * nalgebra::Point3::from(v))
-                    .map(|p| p.coords)
+            .map(|p: &Vec<Vector3<f64>>| {
+                p.iter()
+                    .map(|v| (truth * nalgebra::Point3::from(*v)).coords)
+                    .collect::<Vec<_>>()
             })
             .collect();
         let start = Isometry3::new(
             Vector3::new(62.0, -69.0, -33.0),
             Vector3::new(0.31, -1.19, 0.41),
         );
-        BaseProblem::new(left, right, &ml, &mr, start)
+        BaseProblem::new(left, right, &ml, &mr, 3, start)
     }
 }

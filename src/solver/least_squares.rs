@@ -32,7 +32,7 @@ pub trait LeastSquaresProblem: Send + Sync {
     /// The objective minimised, Σ r², mm².
     fn cost(&self, y: &DVector<f64>) -> f64;
     /// What the progress lines report as F_a, F_b, F_c (sums of squares per reflector), mm².
-    fn objectives_mm2(&self, y: &DVector<f64>) -> [f64; 3];
+    fn objectives_mm2(&self, y: &DVector<f64>) -> Vec<f64>;
     /// The normal equations `JᵀJ`, `Jᵀr` (r = measured − model, J = ∂r/∂y) and the cost at y.
     fn normal_equations(&self, y: &DVector<f64>) -> LeastSquaresSystem;
     /// The residuals and their Jacobian ∂r/∂y, for methods solved by QR; `None` where only the normal
@@ -235,7 +235,7 @@ impl<P: LeastSquaresProblem> StageSolver for LsqState<P> {
         self.problem.params_at(&self.y)
     }
 
-    fn objectives_mm2(&self) -> [f64; 3] {
+    fn objectives_mm2(&self) -> Vec<f64> {
         self.problem.objectives_mm2(&self.y)
     }
 
@@ -249,11 +249,11 @@ impl<P: LeastSquaresProblem> StageSolver for LsqState<P> {
 }
 
 /// A distance problem of the minimax form solved as least squares of the distance errors of the
-/// reflectors in `reflectors` (all three for the collaborative distances of ref. [26]'s step 2, one
-/// for its step 1, where the problem's normal equations are restricted to that reflector too).
+/// reflectors in `reflectors` (all for the collaborative distances of ref. [26]'s step 2, one for its
+/// step 1, where the problem's normal equations are restricted to that reflector too).
 pub struct DistanceLeastSquares<P: MinimaxProblem> {
     pub problem: P,
-    pub reflectors: [bool; 3],
+    pub reflectors: Vec<bool>,
 }
 
 impl<P: MinimaxProblem> LeastSquaresProblem for DistanceLeastSquares<P> {
@@ -268,15 +268,20 @@ impl<P: MinimaxProblem> LeastSquaresProblem for DistanceLeastSquares<P> {
     fn cost(&self, y: &DVector<f64>) -> f64 {
         let f = self.problem.values(y).0;
         let pairs = self.problem.pair_count() as f64;
-        (0..3)
+        (0..self.reflectors.len())
             .filter(|&k| self.reflectors[k])
             .map(|k| f[k] * pairs)
             .sum()
     }
 
-    fn objectives_mm2(&self, y: &DVector<f64>) -> [f64; 3] {
+    fn objectives_mm2(&self, y: &DVector<f64>) -> Vec<f64> {
         let pairs = self.problem.pair_count() as f64;
-        self.problem.values(y).0.map(|f| f * pairs)
+        self.problem
+            .values(y)
+            .0
+            .into_iter()
+            .map(|f| f * pairs)
+            .collect()
     }
 
     fn normal_equations(&self, y: &DVector<f64>) -> LeastSquaresSystem {

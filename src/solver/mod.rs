@@ -59,7 +59,8 @@ pub enum QpMethod {
     Exact,
 }
 
-/// One of the three end-reflectors, `a`, `b` or `c` (the dataset's column order).
+/// The first, second or third reflector of the dataset (`a`, `b`, `c` in the paper's set-up; by position
+/// in the dataset's order whatever their names), for the single-reflector method.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]
 pub enum Reflector {
@@ -217,8 +218,8 @@ pub struct IterationRecord {
     pub iteration: usize,
     /// ψ = max_i F_i, mm².
     pub psi_mm2: f64,
-    /// F_a, F_b, F_c, mm².
-    pub f_mm2: [f64; 3],
+    /// F_k per reflector (F_a, F_b, F_c in the paper's set-up), mm².
+    pub f_mm2: Vec<f64>,
     /// Norm of the scaled parameter step.
     pub step_norm: f64,
     /// The stage's first-order optimality residual after this iteration: for an SQP stage the KKT
@@ -228,11 +229,11 @@ pub struct IterationRecord {
     /// the name `kkt_residual` too, which earlier versions used.
     #[serde(alias = "kkt_residual")]
     pub optimality_residual: f64,
-    /// Multipliers λ_a, λ_b, λ_c of the three reflectors' rows in this iteration's QP (summing to one):
+    /// Multipliers λ_k of the reflectors' rows in this iteration's QP (summing to one):
     /// how much each reflector's F_k weighs in the step. `None` for methods without such weights
     /// (least squares), NaN when an SQP iteration solved no QP.
     #[serde(default)]
-    pub lambda: Option<[f64; 3]>,
+    pub lambda: Option<Vec<f64>>,
     /// Time since the start of the whole run.
     pub elapsed_secs: f64,
 }
@@ -305,6 +306,14 @@ pub enum CalibrationError {
     RankDeficient { stage: Stage, detail: String },
     #[error("{stage}: non-finite value ({detail})")]
     NonFinite { stage: Stage, detail: String },
+    /// The full-pose method builds a tool frame from three reflectors per configuration; the data have
+    /// another number.
+    #[error(
+        "{side} arm: the pose method (ref. [19]) builds a tool frame from three reflectors per \
+         configuration; the data have {found}: it cannot run on them (the distance and position \
+         methods can)"
+    )]
+    NeedsThreeReflectors { side: Side, found: usize },
     /// Settings that do not fit together (e.g. a reflector chosen for a method that uses all three).
     #[error("invalid calibration settings: {0}")]
     InvalidSettings(String),
@@ -330,7 +339,7 @@ pub struct StageSummary {
     pub termination: Termination,
     /// Final ψ and F_i (sums of squares over all pairs), mm².
     pub psi_mm2: f64,
-    pub f_mm2: [f64; 3],
+    pub f_mm2: Vec<f64>,
     /// Initial ψ, mm².
     pub psi_start_mm2: f64,
 }

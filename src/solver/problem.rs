@@ -10,8 +10,9 @@ use nalgebra::{DMatrix, DVector, Isometry3};
 /// `c_l(y) ≤ 0` (normalised to order one).
 #[derive(Clone, Debug)]
 pub struct Eval {
-    pub f: [f64; 3],
-    pub grad: [DVector<f64>; 3],
+    /// One objective per reflector.
+    pub f: Vec<f64>,
+    pub grad: Vec<DVector<f64>>,
     pub cons: Vec<f64>,
     pub cons_grad: Vec<DVector<f64>>,
 }
@@ -66,7 +67,7 @@ pub trait MinimaxProblem: Send + Sync {
     /// Values and gradients.
     fn evaluate(&self, y: &DVector<f64>) -> Eval;
     /// Values only (line search).
-    fn values(&self, y: &DVector<f64>) -> ([f64; 3], Vec<f64>);
+    fn values(&self, y: &DVector<f64>) -> (Vec<f64>, Vec<f64>);
     /// Normal equations of Σ_i F_i (least-squares baseline); `cost` is Σ r².
     fn least_squares(&self, y: &DVector<f64>) -> LeastSquaresSystem;
 }

@@ -45,14 +45,24 @@ pub struct CalibrationResult {
     /// [`super::BaseMethod::Absolute`] in step 2, which overrides step 1's); `None` for the distance
     /// methods, which cannot see it.
     pub tracker_from_base: PerSide<Option<Isometry3<f64>>>,
+    /// Why step 2 was not run, when the data cannot measure the base (the arms were measured from
+    /// different tracker stations): the base stays nominal and is no calibration result.
+    pub base_not_measurable: Option<String>,
     pub elapsed_secs: f64,
 }
 
 impl CalibrationResult {
     /// Did every stage run and converge?
     pub fn is_converged(&self) -> bool {
-        self.stages.len() == STAGES.len()
+        self.stages.len() == self.planned_stages().count()
             && self.stages.iter().all(|s| s.termination.is_converged())
+    }
+
+    /// The stages the data call for: both arms, and the base unless it is not measurable.
+    pub fn planned_stages(&self) -> impl Iterator<Item = Stage> + '_ {
+        STAGES
+            .into_iter()
+            .filter(|&s| s != Stage::Base || self.base_not_measurable.is_none())
     }
 
     /// Was `stage` solved by the paper's SQP (the minimax methods) rather than least squares?
@@ -111,10 +121,16 @@ impl CalibrationResult {
                 ),
             })
             .collect();
-        for stage in STAGES {
+        for stage in self.planned_stages() {
             if self.stage(stage).is_none() {
                 out.push(format!("{stage} did not run; its parameters are nominal"));
             }
+        }
+        if let Some(why) = &self.base_not_measurable {
+            out.push(format!(
+                "{} not measurable from this data ({why}): the right-arm base stays nominal",
+                Stage::Base
+            ));
         }
         out.extend(self.diagnostics.iter().cloned());
         out

@@ -183,6 +183,8 @@ pub struct CalibrationRun {
     reflector_used: PerSide<Option<Reflector>>,
     /// Each arm's base in the tracker frame, where the method identified it.
     tracker_from_base: PerSide<Option<Isometry3<f64>>>,
+    /// Why step 2 is not in the plan (see [`CalibrationResult::base_not_measurable`]).
+    base_not_measurable: Option<String>,
     cancel: Arc<AtomicBool>,
     started: Instant,
 }
@@ -196,13 +198,25 @@ impl CalibrationRun {
     ) -> Result<Self, CalibrationError> {
         check_settings(&settings)?;
         let inputs = PerSide::try_from_fn(|side| arm_input(dataset, nominal, side, &settings))?;
+        let base_not_measurable = (!dataset.one_tracker_frame()).then(|| {
+            format!(
+                "the arms were measured from different tracker stations (left `{}`, right `{}`)",
+                dataset.arms.left.station.as_deref().unwrap_or(""),
+                dataset.arms.right.station.as_deref().unwrap_or("")
+            )
+        });
+        let mut plan = VecDeque::from([Stage::Arm(Side::Left), Stage::Arm(Side::Right)]);
+        if base_not_measurable.is_none() {
+            plan.push_back(Stage::Base);
+        }
         Ok(Self {
             settings,
             nominal: nominal.clone(),
             committed: nominal.clone(),
             inputs,
             active: None,
-            plan: VecDeque::from([Stage::Arm(Side::Left), Stage::Arm(Side::Right), Stage::Base]),
+            plan,
+            base_not_measurable,
             replaying: None,
             history: Vec::new(),
             stages: Vec::new(),
@@ -290,7 +304,7 @@ impl CalibrationRun {
             }
             Some(state) => {
                 active.iterations += 1;
-                let psi_mm2 = max3(state.f_mm2);
+                let psi_mm2 = max_of(&state.f_mm2);
                 let params = active.solver.current();
                 if !psi_mm2.is_finite() || !state.step_norm.is_finite() || !params_finite(&params) {
                     self.diagnostics.push(format!(
@@ -352,7 +366,9 @@ impl CalibrationRun {
             _ => Some(active.solver.current()),
         };
         let f_mm2 = match termination {
-            Termination::NonFinite | Termination::Diverged => [f64::NAN; 3],
+            Termination::NonFinite | Termination::Diverged => {
+                vec![f64::NAN; self.committed.arm(Side::Left).reflector_count()]
+            }
             _ => active.solver.objectives_mm2(),
         };
         if let Some(params) = params {
@@ -385,7 +401,7 @@ impl CalibrationRun {
             n_configs: self.stage_size(active.stage).0,
             iterations: active.iterations,
             termination,
-            psi_mm2: max3(f_mm2),
+            psi_mm2: max_of(&f_mm2),
             f_mm2,
             psi_start_mm2: active.start_psi_mm2,
         };
@@ -446,7 +462,7 @@ impl CalibrationRun {
         };
         Ok(ActiveStage {
             stage,
-            start_psi_mm2: max3(solver.objectives_mm2()),
+            start_psi_mm2: max_of(&solver.objectives_mm2()),
             solver,
             iterations: 0,
             announced: false,
@@ -479,12 +495,12 @@ impl CalibrationRun {
 
     /// F_a, F_b, F_c of the committed model on a stage's data, mm² (for a stage whose solver state is
     /// unusable).
-    fn stage_objectives(&self, stage: Stage) -> [f64; 3] {
+    fn stage_objectives(&self, stage: Stage) -> Vec<f64> {
         match stage {
             Stage::Arm(side) => self.inputs[side]
                 .distance_probe(self.committed.arm(side))
                 .start_objectives_mm2(),
-            Stage::Base => [f64::NAN; 3],
+            Stage::Base => vec![f64::NAN; self.committed.arm(Side::Left).reflector_count()],
         }
     }
 
@@ -539,6 +555,7 @@ impl CalibrationRun {
             side_tolerance_mm: self.inputs.as_ref().map(|_, i| i.side_tolerance_mm),
             reflector_used: self.reflector_used,
             tracker_from_base: self.tracker_from_base,
+            base_not_measurable: self.base_not_measurable.clone(),
             elapsed_secs: self.started.elapsed().as_secs_f64(),
         }
     }
@@ -601,7 +618,17 @@ fn arm_input(
         });
     }
     let qs: Vec<Vec<f64>> = ms.iter().map(|m| m.q_rad.clone()).collect();
-    let measured: Vec<[Vector3<f64>; 3]> = ms.iter().map(|m| m.tracker_points_mm).collect();
+    let reflectors = nominal.arm(side).reflector_count();
+    if let Some(m) = ms.iter().find(|m| m.tracker_points_mm.len() != reflectors) {
+        return Err(CalibrationError::InvalidSettings(format!(
+            "{side} arm: configuration `{}` has {} reflector positions, the model has {reflectors} \
+             reflectors",
+            m.id,
+            m.tracker_points_mm.len()
+        )));
+    }
+    let measured: Vec<Vec<Vector3<f64>>> =
+        ms.iter().map(|m| m.tracker_points_mm.clone()).collect();
     if qs
         .iter()
         .flatten()
@@ -615,7 +642,7 @@ fn arm_input(
     }
     // ε of constraint (14): the tracker's MPE at the mean measuring distance, squared.
     let mean_dist_m = measured.iter().flatten().map(|p| p.norm()).sum::<f64>()
-        / (3.0 * measured.len() as f64)
+        / (reflectors as f64 * measured.len() as f64)
         / 1000.0;
     let side_tolerance_mm =
         (dataset.tracker.mpe_um + dataset.tracker.mpe_um_per_m * mean_dist_m) / 1000.0;
@@ -653,6 +680,6 @@ fn params_finite(params: &StageParams) -> bool {
 /// A condition number at the solution this many times the start's is reported.
 pub const CONDITION_GROWTH: f64 = 10.0;
 
-fn max3(f: [f64; 3]) -> f64 {
+fn max_of(f: &[f64]) -> f64 {
     f.iter().copied().fold(f64::NEG_INFINITY, f64::max)
 }

@@ -20,13 +20,15 @@ pub struct SqpSettings {
 /// What one outer iteration did.
 #[derive(Clone, Debug)]
 pub struct SqpStep {
-    pub f: [f64; 3],
+    /// One objective per reflector.
+    pub f: Vec<f64>,
     pub psi: f64,
     pub step_norm: f64,
     pub kkt_residual: f64,
-    /// Multipliers λ_a, λ_b, λ_c of the three objective rows in this iteration's QP (they sum to one;
-    /// at a minimax optimum ψ is stationary for the λ-weighted sum of the F_k). NaN if no QP was solved.
-    pub lambda: [f64; 3],
+    /// Multipliers λ_k of the objective rows in this iteration's QP, one per reflector (λ_a, λ_b, λ_c
+    /// in the paper's set-up; they sum to one; at a minimax optimum ψ is stationary for the λ-weighted
+    /// sum of the F_k). NaN if no QP was solved.
+    pub lambda: Vec<f64>,
     pub qp_iterations: usize,
     /// `Some` when the loop should stop.
     pub termination: Option<Termination>,
@@ -70,9 +72,9 @@ fn negligible(predicted: f64, phi0: f64) -> bool {
     predicted > -1e-15 * phi0.abs().max(1e-300)
 }
 
-/// The multipliers of the three objective rows of a QP solution.
-fn objective_multipliers(sol: &QpSolution) -> [f64; 3] {
-    std::array::from_fn(|i| sol.nu[i])
+/// The multipliers of the `n_obj` objective rows of a QP solution.
+fn objective_multipliers(sol: &QpSolution, n_obj: usize) -> Vec<f64> {
+    sol.nu.iter().take(n_obj).copied().collect()
 }
 
 /// Non-finite values in the problem at the start point.
@@ -117,18 +119,19 @@ impl<P: MinimaxProblem> SqpState<P> {
         &self.eval
     }
 
-    fn merit(&self, f: &[f64; 3], cons: &[f64]) -> f64 {
+    fn merit(&self, f: &[f64], cons: &[f64]) -> f64 {
         f.iter().copied().fold(f64::NEG_INFINITY, f64::max)
             + self.rho * cons.iter().map(|c| c.max(0.0)).sum::<f64>()
     }
 
     fn lagrangian_gradient(eval: &Eval, nu: &DVector<f64>) -> DVector<f64> {
+        let n_obj = eval.f.len();
         let mut g = DVector::zeros(eval.grad[0].len());
-        for i in 0..3 {
+        for i in 0..n_obj {
             g.axpy(nu[i], &eval.grad[i], 1.0);
         }
         for (l, cg) in eval.cons_grad.iter().enumerate() {
-            g.axpy(nu[3 + l], cg, 1.0);
+            g.axpy(nu[n_obj + l], cg, 1.0);
         }
         g
     }
@@ -137,16 +140,17 @@ impl<P: MinimaxProblem> SqpState<P> {
     fn qp_rows(&self) -> (DMatrix<f64>, DVector<f64>) {
         let psi = self.eval.psi();
         let m = self.problem.dim();
-        let p = 3 + self.eval.cons.len();
+        let n_obj = self.eval.f.len();
+        let p = n_obj + self.eval.cons.len();
         let mut a = DMatrix::zeros(p, m);
         let mut b = DVector::zeros(p);
-        for i in 0..3 {
+        for i in 0..n_obj {
             a.row_mut(i).copy_from(&self.eval.grad[i].transpose());
             b[i] = self.eval.f[i] - psi;
         }
         for (l, (c, g)) in self.eval.cons.iter().zip(&self.eval.cons_grad).enumerate() {
-            a.row_mut(3 + l).copy_from(&g.transpose());
-            b[3 + l] = *c;
+            a.row_mut(n_obj + l).copy_from(&g.transpose());
+            b[n_obj + l] = *c;
         }
         (a, b)
     }
@@ -163,7 +167,7 @@ impl<P: MinimaxProblem> SqpState<P> {
             h_chol: &chol,
             a: &a,
             b: &b,
-            n_obj: 3,
+            n_obj: self.eval.f.len(),
         };
         Ok(match self.settings.qp {
             QpMethod::Exact => solve_exact(&qp),
@@ -215,7 +219,7 @@ impl<P: MinimaxProblem> SqpState<P> {
             h_chol: &chol,
             a: &a,
             b: &b,
-            n_obj: 3,
+            n_obj: self.eval.f.len(),
         });
         let phi = self.merit(&self.eval.f, &self.eval.cons);
         self.predicted_change(&exact) > -(STATIONARY_RTOL * phi.abs() + STATIONARY_ABS_MM2)
@@ -223,12 +227,16 @@ impl<P: MinimaxProblem> SqpState<P> {
 
     /// A stopped iteration: the iterate unchanged, `term` as its termination.
     fn done(&self, term: Termination, kkt: f64, sol: Option<&QpSolution>) -> SqpStep {
+        let n_obj = self.eval.f.len();
         SqpStep {
-            f: self.eval.f,
+            f: self.eval.f.clone(),
             psi: self.eval.psi(),
             step_norm: 0.0,
             kkt_residual: kkt,
-            lambda: sol.map_or([f64::NAN; 3], objective_multipliers),
+            lambda: sol.map_or_else(
+                || vec![f64::NAN; n_obj],
+                |s| objective_multipliers(s, n_obj),
+            ),
             qp_iterations: sol.map_or(0, |s| s.iterations),
             termination: Some(term),
         }
@@ -243,7 +251,8 @@ impl<P: MinimaxProblem> SqpState<P> {
         let phi0 = self.merit(&self.eval.f, &self.eval.cons);
         let kkt = self.first_order_residual(&sol.nu);
         // Penalty large enough for the constraint multipliers.
-        let max_mu = sol.nu.iter().skip(3).copied().fold(0.0, f64::max);
+        let n_obj = self.eval.f.len();
+        let max_mu = sol.nu.iter().skip(n_obj).copied().fold(0.0, f64::max);
         self.rho = self.rho.max(1.5 * max_mu + 1e-9);
         // Predicted change of the merit function along s (linear model).
         let predicted = self.predicted_change(&sol);
@@ -268,11 +277,11 @@ impl<P: MinimaxProblem> SqpState<P> {
             None
         };
         SqpStep {
-            f: self.eval.f,
+            f: self.eval.f.clone(),
             psi: self.eval.psi(),
             step_norm,
             kkt_residual: kkt,
-            lambda: objective_multipliers(&sol),
+            lambda: objective_multipliers(&sol, n_obj),
             qp_iterations: sol.iterations,
             termination,
         }
@@ -333,7 +342,7 @@ impl<P: MinimaxProblem> SqpState<P> {
         let (y_new, alpha) = loop {
             let y_new = &self.y + &sol.s * alpha;
             let (f, cons) = if alpha == 1.0 {
-                (full_eval.f, full_eval.cons.clone())
+                (full_eval.f.clone(), full_eval.cons.clone())
             } else {
                 self.problem.values(&y_new)
             };
@@ -408,13 +417,17 @@ impl<P: MinimaxProblem> SqpState<P> {
             .max(1e-300);
         let psi = self.eval.psi();
         let psi_scale = psi.abs().max(1e-300);
-        let comp: f64 = (0..3).map(|i| nu[i] * (psi - self.eval.f[i])).sum::<f64>() / psi_scale;
+        let n_obj = self.eval.f.len();
+        let comp: f64 = (0..n_obj)
+            .map(|i| nu[i] * (psi - self.eval.f[i]))
+            .sum::<f64>()
+            / psi_scale;
         let cons: f64 = self
             .eval
             .cons
             .iter()
             .enumerate()
-            .map(|(l, c)| nu[3 + l] * c.abs() + c.max(0.0))
+            .map(|(l, c)| nu[n_obj + l] * c.abs() + c.max(0.0))
             .sum();
         g.amax() / scale + comp + cons
     }

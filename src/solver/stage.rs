@@ -11,7 +11,7 @@ use nalgebra::Isometry3;
 #[derive(Clone, Debug, PartialEq)]
 pub struct IterState {
     /// F_a, F_b, F_c at the new iterate: sums of squared distance errors over all pairs, mm².
-    pub f_mm2: [f64; 3],
+    pub f_mm2: Vec<f64>,
     /// Norm of the scaled parameter step taken.
     pub step_norm: f64,
     /// First-order optimality residual: the KKT residual of the minimax problem (SQP) or the largest
@@ -19,7 +19,7 @@ pub struct IterState {
     pub residual: f64,
     /// The reflectors' weights λ_a, λ_b, λ_c in this iteration (SQP: the QP multipliers of the three
     /// objective rows); `None` for methods that have none.
-    pub lambda: Option<[f64; 3]>,
+    pub lambda: Option<Vec<f64>>,
     /// `Some` when the stage is over.
     pub termination: Option<Termination>,
 }
@@ -34,7 +34,7 @@ pub trait StageSolver: Send {
     /// The stage's parameters at the current iterate.
     fn current(&self) -> StageParams;
     /// F_a, F_b, F_c at the current iterate, mm² (sums over all pairs).
-    fn objectives_mm2(&self) -> [f64; 3];
+    fn objectives_mm2(&self) -> Vec<f64>;
     /// Configuration pairs per reflector (configurations, for the absolute methods).
     fn pair_count(&self) -> usize;
     /// Each arm's model base in the tracker frame at the current iterate, where the method identifies
@@ -49,7 +49,7 @@ impl<P: MinimaxProblem> StageSolver for SqpState<P> {
         let step = SqpState::next_iter(self, stop);
         let pairs = self.problem.pair_count() as f64;
         IterState {
-            f_mm2: step.f.map(|v| v * pairs),
+            f_mm2: step.f.iter().map(|v| v * pairs).collect(),
             step_norm: step.step_norm,
             residual: step.kkt_residual,
             lambda: Some(step.lambda),
@@ -61,9 +61,9 @@ impl<P: MinimaxProblem> StageSolver for SqpState<P> {
         self.problem.params_at(&self.y)
     }
 
-    fn objectives_mm2(&self) -> [f64; 3] {
+    fn objectives_mm2(&self) -> Vec<f64> {
         let pairs = self.problem.pair_count() as f64;
-        self.eval().f.map(|v| v * pairs)
+        self.eval().f.iter().map(|v| v * pairs).collect()
     }
 
     fn pair_count(&self) -> usize {

@@ -223,9 +223,10 @@ impl SerialChain {
         self.joints.len()
     }
 
-    /// Number of parameters: six corrections per joint and nine reflector coordinates.
-    pub fn param_count(&self) -> usize {
-        PARAMS_PER_JOINT * self.dof() + 9
+    /// Number of parameters with `reflectors` reflectors: six corrections per joint and three
+    /// coordinates per reflector.
+    pub fn param_count(&self, reflectors: usize) -> usize {
+        PARAMS_PER_JOINT * self.dof() + 3 * reflectors
     }
 
     /// Index of the first reflector coordinate in the parameter vector.
@@ -242,7 +243,7 @@ impl SerialChain {
                 self.joints[k / PARAMS_PER_JOINT].name,
                 CORRECTION_NAMES[k % PARAMS_PER_JOINT]
             )
-        } else if k < off + 9 {
+        } else if k < off + 3 * REFLECTOR_NAMES.len() {
             format!(
                 "t_{}.{}",
                 REFLECTOR_NAMES[(k - off) / 3],
@@ -341,7 +342,7 @@ impl SerialChain {
     pub fn reflector_jacobians(
         &self,
         corrections: &[[f64; PARAMS_PER_JOINT]],
-        reflectors_mm: &[Vector3<f64>; 3],
+        reflectors_mm: &[Vector3<f64>],
         q_rad: &[f64],
     ) -> ArmJacobians {
         let n = self.dof();
@@ -374,11 +375,14 @@ impl SerialChain {
             f *= Isometry3::from_parts(Translation3::from(t), rxy * rot_z(c[5] + q));
         }
         let tip = f * self.last_aligned_from_tip;
-        let points_mm = reflectors_mm.map(|t| tip.transform_point(&t.into()).coords);
+        let points_mm: Vec<Vector3<f64>> = reflectors_mm
+            .iter()
+            .map(|t| tip.transform_point(&(*t).into()).coords)
+            .collect();
         let rot_tip = tip.rotation.to_rotation_matrix().into_inner();
-        let cols = self.param_count();
+        let cols = self.param_count(reflectors_mm.len());
         let off = self.reflector_offset();
-        let jacobians = std::array::from_fn(|k| {
+        let jacobians = (0..points_mm.len()).map(|k| {
             let p = points_mm[k];
             let mut j = Matrix3xX::zeros(cols);
             for (i, (d, o)) in dirs.iter().zip(&origins).enumerate() {
@@ -391,7 +395,8 @@ impl SerialChain {
             }
             j.fixed_view_mut::<3, 3>(0, off + 3 * k).copy_from(&rot_tip);
             j
-        });
+        })
+        .collect();
         ArmJacobians {
             fk: ReflectorFk {
                 points_mm,
@@ -452,9 +457,9 @@ impl SerialChain {
     /// parallel to the previous one, Hayati's tilt instead of the shift). Joint 1's six are a rigid
     /// motion of the arm and are fixed, the last joint's offset and shift go to the reflectors. Real
     /// robots' largest errors are joint offsets (encoder zeros): this order keeps them as offsets.
-    pub fn preference_order(&self) -> Vec<usize> {
+    pub fn preference_order(&self, reflectors: usize) -> Vec<usize> {
         let off = self.reflector_offset();
-        let mut out: Vec<usize> = (off..off + 9).collect();
+        let mut out: Vec<usize> = (off..off + 3 * reflectors).collect();
         for k in 0..self.dof() {
             let b = PARAMS_PER_JOINT * k;
             out.extend([b + 5, b + 2, b, b + 1, b + 3, b + 4]);

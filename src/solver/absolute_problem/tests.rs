@@ -49,13 +49,15 @@ fn setup(nominal: &ArmModel, data: AbsoluteData, n: usize) -> (AbsoluteProblem, 
         })
         .collect();
     let t = tracker();
-    let measured: Vec<[Vector3<f64>; 3]> = qs
+    let measured: Vec<Vec<Vector3<f64>>> = qs
         .iter()
         .map(|q| {
             truth
                 .reflector_fk(q)
                 .points_mm
-                .map(|p| t.transform_point(&p.into()).coords)
+                .iter()
+                .map(|p| t.transform_point(&(*p).into()).coords)
+                .collect()
         })
         .collect();
     let p = nominal.param_count();

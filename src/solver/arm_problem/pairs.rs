@@ -166,13 +166,12 @@ fn fold<const L: usize>(lanes: &[f64; L]) -> f64 {
 
 /// The measured distances |m_i − m_j| of every pair (i < j), row by row, per reflector — when there are
 /// at most [`KEPT_DISTANCE_PAIRS`] pairs per reflector; `None` beyond (the passes recompute them).
-pub fn kept_triangle_distances(measured: &[Points; 3]) -> Option<[Vec<f64>; 3]> {
-    let n = measured[0].len();
+pub fn kept_triangle_distances(measured: &[Points]) -> Option<Vec<Vec<f64>>> {
+    let n = measured.first().map_or(0, Points::len);
     if n * n.saturating_sub(1) / 2 > KEPT_DISTANCE_PAIRS {
         return None;
     }
-    Some(std::array::from_fn(|k| {
-        let m = &measured[k];
+    Some(measured.iter().map(|m| {
         let mut out = vec![0.0; n * n.saturating_sub(1) / 2];
         // Row i (the pairs (i, j), j > i) is n − i − 1 long: split the list into its rows, fill them
         // in parallel.
@@ -189,17 +188,20 @@ pub fn kept_triangle_distances(measured: &[Points; 3]) -> Option<[Vec<f64>; 3]> 
             }
         });
         out
-    }))
+    }).collect())
 }
 
 /// The measured distances |m_l − n_r| of every pair (l, r), row by row, per reflector, when there are at
 /// most [`KEPT_DISTANCE_PAIRS`] pairs per reflector.
-pub fn kept_rectangle_distances(left: &[Points; 3], right: &[Points; 3]) -> Option<[Vec<f64>; 3]> {
-    let (nl, nr) = (left[0].len(), right[0].len());
+pub fn kept_rectangle_distances(left: &[Points], right: &[Points]) -> Option<Vec<Vec<f64>>> {
+    let (nl, nr) = (
+        left.first().map_or(0, Points::len),
+        right.first().map_or(0, Points::len),
+    );
     if nl * nr > KEPT_DISTANCE_PAIRS {
         return None;
     }
-    Some(std::array::from_fn(|k| {
+    Some((0..left.len().min(right.len())).map(|k| {
         let mut out = vec![0.0; nl * nr];
         // Row l (the pairs (l, r)) is nr long: the rows filled in parallel.
         if nr > 0 {
@@ -210,7 +212,7 @@ pub fn kept_rectangle_distances(left: &[Points; 3], right: &[Points; 3]) -> Opti
             });
         }
         out
-    }))
+    }).collect())
 }
 
 /// Index of the pair (i, i + 1) in the row-by-row list of the pairs (i < j) of n points.
@@ -316,15 +318,15 @@ fn triangle_rows<const L: usize, const W: bool, const K: bool>(
 /// with `weights`, w_i,k = Σ_{j≠i} t_ij (signed so that ∇F_k = −2 Σ_i J_i,kᵀ w_i,k).
 /// `kept`: the measured distances from [`kept_triangle_distances`], if kept.
 pub fn triangle(
-    model: &[Points; 3],
-    measured: &[Points; 3],
-    kept: Option<&[Vec<f64>; 3]>,
+    model: &[Points],
+    measured: &[Points],
+    kept: Option<&[Vec<f64>]>,
     weights: bool,
     plan: Plan,
-) -> [(f64, Points); 3] {
-    let n = model[0].len();
+) -> Vec<(f64, Points)> {
+    let n = model.first().map_or(0, Points::len);
     let blocks = triangle_blocks(n, plan);
-    let tasks: Vec<(usize, Range<usize>)> = (0..3)
+    let tasks: Vec<(usize, Range<usize>)> = (0..model.len())
         .flat_map(|k| blocks.iter().map(move |b| (k, b.clone())))
         .collect();
     let run = |(k, rows): &(usize, Range<usize>)| {
@@ -356,13 +358,13 @@ pub fn triangle(
         (f, w)
     };
     let parts: Vec<(f64, Points)> = tasks.par_iter().map(run).collect();
-    reduce(parts, blocks.len())
+    reduce(parts, model.len(), blocks.len())
 }
 
 /// Per reflector, the blocks' sums and weights added in block order.
-fn reduce(parts: Vec<(f64, Points)>, per_reflector: usize) -> [(f64, Points); 3] {
+fn reduce(parts: Vec<(f64, Points)>, reflectors: usize, per_reflector: usize) -> Vec<(f64, Points)> {
     let mut it = parts.into_iter();
-    std::array::from_fn(|_| {
+    (0..reflectors).map(|_| {
         let (mut f, mut w) = it.next().unwrap_or_default();
         for _ in 1..per_reflector {
             let (fb, wb) = it.next().unwrap_or_default();
@@ -370,7 +372,7 @@ fn reduce(parts: Vec<(f64, Points)>, per_reflector: usize) -> [(f64, Points); 3]
             w.add(&wb);
         }
         (f, w)
-    })
+    }).collect()
 }
 
 /// The pair (l, r) of `row` (its model point already less t) into lane `k`: Σ Δd² into `sum`,
@@ -458,16 +460,16 @@ fn rectangle_rows<const L: usize, const K: bool>(
 /// order of earlier releases is [`super::base_problem`]'s own.
 /// `kept`: the measured distances from [`kept_rectangle_distances`], if kept.
 pub fn rectangle(
-    left: &[Points; 3],
-    right: &[Points; 3],
+    left: &[Points],
+    right: &[Points],
     t: &Vector3<f64>,
-    measured_left: &[Points; 3],
-    measured_right: &[Points; 3],
-    kept: Option<&[Vec<f64>; 3]>,
-) -> [(f64, Points); 3] {
-    let blocks = rectangle_blocks(left[0].len(), Plan::Blocked);
-    let nr = right[0].len();
-    let tasks: Vec<(usize, Range<usize>)> = (0..3)
+    measured_left: &[Points],
+    measured_right: &[Points],
+    kept: Option<&[Vec<f64>]>,
+) -> Vec<(f64, Points)> {
+    let blocks = rectangle_blocks(left.first().map_or(0, Points::len), Plan::Blocked);
+    let nr = right.first().map_or(0, Points::len);
+    let tasks: Vec<(usize, Range<usize>)> = (0..left.len())
         .flat_map(|k| blocks.iter().map(move |b| (k, b.clone())))
         .collect();
     let parts: Vec<(f64, Points)> = tasks
@@ -489,7 +491,7 @@ pub fn rectangle(
             (f, a)
         })
         .collect();
-    reduce(parts, blocks.len())
+    reduce(parts, left.len(), blocks.len())
 }
 
 /// Σ_l u_lr u_lrᵀ for every r (u the unit model direction, as in [`rectangle`]): the six distinct

@@ -30,7 +30,7 @@ pub fn at_solution(
     method: GramMethod,
 ) -> IdentifiabilityReport {
     let jac: Vec<ArmJacobians> = qs.par_iter().map(|q| arm.reflector_jacobians(q)).collect();
-    let columns = pair_jacobian_columns(&jac, max_pairs, [true; 3]);
+    let columns = pair_jacobian_columns(&jac, max_pairs, &vec![true; arm.reflector_count()]);
     let gram: DMatrix<f64> = match method {
         GramMethod::Product => gram_by_product(&columns),
         GramMethod::Qr => gram_by_qr(&columns),

@@ -34,7 +34,7 @@ fn columns(arm: &ArmModel, n: usize, rng: &mut ChaCha8Rng) -> DMatrix<f64> {
             arm.reflector_jacobians(&q)
         })
         .collect();
-    pair_jacobian_columns(&jacs, 3000, [true; 3])
+    pair_jacobian_columns(&jacs, 3000, &[true; 3])
 }
 
 fn report(arm: &ArmModel, gram: &DMatrix<f64>) -> IdentifiabilityReport {

@@ -45,7 +45,7 @@ pub const DISTANCE: BaseMethodSpec = BaseMethodSpec {
         let (problem, _) = s.collaborative_distances()?;
         let problem = DistanceLeastSquares {
             problem,
-            reflectors: [true; 3],
+            reflectors: vec![true; s.model.arm(crate::side::Side::Left).reflector_count()],
         };
         Ok(least_squares_solver(
             problem,

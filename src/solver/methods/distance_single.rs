@@ -38,10 +38,17 @@ fn set_up(s: &ArmSetUp) -> Result<ArmStage, CalibrationError> {
     let reflector = s
         .settings
         .reflector
-        .unwrap_or_else(|| worst_reflector(probe.start_objectives_mm2()));
+        .unwrap_or_else(|| worst_reflector(&probe.start_objectives_mm2()));
     let k = reflector.index();
-    let mask = std::array::from_fn(|r| r == k);
-    let probe = probe.with_reflectors(mask);
+    let count = start.reflector_count();
+    if k >= count {
+        return Err(CalibrationError::InvalidSettings(format!(
+            "distance-single: reflector {reflector} (number {}) was chosen, the data have {count}",
+            k + 1
+        )));
+    }
+    let mask: Vec<bool> = (0..count).map(|r| r == k).collect();
+    let probe = probe.with_reflectors(mask.clone());
     // The other reflectors' coordinates do not enter reflector k's distances at all.
     let off = start.reflector_offset();
     let allowed: Vec<bool> = (0..n_params)

@@ -30,8 +30,8 @@ pub const LSQ: MethodSpec = MethodSpec {
 fn set_up(s: &ArmSetUp) -> Result<ArmStage, CalibrationError> {
     let start = s.all_distances()?;
     let problem = DistanceLeastSquares {
+        reflectors: vec![true; s.start.reflector_count()],
         problem: start.problem,
-        reflectors: [true; 3],
     };
     Ok(ArmStage {
         solver: least_squares_solver(problem, LsqAlgorithm::LevenbergMarquardt, s.settings),

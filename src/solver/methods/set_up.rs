@@ -4,7 +4,7 @@
 //! solvers.
 
 use super::super::absolute_problem::{
-    AbsoluteData, AbsoluteProblem, moore_penrose_fit, triangle_area_mm2,
+    AbsoluteData, AbsoluteProblem, as_triangle, moore_penrose_fit, triangle_area_mm2,
 };
 use super::super::arm_problem::ArmProblem;
 use super::super::base_problem::BaseProblem;
@@ -27,8 +27,8 @@ pub struct ArmData {
     /// The configurations' ids (for messages).
     pub ids: Vec<String>,
     pub qs: Vec<Vec<f64>>,
-    /// Tracker-frame reflector positions, one triple per configuration, mm.
-    pub measured: Vec<[Vector3<f64>; 3]>,
+    /// Tracker-frame reflector positions, one per reflector per configuration, mm.
+    pub measured: Vec<Vec<Vector3<f64>>>,
     /// Allowed deviation δ of the reflector triangle's sides (constraint 14, ε = δ²), mm.
     pub side_tolerance_mm: f64,
 }
@@ -71,6 +71,12 @@ impl ArmData {
         arm: &ArmModel,
         free: Vec<usize>,
     ) -> Result<AbsoluteProblem, CalibrationError> {
+        if matches!(data, AbsoluteData::Pose { .. }) && arm.reflector_count() != 3 {
+            return Err(CalibrationError::NeedsThreeReflectors {
+                side: self.side,
+                found: arm.reflector_count(),
+            });
+        }
         let t0 = self.tracker_start(arm)?;
         let scale = DVector::from_element(free.len() + 6, 1.0);
         AbsoluteProblem::new(
@@ -86,7 +92,7 @@ impl ArmData {
         .map_err(|i| CalibrationError::DegenerateReflectors {
             side: self.side,
             id: self.ids[i].clone(),
-            area_mm2: triangle_area_mm2(&self.measured[i]).0,
+            area_mm2: as_triangle(&self.measured[i]).map_or(0.0, |t| triangle_area_mm2(t).0),
         })
     }
 }
@@ -182,8 +188,8 @@ pub fn require_kinematics(
 
 /// The reflector `distance-single` uses by default: the one whose distance errors the nominal model
 /// fits worst (largest F_k), as ref. [26] is compared in the paper.
-pub fn worst_reflector(objectives_mm2: [f64; 3]) -> Reflector {
-    let k = (0..3)
+pub fn worst_reflector(objectives_mm2: &[f64]) -> Reflector {
+    let k = (0..objectives_mm2.len().min(Reflector::ALL.len()))
         .max_by(|&a, &b| objectives_mm2[a].total_cmp(&objectives_mm2[b]))
         .unwrap_or(0);
     Reflector::from_index(k).unwrap_or(Reflector::A)
@@ -295,7 +301,7 @@ impl BaseSetUp<'_> {
     /// The collaborative distance problem on step 1's arms from the model's base, and its
     /// Gauss–Newton matrix (the SQP's start Hessian); `RankDeficient` when that is singular.
     pub fn collaborative_distances(&self) -> Result<(BaseProblem, DMatrix<f64>), CalibrationError> {
-        let model_points = |side: Side| -> Vec<[Vector3<f64>; 3]> {
+        let model_points = |side: Side| -> Vec<Vec<Vector3<f64>>> {
             self.data[side]
                 .qs
                 .iter()
@@ -307,6 +313,7 @@ impl BaseSetUp<'_> {
             model_points(Side::Right),
             &self.data.left.measured,
             &self.data.right.measured,
+            self.model.arm(Side::Left).reflector_count(),
             self.model.left_base_from_right_base,
         );
         let h0 = problem.gauss_newton(&DVector::zeros(6));

@@ -147,6 +147,7 @@ impl CalibrationRun {
             diagnostics: Vec::new(),
             reflector_used: Default::default(),
             tracker_from_base: Default::default(),
+            base_not_measurable: self.base_not_measurable.clone(),
             cancel: self.cancel.clone(),
             started: self.started,
         }
