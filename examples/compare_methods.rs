@@ -100,13 +100,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     let n_free = free.len();
                     let problem = ArmProblem::new(
                         cal.iter().map(|m| m.q_rad.clone()).collect(),
-                        &cal.iter().map(|m| m.tracker_points_mm).collect::<Vec<_>>(),
+                        &cal.iter()
+                            .map(|m| m.tracker_points_mm.clone())
+                            .collect::<Vec<_>>(),
                         &arm,
                         free,
                         DVector::from_element(n_free, 1.0),
                         0.02,
                     )
-                    .with_reflectors(std::array::from_fn(|j| j != k));
+                    .with_reflectors((0..3).map(|j| j != k).collect());
                     let mut state = LsqState::new(
                         DistanceLeastSquares {
                             problem,

@@ -107,8 +107,8 @@ fn each_new_method_recovers_known_parameters_from_noise_free_data() {
         // comparison is of the predictions above, plus the identified reflector triangle).
         for side in Side::BOTH {
             let (t, c) = (
-                sim.truth.arm(side).reflectors_mm,
-                r.calibrated.arm(side).reflectors_mm,
+                &sim.truth.arm(side).reflectors_mm,
+                &r.calibrated.arm(side).reflectors_mm,
             );
             for (a, b) in [(0, 1), (1, 2), (2, 0)] {
                 let d = ((t[a] - t[b]).norm() - (c[a] - c[b]).norm()).abs();
@@ -292,7 +292,7 @@ fn identical_configurations_are_rank_deficient() {
         let first = arm.measurements[0].clone();
         for m in arm.measurements.iter_mut() {
             m.q_rad = first.q_rad.clone();
-            m.tracker_points_mm = first.tracker_points_mm;
+            m.tracker_points_mm = first.tracker_points_mm.clone();
         }
     }
     for &method in Method::ALL {
@@ -324,7 +324,9 @@ fn a_joint_that_never_moves_fixes_what_it_hides_and_the_rest_converges() {
         m.tracker_points_mm = arm
             .reflector_fk(&m.q_rad)
             .points_mm
-            .map(|p| t.transform_point(&p.into()).coords);
+            .iter()
+            .map(|p| t.transform_point(&(*p).into()).coords)
+            .collect();
     }
     for method in [Method::DistanceSingle, Method::Position, Method::Pose] {
         let r = Calibrator::new(&sim.dataset, &sim.nominal)
@@ -346,7 +348,7 @@ fn a_joint_that_never_moves_fixes_what_it_hides_and_the_rest_converges() {
 fn collinear_measured_reflectors_are_refused_by_the_pose_method() {
     let mut sim = sim(6, 30, 30, 1.0);
     let m = &mut sim.dataset.arms.right.measurements[7];
-    let [a, _, c] = m.tracker_points_mm;
+    let (a, c) = (m.tracker_points_mm[0], m.tracker_points_mm[2]);
     m.tracker_points_mm[1] = (a + c) * 0.5;
     let err = Calibrator::new(&sim.dataset, &sim.nominal)
         .settings(settings(Method::Pose, BaseMethod::Minimax))

@@ -98,10 +98,14 @@ fn simulate(truth: &DualArmModel, n: [usize; 2], noise_mm: f64, seed: u64) -> Da
                 let q_rad: [f64; N_JOINTS] =
                     std::array::from_fn(|j| rng.random_range(lim[j].0..lim[j].1));
                 let fk = truth.arm(side).reflector_fk(&q_rad);
-                let tracker_points_mm = fk.points_mm.map(|p| {
-                    let e = Vector3::from_fn(|_, _| rng.random_range(-1.0..=1.0)) * noise_mm;
-                    tracker_from_base.transform_point(&p.into()).coords + e
-                });
+                let tracker_points_mm = fk
+                    .points_mm
+                    .iter()
+                    .map(|p| {
+                        let e = Vector3::from_fn(|_, _| rng.random_range(-1.0..=1.0)) * noise_mm;
+                        tracker_from_base.transform_point(&(*p).into()).coords + e
+                    })
+                    .collect();
                 Measurement {
                     id: format!("{}-{i}", &side.name()[..1]),
                     q_rad: q_rad.to_vec(),
@@ -115,6 +119,7 @@ fn simulate(truth: &DualArmModel, n: [usize; 2], noise_mm: f64, seed: u64) -> Da
             side,
             links: None,
             file: PathBuf::from(format!("{}.csv", side.name())),
+            station: None,
             measurements,
         }
     };
@@ -124,7 +129,8 @@ fn simulate(truth: &DualArmModel, n: [usize; 2], noise_mm: f64, seed: u64) -> Da
         dir: PathBuf::new(),
         robot: None,
         tracker: TrackerSpec::default(),
-        nominal_reflectors_mm: common::reflectors_mm(),
+        nominal_reflectors_mm: common::reflectors_mm().to_vec(),
+        reflector_names: dualcal::kinematics::default_reflector_names(3),
         arms: PerSide::new(left, right),
     }
 }

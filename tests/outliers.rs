@@ -158,7 +158,7 @@ fn explanations_of_single_mistakes() {
     );
     // Reflector c misread by 1 mm along the triangle's normal (invisible to the side lengths).
     let mut ds = s.dataset.clone();
-    let p = ds.arms.left.measurements[20].tracker_points_mm;
+    let p = ds.arms.left.measurements[20].tracker_points_mm.clone();
     let normal = (p[1] - p[0]).cross(&(p[2] - p[0])).normalize();
     ds.arms.left.measurements[20].tracker_points_mm[2] += normal;
     let result = Calibrator::new(&ds, &s.nominal).run().unwrap();

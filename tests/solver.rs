@@ -69,10 +69,10 @@ fn synthetic(seed: u64, n: usize, n_cal: usize, noise_mm: f64) -> Synthetic {
                 let q: [f64; 7] =
                     std::array::from_fn(|j| rng.random_range(lim[j].0 * 0.9..lim[j].1 * 0.9));
                 let pts = truth.arm(side).reflector_fk(&q).points_mm;
-                let tracker_points_mm = pts.map(|p| {
+                let tracker_points_mm = pts.iter().map(|p| {
                     let p = tracker_from_left_base
                         * truth.left_base_from(side)
-                        * nalgebra::Point3::from(p);
+                        * nalgebra::Point3::from(*p);
                     let e = if noise_mm > 0.0 {
                         Vector3::new(
                             noise.sample(&mut rng),
@@ -83,7 +83,7 @@ fn synthetic(seed: u64, n: usize, n_cal: usize, noise_mm: f64) -> Synthetic {
                         Vector3::zeros()
                     };
                     p.coords + e
-                });
+                }).collect();
                 Measurement {
                     id: format!("{}{i:03}", if side == Side::Left { "L" } else { "R" }),
                     q_rad: q.to_vec(),
@@ -97,6 +97,7 @@ fn synthetic(seed: u64, n: usize, n_cal: usize, noise_mm: f64) -> Synthetic {
             side,
             file: format!("{side}.csv").into(),
             links: None,
+            station: None,
             measurements,
         }
     };
@@ -107,7 +108,8 @@ fn synthetic(seed: u64, n: usize, n_cal: usize, noise_mm: f64) -> Synthetic {
             dir: "synthetic".into(),
             robot: None,
             tracker: TrackerSpec::default(),
-            nominal_reflectors_mm: common::reflectors_mm(),
+            nominal_reflectors_mm: common::reflectors_mm().to_vec(),
+            reflector_names: dualcal::kinematics::default_reflector_names(3),
             arms: PerSide::new(left, right),
         },
         truth,
@@ -131,13 +133,15 @@ fn max_distance_disagreement(a: &DualArmModel, b: &DualArmModel, seed: u64) -> f
     let qs: Vec<[f64; 7]> = (0..30)
         .map(|_| std::array::from_fn(|j| rng.random_range(lim[j].0..lim[j].1)))
         .collect();
-    let pts = |m: &DualArmModel, side: Side| -> Vec<[Vector3<f64>; 3]> {
+    let pts = |m: &DualArmModel, side: Side| -> Vec<Vec<Vector3<f64>>> {
         qs.iter()
             .map(|q| {
                 m.arm(side)
                     .reflector_fk(q)
                     .points_mm
-                    .map(|p| (m.left_base_from(side) * nalgebra::Point3::from(p)).coords)
+                    .iter()
+                    .map(|p| (m.left_base_from(side) * nalgebra::Point3::from(*p)).coords)
+                    .collect()
             })
             .collect()
     };
@@ -503,7 +507,7 @@ fn error_paths() {
     let first = syn.dataset.arms.left.measurements[0].clone();
     for m in &mut syn.dataset.arms.left.measurements {
         m.q_rad = first.q_rad.clone();
-        m.tracker_points_mm = first.tracker_points_mm;
+        m.tracker_points_mm = first.tracker_points_mm.clone();
     }
     let err = run(&syn.dataset, &CalibrationSettings::default()).unwrap_err();
     assert!(

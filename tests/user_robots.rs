@@ -35,7 +35,7 @@ fn independent_points(
     arm: &ArmLinks,
     qs: &[Vec<f64>],
     dir: &Path,
-) -> Vec<[Vector3<f64>; 3]> {
+) -> Vec<Vec<Vector3<f64>>> {
     let configs = dir.join(format!("{}.json", arm.tip_link));
     std::fs::write(&configs, serde_json::to_vec(qs).unwrap()).unwrap();
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/urdf_fk.py");
@@ -62,16 +62,18 @@ fn independent_points(
         .unwrap()
         .iter()
         .map(|c| {
-            std::array::from_fn(|k| {
-                let p = &c["links"][&names[k]];
-                Vector3::from_fn(|i, _| p[i].as_f64().unwrap())
-            })
+            (0..names.len())
+                .map(|k| {
+                    let p = &c["links"][&names[k]];
+                    Vector3::from_fn(|i, _| p[i].as_f64().unwrap())
+                })
+                .collect()
         })
         .collect()
 }
 
 /// Relative positioning RMS (largest reflector) of model points against the dataset's measurements.
-fn relative_rms(measured: &[[Vector3<f64>; 3]], model: &[[Vector3<f64>; 3]]) -> f64 {
+fn relative_rms(measured: &[Vec<Vector3<f64>>], model: &[Vec<Vector3<f64>>]) -> f64 {
     let mut sum = [0.0; 3];
     let mut n = 0usize;
     for i in 0..measured.len() {
@@ -89,8 +91,8 @@ fn relative_rms(measured: &[[Vector3<f64>; 3]], model: &[[Vector3<f64>; 3]]) -> 
         .fold(0.0, f64::max)
 }
 
-fn ds_reflectors(flow: &Flow) -> [Vector3<f64>; 3] {
-    flow.dataset.nominal_reflectors_mm
+fn ds_reflectors(flow: &Flow) -> Vec<Vector3<f64>> {
+    flow.dataset.nominal_reflectors_mm.clone()
 }
 
 struct Flow {
@@ -126,7 +128,7 @@ fn run_flow(urdf_path: &Path, arms: [(&str, &str); 2], seed: u64, configs: (usiz
         &Default::default(),
     )
     .unwrap();
-    let nominal = robot.nominal_model(dataset.nominal_reflectors_mm);
+    let nominal = robot.nominal_model_for(&dataset);
     let settings = CalibrationSettings {
         max_iterations: 400,
         ..CalibrationSettings::default()
@@ -153,7 +155,7 @@ fn stats(r: &AccuracyReport) -> [(&'static str, f64); 3] {
 /// Verification accuracy of the calibrated model within 10% of the truth's, far below the nominal's.
 fn assert_noise_floor(flow: &Flow, name: &str) {
     let ds = &flow.dataset;
-    let nominal = flow.robot.nominal_model(ds.nominal_reflectors_mm);
+    let nominal = flow.robot.nominal_model_for(ds);
     let at = |m: &DualArmModel| evaluate(ds, m, Split::Ver).unwrap();
     let (n, t, c) = (at(&nominal), at(&flow.truth), at(&flow.calibrated));
     for ((label, n), ((_, t), (_, c))) in stats(&n)
@@ -282,7 +284,8 @@ fn assert_export(flow: &Flow, name: &str) {
             .filter(|m| m.split == Split::Ver)
             .collect();
         let qs: Vec<Vec<f64>> = ms.iter().map(|m| m.q_rad.clone()).collect();
-        let measured: Vec<[Vector3<f64>; 3]> = ms.iter().map(|m| m.tracker_points_mm).collect();
+        let measured: Vec<Vec<Vector3<f64>>> =
+            ms.iter().map(|m| m.tracker_points_mm.clone()).collect();
         let points = independent_points(&out, &flow.robot.arm(side).links, &qs, dir);
         // The file's right base link sits where the URDF tree puts it; the base correction is in
         // its first joint: the model points seen from the nominal base link.
@@ -292,14 +295,16 @@ fn assert_export(flow: &Flow, name: &str) {
             .left_base_from(side)
             .inverse()
             * flow.calibrated.left_base_from(side);
-        let model: Vec<[Vector3<f64>; 3]> = qs
+        let model: Vec<Vec<Vector3<f64>>> = qs
             .iter()
             .map(|q| {
                 flow.calibrated
                     .arm(side)
                     .reflector_fk(q)
                     .points_mm
-                    .map(|p| nominal_from_calibrated.transform_point(&p.into()).coords)
+                    .iter()
+                    .map(|p| nominal_from_calibrated.transform_point(&(*p).into()).coords)
+                    .collect()
             })
             .collect();
         for (p, m) in points.iter().zip(&model) {
