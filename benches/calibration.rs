@@ -149,7 +149,7 @@ fn identifiability(c: &mut Criterion) {
             .map(|m| m.q_rad.clone())
             .collect();
         let jac: Vec<_> = qs.iter().map(|q| arm.reflector_jacobians(q)).collect();
-        let columns = pair_jacobian_columns(&jac, 3000, [true; 3]);
+        let columns = pair_jacobian_columns(&jac, 3000, &[true; 3]);
         group.bench_function(format!("start_gram_by_qr_{cal}"), |b| {
             b.iter(|| black_box(gram_by_qr(black_box(&columns))))
         });

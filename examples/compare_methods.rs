@@ -38,15 +38,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 "{:.4} ({:.2}) | {:.5} ({:.2})",
                 s.pos_rms_mm,
                 s.pos_rms_mm / t.pos_rms_mm,
-                s.ori_rms_rad,
-                s.ori_rms_rad / t.ori_rms_rad
+                s.ori_rms_rad.unwrap(),
+                s.ori_rms_rad.unwrap() / t.ori_rms_rad.unwrap()
             )
         };
         println!(
             "| truth | | {} | {} | {} | |",
             cell(&truth.relative_left, &truth.relative_left),
             cell(&truth.relative_right, &truth.relative_right),
-            cell(&truth.collaborative, &truth.collaborative)
+            cell(&truth.collaborative.unwrap(), &truth.collaborative.unwrap())
         );
         let combos = Method::ALL
             .iter()
@@ -74,7 +74,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 base_method.name(),
                 cell(&v.relative_left, &truth.relative_left),
                 cell(&v.relative_right, &truth.relative_right),
-                cell(&v.collaborative, &truth.collaborative),
+                cell(&v.collaborative.unwrap(), &truth.collaborative.unwrap()),
                 if r.is_converged() {
                     String::new()
                 } else {
@@ -112,7 +112,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     let mut state = LsqState::new(
                         DistanceLeastSquares {
                             problem,
-                            reflectors: std::array::from_fn(|j| j != k),
+                            reflectors: (0..3).map(|j| j != k).collect(),
                         },
                         LsqAlgorithm::GaussNewton,
                         1e-10,

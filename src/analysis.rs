@@ -14,7 +14,7 @@ use crate::kinematics::DualArmModel;
 use crate::metrics::{
     self, AccuracyReport, MetricsError, PairKind, PairSamples, SplitSweep, Sweep,
 };
-use crate::side::{ConfigId, Side};
+use crate::side::{ConfigId, PerSide, Side};
 use nalgebra::{Isometry3, Point3, Vector3};
 use rayon::prelude::*;
 
@@ -75,27 +75,25 @@ impl Indicator {
         }
     }
 
-    /// The matching summary line of a report: (rms, max, [frequency within the two thresholds]).
-    pub fn summary(self, report: &AccuracyReport) -> (f64, f64, [f64; 2]) {
-        let stats = match self.pair_kind() {
-            PairKind::Relative(side) => report.relative(side),
-            PairKind::Collaborative => &report.collaborative,
-        };
+    /// The matching summary line of a report: (rms, max, [frequency within the two thresholds]);
+    /// `None` for an orientation indicator the data cannot measure (fewer than three reflectors).
+    pub fn summary(self, report: &AccuracyReport) -> Option<(f64, f64, [f64; 2])> {
+        let stats = report.stats(self.pair_kind())?;
         if self.is_position() {
-            (
+            Some((
                 stats.pos_rms_mm,
                 stats.pos_max_mm,
                 [stats.pos_within_0_3mm_frac, stats.pos_within_0_6mm_frac],
-            )
+            ))
         } else {
-            (
-                stats.ori_rms_rad,
-                stats.ori_max_rad,
+            Some((
+                stats.ori_rms_rad?,
+                stats.ori_max_rad?,
                 [
-                    stats.ori_within_0_005rad_frac,
-                    stats.ori_within_0_01rad_frac,
+                    stats.ori_within_0_005rad_frac?,
+                    stats.ori_within_0_01rad_frac?,
                 ],
-            )
+            ))
         }
     }
 }
@@ -110,7 +108,8 @@ pub struct Histogram {
     pub hi: f64,
     /// Fraction (0..1) of all samples in each bin; samples outside the range count in the end bins.
     pub fractions: Vec<f64>,
-    /// How many samples: three per pair for `Δd` (one per reflector), one per pair for `Δo`.
+    /// How many samples: one per pair and reflector for `Δd`, one per pair for `Δo` (none when the
+    /// orientation is not measurable).
     pub samples: usize,
 }
 
@@ -165,7 +164,9 @@ impl Histogram {
     /// `|Δd|`, or `Δo` from zero to the largest.
     fn of_indicator(indicator: Indicator, split: &SplitSweep) -> Self {
         let samples = split.samples(indicator.pair_kind());
-        let (_, max, _) = indicator.summary(&split.report);
+        let Some((_, max, _)) = indicator.summary(&split.report) else {
+            return Self::of(&[], 0.0, 1.0, HISTOGRAM_BINS);
+        };
         let extent = max.max(1e-9);
         if indicator.is_position() {
             Self::of(&samples.pos_mm, -extent, extent, HISTOGRAM_BINS)
@@ -183,22 +184,27 @@ pub struct ConfigRow {
     pub split: Split,
     /// Largest |Δd| over every pair (relative and collaborative) involving it, mm.
     pub worst_pos_mm: f64,
-    /// Largest Δo over every pair involving it, rad.
-    pub worst_ori_rad: f64,
-    /// Largest deviation of the measured triangle's sides from the model's, mm.
+    /// Largest Δo over every pair involving it, rad; `None`: not measurable (fewer than three
+    /// reflectors).
+    pub worst_ori_rad: Option<f64>,
+    /// Largest deviation of the measured distances between its reflectors from the model's, mm.
     pub rigidity_mm: f64,
-    /// Measured points a, b, c in the body frame (after registration), mm.
-    pub measured_body_mm: [Vector3<f64>; 3],
-    /// Model points a, b, c in the body frame, mm.
-    pub model_body_mm: [Vector3<f64>; 3],
+    /// Measured points of its reflectors (a, b, c) in the body frame (after registration), mm.
+    pub measured_body_mm: Vec<Vector3<f64>>,
+    /// Model points of its reflectors in the body frame, mm.
+    pub model_body_mm: Vec<Vector3<f64>>,
     /// Left out of the calibration and of the accuracy figures (its own errors are still listed).
     pub excluded: bool,
 }
 
 impl ConfigRow {
     /// Distance between measured and model point of each reflector after registration, mm.
-    pub fn point_errors_mm(&self) -> [f64; 3] {
-        std::array::from_fn(|k| (self.measured_body_mm[k] - self.model_body_mm[k]).norm())
+    pub fn point_errors_mm(&self) -> Vec<f64> {
+        self.measured_body_mm
+            .iter()
+            .zip(&self.model_body_mm)
+            .map(|(m, p)| (m - p).norm())
+            .collect()
     }
 }
 
@@ -267,11 +273,11 @@ impl SplitFigures {
     }
 }
 
-/// Per pair, the signed `Δd` of largest magnitude among the three reflectors.
+/// Per pair, the signed `Δd` of largest magnitude among the reflectors.
 pub fn worst_reflector_mm(samples: &PairSamples) -> Vec<f32> {
     samples
         .pos_mm
-        .par_chunks_exact(3)
+        .par_chunks_exact(samples.reflectors.max(1))
         .map(|d| {
             d.iter()
                 .copied()
@@ -290,8 +296,12 @@ pub struct Analysis {
     pub ver: SplitFigures,
     /// Every configuration of both arms (left first).
     pub configs: Vec<ConfigRow>,
-    /// Tracker → left DH base registration used for drawing.
+    /// Tracker → left DH base registration used for drawing (the left arm's station's, where the
+    /// arms were measured from two).
     pub left_base_from_tracker: Isometry3<f64>,
+    /// Each arm's registration: the same one for both arms measured in one tracker frame, each arm's
+    /// own where they were measured from two stations.
+    pub left_base_from_station: PerSide<Isometry3<f64>>,
     /// RMS of the registration residuals, mm.
     pub registration_rms_mm: f64,
     /// The configurations left out of the figures (indices into the loaded dataset).
@@ -353,18 +363,20 @@ impl Analysis {
         };
 
         // Model points in the left base, and the registration of the tracker onto them.
-        let mut model_left: Vec<[Vector3<f64>; 3]> = Vec::new();
+        let mut model_left: Vec<Vec<Vector3<f64>>> = Vec::new();
         for side in Side::BOTH {
             let arm = model.arm(side);
             let left_base_from_base = model.left_base_from(side);
-            let points: Vec<[Vector3<f64>; 3]> = dataset
+            let points: Vec<Vec<Vector3<f64>>> = dataset
                 .arm(side)
                 .measurements
                 .par_iter()
                 .map(|m| {
                     arm.reflector_fk(&m.q_rad)
                         .points_mm
-                        .map(|p| (left_base_from_base * Point3::from(p)).coords)
+                        .iter()
+                        .map(|p| (left_base_from_base * Point3::from(*p)).coords)
+                        .collect()
                 })
                 .collect();
             model_left.extend(points);
@@ -380,44 +392,78 @@ impl Analysis {
             .into_iter()
             .flat_map(|side| (0..dataset.arm(side).measurements.len()).map(move |i| kept(side, i)))
             .collect();
-        let from: Vec<Vector3<f64>> = measured()
-            .zip(&kept_flags)
-            .filter(|(_, k)| **k)
-            .flat_map(|(m, _)| m.tracker_points_mm)
-            .collect();
-        let to: Vec<Vector3<f64>> = model_left
-            .iter()
-            .zip(&kept_flags)
-            .filter(|(_, k)| **k)
-            .flat_map(|(p, _)| *p)
-            .collect();
-        let left_base_from_tracker =
-            best_fit_rigid(&from, &to).ok_or(AnalysisError::Registration)?;
-        let sum_sq: f64 = from
-            .iter()
-            .zip(&to)
-            .map(|(p, q)| ((left_base_from_tracker * Point3::from(*p)).coords - q).norm_squared())
-            .sum();
-        let registration_rms_mm = (sum_sq / from.len().max(1) as f64).sqrt();
+        // One registration of every kept point, or one per arm where the arms were measured from two
+        // stations (their coordinates lie in unrelated frames).
+        let n_left = dataset.arms.left.measurements.len();
+        let side_of = |row: usize| if row < n_left { Side::Left } else { Side::Right };
+        let one_frame = dataset.one_tracker_frame();
+        let register = |only: Option<Side>| -> Result<(Isometry3<f64>, f64, usize), AnalysisError> {
+            let take = |row: usize| kept_flags[row] && only.is_none_or(|s| side_of(row) == s);
+            let from: Vec<Vector3<f64>> = measured()
+                .enumerate()
+                .filter(|(row, _)| take(*row))
+                .flat_map(|(_, m)| m.tracker_points_mm.iter().copied())
+                .collect();
+            let to: Vec<Vector3<f64>> = model_left
+                .iter()
+                .enumerate()
+                .filter(|(row, _)| take(*row))
+                .flat_map(|(_, p)| p.iter().copied())
+                .collect();
+            let fit = best_fit_rigid(&from, &to).ok_or(AnalysisError::Registration)?;
+            let sum_sq: f64 = from
+                .iter()
+                .zip(&to)
+                .map(|(p, q)| ((fit * Point3::from(*p)).coords - q).norm_squared())
+                .sum();
+            Ok((fit, sum_sq, from.len()))
+        };
+        let (left_base_from_station, registration_rms_mm) = if one_frame {
+            let (fit, sum_sq, n) = register(None)?;
+            (PerSide::new(fit, fit), (sum_sq / n.max(1) as f64).sqrt())
+        } else {
+            let (l, r) = (register(Some(Side::Left))?, register(Some(Side::Right))?);
+            (
+                PerSide::new(l.0, r.0),
+                ((l.1 + r.1) / (l.2 + r.2).max(1) as f64).sqrt(),
+            )
+        };
+        let left_base_from_tracker = left_base_from_station.left;
 
         // The sweep lists every configuration, in the same order (left arm first).
         debug_assert_eq!(per_config.len(), model_left.len());
-        let body_from_tracker = body_from_left_base * left_base_from_tracker;
+        let body_from_station = left_base_from_station.map(|_, r| body_from_left_base * r);
         let configs = measured()
             .zip(per_config)
             .zip(model_left)
-            .map(|((m, c), model_pts)| ConfigRow {
-                config: c.config,
-                id: m.id.clone(),
-                split: m.split,
-                worst_pos_mm: c.relative_pos_max_mm.max(c.collaborative_pos_max_mm),
-                worst_ori_rad: c.relative_ori_max_rad.max(c.collaborative_ori_max_rad),
-                rigidity_mm: c.rigidity_mm,
-                measured_body_mm: m
-                    .tracker_points_mm
-                    .map(|p| (body_from_tracker * Point3::from(p)).coords),
-                model_body_mm: model_pts.map(|p| (body_from_left_base * Point3::from(p)).coords),
-                excluded: exclude.contains(&c.config),
+            .map(|((m, c), model_pts)| {
+                let body_from_tracker = body_from_station[c.config.side];
+                // Without a common frame the collaborative figures do not exist.
+                let worst_pos_mm = c
+                    .collaborative_pos_max_mm
+                    .map_or(c.relative_pos_max_mm, |o| c.relative_pos_max_mm.max(o));
+                let worst_ori_rad = match (c.relative_ori_max_rad, c.collaborative_ori_max_rad) {
+                    (Some(r), Some(o)) if one_frame => Some(r.max(o)),
+                    (r, _) => r,
+                };
+                ConfigRow {
+                    config: c.config,
+                    id: m.id.clone(),
+                    split: m.split,
+                    worst_pos_mm,
+                    worst_ori_rad,
+                    rigidity_mm: c.rigidity_mm,
+                    measured_body_mm: m
+                        .tracker_points_mm
+                        .iter()
+                        .map(|p| (body_from_tracker * Point3::from(*p)).coords)
+                        .collect(),
+                    model_body_mm: model_pts
+                        .iter()
+                        .map(|p| (body_from_left_base * Point3::from(*p)).coords)
+                        .collect(),
+                    excluded: exclude.contains(&c.config),
+                }
             })
             .collect();
         Ok(Self {
@@ -426,6 +472,7 @@ impl Analysis {
             ver: SplitFigures::of(ver),
             configs,
             left_base_from_tracker,
+            left_base_from_station,
             registration_rms_mm,
             excluded: exclude.to_vec(),
         })
@@ -476,6 +523,7 @@ mod tests {
     #[test]
     fn worst_reflector_keeps_the_sign_of_the_largest_magnitude() {
         let s = PairSamples {
+            reflectors: 3,
             pos_mm: vec![0.1, -0.3, 0.2, 0.5, 0.0, -0.1, 0.0, 0.0, 0.0],
             ori_rad: vec![0.0; 3],
         };

@@ -109,7 +109,7 @@ impl Workspace {
             })?;
         let limits = PerSide::from_fn(|side| robot.joint_limits_rad(side));
         dataset::check_joint_limits(&dataset, &limits).map_err(LoadError::JointLimits)?;
-        let nominal = robot.nominal_model(dataset.nominal_reflectors_mm);
+        let nominal = robot.nominal_model_for(&dataset);
         let screening = quality::screen(&dataset, &nominal, screen);
         Ok(Self {
             dataset,
@@ -161,7 +161,7 @@ mod tests {
         assert_eq!(
             ws.nominal.arm(crate::side::Side::Left).param_count(),
             ws.robot
-                .nominal_model(ws.dataset.nominal_reflectors_mm)
+                .nominal_model_for(&ws.dataset)
                 .arm(crate::side::Side::Left)
                 .param_count()
         );

@@ -30,7 +30,7 @@ fn stats(r: &AccuracyReport) -> [(&'static str, &AccuracyStats); 3] {
     [
         ("relative left", &r.relative_left),
         ("relative right", &r.relative_right),
-        ("collaborative", &r.collaborative),
+        ("collaborative", r.collaborative.as_ref().unwrap()),
     ]
 }
 
@@ -61,10 +61,10 @@ fn paper_size_simulation_reaches_the_noise_floor() {
                 t.pos_rms_mm
             );
             assert!(
-                c.ori_rms_rad <= 1.1 * t.ori_rms_rad,
+                c.ori_rms_rad.unwrap() <= 1.1 * t.ori_rms_rad.unwrap(),
                 "seed {seed} {name}: orientation RMS {} vs truth {}",
-                c.ori_rms_rad,
-                t.ori_rms_rad
+                c.ori_rms_rad.unwrap(),
+                t.ori_rms_rad.unwrap()
             );
         }
 

@@ -114,7 +114,7 @@ fn calibrate_shows_calibrated_figures() {
     harness.get_by_label("Summary").click();
     harness.step();
     harness.get_by_label("collaborative");
-    let collab = format!("{:.3}", ver.collaborative.pos_rms_mm);
+    let collab = format!("{:.3}", ver.collaborative.unwrap().pos_rms_mm);
     assert!(
         harness.query_all_by_label(&collab).count() >= 1,
         "{collab} mm not shown"
@@ -602,7 +602,7 @@ fn accuracy_follows_a_running_calibration(execution: Option<dualcal::app::task::
         fn record(&mut self, run: &CalibrationRun) {
             let report =
                 dualcal::metrics::evaluate(self.dataset, &run.current_model(), Split::Ver).unwrap();
-            self.rms_mm.push(report.collaborative.pos_rms_mm);
+            self.rms_mm.push(report.collaborative.unwrap().pos_rms_mm);
         }
     }
     impl Observer for Iterates<'_> {
@@ -660,7 +660,7 @@ fn accuracy_follows_a_running_calibration(execution: Option<dualcal::app::task::
         .ver
         .report
         .unwrap()
-        .collaborative
+        .collaborative.unwrap()
         .pos_rms_mm;
     let [_, after] = accuracy_rms_cells(&harness);
     assert_eq!(after, format!("{final_rms:.3}"));
@@ -748,7 +748,7 @@ fn calibrated_ver_collab_rms(app: &WorkbenchApp) -> f64 {
         .ver
         .report
         .unwrap()
-        .collaborative
+        .collaborative.unwrap()
         .pos_rms_mm
 }
 
@@ -826,7 +826,7 @@ fn excluding_a_flagged_configuration_resolves_at_once_and_changes_the_figures() 
             .find(|r| r.config == config)
             .unwrap();
         let figures = analysis.figures(row.split).unwrap();
-        figures.report.unwrap().collaborative.pos_rms_mm
+        figures.report.unwrap().collaborative.unwrap().pos_rms_mm
     };
     let nominal_with = split_rms(&harness.state().session().unwrap().nominal, flagged);
 
@@ -1247,7 +1247,7 @@ fn calibrated_ver_collab(app: &WorkbenchApp) -> f64 {
         .calibrated
         .as_ref()
         .expect("calibrated");
-    c.analysis.ver.report.unwrap().collaborative.pos_rms_mm
+    c.analysis.ver.report.unwrap().collaborative.unwrap().pos_rms_mm
 }
 
 /// The `method` record of the parameter file the workbench exports.
@@ -1355,7 +1355,7 @@ fn the_comparison_lists_each_method_and_adopting_one_changes_the_export() {
             .and_then(|m| m.figures())
             .and_then(|f| f.report(dualcal::dataset::Split::Ver))
             .expect("verification figures")
-            .collaborative
+            .collaborative.unwrap()
             .pos_rms_mm
     };
     let (minimax, lsq) = (ver_collab("minimax"), ver_collab("lsq"));
@@ -1364,7 +1364,7 @@ fn the_comparison_lists_each_method_and_adopting_one_changes_the_export() {
         .nominal
         .report(dualcal::dataset::Split::Ver)
         .unwrap()
-        .collaborative
+        .collaborative.unwrap()
         .pos_rms_mm;
     assert!(nominal > 10.0 * minimax.max(lsq), "nominal {nominal} mm");
     // One row per method plus the nominal one, each with its figures shown.

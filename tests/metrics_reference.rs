@@ -272,15 +272,15 @@ fn fields(s: &AccuracyStats) -> Vec<(String, f64)> {
     let mut v = vec![
         ("pos_rms_mm".to_string(), s.pos_rms_mm),
         ("pos_max_mm".into(), s.pos_max_mm),
-        ("ori_rms_rad".into(), s.ori_rms_rad),
-        ("ori_max_rad".into(), s.ori_max_rad),
+        ("ori_rms_rad".into(), s.ori_rms_rad.unwrap()),
+        ("ori_max_rad".into(), s.ori_max_rad.unwrap()),
         ("pos_within_0_3mm_frac".into(), s.pos_within_0_3mm_frac),
         ("pos_within_0_6mm_frac".into(), s.pos_within_0_6mm_frac),
         (
             "ori_within_0_005rad_frac".into(),
-            s.ori_within_0_005rad_frac,
+            s.ori_within_0_005rad_frac.unwrap(),
         ),
-        ("ori_within_0_01rad_frac".into(), s.ori_within_0_01rad_frac),
+        ("ori_within_0_01rad_frac".into(), s.ori_within_0_01rad_frac.unwrap()),
         ("n_configs".into(), s.n_configs as f64),
         ("n_pairs".into(), s.n_pairs as f64),
     ];
@@ -308,8 +308,8 @@ fn assert_agree(rust: &AccuracyReport, reference: &AccuracyReport, what: &str) {
         ),
         (
             "collaborative",
-            &rust.collaborative,
-            &reference.collaborative,
+            &rust.collaborative.unwrap(),
+            &reference.collaborative.unwrap(),
         ),
     ];
     for (name, a, b) in sets {
@@ -325,8 +325,8 @@ fn assert_agree(rust: &AccuracyReport, reference: &AccuracyReport, what: &str) {
 
 /// The figures must be non-trivial for the comparison to mean something.
 fn assert_nontrivial(r: &AccuracyReport) {
-    for s in [&r.relative_left, &r.relative_right, &r.collaborative] {
-        assert!(s.pos_rms_mm > 0.01 && s.ori_rms_rad > 1e-5, "{s:?}");
+    for s in [&r.relative_left, &r.relative_right, &r.collaborative.unwrap()] {
+        assert!(s.pos_rms_mm > 0.01 && s.ori_rms_rad.unwrap() > 1e-5, "{s:?}");
     }
 }
 
@@ -408,7 +408,7 @@ fn in_memory_dataset_agrees_with_reference() {
                     &reference,
                     &format!("seed {seed} {name} split {split}"),
                 );
-                let f = rust.collaborative.pos_within_0_6mm_frac;
+                let f = rust.collaborative.unwrap().pos_within_0_6mm_frac;
                 freq_seen |= f > 0.0 && f < 1.0;
             }
         }

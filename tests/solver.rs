@@ -228,9 +228,9 @@ fn accuracy(ds: &Dataset, model: &DualArmModel, split: Split) -> [(&'static str,
     [
         ("relative left", &r.relative_left),
         ("relative right", &r.relative_right),
-        ("collaborative", &r.collaborative),
+        ("collaborative", &r.collaborative.unwrap()),
     ]
-    .map(|(name, s)| (name, s.pos_rms_mm, s.ori_rms_rad))
+    .map(|(name, s)| (name, s.pos_rms_mm, s.ori_rms_rad.unwrap()))
 }
 
 /// Tracker noise of 0.01 mm per axis: the true model's errors on this data are the noise floor

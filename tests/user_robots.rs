@@ -148,7 +148,7 @@ fn stats(r: &AccuracyReport) -> [(&'static str, f64); 3] {
     [
         ("relative left", r.relative_left.pos_rms_mm),
         ("relative right", r.relative_right.pos_rms_mm),
-        ("collaborative", r.collaborative.pos_rms_mm),
+        ("collaborative", r.collaborative.unwrap().pos_rms_mm),
     ]
 }
 

@@ -79,40 +79,35 @@ pub fn encode_png(image: &egui::ColorImage) -> anyhow::Result<Vec<u8>> {
 /// Per-configuration errors of the current model as CSV.
 pub fn export_csv(session: &Session) -> anyhow::Result<Vec<u8>> {
     let mut w = csv::Writer::from_writer(Vec::new());
-    w.write_record([
-        "id",
-        "arm",
-        "split",
-        "worst_pos_mm",
-        "worst_ori_rad",
-        "rigidity_mm",
-        "point_error_a_mm",
-        "point_error_b_mm",
-        "point_error_c_mm",
-        "excluded",
-        "flag",
-        "flag_size_mm",
-        "flag_reason",
-    ])?;
+    let names = &session.dataset.reflector_names;
+    let mut header: Vec<String> = ["id", "arm", "split", "worst_pos_mm", "worst_ori_rad", "rigidity_mm"]
+        .map(String::from)
+        .to_vec();
+    header.extend(names.iter().map(|r| format!("point_error_{r}_mm")));
+    header.extend(["excluded", "flag", "flag_size_mm", "flag_reason"].map(String::from));
+    w.write_record(&header)?;
     let flags = session.current_screening().by_config();
     for row in &session.current().configs {
         let e = row.point_errors_mm();
         let flag = flags.get(&row.config).map(|f| f[0]);
-        w.write_record([
+        let mut record = vec![
             row.id.clone(),
             row.config.side.name().to_string(),
             row.split.name().to_string(),
             format!("{:.6}", row.worst_pos_mm),
-            format!("{:.8}", row.worst_ori_rad),
+            // Empty where the orientation is not measurable (fewer than three reflectors).
+            row.worst_ori_rad
+                .map_or_else(String::new, |v| format!("{v:.8}")),
             format!("{:.6}", row.rigidity_mm),
-            format!("{:.6}", e[0]),
-            format!("{:.6}", e[1]),
-            format!("{:.6}", e[2]),
+        ];
+        record.extend(e.iter().map(|v| format!("{v:.6}")));
+        record.extend([
             row.excluded.to_string(),
             flag.map_or("", |f| f.kind.label()).to_string(),
             flag.map_or_else(String::new, |f| format!("{:.6}", f.size_mm)),
             flag.map_or_else(String::new, |f| f.reason.clone()),
-        ])?;
+        ]);
+        w.write_record(&record)?;
     }
     w.into_inner().context("CSV buffer")
 }
@@ -213,7 +208,7 @@ mod tests {
         )
         .unwrap();
         let back = robot
-            .dh_model(session.dataset.nominal_reflectors_mm)
+            .dh_model(session.dataset.nominal_reflectors_mm.clone())
             .unwrap();
         assert!(max_dh_difference(&back, &cal.result.calibrated) < 1e-6);
 

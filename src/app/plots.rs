@@ -3,7 +3,7 @@
 use crate::analysis::{Analysis, Histogram, Indicator, SplitFigures};
 use crate::app::session::{After, Session};
 use crate::dataset::Split;
-use crate::metrics::{AccuracyReport, ORI_THRESHOLDS_RAD, POS_THRESHOLDS_MM, PairKind};
+use crate::metrics::{AccuracyReport, ORI_THRESHOLDS_RAD, POS_THRESHOLDS_MM};
 use crate::side::Side;
 use crate::solver::{IterationRecord, Stage};
 use eframe::egui::{self, Color32, RichText};
@@ -104,17 +104,20 @@ pub fn convergence_plot_ui(ui: &mut egui::Ui, history: &[IterationRecord], stage
                 .color(Color32::GRAY),
         );
     } else if let Some(last) = records.last() {
+        let list = |v: &[f64], digits: usize| {
+            v.iter()
+                .map(|x| format!("{x:.digits$}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
         ui.label(format!(
-            "{stage}: iteration {}, ψ = {:.6} mm², F = [{:.4}, {:.4}, {:.4}] mm², {}step {:.2e}, KKT {:.2e}",
+            "{stage}: iteration {}, ψ = {:.6} mm², F = [{}] mm², {}step {:.2e}, KKT {:.2e}",
             last.iteration,
             last.psi_mm2,
-            last.f_mm2[0],
-            last.f_mm2[1],
-            last.f_mm2[2],
-            last.lambda.map_or(String::new(), |l| format!(
-                "weights λ = [{:.2}, {:.2}, {:.2}], ",
-                l[0], l[1], l[2]
-            )),
+            list(&last.f_mm2, 4),
+            last.lambda
+                .as_ref()
+                .map_or(String::new(), |l| format!("weights λ = [{}], ", list(l, 2))),
             last.step_norm,
             last.optimality_residual
         ));
@@ -294,35 +297,37 @@ fn accuracy_numbers_ui(
             }
             ui.end_row();
             let reports = figures.map(|f| f.and_then(|f| f.report.as_ref()));
+            // `None` without a report; `Some(None)`: the data cannot measure it.
             let summaries = reports.map(|r| r.map(|r| indicator.summary(r)));
-            let cell = |ui: &mut egui::Ui, v: Option<String>| {
-                ui.label(v.unwrap_or_else(|| "—".into()));
+            let cell = |ui: &mut egui::Ui, v: Option<Option<String>>| {
+                ui.label(match v {
+                    None => "—".into(),
+                    Some(None) => crate::metrics::NOT_MEASURABLE.into(),
+                    Some(Some(v)) => v,
+                });
             };
             let digits = if indicator.is_position() { 3 } else { 5 };
             ui.label(format!("RMS ({unit})"));
             for s in summaries {
-                cell(ui, s.map(|s| format!("{:.digits$}", s.0)));
+                cell(ui, s.map(|s| s.map(|s| format!("{:.digits$}", s.0))));
             }
             ui.end_row();
             ui.label(format!("max ({unit})"));
             for s in summaries {
-                cell(ui, s.map(|s| format!("{:.digits$}", s.1)));
+                cell(ui, s.map(|s| s.map(|s| format!("{:.digits$}", s.1))));
             }
             ui.end_row();
             for (t, label) in thresholds.iter().enumerate() {
                 ui.label(label);
                 for s in summaries {
-                    cell(ui, s.map(|s| format!("{:.1} %", 100.0 * s.2[t])));
+                    cell(ui, s.map(|s| s.map(|s| format!("{:.1} %", 100.0 * s.2[t]))));
                 }
                 ui.end_row();
             }
             ui.label("pairs");
             for r in reports {
-                let stats = r.map(|r| match indicator.pair_kind() {
-                    PairKind::Relative(side) => r.relative(side),
-                    PairKind::Collaborative => &r.collaborative,
-                });
-                cell(ui, stats.map(|s| s.n_pairs.to_string()));
+                let stats = r.and_then(|r| r.stats(indicator.pair_kind()));
+                cell(ui, stats.map(|s| Some(s.n_pairs.to_string())));
             }
             ui.end_row();
         });
@@ -450,16 +455,25 @@ pub fn accuracy_summary_ui(ui: &mut egui::Ui, session: &Session, split: Split) {
                             ui.label(model);
                             match report {
                                 Some(r) => {
-                                    let (p_rms, p_max, p_freq) = pos.summary(r);
-                                    let (o_rms, o_max, o_freq) = ori.summary(r);
-                                    ui.label(format!("{p_rms:.3}"));
-                                    ui.label(format!("{p_max:.3}"));
-                                    ui.label(format!("{:.1} %", 100.0 * p_freq[0]));
-                                    ui.label(format!("{:.1} %", 100.0 * p_freq[1]));
-                                    ui.label(format!("{o_rms:.5}"));
-                                    ui.label(format!("{o_max:.5}"));
-                                    ui.label(format!("{:.1} %", 100.0 * o_freq[0]));
-                                    ui.label(format!("{:.1} %", 100.0 * o_freq[1]));
+                                    let four = |s: Option<(f64, f64, [f64; 2])>, digits: usize| {
+                                        s.map_or_else(
+                                            || std::array::from_fn(|_| crate::metrics::NOT_MEASURABLE.to_string()),
+                                            |(rms, max, freq)| {
+                                                [
+                                                    format!("{rms:.digits$}"),
+                                                    format!("{max:.digits$}"),
+                                                    format!("{:.1} %", 100.0 * freq[0]),
+                                                    format!("{:.1} %", 100.0 * freq[1]),
+                                                ]
+                                            },
+                                        )
+                                    };
+                                    for text in four(pos.summary(r), 3)
+                                        .into_iter()
+                                        .chain(four(ori.summary(r), 5))
+                                    {
+                                        ui.label(text);
+                                    }
                                 }
                                 None => {
                                     for _ in 0..8 {

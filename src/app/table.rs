@@ -101,7 +101,9 @@ impl Column {
             Column::Arm => row.config.side.name().into(),
             Column::Split => row.split.name().into(),
             Column::WorstPos => number(row.worst_pos_mm, 3),
-            Column::WorstOri => number(row.worst_ori_rad, 5),
+            Column::WorstOri => row
+                .worst_ori_rad
+                .map_or_else(|| "–".to_string(), |v| number(v, 5)),
             Column::Rigidity => number(row.rigidity_mm, 3),
         }
     }
@@ -143,7 +145,10 @@ fn compare(a: &ConfigRow, b: &ConfigRow, column: Column, flags: &Flags) -> std::
         Column::Arm => a.config.side.name().cmp(b.config.side.name()),
         Column::Split => (a.split == Split::Ver).cmp(&(b.split == Split::Ver)),
         Column::WorstPos => a.worst_pos_mm.total_cmp(&b.worst_pos_mm),
-        Column::WorstOri => a.worst_ori_rad.total_cmp(&b.worst_ori_rad),
+        Column::WorstOri => a
+            .worst_ori_rad
+            .unwrap_or(-1.0)
+            .total_cmp(&b.worst_ori_rad.unwrap_or(-1.0)),
         Column::Rigidity => a.rigidity_mm.total_cmp(&b.rigidity_mm),
     }
 }

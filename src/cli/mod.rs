@@ -518,17 +518,28 @@ pub fn print_event(event: &CalibrationEvent) {
             eprintln!("{stage}: {n_configs} configurations, {n_pairs} pairs per reflector")
         }
         CalibrationEvent::Iteration(r) => {
-            let lambda = match r.lambda {
-                Some(l) => format!("λ {:.2}/{:.2}/{:.2}", l[0], l[1], l[2]),
+            let lambda = match &r.lambda {
+                Some(l) => format!(
+                    "λ {}",
+                    l.iter()
+                        .map(|x| format!("{x:.2}"))
+                        .collect::<Vec<_>>()
+                        .join("/")
+                ),
                 None => format!("{:14}", "λ –"),
             };
+            // One column per reflector, named a, b, c, … by position.
+            let names = crate::kinematics::default_reflector_names(r.f_mm2.len());
+            let f = names
+                .iter()
+                .zip(&r.f_mm2)
+                .map(|(n, v)| format!("F_{n} {v:>12.4}"))
+                .collect::<Vec<_>>()
+                .join("  ");
             eprintln!(
-                "  {:>3}  ψ {:>14.6} mm²   F_a {:>12.4}  F_b {:>12.4}  F_c {:>12.4}   {lambda}   step {:>9.2e}   KKT {:>9.2e}   {:>7.3} s",
+                "  {:>3}  ψ {:>14.6} mm²   {f}   {lambda}   step {:>9.2e}   KKT {:>9.2e}   {:>7.3} s",
                 r.iteration,
                 r.psi_mm2,
-                r.f_mm2[0],
-                r.f_mm2[1],
-                r.f_mm2[2],
                 r.step_norm,
                 r.optimality_residual,
                 r.elapsed_secs

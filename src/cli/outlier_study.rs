@@ -36,7 +36,7 @@ const KIND_NAMES: [&str; 3] = [
 ];
 
 fn three(r: &AccuracyReport, pick: fn(&metrics::AccuracyStats) -> f64) -> [f64; 3] {
-    [r.relative_left, r.relative_right, r.collaborative].map(|s| pick(&s))
+    [r.relative_left, r.relative_right, r.collaborative_or_nan()].map(|s| pick(&s))
 }
 
 fn fmt3(v: [f64; 3], digits: usize) -> String {
@@ -193,10 +193,10 @@ fn one_seed(
             "{lead} {name} | {} | {} | {} |",
             fmt3(three(report, |s| s.pos_rms_mm), 4),
             fmt3(three(report, |s| s.pos_max_mm), 4),
-            fmt3(three(report, |s| s.ori_rms_rad), 5)
+            fmt3(three(report, |s| s.ori_rms_rad.unwrap_or(f64::NAN)), 5)
         );
     }
-    let collab = |r: &AccuracyReport| r.collaborative.pos_rms_mm;
+    let collab = |r: &AccuracyReport| r.collaborative_or_nan().pos_rms_mm;
     t.ratios.push([
         collab(&unscreened) / collab(&outlier_free),
         collab(&screened) / collab(&outlier_free),

@@ -71,7 +71,7 @@ pub(crate) fn run(a: &ReproduceArgs) -> Result<()> {
                 None => {
                     let ds = simulate::simulate_with_robot(&study_options(a, a.seeds[0]), &robot)?
                         .dataset;
-                    let nominal = robot.nominal_model(ds.nominal_reflectors_mm);
+                    let nominal = robot.nominal_model_for(&ds);
                     (ds, nominal)
                 }
             };
@@ -94,10 +94,10 @@ pub(crate) fn run(a: &ReproduceArgs) -> Result<()> {
                     ver.relative_left.pos_rms_mm,
                     cal.relative_right.pos_rms_mm,
                     ver.relative_right.pos_rms_mm,
-                    cal.relative_left.ori_rms_rad,
-                    ver.relative_left.ori_rms_rad,
-                    cal.relative_right.ori_rms_rad,
-                    ver.relative_right.ori_rms_rad
+                    cal.relative_left.ori_rms_rad.unwrap_or(f64::NAN),
+                    ver.relative_left.ori_rms_rad.unwrap_or(f64::NAN),
+                    cal.relative_right.ori_rms_rad.unwrap_or(f64::NAN),
+                    ver.relative_right.ori_rms_rad.unwrap_or(f64::NAN)
                 );
             }
         }
@@ -116,10 +116,10 @@ pub(crate) fn run(a: &ReproduceArgs) -> Result<()> {
                     "| {seed} | truth | – | – | – | – | – | – | {:.4} / {:.4} / {:.4} | {:.5} / {:.5} / {:.5} |",
                     truth_ver.relative_left.pos_rms_mm,
                     truth_ver.relative_right.pos_rms_mm,
-                    truth_ver.collaborative.pos_rms_mm,
-                    truth_ver.relative_left.ori_rms_rad,
-                    truth_ver.relative_right.ori_rms_rad,
-                    truth_ver.collaborative.ori_rms_rad
+                    truth_ver.collaborative_or_nan().pos_rms_mm,
+                    truth_ver.relative_left.ori_rms_rad.unwrap_or(f64::NAN),
+                    truth_ver.relative_right.ori_rms_rad.unwrap_or(f64::NAN),
+                    truth_ver.collaborative_or_nan().ori_rms_rad.unwrap_or(f64::NAN)
                 );
                 for qp in [QpMethod::Exact, QpMethod::Paper] {
                     let settings = CalibrationSettings {
@@ -150,10 +150,10 @@ pub(crate) fn run(a: &ReproduceArgs) -> Result<()> {
                         psi[2],
                         ver.relative_left.pos_rms_mm,
                         ver.relative_right.pos_rms_mm,
-                        ver.collaborative.pos_rms_mm,
-                        ver.relative_left.ori_rms_rad,
-                        ver.relative_right.ori_rms_rad,
-                        ver.collaborative.ori_rms_rad
+                        ver.collaborative_or_nan().pos_rms_mm,
+                        ver.relative_left.ori_rms_rad.unwrap_or(f64::NAN),
+                        ver.relative_right.ori_rms_rad.unwrap_or(f64::NAN),
+                        ver.collaborative_or_nan().ori_rms_rad.unwrap_or(f64::NAN)
                     );
                 }
             }
@@ -193,8 +193,8 @@ fn robustness_study(a: &ReproduceArgs, robot: &RobotDescription) -> Result<()> {
     };
     let indicators: [(&str, bool, Pick); 5] = [
         ("position max", false, |s| s.pos_max_mm),
-        ("orientation max", false, |s| s.ori_max_rad),
-        ("orientation RMS", false, |s| s.ori_rms_rad),
+        ("orientation max", false, |s| s.ori_max_rad.unwrap_or(f64::NAN)),
+        ("orientation RMS", false, |s| s.ori_rms_rad.unwrap_or(f64::NAN)),
         ("worst reflector's position RMS", false, worst_reflector),
         (
             "worst reflector's position RMS (cal)",
@@ -232,23 +232,31 @@ fn robustness_study(a: &ReproduceArgs, robot: &RobotDescription) -> Result<()> {
                 let ver = metrics::evaluate(&sim.dataset, &res.calibrated, Split::Ver)?;
                 let cal = metrics::evaluate(&sim.dataset, &res.calibrated, Split::Cal)?;
                 let three = |r: &metrics::AccuracyReport, pick: Pick| {
-                    [r.relative_left, r.relative_right, r.collaborative].map(|s| pick(&s))
+                    [r.relative_left, r.relative_right, r.collaborative_or_nan()].map(|s| pick(&s))
                 };
                 let f = |v: [f64; 3], digits: usize| v.map(|x| format!("{x:.digits$}")).join(" / ");
                 let final_lambda = |side: Side| {
                     res.history
                         .iter()
                         .rfind(|r| r.stage == solver::Stage::Arm(side))
-                        .and_then(|r| r.lambda)
-                        .map_or_else(|| "–".to_owned(), |l| f(l, 2).replace(" / ", "/"))
+                        .and_then(|r| r.lambda.clone())
+                        .map_or_else(
+                            || "–".to_owned(),
+                            |l| {
+                                l.iter()
+                                    .map(|x| format!("{x:.2}"))
+                                    .collect::<Vec<_>>()
+                                    .join("/")
+                            },
+                        )
                 };
                 outln!(
                     "| {seed} | {name} | {} | {} | {} | {} | {} | {}; {} |",
                     method.spec().objective,
                     f(three(&ver, |s| s.pos_max_mm), 4),
                     f(three(&ver, |s| s.pos_rms_mm), 4),
-                    f(three(&ver, |s| s.ori_max_rad), 5),
-                    f(three(&ver, |s| s.ori_rms_rad), 5),
+                    f(three(&ver, |s| s.ori_max_rad.unwrap_or(f64::NAN)), 5),
+                    f(three(&ver, |s| s.ori_rms_rad.unwrap_or(f64::NAN)), 5),
                     final_lambda(Side::Left),
                     final_lambda(Side::Right),
                 );

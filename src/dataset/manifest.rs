@@ -339,6 +339,17 @@ fn parse_reflectors(
             "no reflector; expected at least one, e.g. a = [x, y, z] in the tip link's frame",
         ));
     }
+    if entries.len() > crate::kinematics::MAX_REFLECTORS {
+        return Err(cx.err(
+            Some(cx.line_of(entries[crate::kinematics::MAX_REFLECTORS].0.span())),
+            "reflectors",
+            format!(
+                "{} reflectors; dualcal takes 1 to {} per flange",
+                entries.len(),
+                crate::kinematics::MAX_REFLECTORS
+            ),
+        ));
+    }
     let mut names = Vec::with_capacity(entries.len());
     let mut reflectors_mm = Vec::with_capacity(entries.len());
     for (key, v) in entries {

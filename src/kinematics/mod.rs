@@ -20,6 +20,7 @@
 
 pub mod chain;
 pub mod dh;
+mod per_reflector;
 #[cfg(test)]
 pub(crate) mod tests;
 
@@ -33,6 +34,7 @@ pub use dh::{
     ParamVector, PointJacobian, joint_limits_rad, param_is_angle, param_name,
 };
 use nalgebra::{DVector, Isometry3, Matrix3xX, Vector3};
+pub use per_reflector::{MAX_REFLECTORS, PerReflector};
 use std::sync::Arc;
 
 /// Reflector labels of the paper's set-up, in file order.

@@ -1,11 +1,11 @@
 //! Per-configuration geometry, computed once, and the pair loops that combine it.
 
-use super::kabsch::kabsch_fit;
+use super::kabsch::kabsch_fit_points;
 use super::{
     AccuracyStats, MIN_METRIC_CONFIGS, MetricsError, ORI_THRESHOLDS_RAD, POS_THRESHOLDS_MM,
 };
 use crate::dataset::{ArmData, Dataset, Measurement, Split};
-use crate::kinematics::{ArmModel, DualArmModel, REFLECTOR_NAMES};
+use crate::kinematics::{ArmModel, DualArmModel, PerReflector, reflector_pairs};
 use crate::side::Side;
 use nalgebra::{Isometry3, Vector3};
 use rayon::prelude::*;
@@ -15,12 +15,14 @@ use rayon::prelude::*;
 #[derive(Clone, Copy, Debug)]
 pub(super) struct ConfigGeom {
     /// Measured reflector points, tracker frame, mm.
-    pub(super) measured_mm: [[f64; 3]; 3],
+    pub(super) measured_mm: PerReflector<[f64; 3]>,
     /// Model reflector points in the reference base frame, mm.
-    pub(super) model_mm: [[f64; 3]; 3],
+    pub(super) model_mm: PerReflector<[f64; 3]>,
     /// `M = R_m · R_oᵀ` (row-major): the measured flange rotation (Kabsch fit, tracker frame) times the
-    /// inverse of the model's (reference base frame). See [`pair_residual`].
+    /// inverse of the model's (reference base frame). See [`pair_residual`]. The identity when the
+    /// orientation is not measurable (fewer than three reflectors): [`ArmGeom::orientation`] says so.
     pub(super) measured_from_model_rot: [[f64; 3]; 3],
+    /// RMS residual of that Kabsch fit, mm (0 without orientation).
     pub(super) fit_rms_mm: f64,
 }
 
@@ -29,6 +31,20 @@ pub(super) struct ArmGeom {
     pub(super) side: Side,
     pub(super) indices: Vec<usize>,
     pub(super) geom: Vec<ConfigGeom>,
+    /// Is the flange orientation measurable (three or more non-collinear reflectors)? Without it the
+    /// orientation figures are "not measurable" (`None`), never zero.
+    pub(super) orientation: bool,
+}
+
+/// Can the model's reflectors give the flange's orientation (three or more, not collinear)?
+pub fn orientation_measurable(reflectors_mm: &[Vector3<f64>]) -> bool {
+    if reflectors_mm.len() < 3 {
+        return false;
+    }
+    let t = reflectors_mm;
+    let (ab, ac) = (t[1] - t[0], t[2] - t[0]);
+    let longest = ab.norm().max(ac.norm()).max((t[2] - t[1]).norm());
+    ab.cross(&ac).norm() > 1e-9 * longest * longest
 }
 
 fn check_model_arm(side: Side, arm: &ArmModel) -> Result<(), MetricsError> {
@@ -37,10 +53,9 @@ fn check_model_arm(side: Side, arm: &ArmModel) -> Result<(), MetricsError> {
             field: format!("{side} arm {name}"),
         });
     }
-    let t = &arm.reflectors_mm;
-    let (ab, ac) = (t[1] - t[0], t[2] - t[0]);
-    let longest = ab.norm().max(ac.norm()).max((t[2] - t[1]).norm());
-    if ab.cross(&ac).norm() <= 1e-9 * longest * longest {
+    // Three reflectors that a model made collinear give no orientation where the data would: refused
+    // (one or two reflectors have none to give).
+    if arm.reflector_count() == 3 && !orientation_measurable(&arm.reflectors_mm) {
         return Err(MetricsError::DegenerateReflectors { side });
     }
     Ok(())
@@ -58,7 +73,8 @@ fn check_base(b: &Isometry3<f64>) -> Result<(), MetricsError> {
     }
 }
 
-fn check_measurement(side: Side, m: &Measurement, joints: usize) -> Result<(), MetricsError> {
+fn check_measurement(side: Side, m: &Measurement, arm: &ArmModel) -> Result<(), MetricsError> {
+    let joints = arm.joint_count();
     if m.q_rad.len() != joints {
         return Err(MetricsError::JointCount {
             side,
@@ -76,9 +92,17 @@ fn check_measurement(side: Side, m: &Measurement, joints: usize) -> Result<(), M
     if let Some(j) = m.q_rad.iter().position(|q| !q.is_finite()) {
         return Err(bad(format!("q{}", j + 1)));
     }
+    if m.tracker_points_mm.len() != arm.reflector_count() {
+        return Err(MetricsError::ReflectorCount {
+            side,
+            id: m.id.clone(),
+            found: m.tracker_points_mm.len(),
+            expected: arm.reflector_count(),
+        });
+    }
     for (k, p) in m.tracker_points_mm.iter().enumerate() {
         if let Some(c) = p.iter().position(|x| !x.is_finite()) {
-            return Err(bad(format!("{}{}", REFLECTOR_NAMES[k], ["x", "y", "z"][c])));
+            return Err(bad(format!("{}{}", arm.reflector_names[k], ["x", "y", "z"][c])));
         }
     }
     Ok(())
@@ -110,31 +134,42 @@ pub(super) fn arm_geometry(
         });
     }
     for (_, m) in &selected {
-        check_measurement(side, m, arm.joint_count())?;
+        check_measurement(side, m, arm)?;
     }
+    let orientation = orientation_measurable(&arm.reflectors_mm);
+    let n_refl = arm.reflector_count();
     let reference_rot = reference_from_base.rotation.to_rotation_matrix();
     let geom = selected
         .par_iter()
         .map(|(_, m)| {
             let fk = arm.reflector_fk(&m.q_rad);
-            let model_mm = fk
-                .points_mm
-                .map(|p| reference_from_base.transform_point(&p.into()).coords);
+            let model_mm = PerReflector::from_fn(n_refl, |k| {
+                reference_from_base
+                    .transform_point(&fk.points_mm[k].into())
+                    .coords
+            });
             let model_rot = reference_rot * fk.base_from_flange.rotation.to_rotation_matrix();
-            let fit = kabsch_fit(&arm.reflectors_mm, &m.tracker_points_mm).ok_or_else(|| {
-                MetricsError::FitFailed {
-                    side,
-                    id: m.id.clone(),
-                }
-            })?;
+            let (measured_from_model_rot, fit_rms_mm) = if orientation {
+                let fit = kabsch_fit_points(&arm.reflectors_mm, &m.tracker_points_mm)
+                    .ok_or_else(|| MetricsError::FitFailed {
+                        side,
+                        id: m.id.clone(),
+                    })?;
+                (
+                    (fit.rotation * model_rot.transpose())
+                        .into_inner()
+                        .transpose()
+                        .into(),
+                    fit.rms_mm,
+                )
+            } else {
+                ([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]], 0.0)
+            };
             let g = ConfigGeom {
-                measured_mm: m.tracker_points_mm.map(|p| p.into()),
+                measured_mm: PerReflector::from_fn(n_refl, |k| m.tracker_points_mm[k].into()),
                 model_mm: model_mm.map(|p| p.into()),
-                measured_from_model_rot: (fit.rotation * model_rot.transpose())
-                    .into_inner()
-                    .transpose()
-                    .into(),
-                fit_rms_mm: fit.rms_mm,
+                measured_from_model_rot,
+                fit_rms_mm,
             };
             let finite = model_mm.iter().all(|p| p.iter().all(|x| x.is_finite()))
                 && model_rot.matrix().iter().all(|x| x.is_finite());
@@ -151,6 +186,7 @@ pub(super) fn arm_geometry(
         side,
         indices: selected.iter().map(|(i, _)| *i).collect(),
         geom,
+        orientation,
     })
 }
 
@@ -160,8 +196,8 @@ pub(super) fn arm_geometry(
 /// of a rotation is invariant under conjugation, and `R_o,j E R_o,jᵀ = M_jᵀ M_i`, so `Δo` is the angle of
 /// `M_jᵀ M_i`: one matrix product per pair.
 #[inline]
-pub(super) fn pair_residual(a: &ConfigGeom, b: &ConfigGeom) -> ([f64; 3], f64) {
-    let dd = std::array::from_fn(|k| {
+pub(super) fn pair_residual(a: &ConfigGeom, b: &ConfigGeom) -> (PerReflector<f64>, f64) {
+    let dd = PerReflector::from_fn(a.measured_mm.len(), |k| {
         distance(&a.measured_mm[k], &b.measured_mm[k]) - distance(&a.model_mm[k], &b.model_mm[k])
     });
     let (mb, ma) = (&b.measured_from_model_rot, &a.measured_from_model_rot);
@@ -224,7 +260,7 @@ fn distance(p: &[f64; 3], q: &[f64; 3]) -> f64 {
     (x * x + y * y + z * z).sqrt()
 }
 
-pub(super) fn worst(dd: &[f64; 3]) -> f64 {
+pub(super) fn worst(dd: &[f64]) -> f64 {
     dd.iter()
         .copied()
         .fold(0.0, |w, d| if d.abs() > w.abs() { d } else { w })
@@ -234,7 +270,7 @@ pub(super) fn worst(dd: &[f64; 3]) -> f64 {
 #[derive(Clone, Copy, Debug, Default)]
 pub(super) struct Accumulator {
     n: usize,
-    pos_sum_sq: [f64; 3],
+    pos_sum_sq: PerReflector<f64>,
     pos_max: f64,
     pos_within: [usize; 2],
     ori_sum_sq: f64,
@@ -244,7 +280,10 @@ pub(super) struct Accumulator {
 
 impl Accumulator {
     #[inline]
-    pub(super) fn add(&mut self, dd: &[f64; 3], ori: f64) {
+    pub(super) fn add(&mut self, dd: &[f64], ori: f64) {
+        if self.pos_sum_sq.len() < dd.len() {
+            self.pos_sum_sq = PerReflector::from_fn(dd.len(), |_| 0.0);
+        }
         self.n += 1;
         let mut w = 0.0f64;
         for (s, d) in self.pos_sum_sq.iter_mut().zip(dd) {
@@ -262,7 +301,10 @@ impl Accumulator {
 
     pub(super) fn merge(mut self, o: Self) -> Self {
         self.n += o.n;
-        for k in 0..3 {
+        if self.pos_sum_sq.len() < o.pos_sum_sq.len() {
+            self.pos_sum_sq = PerReflector::from_fn(o.pos_sum_sq.len(), |_| 0.0);
+        }
+        for k in 0..o.pos_sum_sq.len() {
             self.pos_sum_sq[k] += o.pos_sum_sq[k];
         }
         self.pos_max = self.pos_max.max(o.pos_max);
@@ -275,31 +317,34 @@ impl Accumulator {
         self
     }
 
+    /// The figures; `orientation`: is the orientation measurable (else its figures are `None`)?
     pub(super) fn finish(
         self,
         n_configs: usize,
+        orientation: bool,
         what: &str,
     ) -> Result<AccuracyStats, MetricsError> {
         let n = self.n.max(1) as f64;
         let per = self.pos_sum_sq.map(|s| (s / n).sqrt());
         let frac = |c: usize| c as f64 / n;
+        let ori = |v: f64| orientation.then_some(v);
         let stats = AccuracyStats {
             pos_rms_mm: per.iter().copied().fold(0.0, f64::max),
             pos_rms_per_reflector_mm: per,
             pos_max_mm: self.pos_max,
-            ori_rms_rad: (self.ori_sum_sq / n).sqrt(),
-            ori_max_rad: self.ori_max,
+            ori_rms_rad: ori((self.ori_sum_sq / n).sqrt()),
+            ori_max_rad: ori(self.ori_max),
             pos_within_0_3mm_frac: frac(self.pos_within[0]),
             pos_within_0_6mm_frac: frac(self.pos_within[1]),
-            ori_within_0_005rad_frac: frac(self.ori_within[0]),
-            ori_within_0_01rad_frac: frac(self.ori_within[1]),
+            ori_within_0_005rad_frac: ori(frac(self.ori_within[0])),
+            ori_within_0_01rad_frac: ori(frac(self.ori_within[1])),
             n_configs,
             n_pairs: self.n,
         };
         // `f64::max` ignores NaN, so a NaN pair shows up only in the sums.
         let finite = per.iter().all(|x| x.is_finite())
             && stats.pos_max_mm.is_finite()
-            && stats.ori_rms_rad.is_finite();
+            && stats.ori_rms_rad.is_none_or(f64::is_finite);
         if finite {
             Ok(stats)
         } else {
@@ -409,12 +454,12 @@ pub(super) fn against(
     (pos_max, (ori_sum_sq / n.max(1) as f64).sqrt(), ori_max)
 }
 
-pub(super) fn triangle_sides(p: &[Vector3<f64>; 3]) -> [f64; 3] {
-    [
-        (p[0] - p[1]).norm(),
-        (p[1] - p[2]).norm(),
-        (p[2] - p[0]).norm(),
-    ]
+/// Distances between the reflectors, in the order of [`reflector_pairs`] (|ab|, |bc|, |ca| for three).
+pub(super) fn triangle_sides(p: &[Vector3<f64>]) -> Vec<f64> {
+    reflector_pairs(p.len())
+        .into_iter()
+        .map(|(i, j)| (p[i] - p[j]).norm())
+        .collect()
 }
 
 #[cfg(test)]

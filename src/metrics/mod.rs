@@ -30,18 +30,21 @@ mod tables;
 mod tests;
 
 use crate::dataset::{ArmData, Dataset, Split};
-use crate::kinematics::{ArmModel, DualArmModel};
+use crate::kinematics::{ArmModel, DualArmModel, PerReflector};
 use crate::side::{ConfigId, Side};
 use geometry::{
     ArmGeom, against, arm_geometry, both_arms, collaborative_accumulate, pair_residual,
     relative_accumulate, triangle_sides, worst,
 };
+pub use geometry::orientation_measurable;
 pub use kabsch::{KabschFit, kabsch_fit, kabsch_fit_points, kabsch_rotation};
 use nalgebra::{Isometry3, Vector3};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 pub use sweep::{PairSamples, SplitSweep, Sweep, sweep};
-pub use tables::{format_comparison, format_table};
+pub use tables::{
+    NOT_MEASURABLE, format_comparison, format_comparison_named, format_table, format_table_named,
+};
 
 /// The metrics need at least two configurations per arm (one pair); a calibration needs more
 /// ([`crate::dataset::MIN_CONFIGS`]).
@@ -54,24 +57,24 @@ pub const ORI_THRESHOLDS_RAD: [f64; 2] = [0.005, 0.01];
 /// Accuracy figures over one set of pairs (one arm's relative pairs, or the collaborative pairs).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct AccuracyStats {
-    /// Largest of the three reflectors' RMS of `Δd`, mm.
+    /// Largest of the reflectors' RMS of `Δd`, mm.
     pub pos_rms_mm: f64,
-    /// RMS of `Δd` of reflectors a, b, c, mm.
-    pub pos_rms_per_reflector_mm: [f64; 3],
+    /// RMS of `Δd` of each reflector (a, b, c in the paper's set-up), mm.
+    pub pos_rms_per_reflector_mm: PerReflector<f64>,
     /// Largest `|Δd|` over all pairs and reflectors, mm.
     pub pos_max_mm: f64,
-    /// RMS of `Δo`, rad.
-    pub ori_rms_rad: f64,
-    /// Largest `Δo`, rad.
-    pub ori_max_rad: f64,
+    /// RMS of `Δo`, rad; `None`: not measurable (fewer than three reflectors).
+    pub ori_rms_rad: Option<f64>,
+    /// Largest `Δo`, rad; `None`: not measurable.
+    pub ori_max_rad: Option<f64>,
     /// Fraction (0..1) of pairs whose worst-reflector `|Δd|` ≤ 0.3 mm.
     pub pos_within_0_3mm_frac: f64,
     /// Fraction (0..1) of pairs whose worst-reflector `|Δd|` ≤ 0.6 mm.
     pub pos_within_0_6mm_frac: f64,
-    /// Fraction (0..1) of pairs with `Δo` ≤ 0.005 rad.
-    pub ori_within_0_005rad_frac: f64,
-    /// Fraction (0..1) of pairs with `Δo` ≤ 0.01 rad.
-    pub ori_within_0_01rad_frac: f64,
+    /// Fraction (0..1) of pairs with `Δo` ≤ 0.005 rad; `None`: not measurable.
+    pub ori_within_0_005rad_frac: Option<f64>,
+    /// Fraction (0..1) of pairs with `Δo` ≤ 0.01 rad; `None`: not measurable.
+    pub ori_within_0_01rad_frac: Option<f64>,
     /// Configurations involved (left + right for the collaborative figures).
     pub n_configs: usize,
     /// Pairs evaluated: `n(n−1)/2` per arm, `n_left · n_right` collaborative.
@@ -84,7 +87,9 @@ pub struct AccuracyStats {
 pub struct AccuracyReport {
     pub relative_left: AccuracyStats,
     pub relative_right: AccuracyStats,
-    pub collaborative: AccuracyStats,
+    /// `None`: not measurable from this data — the arms were measured from different tracker
+    /// stations, so distances between their reflectors mean nothing (serialised as `null`).
+    pub collaborative: Option<AccuracyStats>,
 }
 
 impl AccuracyReport {
@@ -93,6 +98,32 @@ impl AccuracyReport {
         match side {
             Side::Left => &self.relative_left,
             Side::Right => &self.relative_right,
+        }
+    }
+
+    /// The collaborative figures, NaN where they are not measurable: for the studies' tables over
+    /// simulated one-station data, where they always exist.
+    pub fn collaborative_or_nan(&self) -> AccuracyStats {
+        self.collaborative.unwrap_or(AccuracyStats {
+            pos_rms_mm: f64::NAN,
+            pos_rms_per_reflector_mm: self.relative_left.pos_rms_per_reflector_mm.map(|_| f64::NAN),
+            pos_max_mm: f64::NAN,
+            ori_rms_rad: None,
+            ori_max_rad: None,
+            pos_within_0_3mm_frac: f64::NAN,
+            pos_within_0_6mm_frac: f64::NAN,
+            ori_within_0_005rad_frac: None,
+            ori_within_0_01rad_frac: None,
+            n_configs: 0,
+            n_pairs: 0,
+        })
+    }
+
+    /// The figures of one kind of pairs (`None`: not measurable from the data).
+    pub fn stats(&self, kind: PairKind) -> Option<&AccuracyStats> {
+        match kind {
+            PairKind::Relative(side) => Some(self.relative(side)),
+            PairKind::Collaborative => self.collaborative.as_ref(),
         }
     }
 }
@@ -111,12 +142,12 @@ pub struct PairResiduals {
     pub first: usize,
     /// Index into `ArmData::measurements` of the second configuration (the right arm's, if collaborative).
     pub second: usize,
-    /// Signed `Δd` of reflectors a, b, c, mm.
-    pub pos_error_mm: [f64; 3],
-    /// The `Δd` of largest magnitude among the three reflectors (signed), mm.
+    /// Signed `Δd` of each reflector (a, b, c in the paper's set-up), mm.
+    pub pos_error_mm: PerReflector<f64>,
+    /// The `Δd` of largest magnitude among the reflectors (signed), mm.
     pub pos_worst_mm: f64,
-    /// `Δo`, rad.
-    pub ori_error_rad: f64,
+    /// `Δo`, rad; `None`: not measurable (fewer than three reflectors).
+    pub ori_error_rad: Option<f64>,
 }
 
 impl PairResiduals {
@@ -139,22 +170,25 @@ pub struct ConfigResiduals {
     pub id: String,
     /// Largest `|Δd|` over the relative pairs involving this configuration, mm.
     pub relative_pos_max_mm: f64,
-    /// RMS of `Δo` over the relative pairs involving this configuration, rad.
-    pub relative_ori_rms_rad: f64,
+    /// RMS of `Δo` over the relative pairs involving this configuration, rad (`None`: not measurable).
+    pub relative_ori_rms_rad: Option<f64>,
     /// Largest `Δo` over the relative pairs involving this configuration, rad.
-    pub relative_ori_max_rad: f64,
-    /// Largest `|Δd|` over the collaborative pairs involving this configuration, mm.
-    pub collaborative_pos_max_mm: f64,
+    pub relative_ori_max_rad: Option<f64>,
+    /// Largest `|Δd|` over the collaborative pairs involving this configuration, mm (`None`: not
+    /// measurable, the arms measured from different tracker stations).
+    pub collaborative_pos_max_mm: Option<f64>,
     /// RMS of `Δo` over the collaborative pairs involving this configuration, rad.
-    pub collaborative_ori_rms_rad: f64,
+    pub collaborative_ori_rms_rad: Option<f64>,
     /// Largest `Δo` over the collaborative pairs involving this configuration, rad.
-    pub collaborative_ori_max_rad: f64,
-    /// Measured minus model reflector-triangle sides `|ab|`, `|bc|`, `|ca|`, mm.
-    pub triangle_side_errors_mm: [f64; 3],
-    /// Largest `|triangle_side_errors_mm|` (rigidity of the measured reflector triangle), mm.
+    pub collaborative_ori_max_rad: Option<f64>,
+    /// Measured minus model distances between the reflectors (the triangle's sides `|ab|`, `|bc|`,
+    /// `|ca|` for three; none for one reflector), mm.
+    pub triangle_side_errors_mm: Vec<f64>,
+    /// Largest `|triangle_side_errors_mm|` (rigidity of the measured reflector set; 0 for one), mm.
     pub rigidity_mm: f64,
-    /// RMS residual of the Kabsch fit of the model reflectors to the measured points, mm.
-    pub fit_rms_mm: f64,
+    /// RMS residual of the Kabsch fit of the model reflectors to the measured points, mm (`None`
+    /// without orientation: fewer than three reflectors).
+    pub fit_rms_mm: Option<f64>,
 }
 
 /// Why the metrics cannot be computed.
@@ -192,6 +226,15 @@ pub enum MetricsError {
         "model: the {side} arm's reflectors t_a, t_b, t_c are (nearly) collinear, no flange rotation can be fitted"
     )]
     DegenerateReflectors { side: Side },
+    #[error(
+        "{side} arm, configuration `{id}`: {found} reflector positions, the model has {expected} reflectors"
+    )]
+    ReflectorCount {
+        side: Side,
+        id: String,
+        found: usize,
+        expected: usize,
+    },
     #[error("{side} arm, configuration `{id}`: the Kabsch fit did not converge")]
     FitFailed { side: Side, id: String },
     #[error("{what} is not finite (the model or the data overflow)")]
@@ -207,11 +250,25 @@ pub fn evaluate(
     let (left, right) = both_arms(dataset, model, split)?;
     // The right arm's model is expressed in the left base; relative figures do not depend on the frame.
     Ok(AccuracyReport {
-        relative_left: relative_accumulate(&left.geom).finish(left.geom.len(), "left relative")?,
-        relative_right: relative_accumulate(&right.geom)
-            .finish(right.geom.len(), "right relative")?,
-        collaborative: collaborative_accumulate(&left.geom, &right.geom)
-            .finish(left.geom.len() + right.geom.len(), "collaborative")?,
+        relative_left: relative_accumulate(&left.geom).finish(
+            left.geom.len(),
+            left.orientation,
+            "left relative",
+        )?,
+        relative_right: relative_accumulate(&right.geom).finish(
+            right.geom.len(),
+            right.orientation,
+            "right relative",
+        )?,
+        collaborative: if dataset.one_tracker_frame() {
+            Some(collaborative_accumulate(&left.geom, &right.geom).finish(
+                left.geom.len() + right.geom.len(),
+                left.orientation && right.orientation,
+                "collaborative",
+            )?)
+        } else {
+            None
+        },
     })
 }
 
@@ -223,18 +280,26 @@ pub fn relative_stats(
     split: Split,
 ) -> Result<AccuracyStats, MetricsError> {
     let g = arm_geometry(dataset.arm(side), side, arm, &Isometry3::identity(), split)?;
-    relative_accumulate(&g.geom).finish(g.geom.len(), &format!("{side} relative"))
+    relative_accumulate(&g.geom).finish(g.geom.len(), g.orientation, &format!("{side} relative"))
 }
 
-/// Collaborative accuracy alone.
+/// Collaborative accuracy alone (`None`: not measurable, the arms measured from different stations).
 pub fn collaborative_stats(
     dataset: &Dataset,
     model: &DualArmModel,
     split: Split,
-) -> Result<AccuracyStats, MetricsError> {
+) -> Result<Option<AccuracyStats>, MetricsError> {
+    if !dataset.one_tracker_frame() {
+        return Ok(None);
+    }
     let (left, right) = both_arms(dataset, model, split)?;
     collaborative_accumulate(&left.geom, &right.geom)
-        .finish(left.geom.len() + right.geom.len(), "collaborative")
+        .finish(
+            left.geom.len() + right.geom.len(),
+            left.orientation && right.orientation,
+            "collaborative",
+        )
+        .map(Some)
 }
 
 fn make_pair(a: &ArmGeom, i: usize, b: &ArmGeom, j: usize) -> PairResiduals {
@@ -244,7 +309,7 @@ fn make_pair(a: &ArmGeom, i: usize, b: &ArmGeom, j: usize) -> PairResiduals {
         second: b.indices[j],
         pos_error_mm,
         pos_worst_mm: worst(&pos_error_mm),
-        ori_error_rad,
+        ori_error_rad: (a.orientation && b.orientation).then_some(ori_error_rad),
     }
 }
 
@@ -319,22 +384,32 @@ pub fn per_config(
                 let g = &own.geom[i];
                 let (rel_pos, rel_ori_rms, rel_ori_max) = against(g, &own.geom, Some(i));
                 let (col_pos, col_ori_rms, col_ori_max) = against(g, &other.geom, None);
-                let measured_sides = triangle_sides(&g.measured_mm.map(Vector3::from));
-                let side_errors: [f64; 3] =
-                    std::array::from_fn(|k| measured_sides[k] - model_sides[k]);
+                let measured: Vec<Vector3<f64>> =
+                    g.measured_mm.iter().map(|p| Vector3::from(*p)).collect();
+                let measured_sides = triangle_sides(&measured);
+                let side_errors: Vec<f64> = measured_sides
+                    .iter()
+                    .zip(&model_sides)
+                    .map(|(m, o)| m - o)
+                    .collect();
+                let one_frame = dataset.one_tracker_frame();
+                let (rel, col) = (
+                    own.orientation,
+                    own.orientation && other.orientation && one_frame,
+                );
                 let index = own.indices[i];
                 ConfigResiduals {
                     config: ConfigId::new(own.side, index),
                     id: data.measurements[index].id.clone(),
                     relative_pos_max_mm: rel_pos,
-                    relative_ori_rms_rad: rel_ori_rms,
-                    relative_ori_max_rad: rel_ori_max,
-                    collaborative_pos_max_mm: col_pos,
-                    collaborative_ori_rms_rad: col_ori_rms,
-                    collaborative_ori_max_rad: col_ori_max,
-                    triangle_side_errors_mm: side_errors,
+                    relative_ori_rms_rad: rel.then_some(rel_ori_rms),
+                    relative_ori_max_rad: rel.then_some(rel_ori_max),
+                    collaborative_pos_max_mm: one_frame.then_some(col_pos),
+                    collaborative_ori_rms_rad: col.then_some(col_ori_rms),
+                    collaborative_ori_max_rad: col.then_some(col_ori_max),
                     rigidity_mm: side_errors.iter().fold(0.0, |m, e| m.max(e.abs())),
-                    fit_rms_mm: g.fit_rms_mm,
+                    triangle_side_errors_mm: side_errors,
+                    fit_rms_mm: own.orientation.then_some(g.fit_rms_mm),
                 }
             })
             .collect();

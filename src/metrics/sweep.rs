@@ -11,7 +11,7 @@
 //! are contiguous and its samples go to a slice of their own, written in parallel without locks.
 
 use super::geometry::{
-    Accumulator, ConfigGeom, SUM_BLOCKS, both_arms, pair_residual, triangle_sides,
+    Accumulator, ArmGeom, ConfigGeom, SUM_BLOCKS, both_arms, pair_residual, triangle_sides,
 };
 use super::{AccuracyReport, ConfigResiduals, MIN_METRIC_CONFIGS, MetricsError, PairKind};
 use crate::dataset::{Dataset, Split};
@@ -23,9 +23,13 @@ use rayon::prelude::*;
 /// The residuals of one set of pairs as histogram samples.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct PairSamples {
-    /// Signed `Δd` of reflectors a, b, c of every pair, mm (three per pair).
+    /// Reflectors per pair in `pos_mm`.
+    pub reflectors: usize,
+    /// Signed `Δd` of each reflector (a, b, c in the paper's set-up) of every pair, mm (`reflectors`
+    /// per pair).
     pub pos_mm: Vec<f32>,
-    /// `Δo` of every pair, rad.
+    /// `Δo` of every pair, rad; empty when the orientation is not measurable (fewer than three
+    /// reflectors).
     pub ori_rad: Vec<f32>,
 }
 
@@ -82,6 +86,10 @@ fn kind_slot(kind: PairKind) -> usize {
 /// One arm's configurations, calibration ones first.
 struct Ordered {
     geom: Vec<ConfigGeom>,
+    /// Is the orientation measurable ([`super::geometry::ArmGeom::orientation`])?
+    orientation: bool,
+    /// Reflectors per configuration.
+    reflectors: usize,
     /// Index into `ArmData::measurements` of each.
     indices: Vec<usize>,
     /// How many are calibration configurations (they come first).
@@ -89,7 +97,13 @@ struct Ordered {
 }
 
 impl Ordered {
-    fn new(dataset: &Dataset, side: Side, geom: Vec<ConfigGeom>, indices: Vec<usize>) -> Self {
+    fn new(dataset: &Dataset, side: Side, arm: ArmGeom) -> Self {
+        let ArmGeom {
+            geom,
+            indices,
+            orientation,
+            ..
+        } = arm;
         let measurements = &dataset.arm(side).measurements;
         let is_cal = |i: usize| measurements[indices[i]].split != Split::Ver;
         let order: Vec<usize> = (0..geom.len())
@@ -97,6 +111,8 @@ impl Ordered {
             .chain((0..geom.len()).filter(|&i| !is_cal(i)))
             .collect();
         Self {
+            orientation,
+            reflectors: dataset.reflector_count(),
             n_cal: (0..geom.len()).filter(|&i| is_cal(i)).count(),
             geom: order.iter().map(|&i| geom[i]).collect(),
             indices: order.iter().map(|&i| indices[i]).collect(),
@@ -199,26 +215,32 @@ struct Row<'a> {
 
 struct SampleSlice<'a> {
     pos: &'a mut [f32],
+    /// Empty without orientation.
     ori: &'a mut [f32],
 }
 
 impl SampleSlice<'_> {
     #[inline]
-    fn write(&mut self, k: usize, dd: &[f64; 3], ori: f64) {
-        self.pos[3 * k] = dd[0] as f32;
-        self.pos[3 * k + 1] = dd[1] as f32;
-        self.pos[3 * k + 2] = dd[2] as f32;
-        self.ori[k] = ori as f32;
+    fn write(&mut self, k: usize, dd: &[f64], ori: f64) {
+        let r = dd.len();
+        for (c, d) in dd.iter().enumerate() {
+            self.pos[r * k + c] = *d as f32;
+        }
+        if let Some(o) = self.ori.get_mut(k) {
+            *o = ori as f32;
+        }
     }
 }
 
 /// Cut `samples` into consecutive rows of `lens` pairs each.
 fn rows_of<'a>(samples: &'a mut PairSamples, lens: &[usize]) -> Vec<SampleSlice<'a>> {
+    let r = samples.reflectors;
+    let ori_stride = usize::from(!samples.ori_rad.is_empty());
     let (mut pos, mut ori) = (&mut samples.pos_mm[..], &mut samples.ori_rad[..]);
     let mut out = Vec::with_capacity(lens.len());
     for &n in lens {
-        let (p, rest_p) = std::mem::take(&mut pos).split_at_mut(3 * n);
-        let (o, rest_o) = std::mem::take(&mut ori).split_at_mut(n);
+        let (p, rest_p) = std::mem::take(&mut pos).split_at_mut(r * n);
+        let (o, rest_o) = std::mem::take(&mut ori).split_at_mut(ori_stride * n);
         (pos, ori) = (rest_p, rest_o);
         out.push(SampleSlice { pos: p, ori: o });
     }
@@ -238,15 +260,17 @@ fn relative_rows<'a>(
     rows
 }
 
-fn zeroed(n_pairs: usize) -> PairSamples {
+fn zeroed(n_pairs: usize, reflectors: usize, orientation: bool) -> PairSamples {
     PairSamples {
-        pos_mm: vec![0.0; 3 * n_pairs],
-        ori_rad: vec![0.0; n_pairs],
+        reflectors,
+        pos_mm: vec![0.0; reflectors * n_pairs],
+        ori_rad: vec![0.0; if orientation { n_pairs } else { 0 }],
     }
 }
 
-fn abs_max(dd: &[f64; 3]) -> f64 {
-    dd[0].abs().max(dd[1].abs()).max(dd[2].abs())
+#[inline]
+fn abs_max(dd: &[f64]) -> f64 {
+    dd.iter().fold(0.0f64, |m, d| m.max(d.abs()))
 }
 
 /// Zeroed sample buffers per split group (calibration, verification) and pair kind (left relative,
@@ -254,10 +278,12 @@ fn abs_max(dd: &[f64; 3]) -> f64 {
 fn sample_buffers(arms: &PerSide<Ordered>) -> [[PairSamples; 3]; 2] {
     std::array::from_fn(|g| {
         let (l, r) = (arms.left.range(g).len(), arms.right.range(g).len());
+        let (ol, or) = (arms.left.orientation, arms.right.orientation);
+        let n = arms.left.reflectors;
         [
-            zeroed(l * l.saturating_sub(1) / 2),
-            zeroed(r * r.saturating_sub(1) / 2),
-            zeroed(l * r),
+            zeroed(l * l.saturating_sub(1) / 2, n, ol),
+            zeroed(r * r.saturating_sub(1) / 2, n, or),
+            zeroed(l * r, n, ol && or),
         ]
     })
 }
@@ -380,22 +406,31 @@ fn per_config_residuals(
         for p in by_index {
             let c = &totals.configs[offset[side] + p];
             let g = &a.geom[p];
-            let measured_sides = triangle_sides(&g.measured_mm.map(Vector3::from));
-            let side_errors: [f64; 3] = std::array::from_fn(|k| measured_sides[k] - model_sides[k]);
+            let measured: Vec<Vector3<f64>> =
+                g.measured_mm.iter().map(|p| Vector3::from(*p)).collect();
+            let measured_sides = triangle_sides(&measured);
+            let side_errors: Vec<f64> = measured_sides
+                .iter()
+                .zip(&model_sides)
+                .map(|(m, o)| m - o)
+                .collect();
             let index = a.indices[p];
             let rms = |sum_sq: f64, n: usize| (sum_sq / n.max(1) as f64).sqrt();
+            let rel = a.orientation;
+            let one_frame = dataset.one_tracker_frame();
+            let col = a.orientation && arms[side.other()].orientation && one_frame;
             per_config.push(ConfigResiduals {
                 config: ConfigId::new(side, index),
                 id: data.measurements[index].id.clone(),
                 relative_pos_max_mm: c.rel_pos_max,
-                relative_ori_rms_rad: rms(c.rel_ori_sum_sq, a.len() - 1),
-                relative_ori_max_rad: c.rel_ori_max,
-                collaborative_pos_max_mm: c.col_pos_max,
-                collaborative_ori_rms_rad: rms(c.col_ori_sum_sq, n_other),
-                collaborative_ori_max_rad: c.col_ori_max,
-                triangle_side_errors_mm: side_errors,
+                relative_ori_rms_rad: rel.then(|| rms(c.rel_ori_sum_sq, a.len() - 1)),
+                relative_ori_max_rad: rel.then_some(c.rel_ori_max),
+                collaborative_pos_max_mm: one_frame.then_some(c.col_pos_max),
+                collaborative_ori_rms_rad: col.then(|| rms(c.col_ori_sum_sq, n_other)),
+                collaborative_ori_max_rad: col.then_some(c.col_ori_max),
                 rigidity_mm: side_errors.iter().fold(0.0, |m, e| m.max(e.abs())),
-                fit_rms_mm: g.fit_rms_mm,
+                triangle_side_errors_mm: side_errors,
+                fit_rms_mm: a.orientation.then_some(g.fit_rms_mm),
             });
         }
     }
@@ -407,8 +442,8 @@ fn per_config_residuals(
 pub fn sweep(dataset: &Dataset, model: &DualArmModel) -> Result<Sweep, MetricsError> {
     let (left, right) = both_arms(dataset, model, Split::All)?;
     let arms = PerSide::new(
-        Ordered::new(dataset, Side::Left, left.geom, left.indices),
-        Ordered::new(dataset, Side::Right, right.geom, right.indices),
+        Ordered::new(dataset, Side::Left, left),
+        Ordered::new(dataset, Side::Right, right),
     );
     let mut samples = sample_buffers(&arms);
     let totals = accumulate(&arms, sample_rows(&arms, &mut samples));
@@ -421,11 +456,17 @@ pub fn sweep(dataset: &Dataset, model: &DualArmModel) -> Result<Sweep, MetricsEr
             return Ok(None);
         }
         let acc = &totals.acc[g];
+        let (ol, or) = (arms.left.orientation, arms.right.orientation);
+        let one_frame = dataset.one_tracker_frame();
         Ok(Some(SplitSweep {
             report: AccuracyReport {
-                relative_left: acc[REL_LEFT].finish(l, "left relative")?,
-                relative_right: acc[REL_RIGHT].finish(r, "right relative")?,
-                collaborative: acc[COLLAB].finish(l + r, "collaborative")?,
+                relative_left: acc[REL_LEFT].finish(l, ol, "left relative")?,
+                relative_right: acc[REL_RIGHT].finish(r, or, "right relative")?,
+                collaborative: if one_frame {
+                    Some(acc[COLLAB].finish(l + r, ol && or, "collaborative")?)
+                } else {
+                    None
+                },
             },
             samples,
         }))

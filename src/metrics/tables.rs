@@ -5,10 +5,17 @@ use std::fmt::Write as _;
 
 const COLUMN_TITLES: [&str; 3] = ["relative left", "relative right", "collaborative"];
 
+/// The reflector names of a report without names at hand: a, b, c, … by position.
+fn default_names(report: &AccuracyReport) -> Vec<String> {
+    crate::kinematics::default_reflector_names(report.relative_left.pos_rms_per_reflector_mm.len())
+        .to_vec()
+}
+
 /// How a row's value is read off the stats and printed.
 struct Row {
-    label: &'static str,
-    value: fn(&AccuracyStats) -> f64,
+    label: String,
+    /// `None`: not measurable from the data (the orientation with fewer than three reflectors).
+    value: Box<dyn Fn(&AccuracyStats) -> Option<f64>>,
     kind: RowKind,
 }
 
@@ -24,75 +31,57 @@ enum RowKind {
     Count,
 }
 
-const ROWS: [Row; 13] = [
-    Row {
-        label: "configurations",
-        value: |s| s.n_configs as f64,
-        kind: RowKind::Count,
-    },
-    Row {
-        label: "pairs",
-        value: |s| s.n_pairs as f64,
-        kind: RowKind::Count,
-    },
-    Row {
-        label: "positioning RMS (mm)",
-        value: |s| s.pos_rms_mm,
-        kind: RowKind::Mm,
-    },
-    Row {
-        label: "  reflector a RMS (mm)",
-        value: |s| s.pos_rms_per_reflector_mm[0],
-        kind: RowKind::Mm,
-    },
-    Row {
-        label: "  reflector b RMS (mm)",
-        value: |s| s.pos_rms_per_reflector_mm[1],
-        kind: RowKind::Mm,
-    },
-    Row {
-        label: "  reflector c RMS (mm)",
-        value: |s| s.pos_rms_per_reflector_mm[2],
-        kind: RowKind::Mm,
-    },
-    Row {
-        label: "positioning max (mm)",
-        value: |s| s.pos_max_mm,
-        kind: RowKind::Mm,
-    },
-    Row {
-        label: "|Δd| ≤ 0.3 mm",
-        value: |s| s.pos_within_0_3mm_frac,
-        kind: RowKind::Percent,
-    },
-    Row {
-        label: "|Δd| ≤ 0.6 mm",
-        value: |s| s.pos_within_0_6mm_frac,
-        kind: RowKind::Percent,
-    },
-    Row {
-        label: "orientation RMS (mrad)",
-        value: |s| s.ori_rms_rad,
-        kind: RowKind::Mrad,
-    },
-    Row {
-        label: "orientation max (mrad)",
-        value: |s| s.ori_max_rad,
-        kind: RowKind::Mrad,
-    },
-    Row {
-        label: "Δo ≤ 0.005 rad",
-        value: |s| s.ori_within_0_005rad_frac,
-        kind: RowKind::Percent,
-    },
-    Row {
-        label: "Δo ≤ 0.01 rad",
-        value: |s| s.ori_within_0_01rad_frac,
-        kind: RowKind::Percent,
-    },
-];
+/// What a figure the data cannot give shows.
+pub const NOT_MEASURABLE: &str = "not measurable";
 
-fn format_value(kind: RowKind, v: f64) -> String {
+fn row(
+    label: impl Into<String>,
+    kind: RowKind,
+    value: impl Fn(&AccuracyStats) -> Option<f64> + 'static,
+) -> Row {
+    Row {
+        label: label.into(),
+        value: Box::new(value),
+        kind,
+    }
+}
+
+/// The rows, one per reflector of `reflector_names` for the per-reflector RMS.
+fn rows(reflector_names: &[String]) -> Vec<Row> {
+    let mut out = vec![
+        row("configurations", RowKind::Count, |s| Some(s.n_configs as f64)),
+        row("pairs", RowKind::Count, |s| Some(s.n_pairs as f64)),
+        row("positioning RMS (mm)", RowKind::Mm, |s| Some(s.pos_rms_mm)),
+    ];
+    for (k, name) in reflector_names.iter().enumerate() {
+        out.push(row(
+            format!("  reflector {name} RMS (mm)"),
+            RowKind::Mm,
+            move |s| s.pos_rms_per_reflector_mm.get(k).copied(),
+        ));
+    }
+    out.extend([
+        row("positioning max (mm)", RowKind::Mm, |s| Some(s.pos_max_mm)),
+        row("|Δd| ≤ 0.3 mm", RowKind::Percent, |s| {
+            Some(s.pos_within_0_3mm_frac)
+        }),
+        row("|Δd| ≤ 0.6 mm", RowKind::Percent, |s| {
+            Some(s.pos_within_0_6mm_frac)
+        }),
+        row("orientation RMS (mrad)", RowKind::Mrad, |s| s.ori_rms_rad),
+        row("orientation max (mrad)", RowKind::Mrad, |s| s.ori_max_rad),
+        row("Δo ≤ 0.005 rad", RowKind::Percent, |s| {
+            s.ori_within_0_005rad_frac
+        }),
+        row("Δo ≤ 0.01 rad", RowKind::Percent, |s| s.ori_within_0_01rad_frac),
+    ]);
+    out
+}
+
+fn format_value(kind: RowKind, v: Option<f64>) -> String {
+    let Some(v) = v else {
+        return NOT_MEASURABLE.into();
+    };
     match kind {
         RowKind::Mm => format!("{v:.3}"),
         RowKind::Mrad => format!("{:.3}", v * 1e3),
@@ -101,18 +90,24 @@ fn format_value(kind: RowKind, v: f64) -> String {
     }
 }
 
-fn stats_of(report: &AccuracyReport) -> [&AccuracyStats; 3] {
+/// The three columns; `None` for a kind of pairs the data cannot measure.
+fn stats_of(report: &AccuracyReport) -> [Option<&AccuracyStats>; 3] {
     [
-        &report.relative_left,
-        &report.relative_right,
-        &report.collaborative,
+        Some(&report.relative_left),
+        Some(&report.relative_right),
+        report.collaborative.as_ref(),
     ]
 }
 
 const LABEL_WIDTH: usize = 24;
 
-/// A table of one report: one column per set of pairs.
+/// A table of one report: one column per set of pairs (reflectors named a, b, c, … by position).
 pub fn format_table(report: &AccuracyReport) -> String {
+    format_table_named(report, &default_names(report))
+}
+
+/// A table of one report, the per-reflector rows named `reflector_names`.
+pub fn format_table_named(report: &AccuracyReport, reflector_names: &[String]) -> String {
     let stats = stats_of(report);
     let mut out = String::new();
     let _ = write!(out, "{:<LABEL_WIDTH$}", "");
@@ -120,10 +115,14 @@ pub fn format_table(report: &AccuracyReport) -> String {
         let _ = write!(out, "{t:>16}");
     }
     out.push('\n');
-    for row in &ROWS {
+    for row in &rows(reflector_names) {
         let _ = write!(out, "{:<LABEL_WIDTH$}", row.label);
         for s in stats {
-            let _ = write!(out, "{:>16}", format_value(row.kind, (row.value)(s)));
+            let _ = write!(
+                out,
+                "{:>16}",
+                format_value(row.kind, s.and_then(|s| (row.value)(s)))
+            );
         }
         out.push('\n');
     }
@@ -132,7 +131,10 @@ pub fn format_table(report: &AccuracyReport) -> String {
 
 /// The change from `before` to `after`: relative reduction of an error, or percentage points of a
 /// frequency.
-fn format_change(kind: RowKind, before: f64, after: f64) -> String {
+fn format_change(kind: RowKind, before: Option<f64>, after: Option<f64>) -> String {
+    let (Some(before), Some(after)) = (before, after) else {
+        return "–".into();
+    };
     match kind {
         RowKind::Count => String::new(),
         RowKind::Percent => format!("{:+.2} pp", (after - before) * 100.0),
@@ -153,6 +155,17 @@ pub fn format_comparison(
     after: &AccuracyReport,
     labels: [&str; 2],
 ) -> String {
+    format_comparison_named(before, after, labels, &default_names(before))
+}
+
+/// [`format_comparison`] with the per-reflector rows named `reflector_names`.
+pub fn format_comparison_named(
+    before: &AccuracyReport,
+    after: &AccuracyReport,
+    labels: [&str; 2],
+    reflector_names: &[String],
+) -> String {
+    let rows = rows(reflector_names);
     let mut out = String::new();
     for ((title, b), a) in COLUMN_TITLES
         .iter()
@@ -167,8 +180,8 @@ pub fn format_comparison(
             "{:<LABEL_WIDTH$}{:>14}{:>14}{:>14}",
             title, labels[0], labels[1], "change"
         );
-        for row in &ROWS {
-            let (vb, va) = ((row.value)(b), (row.value)(a));
+        for row in &rows {
+            let (vb, va) = (b.and_then(|b| (row.value)(b)), a.and_then(|a| (row.value)(a)));
             let _ = writeln!(
                 out,
                 "{:<LABEL_WIDTH$}{:>14}{:>14}{:>14}",

@@ -76,10 +76,14 @@ fn simulate(
             .map(|i| {
                 let q_rad = random_q(&mut rng);
                 let fk = truth.arm(side).reflector_fk(&q_rad);
-                let tracker_points_mm = fk.points_mm.map(|p| {
-                    let noise = Vector3::from_fn(|_, _| rng.random_range(-1.0..=1.0));
-                    tracker_from_base.transform_point(&p.into()).coords + noise * noise_mm
-                });
+                let tracker_points_mm = fk
+                    .points_mm
+                    .iter()
+                    .map(|p| {
+                        let noise = Vector3::from_fn(|_, _| rng.random_range(-1.0..=1.0));
+                        tracker_from_base.transform_point(&(*p).into()).coords + noise * noise_mm
+                    })
+                    .collect();
                 Measurement {
                     id: format!("{}{i:03}", side.name()),
                     q_rad: q_rad.to_vec(),
@@ -93,6 +97,7 @@ fn simulate(
             side,
             file: PathBuf::from(format!("{}.csv", side.name())),
             links: None,
+            station: None,
             measurements,
         }
     };
@@ -102,7 +107,8 @@ fn simulate(
         dir: PathBuf::from("mem"),
         robot: None,
         tracker: TrackerSpec::default(),
-        nominal_reflectors_mm: nominal_reflectors(),
+        nominal_reflectors_mm: nominal_reflectors().to_vec(),
+        reflector_names: crate::kinematics::default_reflector_names(3),
         arms: PerSide::new(left, right),
     }
 }
@@ -128,7 +134,7 @@ fn true_model(rng: &mut ChaCha8Rng) -> DualArmModel {
 }
 
 fn all_stats(r: &AccuracyReport) -> [AccuracyStats; 3] {
-    [r.relative_left, r.relative_right, r.collaborative]
+    [r.relative_left, r.relative_right, r.collaborative.unwrap()]
 }
 
 fn assert_reports_close(a: &AccuracyReport, b: &AccuracyReport, tol: f64) {
@@ -158,14 +164,14 @@ fn perfect_model_on_noise_free_data_gives_zero() {
     let r = evaluate(&ds, &truth, Split::All).unwrap();
     for s in all_stats(&r) {
         assert!(s.pos_max_mm < 1e-9, "{s:?}");
-        assert!(s.ori_max_rad < 1e-7, "{s:?}");
+        assert!(s.ori_max_rad.unwrap() < 1e-7, "{s:?}");
         assert_eq!(s.pos_within_0_3mm_frac, 1.0);
-        assert_eq!(s.ori_within_0_005rad_frac, 1.0);
+        assert_eq!(s.ori_within_0_005rad_frac.unwrap(), 1.0);
     }
     assert_eq!(r.relative_left.n_pairs, 15 * 14 / 2);
     assert_eq!(r.relative_right.n_pairs, 12 * 11 / 2);
-    assert_eq!(r.collaborative.n_pairs, 15 * 12);
-    assert_eq!(r.collaborative.n_configs, 27);
+    assert_eq!(r.collaborative.unwrap().n_pairs, 15 * 12);
+    assert_eq!(r.collaborative.unwrap().n_configs, 27);
     // The nominal model on the same data is clearly wrong (mm-level), so the check above can fail.
     let nominal = DualArmModel {
         arms: PerSide::new(
@@ -177,7 +183,7 @@ fn perfect_model_on_noise_free_data_gives_zero() {
     let rn = evaluate(&ds, &nominal, Split::All).unwrap();
     for s in all_stats(&rn) {
         assert!(s.pos_rms_mm > 0.2, "{s:?}");
-        assert!(s.ori_rms_rad > 1e-4, "{s:?}");
+        assert!(s.ori_rms_rad.unwrap() > 1e-4, "{s:?}");
     }
 }
 
@@ -192,7 +198,7 @@ fn split_selects_configurations() {
     assert_eq!(ver.relative_left.n_configs, 3);
     assert_eq!(cal.relative_right.n_configs, 5);
     assert_eq!(ver.relative_right.n_configs, 2);
-    assert_eq!(ver.collaborative.n_pairs, 6);
+    assert_eq!(ver.collaborative.unwrap().n_pairs, 6);
     let p = relative_pairs(&ds, &truth, Side::Left, Split::Ver).unwrap();
     let ids: Vec<_> = p
         .iter()
@@ -217,7 +223,8 @@ fn base_translation_error_gives_the_expected_collaborative_error() {
         kinematics: crate::kinematics::ArmKinematics::Dh(
             [DhRow::new(0.0, 0.0, 0.0, 0.0); N_JOINTS],
         ),
-        reflectors_mm: nominal_reflectors(),
+        reflectors_mm: nominal_reflectors().to_vec(),
+        reflector_names: crate::kinematics::default_reflector_names(3),
     };
     let truth = DualArmModel {
         arms: PerSide::new(zero_arm.clone(), zero_arm.clone()),
@@ -227,7 +234,9 @@ fn base_translation_error_gives_the_expected_collaborative_error() {
     for (arm, offset) in [(&mut ds.arms.left, 0.0), (&mut ds.arms.right, 300.0)] {
         for m in &mut arm.measurements {
             m.q_rad = vec![0.0; N_JOINTS];
-            m.tracker_points_mm = nominal_reflectors().map(|t| t + Vector3::x() * offset);
+            m.tracker_points_mm = nominal_reflectors()
+                .map(|t| t + Vector3::x() * offset)
+                .to_vec();
         }
     }
     let mut wrong = truth.clone();
@@ -237,18 +246,18 @@ fn base_translation_error_gives_the_expected_collaborative_error() {
     let pairs = collaborative_pairs(&ds, &wrong, Split::All).unwrap();
     assert_eq!(pairs.len(), 12);
     for p in &pairs {
-        for d in p.pos_error_mm {
+        for &d in p.pos_error_mm.iter() {
             assert!((d - expected).abs() < 1e-12, "{d} vs {expected}");
         }
         assert!((p.pos_worst_mm - expected).abs() < 1e-12);
-        assert!(p.ori_error_rad < 1e-12);
+        assert!(p.ori_error_rad.unwrap() < 1e-12);
     }
     // 2 mm further along x: Δd = 300 − 302 = −2 mm.
     wrong.left_base_from_right_base = Isometry3::translation(302.0, 0.0, 0.0);
     let r = evaluate(&ds, &wrong, Split::All).unwrap();
-    assert!((r.collaborative.pos_rms_mm - 2.0).abs() < 1e-12);
-    assert!((r.collaborative.pos_max_mm - 2.0).abs() < 1e-12);
-    assert_eq!(r.collaborative.pos_within_0_6mm_frac, 0.0);
+    assert!((r.collaborative.unwrap().pos_rms_mm - 2.0).abs() < 1e-12);
+    assert!((r.collaborative.unwrap().pos_max_mm - 2.0).abs() < 1e-12);
+    assert_eq!(r.collaborative.unwrap().pos_within_0_6mm_frac, 0.0);
     assert!(r.relative_left.pos_max_mm < 1e-12 && r.relative_right.pos_max_mm < 1e-12);
 }
 
@@ -286,11 +295,11 @@ fn base_translation_error_on_a_real_arm() {
             assert!(expected.abs() > 1e-3);
             n += 1;
         }
-        assert!(p.ori_error_rad < 1e-7);
+        assert!(p.ori_error_rad.unwrap() < 1e-7);
     }
     assert_eq!(n, 5 * 6 * 3);
     let r = evaluate(&ds, &wrong, Split::All).unwrap();
-    assert!(r.relative_left.pos_max_mm < 1e-9 && r.relative_right.ori_max_rad < 1e-7);
+    assert!(r.relative_left.pos_max_mm < 1e-9 && r.relative_right.ori_max_rad.unwrap() < 1e-7);
 }
 
 #[test]
@@ -312,28 +321,28 @@ fn rotating_one_measured_triangle_gives_that_orientation_error() {
         } else {
             0.0
         };
-        assert!((p.ori_error_rad - expected).abs() < 1e-9, "{p:?}");
+        assert!((p.ori_error_rad.unwrap() - expected).abs() < 1e-9, "{p:?}");
     }
     for p in collaborative_pairs(&ds, &truth, Split::All).unwrap() {
         let expected = if p.first == 2 { alpha } else { 0.0 };
-        assert!((p.ori_error_rad - expected).abs() < 1e-9, "{p:?}");
+        assert!((p.ori_error_rad.unwrap() - expected).abs() < 1e-9, "{p:?}");
     }
     let r = evaluate(&ds, &truth, Split::All).unwrap();
-    assert!((r.relative_left.ori_max_rad - alpha).abs() < 1e-9);
-    assert!(r.relative_right.ori_max_rad < 1e-7);
+    assert!((r.relative_left.ori_max_rad.unwrap() - alpha).abs() < 1e-9);
+    assert!(r.relative_right.ori_max_rad.unwrap() < 1e-7);
     // 5 of 15 left pairs involve configuration 2.
     let expected_rms = (5.0 / 15.0f64).sqrt() * alpha;
-    assert!((r.relative_left.ori_rms_rad - expected_rms).abs() < 1e-9);
-    assert!((r.relative_left.ori_within_0_005rad_frac - 1.0).abs() < 1e-12);
+    assert!((r.relative_left.ori_rms_rad.unwrap() - expected_rms).abs() < 1e-9);
+    assert!((r.relative_left.ori_within_0_005rad_frac.unwrap() - 1.0).abs() < 1e-12);
     let per = per_config(&ds, &truth, Split::All).unwrap();
     assert_eq!(per.len(), 11);
-    assert!((per[2].relative_ori_max_rad - alpha).abs() < 1e-9);
-    assert!((per[2].collaborative_ori_max_rad - alpha).abs() < 1e-9);
-    assert!(per[3].relative_ori_max_rad > alpha - 1e-9 && per[3].collaborative_ori_max_rad < 1e-7);
+    assert!((per[2].relative_ori_max_rad.unwrap() - alpha).abs() < 1e-9);
+    assert!((per[2].collaborative_ori_max_rad.unwrap() - alpha).abs() < 1e-9);
+    assert!(per[3].relative_ori_max_rad.unwrap() > alpha - 1e-9 && per[3].collaborative_ori_max_rad.unwrap() < 1e-7);
     // A rotation about the centroid keeps the triangle rigid and the fit exact.
     assert!(
         per.iter()
-            .all(|c| c.rigidity_mm < 1e-9 && c.fit_rms_mm < 1e-9)
+            .all(|c| c.rigidity_mm < 1e-9 && c.fit_rms_mm.unwrap() < 1e-9)
     );
 }
 
@@ -367,7 +376,7 @@ fn tracker_frame_does_not_matter() {
     }
     let after = evaluate(&ds2, &nominal, Split::All).unwrap();
     assert_reports_close(&before, &after, 1e-9);
-    assert!(before.collaborative.pos_rms_mm > 0.1);
+    assert!(before.collaborative.unwrap().pos_rms_mm > 0.1);
 }
 
 #[test]
@@ -404,15 +413,15 @@ fn stats_agree_with_the_pair_lists() {
             s.pos_within_0_6mm_frac
         );
         assert_eq!(
-            frac(&|e| e.ori_error_rad <= 0.005),
-            s.ori_within_0_005rad_frac
+            frac(&|e| e.ori_error_rad.unwrap() <= 0.005),
+            s.ori_within_0_005rad_frac.unwrap()
         );
         assert_eq!(
-            frac(&|e| e.ori_error_rad <= 0.01),
-            s.ori_within_0_01rad_frac
+            frac(&|e| e.ori_error_rad.unwrap() <= 0.01),
+            s.ori_within_0_01rad_frac.unwrap()
         );
-        let ori = (p.iter().map(|e| e.ori_error_rad.powi(2)).sum::<f64>() / n).sqrt();
-        assert!((ori - s.ori_rms_rad).abs() < 1e-12);
+        let ori = (p.iter().map(|e| e.ori_error_rad.unwrap().powi(2)).sum::<f64>() / n).sqrt();
+        assert!((ori - s.ori_rms_rad.unwrap()).abs() < 1e-12);
     };
     check(
         &r.relative_left,
@@ -423,7 +432,7 @@ fn stats_agree_with_the_pair_lists() {
         &relative_pairs(&ds, &model, Side::Right, Split::Cal).unwrap(),
     );
     check(
-        &r.collaborative,
+        &r.collaborative.unwrap(),
         &collaborative_pairs(&ds, &model, Split::Cal).unwrap(),
     );
     // Not all trivially 0 or 1, so the frequency checks mean something.
@@ -456,7 +465,7 @@ fn triangle_rigidity_sees_a_displaced_reflector() {
     assert!((c.triangle_side_errors_mm[0] - 0.25).abs() < 1e-9, "{c:?}");
     assert!(c.triangle_side_errors_mm[1].abs() < 1e-9);
     assert!((c.rigidity_mm - 0.25).abs() < 1e-9);
-    assert!(c.fit_rms_mm > 0.01);
+    assert!(c.fit_rms_mm.unwrap() > 0.01);
     assert!(
         per.iter()
             .filter(|c| c.id != "right001")
@@ -617,21 +626,25 @@ fn report_json_has_the_issue_shape() {
 fn tables_show_the_figures() {
     let stats = |x: f64| AccuracyStats {
         pos_rms_mm: 3.25 * x,
-        pos_rms_per_reflector_mm: [3.25 * x, 2.5 * x, 1.0 * x],
+        pos_rms_per_reflector_mm: crate::kinematics::PerReflector::from_slice(&[
+            3.25 * x,
+            2.5 * x,
+            1.0 * x,
+        ]),
         pos_max_mm: 9.5 * x,
-        ori_rms_rad: 0.0042 * x,
-        ori_max_rad: 0.0123 * x,
+        ori_rms_rad: Some(0.0042 * x),
+        ori_max_rad: Some(0.0123 * x),
         pos_within_0_3mm_frac: 0.0081 / x,
         pos_within_0_6mm_frac: 0.0311 / x,
-        ori_within_0_005rad_frac: 0.023 / x,
-        ori_within_0_01rad_frac: 0.1248 / x,
+        ori_within_0_005rad_frac: Some(0.023 / x),
+        ori_within_0_01rad_frac: Some(0.1248 / x),
         n_configs: 100,
         n_pairs: 4950,
     };
     let before = AccuracyReport {
         relative_left: stats(1.0),
         relative_right: stats(1.0),
-        collaborative: stats(1.0),
+        collaborative: Some(stats(1.0)),
     };
     let t = format_table(&before);
     for s in [
@@ -703,12 +716,12 @@ fn sweep_agrees_with_evaluate_per_config_and_the_pair_lists() {
                 sorted(
                     pairs
                         .iter()
-                        .flat_map(|p| p.pos_error_mm.map(|d| d as f32))
+                        .flat_map(|p| p.pos_error_mm.iter().map(|&d| d as f32).collect::<Vec<_>>())
                         .collect()
                 ),
                 "{split:?} {kind:?} Δd"
             );
-            let ori: Vec<f32> = pairs.iter().map(|p| p.ori_error_rad as f32).collect();
+            let ori: Vec<f32> = pairs.iter().map(|p| p.ori_error_rad.unwrap() as f32).collect();
             let (a, b) = (sorted(samples.ori_rad.clone()), sorted(ori));
             assert_eq!(a.len(), b.len());
             for (x, y) in a.iter().zip(&b) {
@@ -725,13 +738,13 @@ fn sweep_agrees_with_evaluate_per_config_and_the_pair_lists() {
         let close = |x: f64, y: f64| (x - y).abs() <= 1e-12 * x.abs().max(1e-9);
         for (x, y) in [
             (a.relative_pos_max_mm, b.relative_pos_max_mm),
-            (a.relative_ori_rms_rad, b.relative_ori_rms_rad),
-            (a.relative_ori_max_rad, b.relative_ori_max_rad),
-            (a.collaborative_pos_max_mm, b.collaborative_pos_max_mm),
-            (a.collaborative_ori_rms_rad, b.collaborative_ori_rms_rad),
-            (a.collaborative_ori_max_rad, b.collaborative_ori_max_rad),
+            (a.relative_ori_rms_rad.unwrap(), b.relative_ori_rms_rad.unwrap()),
+            (a.relative_ori_max_rad.unwrap(), b.relative_ori_max_rad.unwrap()),
+            (a.collaborative_pos_max_mm.unwrap(), b.collaborative_pos_max_mm.unwrap()),
+            (a.collaborative_ori_rms_rad.unwrap(), b.collaborative_ori_rms_rad.unwrap()),
+            (a.collaborative_ori_max_rad.unwrap(), b.collaborative_ori_max_rad.unwrap()),
             (a.rigidity_mm, b.rigidity_mm),
-            (a.fit_rms_mm, b.fit_rms_mm),
+            (a.fit_rms_mm.unwrap(), b.fit_rms_mm.unwrap()),
         ] {
             assert!(close(x, y), "{}: {x} vs {y}", a.id);
         }
@@ -752,7 +765,7 @@ fn sweep_without_verification_configurations() {
     let s = sweep(&ds, &truth).unwrap();
     assert!(s.ver.is_none());
     let cal = s.cal.as_ref().unwrap();
-    assert_eq!(cal.report.collaborative.n_pairs, 42);
+    assert_eq!(cal.report.collaborative.unwrap().n_pairs, 42);
     assert_eq!(cal.samples(PairKind::Collaborative).ori_rad.len(), 42);
     assert_eq!(
         cal.samples(PairKind::Relative(Side::Right)).pos_mm.len(),

@@ -44,13 +44,48 @@ pub struct ChainParams {
     pub joints: Vec<JointCorrection>,
 }
 
-/// Reflector coordinates in the tip frame (length unit).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct ReflectorsEntry {
-    pub a: [f64; 3],
-    pub b: [f64; 3],
-    pub c: [f64; 3],
+/// Reflector coordinates in the tip frame (length unit), by name, in the model's order: a JSON object
+/// `{"a": [x, y, z], "b": …}` written and read in that order (not sorted).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ReflectorsEntry(pub Vec<(String, [f64; 3])>);
+
+impl Serialize for ReflectorsEntry {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut map = serializer.serialize_map(Some(self.0.len()))?;
+        for (name, v) in &self.0 {
+            map.serialize_entry(name, v)?;
+        }
+        map.end()
+    }
+}
+
+impl<'de> Deserialize<'de> for ReflectorsEntry {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct InOrder;
+        impl<'de> serde::de::Visitor<'de> for InOrder {
+            type Value = ReflectorsEntry;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("an object of reflectors, each name with [x, y, z]")
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(
+                self,
+                mut map: A,
+            ) -> Result<Self::Value, A::Error> {
+                let mut out: Vec<(String, [f64; 3])> = Vec::new();
+                while let Some((name, v)) = map.next_entry::<String, [f64; 3]>()? {
+                    if out.iter().any(|(n, _)| *n == name) {
+                        return Err(serde::de::Error::custom(format!(
+                            "reflector `{name}` given twice"
+                        )));
+                    }
+                    out.push((name, v));
+                }
+                Ok(ReflectorsEntry(out))
+            }
+        }
+        deserializer.deserialize_map(InOrder)
+    }
 }
 
 /// One arm: either 7 DH rows in chain order (`dh`) or a chain's corrections (`chain`), and the
@@ -104,15 +139,13 @@ pub(super) fn plausible(
 
 /// The file form of one arm's model (mm, rad).
 pub(super) fn arm_params(arm: &ArmModel) -> ArmParams {
-    let t = |k: usize| {
-        let v = arm.reflectors_mm[k];
-        [v.x, v.y, v.z]
-    };
-    let reflectors = ReflectorsEntry {
-        a: t(0),
-        b: t(1),
-        c: t(2),
-    };
+    let reflectors = ReflectorsEntry(
+        arm.reflector_names
+            .iter()
+            .zip(&arm.reflectors_mm)
+            .map(|(name, v)| (name.clone(), [v.x, v.y, v.z]))
+            .collect(),
+    );
     match &arm.kinematics {
         ArmKinematics::Dh(dh) => ArmParams {
             dh: Some(
@@ -153,23 +186,35 @@ pub(super) fn arm_params(arm: &ArmModel) -> ArmParams {
     }
 }
 
+/// The reflectors of an arm entry: their names and coordinates (mm), one to
+/// [`crate::kinematics::MAX_REFLECTORS`].
 fn reflectors_mm(
     side: &str,
     r: &ReflectorsEntry,
     scale: Scale,
-) -> Result<[Vector3<f64>; 3], ParamsError> {
-    let mut out = [Vector3::zeros(); 3];
-    for (k, (name, v)) in [("a", r.a), ("b", r.b), ("c", r.c)].into_iter().enumerate() {
-        finite(&format!("arms.{side}.reflectors.{name}"), &v)?;
-        out[k] = Vector3::from(v) * scale.mm;
-        plausible(
-            &format!("arms.{side}.reflectors.{name}"),
-            &[out[k].norm()],
-            MAX_REFLECTOR_MM,
-            "mm",
-        )?;
+) -> Result<(Arc<[String]>, Vec<Vector3<f64>>), ParamsError> {
+    let max = crate::kinematics::MAX_REFLECTORS;
+    if r.0.is_empty() || r.0.len() > max {
+        return Err(invalid(
+            format!("arms.{side}.reflectors"),
+            format!("{} reflectors; expected 1 to {max}", r.0.len()),
+        ));
     }
-    Ok(out)
+    let mut out = Vec::with_capacity(r.0.len());
+    for (name, v) in &r.0 {
+        let field = format!("arms.{side}.reflectors.{name}");
+        if name.is_empty() || !name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') {
+            return Err(invalid(
+                field,
+                "a reflector name is letters, digits and `_`".to_string(),
+            ));
+        }
+        finite(&field, v)?;
+        let p = Vector3::from(*v) * scale.mm;
+        plausible(&field, &[p.norm()], MAX_REFLECTOR_MM, "mm")?;
+        out.push(p);
+    }
+    Ok((r.0.iter().map(|(n, _)| n.clone()).collect(), out))
 }
 
 fn dh_rows(side: &str, rows: &[DhEntry], scale: Scale) -> Result<[DhRow; N_JOINTS], ParamsError> {
@@ -292,11 +337,12 @@ pub(super) fn arm_model(
     arm: &ArmParams,
     scale: Scale,
 ) -> Result<ArmModel, ParamsError> {
-    let reflectors_mm = reflectors_mm(side, &arm.reflectors, scale)?;
+    let (reflector_names, reflectors_mm) = reflectors_mm(side, &arm.reflectors, scale)?;
     match one_form(side, arm)? {
         Form::Dh(rows) => Ok(ArmModel {
             kinematics: ArmKinematics::Dh(dh_rows(side, rows, scale)?),
             reflectors_mm,
+            reflector_names,
         }),
         Form::Chain(_) => Err(invalid(
             format!("arms.{side}.chain"),
@@ -357,12 +403,14 @@ pub(super) fn arm_model_for(
                     ),
                 ));
             }
+            let (reflector_names, reflectors_mm) = reflectors_mm(side, &arm.reflectors, scale)?;
             Ok(ArmModel {
                 kinematics: ArmKinematics::Chain {
                     chain: chain.clone(),
                     corrections: corrections(side, params, scale)?,
                 },
-                reflectors_mm: reflectors_mm(side, &arm.reflectors, scale)?,
+                reflectors_mm,
+                reflector_names,
             })
         }
     }

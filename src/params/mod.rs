@@ -10,7 +10,7 @@
 mod arm;
 mod records;
 
-use crate::kinematics::{DualArmModel, N_PARAMS, PARAMS_PER_JOINT, nearest_rotation, param_name};
+use crate::kinematics::{DualArmModel, PARAMS_PER_JOINT, nearest_rotation, param_name};
 use crate::output::write_atomic;
 use crate::robot::RobotDescription;
 use crate::side::{PerSide, Side};
@@ -335,8 +335,18 @@ impl ParamsFile {
             return Ok(());
         };
         for (side, list) in [(Side::Left, &fixed.left), (Side::Right, &fixed.right)] {
+            let reflector_names = self.arms[side]
+                .reflectors
+                .0
+                .iter()
+                .flat_map(|(r, _)| ["x", "y", "z"].map(|c| format!("t_{r}.{c}")));
             let names = match &self.arms[side].chain {
-                None => (0..N_PARAMS).map(param_name).collect::<Vec<_>>(),
+                None => {
+                    let mut names: Vec<String> =
+                        (0..crate::kinematics::N_DH).map(param_name).collect();
+                    names.extend(reflector_names);
+                    names
+                }
                 Some(chain) => {
                     let mut names: Vec<String> = chain
                         .joints
@@ -347,8 +357,11 @@ impl ParamsFile {
                                 .map(move |c| format!("{}.{c}", j.name))
                         })
                         .collect();
-                    names.extend((0..9).map(|k| param_name(crate::kinematics::N_DH + k)));
-                    debug_assert_eq!(names.len(), PARAMS_PER_JOINT * chain.joints.len() + 9);
+                    names.extend(reflector_names);
+                    debug_assert_eq!(
+                        names.len(),
+                        PARAMS_PER_JOINT * chain.joints.len() + 3 * self.arms[side].reflectors.0.len()
+                    );
                     names
                 }
             };

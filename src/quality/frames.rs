@@ -41,16 +41,17 @@ const SAMPLE_PAIRS: usize = 20_000;
 /// worst-reflector |Δd| (model points `pa`, `pb` in one frame), mm. A median, so that a few gross
 /// outliers (a swapped label is 80 mm off) do not make a good robot look wrong.
 fn typical(
-    ma: &[[Vector3<f64>; 3]],
-    pa: &[[Vector3<f64>; 3]],
-    mb: &[[Vector3<f64>; 3]],
-    pb: &[[Vector3<f64>; 3]],
+    ma: &[Vec<Vector3<f64>>],
+    pa: &[Vec<Vector3<f64>>],
+    mb: &[Vec<Vector3<f64>>],
+    pb: &[Vec<Vector3<f64>>],
     same: bool,
 ) -> f64 {
     let mut worst = Vec::new();
+    let reflectors = ma.first().map_or(0, Vec::len);
     super::sampled_pairs(ma.len(), mb.len(), same, SAMPLE_PAIRS, |i, j| {
         worst.push(
-            (0..3)
+            (0..reflectors)
                 .map(|k| ((ma[i][k] - mb[j][k]).norm() - (pa[i][k] - pb[j][k]).norm()).abs())
                 .fold(0.0, f64::max),
         );
@@ -63,7 +64,7 @@ fn points(
     arm: &ArmModel,
     side: Side,
     map: impl Fn(&[f64]) -> Vec<f64>,
-) -> Vec<[Vector3<f64>; 3]> {
+) -> Vec<Vec<Vector3<f64>>> {
     dataset
         .arm(side)
         .measurements
@@ -76,12 +77,12 @@ fn points(
 /// reordering or a unit explains it), and the arms in different tracker frames (a warning).
 pub fn nominal_findings(dataset: &Dataset, nominal: &DualArmModel) -> Vec<Finding> {
     let mut out = Vec::new();
-    let measured = |side: Side| -> Vec<[Vector3<f64>; 3]> {
+    let measured = |side: Side| -> Vec<Vec<Vector3<f64>>> {
         dataset
             .arm(side)
             .measurements
             .iter()
-            .map(|m| m.tracker_points_mm)
+            .map(|m| m.tracker_points_mm.clone())
             .collect()
     };
     let mut relative = [0.0f64; 2];
@@ -144,12 +145,13 @@ pub fn nominal_findings(dataset: &Dataset, nominal: &DualArmModel) -> Vec<Findin
         }
         model_pts.push(p);
     }
-    if out.is_empty() {
+    // Arms declared as measured from different stations need no check of their common frame.
+    if out.is_empty() && dataset.one_tracker_frame() {
         let (ml, mr) = (measured(Side::Left), measured(Side::Right));
         let b = nominal.left_base_from_right_base;
-        let pr: Vec<[Vector3<f64>; 3]> = model_pts[1]
+        let pr: Vec<Vec<Vector3<f64>>> = model_pts[1]
             .iter()
-            .map(|p| p.map(|x| (b * Point3::from(x)).coords))
+            .map(|p: &Vec<Vector3<f64>>| p.iter().map(|x| (b * Point3::from(*x)).coords).collect())
             .collect();
         let collaborative = typical(&ml, &model_pts[0], &mr, &pr, false);
         let worse = relative[0].max(relative[1]);
@@ -162,7 +164,8 @@ pub fn nominal_findings(dataset: &Dataset, nominal: &DualArmModel) -> Vec<Findin
                      {collaborative:.1} mm, those within each arm by {worse:.1} mm (medians over \
                      pairs): were both \
                      arms measured from one tracker position? dualcal relies on one tracker frame \
-                     for the base (step 2); each arm's own calibration is not affected"
+                     for the base (step 2); each arm's own calibration is not affected (if the \
+                     tracker was moved, name each arm's `station` in dataset.toml)"
                 ),
             });
         }
@@ -226,13 +229,16 @@ pub(crate) fn tracker_moved_with(
     }
     let ms: Vec<&crate::dataset::Measurement> = rows.iter().map(|&i| &all[i]).collect();
     // The kept rows' points, per reflector and axis, for the pair loop.
-    let column = |points: &[[Vector3<f64>; 3]], k: usize, a: usize| -> Vec<f64> {
+    let column = |points: &[Vec<Vector3<f64>>], k: usize, a: usize| -> Vec<f64> {
         rows.iter().map(|&i| points[i][k][a]).collect()
     };
-    let measured: [[Vec<f64>; 3]; 3] =
-        std::array::from_fn(|k| std::array::from_fn(|a| column(&fit.measured, k, a)));
-    let model: [[Vec<f64>; 3]; 3] =
-        std::array::from_fn(|k| std::array::from_fn(|a| column(&fit.model, k, a)));
+    let reflectors = fit.sigma_mm.len();
+    let measured: Vec<[Vec<f64>; 3]> = (0..reflectors)
+        .map(|k| std::array::from_fn(|a| column(&fit.measured, k, a)))
+        .collect();
+    let model: Vec<[Vec<f64>; 3]> = (0..reflectors)
+        .map(|k| std::array::from_fn(|a| column(&fit.model, k, a)))
+        .collect();
     // Squared worst-reflector errors, capped so a few gross outliers do not make a change point.
     let sigma = median(&fit.sigma_mm);
     let cap = (10.0 * sigma).powi(2);
@@ -240,7 +246,7 @@ pub(crate) fn tracker_moved_with(
     let row = |i: usize, out: &mut Vec<f64>| {
         out.clear();
         out.resize(n - i - 1, 0.0);
-        for k in 0..3 {
+        for k in 0..reflectors {
             let ([mx, my, mz], [px, py, pz]) = (&measured[k], &model[k]);
             let (mx, my, mz) = (&mx[i + 1..], &my[i + 1..], &mz[i + 1..]);
             let (px, py, pz) = (&px[i + 1..], &py[i + 1..], &pz[i + 1..]);

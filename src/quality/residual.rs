@@ -19,7 +19,7 @@
 use super::triangle::RELABELLINGS;
 use super::{Flag, FlagKind, ScreenSettings, mpe_mm};
 use crate::dataset::{Dataset, Measurement};
-use crate::kinematics::{ArmModel, DualArmModel, REFLECTOR_NAMES};
+use crate::kinematics::{ArmModel, DualArmModel, PerReflector};
 use crate::side::{ConfigId, PerSide, Side};
 use crate::stats::{mad_sigma_in_place, median_in_place};
 use nalgebra::{Matrix3, Vector3};
@@ -52,14 +52,14 @@ const LANES: usize = 2;
 pub struct ArmResiduals {
     pub side: Side,
     /// Measured points (tracker frame) and model points (the arm's base frame), per configuration.
-    pub measured: Vec<[Vector3<f64>; 3]>,
-    pub model: Vec<[Vector3<f64>; 3]>,
+    pub measured: Vec<Vec<Vector3<f64>>>,
+    pub model: Vec<Vec<Vector3<f64>>>,
     /// Robust standard deviation of the pair distance errors Δd per reflector, mm.
-    pub sigma_mm: [f64; 3],
+    pub sigma_mm: PerReflector<f64>,
     /// Every `stride`-th configuration is a partner of the displacement fits ([`MAX_PARTNERS`]).
     stride: usize,
     /// The partners' points per reflector, coordinate by coordinate, for the pair loops.
-    columns: [PointColumns; 3],
+    columns: Vec<PointColumns>,
 }
 
 /// One reflector's measured and model points of the partner configurations, as columns.
@@ -71,12 +71,12 @@ struct PointColumns {
 
 impl PointColumns {
     fn new(
-        measured: &[[Vector3<f64>; 3]],
-        model: &[[Vector3<f64>; 3]],
+        measured: &[Vec<Vector3<f64>>],
+        model: &[Vec<Vector3<f64>>],
         k: usize,
         stride: usize,
     ) -> Self {
-        let column = |points: &[[Vector3<f64>; 3]], axis: usize| -> Vec<f64> {
+        let column = |points: &[Vec<Vector3<f64>>], axis: usize| -> Vec<f64> {
             points.iter().step_by(stride).map(|p| p[k][axis]).collect()
         };
         Self {
@@ -104,15 +104,17 @@ impl ArmResiduals {
     /// All configurations of `side` (every split) with `arm`'s forward kinematics.
     pub fn new(dataset: &Dataset, arm: &ArmModel, side: Side) -> Self {
         let ms = &dataset.arm(side).measurements;
-        let measured: Vec<[Vector3<f64>; 3]> = ms.iter().map(|m| m.tracker_points_mm).collect();
-        let model: Vec<[Vector3<f64>; 3]> = ms
+        let measured: Vec<Vec<Vector3<f64>>> =
+            ms.iter().map(|m| m.tracker_points_mm.clone()).collect();
+        let model: Vec<Vec<Vector3<f64>>> = ms
             .par_iter()
             .map(|m| arm.reflector_fk(&m.q_rad).points_mm)
             .collect();
         let n = ms.len();
+        let reflectors = arm.reflector_count();
         let floor = mpe_mm(dataset, side);
         let mut dd = Vec::new();
-        let sigma_mm = std::array::from_fn(|k| {
+        let sigma_mm = PerReflector::from_fn(reflectors, |k| {
             dd.clear();
             super::sampled_pairs(n, n, true, SCALE_PAIRS, |i, j| {
                 dd.push(
@@ -122,7 +124,9 @@ impl ArmResiduals {
             mad_sigma_in_place(&mut dd).max(floor)
         });
         let stride = n.div_ceil(MAX_PARTNERS).max(1);
-        let columns = std::array::from_fn(|k| PointColumns::new(&measured, &model, k, stride));
+        let columns = (0..reflectors)
+            .map(|k| PointColumns::new(&measured, &model, k, stride))
+            .collect();
         Self {
             side,
             measured,
@@ -152,10 +156,10 @@ impl ArmResiduals {
     /// (tracker frame).
     pub fn displacement(
         &self,
-        m: &[Vector3<f64>; 3],
-        p: &[Vector3<f64>; 3],
+        m: &[Vector3<f64>],
+        p: &[Vector3<f64>],
         skip: Option<usize>,
-    ) -> [Vector3<f64>; 3] {
+    ) -> PerReflector<Vector3<f64>> {
         // The row of `skip` among the partners, if it is one.
         let skip = skip
             .filter(|s| s % self.stride == 0)
@@ -164,7 +168,7 @@ impl ArmResiduals {
             let mut fresh = FitRows::default();
             let mut borrowed = rows.try_borrow_mut();
             let rows = borrowed.as_deref_mut().unwrap_or(&mut fresh);
-            std::array::from_fn(|k| {
+            PerReflector::from_fn(self.columns.len(), |k| {
                 self.fill_rows(rows, k, &m[k], &p[k], skip);
                 huber_fit(rows, HUBER_K * self.sigma_mm[k])
             })
@@ -172,7 +176,7 @@ impl ArmResiduals {
     }
 
     /// [`ArmResiduals::displacement`] of configuration `i` as measured.
-    pub fn displacement_of(&self, i: usize) -> [Vector3<f64>; 3] {
+    pub fn displacement_of(&self, i: usize) -> PerReflector<Vector3<f64>> {
         self.displacement(&self.measured[i], &self.model[i], Some(i))
     }
 
@@ -359,8 +363,8 @@ fn huber_fit(rows: &mut FitRows, c: f64) -> Vector3<f64> {
     e
 }
 
-/// Largest of three displacements and its reflector.
-fn largest(e: &[Vector3<f64>; 3]) -> (f64, usize) {
+/// Largest of the reflectors' displacements and its reflector.
+fn largest(e: &[Vector3<f64>]) -> (f64, usize) {
     e.iter().enumerate().fold(
         (0.0, 0),
         |b, (k, v)| if v.norm() > b.0 { (v.norm(), k) } else { b },
@@ -374,7 +378,7 @@ pub fn fits(dataset: &Dataset, model: &DualArmModel) -> PerSide<ArmResiduals> {
 }
 
 /// Every configuration's displacement estimate.
-fn estimates(fit: &ArmResiduals) -> Vec<[Vector3<f64>; 3]> {
+fn estimates(fit: &ArmResiduals) -> Vec<PerReflector<Vector3<f64>>> {
     (0..fit.len())
         .into_par_iter()
         .map(|i| fit.displacement_of(i))
@@ -388,7 +392,7 @@ pub fn displacements(
     model: &DualArmModel,
     side: Side,
     settings: &ScreenSettings,
-) -> Option<(Vec<[Vector3<f64>; 3]>, f64)> {
+) -> Option<(Vec<PerReflector<Vector3<f64>>>, f64)> {
     if dataset.arm(side).measurements.len() < MIN_CONFIGS {
         return None;
     }
@@ -400,10 +404,10 @@ pub fn displacements(
 fn threshold(
     dataset: &Dataset,
     side: Side,
-    e: &[[Vector3<f64>; 3]],
+    e: &[PerReflector<Vector3<f64>>],
     settings: &ScreenSettings,
 ) -> f64 {
-    let mut sizes: Vec<f64> = e.iter().flatten().map(|v| v.norm()).collect();
+    let mut sizes: Vec<f64> = e.iter().flat_map(|v| v.iter()).map(|v| v.norm()).collect();
     let sigma = median_in_place(&mut sizes) / CHI3_MEDIAN;
     (settings.residual_k * sigma).max(settings.mpe_floor * mpe_mm(dataset, side))
 }
@@ -462,17 +466,16 @@ pub(crate) fn flags_with(
                         .iter()
                         .enumerate()
                         .all(|(j, v)| j == k || v.norm() <= tau);
+                    let names = &dataset.reflector_names;
                     let what = if single {
-                        format!(
-                            "reflector {} seems displaced by {size:.3} mm",
-                            REFLECTOR_NAMES[k]
-                        )
+                        format!("reflector {} seems displaced by {size:.3} mm", names[k])
                     } else {
+                        let sizes: Vec<String> =
+                            e[i].iter().map(|v| format!("{:.3}", v.norm())).collect();
                         format!(
-                            "its reflectors seem displaced by {:.3}, {:.3}, {:.3} mm (a, b, c)",
-                            e[i][0].norm(),
-                            e[i][1].norm(),
-                            e[i][2].norm()
+                            "its reflectors seem displaced by {} mm ({})",
+                            sizes.join(", "),
+                            names.join(", ")
                         )
                     };
                     (
@@ -514,7 +517,13 @@ fn explain(
 ) -> Option<(FlagKind, String, f64)> {
     let arm = model.arm(fit.side);
     let mut candidates: Vec<(FlagKind, String, f64)> = Vec::new();
-    for (perm, name) in RELABELLINGS {
+    // Relabellings of three reflectors (two swapped keep their distances: nothing to tell by).
+    let relabellings = if m.tracker_points_mm.len() == 3 {
+        &RELABELLINGS[..]
+    } else {
+        &[]
+    };
+    for (perm, name) in relabellings {
         let e = fit.displacement(
             &perm.map(|k| m.tracker_points_mm[k]),
             &fit.model[i],

@@ -3,7 +3,7 @@
 
 use super::{Flag, FlagKind, ScreenSettings, mpe_mm};
 use crate::dataset::Dataset;
-use crate::kinematics::REFLECTOR_NAMES;
+use crate::kinematics::reflector_pairs;
 use crate::side::{ConfigId, Side};
 use crate::stats::{mad_sigma, median};
 use nalgebra::Vector3;
@@ -11,16 +11,25 @@ use nalgebra::Vector3;
 /// Fewer configurations than this give no reliable reference triangle.
 pub const MIN_CONFIGS: usize = 5;
 
-/// Side names in the order of [`sides`].
+/// Side names in the order of [`sides`] for three reflectors a, b, c.
 pub const SIDE_NAMES: [&str; 3] = ["ab", "bc", "ca"];
 
-/// Side lengths |ab|, |bc|, |ca|, mm.
-pub fn sides(p: &[Vector3<f64>; 3]) -> [f64; 3] {
-    [
-        (p[0] - p[1]).norm(),
-        (p[1] - p[2]).norm(),
-        (p[2] - p[0]).norm(),
-    ]
+/// Distances between the reflectors in the order of [`reflector_pairs`] (|ab|, |bc|, |ca| for three),
+/// mm; none for one reflector.
+pub fn sides(p: &[Vector3<f64>]) -> Vec<f64> {
+    reflector_pairs(p.len())
+        .into_iter()
+        .map(|(i, j)| (p[i] - p[j]).norm())
+        .collect()
+}
+
+/// The name of the pair of reflectors `(i, j)`: `ab` for single-letter names, `front–back` otherwise.
+pub fn side_name(names: &[String], (i, j): (usize, usize)) -> String {
+    if names[i].chars().count() == 1 && names[j].chars().count() == 1 {
+        format!("{}{}", names[i], names[j])
+    } else {
+        format!("{}–{}", names[i], names[j])
+    }
 }
 
 /// The five relabellings of a row other than the identity: `perm[k]` is the measured point used as
@@ -39,17 +48,20 @@ pub fn reference(
     dataset: &Dataset,
     side: Side,
     settings: &ScreenSettings,
-) -> Option<([f64; 3], f64)> {
+) -> Option<(Vec<f64>, f64)> {
     let ms = &dataset.arm(side).measurements;
-    if ms.len() < MIN_CONFIGS {
+    let n_sides = reflector_pairs(dataset.reflector_count()).len();
+    // One reflector: no distance on the flange to check.
+    if ms.len() < MIN_CONFIGS || n_sides == 0 {
         return None;
     }
-    let all: Vec<[f64; 3]> = ms.iter().map(|m| sides(&m.tracker_points_mm)).collect();
-    let reference: [f64; 3] =
-        std::array::from_fn(|k| median(&all.iter().map(|s| s[k]).collect::<Vec<_>>()));
+    let all: Vec<Vec<f64>> = ms.iter().map(|m| sides(&m.tracker_points_mm)).collect();
+    let reference: Vec<f64> = (0..n_sides)
+        .map(|k| median(&all.iter().map(|s| s[k]).collect::<Vec<_>>()))
+        .collect();
     let deviations: Vec<f64> = all
         .iter()
-        .flat_map(|s| (0..3).map(move |k| s[k] - reference[k]))
+        .flat_map(|s| (0..n_sides).map(|k| s[k] - reference[k]).collect::<Vec<_>>())
         .collect();
     // The side noise of the tracker: two points of σ = MPE/2 per axis give σ_side = MPE/√2.
     let mpe = mpe_mm(dataset, side);
@@ -59,9 +71,9 @@ pub fn reference(
 }
 
 /// Largest |deviation| of a triangle's sides from the reference, and the deviations.
-fn deviation(p: &[Vector3<f64>; 3], reference: &[f64; 3]) -> (f64, [f64; 3]) {
+fn deviation(p: &[Vector3<f64>], reference: &[f64]) -> (f64, Vec<f64>) {
     let s = sides(p);
-    let d: [f64; 3] = std::array::from_fn(|k| s[k] - reference[k]);
+    let d: Vec<f64> = s.iter().zip(reference).map(|(s, r)| s - r).collect();
     (d.iter().fold(0.0, |m, x| m.max(x.abs())), d)
 }
 
@@ -73,8 +85,13 @@ pub fn flags(dataset: &Dataset, side: Side, settings: &ScreenSettings) -> Vec<Fl
     // The other arm's triangle: a row of the other arm fits it (when the arms' reflector triangles
     // differ measurably).
     let other = self::reference(dataset, side.other(), settings).filter(|(other, t)| {
-        (0..3).any(|k| (other[k] - reference[k]).abs() > 2.0 * threshold.max(*t))
+        other
+            .iter()
+            .zip(&reference)
+            .any(|(o, r)| (o - r).abs() > 2.0 * threshold.max(*t))
     });
+    let names = &dataset.reflector_names;
+    let three = dataset.reflector_count() == 3;
     let mut out = Vec::new();
     for (index, m) in dataset.arm(side).measurements.iter().enumerate() {
         let p = &m.tracker_points_mm;
@@ -93,9 +110,11 @@ pub fn flags(dataset: &Dataset, side: Side, settings: &ScreenSettings) -> Vec<Fl
             reflector,
             reason,
         };
-        // Labels: a relabelling that restores the triangle (the best one).
+        // Labels: a relabelling that restores the triangle (the best one); two reflectors swapped keep
+        // their one distance, so only three can tell.
         let relabelled = RELABELLINGS
             .iter()
+            .filter(|_| three)
             .map(|(perm, name)| (deviation(&perm.map(|k| p[k]), &reference).0, *name))
             .min_by(|a, b| a.0.total_cmp(&b.0));
         if let Some((best, name)) = relabelled
@@ -126,6 +145,23 @@ pub fn flags(dataset: &Dataset, side: Side, settings: &ScreenSettings) -> Vec<Fl
                 continue;
             }
         }
+        if !three {
+            let list: Vec<String> = reflector_pairs(dataset.reflector_count())
+                .into_iter()
+                .zip(&d)
+                .map(|(pair, x)| format!("{} by {x:+.3} mm", side_name(names, pair)))
+                .collect();
+            out.push(flag(
+                FlagKind::Triangle,
+                None,
+                format!(
+                    "the distances between the reflectors differ from those of the other \
+                     configurations: {} (threshold {threshold:.3} mm)",
+                    list.join(", ")
+                ),
+            ));
+            continue;
+        }
         // A single misread reflector changes the two sides that meet at it; the third side (the
         // one with the smallest deviation) is opposite it.
         let (k_min, _) = d.iter().enumerate().fold((0, f64::INFINITY), |b, (k, x)| {
@@ -138,17 +174,22 @@ pub fn flags(dataset: &Dataset, side: Side, settings: &ScreenSettings) -> Vec<Fl
             format!(
                 "reflector {} looks misread: sides {} and {} differ from the rigid triangle of the \
                  other configurations by {:+.3} and {:+.3} mm (threshold {threshold:.3} mm)",
-                REFLECTOR_NAMES[opposite],
-                SIDE_NAMES[others[0]],
-                SIDE_NAMES[others[1]],
+                names[opposite],
+                side_name(names, reflector_pairs(3)[others[0]]),
+                side_name(names, reflector_pairs(3)[others[1]]),
                 d[others[0]],
                 d[others[1]]
             )
         } else {
             format!(
                 "the reflector triangle differs from the rigid triangle of the other configurations: \
-                 sides ab, bc, ca by {:+.3}, {:+.3}, {:+.3} mm (threshold {threshold:.3} mm)",
-                d[0], d[1], d[2]
+                 sides {}, {}, {} by {:+.3}, {:+.3}, {:+.3} mm (threshold {threshold:.3} mm)",
+                side_name(names, (0, 1)),
+                side_name(names, (1, 2)),
+                side_name(names, (2, 0)),
+                d[0],
+                d[1],
+                d[2]
             )
         };
         out.push(flag(FlagKind::Triangle, single.then_some(opposite), reason));

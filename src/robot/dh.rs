@@ -106,7 +106,21 @@ impl RobotDescription {
     /// of [`crate::urdf_export::calibrated_urdf`]), reflectors from `reflector_{a,b,c}_{l,r}` links
     /// when present (else `reflectors_mm`), and the base transform of the DH base frames. For the
     /// built-in URDF this is Table 3. Fails when an origin is not of DH form or an axis is not +z.
-    pub fn dh_model(&self, reflectors_mm: [Vector3<f64>; 3]) -> Result<DualArmModel, RobotError> {
+    pub fn dh_model(
+        &self,
+        reflectors_mm: impl Into<Vec<Vector3<f64>>>,
+    ) -> Result<DualArmModel, RobotError> {
+        let reflectors_mm: Vec<Vector3<f64>> = reflectors_mm.into();
+        let names = crate::kinematics::default_reflector_names(reflectors_mm.len());
+        self.dh_model_named(&names, &reflectors_mm)
+    }
+
+    /// [`RobotDescription::dh_model`] with reflectors named `names` (links `reflector_<name>_{l,r}`).
+    pub fn dh_model_named(
+        &self,
+        reflector_names: &std::sync::Arc<[String]>,
+        reflectors_mm: &[Vector3<f64>],
+    ) -> Result<DualArmModel, RobotError> {
         let file = self
             .source
             .as_ref()
@@ -162,8 +176,8 @@ impl RobotDescription {
                         "flange is not at a DH offset of link 7",
                     )
                 })?;
-            let mut reflectors = reflectors_mm;
-            for (k, r) in crate::kinematics::REFLECTOR_NAMES.iter().enumerate() {
+            let mut reflectors = reflectors_mm.to_vec();
+            for (k, r) in reflector_names.iter().enumerate() {
                 if let Some(p) = link_pose(&format!("reflector_{r}_{}", side_suffix(side))) {
                     reflectors[k] = (flange.inverse() * p).translation.vector;
                 }
@@ -171,6 +185,7 @@ impl RobotDescription {
             Ok(ArmModel {
                 kinematics: ArmKinematics::Dh(dh),
                 reflectors_mm: reflectors,
+                reflector_names: reflector_names.clone(),
             })
         })?;
         let base = PerSide::from_fn(|side| self.body_from_dh_base(side));

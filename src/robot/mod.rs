@@ -650,21 +650,42 @@ impl RobotDescription {
         self.body_from_arm_base(Side::Left).inverse() * self.body_from_arm_base(Side::Right)
     }
 
-    /// The nominal dual-arm model: for the built-in robot Table 3 with the given reflectors; for a
-    /// description from a file its arm chains without corrections, with reflectors from links
-    /// `reflector_{a,b,c}_<tip>` (or `_l`/`_r`) fixed below the tip where the file has them (a
-    /// calibrated URDF) and the given ones otherwise. The base transform is the URDF's.
-    pub fn nominal_model(&self, reflectors_mm: [Vector3<f64>; 3]) -> DualArmModel {
+    /// The nominal dual-arm model: for the built-in robot Table 3 with the given reflectors (named a,
+    /// b, c, …); for a description from a file its arm chains without corrections, with reflectors
+    /// from links `reflector_{a,b,c}_<tip>` (or `_l`/`_r`) fixed below the tip where the file has them
+    /// (a calibrated URDF) and the given ones otherwise. The base transform is the URDF's.
+    pub fn nominal_model(&self, reflectors_mm: impl Into<Vec<Vector3<f64>>>) -> DualArmModel {
+        let reflectors_mm = reflectors_mm.into();
+        let names = crate::kinematics::default_reflector_names(reflectors_mm.len());
+        self.nominal_model_named(&names, &reflectors_mm)
+    }
+
+    /// The nominal model for `dataset`: its reflectors, with their names (a calibrated URDF's links
+    /// `reflector_<name>_<tip>` for those names win, as in [`RobotDescription::nominal_model`]).
+    pub fn nominal_model_for(&self, dataset: &crate::dataset::Dataset) -> DualArmModel {
+        self.nominal_model_named(&dataset.reflector_names, &dataset.nominal_reflectors_mm)
+    }
+
+    /// [`RobotDescription::nominal_model`] with reflectors named `names` (one per entry of
+    /// `reflectors_mm`).
+    pub fn nominal_model_named(
+        &self,
+        names: &std::sync::Arc<[String]>,
+        reflectors_mm: &[Vector3<f64>],
+    ) -> DualArmModel {
         let arms = match self.form {
             ModelForm::Dh => {
-                let arm = ArmModel::nominal_irb14000(reflectors_mm);
+                let arm = ArmModel::nominal_irb14000(reflectors_mm.to_vec())
+                    .with_reflector_names(names.clone());
                 PerSide::new(arm.clone(), arm)
             }
             ModelForm::Chain => PerSide::from_fn(|side| {
                 ArmModel::nominal_chain(
                     self.arms[side].chain.clone(),
-                    self.reflector_links(side).unwrap_or(reflectors_mm),
+                    self.reflector_links_named(side, names)
+                        .unwrap_or_else(|| reflectors_mm.to_vec()),
                 )
+                .with_reflector_names(names.clone())
             }),
         };
         DualArmModel {
@@ -675,12 +696,20 @@ impl RobotDescription {
 
     /// The reflector coordinates written into the description as links `reflector_{a,b,c}_<tip>`
     /// (or `reflector_{a,b,c}_{l,r}`) fixed below `side`'s tip, in the tip frame, mm.
-    pub fn reflector_links(&self, side: Side) -> Option<[Vector3<f64>; 3]> {
+    pub fn reflector_links(&self, side: Side) -> Option<Vec<Vector3<f64>>> {
+        let names: Vec<String> = REFLECTOR_NAMES.iter().map(|r| r.to_string()).collect();
+        self.reflector_links_named(side, &names)
+    }
+
+    /// The coordinates of the reflectors `names` from links `reflector_<name>_<tip>` (or
+    /// `reflector_<name>_{l,r}`) fixed below `side`'s tip, in the tip frame, mm; `None` unless every
+    /// one of them is there.
+    pub fn reflector_links_named(&self, side: Side, names: &[String]) -> Option<Vec<Vector3<f64>>> {
         let tip = self.kin.flange[side];
         let q = vec![0.0; self.arms[side].chain.dof()];
         let tip_pose = self.kin.body_from_link(tip, side, &q);
-        let mut out = [Vector3::zeros(); 3];
-        for (k, r) in REFLECTOR_NAMES.iter().enumerate() {
+        let mut out = Vec::with_capacity(names.len());
+        for r in names {
             let link = [
                 format!("reflector_{r}_{}", self.flange_link(side)),
                 format!("reflector_{r}_{}", side_suffix(side)),
@@ -688,7 +717,7 @@ impl RobotDescription {
             .into_iter()
             .find_map(|name| self.kin.fixed_below(tip, &name))?;
             let pose = self.kin.body_from_link(link, side, &q);
-            out[k] = (tip_pose.inverse() * pose).translation.vector;
+            out.push((tip_pose.inverse() * pose).translation.vector);
         }
         Some(out)
     }

@@ -107,10 +107,14 @@ pub(super) fn inject(
                         let others = &clean[side.other()].measurements;
                         let source = rng.random_range(0..others.len());
                         m.q_rad = others[source].q_rad.clone();
-                        m.tracker_points_mm = others[source].tracker_points_mm.map(|p| {
-                            p + Vector3::new(gauss(&mut rng), gauss(&mut rng), gauss(&mut rng))
-                                * sigma_mm
-                        });
+                        m.tracker_points_mm = others[source]
+                            .tracker_points_mm
+                            .iter()
+                            .map(|p| {
+                                p + Vector3::new(gauss(&mut rng), gauss(&mut rng), gauss(&mut rng))
+                                    * sigma_mm
+                            })
+                            .collect();
                         GrossError::OtherArm { source }
                     }
                 };

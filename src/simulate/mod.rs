@@ -334,6 +334,7 @@ pub fn simulate(
         side,
         file: PathBuf::from(format!("{}.csv", side.name())),
         links: None,
+        station: None,
         measurements: measure_arm(
             opts,
             side,
@@ -356,7 +357,8 @@ pub fn simulate(
             dir: PathBuf::new(),
             robot: None,
             tracker: opts.tracker,
-            nominal_reflectors_mm: nominal.arm(Side::Left).reflectors_mm,
+            nominal_reflectors_mm: nominal.arm(Side::Left).reflectors_mm.clone(),
+            reflector_names: nominal.arm(Side::Left).reflector_names.clone(),
             arms,
         },
         truth,
@@ -402,12 +404,17 @@ fn measure_arm(
                 None => q.clone(),
             };
             let fk = true_arm.reflector_fk(&q_true);
-            let tracker_points_mm = fk.points_mm.map(|p| {
-                let p = tracker_from_base.transform_point(&Point3::from(p)).coords;
-                let mpe_um = opts.tracker.mpe_um + opts.tracker.mpe_um_per_m * p.norm() / 1000.0;
-                let sigma_mm = 0.5 * mpe_um / 1000.0;
-                p + sigma_mm * gauss3(&mut noise_rng)
-            });
+            let tracker_points_mm = fk
+                .points_mm
+                .iter()
+                .map(|p| {
+                    let p = tracker_from_base.transform_point(&Point3::from(*p)).coords;
+                    let mpe_um =
+                        opts.tracker.mpe_um + opts.tracker.mpe_um_per_m * p.norm() / 1000.0;
+                    let sigma_mm = 0.5 * mpe_um / 1000.0;
+                    p + sigma_mm * gauss3(&mut noise_rng)
+                })
+                .collect();
             Measurement {
                 id: format!("{prefix}{:03}", i + 1),
                 q_rad: q.clone(),

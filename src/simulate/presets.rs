@@ -80,7 +80,7 @@ pub fn simulate_with_robot(
     // One set of nominal reflectors for both arms (a dataset has one), even where the description
     // carries calibrated reflector links.
     for (_, arm) in nominal.arms.iter_mut() {
-        arm.reflectors_mm = reflectors;
+        arm.reflectors_mm = reflectors.to_vec();
     }
     let world = CollisionWorld::new(robot);
     let parked = resting_poses(robot, &world, opts.seed)?;

@@ -83,12 +83,19 @@ fn collaborative_pos_rms_mm(out: &SimOutput, model: &DualArmModel) -> f64 {
     let pr: Vec<_> = r
         .iter()
         .map(|m| {
-            model.arms.right.reflector_fk(&m.q_rad).points_mm.map(|p| {
-                model
-                    .left_base_from_right_base
-                    .transform_point(&p.into())
-                    .coords
-            })
+            model
+                .arms
+                .right
+                .reflector_fk(&m.q_rad)
+                .points_mm
+                .iter()
+                .map(|p| {
+                    model
+                        .left_base_from_right_base
+                        .transform_point(&(*p).into())
+                        .coords
+                })
+                .collect::<Vec<_>>()
         })
         .collect();
     let mut sum_sq = [0.0; 3];

@@ -15,7 +15,7 @@
 
 use super::patch::REFLECTOR_RADIUS_M;
 use super::{export_err, urdf_pose_from_isometry};
-use crate::kinematics::{DualArmModel, N_JOINTS, REFLECTOR_NAMES};
+use crate::kinematics::{DualArmModel, N_JOINTS};
 use crate::robot::{
     RobotDescription, RobotError, arm_link_name, flange_link_name, joint1_from_dh_base, side_suffix,
 };
@@ -169,7 +169,8 @@ fn write_arm(
     }
 
     // Reflectors: fixed links of the flange.
-    for (r, t) in REFLECTOR_NAMES.iter().zip(&model.arm(side).reflectors_mm) {
+    let arm = model.arm(side);
+    for (r, t) in arm.reflector_names.iter().zip(&arm.reflectors_mm) {
         let link = format!("reflector_{r}_{}", side_suffix(side));
         let origin = urdf_rs::Pose {
             xyz: urdf_rs::Vec3([t.x / 1000.0, t.y / 1000.0, t.z / 1000.0]),

@@ -12,7 +12,7 @@
 //! rotations, never rpy text.
 
 use super::{export_err, urdf_pose_from_isometry};
-use crate::kinematics::{DualArmModel, REFLECTOR_NAMES};
+use crate::kinematics::DualArmModel;
 use crate::robot::{LoadOptions, RobotDescription, RobotError};
 use crate::side::Side;
 use nalgebra::{Isometry3, Vector3};
@@ -121,12 +121,13 @@ fn reflector_edits(
     root: roxmltree::Node,
     side: Side,
     tip: &str,
-    reflectors_mm: &[Vector3<f64>; 3],
+    names: &[String],
+    reflectors_mm: &[Vector3<f64>],
     text: &str,
     edits: &mut Vec<(Range<usize>, String)>,
     appended: &mut String,
 ) -> Result<(), RobotError> {
-    for (r, t) in REFLECTOR_NAMES.iter().zip(reflectors_mm) {
+    for (r, t) in names.iter().zip(reflectors_mm) {
         let link = format!("reflector_{r}_{tip}");
         let legacy = format!("reflector_{r}_{}", crate::robot::side_suffix(side));
         let carrier_of = |name: &str| {
@@ -225,6 +226,7 @@ pub(super) fn calibrated_chain_urdf(
             root,
             side,
             &chain.tip_link,
+            &arm.reflector_names,
             &arm.reflectors_mm,
             text,
             &mut edits,
@@ -239,12 +241,18 @@ pub(super) fn calibrated_chain_urdf(
         edits.push((close..close, appended));
     }
     let from = robot.name().replace("--", "- -");
+    let names = &model.arm(Side::Left).reflector_names;
+    let reflector_links = match names.len() {
+        1 => format!("link reflector_{}_<tip>", names[0]),
+        _ => format!("links reflector_{{{}}}_<tip>", names.join(",")),
+    }
+    .replace("--", "- -");
     edits.push((
         root.range().start..root.range().start,
         format!(
             "<!-- Calibrated by dualcal {} from {from}: only the arm joints' origins differ (each by the \
              identified correction; the right arm's first joint also by the base correction); the \
-             identified reflectors are the links reflector_{{a,b,c}}_<tip>. -->\n",
+             identified reflectors are the {reflector_links}. -->\n",
             env!("CARGO_PKG_VERSION")
         ),
     ));
@@ -268,7 +276,10 @@ fn verify(robot: &RobotDescription, model: &DualArmModel, text: &str) -> Result<
         &options,
     )
     .map_err(|e| export_err(format!("the written URDF does not load back: {e}")))?;
-    let again = back.nominal_model(model.arm(Side::Left).reflectors_mm);
+    let again = back.nominal_model_named(
+        &model.arm(Side::Left).reflector_names,
+        &model.arm(Side::Left).reflectors_mm,
+    );
     for side in Side::BOTH {
         let limits = robot.joint_limits_rad(side);
         for k in 0..8 {
@@ -284,8 +295,8 @@ fn verify(robot: &RobotDescription, model: &DualArmModel, text: &str) -> Result<
                 again.left_base_from(side) * again.arm(side).reflector_fk(&q).base_from_flange;
             let dt = (want.translation.vector - got.translation.vector).norm();
             let dr = (want.rotation.inverse() * got.rotation).angle();
-            let refl = model.arm(side).reflectors_mm;
-            let dp = (0..3)
+            let refl = &model.arm(side).reflectors_mm;
+            let dp = (0..refl.len())
                 .map(|r| (refl[r] - again.arm(side).reflectors_mm[r]).norm())
                 .fold(0.0, f64::max);
             if !(dt < 1e-6 && dr < 1e-9 && dp < 1e-6) {

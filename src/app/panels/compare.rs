@@ -51,9 +51,18 @@ fn termination_text(outcome: &MethodOutcome) -> (String, bool) {
 /// the collaborative errors, `Δd` RMS* and max (mm), `Δo` RMS and max (rad).
 fn row_figures(report: Option<&crate::metrics::AccuracyReport>) -> Option<[f64; 12]> {
     let r = report?;
-    let four = |s: &AccuracyStats| [s.pos_rms_mm, s.pos_max_mm, s.ori_rms_rad, s.ori_max_rad];
+    // NaN where the data cannot measure a figure (printed "not measurable").
+    let four = |s: &AccuracyStats| {
+        [
+            s.pos_rms_mm,
+            s.pos_max_mm,
+            s.ori_rms_rad.unwrap_or(f64::NAN),
+            s.ori_max_rad.unwrap_or(f64::NAN),
+        ]
+    };
     let mut out = [0.0; 12];
-    for (k, s) in [&r.relative_left, &r.relative_right, &r.collaborative]
+    let collaborative = r.collaborative_or_nan();
+    for (k, s) in [&r.relative_left, &r.relative_right, &collaborative]
         .into_iter()
         .enumerate()
     {
@@ -212,7 +221,9 @@ fn summary_table_ui(
     let groups = ["relative, left arm", "relative, right arm", "collaborative"];
     let columns = ["Δd RMS* mm", "Δd max mm", "Δo RMS rad", "Δo max rad"];
     let value = |k: usize, v: f64| {
-        if k % 4 < 2 {
+        if v.is_nan() {
+            crate::metrics::NOT_MEASURABLE.to_string()
+        } else if k % 4 < 2 {
             format!("{v:.3}")
         } else {
             format!("{v:.5}")

@@ -118,7 +118,7 @@ impl ViewportState {
                 .nominal
                 .configs
                 .iter()
-                .flat_map(|r| r.measured_body_mm);
+                .flat_map(|r| r.measured_body_mm.iter().copied());
             let points: Vec<nalgebra::Vector3<f32>> = links
                 .chain(measured)
                 .filter(|p| p.iter().all(|c| c.is_finite()))

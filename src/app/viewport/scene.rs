@@ -525,7 +525,7 @@ pub fn build_scene(
     {
         let selected = selection == Some(row.config);
         let errors = row.point_errors_mm();
-        let mean = (errors[0] + errors[1] + errors[2]) / 3.0;
+        let mean = errors.iter().sum::<f64>() / errors.len().max(1) as f64;
         // A flagged configuration in its flag's colour (severity), outlined; an excluded one grey.
         let flag = flags
             .get(&row.config)
@@ -540,20 +540,29 @@ pub fn build_scene(
                     if selected { 0.95 } else { 0.3 },
                 ),
             };
-            for p in row.measured_body_mm {
-                scene.triangles.push(ColorVertex {
-                    position: p.cast::<f32>().into(),
-                    color: [r, g, b, alpha],
-                });
+            let points = &row.measured_body_mm;
+            if points.len() == 3 {
+                // The paper's set-up: the measured reflector triangle, filled.
+                for p in points {
+                    scene.triangles.push(ColorVertex {
+                        position: p.cast::<f32>().into(),
+                        color: [r, g, b, alpha],
+                    });
+                }
+            } else {
+                // One, two or four reflectors: a marker per reflector.
+                for p in points {
+                    scene.instances.push(MeshInstance::new(
+                        Primitive::Sphere,
+                        &Isometry3::translation(p.x, p.y, p.z),
+                        Vector3::repeat(MARKER_MM),
+                        [r, g, b, alpha.max(0.6)],
+                    ));
+                }
             }
             if let Some([r, g, b]) = flag {
-                for k in 0..3 {
-                    line(
-                        &mut scene.lines,
-                        row.measured_body_mm[k],
-                        row.measured_body_mm[(k + 1) % 3],
-                        [r, g, b, 1.0],
-                    );
+                for (i, j) in outline(points.len()) {
+                    line(&mut scene.lines, points[i], points[j], [r, g, b, 1.0]);
                 }
             }
         }
@@ -565,20 +574,23 @@ pub fn build_scene(
             } else {
                 model_color
             };
-            for k in 0..3 {
-                line(
-                    &mut scene.lines,
-                    row.model_body_mm[k],
-                    row.model_body_mm[(k + 1) % 3],
-                    c,
-                );
+            let points = &row.model_body_mm;
+            for (i, j) in outline(points.len()) {
+                line(&mut scene.lines, points[i], points[j], c);
+            }
+            if points.len() == 1 {
+                // A single model point: a small cross.
+                for axis in [Vector3::x(), Vector3::y(), Vector3::z()] {
+                    let d = axis * MARKER_MM;
+                    line(&mut scene.lines, points[0] - d, points[0] + d, c);
+                }
             }
         }
         if options.show_vectors {
             for ((error, from), measured) in errors
                 .iter()
-                .zip(row.model_body_mm)
-                .zip(row.measured_body_mm)
+                .zip(row.model_body_mm.iter().copied())
+                .zip(row.measured_body_mm.iter().copied())
             {
                 let color = if row.excluded {
                     excluded_color
@@ -592,7 +604,7 @@ pub fn build_scene(
         }
         if selected {
             let c = srgb_linear([255, 255, 255], 1.0);
-            for p in row.measured_body_mm {
+            for p in &row.measured_body_mm {
                 scene.instances.push(MeshInstance::new(
                     Primitive::Sphere,
                     &Isometry3::translation(p.x, p.y, p.z),
@@ -605,9 +617,24 @@ pub fn build_scene(
     scene
 }
 
-/// Screen-space anchor of a configuration for picking: its measured triangle's centroid.
+/// Screen-space anchor of a configuration for picking: the centroid of its measured reflectors (the
+/// triangle's, for three).
 pub fn pick_anchor(row: &ConfigRow) -> Vector3<f32> {
-    ((row.measured_body_mm[0] + row.measured_body_mm[1] + row.measured_body_mm[2]) / 3.0).cast()
+    let n = row.measured_body_mm.len().max(1) as f64;
+    (row.measured_body_mm.iter().sum::<Vector3<f64>>() / n).cast()
+}
+
+/// Size of a reflector marker (one or two reflectors, or a single model point), mm.
+const MARKER_MM: f64 = 6.0;
+
+/// The segments that outline a configuration's reflectors: the triangle's sides for three, the one
+/// distance for two, none for one; every neighbour in order otherwise.
+fn outline(n: usize) -> Vec<(usize, usize)> {
+    match n {
+        0 | 1 => Vec::new(),
+        2 => vec![(0, 1)],
+        n => (0..n).map(|k| (k, (k + 1) % n)).collect(),
+    }
 }
 
 #[cfg(test)]

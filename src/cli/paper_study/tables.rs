@@ -83,10 +83,10 @@ enum Pairs {
 }
 
 impl Pairs {
-    fn of(self, r: &AccuracyReport) -> &AccuracyStats {
+    fn of(self, r: &AccuracyReport) -> AccuracyStats {
         match self {
-            Pairs::Relative(s) => r.relative(s),
-            Pairs::Collaborative => &r.collaborative,
+            Pairs::Relative(s) => *r.relative(s),
+            Pairs::Collaborative => r.collaborative_or_nan(),
         }
     }
 
@@ -112,8 +112,8 @@ fn accuracy_rows(pairs: Pairs) -> Vec<RowSpec> {
     let rows: [(&str, &str, Unit, Pick); 4] = [
         ("pos_rms", "positioning RMS*", Unit::Mm, |s| s.pos_rms_mm),
         ("pos_max", "positioning max", Unit::Mm, |s| s.pos_max_mm),
-        ("ori_rms", "orientation RMS", Unit::Rad, |s| s.ori_rms_rad),
-        ("ori_max", "orientation max", Unit::Rad, |s| s.ori_max_rad),
+        ("ori_rms", "orientation RMS", Unit::Rad, |s| s.ori_rms_rad.unwrap_or(f64::NAN)),
+        ("ori_max", "orientation max", Unit::Rad, |s| s.ori_max_rad.unwrap_or(f64::NAN)),
     ];
     rows.into_iter()
         .map(|(id, label, unit, pick)| RowSpec {
@@ -137,10 +137,10 @@ fn frequency_rows(pairs: Pairs) -> Vec<RowSpec> {
             100.0 * s.pos_within_0_6mm_frac
         }),
         ("ori_0.005", "orientation Δo ≤ 0.005 rad", |s| {
-            100.0 * s.ori_within_0_005rad_frac
+            100.0 * s.ori_within_0_005rad_frac.unwrap_or(f64::NAN)
         }),
         ("ori_0.01", "orientation Δo ≤ 0.01 rad", |s| {
-            100.0 * s.ori_within_0_01rad_frac
+            100.0 * s.ori_within_0_01rad_frac.unwrap_or(f64::NAN)
         }),
     ];
     rows.into_iter()
@@ -272,7 +272,7 @@ impl Table {
                             .map(|r| {
                                 c.which
                                     .report(&r.comparison, Split::Ver)
-                                    .map_or(f64::NAN, |rep| (spec.pick)(spec.pairs.of(rep)))
+                                    .map_or(f64::NAN, |rep| (spec.pick)(&spec.pairs.of(rep)))
                             })
                             .collect()
                     })
@@ -490,7 +490,7 @@ fn fig4(plan: &Plan, runs: &[SeedRun]) -> (String, String) {
             let mut cells = Vec::new();
             for (unit, pick) in [
                 (Unit::Mm, (|s| s.pos_rms_mm) as Pick),
-                (Unit::Rad, |s| s.ori_rms_rad),
+                (Unit::Rad, |s| s.ori_rms_rad.unwrap_or(f64::NAN)),
             ] {
                 for side in Side::BOTH {
                     let mut pair = Vec::new();
@@ -518,7 +518,7 @@ fn fig4(plan: &Plan, runs: &[SeedRun]) -> (String, String) {
                                 .iter()
                                 .map(|p| {
                                     let r = if split == Split::Cal { p.cal } else { p.ver };
-                                    r.map_or(f64::NAN, |r| r.relative(side).ori_rms_rad)
+                                    r.map_or(f64::NAN, |r| r.relative(side).ori_rms_rad.unwrap_or(f64::NAN))
                                 })
                                 .collect();
                             let (om, osd, _, _, _) = summary(&ori);
@@ -647,7 +647,7 @@ pub(crate) fn runs_csv(runs: &[SeedRun]) -> Result<String> {
                 for (pairs, s) in [
                     ("relative_left", &rep.relative_left),
                     ("relative_right", &rep.relative_right),
-                    ("collaborative", &rep.collaborative),
+                    ("collaborative", &rep.collaborative_or_nan()),
                 ] {
                     let mut rec = vec![
                         seed.clone(),
@@ -665,12 +665,12 @@ pub(crate) fn runs_csv(runs: &[SeedRun]) -> Result<String> {
                             s.pos_rms_per_reflector_mm[1],
                             s.pos_rms_per_reflector_mm[2],
                             s.pos_max_mm,
-                            s.ori_rms_rad,
-                            s.ori_max_rad,
+                            s.ori_rms_rad.unwrap_or(f64::NAN),
+                            s.ori_max_rad.unwrap_or(f64::NAN),
                             s.pos_within_0_3mm_frac,
                             s.pos_within_0_6mm_frac,
-                            s.ori_within_0_005rad_frac,
-                            s.ori_within_0_01rad_frac,
+                            s.ori_within_0_005rad_frac.unwrap_or(f64::NAN),
+                            s.ori_within_0_01rad_frac.unwrap_or(f64::NAN),
                         ]
                         .map(|x| format!("{x}")),
                     );
@@ -736,5 +736,5 @@ fn own_reflector_rms(r: &SeedRun, key: &str, side: Side, model: Model) -> Option
 fn ver_stat(r: &SeedRun, model: Model, pairs: Pairs, pick: Pick) -> Option<f64> {
     model
         .report(&r.comparison, Split::Ver)
-        .map(|rep| pick(pairs.of(rep)))
+        .map(|rep| pick(&pairs.of(rep)))
 }

@@ -84,7 +84,7 @@ fn yumi_like_chain_has_seven_joints_in_chain_order() {
         chain.joint_names(),
         ["1", "2", "7", "3", "4", "5", "6"].map(|n| format!("yumi_joint_{n}_l"))
     );
-    assert_eq!(chain.param_count(), 51);
+    assert_eq!(chain.param_count(3), 51);
     assert!(chain.warnings.is_empty(), "{:?}", chain.warnings);
     // From the world link the fixed joints are folded into joint 1's origin, the gripper's into the
     // tip.

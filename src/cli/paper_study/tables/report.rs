@@ -12,8 +12,8 @@ use std::fmt::Write as _;
 const PICKS: [(&str, Pick); 4] = [
     ("pos RMS*", |s| s.pos_rms_mm),
     ("pos max", |s| s.pos_max_mm),
-    ("ori RMS", |s| s.ori_rms_rad),
-    ("ori max", |s| s.ori_max_rad),
+    ("ori RMS", |s| s.ori_rms_rad.unwrap_or(f64::NAN)),
+    ("ori max", |s| s.ori_max_rad.unwrap_or(f64::NAN)),
 ];
 
 /// How each method ended: converged runs, iterations per stage, calibration time.
