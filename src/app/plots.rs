@@ -11,10 +11,11 @@ use egui_plot::{Bar, BarChart, Legend, Line, Plot, VLine};
 
 pub use crate::solver::STAGES;
 
-const F_COLORS: [Color32; 3] = [
+const F_COLORS: [Color32; 4] = [
     Color32::from_rgb(230, 120, 90),
     Color32::from_rgb(110, 190, 110),
     Color32::from_rgb(100, 160, 235),
+    Color32::from_rgb(200, 130, 220),
 ];
 const PSI_COLOR: Color32 = Color32::from_rgb(240, 220, 120);
 
@@ -129,14 +130,23 @@ pub fn convergence_plot_ui(ui: &mut egui::Ui, history: &[IterationRecord], stage
             .collect()
     };
     let psi = series(&|r| r.psi_mm2);
-    let f: [Vec<[f64; 2]>; 3] = std::array::from_fn(|k| series(&|r| r.f_mm2[k]));
+    // One objective per reflector (F_a, F_b, F_c for three), named a, b, c, … by position.
+    let n_reflectors = records.first().map_or(0, |r| r.f_mm2.len());
+    let f: Vec<(String, Vec<[f64; 2]>)> = crate::kinematics::default_reflector_names(n_reflectors)
+        .iter()
+        .enumerate()
+        .map(|(k, name)| {
+            let points = series(&|r| r.f_mm2.get(k).copied().unwrap_or(f64::NAN));
+            (format!("F_{name}"), points)
+        })
+        .collect();
     let step = series(&|r| r.step_norm);
     let kkt = series(&|r| r.optimality_residual);
     ui.columns(2, |cols| {
         iteration_plot(("objective", stage), "mm² (log10)").show(&mut cols[0], |plot| {
             plot.line(Line::new("ψ = max F", psi).color(PSI_COLOR).width(2.5));
-            for (k, (name, points)) in ["F_a", "F_b", "F_c"].into_iter().zip(f).enumerate() {
-                plot.line(Line::new(name, points).color(F_COLORS[k]));
+            for (k, (name, points)) in f.into_iter().enumerate() {
+                plot.line(Line::new(name, points).color(F_COLORS[k % F_COLORS.len()]));
             }
         });
         iteration_plot(("step", stage), "log10").show(&mut cols[1], |plot| {

@@ -339,7 +339,7 @@ mod tests {
         let flange = session
             .robot
             .body_from_flange(Side::Left, &session.dataset.arms.left.measurements[0].q_rad);
-        let centroid = (row.model_body_mm[0] + row.model_body_mm[1] + row.model_body_mm[2]) / 3.0;
+        let centroid = row.model_body_mm.iter().sum::<nalgebra::Vector3<f64>>() / 3.0;
         let d = (centroid - flange.translation.vector).norm();
         assert!(d < 150.0, "reflectors {d} mm from the drawn flange");
     }

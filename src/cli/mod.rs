@@ -488,7 +488,10 @@ fn evaluate_cmd(a: &EvaluateArgs) -> Result<()> {
             a.split
         );
         outln!("{}", describe_robot(&robot));
-        outln!("{}", metrics::format_table(&report));
+        outln!(
+            "{}",
+            metrics::format_table_named(&report, &ds.reflector_names)
+        );
     }
     Ok(())
 }
@@ -791,8 +794,10 @@ fn print_identifiability(result: &CalibrationResult) {
             rep.condition_after
         );
         if let Some(r) = result.reflector_used[side] {
+            let arm = result.nominal.arm(side);
+            let name = arm.reflector_names.get(r.index()).map_or("?", String::as_str);
             outln!(
-                "  reflector {r} used ({}); the other two reflectors' coordinates are nominal: the \
+                "  reflector {name} used ({}); the other reflectors' coordinates are nominal: the \
                  flange's orientation is not identified",
                 settings.method.name()
             );
@@ -826,6 +831,21 @@ fn print_identifiability(result: &CalibrationResult) {
             s.psi_start_mm2,
             s.psi_mm2
         );
+    }
+    let reflectors = result.nominal.arm(Side::Left).reflector_count();
+    if reflectors == 1 {
+        outln!(
+            "one reflector per arm: ψ is that reflector's summed squared distance errors (the minimax \
+             of step 1 is a least-squares fit); the flange's orientation is not measurable"
+        );
+    } else if reflectors == 2 {
+        outln!(
+            "two reflectors per arm: ψ is the larger of their summed squared distance errors; the \
+             flange's orientation is not measurable"
+        );
+    }
+    if let Some(why) = &result.base_not_measurable {
+        outln!("{}: not measurable from this data ({why}); the base is nominal", crate::solver::Stage::Base);
     }
     for warning in result.warnings() {
         eprintln!("warning: {warning}");
@@ -865,10 +885,11 @@ pub fn comparison_table(
         out.push_str(&format!(
             "Accuracy on the {name} configurations (nominal → calibrated)\n"
         ));
-        out.push_str(&metrics::format_comparison(
+        out.push_str(&metrics::format_comparison_named(
             &before,
             &after,
             ["nominal", "calibrated"],
+            &ds.reflector_names,
         ));
         out.push('\n');
     }

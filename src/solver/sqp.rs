@@ -49,6 +49,9 @@ pub struct SqpState<P: MinimaxProblem> {
     /// (ψ, constraint violation) after each accepted step, for the no-progress rule (the merit
     /// function is recomputed with the current penalty, which may have grown since).
     merit_history: Vec<(f64, f64)>,
+    /// The largest objective gradient component at the start: the scale of a single objective's
+    /// stationarity (one reflector), where the current gradient cannot scale itself.
+    start_gradient_scale: f64,
 }
 
 /// Outer iterations over which the no-progress rule looks back.
@@ -102,11 +105,13 @@ impl<P: MinimaxProblem> SqpState<P> {
         if !h.iter().all(|v| v.is_finite()) {
             return Err(NonFiniteStart);
         }
+        let start_gradient_scale = eval.grad.iter().map(|g| g.amax()).fold(0.0, f64::max);
         Ok(Self {
             problem,
             y,
             eval,
             h,
+            start_gradient_scale,
             rho: 1.0,
             settings,
             iterations: 0,
@@ -408,13 +413,16 @@ impl<P: MinimaxProblem> SqpState<P> {
     /// ‖Σλ_i ∇f_i + Σμ_l ∇c_l‖∞ + Σλ_i (ψ − f_i) + Σ μ_l |c_l| + Σ c_l⁺, relative to the gradient scale.
     fn first_order_residual(&self, nu: &DVector<f64>) -> f64 {
         let g = Self::lagrangian_gradient(&self.eval, nu);
-        let scale = self
-            .eval
-            .grad
-            .iter()
-            .map(|g| g.amax())
-            .fold(0.0, f64::max)
-            .max(1e-300);
+        let current = self.eval.grad.iter().map(|g| g.amax()).fold(0.0, f64::max);
+        // Several objectives: their gradients stay large at a minimax optimum while the λ-weighted
+        // sum vanishes, so they scale it. One objective (one reflector): its own gradient vanishes,
+        // so the start's scales it.
+        let scale = if self.eval.f.len() == 1 {
+            self.start_gradient_scale
+        } else {
+            current
+        }
+        .max(1e-300);
         let psi = self.eval.psi();
         let psi_scale = psi.abs().max(1e-300);
         let n_obj = self.eval.f.len();

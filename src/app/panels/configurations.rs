@@ -59,15 +59,18 @@ impl TablePanel<'_> {
             && let Some(row) = session::config_row(session.current(), config)
         {
             let e = row.point_errors_mm();
+            let names = session.dataset.reflector_names.join("/");
+            let errors = e
+                .iter()
+                .map(|v| format!("{v:.3}"))
+                .collect::<Vec<_>>()
+                .join(" / ");
             ui.horizontal_wrapped(|ui| {
                 ui.label(format!(
-                    "selected: {} ({} arm, {}), point errors a/b/c = {:.3} / {:.3} / {:.3} mm",
+                    "selected: {} ({} arm, {}), point errors {names} = {errors} mm",
                     row.id,
                     config.side,
                     row.split.name(),
-                    e[0],
-                    e[1],
-                    e[2]
                 ));
                 let text = if row.excluded {
                     "Include (X)"

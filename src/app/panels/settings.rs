@@ -39,8 +39,9 @@ impl LeftPanel<'_> {
                 self.compare_button_ui(ui, commands);
             });
             self.current_method_ui(ui);
+            let names = self.session.map(|s| &s.dataset.reflector_names[..]);
             ui.add_enabled_ui(!self.calibrating, |ui| {
-                calibration_settings_ui(ui, &mut *self.settings)
+                calibration_settings_ui(ui, &mut *self.settings, names)
             });
             self.calibration_buttons_ui(ui, commands);
             ui.separator();
@@ -69,6 +70,34 @@ impl LeftPanel<'_> {
                     "tracker MPE {} µm + {} µm/m",
                     d.tracker.mpe_um, d.tracker.mpe_um_per_m
                 ));
+                let names = d.reflector_names.join(", ");
+                let label = match d.reflector_count() {
+                    1 => format!("1 reflector per arm ({names})"),
+                    n => format!("{n} reflectors per arm ({names})"),
+                };
+                let orientation = crate::metrics::orientation_measurable(&d.nominal_reflectors_mm);
+                ui.label(label).on_hover_text(if orientation {
+                    "three or more reflectors: the flange's orientation is measured too"
+                } else {
+                    "fewer than three reflectors: the flange's orientation is not measurable; its \
+                     figures read \"not measurable\""
+                });
+                if !d.one_tracker_frame() {
+                    ui.label(
+                        RichText::new(format!(
+                            "stations: left `{}`, right `{}` — base and collaborative figures not \
+                             measurable",
+                            d.arms.left.station.as_deref().unwrap_or(""),
+                            d.arms.right.station.as_deref().unwrap_or("")
+                        ))
+                        .color(egui::Color32::from_rgb(230, 180, 80)),
+                    )
+                    .on_hover_text(
+                        "The arms were measured from different tracker stations (dataset.toml \
+                         `[[arms]] station`): each arm calibrates on its own; distances between the \
+                         arms mean nothing, so step 2 is not run.",
+                    );
+                }
             }
             None => {
                 ui.label("none loaded");
@@ -359,8 +388,8 @@ fn arm_details_ui(ui: &mut egui::Ui, session: &Session, side: Side) {
         .small(),
     )
     .on_hover_text(
-        "The arm's calibration parameters (docs/solver.md): the kinematic ones and the nine reflector \
-         coordinates. Those distances between measured points cannot see are never identified.",
+        "The arm's calibration parameters (docs/solver.md): the kinematic ones and three coordinates per \
+         reflector. Those distances between measured points cannot see are never identified.",
     );
     for (name, why) in &unidentifiable {
         ui.label(
@@ -405,7 +434,11 @@ fn thousands(n: usize) -> String {
 }
 
 /// The settings grid: method, QP solver, split, iteration limit, tolerances.
-fn calibration_settings_ui(ui: &mut egui::Ui, settings: &mut CalibrationSettings) {
+fn calibration_settings_ui(
+    ui: &mut egui::Ui,
+    settings: &mut CalibrationSettings,
+    reflector_names: Option<&[String]>,
+) {
     egui::Grid::new("settings grid").num_columns(2).show(ui, |ui| {
         grid_row_ui(
             ui,
@@ -421,8 +454,15 @@ fn calibration_settings_ui(ui: &mut egui::Ui, settings: &mut CalibrationSettings
                 "The one reflector whose distance errors ref. [26] fits. auto: per arm, the one with \
                  the largest nominal error (the summary names the one used).",
                 |ui| {
+                    // The dataset's reflectors by name (a, b, c without a dataset).
                     let mut choices = vec![(None, "auto")];
-                    choices.extend(Reflector::ALL.map(|r| (Some(r), r.name())));
+                    choices.extend(Reflector::ALL.iter().filter_map(|&r| {
+                        let name = match reflector_names {
+                            Some(names) => names.get(r.index())?.as_str(),
+                            None => r.name(),
+                        };
+                        Some((Some(r), name))
+                    }));
                     choice_ui(ui, "reflector", &mut settings.reflector, &choices)
                 },
             );
