@@ -395,7 +395,13 @@ impl Analysis {
         // One registration of every kept point, or one per arm where the arms were measured from two
         // stations (their coordinates lie in unrelated frames).
         let n_left = dataset.arms.left.measurements.len();
-        let side_of = |row: usize| if row < n_left { Side::Left } else { Side::Right };
+        let side_of = |row: usize| {
+            if row < n_left {
+                Side::Left
+            } else {
+                Side::Right
+            }
+        };
         let one_frame = dataset.one_tracker_frame();
         let register = |only: Option<Side>| -> Result<(Isometry3<f64>, f64, usize), AnalysisError> {
             let take = |row: usize| kept_flags[row] && only.is_none_or(|s| side_of(row) == s);

@@ -405,7 +405,10 @@ fn columns_of_an_undeclared_reflector() {
 /// A declared reflector whose columns the CSV lacks.
 #[test]
 fn reflector_declared_but_its_columns_missing() {
-    let manifest = MANIFEST.replace("c = [-25.0, -40.0, 40]\n", "c = [-25.0, -40.0, 40]\nd = [0, 0, 90]\n");
+    let manifest = MANIFEST.replace(
+        "c = [-25.0, -40.0, 40]\n",
+        "c = [-25.0, -40.0, 40]\nd = [0, 0, 90]\n",
+    );
     let err = Fixture::with_manifest(&manifest).load().unwrap_err();
     assert!(
         matches!(err, DatasetError::Header { line: 3, ref field, .. } if field == "dx" || field == "split"),
@@ -418,7 +421,13 @@ fn reflector_declared_but_its_columns_missing() {
 fn reflector_names_and_an_empty_table_are_checked() {
     let manifest = MANIFEST.replace("b = [", "2b = [");
     let err = Fixture::with_manifest(&manifest).load().unwrap_err();
-    assert!(matches!(err, DatasetError::Toml { .. } | DatasetError::Manifest { .. }), "{err}");
+    assert!(
+        matches!(
+            err,
+            DatasetError::Toml { .. } | DatasetError::Manifest { .. }
+        ),
+        "{err}"
+    );
     let manifest = MANIFEST.replace("b = [", "\"b-2\" = [");
     let err = Fixture::with_manifest(&manifest).load().unwrap_err();
     assert!(
@@ -458,7 +467,11 @@ fn a_one_reflector_dataset_loads() {
             .join("\n")
             + "\n"
     };
-    let fx = Fixture::new(&manifest, &keep_a(&csv_text(6, 1)), &keep_a(&csv_text(5, 2)));
+    let fx = Fixture::new(
+        &manifest,
+        &keep_a(&csv_text(6, 1)),
+        &keep_a(&csv_text(5, 2)),
+    );
     let ds = fx.load().unwrap();
     assert_eq!(ds.reflector_count(), 1);
     assert_eq!(&ds.reflector_names[..], &["a".to_string()]);
@@ -468,19 +481,30 @@ fn a_one_reflector_dataset_loads() {
 
 #[test]
 fn stations_on_both_arms_or_neither() {
-    let manifest = MANIFEST.replace("file = \"left.csv\"\n", "file = \"left.csv\"\nstation = \"east\"\n");
+    let manifest = MANIFEST.replace(
+        "file = \"left.csv\"\n",
+        "file = \"left.csv\"\nstation = \"east\"\n",
+    );
     let err = Fixture::with_manifest(&manifest).load().unwrap_err();
     assert!(
         matches!(err, DatasetError::Manifest { line: Some(16), ref field, .. } if field == "arms.station"),
         "{err}"
     );
     assert_names(&err, &["dataset.toml:16", "arms.station", "left arm"]);
-    let both = manifest.replace("file = \"right.csv\"\n", "file = \"right.csv\"\nstation = \"west\"\n");
+    let both = manifest.replace(
+        "file = \"right.csv\"\n",
+        "file = \"right.csv\"\nstation = \"west\"\n",
+    );
     let ds = Fixture::with_manifest(&both).load().unwrap();
     assert_eq!(ds.arms.left.station.as_deref(), Some("east"));
     assert!(!ds.one_tracker_frame());
     let same = both.replace("\"west\"", "\"east\"");
-    assert!(Fixture::with_manifest(&same).load().unwrap().one_tracker_frame());
+    assert!(
+        Fixture::with_manifest(&same)
+            .load()
+            .unwrap()
+            .one_tracker_frame()
+    );
 }
 
 #[test]

@@ -660,7 +660,8 @@ fn accuracy_follows_a_running_calibration(execution: Option<dualcal::app::task::
         .ver
         .report
         .unwrap()
-        .collaborative.unwrap()
+        .collaborative
+        .unwrap()
         .pos_rms_mm;
     let [_, after] = accuracy_rms_cells(&harness);
     assert_eq!(after, format!("{final_rms:.3}"));
@@ -748,7 +749,8 @@ fn calibrated_ver_collab_rms(app: &WorkbenchApp) -> f64 {
         .ver
         .report
         .unwrap()
-        .collaborative.unwrap()
+        .collaborative
+        .unwrap()
         .pos_rms_mm
 }
 
@@ -1247,7 +1249,13 @@ fn calibrated_ver_collab(app: &WorkbenchApp) -> f64 {
         .calibrated
         .as_ref()
         .expect("calibrated");
-    c.analysis.ver.report.unwrap().collaborative.unwrap().pos_rms_mm
+    c.analysis
+        .ver
+        .report
+        .unwrap()
+        .collaborative
+        .unwrap()
+        .pos_rms_mm
 }
 
 /// The `method` record of the parameter file the workbench exports.
@@ -1355,7 +1363,8 @@ fn the_comparison_lists_each_method_and_adopting_one_changes_the_export() {
             .and_then(|m| m.figures())
             .and_then(|f| f.report(dualcal::dataset::Split::Ver))
             .expect("verification figures")
-            .collaborative.unwrap()
+            .collaborative
+            .unwrap()
             .pos_rms_mm
     };
     let (minimax, lsq) = (ver_collab("minimax"), ver_collab("lsq"));
@@ -1364,7 +1373,8 @@ fn the_comparison_lists_each_method_and_adopting_one_changes_the_export() {
         .nominal
         .report(dualcal::dataset::Split::Ver)
         .unwrap()
-        .collaborative.unwrap()
+        .collaborative
+        .unwrap()
         .pos_rms_mm;
     assert!(nominal > 10.0 * minimax.max(lsq), "nominal {nominal} mm");
     // One row per method plus the nominal one, each with its figures shown.

@@ -187,7 +187,8 @@ fn new_methods_work_on_a_urdf_chain() {
 
 /// What the acceptance compares: positioning RMS* and orientation RMS on the verification split.
 fn figures(r: &AccuracyReport) -> [(f64, f64); 3] {
-    [r.relative_left, r.relative_right, r.collaborative.unwrap()].map(|s| (s.pos_rms_mm, s.ori_rms_rad.unwrap()))
+    [r.relative_left, r.relative_right, r.collaborative.unwrap()]
+        .map(|s| (s.pos_rms_mm, s.ori_rms_rad.unwrap()))
 }
 
 #[test]

@@ -280,7 +280,10 @@ fn fields(s: &AccuracyStats) -> Vec<(String, f64)> {
             "ori_within_0_005rad_frac".into(),
             s.ori_within_0_005rad_frac.unwrap(),
         ),
-        ("ori_within_0_01rad_frac".into(), s.ori_within_0_01rad_frac.unwrap()),
+        (
+            "ori_within_0_01rad_frac".into(),
+            s.ori_within_0_01rad_frac.unwrap(),
+        ),
         ("n_configs".into(), s.n_configs as f64),
         ("n_pairs".into(), s.n_pairs as f64),
     ];
@@ -325,8 +328,15 @@ fn assert_agree(rust: &AccuracyReport, reference: &AccuracyReport, what: &str) {
 
 /// The figures must be non-trivial for the comparison to mean something.
 fn assert_nontrivial(r: &AccuracyReport) {
-    for s in [&r.relative_left, &r.relative_right, &r.collaborative.unwrap()] {
-        assert!(s.pos_rms_mm > 0.01 && s.ori_rms_rad.unwrap() > 1e-5, "{s:?}");
+    for s in [
+        &r.relative_left,
+        &r.relative_right,
+        &r.collaborative.unwrap(),
+    ] {
+        assert!(
+            s.pos_rms_mm > 0.01 && s.ori_rms_rad.unwrap() > 1e-5,
+            "{s:?}"
+        );
     }
 }
 

@@ -94,7 +94,8 @@ fn gross_errors_are_flagged_and_auto_excluded() {
     let ver = |m: &DualArmModel| {
         metrics::evaluate(&clean.dataset, m, Split::Ver)
             .unwrap()
-            .collaborative.unwrap()
+            .collaborative
+            .unwrap()
             .pos_rms_mm
     };
     let (with, without) = (ver(&auto.result.calibrated), ver(&reference.calibrated));

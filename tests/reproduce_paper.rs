@@ -561,7 +561,10 @@ fn comparison_figures_leave_out_the_excluded_configurations() {
             let want = dualcal::metrics::evaluate(&kept, &figures.model, split).unwrap();
             let got = figures.report(split).unwrap();
             assert_eq!(got.relative_left.n_configs, want.relative_left.n_configs);
-            assert_eq!(got.collaborative.unwrap().n_pairs, want.collaborative.unwrap().n_pairs);
+            assert_eq!(
+                got.collaborative.unwrap().n_pairs,
+                want.collaborative.unwrap().n_pairs
+            );
             let (a, b) = (got.relative_left.pos_rms_mm, want.relative_left.pos_rms_mm);
             assert!((a - b).abs() <= 1e-12 * b, "{split:?}: {a} vs {b}");
         }

@@ -102,7 +102,11 @@ fn check_case(case: &Case, name: &str) {
     }
     let three = case.dataset.reflector_count() == 3;
     for r in [&n, &t, &c] {
-        for stats in [&r.relative_left, &r.relative_right, &r.collaborative.unwrap()] {
+        for stats in [
+            &r.relative_left,
+            &r.relative_right,
+            &r.collaborative.unwrap(),
+        ] {
             assert_eq!(
                 stats.ori_rms_rad.is_some(),
                 three,
@@ -116,7 +120,12 @@ fn check_case(case: &Case, name: &str) {
 fn one_and_two_reflectors_on_the_built_in_robot() {
     let dir = tempfile::tempdir().unwrap();
     for (seed, keep) in [(31, vec![0]), (32, vec![0, 2])] {
-        let case = simulate(RobotDescription::builtin_irb14000(), seed, &keep, dir.path());
+        let case = simulate(
+            RobotDescription::builtin_irb14000(),
+            seed,
+            &keep,
+            dir.path(),
+        );
         check_case(&case, &format!("IRB 14000, {} reflector(s)", keep.len()));
     }
 }
@@ -136,14 +145,22 @@ fn one_and_two_reflectors_on_a_urdf_robot() {
     for (seed, keep) in [(41, vec![1]), (42, vec![0, 1])] {
         let robot = RobotDescription::load(urdf.as_path(), &options).unwrap();
         let case = simulate(robot, seed, &keep, dir.path());
-        check_case(&case, &format!("YuMi-like URDF, {} reflector(s)", keep.len()));
+        check_case(
+            &case,
+            &format!("YuMi-like URDF, {} reflector(s)", keep.len()),
+        );
     }
 }
 
 #[test]
 fn the_pose_method_says_why_it_cannot_run_without_three_reflectors() {
     let dir = tempfile::tempdir().unwrap();
-    let case = simulate(RobotDescription::builtin_irb14000(), 51, &[0, 1], dir.path());
+    let case = simulate(
+        RobotDescription::builtin_irb14000(),
+        51,
+        &[0, 1],
+        dir.path(),
+    );
     let settings = CalibrationSettings {
         method: Method::Pose,
         ..CalibrationSettings::default()
@@ -162,7 +179,12 @@ fn the_pose_method_says_why_it_cannot_run_without_three_reflectors() {
 #[test]
 fn reflector_names_come_back_as_the_user_wrote_them() {
     let dir = tempfile::tempdir().unwrap();
-    let mut case = simulate(RobotDescription::builtin_irb14000(), 61, &[0, 1], dir.path());
+    let mut case = simulate(
+        RobotDescription::builtin_irb14000(),
+        61,
+        &[0, 1],
+        dir.path(),
+    );
     case.dataset.reflector_names = vec!["smr_front".to_string(), "smr_back".to_string()].into();
     let out = dir.path().join("named");
     dataset::save(&case.dataset, &out, Units::MM_DEG).unwrap();
@@ -225,7 +247,10 @@ fn arms_measured_from_two_stations() {
     let why = result.base_not_measurable.as_deref().unwrap();
     assert!(why.contains("north") && why.contains("south"), "{why}");
     assert!(
-        result.warnings().iter().any(|w| w.contains("not measurable")),
+        result
+            .warnings()
+            .iter()
+            .any(|w| w.contains("not measurable")),
         "{:?}",
         result.warnings()
     );
@@ -247,7 +272,9 @@ fn arms_measured_from_two_stations() {
     // Nothing warns that the arms' frames differ: the manifest says so.
     let ws = dualcal::workspace::Workspace::load(&out, &Default::default()).unwrap();
     assert!(
-        ws.warnings().iter().all(|w| !w.contains("one tracker position")),
+        ws.warnings()
+            .iter()
+            .all(|w| !w.contains("one tracker position")),
         "{:?}",
         ws.warnings()
     );

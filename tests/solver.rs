@@ -69,21 +69,24 @@ fn synthetic(seed: u64, n: usize, n_cal: usize, noise_mm: f64) -> Synthetic {
                 let q: [f64; 7] =
                     std::array::from_fn(|j| rng.random_range(lim[j].0 * 0.9..lim[j].1 * 0.9));
                 let pts = truth.arm(side).reflector_fk(&q).points_mm;
-                let tracker_points_mm = pts.iter().map(|p| {
-                    let p = tracker_from_left_base
-                        * truth.left_base_from(side)
-                        * nalgebra::Point3::from(*p);
-                    let e = if noise_mm > 0.0 {
-                        Vector3::new(
-                            noise.sample(&mut rng),
-                            noise.sample(&mut rng),
-                            noise.sample(&mut rng),
-                        )
-                    } else {
-                        Vector3::zeros()
-                    };
-                    p.coords + e
-                }).collect();
+                let tracker_points_mm = pts
+                    .iter()
+                    .map(|p| {
+                        let p = tracker_from_left_base
+                            * truth.left_base_from(side)
+                            * nalgebra::Point3::from(*p);
+                        let e = if noise_mm > 0.0 {
+                            Vector3::new(
+                                noise.sample(&mut rng),
+                                noise.sample(&mut rng),
+                                noise.sample(&mut rng),
+                            )
+                        } else {
+                            Vector3::zeros()
+                        };
+                        p.coords + e
+                    })
+                    .collect();
                 Measurement {
                     id: format!("{}{i:03}", if side == Side::Left { "L" } else { "R" }),
                     q_rad: q.to_vec(),

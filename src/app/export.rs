@@ -80,9 +80,16 @@ pub fn encode_png(image: &egui::ColorImage) -> anyhow::Result<Vec<u8>> {
 pub fn export_csv(session: &Session) -> anyhow::Result<Vec<u8>> {
     let mut w = csv::Writer::from_writer(Vec::new());
     let names = &session.dataset.reflector_names;
-    let mut header: Vec<String> = ["id", "arm", "split", "worst_pos_mm", "worst_ori_rad", "rigidity_mm"]
-        .map(String::from)
-        .to_vec();
+    let mut header: Vec<String> = [
+        "id",
+        "arm",
+        "split",
+        "worst_pos_mm",
+        "worst_ori_rad",
+        "rigidity_mm",
+    ]
+    .map(String::from)
+    .to_vec();
     header.extend(names.iter().map(|r| format!("point_error_{r}_mm")));
     header.extend(["excluded", "flag", "flag_size_mm", "flag_reason"].map(String::from));
     w.write_record(&header)?;

@@ -467,7 +467,11 @@ pub fn accuracy_summary_ui(ui: &mut egui::Ui, session: &Session, split: Split) {
                                 Some(r) => {
                                     let four = |s: Option<(f64, f64, [f64; 2])>, digits: usize| {
                                         s.map_or_else(
-                                            || std::array::from_fn(|_| crate::metrics::NOT_MEASURABLE.to_string()),
+                                            || {
+                                                std::array::from_fn(|_| {
+                                                    crate::metrics::NOT_MEASURABLE.to_string()
+                                                })
+                                            },
                                             |(rms, max, freq)| {
                                                 [
                                                     format!("{rms:.digits$}"),

@@ -541,11 +541,7 @@ pub fn print_event(event: &CalibrationEvent) {
                 .join("  ");
             eprintln!(
                 "  {:>3}  ψ {:>14.6} mm²   {f}   {lambda}   step {:>9.2e}   KKT {:>9.2e}   {:>7.3} s",
-                r.iteration,
-                r.psi_mm2,
-                r.step_norm,
-                r.optimality_residual,
-                r.elapsed_secs
+                r.iteration, r.psi_mm2, r.step_norm, r.optimality_residual, r.elapsed_secs
             )
         }
         CalibrationEvent::StageFinished { stage, termination } => {
@@ -795,7 +791,10 @@ fn print_identifiability(result: &CalibrationResult) {
         );
         if let Some(r) = result.reflector_used[side] {
             let arm = result.nominal.arm(side);
-            let name = arm.reflector_names.get(r.index()).map_or("?", String::as_str);
+            let name = arm
+                .reflector_names
+                .get(r.index())
+                .map_or("?", String::as_str);
             outln!(
                 "  reflector {name} used ({}); the other reflectors' coordinates are nominal: the \
                  flange's orientation is not identified",
@@ -845,7 +844,10 @@ fn print_identifiability(result: &CalibrationResult) {
         );
     }
     if let Some(why) = &result.base_not_measurable {
-        outln!("{}: not measurable from this data ({why}); the base is nominal", crate::solver::Stage::Base);
+        outln!(
+            "{}: not measurable from this data ({why}); the base is nominal",
+            crate::solver::Stage::Base
+        );
     }
     for warning in result.warnings() {
         eprintln!("warning: {warning}");

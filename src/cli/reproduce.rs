@@ -119,7 +119,10 @@ pub(crate) fn run(a: &ReproduceArgs) -> Result<()> {
                     truth_ver.collaborative_or_nan().pos_rms_mm,
                     truth_ver.relative_left.ori_rms_rad.unwrap_or(f64::NAN),
                     truth_ver.relative_right.ori_rms_rad.unwrap_or(f64::NAN),
-                    truth_ver.collaborative_or_nan().ori_rms_rad.unwrap_or(f64::NAN)
+                    truth_ver
+                        .collaborative_or_nan()
+                        .ori_rms_rad
+                        .unwrap_or(f64::NAN)
                 );
                 for qp in [QpMethod::Exact, QpMethod::Paper] {
                     let settings = CalibrationSettings {
@@ -193,8 +196,12 @@ fn robustness_study(a: &ReproduceArgs, robot: &RobotDescription) -> Result<()> {
     };
     let indicators: [(&str, bool, Pick); 5] = [
         ("position max", false, |s| s.pos_max_mm),
-        ("orientation max", false, |s| s.ori_max_rad.unwrap_or(f64::NAN)),
-        ("orientation RMS", false, |s| s.ori_rms_rad.unwrap_or(f64::NAN)),
+        ("orientation max", false, |s| {
+            s.ori_max_rad.unwrap_or(f64::NAN)
+        }),
+        ("orientation RMS", false, |s| {
+            s.ori_rms_rad.unwrap_or(f64::NAN)
+        }),
         ("worst reflector's position RMS", false, worst_reflector),
         (
             "worst reflector's position RMS (cal)",

@@ -205,17 +205,29 @@ fn csv_error(
     }
 }
 
+/// What the header says a row holds.
+#[derive(Clone, Copy)]
+struct RowLayout {
+    joints: usize,
+    reflectors: usize,
+    has_split: bool,
+    units: Units,
+}
+
 /// One data row (its id already checked) in mm and rad; `names` are the header's columns.
 fn parse_row(
     path: &Path,
     line: usize,
     rec: &csv::StringRecord,
     names: &[String],
-    joints: usize,
-    reflectors: usize,
-    has_split: bool,
-    units: Units,
+    layout: RowLayout,
 ) -> Result<Measurement, DatasetError> {
+    let RowLayout {
+        joints,
+        reflectors,
+        has_split,
+        units,
+    } = layout;
     let field = |i: usize| rec.get(i).unwrap_or("");
     let number = |col: usize| parse_number(path, line, &names[col], field(col));
     // Absurd magnitudes are refused with the column (docs/reliability.md).
@@ -372,10 +384,12 @@ pub(super) fn read_arm(
             line,
             &rec,
             &names,
-            joints,
-            reflector_names.len(),
-            has_split,
-            units,
+            RowLayout {
+                joints,
+                reflectors: reflector_names.len(),
+                has_split,
+                units,
+            },
         )?);
     }
     if out.len() < MIN_CONFIGS {

@@ -214,12 +214,14 @@ pub fn save_with(
     )?;
     // Build everything before touching the disk.
     let manifest = manifest_text(dataset, dir, &manifest_path, units)?;
-    let csv = PerSide::try_from_fn(|s| arm_csv(
+    let csv = PerSide::try_from_fn(|s| {
+        arm_csv(
             &dataset.arms[s],
             &dataset.reflector_names,
             &csv_paths[s],
             units,
-        ))?;
+        )
+    })?;
     std::fs::create_dir_all(dir).map_err(|error| DatasetError::Write {
         path: dir.to_path_buf(),
         error,

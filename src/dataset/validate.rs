@@ -7,9 +7,9 @@
 use super::error::DatasetError;
 use super::units::LengthUnit;
 use super::{ArmData, Dataset, Measurement};
+use crate::kinematics::reflector_pairs;
 use crate::side::PerSide;
 use crate::textfile::excerpt;
-use crate::kinematics::reflector_pairs;
 use nalgebra::Vector3;
 use std::collections::HashMap;
 use std::path::{Component, Path, PathBuf};

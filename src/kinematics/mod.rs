@@ -317,9 +317,7 @@ impl ArmModel {
     /// DH; see [`chain`] for the chain form).
     pub fn reflector_jacobians(&self, q_rad: &[f64]) -> ArmJacobians {
         match &self.kinematics {
-            ArmKinematics::Dh(dh) => {
-                dh::reflector_jacobians(dh, &self.reflectors_mm, q_rad)
-            }
+            ArmKinematics::Dh(dh) => dh::reflector_jacobians(dh, &self.reflectors_mm, q_rad),
             ArmKinematics::Chain { chain, corrections } => {
                 chain.reflector_jacobians(corrections, &self.reflectors_mm, q_rad)
             }

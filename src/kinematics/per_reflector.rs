@@ -92,7 +92,10 @@ impl<'de, T: Copy + Default + Deserialize<'de>> Deserialize<'de> for PerReflecto
         impl<'de, T: Copy + Default + Deserialize<'de>> Visitor<'de> for Seq<T> {
             type Value = PerReflector<T>;
             fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-                write!(f, "a list of 1 to {MAX_REFLECTORS} values, one per reflector")
+                write!(
+                    f,
+                    "a list of 1 to {MAX_REFLECTORS} values, one per reflector"
+                )
             }
             fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Self::Value, A::Error> {
                 let mut out = PerReflector::<T>::default();

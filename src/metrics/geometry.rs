@@ -102,7 +102,11 @@ fn check_measurement(side: Side, m: &Measurement, arm: &ArmModel) -> Result<(), 
     }
     for (k, p) in m.tracker_points_mm.iter().enumerate() {
         if let Some(c) = p.iter().position(|x| !x.is_finite()) {
-            return Err(bad(format!("{}{}", arm.reflector_names[k], ["x", "y", "z"][c])));
+            return Err(bad(format!(
+                "{}{}",
+                arm.reflector_names[k],
+                ["x", "y", "z"][c]
+            )));
         }
     }
     Ok(())
@@ -150,11 +154,12 @@ pub(super) fn arm_geometry(
             });
             let model_rot = reference_rot * fk.base_from_flange.rotation.to_rotation_matrix();
             let (measured_from_model_rot, fit_rms_mm) = if orientation {
-                let fit = kabsch_fit_points(&arm.reflectors_mm, &m.tracker_points_mm)
-                    .ok_or_else(|| MetricsError::FitFailed {
+                let fit = kabsch_fit_points(&arm.reflectors_mm, &m.tracker_points_mm).ok_or_else(
+                    || MetricsError::FitFailed {
                         side,
                         id: m.id.clone(),
-                    })?;
+                    },
+                )?;
                 (
                     (fit.rotation * model_rot.transpose())
                         .into_inner()

@@ -32,11 +32,11 @@ mod tests;
 use crate::dataset::{ArmData, Dataset, Split};
 use crate::kinematics::{ArmModel, DualArmModel, PerReflector};
 use crate::side::{ConfigId, Side};
+pub use geometry::orientation_measurable;
 use geometry::{
     ArmGeom, against, arm_geometry, both_arms, collaborative_accumulate, pair_residual,
     relative_accumulate, triangle_sides, worst,
 };
-pub use geometry::orientation_measurable;
 pub use kabsch::{KabschFit, kabsch_fit, kabsch_fit_points, kabsch_rotation};
 use nalgebra::{Isometry3, Vector3};
 use rayon::prelude::*;
@@ -106,7 +106,10 @@ impl AccuracyReport {
     pub fn collaborative_or_nan(&self) -> AccuracyStats {
         self.collaborative.unwrap_or(AccuracyStats {
             pos_rms_mm: f64::NAN,
-            pos_rms_per_reflector_mm: self.relative_left.pos_rms_per_reflector_mm.map(|_| f64::NAN),
+            pos_rms_per_reflector_mm: self
+                .relative_left
+                .pos_rms_per_reflector_mm
+                .map(|_| f64::NAN),
             pos_max_mm: f64::NAN,
             ori_rms_rad: None,
             ori_max_rad: None,

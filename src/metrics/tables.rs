@@ -11,11 +11,14 @@ fn default_names(report: &AccuracyReport) -> Vec<String> {
         .to_vec()
 }
 
+/// Reads a row's value off the stats; `None` where the data cannot give it.
+type RowValue = Box<dyn Fn(&AccuracyStats) -> Option<f64>>;
+
 /// How a row's value is read off the stats and printed.
 struct Row {
     label: String,
     /// `None`: not measurable from the data (the orientation with fewer than three reflectors).
-    value: Box<dyn Fn(&AccuracyStats) -> Option<f64>>,
+    value: RowValue,
     kind: RowKind,
 }
 
@@ -49,7 +52,9 @@ fn row(
 /// The rows, one per reflector of `reflector_names` for the per-reflector RMS.
 fn rows(reflector_names: &[String]) -> Vec<Row> {
     let mut out = vec![
-        row("configurations", RowKind::Count, |s| Some(s.n_configs as f64)),
+        row("configurations", RowKind::Count, |s| {
+            Some(s.n_configs as f64)
+        }),
         row("pairs", RowKind::Count, |s| Some(s.n_pairs as f64)),
         row("positioning RMS (mm)", RowKind::Mm, |s| Some(s.pos_rms_mm)),
     ];
@@ -73,7 +78,9 @@ fn rows(reflector_names: &[String]) -> Vec<Row> {
         row("Δo ≤ 0.005 rad", RowKind::Percent, |s| {
             s.ori_within_0_005rad_frac
         }),
-        row("Δo ≤ 0.01 rad", RowKind::Percent, |s| s.ori_within_0_01rad_frac),
+        row("Δo ≤ 0.01 rad", RowKind::Percent, |s| {
+            s.ori_within_0_01rad_frac
+        }),
     ]);
     out
 }
@@ -181,7 +188,10 @@ pub fn format_comparison_named(
             title, labels[0], labels[1], "change"
         );
         for row in &rows {
-            let (vb, va) = (b.and_then(|b| (row.value)(b)), a.and_then(|a| (row.value)(a)));
+            let (vb, va) = (
+                b.and_then(|b| (row.value)(b)),
+                a.and_then(|a| (row.value)(a)),
+            );
             let _ = writeln!(
                 out,
                 "{:<LABEL_WIDTH$}{:>14}{:>14}{:>14}",

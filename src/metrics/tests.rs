@@ -338,7 +338,10 @@ fn rotating_one_measured_triangle_gives_that_orientation_error() {
     assert_eq!(per.len(), 11);
     assert!((per[2].relative_ori_max_rad.unwrap() - alpha).abs() < 1e-9);
     assert!((per[2].collaborative_ori_max_rad.unwrap() - alpha).abs() < 1e-9);
-    assert!(per[3].relative_ori_max_rad.unwrap() > alpha - 1e-9 && per[3].collaborative_ori_max_rad.unwrap() < 1e-7);
+    assert!(
+        per[3].relative_ori_max_rad.unwrap() > alpha - 1e-9
+            && per[3].collaborative_ori_max_rad.unwrap() < 1e-7
+    );
     // A rotation about the centroid keeps the triangle rigid and the fit exact.
     assert!(
         per.iter()
@@ -420,7 +423,12 @@ fn stats_agree_with_the_pair_lists() {
             frac(&|e| e.ori_error_rad.unwrap() <= 0.01),
             s.ori_within_0_01rad_frac.unwrap()
         );
-        let ori = (p.iter().map(|e| e.ori_error_rad.unwrap().powi(2)).sum::<f64>() / n).sqrt();
+        let ori = (p
+            .iter()
+            .map(|e| e.ori_error_rad.unwrap().powi(2))
+            .sum::<f64>()
+            / n)
+            .sqrt();
         assert!((ori - s.ori_rms_rad.unwrap()).abs() < 1e-12);
     };
     check(
@@ -721,7 +729,10 @@ fn sweep_agrees_with_evaluate_per_config_and_the_pair_lists() {
                 ),
                 "{split:?} {kind:?} Δd"
             );
-            let ori: Vec<f32> = pairs.iter().map(|p| p.ori_error_rad.unwrap() as f32).collect();
+            let ori: Vec<f32> = pairs
+                .iter()
+                .map(|p| p.ori_error_rad.unwrap() as f32)
+                .collect();
             let (a, b) = (sorted(samples.ori_rad.clone()), sorted(ori));
             assert_eq!(a.len(), b.len());
             for (x, y) in a.iter().zip(&b) {
@@ -738,11 +749,26 @@ fn sweep_agrees_with_evaluate_per_config_and_the_pair_lists() {
         let close = |x: f64, y: f64| (x - y).abs() <= 1e-12 * x.abs().max(1e-9);
         for (x, y) in [
             (a.relative_pos_max_mm, b.relative_pos_max_mm),
-            (a.relative_ori_rms_rad.unwrap(), b.relative_ori_rms_rad.unwrap()),
-            (a.relative_ori_max_rad.unwrap(), b.relative_ori_max_rad.unwrap()),
-            (a.collaborative_pos_max_mm.unwrap(), b.collaborative_pos_max_mm.unwrap()),
-            (a.collaborative_ori_rms_rad.unwrap(), b.collaborative_ori_rms_rad.unwrap()),
-            (a.collaborative_ori_max_rad.unwrap(), b.collaborative_ori_max_rad.unwrap()),
+            (
+                a.relative_ori_rms_rad.unwrap(),
+                b.relative_ori_rms_rad.unwrap(),
+            ),
+            (
+                a.relative_ori_max_rad.unwrap(),
+                b.relative_ori_max_rad.unwrap(),
+            ),
+            (
+                a.collaborative_pos_max_mm.unwrap(),
+                b.collaborative_pos_max_mm.unwrap(),
+            ),
+            (
+                a.collaborative_ori_rms_rad.unwrap(),
+                b.collaborative_ori_rms_rad.unwrap(),
+            ),
+            (
+                a.collaborative_ori_max_rad.unwrap(),
+                b.collaborative_ori_max_rad.unwrap(),
+            ),
             (a.rigidity_mm, b.rigidity_mm),
             (a.fit_rms_mm.unwrap(), b.fit_rms_mm.unwrap()),
         ] {

@@ -186,13 +186,16 @@ pub(super) fn arm_params(arm: &ArmModel) -> ArmParams {
     }
 }
 
+/// Reflector names and their coordinates (mm), in the same order.
+type NamedReflectors = (Arc<[String]>, Vec<Vector3<f64>>);
+
 /// The reflectors of an arm entry: their names and coordinates (mm), one to
 /// [`crate::kinematics::MAX_REFLECTORS`].
 fn reflectors_mm(
     side: &str,
     r: &ReflectorsEntry,
     scale: Scale,
-) -> Result<(Arc<[String]>, Vec<Vector3<f64>>), ParamsError> {
+) -> Result<NamedReflectors, ParamsError> {
     let max = crate::kinematics::MAX_REFLECTORS;
     if r.0.is_empty() || r.0.len() > max {
         return Err(invalid(

@@ -360,7 +360,8 @@ impl ParamsFile {
                     names.extend(reflector_names);
                     debug_assert_eq!(
                         names.len(),
-                        PARAMS_PER_JOINT * chain.joints.len() + 3 * self.arms[side].reflectors.0.len()
+                        PARAMS_PER_JOINT * chain.joints.len()
+                            + 3 * self.arms[side].reflectors.0.len()
                     );
                     names
                 }

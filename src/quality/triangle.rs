@@ -61,7 +61,11 @@ pub fn reference(
         .collect();
     let deviations: Vec<f64> = all
         .iter()
-        .flat_map(|s| (0..n_sides).map(|k| s[k] - reference[k]).collect::<Vec<_>>())
+        .flat_map(|s| {
+            (0..n_sides)
+                .map(|k| s[k] - reference[k])
+                .collect::<Vec<_>>()
+        })
         .collect();
     // The side noise of the tracker: two points of σ = MPE/2 per axis give σ_side = MPE/√2.
     let mpe = mpe_mm(dataset, side);

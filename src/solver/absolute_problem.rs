@@ -264,7 +264,9 @@ impl AbsoluteProblem {
                 measured
                     .iter()
                     .zip(&measured_frames)
-                    .map(|(m, f): (&Vec<Vector3<f64>>, _)| f.rotation.inverse() * (m[k] - f.origin_mm))
+                    .map(|(m, f): (&Vec<Vector3<f64>>, _)| {
+                        f.rotation.inverse() * (m[k] - f.origin_mm)
+                    })
                     .sum::<Vector3<f64>>()
                     / n
             })

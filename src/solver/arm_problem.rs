@@ -200,7 +200,11 @@ impl ArmProblem {
     pub fn start_objectives_mm2(&self) -> Vec<f64> {
         let model = self.model_at(&DVector::zeros(self.free.len()));
         let fk = self.fk_all(&model);
-        let points = model_points(fk.iter().map(|f| &f.points_mm), fk.len(), self.measured.len());
+        let points = model_points(
+            fk.iter().map(|f| &f.points_mm),
+            fk.len(),
+            self.measured.len(),
+        );
         pairs::triangle(
             &points,
             &self.measured,
@@ -353,7 +357,11 @@ impl MinimaxProblem for ArmProblem {
         let x = self.x_of(y);
         let model = self.start.with_vector(&x);
         let fk = self.fk_all(&model);
-        let points = model_points(fk.iter().map(|f| &f.points_mm), fk.len(), self.measured.len());
+        let points = model_points(
+            fk.iter().map(|f| &f.points_mm),
+            fk.len(),
+            self.measured.len(),
+        );
         let norm = 1.0 / self.n_pairs.max(1) as f64;
         let f = pairs::triangle(
             &points,

@@ -145,26 +145,28 @@ impl BaseProblem {
             &self.measured_right,
             self.kept_distances.as_deref(),
         );
-        (0..self.reflectors).map(|k| {
-            let (f, a) = &sums[k];
-            let (mut c, mut sp) = (Vector3::zeros(), Vector3::zeros());
-            for r in 0..a.len() {
-                let ar = a.get(r);
-                c += ar.cross(&right[k].get(r));
-                sp += ar;
-            }
-            let dw = jl.transpose() * c;
-            let s = &self.scale;
-            let g = SVector::<f64, 6>::new(
-                -dw.x * s[0],
-                -dw.y * s[1],
-                -dw.z * s[2],
-                sp.x * s[3],
-                sp.y * s[4],
-                sp.z * s[5],
-            ) * 2.0;
-            (*f, g)
-        }).collect()
+        (0..self.reflectors)
+            .map(|k| {
+                let (f, a) = &sums[k];
+                let (mut c, mut sp) = (Vector3::zeros(), Vector3::zeros());
+                for r in 0..a.len() {
+                    let ar = a.get(r);
+                    c += ar.cross(&right[k].get(r));
+                    sp += ar;
+                }
+                let dw = jl.transpose() * c;
+                let s = &self.scale;
+                let g = SVector::<f64, 6>::new(
+                    -dw.x * s[0],
+                    -dw.y * s[1],
+                    -dw.z * s[2],
+                    sp.x * s[3],
+                    sp.y * s[4],
+                    sp.z * s[5],
+                ) * 2.0;
+                (*f, g)
+            })
+            .collect()
     }
 
     /// Σ rows rowsᵀ regrouped: row = C_r u with C_r = [S_ω J_lᵀ [R q_r]×; S_p], so the sum over l is

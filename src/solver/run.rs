@@ -627,8 +627,7 @@ fn arm_input(
             m.tracker_points_mm.len()
         )));
     }
-    let measured: Vec<Vec<Vector3<f64>>> =
-        ms.iter().map(|m| m.tracker_points_mm.clone()).collect();
+    let measured: Vec<Vec<Vector3<f64>>> = ms.iter().map(|m| m.tracker_points_mm.clone()).collect();
     if qs
         .iter()
         .flatten()

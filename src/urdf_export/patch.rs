@@ -121,13 +121,12 @@ fn reflector_edits(
     root: roxmltree::Node,
     side: Side,
     tip: &str,
-    names: &[String],
-    reflectors_mm: &[Vector3<f64>],
+    arm: &crate::kinematics::ArmModel,
     text: &str,
     edits: &mut Vec<(Range<usize>, String)>,
     appended: &mut String,
 ) -> Result<(), RobotError> {
-    for (r, t) in names.iter().zip(reflectors_mm) {
+    for (r, t) in arm.reflector_names.iter().zip(&arm.reflectors_mm) {
         let link = format!("reflector_{r}_{tip}");
         let legacy = format!("reflector_{r}_{}", crate::robot::side_suffix(side));
         let carrier_of = |name: &str| {
@@ -226,8 +225,7 @@ pub(super) fn calibrated_chain_urdf(
             root,
             side,
             &chain.tip_link,
-            &arm.reflector_names,
-            &arm.reflectors_mm,
+            arm,
             text,
             &mut edits,
             &mut appended,

@@ -506,7 +506,9 @@ fn fig4_svg(plan: &Plan, runs: &[SeedRun]) -> Result<String> {
         type Pick = fn(&crate::metrics::AccuracyStats) -> f64;
         let rows: [(&str, Pick); 2] = [
             ("positioning RMS* (mm)", |s| s.pos_rms_mm),
-            ("orientation RMS (rad)", |s| s.ori_rms_rad.unwrap_or(f64::NAN)),
+            ("orientation RMS (rad)", |s| {
+                s.ori_rms_rad.unwrap_or(f64::NAN)
+            }),
         ];
         for (r, (label, pick)) in rows.iter().enumerate() {
             for (c, side) in Side::BOTH.into_iter().enumerate() {

@@ -112,8 +112,12 @@ fn accuracy_rows(pairs: Pairs) -> Vec<RowSpec> {
     let rows: [(&str, &str, Unit, Pick); 4] = [
         ("pos_rms", "positioning RMS*", Unit::Mm, |s| s.pos_rms_mm),
         ("pos_max", "positioning max", Unit::Mm, |s| s.pos_max_mm),
-        ("ori_rms", "orientation RMS", Unit::Rad, |s| s.ori_rms_rad.unwrap_or(f64::NAN)),
-        ("ori_max", "orientation max", Unit::Rad, |s| s.ori_max_rad.unwrap_or(f64::NAN)),
+        ("ori_rms", "orientation RMS", Unit::Rad, |s| {
+            s.ori_rms_rad.unwrap_or(f64::NAN)
+        }),
+        ("ori_max", "orientation max", Unit::Rad, |s| {
+            s.ori_max_rad.unwrap_or(f64::NAN)
+        }),
     ];
     rows.into_iter()
         .map(|(id, label, unit, pick)| RowSpec {
@@ -518,7 +522,9 @@ fn fig4(plan: &Plan, runs: &[SeedRun]) -> (String, String) {
                                 .iter()
                                 .map(|p| {
                                     let r = if split == Split::Cal { p.cal } else { p.ver };
-                                    r.map_or(f64::NAN, |r| r.relative(side).ori_rms_rad.unwrap_or(f64::NAN))
+                                    r.map_or(f64::NAN, |r| {
+                                        r.relative(side).ori_rms_rad.unwrap_or(f64::NAN)
+                                    })
                                 })
                                 .collect();
                             let (om, osd, _, _, _) = summary(&ori);

@@ -382,21 +382,22 @@ impl SerialChain {
         let rot_tip = tip.rotation.to_rotation_matrix().into_inner();
         let cols = self.param_count(reflectors_mm.len());
         let off = self.reflector_offset();
-        let jacobians = (0..points_mm.len()).map(|k| {
-            let p = points_mm[k];
-            let mut j = Matrix3xX::zeros(cols);
-            for (i, (d, o)) in dirs.iter().zip(&origins).enumerate() {
-                let lever = p - o;
-                let base = PARAMS_PER_JOINT * i;
-                for c in 0..3 {
-                    j.set_column(base + c, &d[c]);
-                    j.set_column(base + 3 + c, &d[3 + c].cross(&lever));
+        let jacobians = (0..points_mm.len())
+            .map(|k| {
+                let p = points_mm[k];
+                let mut j = Matrix3xX::zeros(cols);
+                for (i, (d, o)) in dirs.iter().zip(&origins).enumerate() {
+                    let lever = p - o;
+                    let base = PARAMS_PER_JOINT * i;
+                    for c in 0..3 {
+                        j.set_column(base + c, &d[c]);
+                        j.set_column(base + 3 + c, &d[3 + c].cross(&lever));
+                    }
                 }
-            }
-            j.fixed_view_mut::<3, 3>(0, off + 3 * k).copy_from(&rot_tip);
-            j
-        })
-        .collect();
+                j.fixed_view_mut::<3, 3>(0, off + 3 * k).copy_from(&rot_tip);
+                j
+            })
+            .collect();
         ArmJacobians {
             fk: ReflectorFk {
                 points_mm,

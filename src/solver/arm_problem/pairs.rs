@@ -171,24 +171,29 @@ pub fn kept_triangle_distances(measured: &[Points]) -> Option<Vec<Vec<f64>>> {
     if n * n.saturating_sub(1) / 2 > KEPT_DISTANCE_PAIRS {
         return None;
     }
-    Some(measured.iter().map(|m| {
-        let mut out = vec![0.0; n * n.saturating_sub(1) / 2];
-        // Row i (the pairs (i, j), j > i) is n − i − 1 long: split the list into its rows, fill them
-        // in parallel.
-        let mut rows = Vec::with_capacity(n);
-        let mut rest = &mut out[..];
-        for i in 0..n {
-            let (row, tail) = rest.split_at_mut(n - i - 1);
-            rows.push(row);
-            rest = tail;
-        }
-        rows.into_par_iter().enumerate().for_each(|(i, row)| {
-            for (d, j) in row.iter_mut().zip(i + 1..n) {
-                *d = m.distance(i, j);
-            }
-        });
-        out
-    }).collect())
+    Some(
+        measured
+            .iter()
+            .map(|m| {
+                let mut out = vec![0.0; n * n.saturating_sub(1) / 2];
+                // Row i (the pairs (i, j), j > i) is n − i − 1 long: split the list into its rows, fill them
+                // in parallel.
+                let mut rows = Vec::with_capacity(n);
+                let mut rest = &mut out[..];
+                for i in 0..n {
+                    let (row, tail) = rest.split_at_mut(n - i - 1);
+                    rows.push(row);
+                    rest = tail;
+                }
+                rows.into_par_iter().enumerate().for_each(|(i, row)| {
+                    for (d, j) in row.iter_mut().zip(i + 1..n) {
+                        *d = m.distance(i, j);
+                    }
+                });
+                out
+            })
+            .collect(),
+    )
 }
 
 /// The measured distances |m_l − n_r| of every pair (l, r), row by row, per reflector, when there are at
@@ -201,18 +206,22 @@ pub fn kept_rectangle_distances(left: &[Points], right: &[Points]) -> Option<Vec
     if nl * nr > KEPT_DISTANCE_PAIRS {
         return None;
     }
-    Some((0..left.len().min(right.len())).map(|k| {
-        let mut out = vec![0.0; nl * nr];
-        // Row l (the pairs (l, r)) is nr long: the rows filled in parallel.
-        if nr > 0 {
-            out.par_chunks_mut(nr).enumerate().for_each(|(l, row)| {
-                for (r, d) in row.iter_mut().enumerate() {
-                    *d = distance_between(&left[k], l, &right[k], r);
+    Some(
+        (0..left.len().min(right.len()))
+            .map(|k| {
+                let mut out = vec![0.0; nl * nr];
+                // Row l (the pairs (l, r)) is nr long: the rows filled in parallel.
+                if nr > 0 {
+                    out.par_chunks_mut(nr).enumerate().for_each(|(l, row)| {
+                        for (r, d) in row.iter_mut().enumerate() {
+                            *d = distance_between(&left[k], l, &right[k], r);
+                        }
+                    });
                 }
-            });
-        }
-        out
-    }).collect())
+                out
+            })
+            .collect(),
+    )
 }
 
 /// Index of the pair (i, i + 1) in the row-by-row list of the pairs (i < j) of n points.
@@ -362,17 +371,23 @@ pub fn triangle(
 }
 
 /// Per reflector, the blocks' sums and weights added in block order.
-fn reduce(parts: Vec<(f64, Points)>, reflectors: usize, per_reflector: usize) -> Vec<(f64, Points)> {
+fn reduce(
+    parts: Vec<(f64, Points)>,
+    reflectors: usize,
+    per_reflector: usize,
+) -> Vec<(f64, Points)> {
     let mut it = parts.into_iter();
-    (0..reflectors).map(|_| {
-        let (mut f, mut w) = it.next().unwrap_or_default();
-        for _ in 1..per_reflector {
-            let (fb, wb) = it.next().unwrap_or_default();
-            f += fb;
-            w.add(&wb);
-        }
-        (f, w)
-    }).collect()
+    (0..reflectors)
+        .map(|_| {
+            let (mut f, mut w) = it.next().unwrap_or_default();
+            for _ in 1..per_reflector {
+                let (fb, wb) = it.next().unwrap_or_default();
+                f += fb;
+                w.add(&wb);
+            }
+            (f, w)
+        })
+        .collect()
 }
 
 /// The pair (l, r) of `row` (its model point already less t) into lane `k`: Σ Δd² into `sum`,
