@@ -21,7 +21,7 @@ use crate::quality::{self, Finding, ScreenSettings, Screening, Severity};
 use crate::robot::{
     ArmLinks, LoadOptions as RobotOptions, RobotDescription, RobotError, RobotSource,
 };
-use crate::side::PerSide;
+use crate::side::{PerSide, Side};
 use crate::source::Files;
 use std::path::{Path, PathBuf};
 
@@ -75,7 +75,7 @@ pub struct Workspace {
 impl Workspace {
     /// Load the dataset at `dataset_path` (its directory or its `dataset.toml`) and its robot.
     pub fn load(dataset_path: &Path, options: &WorkspaceOptions) -> Result<Self, LoadError> {
-        let (dataset, _units) = dataset::load_from(&*options.files, dataset_path)?;
+        let (mut dataset, units) = dataset::load_from(&*options.files, dataset_path)?;
         let robot = RobotDescription::load(
             RobotSource::Dataset {
                 dataset: &dataset,
@@ -91,6 +91,11 @@ impl Workspace {
             dataset_dir: dataset.dir.clone(),
             source,
         })?;
+        // A prismatic joint's column holds a length (the file's length unit), known now.
+        for side in Side::BOTH {
+            let linear = robot.arm(side).linear_joints();
+            dataset.arms[side].set_linear_joints(&linear, units)?;
+        }
         Self::new(dataset, robot, &options.screen)
     }
 

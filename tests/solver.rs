@@ -101,6 +101,7 @@ fn synthetic(seed: u64, n: usize, n_cal: usize, noise_mm: f64) -> Synthetic {
             file: format!("{side}.csv").into(),
             links: None,
             station: None,
+            linear_joints: Vec::new(),
             measurements,
         }
     };

@@ -119,15 +119,18 @@ fn run_flow(urdf_path: &Path, arms: [(&str, &str); 2], seed: u64, configs: (usiz
     }
     let dir = urdf_path.parent().unwrap().join(format!("data-{seed}"));
     dataset::save(&ds, &dir, Units::MM_DEG).unwrap();
-    let dataset = dataset::load(&dir).unwrap();
-    let robot = RobotDescription::load(
-        dualcal::robot::RobotSource::Dataset {
-            dataset: &dataset,
-            robot: None,
-        },
-        &Default::default(),
-    )
-    .unwrap();
+    // Loaded as a user's dataset is: the robot from the manifest, a prismatic joint's column read in
+    // the length unit.
+    let ws = dualcal::workspace::Workspace::load(&dir, &Default::default()).unwrap();
+    let (dataset, robot) = (ws.dataset, ws.robot);
+    for side in Side::BOTH {
+        let (a, b) = (&dataset.arm(side).measurements, &ds.arm(side).measurements);
+        for (m, n) in a.iter().zip(b) {
+            for (x, y) in m.q_rad.iter().zip(&n.q_rad) {
+                assert!((x - y).abs() < 1e-9, "{side} {}: {x} vs {y}", m.id);
+            }
+        }
+    }
     let nominal = robot.nominal_model_for(&dataset);
     let settings = CalibrationSettings {
         max_iterations: 400,
@@ -190,10 +193,19 @@ fn assert_export(flow: &Flow, name: &str) {
             "{name}: {tag}"
         );
     }
-    // Line by line, only arm joints' <origin> lines differ until the appended reflector links.
+    // Line by line, only arm joints' <origin> lines differ until the appended reflector links (a
+    // mimic joint's too: it has its own corrections).
     let arm_joints: Vec<String> = Side::BOTH
         .iter()
-        .flat_map(|&s| flow.robot.arm_joint_names(s))
+        .flat_map(|&s| {
+            flow.robot
+                .arm(s)
+                .chain
+                .joint_names()
+                .into_iter()
+                .map(str::to_string)
+                .collect::<Vec<_>>()
+        })
         .collect();
     let (a, b): (Vec<&str>, Vec<&str>) = (original.lines().collect(), text.lines().collect());
     let robot_line = a.iter().position(|l| l.contains("<robot")).unwrap();
@@ -283,10 +295,28 @@ fn assert_export(flow: &Flow, name: &str) {
             .iter()
             .filter(|m| m.split == Split::Ver)
             .collect();
+        // The URDF's own units for the independent parser: metres for a prismatic joint.
+        let arm_data = flow.dataset.arm(side);
         let qs: Vec<Vec<f64>> = ms.iter().map(|m| m.q_rad.clone()).collect();
+        let qs_urdf: Vec<Vec<f64>> = ms
+            .iter()
+            .map(|m| {
+                m.q_rad
+                    .iter()
+                    .enumerate()
+                    .map(|(i, &v)| {
+                        if arm_data.is_linear_joint(i) {
+                            v / 1000.0
+                        } else {
+                            v
+                        }
+                    })
+                    .collect()
+            })
+            .collect();
         let measured: Vec<Vec<Vector3<f64>>> =
             ms.iter().map(|m| m.tracker_points_mm.clone()).collect();
-        let points = independent_points(&out, &flow.robot.arm(side).links, &qs, dir);
+        let points = independent_points(&out, &flow.robot.arm(side).links, &qs_urdf, dir);
         // The file's right base link sits where the URDF tree puts it; the base correction is in
         // its first joint: the model points seen from the nominal base link.
         let nominal_from_calibrated = flow
@@ -347,6 +377,49 @@ fn yumi_like_description_calibrates_to_the_noise_floor_and_exports_in_its_own_fr
     }
 }
 
+/// A prismatic lift and a mimic (coupled) joint on each arm's chain (issue 19): the lift's CSV
+/// column is a length, the coupled joint has none; both calibrated like the revolute joints, the
+/// calibrated URDF changes their origins (the `<mimic>` and the `prismatic` type kept) and
+/// `check_urdf` and the independent parser read it.
+#[test]
+fn lift_and_mimic_description_calibrates_to_the_noise_floor_and_exports_in_its_own_frames() {
+    let dir = tempfile::tempdir().unwrap();
+    let urdf = robots::write_file(
+        dir.path(),
+        "lift_mimic.urdf",
+        robots::lift_mimic_urdf().as_bytes(),
+    );
+    for seed in [1, 2] {
+        let flow = run_flow(&urdf, robots::LIFT_MIMIC_ARMS, seed, (500, 400));
+        let chain = &flow.robot.arm(Side::Left).chain;
+        assert_eq!((chain.dof(), chain.joint_count()), (6, 7));
+        assert_eq!(
+            flow.dataset.arm(Side::Right).linear_joints,
+            [false, true, false, false, false, false]
+        );
+        // The lift's values are mm within its 0–300 mm travel.
+        let lift: Vec<f64> = flow
+            .dataset
+            .arm(Side::Left)
+            .measurements
+            .iter()
+            .map(|m| m.q_rad[1])
+            .collect();
+        assert!(lift.iter().all(|v| (0.0..=300.0).contains(v)));
+        assert!(
+            lift.iter().fold(0.0f64, |a, v| a.max(*v)) > 150.0,
+            "{lift:?}"
+        );
+        assert_noise_floor(&flow, "lift-mimic");
+        assert_export(&flow, "lift-mimic");
+        let text = calibrated_urdf(&flow.robot, &flow.calibrated).unwrap();
+        assert!(
+            text.contains("<mimic joint=\"left_elbow_joint\" multiplier=\"0.5\" offset=\"0.2\"/>")
+        );
+        assert_eq!(text.matches("type=\"prismatic\"").count(), 2);
+    }
+}
+
 #[test]
 fn dual_ur_like_description_calibrates_to_the_noise_floor_and_exports_in_its_own_frames() {
     let dir = tempfile::tempdir().unwrap();
@@ -361,4 +434,83 @@ fn dual_ur_like_description_calibrates_to_the_noise_floor_and_exports_in_its_own
         assert_noise_floor(&flow, "dual-ur");
         assert_export(&flow, "dual-ur");
     }
+}
+
+/// The lift's column in the file's length unit (metres here, radians for the angles), read back to
+/// the same mm; and a `<mimic>` loop in the description refused with the file, the line and the
+/// joint.
+#[test]
+fn prismatic_columns_follow_the_length_unit_and_mimic_loops_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let urdf = robots::write_file(
+        dir.path(),
+        "lift_mimic.urdf",
+        robots::lift_mimic_urdf().as_bytes(),
+    );
+    let options = LoadOptions {
+        arms: links(robots::LIFT_MIMIC_ARMS),
+        ..Default::default()
+    };
+    let robot = RobotDescription::load(urdf.as_path(), &options).unwrap();
+    let sim = simulate_with_robot(&paper_options(5, 40, 20), &robot).unwrap();
+    let mut ds = sim.dataset.clone();
+    ds.robot = Some(urdf.clone());
+    for (side, a) in ds.arms.iter_mut() {
+        a.links = robot.arm(side).links.clone().into();
+    }
+    let m_rad = Units {
+        length: dataset::LengthUnit::M,
+        angle: dataset::AngleUnit::Rad,
+    };
+    let out = dir.path().join("m-rad");
+    dataset::save(&ds, &out, m_rad).unwrap();
+    let csv = std::fs::read_to_string(out.join("left.csv")).unwrap();
+    let first = csv
+        .lines()
+        .find(|l| !l.starts_with('#') && !l.starts_with("id"))
+        .unwrap();
+    let lift: f64 = first.split(',').nth(2).unwrap().parse().unwrap();
+    let lift_mm = ds.arms.left.measurements[0].q_rad[1];
+    assert!(
+        (lift - lift_mm / 1000.0).abs() < 1e-9,
+        "{lift} m vs {lift_mm} mm"
+    );
+    let ws = dualcal::workspace::Workspace::load(&out, &Default::default()).unwrap();
+    for side in Side::BOTH {
+        for (a, b) in ws
+            .dataset
+            .arm(side)
+            .measurements
+            .iter()
+            .zip(&ds.arm(side).measurements)
+        {
+            for (x, y) in a.q_rad.iter().zip(&b.q_rad) {
+                assert!((x - y).abs() < 1e-9, "{x} vs {y}");
+            }
+        }
+    }
+    // Read as a plain dataset (no robot) the lift is still in radians' clothing; the robot fixes it.
+    let plain = dataset::load(&out).unwrap();
+    assert!((plain.arms.left.measurements[0].q_rad[1] - lift).abs() < 1e-12);
+
+    let looped = robots::lift_mimic_urdf().replace(
+        "<child link=\"right_forearm\"/>",
+        "<child link=\"right_forearm\"/>\n    <mimic joint=\"right_coupled_joint\"/>",
+    );
+    let bad = robots::write_file(dir.path(), "looped.urdf", looped.as_bytes());
+    let err = RobotDescription::load(bad.as_path(), &options).unwrap_err();
+    let text = err.to_string();
+    let line = looped
+        .lines()
+        .position(|l| l.contains("name=\"right_elbow_joint\""))
+        .unwrap()
+        + 1;
+    assert!(
+        text.contains(&format!("looped.urdf, line {line}:")),
+        "{text}"
+    );
+    assert!(
+        text.contains("right_elbow_joint") && text.contains("loop"),
+        "{text}"
+    );
 }

@@ -8,8 +8,9 @@ in the chain's base link frame, in millimetres:
 
     urdf_fk.py ROBOT.urdf BASE TIP CONFIGS.json [LINK ...]
 
-CONFIGS.json is a list of joint-value lists (radians) in the chain order of the movable joints from
-BASE to TIP. Each LINK is a link fixed below TIP (through fixed joints). Prints JSON:
+CONFIGS.json is a list of joint-value lists in the chain order of the movable joints from BASE to TIP
+that have their own value (URDF units: radians, metres for a prismatic joint); a joint with a
+<mimic joint multiplier offset> gets multiplier * leader + offset instead. Each LINK is a link fixed below TIP (through fixed joints). Prints JSON:
 
     {"joints": [names...], "configs": [{"tip": [[4x4]], "links": {"name": [x, y, z]}}, ...]}
 """
@@ -94,16 +95,33 @@ def main(argv):
         return list(reversed(out))
 
     chain = path(base, tip)
-    movable = [j for j in chain if j.get("type") in ("revolute", "continuous")]
+    moving = ("revolute", "continuous", "prismatic")
+    by_name = {j.get("name"): j for j in robot.findall("joint")}
+    movable = [j for j in chain if j.get("type") in moving and j.find("mimic") is None]
     out = {"joints": [j.get("name") for j in movable], "configs": []}
+
+    def value(values, name, depth=0):
+        if name in values:
+            return values[name]
+        m = by_name[name].find("mimic")
+        if m is None or depth > len(by_name):
+            raise SystemExit("urdf_fk.py: joint %s has no value" % name)
+        leader = value(values, m.get("joint"), depth + 1)
+        return float(m.get("multiplier", "1")) * leader + float(m.get("offset", "0"))
+
     for q in configs:
         values = dict(zip((j.get("name") for j in movable), q))
         t = np.eye(4)
         for j in chain:
             t = t @ origin_of(j)
-            if j.get("type") in ("revolute", "continuous"):
+            if j.get("type") in moving:
                 axis = floats(j.find("axis").get("xyz") if j.find("axis") is not None else None, (1, 0, 0))
-                t = t @ homogeneous(axis_angle(axis, values[j.get("name")]), (0, 0, 0))
+                v = value(values, j.get("name"))
+                if j.get("type") == "prismatic":
+                    k = np.asarray(axis, dtype=float)
+                    t = t @ homogeneous(np.eye(3), 1000.0 * v * k / np.linalg.norm(k))
+                else:
+                    t = t @ homogeneous(axis_angle(axis, v), (0, 0, 0))
         entry = {"tip": t.tolist(), "links": {}}
         for name in links:
             u = t.copy()

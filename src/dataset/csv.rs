@@ -241,8 +241,19 @@ fn parse_row(
     };
     let q_rad = (1..=joints)
         .map(|col| {
-            let q = units.angle.to_rad(number(col)?);
-            plausible(col, validate::joint_magnitude, q)?;
+            let raw = number(col)?;
+            let q = units.angle.to_rad(raw);
+            // A prismatic joint's column is a length in the length unit; which columns are is known
+            // with the robot only (ArmData::set_linear_joints, which checks them again), so here a
+            // value is refused when it is implausible either way.
+            validate::joint_magnitude(field(col), q, units.length.to_mm(raw)).map_err(
+                |message| DatasetError::Field {
+                    path: path.to_path_buf(),
+                    line,
+                    field: names[col].clone(),
+                    message,
+                },
+            )?;
             Ok(q)
         })
         .collect::<Result<Vec<f64>, DatasetError>>()?;

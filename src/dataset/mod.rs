@@ -110,10 +110,64 @@ pub struct ArmData {
     /// The tracker station the arm was measured from (`[[arms]] station`): `None` on both arms means
     /// one station, as files without the key.
     pub station: Option<String>,
+    /// Which joint columns are lengths — prismatic joints, in mm — rather than angles (rad); empty:
+    /// all angles. Set from the robot ([`ArmData::set_linear_joints`]).
+    pub linear_joints: Vec<bool>,
     pub measurements: Vec<Measurement>,
 }
 
 impl ArmData {
+    /// Is joint column `i` (0-based) a prismatic joint's length (mm)?
+    pub fn is_linear_joint(&self, i: usize) -> bool {
+        self.linear_joints.get(i).copied().unwrap_or(false)
+    }
+
+    /// Read the joint columns flagged in `linear` as lengths (prismatic joints, mm) and the others as
+    /// angles (rad). The reader converts every joint column with the angle unit, knowing nothing of
+    /// the robot; a column whose reading changes is converted back to the file's number with the
+    /// unit it was read with and again with the other, `units` being the file's. Checks every value's
+    /// magnitude for its kind (file, line and column on failure). Idempotent.
+    pub fn set_linear_joints(&mut self, linear: &[bool], units: Units) -> Result<(), DatasetError> {
+        let now = |i: usize| linear.get(i).copied().unwrap_or(false);
+        let changed: Vec<usize> = (0..self.joint_count())
+            .filter(|&i| now(i) != self.is_linear_joint(i))
+            .collect();
+        if changed.is_empty() {
+            return Ok(());
+        }
+        for m in &mut self.measurements {
+            for &i in &changed {
+                let Some(v) = m.q_rad.get_mut(i) else {
+                    continue;
+                };
+                let raw = if now(i) {
+                    units.angle.from_rad(*v)
+                } else {
+                    units.length.from_mm(*v)
+                };
+                *v = if now(i) {
+                    units.length.to_mm(raw)
+                } else {
+                    units.angle.to_rad(raw)
+                };
+                validate::joint_value_magnitude(*v, now(i)).map_err(|message| {
+                    DatasetError::Field {
+                        path: self.file.clone(),
+                        line: m.line,
+                        field: format!("q{}", i + 1),
+                        message,
+                    }
+                })?;
+            }
+        }
+        self.linear_joints = if linear.iter().any(|&b| b) {
+            linear.to_vec()
+        } else {
+            Vec::new()
+        };
+        Ok(())
+    }
+
     /// Number of joint values per configuration (the CSV's joint columns; every row has as many).
     pub fn joint_count(&self) -> usize {
         self.measurements.first().map_or(0, |m| m.q_rad.len())
@@ -291,6 +345,7 @@ pub fn load_from(files: &dyn FileSource, path: &Path) -> Result<(Dataset, Units)
             file: arm.file,
             links: arm.links,
             station: arm.station,
+            linear_joints: Vec::new(),
             measurements,
         })
     })?;
@@ -349,6 +404,7 @@ mod tests {
             file: PathBuf::new(),
             links: None,
             station: None,
+            linear_joints: Vec::new(),
             measurements,
         }
     }

@@ -106,7 +106,13 @@ fn arm_csv(
                 check_finite(path, &format!("configuration `{id}`"), p.as_slice())?;
             }
             let mut row = vec![id.to_string()];
-            row.extend(m.q_rad.iter().map(|&q| num(units.angle.from_rad(q))));
+            row.extend(m.q_rad.iter().enumerate().map(|(i, &q)| {
+                num(if arm.is_linear_joint(i) {
+                    units.length.from_mm(q)
+                } else {
+                    units.angle.from_rad(q)
+                })
+            }));
             for p in &m.tracker_points_mm {
                 row.extend(p.iter().map(|&x| num(units.length.from_mm(x))));
             }

@@ -203,13 +203,34 @@ pub(super) fn coordinate_magnitude(text: &str, value_mm: f64) -> Result<(), Stri
     Ok(())
 }
 
-/// A parsed joint value's magnitude: `Err` is the message for the field.
-pub(super) fn joint_magnitude(text: &str, value_rad: f64) -> Result<(), String> {
-    if value_rad.abs() > MAX_JOINT_RAD {
+/// A parsed joint value's magnitude, read as an angle (`value_rad`) and as a prismatic joint's length
+/// (`value_mm`): `Err` (the message for the field) when it is implausible as both.
+pub(super) fn joint_magnitude(text: &str, value_rad: f64, value_mm: f64) -> Result<(), String> {
+    if value_rad.abs() > MAX_JOINT_RAD && value_mm.abs() > MAX_COORDINATE_MM {
         return Err(format!(
-            "`{}` is not a plausible joint value: {:.3e} rad is more than {:.0} turns",
+            "`{}` is not a plausible joint value: {:.3e} rad is more than {:.0} turns, and as a \
+             prismatic joint's travel more than {} m",
             excerpt(text),
             value_rad,
+            MAX_JOINT_RAD / std::f64::consts::TAU,
+            MAX_COORDINATE_MM / 1000.0
+        ));
+    }
+    Ok(())
+}
+
+/// A revolute joint's value (`linear` false, rad) or a prismatic joint's (mm): `Err` (the message
+/// for the field) when implausible.
+pub(super) fn joint_value_magnitude(value: f64, linear: bool) -> Result<(), String> {
+    if linear && value.abs() > MAX_COORDINATE_MM {
+        return Err(format!(
+            "{value:.3e} mm is not a plausible travel of a prismatic joint (|value| ≤ {} m)",
+            MAX_COORDINATE_MM / 1000.0
+        ));
+    }
+    if !linear && value.abs() > MAX_JOINT_RAD {
+        return Err(format!(
+            "{value:.3e} rad is not a plausible joint value (more than {:.0} turns)",
             MAX_JOINT_RAD / std::f64::consts::TAU
         ));
     }

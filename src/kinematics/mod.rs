@@ -26,8 +26,8 @@ pub(crate) mod tests;
 
 use crate::side::{PerSide, Side};
 pub use chain::{
-    ArmLinks, CORRECTION_NAMES, ChainError, ChainJoint, MovableKind, PARAMS_PER_JOINT, SerialChain,
-    correction_transform, minimal_parameter_count,
+    ArmLinks, CORRECTION_NAMES, ChainError, ChainJoint, JointDrive, MovableKind, PARAMS_PER_JOINT,
+    SerialChain, correction_transform, minimal_parameter_count,
 };
 pub use dh::{
     ABB_AXIS_OF_CHAIN, DhRow, IRB14000_NOMINAL_DH, JOINT_LIMITS_DEG, N_DH, N_JOINTS, N_PARAMS,
@@ -137,7 +137,7 @@ impl ArmModel {
         reflectors_mm: impl Into<Vec<Vector3<f64>>>,
     ) -> Self {
         let reflectors_mm = reflectors_mm.into();
-        let corrections = vec![[0.0; PARAMS_PER_JOINT]; chain.dof()];
+        let corrections = vec![[0.0; PARAMS_PER_JOINT]; chain.joint_count()];
         Self {
             kinematics: ArmKinematics::Chain { chain, corrections },
             reflector_names: default_reflector_names(reflectors_mm.len()),
@@ -185,14 +185,23 @@ impl ArmModel {
         }
     }
 
+    /// Which joint values are lengths (prismatic joints, mm): one flag per joint value.
+    pub fn linear_joints(&self) -> Vec<bool> {
+        match &self.kinematics {
+            ArmKinematics::Dh(_) => vec![false; N_JOINTS],
+            ArmKinematics::Chain { chain, .. } => chain
+                .variable_joints()
+                .map(|j| j.kind.is_linear())
+                .collect(),
+        }
+    }
+
     /// `(lower, upper)` of every joint in chain order, rad: Table 3's limits for DH (ABB's), the URDF's
     /// for a chain (±π for a continuous joint).
     pub fn joint_limits_rad(&self) -> Vec<(f64, f64)> {
         match &self.kinematics {
             ArmKinematics::Dh(_) => joint_limits_rad().to_vec(),
-            ArmKinematics::Chain { chain, .. } => {
-                chain.joints.iter().map(|j| j.range_rad()).collect()
-            }
+            ArmKinematics::Chain { chain, .. } => chain.variable_ranges(),
         }
     }
 
@@ -270,7 +279,7 @@ impl ArmModel {
             })),
             ArmKinematics::Chain { chain, .. } => ArmKinematics::Chain {
                 chain: chain.clone(),
-                corrections: (0..chain.dof())
+                corrections: (0..chain.joint_count())
                     .map(|k| std::array::from_fn(|i| at(PARAMS_PER_JOINT * k + i)))
                     .collect(),
             },

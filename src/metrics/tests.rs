@@ -98,6 +98,7 @@ fn simulate(
             file: PathBuf::from(format!("{}.csv", side.name())),
             links: None,
             station: None,
+            linear_joints: Vec::new(),
             measurements,
         }
     };

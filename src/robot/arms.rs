@@ -16,14 +16,28 @@ pub struct ArmSpec {
 }
 
 impl ArmSpec {
-    /// Joint names in chain order (the CSV's `q1 … qN`).
+    /// The names of the joints with their own value, in chain order (the CSV's `q1 … qN`; a mimic
+    /// joint has no column).
     pub fn joint_names(&self) -> Vec<String> {
-        self.chain.joints.iter().map(|j| j.name.clone()).collect()
+        self.chain
+            .variable_names()
+            .into_iter()
+            .map(str::to_string)
+            .collect()
     }
 
-    /// `(lower, upper)` of every joint in chain order, rad (±π for a continuous joint).
+    /// Which joint values are lengths (prismatic joints, mm), in chain order.
+    pub fn linear_joints(&self) -> Vec<bool> {
+        self.chain
+            .variable_joints()
+            .map(|j| j.kind.is_linear())
+            .collect()
+    }
+
+    /// `(lower, upper)` of every joint value in chain order, rad (±π for a continuous joint; mm for a
+    /// prismatic joint).
     pub fn joint_limits_rad(&self) -> Vec<(f64, f64)> {
-        self.chain.joints.iter().map(|j| j.range_rad()).collect()
+        self.chain.variable_ranges()
     }
 }
 

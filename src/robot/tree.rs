@@ -6,6 +6,7 @@ use super::dh::joint1_from_dh_base;
 use super::{
     Messages, ModelForm, Owner, RobotError, ShapeKind, finite_pose, isometry_from_urdf_pose,
 };
+use crate::kinematics::JointDrive;
 use crate::side::{PerSide, Side};
 use nalgebra::{Isometry3, Translation3, Unit, UnitQuaternion, Vector3};
 use std::collections::HashMap;
@@ -33,8 +34,10 @@ pub(crate) struct KinJoint {
     /// The joint frame in the parent link's frame (the URDF `<origin>`), mm.
     pub(crate) parent_from_joint: Isometry3<f64>,
     pub(crate) motion: Motion,
-    /// (arm, chain position) of the arms' movable joints.
+    /// (arm, chain position among the chain's movable joints) of the arms' movable joints.
     pub(crate) arm: Option<(Side, usize)>,
+    /// How an arm joint gets its value from the arm's variables (its own, or a mimic's leader).
+    pub(crate) drive: Option<JointDrive>,
 }
 
 /// The description compiled for fast forward kinematics.
@@ -60,10 +63,10 @@ pub(crate) struct Kinematics {
 
 impl Kinematics {
     fn motion(&self, joint: &KinJoint, q_left: &[f64], q_right: &[f64]) -> Isometry3<f64> {
-        let q = match joint.arm {
-            Some((Side::Left, k)) => q_left.get(k).copied().unwrap_or(0.0),
-            Some((Side::Right, k)) => q_right.get(k).copied().unwrap_or(0.0),
-            None => 0.0,
+        let q = match (joint.arm, joint.drive) {
+            (Some((Side::Left, _)), Some(d)) => d.value(q_left),
+            (Some((Side::Right, _)), Some(d)) => d.value(q_right),
+            _ => 0.0,
         };
         motion_transform(&joint.motion, q)
     }
@@ -150,6 +153,7 @@ impl Kinematics {
     }
 }
 
+/// A joint's motion at value `q`: rad, or mm for a prismatic joint.
 pub(crate) fn motion_transform(motion: &Motion, q: f64) -> Isometry3<f64> {
     match motion {
         Motion::Fixed => Isometry3::identity(),
@@ -157,11 +161,7 @@ pub(crate) fn motion_transform(motion: &Motion, q: f64) -> Isometry3<f64> {
             Translation3::identity(),
             UnitQuaternion::from_axis_angle(axis, q),
         ),
-        Motion::Prismatic(axis) => Isometry3::translation(
-            axis.x * q * 1000.0,
-            axis.y * q * 1000.0,
-            axis.z * q * 1000.0,
-        ),
+        Motion::Prismatic(axis) => Isometry3::translation(axis.x * q, axis.y * q, axis.z * q),
     }
 }
 
@@ -216,6 +216,7 @@ pub(crate) fn compile(
         for (k, joint) in spec.chain.joints.iter().enumerate() {
             if let Some(ji) = tree.joint_names.iter().position(|n| *n == joint.name) {
                 tree.joints[ji].arm = Some((side, k));
+                tree.joints[ji].drive = Some(joint.drive);
             }
         }
     }
@@ -355,9 +356,59 @@ fn parse_joints(
             parent_from_joint: isometry_from_urdf_pose(&j.origin),
             motion,
             arm: None,
+            drive: None,
         });
     }
+    check_mimics(urdf, msg, warnings)?;
     Ok(raw)
+}
+
+/// Every `<mimic>` of the file: a loop (a joint that, leader by leader, follows itself) is refused
+/// with the first joint's line; a leader that is not a joint of the file is a warning (the joint is
+/// then held at its offset).
+fn check_mimics(
+    urdf: &urdf_rs::Robot,
+    msg: &Messages,
+    warnings: &mut Vec<String>,
+) -> Result<(), RobotError> {
+    let leader_of: HashMap<&str, &str> = urdf
+        .joints
+        .iter()
+        .filter_map(|j| {
+            j.mimic
+                .as_ref()
+                .map(|m| (j.name.as_str(), m.joint.as_str()))
+        })
+        .collect();
+    for j in &urdf.joints {
+        let Some(first) = leader_of.get(j.name.as_str()) else {
+            continue;
+        };
+        if !urdf.joints.iter().any(|k| k.name == *first) {
+            warnings.push(format!(
+                "joint `{}` mimics `{first}`, which is not a joint of the description",
+                j.name
+            ));
+            continue;
+        }
+        let mut path = vec![j.name.as_str()];
+        let mut next = Some(*first);
+        while let Some(l) = next {
+            if path.contains(&l) {
+                path.push(l);
+                return Err(msg.bad_joint(
+                    &j.name,
+                    format!(
+                        "<mimic> loop: {} (a joint cannot follow itself)",
+                        path.join(" → ")
+                    ),
+                ));
+            }
+            path.push(l);
+            next = leader_of.get(l).copied();
+        }
+    }
+    Ok(())
 }
 
 /// The joints in topological order (from the roots down) and the tree's bookkeeping.

@@ -335,6 +335,14 @@ pub fn simulate(
         file: PathBuf::from(format!("{}.csv", side.name())),
         links: None,
         station: None,
+        linear_joints: {
+            let linear = nominal.arm(side).linear_joints();
+            if linear.contains(&true) {
+                linear
+            } else {
+                Vec::new()
+            }
+        },
         measurements: measure_arm(
             opts,
             side,

@@ -354,19 +354,31 @@ fn arm_details_ui(ui: &mut egui::Ui, session: &Session, side: Side) {
         .num_columns(3)
         .striped(true)
         .show(ui, |ui| {
-            for (k, (name, (lo, hi))) in arm
-                .joint_names()
-                .iter()
-                .zip(arm.joint_limits_rad())
-                .enumerate()
-            {
-                ui.label(RichText::new(format!("q{}", k + 1)).small());
-                ui.label(RichText::new(name.as_str()).small().monospace());
-                ui.label(
-                    RichText::new(format!("{:.1}° … {:.1}°", lo.to_degrees(), hi.to_degrees()))
-                        .small(),
-                )
-                .on_hover_text(format!("{lo:.4} … {hi:.4} rad"));
+            for j in &arm.chain.joints {
+                let (lo, hi) = j.range();
+                match j.drive {
+                    crate::kinematics::JointDrive::Variable(k) => {
+                        ui.label(RichText::new(format!("q{}", k + 1)).small());
+                    }
+                    crate::kinematics::JointDrive::Mimic { .. } => {
+                        ui.label(RichText::new("mimic").small())
+                            .on_hover_text(format!(
+                                "follows `{}` (URDF <mimic>): no CSV column",
+                                j.mimics.as_deref().unwrap_or("?")
+                            ));
+                    }
+                }
+                ui.label(RichText::new(j.name.as_str()).small().monospace());
+                if j.kind.is_linear() {
+                    ui.label(RichText::new(format!("{lo:.1} … {hi:.1} mm")).small())
+                        .on_hover_text("prismatic: its CSV column is a length");
+                } else {
+                    ui.label(
+                        RichText::new(format!("{:.1}° … {:.1}°", lo.to_degrees(), hi.to_degrees()))
+                            .small(),
+                    )
+                    .on_hover_text(format!("{lo:.4} … {hi:.4} rad"));
+                }
                 ui.end_row();
             }
         });

@@ -1,6 +1,6 @@
 //! Building a [`SerialChain`] from a parsed URDF.
 
-use super::{ChainError, ChainJoint, MovableKind, SerialChain};
+use super::{ChainError, ChainJoint, JointDrive, MovableKind, SerialChain};
 use nalgebra::{Isometry3, Translation3, Unit, UnitQuaternion, Vector3};
 use std::collections::HashMap;
 
@@ -106,6 +106,7 @@ impl SerialChain {
                 }
                 urdf_rs::JointType::Revolute => MovableKind::Revolute,
                 urdf_rs::JointType::Continuous => MovableKind::Continuous,
+                urdf_rs::JointType::Prismatic => MovableKind::Prismatic,
                 ref other => {
                     return Err(ChainError::UnsupportedJoint {
                         joint: j.name.clone(),
@@ -115,12 +116,6 @@ impl SerialChain {
                     });
                 }
             };
-            if let Some(m) = &j.mimic {
-                return Err(ChainError::MimicJoint {
-                    joint: j.name.clone(),
-                    mimicked: m.joint.clone(),
-                });
-            }
             let a = Vector3::from(j.axis.xyz.0);
             let norm = a.norm();
             if !(norm.is_finite() && norm > 1e-9) {
@@ -130,8 +125,26 @@ impl SerialChain {
                 });
             }
             let axis = Unit::new_normalize(a);
-            let limits_rad = match kind {
+            let limits = match kind {
                 MovableKind::Continuous => None,
+                MovableKind::Prismatic => {
+                    let (lower, upper) = (j.limit.lower, j.limit.upper);
+                    if !(lower.is_finite() && upper.is_finite() && lower <= upper) {
+                        return Err(ChainError::BadLimits {
+                            joint: j.name.clone(),
+                            lower,
+                            upper,
+                        });
+                    }
+                    if lower == upper && j.mimic.is_none() {
+                        warnings.push(format!(
+                            "joint `{}` is prismatic with the limits [{lower}, {upper}] m (or none): it \
+                             cannot move",
+                            j.name
+                        ));
+                    }
+                    Some((lower * 1000.0, upper * 1000.0))
+                }
                 MovableKind::Revolute => {
                     let (lower, upper) = (j.limit.lower, j.limit.upper);
                     if !(lower.is_finite() && upper.is_finite() && lower <= upper) {
@@ -161,14 +174,18 @@ impl SerialChain {
                 prev_from_parent: pending,
                 folded_fixed: std::mem::take(&mut folded),
                 axis,
-                limits_rad,
+                limits,
+                // Resolved below, once every joint of the chain is known.
+                drive: JointDrive::Variable(0),
+                mimics: j.mimic.as_ref().map(|m| m.joint.clone()),
                 joint_from_aligned: aligned_rotation(&axis),
                 parent_link: j.parent.link.clone(),
                 child_link: j.child.link.clone(),
             });
             pending = Isometry3::identity();
         }
-        if joints.is_empty() {
+        let variables = resolve_drives(robot, &mut joints)?;
+        if variables == 0 {
             return Err(ChainError::NoMovableJoint {
                 base: base_link.into(),
                 tip: tip_link.into(),
@@ -192,12 +209,95 @@ impl SerialChain {
             base_link: base_link.into(),
             tip_link: tip_link.into(),
             joints,
+            variables,
             last_from_tip: pending,
             warnings,
             prev_aligned_from_aligned,
             last_aligned_from_tip,
         })
     }
+}
+
+/// The unit factor from the URDF's value of a joint (m or rad) to the program's (mm or rad).
+fn si_to_internal(kind: MovableKind) -> f64 {
+    if kind.is_linear() { 1000.0 } else { 1.0 }
+}
+
+/// Number the joints driven by their own value (the variables, in chain order) and resolve every
+/// `<mimic>` to a variable: a leader that mimics another joint is followed through the URDF's joints
+/// (composing the multipliers and offsets) until a chain joint with its own variable is reached. A
+/// leader off the chain, a loop and a non-finite or zero multiplier are refused.
+fn resolve_drives(robot: &urdf_rs::Robot, joints: &mut [ChainJoint]) -> Result<usize, ChainError> {
+    let by_name: HashMap<&str, &urdf_rs::Joint> =
+        robot.joints.iter().map(|j| (j.name.as_str(), j)).collect();
+    let mut variables = 0;
+    let mut variable_of: HashMap<String, (usize, MovableKind)> = HashMap::new();
+    for j in joints.iter_mut() {
+        if j.mimics.is_none() {
+            j.drive = JointDrive::Variable(variables);
+            variable_of.insert(j.name.clone(), (variables, j.kind));
+            variables += 1;
+        }
+    }
+    for j in joints.iter_mut() {
+        let Some(first) = j.mimics.clone() else {
+            continue;
+        };
+        // value_j = multiplier · value_leader + offset, in SI units (m, rad) along the way.
+        let (mut multiplier, mut offset) = (1.0, 0.0);
+        let mut path = vec![j.name.clone()];
+        let mut current = j.name.clone();
+        let mut leader = first;
+        loop {
+            let mimic = by_name
+                .get(current.as_str())
+                .and_then(|u| u.mimic.as_ref())
+                .ok_or_else(|| ChainError::MimicOutsideChain {
+                    joint: j.name.clone(),
+                    mimicked: leader.clone(),
+                })?;
+            let (m, o) = (mimic.multiplier.unwrap_or(1.0), mimic.offset.unwrap_or(0.0));
+            if !(m.is_finite() && o.is_finite() && m != 0.0) {
+                return Err(ChainError::BadMimic { joint: current });
+            }
+            // value_current = m · value_leader + o.
+            offset += multiplier * o;
+            multiplier *= m;
+            if path.contains(&leader) {
+                path.push(leader);
+                return Err(ChainError::MimicLoop {
+                    joint: j.name.clone(),
+                    cycle: path.join(" → "),
+                });
+            }
+            path.push(leader.clone());
+            if let Some(&(variable, kind)) = variable_of.get(&leader) {
+                let (to, from) = (si_to_internal(j.kind), si_to_internal(kind));
+                j.drive = JointDrive::Mimic {
+                    leader: variable,
+                    multiplier: multiplier * to / from,
+                    offset: offset * to,
+                };
+                break;
+            }
+            if !by_name.contains_key(leader.as_str()) {
+                return Err(ChainError::MimicOutsideChain {
+                    joint: j.name.clone(),
+                    mimicked: j.mimics.clone().unwrap_or_default(),
+                });
+            }
+            current = leader.clone();
+            leader = by_name[current.as_str()]
+                .mimic
+                .as_ref()
+                .map(|m| m.joint.clone())
+                .ok_or_else(|| ChainError::MimicOutsideChain {
+                    joint: j.name.clone(),
+                    mimicked: current.clone(),
+                })?;
+        }
+    }
+    Ok(variables)
 }
 
 /// Refuse two arm chains that share a movable joint (a torso joint above both bases, as on a Nextage

@@ -2,12 +2,15 @@
 //! and its calibration parametrisation.
 //!
 //! **The chain.** The joints on the path from `base_link` down to `tip_link`, in chain order. Each
-//! revolute or continuous joint is a *movable joint* with its own variable `q_k` (rad, the URDF
-//! joint's own variable); fixed joints are folded into the origin of the next movable joint, or into
-//! [`SerialChain::last_from_tip`] after the last one. Prismatic, floating, planar and spherical joints,
-//! mimic joints, a missing link and a tip that is not below the base are refused with a
-//! [`ChainError`] naming the link or joint. The joint origins are taken as they are: no DH form is
-//! needed. Lengths in mm, angles in rad.
+//! revolute, continuous or prismatic joint is a *movable joint*; fixed joints are folded into the
+//! origin of the next movable joint, or into [`SerialChain::last_from_tip`] after the last one. A
+//! movable joint is driven ([`JointDrive`]) by its own *variable* (the CSV's `q1 … qN` count the
+//! variables, in chain order: rad for a revolute joint, mm for a prismatic one — the URDF joint's own
+//! variable in the program's units), or, with a URDF `<mimic joint multiplier offset>`, by another
+//! joint of the chain (`value = multiplier · leader + offset`; no CSV column). Floating, planar and
+//! spherical joints, a mimic joint whose leader is not on the chain, a mimic loop, a missing link and a
+//! tip that is not below the base are refused with a [`ChainError`] naming the link or joint. The
+//! joint origins are taken as they are: no DH form is needed. Lengths in mm, angles in rad.
 //!
 //! **The parametrisation.** Every movable joint k gets a small correction `Δ_k` of its origin,
 //! inserted between the URDF origin and the joint rotation and expressed in the joint's *aligned
@@ -15,9 +18,13 @@
 //! `C_k = I` when the URDF axis is +z):
 //!
 //! ```text
-//! prev_from_child_k(q) = P_k · O_k · C_k · Δ_k · Rz(q_k) · C_kᵀ,
+//! prev_from_child_k(q) = P_k · O_k · C_k · Δ_k · Rz(q_k) · C_kᵀ     (revolute, continuous)
+//! prev_from_child_k(q) = P_k · O_k · C_k · Δ_k · Tz(q_k) · C_kᵀ     (prismatic)
 //! Δ_k = T(tx, ty, tz) · Rx(rx) · Ry(ry) · Rz(rz)
 //! ```
+//!
+//! (For a prismatic joint `tz` is its zero offset, `rx, ry` tilt its direction, and `tx, ty, rz` move
+//! what follows as the next joint's origin does — the identifiability analysis finds which.)
 //!
 //! (`P_k` the fixed joints folded before joint k, `O_k` its URDF `<origin>`), so `rz` is the joint's
 //! zero offset, `tz` a shift along its axis, and `tx, ty, rx, ry` move the axis line. Six per joint and
@@ -56,7 +63,7 @@ pub enum ChainError {
     NoPath { base: String, tip: String },
     #[error(
         "joint `{joint}` between `{base}` and `{tip}` is {kind}; an arm chain may only hold revolute, \
-         continuous and fixed joints"
+         continuous, prismatic and fixed joints"
     )]
     UnsupportedJoint {
         joint: String,
@@ -64,8 +71,17 @@ pub enum ChainError {
         base: String,
         tip: String,
     },
-    #[error("joint `{joint}` mimics `{mimicked}`; a mimic joint cannot be part of an arm chain")]
-    MimicJoint { joint: String, mimicked: String },
+    #[error(
+        "joint `{joint}` mimics `{mimicked}`, which is not a joint of this arm's chain (nor mimics one): \
+         its value cannot follow from the arm's joint columns"
+    )]
+    MimicOutsideChain { joint: String, mimicked: String },
+    #[error("joint `{joint}`: its <mimic> leads back to itself ({cycle}): a mimic loop")]
+    MimicLoop { joint: String, cycle: String },
+    #[error(
+        "joint `{joint}`: its <mimic> multiplier or offset is not finite, or the multiplier is 0"
+    )]
+    BadMimic { joint: String },
     #[error("joint `{joint}`: its axis {axis:?} has zero length or is not finite")]
     BadAxis { joint: String, axis: [f64; 3] },
     #[error("joint `{joint}`: its origin is not finite")]
@@ -76,7 +92,9 @@ pub enum ChainError {
         lower: f64,
         upper: f64,
     },
-    #[error("no revolute or continuous joint between `{base}` and `{tip}`")]
+    #[error(
+        "no revolute, continuous or prismatic joint driven by its own value between `{base}` and `{tip}`"
+    )]
     NoMovableJoint { base: String, tip: String },
     #[error(
         "joint `{joint}` is in both arm chains; each arm's data would move it on its own — choose base \
@@ -92,7 +110,9 @@ impl ChainError {
             ChainError::UnknownLink { .. } | ChainError::NoPath { .. } => None,
             ChainError::NoMovableJoint { .. } => None,
             ChainError::UnsupportedJoint { joint, .. }
-            | ChainError::MimicJoint { joint, .. }
+            | ChainError::MimicOutsideChain { joint, .. }
+            | ChainError::MimicLoop { joint, .. }
+            | ChainError::BadMimic { joint }
             | ChainError::BadAxis { joint, .. }
             | ChainError::NonFiniteOrigin { joint }
             | ChainError::BadLimits { joint, .. }
@@ -135,11 +155,61 @@ impl std::fmt::Display for ArmLinks {
     }
 }
 
-/// Revolute (limited) or continuous (unlimited) joint.
+/// Revolute (limited), continuous (unlimited) or prismatic (a linear axis: a torso lift) joint.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum MovableKind {
     Revolute,
     Continuous,
+    Prismatic,
+}
+
+impl MovableKind {
+    /// A linear joint: its value is a length (mm), not an angle (rad).
+    pub fn is_linear(self) -> bool {
+        self == MovableKind::Prismatic
+    }
+
+    /// The unit of the joint's value inside the program.
+    pub fn unit(self) -> &'static str {
+        if self.is_linear() { "mm" } else { "rad" }
+    }
+}
+
+/// Where a movable joint's value comes from.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum JointDrive {
+    /// Its own variable `q[index]` (the CSV's `q{index + 1}`).
+    Variable(usize),
+    /// A URDF `<mimic>`: `multiplier · q[leader] + offset`, converted to the program's units (the
+    /// offset in this joint's unit, the multiplier from the leader's unit to this joint's).
+    Mimic {
+        leader: usize,
+        multiplier: f64,
+        offset: f64,
+    },
+}
+
+impl JointDrive {
+    /// The joint's value at the variables `q` (a missing variable counts as zero).
+    #[inline]
+    pub fn value(&self, q: &[f64]) -> f64 {
+        match *self {
+            JointDrive::Variable(i) => q.get(i).copied().unwrap_or(0.0),
+            JointDrive::Mimic {
+                leader,
+                multiplier,
+                offset,
+            } => multiplier * q.get(leader).copied().unwrap_or(0.0) + offset,
+        }
+    }
+
+    /// The variable of a joint driven by its own.
+    pub fn variable(&self) -> Option<usize> {
+        match *self {
+            JointDrive::Variable(i) => Some(i),
+            JointDrive::Mimic { .. } => None,
+        }
+    }
 }
 
 /// One movable joint of a chain.
@@ -157,8 +227,13 @@ pub struct ChainJoint {
     pub folded_fixed: Vec<String>,
     /// Unit joint axis in the joint frame.
     pub axis: Unit<Vector3<f64>>,
-    /// `(lower, upper)` in rad as the URDF gives them; `None` for a continuous joint.
-    pub limits_rad: Option<(f64, f64)>,
+    /// `(lower, upper)` as the URDF gives them, in the joint's unit (rad; mm for a prismatic joint);
+    /// `None` for a continuous joint.
+    pub limits: Option<(f64, f64)>,
+    /// Its own variable, or the joint it mimics.
+    pub drive: JointDrive,
+    /// The URDF joint it mimics (its `<mimic joint>`), if any.
+    pub mimics: Option<String>,
     /// `C_k`: the joint frame's rotation to the aligned frame (whose z axis is the joint axis).
     pub joint_from_aligned: UnitQuaternion<f64>,
     /// The joint's parent and child links.
@@ -167,10 +242,27 @@ pub struct ChainJoint {
 }
 
 impl ChainJoint {
-    /// The range a joint may take: its limits, or ±π for a continuous joint.
-    pub fn range_rad(&self) -> (f64, f64) {
-        self.limits_rad
+    /// The range a joint may take, in its unit: its limits, or ±π for a continuous joint.
+    pub fn range(&self) -> (f64, f64) {
+        self.limits
             .unwrap_or((-std::f64::consts::PI, std::f64::consts::PI))
+    }
+
+    /// The joint's displacement at value `v` (rad or mm) after its correction's `Rx Ry` and `rz`:
+    /// `T(t) Rx(rx) Ry(ry) Rz(rz + v)` for a revolute joint, `T(t) Rx(rx) Ry(ry) Rz(rz) Tz(v)` for a
+    /// prismatic one.
+    #[inline]
+    fn moved(&self, c: &[f64; PARAMS_PER_JOINT], v: f64) -> Isometry3<f64> {
+        if self.kind.is_linear() {
+            let r = rot_x(c[3]) * rot_y(c[4]) * rot_z(c[5]);
+            let t = Vector3::new(c[0], c[1], c[2]) + r * Vector3::new(0.0, 0.0, v);
+            Isometry3::from_parts(Translation3::from(t), r)
+        } else {
+            Isometry3::from_parts(
+                Translation3::new(c[0], c[1], c[2]),
+                rot_x(c[3]) * rot_y(c[4]) * rot_z(c[5] + v),
+            )
+        }
     }
 }
 
@@ -180,6 +272,8 @@ pub struct SerialChain {
     pub base_link: String,
     pub tip_link: String,
     pub joints: Vec<ChainJoint>,
+    /// Number of variables (the CSV's joint columns): the movable joints that mimic none.
+    variables: usize,
     /// The fixed joints after the last movable joint, folded: `last_child_from_tip`.
     pub last_from_tip: Isometry3<f64>,
     /// Things the user should know (a revolute joint without limits, …).
@@ -218,20 +312,53 @@ pub const fn minimal_parameter_count(revolute: usize) -> usize {
 }
 
 impl SerialChain {
-    /// Number of movable joints.
+    /// Number of variables: the joint values a configuration gives (the CSV's `q1 … qN`), one per
+    /// movable joint that mimics none.
     pub fn dof(&self) -> usize {
+        self.variables
+    }
+
+    /// Number of movable joints (mimic joints included): the correction blocks.
+    pub fn joint_count(&self) -> usize {
         self.joints.len()
     }
 
-    /// Number of parameters with `reflectors` reflectors: six corrections per joint and three
+    /// The movable joints driven by their own variable, in variable order.
+    pub fn variable_joints(&self) -> impl Iterator<Item = &ChainJoint> {
+        self.joints.iter().filter(|j| j.drive.variable().is_some())
+    }
+
+    /// Names of the variables' joints (the CSV's `q1 … qN`).
+    pub fn variable_names(&self) -> Vec<&str> {
+        self.variable_joints().map(|j| j.name.as_str()).collect()
+    }
+
+    /// `(lower, upper)` of every variable, in its unit (rad; mm for a prismatic joint).
+    pub fn variable_ranges(&self) -> Vec<(f64, f64)> {
+        self.variable_joints().map(|j| j.range()).collect()
+    }
+
+    /// Is variable `i` a length (a prismatic joint's, mm) rather than an angle (rad)?
+    pub fn variable_is_linear(&self, i: usize) -> bool {
+        self.variable_joints()
+            .nth(i)
+            .is_some_and(|j| j.kind.is_linear())
+    }
+
+    /// Every movable joint's value (rad or mm) at the variables `q`.
+    pub fn joint_values(&self, q: &[f64]) -> Vec<f64> {
+        self.joints.iter().map(|j| j.drive.value(q)).collect()
+    }
+
+    /// Number of parameters with `reflectors` reflectors: six corrections per movable joint and three
     /// coordinates per reflector.
     pub fn param_count(&self, reflectors: usize) -> usize {
-        PARAMS_PER_JOINT * self.dof() + 3 * reflectors
+        PARAMS_PER_JOINT * self.joint_count() + 3 * reflectors
     }
 
     /// Index of the first reflector coordinate in the parameter vector.
     pub fn reflector_offset(&self) -> usize {
-        PARAMS_PER_JOINT * self.dof()
+        PARAMS_PER_JOINT * self.joint_count()
     }
 
     /// Name of parameter `k`: `<joint>.tx` … `<joint>.rz`, `t_a.x` … `t_c.z`.
@@ -259,7 +386,7 @@ impl SerialChain {
         k < self.reflector_offset() && k % PARAMS_PER_JOINT >= 3
     }
 
-    /// Joint names in chain order (the CSV's `q1 … qN`).
+    /// Names of the movable joints in chain order (mimic joints included: one correction block each).
     pub fn joint_names(&self) -> Vec<&str> {
         self.joints.iter().map(|j| j.name.as_str()).collect()
     }
@@ -274,8 +401,9 @@ impl SerialChain {
         )
     }
 
-    /// Tip pose in the base link's frame (mm) with the given corrections; `q_rad` in chain order
-    /// (missing values count as zero, extra ones are ignored).
+    /// Tip pose in the base link's frame (mm) with the given corrections (one block per movable
+    /// joint); `q_rad` the variables in chain order (rad, mm for a prismatic joint; missing values
+    /// count as zero, extra ones are ignored).
     pub fn base_from_tip(
         &self,
         corrections: &[[f64; PARAMS_PER_JOINT]],
@@ -283,26 +411,21 @@ impl SerialChain {
     ) -> Isometry3<f64> {
         debug_assert_eq!(q_rad.len(), self.dof());
         let mut f = Isometry3::identity();
-        for (k, (b, c)) in self
+        for ((b, c), j) in self
             .prev_aligned_from_aligned
             .iter()
             .zip(corrections)
-            .enumerate()
+            .zip(&self.joints)
         {
-            let q = q_rad.get(k).copied().unwrap_or(0.0);
-            // Δ · Rz(q) = T(t) Rx Ry Rz(rz + q).
-            let moved = Isometry3::from_parts(
-                Translation3::new(c[0], c[1], c[2]),
-                rot_x(c[3]) * rot_y(c[4]) * rot_z(c[5] + q),
-            );
-            f = f * b * moved;
+            // Δ · Rz(q) = T(t) Rx Ry Rz(rz + q), or Δ · Tz(q) for a prismatic joint.
+            f = f * b * j.moved(c, j.drive.value(q_rad));
         }
         f * self.last_aligned_from_tip
     }
 
     /// The nominal tip pose (all corrections zero).
     pub fn nominal_base_from_tip(&self, q_rad: &[f64]) -> Isometry3<f64> {
-        self.base_from_tip(&vec![[0.0; PARAMS_PER_JOINT]; self.dof()], q_rad)
+        self.base_from_tip(&vec![[0.0; PARAMS_PER_JOINT]; self.joint_count()], q_rad)
     }
 
     /// The aligned frame of every movable joint (z = its axis, after its correction's translation
@@ -312,15 +435,14 @@ impl SerialChain {
         corrections: &[[f64; PARAMS_PER_JOINT]],
         q_rad: &[f64],
     ) -> Vec<Isometry3<f64>> {
-        let mut out = Vec::with_capacity(self.dof() + 1);
+        let mut out = Vec::with_capacity(self.joint_count() + 1);
         let mut f = Isometry3::identity();
-        for (k, (b, c)) in self
+        for ((b, c), j) in self
             .prev_aligned_from_aligned
             .iter()
             .zip(corrections)
-            .enumerate()
+            .zip(&self.joints)
         {
-            let q = q_rad.get(k).copied().unwrap_or(0.0);
             f *= b;
             out.push(
                 f * Isometry3::from_parts(
@@ -328,10 +450,7 @@ impl SerialChain {
                     rot_x(c[3]) * rot_y(c[4]),
                 ),
             );
-            f *= Isometry3::from_parts(
-                Translation3::new(c[0], c[1], c[2]),
-                rot_x(c[3]) * rot_y(c[4]) * rot_z(c[5] + q),
-            );
+            f *= j.moved(c, j.drive.value(q_rad));
         }
         out.push(f * self.last_aligned_from_tip);
         out
@@ -345,19 +464,19 @@ impl SerialChain {
         reflectors_mm: &[Vector3<f64>],
         q_rad: &[f64],
     ) -> ArmJacobians {
-        let n = self.dof();
+        let n = self.joint_count();
         // Per joint: the three translation directions, the three rotation axes and the corrected
         // origin o' through which they pass.
         let mut dirs: Vec<[Vector3<f64>; 6]> = Vec::with_capacity(n);
         let mut origins: Vec<Vector3<f64>> = Vec::with_capacity(n);
         let mut f = Isometry3::identity();
-        for (k, (b, c)) in self
+        for ((b, c), j) in self
             .prev_aligned_from_aligned
             .iter()
             .zip(corrections)
-            .enumerate()
+            .zip(&self.joints)
         {
-            let q = q_rad.get(k).copied().unwrap_or(0.0);
+            let q = j.drive.value(q_rad);
             f *= b;
             let r = f.rotation;
             let rx = rot_x(c[3]);
@@ -372,7 +491,14 @@ impl SerialChain {
                 r * (rx * Vector3::y()),
                 r * (rxy * Vector3::z()),
             ]);
-            f *= Isometry3::from_parts(Translation3::from(t), rxy * rot_z(c[5] + q));
+            // A rotation of the correction turns everything after it about o', the prismatic
+            // joint's travel included: the columns above hold for both kinds.
+            f *= if j.kind.is_linear() {
+                let r = rxy * rot_z(c[5]);
+                Isometry3::from_parts(Translation3::from(t + r * Vector3::new(0.0, 0.0, q)), r)
+            } else {
+                Isometry3::from_parts(Translation3::from(t), rxy * rot_z(c[5] + q))
+            };
         }
         let tip = f * self.last_aligned_from_tip;
         let points_mm: Vec<Vector3<f64>> = reflectors_mm
@@ -443,7 +569,7 @@ impl SerialChain {
 
     /// Is joint `k`'s axis parallel to joint `k − 1`'s (at q = 0, within 1e-6 rad)?
     pub fn parallel_to_previous(&self, k: usize) -> bool {
-        if k == 0 || k >= self.dof() {
+        if k == 0 || k >= self.joint_count() {
             return false;
         }
         // Joint k's axis in the aligned frame of joint k − 1 (whose z is that joint's axis).
@@ -461,9 +587,15 @@ impl SerialChain {
     pub fn preference_order(&self, reflectors: usize) -> Vec<usize> {
         let off = self.reflector_offset();
         let mut out: Vec<usize> = (off..off + 3 * reflectors).collect();
-        for k in 0..self.dof() {
+        for (k, j) in self.joints.iter().enumerate() {
             let b = PARAMS_PER_JOINT * k;
-            out.extend([b + 5, b + 2, b, b + 1, b + 3, b + 4]);
+            if j.kind.is_linear() {
+                // A linear axis: its zero offset, its direction, then what the next joint's origin
+                // would otherwise hold.
+                out.extend([b + 2, b + 3, b + 4, b + 5, b, b + 1]);
+            } else {
+                out.extend([b + 5, b + 2, b, b + 1, b + 3, b + 4]);
+            }
         }
         out
     }
@@ -475,6 +607,14 @@ impl SerialChain {
         }
         let (joint, c) = (k / PARAMS_PER_JOINT, k % PARAMS_PER_JOINT);
         let name = &self.joints[joint].name;
+        if self.joints[joint].kind.is_linear() && joint > 0 {
+            return match c {
+                0 | 1 | 5 => Some(format!(
+                    "`{name}` is prismatic: its axis is a direction, so shifting it or turning about it                      moves what follows as the next joint's origin does"
+                )),
+                _ => None,
+            };
+        }
         if joint == 0 {
             return Some(format!(
                 "`{name}` is the first joint: moving its origin moves the whole arm rigidly, which the \
@@ -482,7 +622,7 @@ impl SerialChain {
             ));
         }
         match c {
-            2 | 5 if joint + 1 == self.dof() => Some(format!(
+            2 | 5 if joint + 1 == self.joint_count() => Some(format!(
                 "`{name}` is the last joint: a {} its axis moves the tip frame alike and is absorbed by \
                  the reflector coordinates",
                 if c == 2 { "shift along" } else { "turn about" }
@@ -504,10 +644,10 @@ impl SerialChain {
     /// joint's origin at q = 0 (the way a flange faces). Used to face simulated reflectors to the
     /// tracker and to place default reflectors.
     pub fn tool_axis(&self) -> Unit<Vector3<f64>> {
-        let zero = vec![[0.0; PARAMS_PER_JOINT]; self.dof()];
+        let zero = vec![[0.0; PARAMS_PER_JOINT]; self.joint_count()];
         let q = vec![0.0; self.dof()];
         let frames = self.joint_frames(&zero, &q);
-        let n = self.dof();
+        let n = self.joint_count();
         let tip = frames[n];
         let last = frames[n - 1];
         let axis_base = last.rotation * Vector3::z();

@@ -3,7 +3,7 @@
 
 use super::*;
 use crate::kinematics::ArmModel;
-use crate::test_robots::{DUAL_UR_ARMS, dual_ur_like_urdf, yumi_like_urdf};
+use crate::test_robots::{DUAL_UR_ARMS, dual_ur_like_urdf, lift_mimic_urdf, yumi_like_urdf};
 use nalgebra::DVector;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -24,12 +24,9 @@ fn parse(text: &str) -> urdf_rs::Robot {
 
 pub(crate) fn random_q(chain: &SerialChain, rng: &mut ChaCha8Rng) -> Vec<f64> {
     chain
-        .joints
-        .iter()
-        .map(|j| {
-            let (lo, hi) = j.range_rad();
-            rng.random_range(lo..=hi)
-        })
+        .variable_ranges()
+        .into_iter()
+        .map(|(lo, hi)| rng.random_range(lo..=hi))
         .collect()
 }
 
@@ -49,7 +46,8 @@ pub(crate) fn random_arm(
     nominal.with_vector(&v)
 }
 
-/// Independent FK: compose every joint's URDF origin and rotation along the path by hand.
+/// Independent FK: compose every joint's URDF origin and motion along the path by hand; `q` holds
+/// URDF values (rad, m) by joint name, a `<mimic>` joint's computed from its leader's.
 fn urdf_fk(
     robot: &urdf_rs::Robot,
     base: &str,
@@ -60,15 +58,24 @@ fn urdf_fk(
     let mut link = tip.to_string();
     while link != base {
         let j = robot.joints.iter().find(|j| j.child.link == link).unwrap();
-        let angle = q.get(&j.name).copied().unwrap_or(0.0);
+        let value = match &j.mimic {
+            Some(m) => {
+                m.multiplier.unwrap_or(1.0) * q.get(&m.joint).copied().unwrap_or(0.0)
+                    + m.offset.unwrap_or(0.0)
+            }
+            None => q.get(&j.name).copied().unwrap_or(0.0),
+        };
         let axis = Unit::new_normalize(Vector3::from(j.axis.xyz.0));
-        let rot = if j.joint_type == urdf_rs::JointType::Fixed {
-            Isometry3::identity()
-        } else {
-            Isometry3::from_parts(
+        let rot = match j.joint_type {
+            urdf_rs::JointType::Fixed => Isometry3::identity(),
+            urdf_rs::JointType::Prismatic => Isometry3::from_parts(
+                Translation3::from(axis.into_inner() * value * 1000.0),
+                UnitQuaternion::identity(),
+            ),
+            _ => Isometry3::from_parts(
                 Translation3::identity(),
-                UnitQuaternion::from_axis_angle(&axis, angle),
-            )
+                UnitQuaternion::from_axis_angle(&axis, value),
+            ),
         };
         t = isometry_from_urdf_pose(&j.origin) * rot * t;
         link = j.parent.link.clone();
@@ -111,24 +118,32 @@ fn nominal_fk_matches_an_independent_composition() {
             "yumi_body",
             "yumi_flange_l",
         ),
+        (lift_mimic_urdf(), "torso", "left_flange"),
+        (yumi_like_urdf(), "yumi_body", "gripper_r_finger_r"),
     ] {
         let robot = parse(&text);
         let chain = SerialChain::from_urdf(&robot, base, tip).unwrap();
         for _ in 0..10 {
             let q = random_q(&chain, &mut rng);
+            // The URDF's own values: metres for a prismatic joint.
             let map: HashMap<String, f64> = chain
-                .joints
-                .iter()
-                .map(|j| j.name.clone())
+                .variable_joints()
                 .zip(q.iter().copied())
+                .map(|(j, v)| {
+                    (
+                        j.name.clone(),
+                        if j.kind.is_linear() { v / 1000.0 } else { v },
+                    )
+                })
                 .collect();
             let a = chain.nominal_base_from_tip(&q).to_homogeneous();
             let b = urdf_fk(&robot, base, tip, &map).to_homogeneous();
             assert!((a - b).abs().max() < 1e-9, "{tip}: {a} vs {b}");
             // The last joint frame is the tip's parent frame turned onto its axis.
-            let frames = chain.joint_frames(&vec![[0.0; 6]; chain.dof()], &q);
-            assert_eq!(frames.len(), chain.dof() + 1);
-            assert!((frames[chain.dof()].to_homogeneous() - a).abs().max() < 1e-9);
+            let n = chain.joint_count();
+            let frames = chain.joint_frames(&vec![[0.0; 6]; n], &q);
+            assert_eq!(frames.len(), n + 1);
+            assert!((frames[n].to_homogeneous() - a).abs().max() < 1e-9);
         }
     }
 }
@@ -164,13 +179,18 @@ fn refusals_name_the_link_or_joint() {
         err("yumi_link_3_l", "yumi_link_7_r"),
         ChainError::NoPath { .. }
     ));
-    let e = err("yumi_body", "gripper_l_finger_r");
+    // The gripper's finger: a prismatic joint ends the chain (its travel in mm); the other finger
+    // mimics a joint that is not on its chain.
+    let finger = SerialChain::from_urdf(&robot, "yumi_body", "gripper_l_finger_r").unwrap();
+    assert_eq!(finger.dof(), 8);
+    assert!(finger.variable_is_linear(7) && !finger.variable_is_linear(6));
+    assert_eq!(finger.joints[7].limits, Some((0.0, 25.0)));
+    let e = err("yumi_body", "gripper_l_finger_l");
     assert!(
-        e.to_string().contains("`gripper_l_joint`") && e.to_string().contains("prismatic"),
+        matches!(e, ChainError::MimicOutsideChain { ref joint, ref mimicked }
+            if joint == "gripper_l_joint_m" && mimicked == "gripper_l_joint"),
         "{e}"
     );
-    let e = err("yumi_body", "gripper_l_finger_l");
-    assert!(e.to_string().contains("gripper_l_joint_m"), "{e}");
     assert!(matches!(
         err("yumi_link_7_l", "gripper_l_base"),
         ChainError::NoMovableJoint { .. }
@@ -206,7 +226,7 @@ fn refusals_name_the_link_or_joint() {
     );
     let chain =
         SerialChain::from_urdf(&parse(&unlimited), "left_base_link", "left_ee_link").unwrap();
-    assert_eq!(chain.joints[0].limits_rad, None);
+    assert_eq!(chain.joints[0].limits, None);
     assert!(chain.warnings[0].contains("left_shoulder_pan_joint"));
 }
 
@@ -219,7 +239,7 @@ fn shared_torso_joints_are_refused() {
     let robot = parse(&torso);
     let l = SerialChain::from_urdf(&robot, "yumi_base_link", "yumi_link_7_l").unwrap();
     let r = SerialChain::from_urdf(&robot, "yumi_base_link", "yumi_link_7_r").unwrap();
-    assert_eq!(l.joints[0].limits_rad, None);
+    assert_eq!(l.joints[0].limits, None);
     assert_eq!(
         check_disjoint(&l, &r).unwrap_err(),
         ChainError::SharedJoint {
@@ -237,6 +257,7 @@ fn analytic_jacobian_matches_central_differences() {
     for (text, base, tip) in [
         (yumi_like_urdf(), "yumi_body", "gripper_l_base"),
         (dual_ur_like_urdf(), "table", DUAL_UR_ARMS[1].1),
+        (lift_mimic_urdf(), "torso", "right_flange"),
     ] {
         let chain = Arc::new(SerialChain::from_urdf(&parse(&text), base, tip).unwrap());
         for _ in 0..10 {
@@ -259,22 +280,95 @@ fn analytic_jacobian_matches_central_differences() {
 #[test]
 fn corrected_origins_reproduce_the_corrected_chain() {
     let mut rng = ChaCha8Rng::seed_from_u64(3);
-    let text = dual_ur_like_urdf();
-    let mut robot = parse(&text);
-    let chain = Arc::new(SerialChain::from_urdf(&robot, "left_base_link", "left_ee_link").unwrap());
-    let arm = random_arm(&chain, &mut rng, 0.5, 0.005);
-    let corrections = arm.corrections().unwrap();
-    for (name, origin) in chain.corrected_origins(corrections) {
-        let j = robot.joints.iter_mut().find(|j| j.name == name).unwrap();
-        j.origin = crate::urdf_export::urdf_pose_from_isometry(&origin);
+    for (text, base, tip) in [
+        (dual_ur_like_urdf(), "left_base_link", "left_ee_link"),
+        (lift_mimic_urdf(), "left_base_link", "left_flange"),
+    ] {
+        let mut robot = parse(&text);
+        let chain = Arc::new(SerialChain::from_urdf(&robot, base, tip).unwrap());
+        let arm = random_arm(&chain, &mut rng, 0.5, 0.005);
+        let corrections = arm.corrections().unwrap();
+        for (name, origin) in chain.corrected_origins(corrections) {
+            let j = robot.joints.iter_mut().find(|j| j.name == name).unwrap();
+            j.origin = crate::urdf_export::urdf_pose_from_isometry(&origin);
+        }
+        let again = SerialChain::from_urdf(&robot, base, tip).unwrap();
+        for _ in 0..10 {
+            let q = random_q(&chain, &mut rng);
+            let a = chain.base_from_tip(corrections, &q).to_homogeneous();
+            let b = again.nominal_base_from_tip(&q).to_homogeneous();
+            assert!((a - b).abs().max() < 1e-9, "{tip}: {a} vs {b}");
+        }
     }
-    let again = SerialChain::from_urdf(&robot, "left_base_link", "left_ee_link").unwrap();
-    for _ in 0..10 {
-        let q = random_q(&chain, &mut rng);
-        let a = chain.base_from_tip(corrections, &q).to_homogeneous();
-        let b = again.nominal_base_from_tip(&q).to_homogeneous();
-        assert!((a - b).abs().max() < 1e-9, "{a} vs {b}");
+}
+
+#[test]
+fn prismatic_and_mimic_joints() {
+    let robot = parse(&lift_mimic_urdf());
+    let chain = SerialChain::from_urdf(&robot, "left_base_link", "left_flange").unwrap();
+    // Seven movable joints, six variables: the coupled joint has no column.
+    assert_eq!(chain.joint_count(), 7);
+    assert_eq!(chain.dof(), 6);
+    assert_eq!(chain.param_count(1), 7 * 6 + 3);
+    assert_eq!(
+        chain.variable_names(),
+        ["waist", "lift", "shoulder", "elbow", "wrist", "roll"].map(|n| format!("left_{n}_joint"))
+    );
+    assert_eq!(chain.joints[1].kind, MovableKind::Prismatic);
+    assert_eq!(chain.joints[1].limits, Some((0.0, 300.0)));
+    assert_eq!(
+        chain.joints[4].drive,
+        JointDrive::Mimic {
+            leader: 3,
+            multiplier: 0.5,
+            offset: 0.2
+        }
+    );
+    assert_eq!(chain.variable_ranges()[1], (0.0, 300.0));
+    // The lift moves the flange along its axis, mm for mm.
+    let q0 = [0.1, 0.0, 0.3, -0.4, 0.2, 0.5];
+    let mut q1 = q0;
+    q1[1] = 120.0;
+    let d = chain.nominal_base_from_tip(&q1).translation.vector
+        - chain.nominal_base_from_tip(&q0).translation.vector;
+    assert!((d - Vector3::new(0.0, 0.0, 120.0)).norm() < 1e-9, "{d}");
+    // A prismatic joint's zero offset (tz) and tilt are preferred over what the next joint holds.
+    let order = chain.preference_order(1);
+    let lift = 6;
+    let pos = |k: usize| order.iter().position(|&o| o == k).unwrap();
+    assert!(pos(lift + 2) < pos(lift + 5) && pos(lift + 3) < pos(lift));
+    assert!(chain.physical_reason(lift).unwrap().contains("prismatic"));
+    assert_eq!(chain.physical_reason(lift + 2), None);
+}
+
+#[test]
+fn mimic_chains_are_followed_and_loops_refused() {
+    // A joint that mimics a mimic joint: the multipliers and offsets compose (URDF units: the lift
+    // in metres, so a revolute follower of the lift gets 1/1000 per mm).
+    let text = lift_mimic_urdf().replace(
+        "<mimic joint=\"left_elbow_joint\" multiplier=\"0.5\" offset=\"0.2\"/>",
+        "<mimic joint=\"left_lift_joint\" multiplier=\"2\" offset=\"0.1\"/>",
+    );
+    let chain = SerialChain::from_urdf(&parse(&text), "left_base_link", "left_flange").unwrap();
+    match chain.joints[4].drive {
+        JointDrive::Mimic {
+            leader,
+            multiplier,
+            offset,
+        } => {
+            assert_eq!(leader, 1);
+            assert!((multiplier - 2.0 / 1000.0).abs() < 1e-15 && offset == 0.1);
+        }
+        other => panic!("{other:?}"),
     }
+    // elbow mimics coupled, which mimics elbow: a loop.
+    let looped = lift_mimic_urdf().replace(
+        "<child link=\"left_forearm\"/>",
+        "<child link=\"left_forearm\"/>\n    <mimic joint=\"left_coupled_joint\"/>",
+    );
+    let e = SerialChain::from_urdf(&parse(&looped), "left_base_link", "left_flange").unwrap_err();
+    assert!(matches!(e, ChainError::MimicLoop { .. }), "{e}");
+    assert!(e.to_string().contains("left_coupled_joint"), "{e}");
 }
 
 #[test]
