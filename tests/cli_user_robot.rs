@@ -199,10 +199,14 @@ fn refusals_name_the_link_joint_column_or_command() {
         err.contains("`yumi_link_9_l`") && err.contains("yumi.urdf"),
         "{err}"
     );
-    // A prismatic joint in the chain.
-    let err = simulate("yumi_body:gripper_l_finger_r");
+    // A mimic joint whose leader is not on the chain (the gripper's second finger; the first, on a
+    // prismatic joint, is a chain like any other).
+    let err = simulate("yumi_body:gripper_l_finger_l");
     assert!(
-        err.contains("`gripper_l_joint`") && err.contains("prismatic") && err.contains(", line "),
+        err.contains("`gripper_l_joint_m`")
+            && err.contains("`gripper_l_joint`")
+            && err.contains("not a joint of this arm's chain")
+            && err.contains(", line "),
         "{err}"
     );
     // Not BASE:TIP.
