@@ -493,6 +493,30 @@ fn prismatic_columns_follow_the_length_unit_and_mimic_loops_are_refused() {
     let plain = dataset::load(&out).unwrap();
     assert!((plain.arms.left.measurements[0].q_rad[1] - lift).abs() < 1e-12);
 
+    // A lift beyond its 0–300 mm travel: refused in mm, with the file, line and column.
+    let mut beyond = ds.clone();
+    beyond.arms.right.measurements[3].q_rad[1] = 350.0;
+    let out = dir.path().join("beyond");
+    dataset::save(&beyond, &out, Units::MM_DEG).unwrap();
+    let err = dualcal::workspace::Workspace::load(&out, &Default::default())
+        .unwrap_err()
+        .to_string();
+    let id = &beyond.arms.right.measurements[3].id;
+    let text = std::fs::read_to_string(out.join("right.csv")).unwrap();
+    let line = text
+        .lines()
+        .position(|l| l.starts_with(&format!("{id},")))
+        .unwrap()
+        + 1;
+    assert!(
+        err.contains(&format!("right.csv:{line}:"))
+            && err.contains(
+                "field `q2`: 350.000 mm is outside the prismatic joint's limits [0.000, 300.000] mm"
+            ),
+        "{err}"
+    );
+    assert!(!err.contains('°'), "{err}");
+
     let looped = robots::lift_mimic_urdf().replace(
         "<child link=\"right_forearm\"/>",
         "<child link=\"right_forearm\"/>\n    <mimic joint=\"right_coupled_joint\"/>",

@@ -120,6 +120,20 @@ pub enum DatasetError {
     /// The measured coordinates do not fit the declared length unit or the nominal reflectors.
     #[error("{path}: {message}")]
     UnitMismatch { path: PathBuf, message: String },
+    /// A prismatic joint's value outside its limits (mm).
+    #[error(
+        "{path}:{line}: field `{field}`: {value_mm:.3} mm is outside the prismatic joint's limits \
+         [{lower_mm:.3}, {upper_mm:.3}] mm of the robot description{hint}"
+    )]
+    JointTravel {
+        path: PathBuf,
+        line: usize,
+        field: String,
+        value_mm: f64,
+        lower_mm: f64,
+        upper_mm: f64,
+        hint: String,
+    },
     /// A joint value outside the robot's joint limits.
     #[error(
         "{path}:{line}: field `{field}`: {} is outside the joint's limits [{}, {}] of the robot \

@@ -24,6 +24,8 @@ pub const MAX_JOINT_RAD: f64 = 100.0;
 /// How far a joint value may lie outside the robot description's limits before it is refused, rad
 /// (0.5°: a controller may report a position slightly past a limit it was commanded to).
 pub const JOINT_LIMIT_TOLERANCE_RAD: f64 = 0.5 * std::f64::consts::PI / 180.0;
+/// The same for a prismatic joint, mm.
+pub const JOINT_LIMIT_TOLERANCE_MM: f64 = 0.5;
 /// Accepted ratio of the measured reflector triangles' size (median over an arm's rows) to the nominal
 /// triangle's: outside [1/2, 2] the coordinates do not fit the declared unit or the nominal reflectors.
 pub const TRIANGLE_SCALE_RANGE: (f64, f64) = (0.5, 2.0);
@@ -375,11 +377,20 @@ pub(super) fn check_both(arms: &PerSide<ArmData>) -> Result<(), DatasetError> {
 
 /// Is every value within its limits? A joint whose limits are not a proper range — missing (a
 /// continuous joint has none), NaN, or `lower >= upper` — is not checked.
-fn within(q: &[f64], limits: &[(f64, f64)]) -> bool {
-    q.iter().zip(limits).all(|(&v, &(lo, hi))| {
-        let proper = lo < hi; // false for NaN too
-        !proper || (v >= lo - JOINT_LIMIT_TOLERANCE_RAD && v <= hi + JOINT_LIMIT_TOLERANCE_RAD)
-    })
+/// `linear` flags the prismatic joints' positions (their values and limits in mm).
+fn within(q: &[f64], limits: &[(f64, f64)], linear: &[bool]) -> bool {
+    q.iter()
+        .zip(limits)
+        .enumerate()
+        .all(|(i, (&v, &(lo, hi)))| {
+            let proper = lo < hi; // false for NaN too
+            let tol = if linear.get(i).copied().unwrap_or(false) {
+                JOINT_LIMIT_TOLERANCE_MM
+            } else {
+                JOINT_LIMIT_TOLERANCE_RAD
+            };
+            !proper || (v >= lo - tol && v <= hi + tol)
+        })
 }
 
 /// The first joint value of `arm` outside `limits`, as (row, joint).
@@ -388,7 +399,8 @@ fn first_violation(arm: &ArmData, limits: &[(f64, f64)]) -> Option<(usize, usize
         m.q_rad
             .iter()
             .zip(limits)
-            .position(|(&v, &l)| !within(&[v], &[l]))
+            .enumerate()
+            .position(|(i, (&v, &l))| !within(&[v], &[l], &[arm.is_linear_joint(i)]))
             .map(|j| (r, j))
     })
 }
@@ -407,6 +419,7 @@ pub fn check_joint_limits(
             continue;
         };
         let m = &arm.measurements[row];
+        let linear = &arm.linear_joints;
         let bad_values = arm
             .measurements
             .iter()
@@ -414,7 +427,8 @@ pub fn check_joint_limits(
                 m.q_rad
                     .iter()
                     .zip(limits)
-                    .filter(|(v, l)| !within(&[**v], &[**l]))
+                    .enumerate()
+                    .filter(|(i, (v, l))| !within(&[**v], &[**l], &[arm.is_linear_joint(*i)]))
                     .count()
             })
             .sum::<usize>();
@@ -429,15 +443,28 @@ pub fn check_joint_limits(
         let rows_within = |f: &dyn Fn(&[f64]) -> Vec<f64>| {
             arm.measurements
                 .iter()
-                .all(|m| within(&f(&m.q_rad), limits))
+                .all(|m| within(&f(&m.q_rad), limits, linear))
         };
+        // The angles only: a prismatic joint's travel is mm whatever `units.angle` says.
         let max_abs = arm
             .measurements
             .iter()
-            .flat_map(|m| m.q_rad.iter())
-            .fold(0.0f64, |a, v| a.max(v.abs()));
+            .flat_map(|m| m.q_rad.iter().enumerate())
+            .filter(|(i, _)| !arm.is_linear_joint(*i))
+            .fold(0.0f64, |a, (_, v)| a.max(v.abs()));
         if max_abs > std::f64::consts::TAU
-            && rows_within(&|q| q.iter().map(|v| v.to_radians()).collect())
+            && rows_within(&|q| {
+                q.iter()
+                    .enumerate()
+                    .map(|(i, v)| {
+                        if arm.is_linear_joint(i) {
+                            *v
+                        } else {
+                            v.to_radians()
+                        }
+                    })
+                    .collect()
+            })
         {
             hints.push(
                 "every value of the file would be within the limits in degrees: does `units.angle` \
@@ -445,6 +472,7 @@ pub fn check_joint_limits(
                     .into(),
             );
         } else if n == crate::kinematics::ABB_AXIS_OF_CHAIN.len()
+            && linear.is_empty()
             && rows_within(&|q| {
                 crate::kinematics::ABB_AXIS_OF_CHAIN
                     .iter()
@@ -463,7 +491,7 @@ pub fn check_joint_limits(
                 .filter(|&(a, b)| {
                     let mut q = m.q_rad.to_vec();
                     q.swap(a, b);
-                    within(&q, limits)
+                    within(&q, limits, linear)
                 })
                 .map(|(a, b)| format!("q{} and q{}", a + 1, b + 1))
                 .take(3)
@@ -481,6 +509,18 @@ pub fn check_joint_limits(
             }
         }
         let (lo, hi) = limits[j];
+        let hint: String = hints.iter().map(|h| format!("; {h}")).collect();
+        if arm.is_linear_joint(j) {
+            return Err(DatasetError::JointTravel {
+                path: arm.file.clone(),
+                line: m.line,
+                field: format!("q{}", j + 1),
+                value_mm: m.q_rad[j],
+                lower_mm: lo,
+                upper_mm: hi,
+                hint,
+            });
+        }
         return Err(DatasetError::JointLimit {
             path: arm.file.clone(),
             line: m.line,
@@ -488,7 +528,7 @@ pub fn check_joint_limits(
             value_rad: m.q_rad[j],
             lower_rad: lo,
             upper_rad: hi,
-            hint: hints.iter().map(|h| format!("; {h}")).collect(),
+            hint,
         });
     }
     Ok(())
