@@ -355,3 +355,62 @@ fn a_calibration_that_does_not_converge_writes_its_result_marked_and_exits_2() {
     let file = json(&std::fs::read_to_string(&out_path).unwrap());
     assert!(file.get("converged").is_none(), "{file}");
 }
+
+/// The user's reflector names come back in the progress lines (`F_<name>`), the tables and the
+/// parameter file — here a dataset whose reflectors are `front`, `left_smr` and `back`.
+#[test]
+fn reflector_names_in_progress_tables_and_parameters() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("named");
+    ok(&[
+        "simulate",
+        "--out",
+        s(&data),
+        "--seed",
+        "3",
+        "--configs",
+        "60",
+        "--cal",
+        "40",
+    ]);
+    let rename = |text: &str| {
+        text.replace("\na = [", "\nfront = [")
+            .replace("\nb = [", "\nleft_smr = [")
+            .replace("\nc = [", "\nback = [")
+            .replace(
+                "ax,ay,az,bx,by,bz,cx,cy,cz",
+                "frontx,fronty,frontz,left_smrx,left_smry,left_smrz,backx,backy,backz",
+            )
+    };
+    for file in ["dataset.toml", "left.csv", "right.csv"] {
+        let path = data.join(file);
+        let text = std::fs::read_to_string(&path).unwrap();
+        let renamed = rename(&text);
+        assert_ne!(renamed, text, "{file}: nothing renamed");
+        std::fs::write(&path, renamed).unwrap();
+    }
+    let params = dir.path().join("p.json");
+    let out = dualcal(&["calibrate", s(&data), "--out", s(&params)]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let line = stderr
+        .lines()
+        .find(|l| l.contains("ψ"))
+        .unwrap_or_else(|| panic!("no progress line:\n{stderr}"));
+    assert!(
+        line.contains("F_front") && line.contains("F_left_smr") && line.contains("F_back"),
+        "{line}"
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("left_smr"), "{stdout}");
+    let p = json(&std::fs::read_to_string(&params).unwrap());
+    let text = p.to_string();
+    assert!(
+        text.contains("\"left_smr\"") && !text.contains("\"t_a\""),
+        "{text}"
+    );
+}

@@ -510,8 +510,9 @@ fn settings_from(a: &CalibrateArgs) -> CalibrationSettings {
     }
 }
 
-/// A progress line per outer iteration.
-pub fn print_event(event: &CalibrationEvent) {
+/// A progress line per outer iteration; `reflectors` are the dataset's reflector names (`F_<name>`
+/// per objective; a, b, c, … by position where the count differs).
+pub fn print_event(event: &CalibrationEvent, reflectors: &[String]) {
     match event {
         CalibrationEvent::StageStarted {
             stage,
@@ -531,8 +532,14 @@ pub fn print_event(event: &CalibrationEvent) {
                 ),
                 None => format!("{:14}", "λ –"),
             };
-            // One column per reflector, named a, b, c, … by position.
-            let names = crate::kinematics::default_reflector_names(r.f_mm2.len());
+            // One column per reflector, by the user's name.
+            let defaults;
+            let names: &[String] = if reflectors.len() == r.f_mm2.len() {
+                reflectors
+            } else {
+                defaults = crate::kinematics::default_reflector_names(r.f_mm2.len());
+                &defaults
+            };
             let f = names
                 .iter()
                 .zip(&r.f_mm2)
@@ -630,7 +637,7 @@ fn fit_and_screen(
         );
         let mut progress = |e: &CalibrationEvent| {
             if !a.quiet {
-                print_event(e)
+                print_event(e, &ds.reflector_names)
             }
         };
         let result = Calibrator::new(ds, nominal)
