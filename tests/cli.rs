@@ -413,4 +413,40 @@ fn reflector_names_in_progress_tables_and_parameters() {
         text.contains("\"left_smr\"") && !text.contains("\"t_a\""),
         "{text}"
     );
+    // The single-reflector method takes a reflector by its name; an unknown name is refused with
+    // the dataset's names.
+    let single = dir.path().join("single.json");
+    ok(&[
+        "calibrate",
+        s(&data),
+        "--method",
+        "distance-single",
+        "--reflector",
+        "left_smr",
+        "--out",
+        s(&single),
+        "--quiet",
+    ]);
+    let used = json(&std::fs::read_to_string(&single).unwrap()).to_string();
+    assert!(
+        used.contains("\"b\""),
+        "the second reflector is the one used: {used}"
+    );
+    let out = dualcal(&[
+        "calibrate",
+        s(&data),
+        "--method",
+        "distance-single",
+        "--reflector",
+        "nope",
+        "--out",
+        s(&dir.path().join("never.json")),
+        "--quiet",
+    ]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("--reflector nope") && err.contains("front, left_smr, back"),
+        "{err}"
+    );
 }

@@ -145,10 +145,11 @@ pub struct CalibrateArgs {
     /// Step 2 (the right-arm base in the left-arm base): what is fitted, and how.
     #[arg(long, value_enum, default_value_t = BaseMethod::Minimax)]
     pub base_method: BaseMethod,
-    /// With `--method distance-single`: the reflector whose distances are fitted (default: the one
-    /// with the largest nominal error, per arm; the summary and the parameter file say which).
-    #[arg(long, value_enum)]
-    pub reflector: Option<Reflector>,
+    /// With `--method distance-single`: the reflector whose distances are fitted, by its name in
+    /// the dataset's `[reflectors]` (or `a`, `b`, `c` for the first three by position); default: the
+    /// one with the largest nominal error, per arm (the summary and the parameter file say which).
+    #[arg(long, value_name = "NAME")]
+    pub reflector: Option<String>,
     #[arg(long, value_enum, default_value_t = QpMethod::Exact)]
     pub qp: QpMethod,
     /// Where to write the parameters (dualcal-params/1 JSON).
@@ -496,18 +497,50 @@ fn evaluate_cmd(a: &EvaluateArgs) -> Result<()> {
     Ok(())
 }
 
-fn settings_from(a: &CalibrateArgs) -> CalibrationSettings {
-    CalibrationSettings {
+/// `--reflector`: a reflector of the dataset by its name, or `a`/`b`/`c` by position where no
+/// reflector has that name. The single-reflector method takes one of the first three.
+fn reflector_arg(name: &str, names: &[String]) -> Result<Reflector> {
+    let index = names
+        .iter()
+        .position(|n| n == name)
+        .or_else(|| match name {
+            "a" => Some(0),
+            "b" => Some(1),
+            "c" => Some(2),
+            _ => None,
+        })
+        .filter(|&k| k < names.len())
+        .ok_or_else(|| {
+            anyhow::anyhow!(
+                "--reflector {name}: the dataset's reflectors are {}",
+                names.join(", ")
+            )
+        })?;
+    Reflector::from_index(index).ok_or_else(|| {
+        anyhow::anyhow!(
+            "--reflector {name}: the single-reflector method takes one of the first three reflectors ({})",
+            names.iter().take(3).cloned().collect::<Vec<_>>().join(", ")
+        )
+    })
+}
+
+fn settings_from(a: &CalibrateArgs, reflector_names: &[String]) -> Result<CalibrationSettings> {
+    let reflector = a
+        .reflector
+        .as_deref()
+        .map(|r| reflector_arg(r, reflector_names))
+        .transpose()?;
+    Ok(CalibrationSettings {
         split: a.split,
         method: a.method,
         base_method: a.base_method,
-        reflector: a.reflector,
+        reflector,
         qp: a.qp,
         max_iterations: a.max_iterations,
         step_tolerance: a.tolerance,
         progress_tolerance: a.progress_tolerance,
         ..CalibrationSettings::default()
-    }
+    })
 }
 
 /// A progress line per outer iteration; `reflectors` are the dataset's reflector names (`F_<name>`
@@ -713,7 +746,7 @@ fn calibrate_cmd(a: &CalibrateArgs) -> Result<()> {
     if !a.quiet {
         eprintln!("{}", describe_robot(&ws.robot));
     }
-    let mut settings = settings_from(a);
+    let mut settings = settings_from(a, &ws.dataset.reflector_names)?;
     for spec in &a.exclude {
         let config = ws
             .dataset
