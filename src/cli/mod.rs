@@ -503,7 +503,7 @@ fn reflector_arg(name: &str, names: &[String]) -> Result<Reflector> {
     let index = names
         .iter()
         .position(|n| n == name)
-        .or_else(|| match name {
+        .or(match name {
             "a" => Some(0),
             "b" => Some(1),
             "c" => Some(2),
