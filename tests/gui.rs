@@ -1528,3 +1528,57 @@ fn the_left_panel_reaches_its_last_row_at_1280x800_with_a_urdf_robot() {
         "the Model row is at {row:?}, not within the panel above the status bar"
     );
 }
+
+/// A robot with a prismatic lift and a coupled (`<mimic>`) joint on each arm: the robot section
+/// lists the lift with its travel in mm and the coupled joint as a mimic without a column.
+#[test]
+fn the_robot_section_lists_prismatic_and_mimic_joints() {
+    let dir = tempfile::tempdir().unwrap();
+    let urdf = robots::write_file(
+        dir.path(),
+        "lift_mimic.urdf",
+        robots::lift_mimic_urdf().as_bytes(),
+    );
+    let options = dualcal::robot::LoadOptions {
+        arms: PerSide::new(
+            Some(dualcal::robot::ArmLinks::new(
+                robots::LIFT_MIMIC_ARMS[0].0,
+                robots::LIFT_MIMIC_ARMS[0].1,
+            )),
+            Some(dualcal::robot::ArmLinks::new(
+                robots::LIFT_MIMIC_ARMS[1].0,
+                robots::LIFT_MIMIC_ARMS[1].1,
+            )),
+        ),
+        ..Default::default()
+    };
+    let robot = dualcal::robot::RobotDescription::load(urdf.as_path(), &options).unwrap();
+    let sim = dualcal::simulate::simulate_with_robot(
+        &dualcal::simulate::paper_options(4, 40, 20),
+        &robot,
+    )
+    .unwrap();
+    let mut ds = sim.dataset.clone();
+    ds.robot = Some(urdf.clone());
+    for (side, a) in ds.arms.iter_mut() {
+        a.links = robot.arm(side).links.clone().into();
+    }
+    let data = dir.path().join("data");
+    dualcal::dataset::save(&ds, &data, dualcal::dataset::Units::MM_DEG).unwrap();
+    let mut harness = open_at(&data);
+    assert!(
+        harness.state().errors().is_empty(),
+        "{:?}",
+        harness.state().errors()
+    );
+    harness.get_by_label("left_base_link → left_flange (6 joints)");
+    harness.get_by_label("left joints and parameters").click();
+    harness.run_steps(2);
+    harness.get_by_label("left_lift_joint");
+    harness.get_by_label("0.0 … 300.0 mm");
+    harness.get_by_label("left_coupled_joint");
+    harness.get_by_label("mimic");
+    // Six columns q1 … q6 for seven movable joints.
+    harness.get_by_label("q6");
+    assert_eq!(harness.query_all_by_label("q7").count(), 0);
+}
