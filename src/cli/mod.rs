@@ -10,7 +10,7 @@ use crate::side::{ConfigId, PerSide, Side};
 use crate::simulate;
 use crate::solver::{
     BaseMethod, CalibrationEvent, CalibrationResult, CalibrationSettings, Calibrator, Method,
-    QpMethod, Reflector,
+    QpMethod,
 };
 use crate::workspace::{Workspace, WorkspaceOptions};
 use anyhow::{Context, Result, bail};
@@ -33,10 +33,13 @@ macro_rules! outln {
     }};
 }
 
+mod calibrate_settings;
 mod outlier_study;
 mod paper_study;
 mod reproduce;
 mod timings;
+
+use calibrate_settings::{print_event, settings_from};
 
 /// Two-step minimax kinematic calibration of dual-arm robots from laser-tracker data.
 #[derive(Parser, Debug)]
@@ -495,99 +498,6 @@ fn evaluate_cmd(a: &EvaluateArgs) -> Result<()> {
         );
     }
     Ok(())
-}
-
-/// `--reflector`: a reflector of the dataset by its name, or `a`/`b`/`c` by position where no
-/// reflector has that name. The single-reflector method takes one of the first three.
-fn reflector_arg(name: &str, names: &[String]) -> Result<Reflector> {
-    let index = names
-        .iter()
-        .position(|n| n == name)
-        .or(match name {
-            "a" => Some(0),
-            "b" => Some(1),
-            "c" => Some(2),
-            _ => None,
-        })
-        .filter(|&k| k < names.len())
-        .ok_or_else(|| {
-            anyhow::anyhow!(
-                "--reflector {name}: the dataset's reflectors are {}",
-                names.join(", ")
-            )
-        })?;
-    Reflector::from_index(index).ok_or_else(|| {
-        anyhow::anyhow!(
-            "--reflector {name}: the single-reflector method takes one of the first three reflectors ({})",
-            names.iter().take(3).cloned().collect::<Vec<_>>().join(", ")
-        )
-    })
-}
-
-fn settings_from(a: &CalibrateArgs, reflector_names: &[String]) -> Result<CalibrationSettings> {
-    let reflector = a
-        .reflector
-        .as_deref()
-        .map(|r| reflector_arg(r, reflector_names))
-        .transpose()?;
-    Ok(CalibrationSettings {
-        split: a.split,
-        method: a.method,
-        base_method: a.base_method,
-        reflector,
-        qp: a.qp,
-        max_iterations: a.max_iterations,
-        step_tolerance: a.tolerance,
-        progress_tolerance: a.progress_tolerance,
-        ..CalibrationSettings::default()
-    })
-}
-
-/// A progress line per outer iteration; `reflectors` are the dataset's reflector names (`F_<name>`
-/// per objective; a, b, c, … by position where the count differs).
-pub fn print_event(event: &CalibrationEvent, reflectors: &[String]) {
-    match event {
-        CalibrationEvent::StageStarted {
-            stage,
-            n_configs,
-            n_pairs,
-        } => {
-            eprintln!("{stage}: {n_configs} configurations, {n_pairs} pairs per reflector")
-        }
-        CalibrationEvent::Iteration(r) => {
-            let lambda = match &r.lambda {
-                Some(l) => format!(
-                    "λ {}",
-                    l.iter()
-                        .map(|x| format!("{x:.2}"))
-                        .collect::<Vec<_>>()
-                        .join("/")
-                ),
-                None => format!("{:14}", "λ –"),
-            };
-            // One column per reflector, by the user's name.
-            let defaults;
-            let names: &[String] = if reflectors.len() == r.f_mm2.len() {
-                reflectors
-            } else {
-                defaults = crate::kinematics::default_reflector_names(r.f_mm2.len());
-                &defaults
-            };
-            let f = names
-                .iter()
-                .zip(&r.f_mm2)
-                .map(|(n, v)| format!("F_{n} {v:>12.4}"))
-                .collect::<Vec<_>>()
-                .join("  ");
-            eprintln!(
-                "  {:>3}  ψ {:>14.6} mm²   {f}   {lambda}   step {:>9.2e}   KKT {:>9.2e}   {:>7.3} s",
-                r.iteration, r.psi_mm2, r.step_norm, r.optimality_residual, r.elapsed_secs
-            )
-        }
-        CalibrationEvent::StageFinished { stage, termination } => {
-            eprintln!("{stage}: {termination}")
-        }
-    }
 }
 
 /// A calibration that ran but did not converge (a stage hit the iteration limit, stalled or was

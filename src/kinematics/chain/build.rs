@@ -42,6 +42,46 @@ fn joint_kind_name(kind: &urdf_rs::JointType) -> &'static str {
     }
 }
 
+/// A movable joint's limits in the program's units (rad; mm for a prismatic joint); `None` for a
+/// continuous joint, and for a revolute joint without proper limits (urdf-rs reads a missing
+/// `<limit>` as [0, 0]: it turns ±π, with a warning). Non-finite or reversed limits are refused.
+fn joint_limits(
+    j: &urdf_rs::Joint,
+    kind: MovableKind,
+    warnings: &mut Vec<String>,
+) -> Result<Option<(f64, f64)>, ChainError> {
+    if kind == MovableKind::Continuous {
+        return Ok(None);
+    }
+    let (lower, upper) = (j.limit.lower, j.limit.upper);
+    if !(lower.is_finite() && upper.is_finite() && lower <= upper) {
+        return Err(ChainError::BadLimits {
+            joint: j.name.clone(),
+            lower,
+            upper,
+        });
+    }
+    if kind.is_linear() {
+        if lower == upper && j.mimic.is_none() {
+            warnings.push(format!(
+                "joint `{}` is prismatic with the limits [{lower}, {upper}] m (or none): it cannot \
+                 move",
+                j.name
+            ));
+        }
+        return Ok(Some((lower * 1000.0, upper * 1000.0)));
+    }
+    if lower == upper {
+        warnings.push(format!(
+            "joint `{}` is revolute with the limits [{lower}, {upper}] (or none): it is treated as \
+             turning ±π",
+            j.name
+        ));
+        return Ok(None);
+    }
+    Ok(Some((lower, upper)))
+}
+
 /// The joints from `base_link` down to `tip_link`, in chain order.
 fn path<'a>(
     robot: &'a urdf_rs::Robot,
@@ -125,48 +165,7 @@ impl SerialChain {
                 });
             }
             let axis = Unit::new_normalize(a);
-            let limits = match kind {
-                MovableKind::Continuous => None,
-                MovableKind::Prismatic => {
-                    let (lower, upper) = (j.limit.lower, j.limit.upper);
-                    if !(lower.is_finite() && upper.is_finite() && lower <= upper) {
-                        return Err(ChainError::BadLimits {
-                            joint: j.name.clone(),
-                            lower,
-                            upper,
-                        });
-                    }
-                    if lower == upper && j.mimic.is_none() {
-                        warnings.push(format!(
-                            "joint `{}` is prismatic with the limits [{lower}, {upper}] m (or none): it \
-                             cannot move",
-                            j.name
-                        ));
-                    }
-                    Some((lower * 1000.0, upper * 1000.0))
-                }
-                MovableKind::Revolute => {
-                    let (lower, upper) = (j.limit.lower, j.limit.upper);
-                    if !(lower.is_finite() && upper.is_finite() && lower <= upper) {
-                        return Err(ChainError::BadLimits {
-                            joint: j.name.clone(),
-                            lower,
-                            upper,
-                        });
-                    }
-                    if lower == upper {
-                        // urdf-rs reads a revolute joint without <limit> as [0, 0].
-                        warnings.push(format!(
-                            "joint `{}` is revolute with the limits [{lower}, {upper}] (or none): it is \
-                             treated as turning ±π",
-                            j.name
-                        ));
-                        None
-                    } else {
-                        Some((lower, upper))
-                    }
-                }
-            };
+            let limits = joint_limits(j, kind, &mut warnings)?;
             joints.push(ChainJoint {
                 name: j.name.clone(),
                 kind,
