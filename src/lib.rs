@@ -14,6 +14,7 @@ pub mod comparison;
 pub mod dataset;
 pub mod exclusion;
 pub mod finite_difference;
+pub mod import;
 pub mod kinematics;
 pub mod meshes;
 pub mod metrics;

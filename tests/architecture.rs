@@ -17,7 +17,7 @@ const LAYERS: &[&[&str]] = &[
     // The robot description (URDF, arms, shapes).
     &["robot"],
     // What is computed from a model and the data, and what is exported of a robot.
-    &["metrics", "collision", "urdf_export"],
+    &["metrics", "collision", "urdf_export", "import"],
     // The screening, the solver, the simulator, the figures of a model.
     &["quality", "solver", "simulate", "analysis"],
     // What combines them: the load pipeline, exclusion and re-fit, the comparison, the parameter file.

@@ -1,0 +1,295 @@
+//! Joint logs: a controller's or ROS's joint values per configuration, `id,q1,…,qN` (with an optional
+//! header, time stamp and split column), in chain order or reordered by a mapping or by joint names.
+
+use super::error::ImportError;
+use super::points::parse_split;
+use super::text::{self, Delimiter};
+use crate::dataset::{AngleUnit, Split};
+use std::path::Path;
+
+/// One configuration of a joint log.
+#[derive(Clone, Debug, PartialEq)]
+pub struct JointRow {
+    pub id: String,
+    /// Chain order, rad.
+    pub q_rad: Vec<f64>,
+    pub time_s: Option<f64>,
+    pub split: Option<Split>,
+    /// 1-based line in the file.
+    pub line: usize,
+}
+
+/// A joint log read.
+#[derive(Clone, Debug, PartialEq)]
+pub struct JointLog {
+    pub rows: Vec<JointRow>,
+    pub angle_unit: AngleUnit,
+    /// How the file's columns became chain order.
+    pub order: String,
+    pub notes: Vec<String>,
+}
+
+/// What the joint-log reader is told.
+#[derive(Clone, Debug, Default)]
+pub struct JointLogOptions<'a> {
+    /// The unit of the joint values; `None`: the header's (`q1 [deg]`), else degrees.
+    pub angle_unit: Option<AngleUnit>,
+    /// Chain joint `k` is the file's joint column `order[k]` (1-based): the YuMi's ABB axes 1, 2, 7, 3,
+    /// 4, 5, 6 in a log of axes 1…7 is `[1, 2, 7, 3, 4, 5, 6]`.
+    pub joint_order: Option<&'a [usize]>,
+    /// The arm's joints in chain order (their count is checked; a header naming them reorders).
+    pub joint_names: Option<&'a [String]>,
+    pub decimal_comma: bool,
+    /// Ids of a log without an id column: this prefix and the row's number (`L001`).
+    pub id_prefix: &'a str,
+}
+
+/// The YuMi's joint order: a log of ABB axes 1…7 in chain order.
+pub const YUMI_ABB_ORDER: [usize; 7] = [1, 2, 7, 3, 4, 5, 6];
+
+/// Parse a joint-order mapping: `1,2,7,3,4,5,6` or `yumi-abb`.
+pub fn parse_joint_order(s: &str) -> Result<Vec<usize>, String> {
+    if matches!(s.trim().to_lowercase().as_str(), "yumi-abb" | "abb-yumi" | "yumi") {
+        return Ok(YUMI_ABB_ORDER.to_vec());
+    }
+    let order: Vec<usize> = s
+        .split(',')
+        .map(|x| {
+            x.trim()
+                .parse::<usize>()
+                .map_err(|_| format!("`{}`: expected a column number", x.trim()))
+        })
+        .collect::<Result<_, _>>()?;
+    let mut sorted = order.clone();
+    sorted.sort_unstable();
+    if sorted != (1..=order.len()).collect::<Vec<_>>() {
+        return Err(format!(
+            "`{s}`: expected each of the numbers 1…{} once (chain joint k is the log's joint column \
+             given k-th)",
+            order.len()
+        ));
+    }
+    Ok(order)
+}
+
+fn is_id_name(n: &str) -> bool {
+    matches!(
+        n.to_lowercase().as_str(),
+        "id" | "name" | "target" | "config" | "configuration" | "pose"
+    )
+}
+
+fn is_time_name(n: &str) -> bool {
+    matches!(
+        n.to_lowercase().as_str(),
+        "time" | "timestamp" | "time stamp" | "time_stamp" | "stamp" | "t" | "time_s" | "date time"
+    )
+}
+
+/// Read a joint log's text.
+pub fn read(path: &Path, text: &str, o: &JointLogOptions) -> Result<JointLog, ImportError> {
+    let mut it = text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| (i + 1, l.trim()))
+        .filter(|(_, l)| !l.is_empty() && !l.starts_with('#') && !l.starts_with("//"))
+        .peekable();
+    let Some(&(first_line, first)) = it.peek() else {
+        return Err(ImportError::Format {
+            path: path.to_path_buf(),
+            message: "no rows: expected `id,q1,…,qN`".to_string(),
+        });
+    };
+    let delimiter = Delimiter::of_line(first, o.decimal_comma);
+    let dc = o.decimal_comma || delimiter.allows_decimal_comma();
+    let first_fields = text::split(first, delimiter);
+    let header = first_fields.len() < 2
+        || first_fields[1..]
+            .iter()
+            .any(|f| text::number(f, dc).is_none() && text::time_s(f).is_none());
+    let mut notes = Vec::new();
+    let (names, units): (Vec<String>, Vec<Option<String>>) = if header {
+        it.next();
+        first_fields.iter().map(|f| text::name_and_unit(f)).unzip()
+    } else {
+        let n = first_fields.len();
+        let mut names = vec!["id".to_string()];
+        names.extend((1..n).map(|k| format!("q{k}")));
+        (names, vec![None; n])
+    };
+    let id_col = names
+        .iter()
+        .position(|n| is_id_name(n))
+        .or((!is_time_name(&names[0]) && names[0] != "split").then_some(0));
+    let time_col = names.iter().position(|n| is_time_name(n));
+    let split_col = names.iter().position(|n| n.eq_ignore_ascii_case("split"));
+    let file_joints: Vec<usize> = (0..names.len())
+        .filter(|&k| Some(k) != id_col && Some(k) != time_col && Some(k) != split_col)
+        .filter(|&k| !names[k].is_empty())
+        .collect();
+    let header_line = if header { first_line } else { 0 };
+    if file_joints.is_empty() {
+        return Err(ImportError::Header {
+            path: path.to_path_buf(),
+            line: first_line,
+            field: "q1".to_string(),
+            message: "no joint columns: expected `id,q1,…,qN`".to_string(),
+        });
+    }
+    // Chain order.
+    let n = file_joints.len();
+    let (cols, order): (Vec<usize>, String) = if let Some(order) = o.joint_order {
+        if order.len() != n {
+            return Err(ImportError::Header {
+                path: path.to_path_buf(),
+                line: first_line,
+                field: names[file_joints[0]].clone(),
+                message: format!(
+                    "{n} joint columns, the joint-order mapping has {} entries",
+                    order.len()
+                ),
+            });
+        }
+        let cols = order.iter().map(|&k| file_joints[k - 1]).collect();
+        let list: Vec<String> = order.iter().map(usize::to_string).collect();
+        (cols, format!("the log's joint columns {} in chain order", list.join(", ")))
+    } else if let Some(joints) = o.joint_names.filter(|j| {
+        header && j.len() == n && j.iter().all(|name| file_joints.iter().any(|&k| &names[k] == name))
+    }) {
+        let cols = joints
+            .iter()
+            .map(|name| file_joints.iter().copied().find(|&k| &names[k] == name).unwrap_or(0))
+            .collect();
+        (cols, "by the header's joint names".to_string())
+    } else {
+        (file_joints.clone(), "the file's order (chain order)".to_string())
+    };
+    if let Some(joints) = o.joint_names
+        && joints.len() != n
+    {
+        let field = names[file_joints[joints.len().min(n - 1)]].clone();
+        return Err(ImportError::Header {
+            path: path.to_path_buf(),
+            line: first_line,
+            field,
+            message: format!(
+                "{n} joint columns, the arm has {} joints ({})",
+                joints.len(),
+                joints.join(", ")
+            ),
+        });
+    }
+    // The unit: the option, else the joint columns' brackets, else degrees.
+    let header_units: Vec<AngleUnit> = file_joints
+        .iter()
+        .filter_map(|&k| units[k].as_deref())
+        .filter_map(|u| match u.to_lowercase().as_str() {
+            "deg" | "°" | "degree" | "degrees" => Some(AngleUnit::Deg),
+            "rad" | "radian" | "radians" => Some(AngleUnit::Rad),
+            _ => None,
+        })
+        .collect();
+    let angle_unit = match o.angle_unit {
+        Some(u) => u,
+        None => match header_units.first() {
+            Some(&u) if header_units.iter().all(|&v| v == u) => u,
+            Some(_) => {
+                return Err(ImportError::Header {
+                    path: path.to_path_buf(),
+                    line: header_line,
+                    field: names[file_joints[0]].clone(),
+                    message: "joint columns in different units".to_string(),
+                });
+            }
+            None => {
+                notes.push("no angle unit given or in the header: read as degrees".to_string());
+                AngleUnit::Deg
+            }
+        },
+    };
+    let needed = names.len().min(
+        [id_col, time_col, split_col]
+            .into_iter()
+            .flatten()
+            .chain(cols.iter().copied())
+            .max()
+            .unwrap_or(0)
+            + 1,
+    );
+    let mut rows: Vec<JointRow> = Vec::new();
+    let mut seen = std::collections::HashMap::new();
+    for (line, t) in it {
+        let fields = text::split(t, delimiter);
+        if fields.len() < needed {
+            return Err(ImportError::FieldCount {
+                path: path.to_path_buf(),
+                line,
+                expected: needed,
+                found: fields.len(),
+            });
+        }
+        let id = match id_col {
+            Some(k) => fields[k].clone(),
+            None => format!("{}{:03}", o.id_prefix, rows.len() + 1),
+        };
+        if id.is_empty() {
+            return Err(ImportError::Field {
+                path: path.to_path_buf(),
+                line,
+                field: names[id_col.unwrap_or(0)].clone(),
+                expected: "a configuration id".to_string(),
+                found: String::new(),
+            });
+        }
+        if let Some(first_line) = seen.insert(id.clone(), line) {
+            return Err(ImportError::DuplicateId {
+                path: path.to_path_buf(),
+                line,
+                id,
+                first_line,
+            });
+        }
+        let mut q_rad = Vec::with_capacity(n);
+        for &k in &cols {
+            let v = text::number(&fields[k], dc).ok_or_else(|| ImportError::Field {
+                path: path.to_path_buf(),
+                line,
+                field: names[k].clone(),
+                expected: format!("a joint value in {}", angle_unit.name()),
+                found: crate::textfile::excerpt(&fields[k]),
+            })?;
+            q_rad.push(angle_unit.to_rad(v));
+        }
+        let time_s = match time_col {
+            Some(k) if !fields[k].is_empty() => {
+                Some(text::time_s(&fields[k]).ok_or_else(|| ImportError::Field {
+                    path: path.to_path_buf(),
+                    line,
+                    field: names[k].clone(),
+                    expected: "a time stamp (`11.10.2022 15:06:48.043`, \
+                               `2022-10-11T15:06:48.043` or seconds)"
+                        .to_string(),
+                    found: crate::textfile::excerpt(&fields[k]),
+                })?)
+            }
+            _ => None,
+        };
+        let split = match split_col {
+            Some(k) if !fields[k].is_empty() => Some(parse_split(path, line, &fields[k])?),
+            _ => None,
+        };
+        rows.push(JointRow {
+            id,
+            q_rad,
+            time_s,
+            split,
+            line,
+        });
+    }
+    Ok(JointLog {
+        rows,
+        angle_unit,
+        order,
+        notes,
+    })
+}

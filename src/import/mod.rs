@@ -1,0 +1,769 @@
+//! Importing tracker and controller files (`dualcal import`): point lists as tracker software writes
+//! them (SpatialAnalyzer, Leica Tracker Pilot, figaroh, any CSV with a column mapping), joint logs, the
+//! matching of points to configurations (by target name, order or time stamp; repeated shots averaged)
+//! and a report of what matched and what did not. The result is a [`Dataset`] that
+//! [`write`] saves as a `dualcal-dataset/1` directory. See docs/formats.md, "Importing tracker and
+//! controller files".
+
+mod error;
+pub mod joints;
+pub mod points;
+pub mod text;
+
+pub use error::ImportError;
+pub use joints::{JointLog, JointLogOptions, JointRow, YUMI_ABB_ORDER, parse_joint_order};
+pub use points::{ColumnMap, ConfigRow, Point, PointFile, PointTable, PointsFormat};
+pub use text::PointUnit;
+
+use crate::dataset::{
+    self, AngleUnit, ArmData, ArmLinks, Dataset, MANIFEST_FILE, Measurement, Split, TrackerSpec,
+    Units,
+};
+use crate::output::{OutputError, Overwrite, refuse_overwrite_input, write_atomic};
+use crate::side::{PerSide, Side};
+use crate::source::FileSource;
+use nalgebra::Vector3;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// How points are matched to the joint log's configurations.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
+pub enum MatchRule {
+    /// Target names `<id>_<reflector>` (`L012_a`) against the joint log's ids.
+    #[default]
+    Name,
+    /// The points in file order, one group of every reflector (in the dataset's order) per
+    /// configuration of the joint log.
+    Order,
+    /// Each point to the configuration with the nearest time stamp within the tolerance; the reflector
+    /// from a name's `_<reflector>` suffix, else by order within the configuration.
+    Time,
+}
+
+/// One arm's input files.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ArmFiles {
+    pub points: PathBuf,
+    /// `None`: the point file gives the joints (figaroh, or a mapping with joint columns).
+    pub joints: Option<PathBuf>,
+}
+
+/// Everything an import is told besides the files.
+#[derive(Clone, Debug)]
+pub struct ImportOptions {
+    /// `None`: recognised from each file.
+    pub points_format: Option<PointsFormat>,
+    /// The generic format's column mapping.
+    pub columns: Option<ColumnMap>,
+    /// The unit of point files that do not state theirs (`None`: mm; m for figaroh).
+    pub length_unit: Option<PointUnit>,
+    /// The unit of joint logs (`None`: the header's `[deg]`/`[rad]`, else degrees) and of a mapping's
+    /// joint columns (`None`: degrees).
+    pub angle_unit: Option<AngleUnit>,
+    pub decimal_comma: bool,
+    /// Chain joint k is the joint log's joint column `joint_order[k]` (1-based).
+    pub joint_order: Option<Vec<usize>>,
+    pub matching: MatchRule,
+    /// `MatchRule::Time`: the largest time difference between a point and its configuration.
+    pub time_tolerance_s: f64,
+    /// The dataset's reflectors: names (target suffixes) and nominal positions in the tip frame, mm.
+    pub reflector_names: Vec<String>,
+    pub nominal_reflectors_mm: Vec<Vector3<f64>>,
+    pub tracker: TrackerSpec,
+    /// Each arm's joints in chain order (from the robot description): counts checked, figaroh's
+    /// columns and named log columns put in chain order.
+    pub joint_names: PerSide<Option<Vec<String>>>,
+    /// The dataset's robot description (`None`: the built-in IRB 14000) and arm chains.
+    pub robot: Option<PathBuf>,
+    pub links: PerSide<Option<ArmLinks>>,
+    /// The tracker station each arm was measured from.
+    pub stations: PerSide<Option<String>>,
+}
+
+impl ImportOptions {
+    /// The defaults with these reflectors.
+    pub fn new(reflector_names: Vec<String>, nominal_reflectors_mm: Vec<Vector3<f64>>) -> Self {
+        Self {
+            points_format: None,
+            columns: None,
+            length_unit: None,
+            angle_unit: None,
+            decimal_comma: false,
+            joint_order: None,
+            matching: MatchRule::Name,
+            time_tolerance_s: 0.5,
+            reflector_names,
+            nominal_reflectors_mm,
+            tracker: TrackerSpec::default(),
+            joint_names: PerSide::new(None, None),
+            robot: None,
+            links: PerSide::new(None, None),
+            stations: PerSide::new(None, None),
+        }
+    }
+}
+
+/// A point or configuration that was not used, and why.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Unmatched {
+    /// The target name (or `#k`, the point's place in the file) or the configuration id.
+    pub name: String,
+    pub file: PathBuf,
+    pub line: usize,
+    pub reason: String,
+}
+
+/// Several shots of one reflector in one configuration, averaged.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RepeatedShots {
+    pub id: String,
+    pub reflector: String,
+    pub shots: usize,
+    /// The largest distance of a shot from their mean, mm.
+    pub spread_mm: f64,
+    /// The lines of the shots in the point file.
+    pub lines: Vec<usize>,
+}
+
+/// What one arm's import did.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ArmReport {
+    pub side: Side,
+    pub points_file: PathBuf,
+    pub joints_file: Option<PathBuf>,
+    pub format: PointsFormat,
+    pub length_unit: PointUnit,
+    /// The working frame named in the point file's header.
+    pub frame: Option<String>,
+    /// The joint log's unit and order, when there is a log.
+    pub angle_unit: Option<AngleUnit>,
+    pub joint_order: Option<String>,
+    /// Points (or configuration rows) in the point file.
+    pub points_read: usize,
+    /// Configurations in the joint log (or rows of the point file without one).
+    pub configurations_read: usize,
+    /// Configurations of the dataset.
+    pub matched: usize,
+    pub unmatched_points: Vec<Unmatched>,
+    pub unmatched_configurations: Vec<Unmatched>,
+    pub repeated: Vec<RepeatedShots>,
+    pub notes: Vec<String>,
+}
+
+/// What an import did, per arm.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImportReport {
+    pub arms: PerSide<ArmReport>,
+}
+
+/// The result of an import: the dataset (its arms' `file` are the joint logs, or the point files, so
+/// that messages about its rows name the input) and the report.
+#[derive(Clone, Debug)]
+pub struct Imported {
+    pub dataset: Dataset,
+    pub report: ImportReport,
+}
+
+/// Import both arms (files read through `files`).
+pub fn import(
+    files: &dyn FileSource,
+    inputs: &PerSide<ArmFiles>,
+    options: &ImportOptions,
+) -> Result<Imported, ImportError> {
+    check_options(options)?;
+    let arms = PerSide::try_from_fn(|side| import_arm(files, side, &inputs[side], options))?;
+    let (data, reports) = (
+        PerSide::new(arms.left.0.clone(), arms.right.0.clone()),
+        PerSide::new(arms.left.1.clone(), arms.right.1.clone()),
+    );
+    Ok(Imported {
+        dataset: Dataset {
+            dir: PathBuf::new(),
+            robot: options.robot.clone(),
+            tracker: options.tracker,
+            nominal_reflectors_mm: options.nominal_reflectors_mm.clone(),
+            reflector_names: options.reflector_names.clone().into(),
+            arms: data,
+        },
+        report: ImportReport { arms: reports },
+    })
+}
+
+fn check_options(o: &ImportOptions) -> Result<(), ImportError> {
+    let names = &o.reflector_names;
+    if names.is_empty() || names.len() != o.nominal_reflectors_mm.len() {
+        return Err(ImportError::Options(format!(
+            "{} reflector names for {} nominal reflector positions",
+            names.len(),
+            o.nominal_reflectors_mm.len()
+        )));
+    }
+    for (k, n) in names.iter().enumerate() {
+        let ok = !n.is_empty()
+            && n
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || c == '-')
+            && !n.starts_with(|c: char| c.is_ascii_digit());
+        if !ok {
+            return Err(ImportError::Options(format!(
+                "reflector name `{n}`: expected letters, digits or `-`, starting with a letter \
+                 (the target suffix `_{n}` and the CSV columns `{n}x`, … use it)"
+            )));
+        }
+        if names[..k].contains(n) {
+            return Err(ImportError::Options(format!("reflector `{n}` named twice")));
+        }
+    }
+    if !(o.time_tolerance_s >= 0.0 && o.time_tolerance_s.is_finite()) {
+        return Err(ImportError::Options(format!(
+            "time tolerance {} s: expected a finite number ≥ 0",
+            o.time_tolerance_s
+        )));
+    }
+    Ok(())
+}
+
+type ArmOut = (ArmData, ArmReport);
+
+fn import_arm(
+    files: &dyn FileSource,
+    side: Side,
+    input: &ArmFiles,
+    o: &ImportOptions,
+) -> Result<ArmOut, ImportError> {
+    let joint_names = o.joint_names[side].as_deref();
+    let text = text::read(files, &input.points)?;
+    let read_options = points::ReadOptions {
+        format: o.points_format,
+        unit: o.length_unit,
+        decimal_comma: o.decimal_comma,
+        columns: o.columns.as_ref(),
+        reflector_names: &o.reflector_names,
+        joint_names,
+        angle_unit: o.angle_unit.unwrap_or(AngleUnit::Deg),
+    };
+    let pf = points::read(&input.points, &text, &read_options)?;
+    let prefix = match side {
+        Side::Left => "L",
+        Side::Right => "R",
+    };
+    let log = match &input.joints {
+        Some(path) => {
+            let text = text::read(files, path)?;
+            Some(joints::read(
+                path,
+                &text,
+                &JointLogOptions {
+                    angle_unit: o.angle_unit,
+                    joint_order: o.joint_order.as_deref(),
+                    joint_names,
+                    decimal_comma: o.decimal_comma,
+                    id_prefix: prefix,
+                },
+            )?)
+        }
+        None => None,
+    };
+    let mut report = ArmReport {
+        side,
+        points_file: input.points.clone(),
+        joints_file: input.joints.clone(),
+        format: pf.format,
+        length_unit: pf.unit,
+        frame: pf.frame.clone(),
+        angle_unit: log.as_ref().map(|l| l.angle_unit),
+        joint_order: log.as_ref().map(|l| l.order.clone()),
+        points_read: 0,
+        configurations_read: 0,
+        matched: 0,
+        unmatched_points: Vec::new(),
+        unmatched_configurations: Vec::new(),
+        repeated: Vec::new(),
+        notes: pf.notes.clone(),
+    };
+    if let Some(log) = &log {
+        report.notes.extend(log.notes.iter().cloned());
+        report.configurations_read = log.rows.len();
+    }
+    let measurements = match (&pf.table, &log) {
+        (PointTable::Points(pts), Some(log)) => {
+            report.points_read = pts.len();
+            match_points(&input.points, input.joints.as_deref(), pts, log, o, &mut report)?
+        }
+        (PointTable::Points(_), None) => {
+            return Err(ImportError::Options(format!(
+                "{}: a list of points without joint values: give the {side} arm's joint log \
+                 (--{side}-joints)",
+                input.points.display()
+            )));
+        }
+        (PointTable::Rows(rows), log) => {
+            report.points_read = rows.len();
+            if log.is_none() {
+                report.configurations_read = rows.len();
+            }
+            match_rows(&input.points, rows, log.as_ref(), o, prefix, joint_names, &mut report)?
+        }
+    };
+    report.matched = measurements.len();
+    let file = input.joints.clone().unwrap_or_else(|| input.points.clone());
+    Ok((
+        ArmData {
+            side,
+            file,
+            links: o.links[side].clone(),
+            station: o.stations[side].clone(),
+            measurements,
+        },
+        report,
+    ))
+}
+
+/// The reflector a target name ends in: `L012_a` is (`L012`, a) when `a` is a reflector.
+fn split_target<'t>(target: &'t str, names: &[String]) -> Option<(&'t str, usize)> {
+    let (id, r) = target.rsplit_once('_')?;
+    let k = names.iter().position(|n| n == r)?;
+    (!id.is_empty()).then_some((id, k))
+}
+
+/// Points assigned to (configuration, reflector); shots averaged.
+fn match_points(
+    points_file: &Path,
+    joints_file: Option<&Path>,
+    pts: &[Point],
+    log: &JointLog,
+    o: &ImportOptions,
+    report: &mut ArmReport,
+) -> Result<Vec<Measurement>, ImportError> {
+    let names = &o.reflector_names;
+    let r = names.len();
+    let ids: std::collections::HashMap<&str, usize> = log
+        .rows
+        .iter()
+        .enumerate()
+        .map(|(k, row)| (row.id.as_str(), k))
+        .collect();
+    // Per configuration: named shots per reflector, and shots without a reflector (time rule).
+    let mut shots: Vec<Vec<Vec<&Point>>> = vec![vec![Vec::new(); r]; log.rows.len()];
+    let mut unnamed: Vec<Vec<&Point>> = vec![Vec::new(); log.rows.len()];
+    let label = |p: &Point, k: usize| p.target.clone().unwrap_or_else(|| format!("#{}", k + 1));
+    let mut miss = |p: &Point, k: usize, reason: String| {
+        report.unmatched_points.push(Unmatched {
+            name: label(p, k),
+            file: points_file.to_path_buf(),
+            line: p.line,
+            reason,
+        })
+    };
+    if o.matching == MatchRule::Time && log.rows.iter().all(|row| row.time_s.is_none()) {
+        return Err(ImportError::Options(format!(
+            "{}: matching by time needs a time column (`time`) in the joint log",
+            joints_file.unwrap_or(points_file).display()
+        )));
+    }
+    for (k, p) in pts.iter().enumerate() {
+        match o.matching {
+            MatchRule::Name => {
+                let Some(target) = &p.target else {
+                    miss(p, k, "no target name (match by order or by time instead)".into());
+                    continue;
+                };
+                let Some((id, refl)) = split_target(target, names) else {
+                    miss(
+                        p,
+                        k,
+                        format!(
+                            "the name is not `<id>_<reflector>` with a reflector of {}",
+                            names.join(", ")
+                        ),
+                    );
+                    continue;
+                };
+                match ids.get(id) {
+                    Some(&c) => shots[c][refl].push(p),
+                    None => miss(p, k, format!("no configuration `{id}` in the joint log")),
+                }
+            }
+            MatchRule::Order => {
+                let c = k / r;
+                if c < log.rows.len() {
+                    shots[c][k % r].push(p);
+                } else {
+                    miss(
+                        p,
+                        k,
+                        format!(
+                            "beyond the joint log's {} configurations × {r} reflectors",
+                            log.rows.len()
+                        ),
+                    );
+                }
+            }
+            MatchRule::Time => {
+                let Some(t) = p.time_s else {
+                    miss(p, k, "no time stamp".into());
+                    continue;
+                };
+                let nearest = log
+                    .rows
+                    .iter()
+                    .enumerate()
+                    .filter_map(|(c, row)| Some((c, (row.time_s? - t).abs())))
+                    .min_by(|a, b| a.1.total_cmp(&b.1));
+                match nearest {
+                    Some((c, dt)) if dt <= o.time_tolerance_s => {
+                        let refl = p.target.as_deref().and_then(|name| {
+                            split_target(name, names)
+                                .map(|(_, k)| k)
+                                .or_else(|| names.iter().position(|n| n == name))
+                        });
+                        match refl {
+                            Some(k) => shots[c][k].push(p),
+                            None => unnamed[c].push(p),
+                        }
+                    }
+                    Some((c, dt)) => miss(
+                        p,
+                        k,
+                        format!(
+                            "the nearest configuration, `{}`, is {dt:.3} s away (tolerance {} s)",
+                            log.rows[c].id, o.time_tolerance_s
+                        ),
+                    ),
+                    None => miss(p, k, "no configuration has a time stamp".into()),
+                }
+            }
+        }
+    }
+    let joints_path = joints_file.unwrap_or(points_file);
+    let mut out = Vec::new();
+    for (c, row) in log.rows.iter().enumerate() {
+        let mut per = std::mem::take(&mut shots[c]);
+        let loose = std::mem::take(&mut unnamed[c]);
+        if !loose.is_empty() {
+            if per.iter().all(Vec::is_empty) && loose.len() == r {
+                for (k, p) in loose.into_iter().enumerate() {
+                    per[k].push(p);
+                }
+            } else {
+                for p in loose {
+                    report.unmatched_points.push(Unmatched {
+                        name: label(p, 0),
+                        file: points_file.to_path_buf(),
+                        line: p.line,
+                        reason: format!(
+                            "no reflector in the name, and configuration `{}` does not have \
+                             exactly {r} such points to take in order",
+                            row.id
+                        ),
+                    });
+                }
+            }
+        }
+        let missing: Vec<&str> = names
+            .iter()
+            .zip(&per)
+            .filter(|(_, s)| s.is_empty())
+            .map(|(n, _)| n.as_str())
+            .collect();
+        if !missing.is_empty() {
+            let found = per.iter().map(Vec::len).sum::<usize>();
+            report.unmatched_configurations.push(Unmatched {
+                name: row.id.clone(),
+                file: joints_path.to_path_buf(),
+                line: row.line,
+                reason: if found == 0 {
+                    "no points".to_string()
+                } else {
+                    format!("no point of reflector {}", missing.join(", "))
+                },
+            });
+            // Its points are reported as unused too.
+            for s in per.iter().flatten() {
+                report.unmatched_points.push(Unmatched {
+                    name: label(s, 0),
+                    file: points_file.to_path_buf(),
+                    line: s.line,
+                    reason: format!(
+                        "configuration `{}` lacks reflector {}",
+                        row.id,
+                        missing.join(", ")
+                    ),
+                });
+            }
+            continue;
+        }
+        let mut tracker_points_mm = Vec::with_capacity(r);
+        for (k, s) in per.iter().enumerate() {
+            let mean = average(s.iter().map(|p| p.position_mm));
+            if s.len() > 1 {
+                let spread_mm = s
+                    .iter()
+                    .map(|p| (p.position_mm - mean).norm())
+                    .fold(0.0, f64::max);
+                report.repeated.push(RepeatedShots {
+                    id: row.id.clone(),
+                    reflector: names[k].clone(),
+                    shots: s.len(),
+                    spread_mm,
+                    lines: s.iter().map(|p| p.line).collect(),
+                });
+            }
+            tracker_points_mm.push(mean);
+        }
+        out.push(Measurement {
+            id: row.id.clone(),
+            q_rad: row.q_rad.clone(),
+            tracker_points_mm,
+            split: row.split.unwrap_or(Split::Cal),
+            line: row.line,
+        });
+    }
+    report.unmatched_points.sort_by_key(|u| u.line);
+    Ok(out)
+}
+
+/// The mean of shots; one shot is returned as it is (no rounding).
+fn average(shots: impl Iterator<Item = Vector3<f64>>) -> Vector3<f64> {
+    let v: Vec<Vector3<f64>> = shots.collect();
+    match v.as_slice() {
+        [one] => *one,
+        _ => v.iter().sum::<Vector3<f64>>() / v.len() as f64,
+    }
+}
+
+/// Rows of whole configurations (figaroh, a mapping with reflector columns): joints from the rows or
+/// from the joint log.
+fn match_rows(
+    points_file: &Path,
+    rows: &[ConfigRow],
+    log: Option<&JointLog>,
+    o: &ImportOptions,
+    prefix: &str,
+    joint_names: Option<&[String]>,
+    report: &mut ArmReport,
+) -> Result<Vec<Measurement>, ImportError> {
+    let Some(log) = log else {
+        let mut out = Vec::new();
+        let mut seen = std::collections::HashMap::new();
+        for (k, row) in rows.iter().enumerate() {
+            let Some(q) = &row.q_rad else {
+                return Err(ImportError::Options(format!(
+                    "{}: no joint columns: give the arm's joint log, or map q1…qN",
+                    points_file.display()
+                )));
+            };
+            if let Some(names) = joint_names
+                && names.len() != q.len()
+            {
+                return Err(ImportError::Field {
+                    path: points_file.to_path_buf(),
+                    line: row.line,
+                    field: format!("q{}", q.len().min(names.len()) + 1),
+                    expected: format!("{} joint values (the arm's joints)", names.len()),
+                    found: format!("{} joint values", q.len()),
+                });
+            }
+            let id = row
+                .id
+                .clone()
+                .unwrap_or_else(|| format!("{prefix}{:03}", k + 1));
+            if let Some(first_line) = seen.insert(id.clone(), row.line) {
+                return Err(ImportError::DuplicateId {
+                    path: points_file.to_path_buf(),
+                    line: row.line,
+                    id,
+                    first_line,
+                });
+            }
+            out.push(Measurement {
+                id,
+                q_rad: q.clone(),
+                tracker_points_mm: row.points_mm.clone(),
+                split: row.split.unwrap_or(Split::Cal),
+                line: row.line,
+            });
+        }
+        return Ok(out);
+    };
+    if rows.iter().any(|r| r.q_rad.is_some()) {
+        report
+            .notes
+            .push("the point file's joint columns are not used: the joint log gives the joints".into());
+    }
+    let by_id = o.matching == MatchRule::Name && rows.iter().all(|r| r.id.is_some());
+    let mut used = vec![false; log.rows.len()];
+    let mut out = Vec::new();
+    for (k, row) in rows.iter().enumerate() {
+        let c = if by_id {
+            let id = row.id.as_deref().unwrap_or_default();
+            log.rows.iter().position(|j| j.id == id)
+        } else if o.matching == MatchRule::Time {
+            row.time_s.and_then(|t| {
+                log.rows
+                    .iter()
+                    .enumerate()
+                    .filter_map(|(c, j)| Some((c, (j.time_s? - t).abs())))
+                    .filter(|&(_, dt)| dt <= o.time_tolerance_s)
+                    .min_by(|a, b| a.1.total_cmp(&b.1))
+                    .map(|(c, _)| c)
+            })
+        } else {
+            (k < log.rows.len()).then_some(k)
+        };
+        match c {
+            Some(c) if !used[c] => {
+                used[c] = true;
+                let j = &log.rows[c];
+                out.push(Measurement {
+                    id: j.id.clone(),
+                    q_rad: j.q_rad.clone(),
+                    tracker_points_mm: row.points_mm.clone(),
+                    split: j.split.or(row.split).unwrap_or(Split::Cal),
+                    line: j.line,
+                });
+            }
+            Some(c) => report.unmatched_points.push(Unmatched {
+                name: format!("row {}", k + 1),
+                file: points_file.to_path_buf(),
+                line: row.line,
+                reason: format!("configuration `{}` already matched", log.rows[c].id),
+            }),
+            None => report.unmatched_points.push(Unmatched {
+                name: row.id.clone().unwrap_or_else(|| format!("row {}", k + 1)),
+                file: points_file.to_path_buf(),
+                line: row.line,
+                reason: "no configuration of the joint log matches".into(),
+            }),
+        }
+    }
+    for (c, j) in log.rows.iter().enumerate() {
+        if !used[c] {
+            report.unmatched_configurations.push(Unmatched {
+                name: j.id.clone(),
+                file: report.joints_file.clone().unwrap_or_default(),
+                line: j.line,
+                reason: "no row of the point file".into(),
+            });
+        }
+    }
+    Ok(out)
+}
+
+/// The file the report is written to inside the dataset directory.
+pub const REPORT_FILE: &str = "import-report.txt";
+
+/// Write an import as a `dualcal-dataset/1` directory `out` (mm and rad, full precision) with the
+/// report as [`REPORT_FILE`]. Refuses an existing non-empty `out` unless `overwrite` allows it, and
+/// never replaces one of the input files. Each file is written atomically.
+pub fn write(
+    imported: &Imported,
+    inputs: &PerSide<ArmFiles>,
+    out: &Path,
+    overwrite: Overwrite,
+) -> Result<(), ImportError> {
+    if out.exists() && !out.is_dir() {
+        return Err(ImportError::Content {
+            path: out.to_path_buf(),
+            message: "is a file: the output is a dataset directory".to_string(),
+        });
+    }
+    let non_empty = std::fs::read_dir(out).is_ok_and(|mut d| d.next().is_some());
+    if non_empty && overwrite == Overwrite::Refuse {
+        return Err(OutputError::Exists {
+            path: out.to_path_buf(),
+        }
+        .into());
+    }
+    let input_paths: Vec<&Path> = inputs
+        .iter()
+        .flat_map(|(_, f)| std::iter::once(f.points.as_path()).chain(f.joints.as_deref()))
+        .collect();
+    for name in [MANIFEST_FILE, "left.csv", "right.csv", REPORT_FILE] {
+        refuse_overwrite_input(&out.join(name), &input_paths)?;
+    }
+    let mut ds = imported.dataset.clone();
+    ds.dir = out.to_path_buf();
+    dataset::save_with(&ds, out, Units::MM_RAD, Overwrite::Allow)?;
+    let path = out.join(REPORT_FILE);
+    write_atomic(&path, imported.report.to_string().as_bytes())
+        .map_err(|error| ImportError::Write { path, error })?;
+    Ok(())
+}
+
+impl std::fmt::Display for ImportReport {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        for (_, arm) in self.arms.iter() {
+            write!(f, "{arm}")?;
+        }
+        Ok(())
+    }
+}
+
+impl std::fmt::Display for ArmReport {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let mut s = String::new();
+        let _ = writeln!(
+            s,
+            "{} arm: {} ({}, {}{})",
+            self.side,
+            self.points_file.display(),
+            self.format.name(),
+            self.length_unit.name(),
+            self.frame
+                .as_ref()
+                .map(|fr| format!(", working frame {fr}"))
+                .unwrap_or_default()
+        );
+        if let Some(j) = &self.joints_file {
+            let _ = writeln!(
+                s,
+                "  joints: {} ({}, {})",
+                j.display(),
+                self.angle_unit.map_or("rad", AngleUnit::name),
+                self.joint_order.as_deref().unwrap_or("chain order")
+            );
+        }
+        let _ = writeln!(
+            s,
+            "  {} points read, {} configurations read, {} configurations matched",
+            self.points_read, self.configurations_read, self.matched
+        );
+        for n in &self.notes {
+            let _ = writeln!(s, "  note: {n}");
+        }
+        for r in &self.repeated {
+            let lines: Vec<String> = r.lines.iter().map(usize::to_string).collect();
+            let _ = writeln!(
+                s,
+                "  repeated: `{}` reflector {}: {} shots averaged, spread {:.4} mm (lines {})",
+                r.id,
+                r.reflector,
+                r.shots,
+                r.spread_mm,
+                lines.join(", ")
+            );
+        }
+        for u in &self.unmatched_configurations {
+            let _ = writeln!(
+                s,
+                "  unmatched configuration `{}` ({}:{}): {}",
+                u.name,
+                u.file.display(),
+                u.line,
+                u.reason
+            );
+        }
+        for u in &self.unmatched_points {
+            let _ = writeln!(
+                s,
+                "  unmatched point `{}` ({}:{}): {}",
+                u.name,
+                u.file.display(),
+                u.line,
+                u.reason
+            );
+        }
+        f.write_str(&s)
+    }
+}

@@ -1,0 +1,312 @@
+//! What every reader shares: bytes to text (UTF-8, else Windows-1252), fields of a line, numbers with a
+//! decimal point or comma, length units by their names, time stamps.
+
+use super::error::ImportError;
+use crate::source::FileSource;
+use std::path::Path;
+
+/// The largest input file read (a tracker export of a few thousand points is well below).
+const MAX_FILE_BYTES: u64 = 256 << 20;
+
+/// Windows-1252's characters for the bytes 0x80–0x9F (the rest of the code page is Latin-1). The five
+/// bytes the code page leaves undefined read as the C1 control of the same value.
+const CP1252_80_9F: [char; 32] = [
+    '€', '\u{81}', '‚', 'ƒ', '„', '…', '†', '‡', 'ˆ', '‰', 'Š', '‹', 'Œ', '\u{8D}', 'Ž', '\u{8F}',
+    '\u{90}', '‘', '’', '“', '”', '•', '–', '—', '˜', '™', 'š', '›', 'œ', '\u{9D}', 'ž', 'Ÿ',
+];
+
+/// A file's text: UTF-8 (a byte-order mark dropped) when it is valid UTF-8, else Windows-1252 (what
+/// tracker software on Windows writes: `µ` and `°` as single bytes). UTF-16 and binary files are
+/// refused.
+pub fn decode(path: &Path, bytes: &[u8]) -> Result<String, ImportError> {
+    let err = |message: &str| ImportError::Encoding {
+        path: path.to_path_buf(),
+        message: message.to_string(),
+    };
+    if bytes.starts_with(&[0xFF, 0xFE]) || bytes.starts_with(&[0xFE, 0xFF]) {
+        return Err(err(
+            "UTF-16 text; save it as UTF-8 or as ANSI (Windows-1252) text",
+        ));
+    }
+    if let Some(k) = bytes.iter().position(|&b| b == 0) {
+        return Err(err(&format!(
+            "a NUL byte at byte {k}: this is not a text file"
+        )));
+    }
+    let bytes = bytes.strip_prefix(&[0xEF, 0xBB, 0xBF]).unwrap_or(bytes);
+    match std::str::from_utf8(bytes) {
+        Ok(s) => Ok(s.to_string()),
+        Err(_) => Ok(bytes
+            .iter()
+            .map(|&b| match b {
+                0x80..=0x9F => CP1252_80_9F[usize::from(b - 0x80)],
+                _ => char::from(b),
+            })
+            .collect()),
+    }
+}
+
+/// Read and decode a file.
+pub fn read(files: &dyn FileSource, path: &Path) -> Result<String, ImportError> {
+    let bytes = files
+        .read_limited(path, MAX_FILE_BYTES)
+        .map_err(|error| ImportError::Io {
+            path: path.to_path_buf(),
+            error,
+        })?;
+    decode(path, &bytes)
+}
+
+/// How the fields of a line are separated.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Delimiter {
+    Comma,
+    Semicolon,
+    Tab,
+    /// Runs of spaces or tabs.
+    Whitespace,
+}
+
+impl Delimiter {
+    /// The delimiter of a line: `;`, else a tab, else `,` (unless numbers have decimal commas), else
+    /// white space.
+    pub fn of_line(line: &str, decimal_comma: bool) -> Delimiter {
+        if line.contains(';') {
+            Delimiter::Semicolon
+        } else if line.contains('\t') && !line.contains(',') {
+            Delimiter::Tab
+        } else if line.contains(',') && !decimal_comma {
+            Delimiter::Comma
+        } else if line.contains('\t') {
+            Delimiter::Tab
+        } else {
+            Delimiter::Whitespace
+        }
+    }
+
+    /// Whether a comma inside a field can only be a decimal comma.
+    pub fn allows_decimal_comma(self) -> bool {
+        self != Delimiter::Comma
+    }
+}
+
+/// The fields of a line, trimmed; double quotes around a field (with `""` inside) are removed.
+pub fn split(line: &str, delimiter: Delimiter) -> Vec<String> {
+    let sep = match delimiter {
+        Delimiter::Whitespace => {
+            return line.split_whitespace().map(unquote).collect();
+        }
+        Delimiter::Comma => ',',
+        Delimiter::Semicolon => ';',
+        Delimiter::Tab => '\t',
+    };
+    let mut out = Vec::new();
+    let mut field = String::new();
+    let mut quoted = false;
+    let mut chars = line.chars().peekable();
+    while let Some(c) = chars.next() {
+        match c {
+            '"' if quoted && chars.peek() == Some(&'"') => {
+                field.push('"');
+                chars.next();
+            }
+            '"' => quoted = !quoted,
+            c if c == sep && !quoted => out.push(std::mem::take(&mut field).trim().to_string()),
+            c => field.push(c),
+        }
+    }
+    out.push(field.trim().to_string());
+    out
+}
+
+fn unquote(s: &str) -> String {
+    let s = s.trim();
+    match s.strip_prefix('"').and_then(|t| t.strip_suffix('"')) {
+        Some(inner) => inner.replace("\"\"", "\""),
+        None => s.to_string(),
+    }
+}
+
+/// A finite number in fixed or scientific notation; with `decimal_comma`, `1,5` is 1.5 (when the field
+/// has a comma and no point).
+pub fn number(field: &str, decimal_comma: bool) -> Option<f64> {
+    let s = field.trim();
+    let parsed = if decimal_comma && s.contains(',') && !s.contains('.') {
+        s.replacen(',', ".", 1).parse::<f64>()
+    } else {
+        s.parse::<f64>()
+    };
+    // Rust also reads `inf`, `NaN`: refused, as are empty fields.
+    parsed.ok().filter(|x| x.is_finite())
+}
+
+/// A length unit of a point file.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
+pub enum PointUnit {
+    #[default]
+    Mm,
+    M,
+    Um,
+    In,
+    Ft,
+}
+
+impl PointUnit {
+    /// Millimetres per unit.
+    pub fn mm_per_unit(self) -> f64 {
+        match self {
+            PointUnit::Mm => 1.0,
+            PointUnit::M => 1000.0,
+            PointUnit::Um => 0.001,
+            PointUnit::In => 25.4,
+            PointUnit::Ft => 304.8,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            PointUnit::Mm => "mm",
+            PointUnit::M => "m",
+            PointUnit::Um => "µm",
+            PointUnit::In => "in",
+            PointUnit::Ft => "ft",
+        }
+    }
+
+    /// A value in this unit, in mm (`v · mm_per_unit`: the dataset reader's conversion, so a file in
+    /// metres imports to exactly what a dataset in metres loads to).
+    pub fn to_mm(self, v: f64) -> f64 {
+        match self {
+            PointUnit::Mm => v,
+            _ => v * self.mm_per_unit(),
+        }
+    }
+
+    /// The unit of a name as tracker software writes it (`mm`, `Millimeters`, `m`, `µm`, `um`,
+    /// `Inches`, …; any case).
+    pub fn parse(name: &str) -> Option<PointUnit> {
+        let n = name.trim().trim_matches(|c| c == '[' || c == ']' || c == '(' || c == ')');
+        let n = n.trim().to_lowercase();
+        Some(match n.as_str() {
+            "mm" | "millimeter" | "millimeters" | "millimetre" | "millimetres" => PointUnit::Mm,
+            "m" | "meter" | "meters" | "metre" | "metres" => PointUnit::M,
+            "µm" | "μm" | "um" | "micron" | "microns" | "micrometer" | "micrometers"
+            | "micrometre" | "micrometres" => PointUnit::Um,
+            "in" | "inch" | "inches" => PointUnit::In,
+            "ft" | "foot" | "feet" => PointUnit::Ft,
+            _ => return None,
+        })
+    }
+}
+
+/// A column name and the unit in its brackets: `X  [mm]` is (`X`, Some(`mm`)).
+pub fn name_and_unit(header: &str) -> (String, Option<String>) {
+    let h = header.trim();
+    for (open, close) in [('[', ']'), ('(', ')')] {
+        if let (Some(a), true) = (h.rfind(open), h.ends_with(close)) {
+            let name = h[..a].trim().to_string();
+            let unit = h[a + open.len_utf8()..h.len() - close.len_utf8()].trim();
+            if !name.is_empty() {
+                return (name, Some(unit.to_string()));
+            }
+        }
+    }
+    (h.to_string(), None)
+}
+
+/// Days from 1970-01-01 to a date of the proleptic Gregorian calendar.
+fn days_from_civil(y: i64, m: i64, d: i64) -> i64 {
+    let y = if m <= 2 { y - 1 } else { y };
+    let era = y.div_euclid(400);
+    let yoe = y - era * 400;
+    let mp = (m + 9) % 12;
+    let doy = (153 * mp + 2) / 5 + d - 1;
+    let doe = yoe * 365 + yoe / 4 - yoe / 100 + doy;
+    era * 146_097 + doe - 719_468
+}
+
+/// `HH:MM:SS(.fff)` in seconds.
+fn time_of_day(s: &str) -> Option<f64> {
+    let mut parts = s.split(':');
+    let h: u32 = parts.next()?.trim().parse().ok()?;
+    let m: u32 = parts.next()?.trim().parse().ok()?;
+    let sec: f64 = parts.next()?.trim().parse().ok()?;
+    if parts.next().is_some() || h > 24 || m > 59 || !(0.0..61.0).contains(&sec) {
+        return None;
+    }
+    Some(f64::from(h) * 3600.0 + f64::from(m) * 60.0 + sec)
+}
+
+/// A time stamp in seconds: `11.10.2022 15:06:48.043` (day first, as Tracker Pilot writes it; a leading
+/// apostrophe — Excel's text marker — is dropped), `2022-10-11T15:06:48.043` or `2022-10-11 15:06:48`
+/// (a trailing `Z` allowed), `15:06:48.043` (seconds of the day), or a plain number of seconds.
+pub fn time_s(field: &str) -> Option<f64> {
+    let s = field.trim().trim_start_matches('\'').trim();
+    if s.is_empty() {
+        return None;
+    }
+    if let Some(x) = number(s, false) {
+        return Some(x);
+    }
+    let s = s.strip_suffix('Z').unwrap_or(s);
+    let (date, time) = match s.split_once(['T', ' ']) {
+        Some((d, t)) => (Some(d.trim()), t.trim()),
+        None => (None, s),
+    };
+    let tod = time_of_day(time)?;
+    let Some(date) = date else {
+        return Some(tod);
+    };
+    let nums = |sep: char| -> Option<Vec<i64>> {
+        let v: Option<Vec<i64>> = date.split(sep).map(|p| p.trim().parse().ok()).collect();
+        v.filter(|v| v.len() == 3)
+    };
+    let (y, m, d) = if let Some(v) = nums('-') {
+        (v[0], v[1], v[2])
+    } else if let Some(v) = nums('.') {
+        (v[2], v[1], v[0])
+    } else {
+        return None;
+    };
+    if !(1..=12).contains(&m) || !(1..=31).contains(&d) {
+        return None;
+    }
+    Some(days_from_civil(y, m, d) as f64 * 86_400.0 + tod)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn windows_1252_bytes_decode() {
+        let bytes = b"Temperature  [\xB0C],U  [\xB5m],\x80";
+        let text = decode(Path::new("x"), bytes).unwrap();
+        assert_eq!(text, "Temperature  [°C],U  [µm],€");
+        assert_eq!(decode(Path::new("x"), "µ°".as_bytes()).unwrap(), "µ°");
+        assert!(decode(Path::new("x"), b"\xFF\xFEa\0").is_err());
+    }
+
+    #[test]
+    fn fields_numbers_units_and_times() {
+        assert_eq!(split("a, \"b,c\" ,", Delimiter::Comma), ["a", "b,c", ""]);
+        assert_eq!(split("  A  B\t1.5 ", Delimiter::Whitespace), ["A", "B", "1.5"]);
+        assert_eq!(number("1.5e3", false), Some(1500.0));
+        assert_eq!(number("-2,25", true), Some(-2.25));
+        assert_eq!(number("-2,25", false), None);
+        assert_eq!(number("NaN", false), None);
+        assert_eq!(
+            name_and_unit("X  [mm]"),
+            ("X".to_string(), Some("mm".to_string()))
+        );
+        assert_eq!(PointUnit::parse("[µm]"), Some(PointUnit::Um));
+        assert_eq!(PointUnit::parse("Millimeters"), Some(PointUnit::Mm));
+        let a = time_s("'11.10.2022 15:06:48.043").unwrap();
+        let b = time_s("2022-10-11T15:06:48.043Z").unwrap();
+        assert_eq!(a, b);
+        assert!((a - (19_276.0 * 86_400.0 + 15.0 * 3600.0 + 6.0 * 60.0 + 48.043)).abs() < 1e-6);
+        assert_eq!(time_s("12.5"), Some(12.5));
+        assert_eq!(time_s("00:01:02.5"), Some(62.5));
+        assert_eq!(time_s("yesterday"), None);
+    }
+}
