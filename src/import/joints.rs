@@ -49,7 +49,10 @@ pub const YUMI_ABB_ORDER: [usize; 7] = [1, 2, 7, 3, 4, 5, 6];
 
 /// Parse a joint-order mapping: `1,2,7,3,4,5,6` or `yumi-abb`.
 pub fn parse_joint_order(s: &str) -> Result<Vec<usize>, String> {
-    if matches!(s.trim().to_lowercase().as_str(), "yumi-abb" | "abb-yumi" | "yumi") {
+    if matches!(
+        s.trim().to_lowercase().as_str(),
+        "yumi-abb" | "abb-yumi" | "yumi"
+    ) {
         return Ok(YUMI_ABB_ORDER.to_vec());
     }
     let order: Vec<usize> = s
@@ -152,17 +155,32 @@ pub fn read(path: &Path, text: &str, o: &JointLogOptions) -> Result<JointLog, Im
         }
         let cols = order.iter().map(|&k| file_joints[k - 1]).collect();
         let list: Vec<String> = order.iter().map(usize::to_string).collect();
-        (cols, format!("the log's joint columns {} in chain order", list.join(", ")))
+        (
+            cols,
+            format!("the log's joint columns {} in chain order", list.join(", ")),
+        )
     } else if let Some(joints) = o.joint_names.filter(|j| {
-        header && j.len() == n && j.iter().all(|name| file_joints.iter().any(|&k| &names[k] == name))
+        header
+            && j.len() == n
+            && j.iter()
+                .all(|name| file_joints.iter().any(|&k| &names[k] == name))
     }) {
         let cols = joints
             .iter()
-            .map(|name| file_joints.iter().copied().find(|&k| &names[k] == name).unwrap_or(0))
+            .map(|name| {
+                file_joints
+                    .iter()
+                    .copied()
+                    .find(|&k| &names[k] == name)
+                    .unwrap_or(0)
+            })
             .collect();
         (cols, "by the header's joint names".to_string())
     } else {
-        (file_joints.clone(), "the file's order (chain order)".to_string())
+        (
+            file_joints.clone(),
+            "the file's order (chain order)".to_string(),
+        )
     };
     if let Some(joints) = o.joint_names
         && joints.len() != n
@@ -262,14 +280,16 @@ pub fn read(path: &Path, text: &str, o: &JointLogOptions) -> Result<JointLog, Im
         }
         let time_s = match time_col {
             Some(k) if !fields[k].is_empty() => {
-                Some(text::time_s(&fields[k]).ok_or_else(|| ImportError::Field {
-                    path: path.to_path_buf(),
-                    line,
-                    field: names[k].clone(),
-                    expected: "a time stamp (`11.10.2022 15:06:48.043`, \
+                Some(text::time_s(&fields[k]).ok_or_else(|| {
+                    ImportError::Field {
+                        path: path.to_path_buf(),
+                        line,
+                        field: names[k].clone(),
+                        expected: "a time stamp (`11.10.2022 15:06:48.043`, \
                                `2022-10-11T15:06:48.043` or seconds)"
-                        .to_string(),
-                    found: crate::textfile::excerpt(&fields[k]),
+                            .to_string(),
+                        found: crate::textfile::excerpt(&fields[k]),
+                    }
                 })?)
             }
             _ => None,

@@ -200,9 +200,7 @@ fn check_options(o: &ImportOptions) -> Result<(), ImportError> {
     }
     for (k, n) in names.iter().enumerate() {
         let ok = !n.is_empty()
-            && n
-                .chars()
-                .all(|c| c.is_ascii_alphanumeric() || c == '-')
+            && n.chars().all(|c| c.is_ascii_alphanumeric() || c == '-')
             && !n.starts_with(|c: char| c.is_ascii_digit());
         if !ok {
             return Err(ImportError::Options(format!(
@@ -288,7 +286,14 @@ fn import_arm(
     let measurements = match (&pf.table, &log) {
         (PointTable::Points(pts), Some(log)) => {
             report.points_read = pts.len();
-            match_points(&input.points, input.joints.as_deref(), pts, log, o, &mut report)?
+            match_points(
+                &input.points,
+                input.joints.as_deref(),
+                pts,
+                log,
+                o,
+                &mut report,
+            )?
         }
         (PointTable::Points(_), None) => {
             return Err(ImportError::Options(format!(
@@ -302,7 +307,15 @@ fn import_arm(
             if log.is_none() {
                 report.configurations_read = rows.len();
             }
-            match_rows(&input.points, rows, log.as_ref(), o, prefix, joint_names, &mut report)?
+            match_rows(
+                &input.points,
+                rows,
+                log.as_ref(),
+                o,
+                prefix,
+                joint_names,
+                &mut report,
+            )?
         }
     };
     report.matched = measurements.len();
@@ -365,7 +378,11 @@ fn match_points(
         match o.matching {
             MatchRule::Name => {
                 let Some(target) = &p.target else {
-                    miss(p, k, "no target name (match by order or by time instead)".into());
+                    miss(
+                        p,
+                        k,
+                        "no target name (match by order or by time instead)".into(),
+                    );
                     continue;
                 };
                 let Some((id, refl)) = split_target(target, names) else {
@@ -587,9 +604,9 @@ fn match_rows(
         return Ok(out);
     };
     if rows.iter().any(|r| r.q_rad.is_some()) {
-        report
-            .notes
-            .push("the point file's joint columns are not used: the joint log gives the joints".into());
+        report.notes.push(
+            "the point file's joint columns are not used: the joint log gives the joints".into(),
+        );
     }
     let by_id = o.matching == MatchRule::Name && rows.iter().all(|r| r.id.is_some());
     let mut used = vec![false; log.rows.len()];

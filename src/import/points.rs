@@ -278,7 +278,10 @@ fn read_spatial_analyzer(
             let delimiter = Delimiter::of_line(t, o.decimal_comma);
             let dc = o.decimal_comma || delimiter.allows_decimal_comma();
             let fields = text::split(t, delimiter);
-            let numbers: Vec<bool> = fields.iter().map(|f| text::number(f, dc).is_some()).collect();
+            let numbers: Vec<bool> = fields
+                .iter()
+                .map(|f| text::number(f, dc).is_some())
+                .collect();
             let first_xyz = (0..fields.len().saturating_sub(2))
                 .find(|&i| numbers[i] && numbers[i + 1] && numbers[i + 2]);
             if header.is_none() && first_xyz.is_none() {
@@ -383,7 +386,10 @@ fn read_spatial_analyzer(
                             crate::textfile::excerpt(u)
                         ),
                     })?;
-                } else if header.as_ref().is_none_or(|(_, n)| n.iter().all(|(_, u)| u.is_none())) {
+                } else if header
+                    .as_ref()
+                    .is_none_or(|(_, n)| n.iter().all(|(_, u)| u.is_none()))
+                {
                     notes.push("no unit in the file: read as mm".to_string());
                 }
             }
@@ -575,7 +581,9 @@ fn read_figaroh(path: &Path, text: &str, o: &ReadOptions) -> Result<PointFile, I
     };
     let mut notes = Vec::new();
     let other: Vec<usize> = (0..names.len())
-        .filter(|k| !marker_cols.contains(k) && !names[*k].is_empty() && !is_orientation(&names[*k]))
+        .filter(|k| {
+            !marker_cols.contains(k) && !names[*k].is_empty() && !is_orientation(&names[*k])
+        })
         .collect();
     let joint_cols: Vec<usize> = match o.joint_names {
         Some(joints) => {
@@ -707,12 +715,21 @@ impl ColumnMap {
                 Err(_) if !c.is_empty() => Ok(ColumnRef::Name(c.to_string())),
                 Err(_) => Err(format!("`{item}`: no column")),
             };
-            let axis = |a: &str| ["x", "y", "z"].iter().position(|x| a.eq_ignore_ascii_case(x));
+            let axis = |a: &str| {
+                ["x", "y", "z"]
+                    .iter()
+                    .position(|x| a.eq_ignore_ascii_case(x))
+            };
             let lower = role.to_lowercase();
             if lower == "q" {
                 let (a, b) = col
                     .split_once('-')
-                    .and_then(|(a, b)| Some((a.trim().parse::<usize>().ok()?, b.trim().parse::<usize>().ok()?)))
+                    .and_then(|(a, b)| {
+                        Some((
+                            a.trim().parse::<usize>().ok()?,
+                            b.trim().parse::<usize>().ok()?,
+                        ))
+                    })
                     .filter(|&(a, b)| a >= 1 && b >= a)
                     .ok_or_else(|| format!("`{item}`: expected q=FIRST-LAST (column numbers)"))?;
                 for (k, c) in (a..=b).enumerate() {
@@ -728,7 +745,9 @@ impl ColumnMap {
                 _ => {
                     if let Some(a) = axis(role) {
                         ColumnRole::Axis(a)
-                    } else if let Some((name, a)) = role.rsplit_once('.').and_then(|(n, a)| Some((n, axis(a)?))) {
+                    } else if let Some((name, a)) =
+                        role.rsplit_once('.').and_then(|(n, a)| Some((n, axis(a)?)))
+                    {
                         ColumnRole::ReflectorAxis(name.to_string(), a)
                     } else if let Some(k) = lower
                         .strip_prefix('q')
@@ -752,7 +771,9 @@ impl ColumnMap {
         if entries.is_empty() {
             return Err("an empty column mapping".to_string());
         }
-        let per_point = entries.iter().any(|(r, _)| matches!(r, ColumnRole::Axis(_)));
+        let per_point = entries
+            .iter()
+            .any(|(r, _)| matches!(r, ColumnRole::Axis(_)));
         let per_config = entries
             .iter()
             .any(|(r, _)| matches!(r, ColumnRole::ReflectorAxis(..)));
@@ -804,9 +825,11 @@ fn read_generic(
         })
         .collect();
     let has_header = names_used
-        || coordinate_cols
-            .iter()
-            .any(|&k| first_fields.get(k).is_none_or(|f| text::number(f, dc).is_none()));
+        || coordinate_cols.iter().any(|&k| {
+            first_fields
+                .get(k)
+                .is_none_or(|f| text::number(f, dc).is_none())
+        });
     let header: Vec<String> = if has_header {
         it.next();
         first_fields
@@ -867,24 +890,25 @@ fn read_generic(
         }
         n
     };
-    let text_field = |line: usize, fields: &[String], r: &ColumnRole| -> Result<Option<String>, ImportError> {
-        match col_of(r) {
-            None => Ok(None),
-            Some(c) => {
-                let f = field(path, line, fields, c, needed)?;
-                if f.is_empty() {
-                    return Err(ImportError::Field {
-                        path: path.to_path_buf(),
-                        line,
-                        field: role_name(r),
-                        expected: "a name".to_string(),
-                        found: String::new(),
-                    });
+    let text_field =
+        |line: usize, fields: &[String], r: &ColumnRole| -> Result<Option<String>, ImportError> {
+            match col_of(r) {
+                None => Ok(None),
+                Some(c) => {
+                    let f = field(path, line, fields, c, needed)?;
+                    if f.is_empty() {
+                        return Err(ImportError::Field {
+                            path: path.to_path_buf(),
+                            line,
+                            field: role_name(r),
+                            expected: "a name".to_string(),
+                            found: String::new(),
+                        });
+                    }
+                    Ok(Some(f.to_string()))
                 }
-                Ok(Some(f.to_string()))
             }
-        }
-    };
+        };
     let per_point = col_of(&ColumnRole::Axis(0)).is_some();
     let mut points = Vec::new();
     let mut rows = Vec::new();

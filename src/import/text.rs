@@ -185,7 +185,9 @@ impl PointUnit {
     /// The unit of a name as tracker software writes it (`mm`, `Millimeters`, `m`, `µm`, `um`,
     /// `Inches`, …; any case).
     pub fn parse(name: &str) -> Option<PointUnit> {
-        let n = name.trim().trim_matches(|c| c == '[' || c == ']' || c == '(' || c == ')');
+        let n = name
+            .trim()
+            .trim_matches(|c| c == '[' || c == ']' || c == '(' || c == ')');
         let n = n.trim().to_lowercase();
         Some(match n.as_str() {
             "mm" | "millimeter" | "millimeters" | "millimetre" | "millimetres" => PointUnit::Mm,
@@ -290,7 +292,10 @@ mod tests {
     #[test]
     fn fields_numbers_units_and_times() {
         assert_eq!(split("a, \"b,c\" ,", Delimiter::Comma), ["a", "b,c", ""]);
-        assert_eq!(split("  A  B\t1.5 ", Delimiter::Whitespace), ["A", "B", "1.5"]);
+        assert_eq!(
+            split("  A  B\t1.5 ", Delimiter::Whitespace),
+            ["A", "B", "1.5"]
+        );
         assert_eq!(number("1.5e3", false), Some(1500.0));
         assert_eq!(number("-2,25", true), Some(-2.25));
         assert_eq!(number("-2,25", false), None);

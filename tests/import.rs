@@ -1,0 +1,728 @@
+//! `dualcal import` (issue 22, "Import"): a simulated dataset written as a SpatialAnalyzer export, a
+//! Leica Tracker Pilot CSV (Windows-1252 bytes) and a figaroh CSV with joint logs — every file written
+//! here, no third-party data — imports into a dataset with the native dataset's measurements and
+//! calibration; malformed files are refused naming file, line and field; unmatched targets are
+//! reported; repeated shots are averaged with their spread.
+
+mod common;
+
+use dualcal::dataset::{self, AngleUnit, Dataset, LengthUnit, Split, Units};
+use dualcal::import::{
+    self, ArmFiles, ImportError, ImportOptions, Imported, MatchRule, PointsFormat, YUMI_ABB_ORDER,
+};
+use dualcal::output::Overwrite;
+use dualcal::robot::RobotDescription;
+use dualcal::side::{PerSide, Side};
+use dualcal::simulate::{SimOutput, paper_options, simulate_with_robot};
+use dualcal::solver::CalibrationSettings;
+use dualcal::source::OsFiles;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn simulated(seed: u64) -> SimOutput {
+    simulate_with_robot(
+        &paper_options(seed, 40, 30),
+        &RobotDescription::builtin_irb14000(),
+    )
+    .unwrap()
+}
+
+/// The simulated dataset through its own files in `units` (what the native reader gives).
+fn native(sim: &SimOutput, dir: &Path, units: Units) -> Dataset {
+    let out = dir.join("native");
+    dataset::save(&sim.dataset, &out, units).unwrap();
+    dataset::load(&out).unwrap()
+}
+
+fn options(ds: &Dataset) -> ImportOptions {
+    let robot = RobotDescription::builtin_irb14000();
+    let mut o = ImportOptions::new(
+        ds.reflector_names.to_vec(),
+        ds.nominal_reflectors_mm.clone(),
+    );
+    o.tracker = ds.tracker;
+    o.joint_names = PerSide::from_fn(|s| Some(robot.arm_joint_names(s)));
+    o
+}
+
+/// A number as the dataset writer writes it (shortest text that reads back exactly).
+fn num(x: f64) -> String {
+    format!("{x:?}")
+}
+
+/// Joint log `id,q1..q7,split` in degrees, as the native CSV writes them; `order` permutes the columns
+/// (the log's column `order[k]` holds chain joint k).
+fn joint_log(ds: &Dataset, side: Side, order: Option<&[usize]>, time: bool) -> String {
+    let arm = ds.arm(side);
+    let n = arm.joint_count();
+    let mut s = String::from("id");
+    for k in 1..=n {
+        s += &format!(",q{k}");
+    }
+    if time {
+        s += ",time";
+    }
+    s += ",split\n";
+    for (i, m) in arm.measurements.iter().enumerate() {
+        let mut cols = vec![String::new(); n];
+        for (k, q) in m.q_rad.iter().enumerate() {
+            let c = order.map_or(k, |o| o[k] - 1);
+            cols[c] = num(q.to_degrees());
+        }
+        s += &format!("{},{}", m.id, cols.join(","));
+        if time {
+            s += &format!(",{}", stamp(i, 0));
+        }
+        s += &format!(",{}\n", m.split.name());
+    }
+    s
+}
+
+/// A Tracker Pilot time stamp: configuration `i` at 10 s intervals, reflector `r` 1 s apart.
+fn stamp(i: usize, r: usize) -> String {
+    let t = 15 * 3600 + 6 * 60 + 10 * i + r;
+    format!(
+        "11.10.2022 {:02}:{:02}:{:02}.043",
+        t / 3600,
+        t / 60 % 60,
+        t % 60
+    )
+}
+
+/// A SpatialAnalyzer export of one arm: `//` header, `Collection Group Target X Y Z` and rows, some in
+/// scientific notation, space separated.
+fn spatial_analyzer(ds: &Dataset, side: Side) -> String {
+    let mut s = String::from(
+        "// SpatialAnalyzer ASCII export\n// Working Frame: World\n// Units: Millimeters\n\
+         Collection Group Target X Y Z\n",
+    );
+    for (i, m) in ds.arm(side).measurements.iter().enumerate() {
+        for (name, p) in ds.reflector_names.iter().zip(&m.tracker_points_mm) {
+            let f = |x: f64| if i % 2 == 0 { num(x) } else { format!("{x:e}") };
+            s += &format!(
+                "A {side}_arm {}_{name}   {} {} {}\n",
+                m.id,
+                f(p.x),
+                f(p.y),
+                f(p.z)
+            );
+        }
+    }
+    s
+}
+
+const LEICA_HEADER: &str = "X  [mm],Y  [mm],Z  [mm],U(95)  [mm],U(95) X  [µm],Target,\
+                            Temperature  [°C],Pressure  [hPa],Humidity  [%],Time Stamp,";
+
+/// A Leica Tracker Pilot CSV of one arm, as Windows-1252 bytes.
+fn leica(ds: &Dataset, side: Side) -> Vec<u8> {
+    let mut s = format!("{LEICA_HEADER}\r\n");
+    for (i, m) in ds.arm(side).measurements.iter().enumerate() {
+        for (r, (name, p)) in ds
+            .reflector_names
+            .iter()
+            .zip(&m.tracker_points_mm)
+            .enumerate()
+        {
+            s += &format!(
+                "{},{},{},0.0123,5.1,{}_{name},20.4,1012.8,41.0,'{},\r\n",
+                num(p.x),
+                num(p.y),
+                num(p.z),
+                m.id,
+                stamp(i, r)
+            );
+        }
+    }
+    windows_1252(&s)
+}
+
+fn windows_1252(s: &str) -> Vec<u8> {
+    s.chars()
+        .map(|c| match c {
+            'µ' => 0xB5,
+            '°' => 0xB0,
+            c if c.is_ascii() => c as u8,
+            c => panic!("{c} is not in the test's Windows-1252 table"),
+        })
+        .collect()
+}
+
+/// figaroh's calibration CSV of one arm: `x1,y1,z1,…` in metres, the joints by their URDF names in
+/// radians.
+fn figaroh(ds: &Dataset, side: Side) -> String {
+    let robot = RobotDescription::builtin_irb14000();
+    let joints = robot.arm_joint_names(side);
+    let mut cols: Vec<String> = (1..=ds.reflector_count())
+        .flat_map(|k| [format!("x{k}"), format!("y{k}"), format!("z{k}")])
+        .collect();
+    // The joint columns in reverse order: the reader puts them in chain order by their names.
+    cols.extend(joints.iter().rev().cloned());
+    let mut s = cols.join(",") + "\n";
+    for m in &ds.arm(side).measurements {
+        let mut row: Vec<String> = m
+            .tracker_points_mm
+            .iter()
+            .flat_map(|p| [num(p.x / 1000.0), num(p.y / 1000.0), num(p.z / 1000.0)])
+            .collect();
+        row.extend(m.q_rad.iter().rev().map(|&q| num(q)));
+        s += &(row.join(",") + "\n");
+    }
+    s
+}
+
+fn write(dir: &Path, name: &str, bytes: impl AsRef<[u8]>) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, bytes).unwrap();
+    p
+}
+
+/// Import, write into `dir/out`, load back.
+fn import_and_load(
+    dir: &Path,
+    inputs: &PerSide<ArmFiles>,
+    o: &ImportOptions,
+) -> (Imported, Dataset) {
+    let imported = import::import(&OsFiles, inputs, o).unwrap();
+    let out = dir.join("imported");
+    import::write(&imported, inputs, &out, Overwrite::Refuse).unwrap();
+    let back = dataset::load(&out).unwrap();
+    (imported, back)
+}
+
+/// The same configurations, joints, points (bit for bit) and splits; same reflectors and tracker.
+fn assert_same_measurements(a: &Dataset, b: &Dataset, same_ids: bool, same_splits: bool) {
+    assert_eq!(a.reflector_names, b.reflector_names);
+    assert_eq!(a.nominal_reflectors_mm, b.nominal_reflectors_mm);
+    assert_eq!(a.tracker, b.tracker);
+    for side in Side::BOTH {
+        let (x, y) = (a.arm(side), b.arm(side));
+        assert_eq!(x.measurements.len(), y.measurements.len(), "{side}");
+        for (m, n) in x.measurements.iter().zip(&y.measurements) {
+            if same_ids {
+                assert_eq!(m.id, n.id);
+            }
+            if same_splits {
+                assert_eq!(m.split, n.split, "{}", m.id);
+            }
+            assert_eq!(m.q_rad, n.q_rad, "{}", m.id);
+            assert_eq!(m.tracker_points_mm, n.tracker_points_mm, "{}", m.id);
+        }
+    }
+}
+
+/// Both datasets calibrated alike give the same parameters (within 1e-9).
+fn assert_same_calibration(a: &Dataset, b: &Dataset, split: Split) {
+    let robot = RobotDescription::builtin_irb14000();
+    let settings = CalibrationSettings {
+        split,
+        ..CalibrationSettings::default()
+    };
+    let ra = common::calibrate(a, &robot.nominal_model_for(a), &settings);
+    let rb = common::calibrate(b, &robot.nominal_model_for(b), &settings);
+    for side in Side::BOTH {
+        let (x, y) = (
+            ra.calibrated.arm(side).to_vector(),
+            rb.calibrated.arm(side).to_vector(),
+        );
+        assert_eq!(x.len(), y.len());
+        // A calibration that moved the parameters, not the nominal model twice.
+        assert!((&x - ra.nominal.arm(side).to_vector()).amax() > 1e-6);
+        assert!((x - y).amax() <= 1e-9, "{side} arm parameters differ");
+    }
+    let (p, q) = (
+        ra.calibrated.left_base_from_right_base,
+        rb.calibrated.left_base_from_right_base,
+    );
+    assert!((p.translation.vector - q.translation.vector).amax() <= 1e-9);
+    assert!(p.rotation.angle_to(&q.rotation) <= 1e-9);
+}
+
+#[test]
+fn spatial_analyzer_export_imports_into_the_native_calibration() {
+    let dir = tempfile::tempdir().unwrap();
+    let sim = simulated(3);
+    let native = native(&sim, dir.path(), Units::MM_DEG);
+    let inputs = PerSide::from_fn(|side| ArmFiles {
+        points: write(
+            dir.path(),
+            &format!("{side}.txt"),
+            spatial_analyzer(&sim.dataset, side),
+        ),
+        joints: Some(write(
+            dir.path(),
+            &format!("{side}-joints.csv"),
+            joint_log(&sim.dataset, side, None, false),
+        )),
+    });
+    let (imported, back) = import_and_load(dir.path(), &inputs, &options(&native));
+    let report = &imported.report.arms.left;
+    assert_eq!(report.format, PointsFormat::SpatialAnalyzer);
+    assert_eq!(report.frame.as_deref(), Some("World"));
+    assert_eq!(report.points_read, 120);
+    assert_eq!(report.matched, 40);
+    assert!(report.unmatched_points.is_empty() && report.unmatched_configurations.is_empty());
+    assert_same_measurements(&native, &back, true, true);
+    assert_same_calibration(&native, &back, Split::Cal);
+}
+
+#[test]
+fn leica_csv_in_windows_1252_imports_into_the_native_calibration() {
+    let dir = tempfile::tempdir().unwrap();
+    let sim = simulated(4);
+    let native = native(&sim, dir.path(), Units::MM_DEG);
+    // The joint log in the YuMi's ABB axis order 1…7, mapped back to chain order.
+    let inputs = PerSide::from_fn(|side| ArmFiles {
+        points: write(
+            dir.path(),
+            &format!("{side}.csv"),
+            leica(&sim.dataset, side),
+        ),
+        joints: Some(write(
+            dir.path(),
+            &format!("{side}-joints.csv"),
+            joint_log(&sim.dataset, side, Some(&YUMI_ABB_ORDER), false),
+        )),
+    });
+    let bytes = std::fs::read(&inputs.left.points).unwrap();
+    assert!(bytes.contains(&0xB5) && std::str::from_utf8(&bytes).is_err());
+    let mut o = options(&native);
+    o.joint_order = Some(YUMI_ABB_ORDER.to_vec());
+    let (imported, back) = import_and_load(dir.path(), &inputs, &o);
+    assert_eq!(imported.report.arms.right.format, PointsFormat::Leica);
+    assert_eq!(imported.report.arms.right.matched, 40);
+    assert_same_measurements(&native, &back, true, true);
+    assert_same_calibration(&native, &back, Split::Cal);
+    // The inputs are untouched.
+    assert_eq!(std::fs::read(&inputs.left.points).unwrap(), bytes);
+}
+
+#[test]
+fn figaroh_csv_imports_into_the_native_calibration() {
+    let dir = tempfile::tempdir().unwrap();
+    let sim = simulated(5);
+    // figaroh writes metres and radians: the native dataset in the same units reads the same texts.
+    let native = native(
+        &sim,
+        dir.path(),
+        Units {
+            length: LengthUnit::M,
+            angle: AngleUnit::Rad,
+        },
+    );
+    let inputs = PerSide::from_fn(|side| ArmFiles {
+        points: write(
+            dir.path(),
+            &format!("{side}.csv"),
+            figaroh(&sim.dataset, side),
+        ),
+        joints: None,
+    });
+    let (imported, back) = import_and_load(dir.path(), &inputs, &options(&native));
+    assert_eq!(imported.report.arms.left.format, PointsFormat::Figaroh);
+    // figaroh has no split: every configuration is a calibration configuration, so both datasets are
+    // calibrated on all of theirs. Ids are made as the simulator makes them (L001, …).
+    assert!(
+        back.arm(Side::Left)
+            .measurements
+            .iter()
+            .all(|m| m.split == Split::Cal)
+    );
+    assert_same_measurements(&native, &back, true, false);
+    assert_same_calibration(&native, &back, Split::All);
+}
+
+#[test]
+fn leica_points_match_by_time_stamp_within_the_tolerance() {
+    let dir = tempfile::tempdir().unwrap();
+    let sim = simulated(6);
+    let native = native(&sim, dir.path(), Units::MM_DEG);
+    // Target names without ids: only the reflector; the time stamps find the configuration (the
+    // reflectors are 0–2 s after the configuration's stamp).
+    let inputs = PerSide::from_fn(|side| {
+        let text = String::from_utf8(
+            leica(&sim.dataset, side)
+                .iter()
+                .map(|&b| b as char)
+                .collect::<String>()
+                .into_bytes(),
+        )
+        .unwrap();
+        let renamed: String = text
+            .lines()
+            .map(|l| {
+                let f: Vec<&str> = l.split(',').collect();
+                if f.len() > 5 && f[5].contains('_') {
+                    let mut g = f.clone();
+                    let r = f[5].rsplit_once('_').unwrap().1;
+                    g[5] = r;
+                    g.join(",") + "\n"
+                } else {
+                    l.to_string() + "\n"
+                }
+            })
+            .collect();
+        ArmFiles {
+            points: write(dir.path(), &format!("{side}.csv"), windows_1252(&renamed)),
+            joints: Some(write(
+                dir.path(),
+                &format!("{side}-joints.csv"),
+                joint_log(&sim.dataset, side, None, true),
+            )),
+        }
+    });
+    let mut o = options(&native);
+    o.matching = MatchRule::Time;
+    o.time_tolerance_s = 2.5;
+    let (_, back) = import_and_load(dir.path(), &inputs, &o);
+    assert_same_measurements(&native, &back, true, true);
+    // A tolerance below the reflectors' delays leaves configurations without reflectors.
+    o.time_tolerance_s = 1.5;
+    let imported = import::import(&OsFiles, &inputs, &o).unwrap();
+    let left = &imported.report.arms.left;
+    assert_eq!(left.matched, 0);
+    assert_eq!(left.unmatched_configurations.len(), 40);
+    // Reflector c (2 s after its configuration) is too late; a and b lack it.
+    let late = left
+        .unmatched_points
+        .iter()
+        .find(|u| u.name == "c")
+        .unwrap();
+    assert!(
+        late.reason.contains("2.000 s away (tolerance 1.5 s)"),
+        "{late:?}"
+    );
+    assert!(
+        left.unmatched_configurations[0]
+            .reason
+            .contains("reflector c")
+    );
+}
+
+/// The error of importing `left` points/joints texts (the right arm valid).
+fn import_error(dir: &Path, points: &[u8], joints: Option<&str>, o: &ImportOptions) -> ImportError {
+    let sim = simulated(7);
+    let ds = &sim.dataset;
+    let inputs = PerSide::new(
+        ArmFiles {
+            points: write(dir, "bad-points.txt", points),
+            joints: joints.map(|j| write(dir, "bad-joints.csv", j)),
+        },
+        ArmFiles {
+            points: write(dir, "right.txt", spatial_analyzer(ds, Side::Right)),
+            joints: Some(write(
+                dir,
+                "right-joints.csv",
+                joint_log(ds, Side::Right, None, false),
+            )),
+        },
+    );
+    import::import(&OsFiles, &inputs, o).unwrap_err()
+}
+
+#[test]
+fn malformed_inputs_are_refused_with_file_line_and_field() {
+    let dir = tempfile::tempdir().unwrap();
+    let sim = simulated(7);
+    let ds = &sim.dataset;
+    let o = options(ds);
+    let sa = spatial_analyzer(ds, Side::Left);
+    let log = joint_log(ds, Side::Left, None, false);
+
+    // A coordinate that is no number: line 7 is the third point (4 header lines).
+    let bad: String = sa
+        .lines()
+        .enumerate()
+        .map(|(i, l)| {
+            if i == 6 {
+                let mut f: Vec<&str> = l.split_whitespace().collect();
+                f[4] = "12.3.4";
+                f.join(" ") + "\n"
+            } else {
+                l.to_string() + "\n"
+            }
+        })
+        .collect();
+    let e = import_error(dir.path(), bad.as_bytes(), Some(&log), &o);
+    assert_eq!((e.line(), e.field()), (Some(7), Some("Y")), "{e}");
+    let msg = e.to_string();
+    assert!(
+        msg.contains("bad-points.txt:7") && msg.contains("12.3.4"),
+        "{msg}"
+    );
+
+    // A row cut short.
+    let cut = sa.lines().take(9).collect::<Vec<_>>().join("\n") + "\nA left_arm L002_c 1.0 2.0\n";
+    let e = import_error(dir.path(), cut.as_bytes(), Some(&log), &o);
+    assert!(
+        matches!(
+            e,
+            ImportError::FieldCount {
+                line: 10,
+                found: 5,
+                ..
+            }
+        ),
+        "{e}"
+    );
+
+    // A Leica header without Z.
+    let leica_bytes = leica(ds, Side::Left);
+    let no_z = String::from_utf8_lossy(&leica_bytes).replacen("Z  [mm]", "Q  [mm]", 1);
+    let e = import_error(dir.path(), no_z.as_bytes(), Some(&log), &o);
+    assert_eq!((e.line(), e.field()), (Some(1), Some("Z  [mm]")), "{e}");
+    // A format forced on a file of another: figaroh's marker columns are missing.
+    let mut forced = options(ds);
+    forced.points_format = Some(PointsFormat::Figaroh);
+    let e = import_error(dir.path(), sa.as_bytes(), Some(&log), &forced);
+    assert_eq!((e.line(), e.field()), (Some(1), Some("x1")), "{e}");
+
+    // A joint value that is no number, on the log's line 4 (header, then rows).
+    let bad_log = log.replacen(
+        &log.lines()
+            .nth(3)
+            .unwrap()
+            .split(',')
+            .nth(3)
+            .unwrap()
+            .to_string(),
+        "abc",
+        1,
+    );
+    let e = import_error(dir.path(), sa.as_bytes(), Some(&bad_log), &o);
+    assert_eq!((e.line(), e.field()), (Some(4), Some("q3")), "{e}");
+    assert!(e.to_string().contains("bad-joints.csv:4"), "{e}");
+
+    // Six joint columns for a seven-joint arm.
+    let six: String = log
+        .lines()
+        .map(|l| {
+            let mut f: Vec<&str> = l.split(',').collect();
+            f.remove(7);
+            f.join(",") + "\n"
+        })
+        .collect();
+    let e = import_error(dir.path(), sa.as_bytes(), Some(&six), &o);
+    assert!(matches!(e, ImportError::Header { line: 1, .. }), "{e}");
+    assert!(e.to_string().contains("the arm has 7 joints"), "{e}");
+
+    // A duplicate id.
+    let second = log
+        .lines()
+        .nth(2)
+        .unwrap()
+        .split(',')
+        .next()
+        .unwrap()
+        .to_string();
+    let dup = log.replacen(
+        &format!("{second},"),
+        &format!("{},", ds.arms.left.measurements[0].id),
+        1,
+    );
+    let e = import_error(dir.path(), sa.as_bytes(), Some(&dup), &o);
+    assert!(
+        matches!(
+            e,
+            ImportError::DuplicateId {
+                line: 3,
+                first_line: 2,
+                ..
+            }
+        ),
+        "{e}"
+    );
+
+    // figaroh without one of the arm's joints.
+    let fig = figaroh(ds, Side::Left);
+    let joint = RobotDescription::builtin_irb14000().arm_joint_names(Side::Left)[2].clone();
+    let e = import_error(
+        dir.path(),
+        fig.replacen(&joint, "elbow", 1).as_bytes(),
+        None,
+        &o,
+    );
+    assert_eq!(
+        (e.line(), e.field()),
+        (Some(1), Some(joint.as_str())),
+        "{e}"
+    );
+    // A figaroh value that is no number.
+    let mut lines: Vec<String> = fig.lines().map(str::to_string).collect();
+    let mut f: Vec<String> = lines[5].split(',').map(str::to_string).collect();
+    f[4] = "n/a".into();
+    lines[5] = f.join(",");
+    let e = import_error(dir.path(), (lines.join("\n") + "\n").as_bytes(), None, &o);
+    assert_eq!((e.line(), e.field()), (Some(6), Some("y2")), "{e}");
+
+    // UTF-16 is refused, not misread.
+    let e = import_error(dir.path(), &[0xFF, 0xFE, b'X', 0], Some(&log), &o);
+    assert!(matches!(e, ImportError::Encoding { .. }), "{e}");
+
+    // Points without a joint log.
+    let e = import_error(dir.path(), sa.as_bytes(), None, &o);
+    assert!(e.to_string().contains("--left-joints"), "{e}");
+}
+
+#[test]
+fn unmatched_targets_are_reported_and_repeated_shots_averaged() {
+    let dir = tempfile::tempdir().unwrap();
+    let sim = simulated(8);
+    let ds = &sim.dataset;
+    let first = &ds.arms.left.measurements[0];
+    let second = &ds.arms.left.measurements[1];
+    let mut sa = spatial_analyzer(ds, Side::Left);
+    // Two more shots of the first configuration's reflector a, 0.01 mm either side in x.
+    let a = first.tracker_points_mm[0];
+    for dx in [0.01, -0.01] {
+        sa += &format!(
+            "A left_arm {}_a {} {} {}\n",
+            first.id,
+            num(a.x + dx),
+            num(a.y),
+            num(a.z)
+        );
+    }
+    // A target of no configuration, a name without a reflector, and the second configuration's
+    // reflector c left out.
+    sa += "A left_arm X999_a 1.0 2.0 3.0\nA left_arm stray 1.0 2.0 3.0\n";
+    let c_line = format!("A left_arm {}_c ", second.id);
+    let sa: String = sa
+        .lines()
+        .filter(|l| !l.starts_with(&c_line))
+        .map(|l| l.to_string() + "\n")
+        .collect();
+    let inputs = PerSide::new(
+        ArmFiles {
+            points: write(dir.path(), "left.txt", &sa),
+            joints: Some(write(
+                dir.path(),
+                "left-joints.csv",
+                joint_log(ds, Side::Left, None, false),
+            )),
+        },
+        ArmFiles {
+            points: write(dir.path(), "right.txt", spatial_analyzer(ds, Side::Right)),
+            joints: Some(write(
+                dir.path(),
+                "right-joints.csv",
+                joint_log(ds, Side::Right, None, false),
+            )),
+        },
+    );
+    let imported = import::import(&OsFiles, &inputs, &options(ds)).unwrap();
+    let r = &imported.report.arms.left;
+    assert_eq!(r.matched, 39);
+    assert_eq!(r.unmatched_configurations.len(), 1);
+    assert_eq!(r.unmatched_configurations[0].name, second.id);
+    assert!(r.unmatched_configurations[0].reason.contains("reflector c"));
+    let reason = |name: &str| {
+        r.unmatched_points
+            .iter()
+            .find(|u| u.name == name)
+            .unwrap_or_else(|| panic!("{name} not reported: {r}"))
+            .reason
+            .clone()
+    };
+    assert!(reason("X999_a").contains("no configuration `X999`"));
+    assert!(reason("stray").contains("<id>_<reflector>"));
+    // The second configuration's a and b are reported unused.
+    assert!(reason(&format!("{}_a", second.id)).contains("lacks reflector c"));
+    assert_eq!(r.repeated.len(), 1);
+    let rep = &r.repeated[0];
+    assert_eq!(
+        (rep.id.as_str(), rep.reflector.as_str(), rep.shots),
+        (first.id.as_str(), "a", 3)
+    );
+    assert!((rep.spread_mm - 0.01).abs() < 1e-9, "{}", rep.spread_mm);
+    let got = imported.dataset.arms.left.measurements[0].tracker_points_mm[0];
+    assert!((got - a).amax() < 1e-9);
+    let text = imported.report.to_string();
+    assert!(
+        text.contains("3 shots averaged, spread 0.0100 mm"),
+        "{text}"
+    );
+    assert!(text.contains("unmatched point `stray`"), "{text}");
+}
+
+fn dualcal(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_dualcal"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn the_command_imports_and_refuses_a_non_empty_out() {
+    let dir = tempfile::tempdir().unwrap();
+    let sim = simulated(9);
+    let ds = &sim.dataset;
+    let files: Vec<PathBuf> = Side::BOTH
+        .iter()
+        .flat_map(|&side| {
+            [
+                write(dir.path(), &format!("{side}.csv"), leica(ds, side)),
+                write(
+                    dir.path(),
+                    &format!("{side}-joints.csv"),
+                    joint_log(ds, side, None, false),
+                ),
+            ]
+        })
+        .collect();
+    let f: Vec<&str> = files.iter().map(|p| p.to_str().unwrap()).collect();
+    let out = dir.path().join("out");
+    let refl: Vec<String> = ds
+        .reflector_names
+        .iter()
+        .zip(&ds.nominal_reflectors_mm)
+        .map(|(n, p)| format!("{n}={},{},{}", p.x, p.y, p.z))
+        .collect();
+    let mut args = vec![
+        "import",
+        "--left-points",
+        f[0],
+        "--left-joints",
+        f[1],
+        "--right-points",
+        f[2],
+        "--right-joints",
+        f[3],
+        "--angle-unit",
+        "deg",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    for r in &refl {
+        args.extend(["--reflector", r]);
+    }
+    let o = dualcal(&args);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        o.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(stdout.contains("40 configurations matched"), "{stdout}");
+    assert!(out.join(import::REPORT_FILE).is_file());
+    let back = dataset::load(&out).unwrap();
+    assert_eq!(back.arms.right.measurements.len(), 40);
+    // Again into the same directory: refused, unless --force.
+    let o = dualcal(&args);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("already exists"));
+    args.push("--force");
+    assert!(dualcal(&args).status.success());
+    // A malformed log: non-zero exit naming file and line.
+    let bad = write(
+        dir.path(),
+        "bad.csv",
+        "id,q1,q2,q3,q4,q5,q6,q7\nL001,1,2,x,4,5,6,7\n",
+    );
+    let mut bad_args = args.clone();
+    bad_args[4] = bad.to_str().unwrap();
+    let o = dualcal(&bad_args);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("bad.csv:2: field `q3`"), "{err}");
+}
