@@ -238,6 +238,9 @@ fn header_comment(comment: &str) -> Option<(String, String)> {
     Some((k.trim().to_lowercase(), v.trim().to_string()))
 }
 
+/// A column's name and the unit in its brackets.
+type NameUnit = (String, Option<String>);
+
 /// The layout of a point list's rows.
 struct Layout {
     delimiter: Delimiter,
@@ -256,7 +259,7 @@ fn read_spatial_analyzer(
     let mut unit_header: Option<(usize, String)> = None;
     let mut frame = None;
     let mut notes = Vec::new();
-    let mut header: Option<(usize, Vec<(String, Option<String>)>)> = None;
+    let mut header: Option<(usize, Vec<NameUnit>)> = None;
     let mut layout: Option<Layout> = None;
     let mut unit = o.unit.unwrap_or_default();
     let mut points = Vec::new();
@@ -286,8 +289,7 @@ fn read_spatial_analyzer(
                 .find(|&i| numbers[i] && numbers[i + 1] && numbers[i + 2]);
             if header.is_none() && first_xyz.is_none() {
                 // Column names: `Collection Group Target X Y Z …`.
-                let names: Vec<(String, Option<String>)> =
-                    fields.iter().map(|f| text::name_and_unit(f)).collect();
+                let names: Vec<NameUnit> = fields.iter().map(|f| text::name_and_unit(f)).collect();
                 let is = |n: &str| names.iter().any(|(m, _)| m.eq_ignore_ascii_case(n));
                 if !(is("x") && is("y") && is("z")) {
                     return Err(ImportError::Header {
@@ -459,7 +461,7 @@ fn read_leica(path: &Path, text: &str, o: &ReadOptions) -> Result<PointFile, Imp
         });
     };
     let delimiter = Delimiter::of_line(header, false);
-    let names: Vec<(String, Option<String>)> = text::split(header, delimiter)
+    let names: Vec<NameUnit> = text::split(header, delimiter)
         .iter()
         .map(|f| text::name_and_unit(f))
         .collect();
