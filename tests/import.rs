@@ -726,3 +726,162 @@ fn the_command_imports_and_refuses_a_non_empty_out() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("bad.csv:2: field `q3`"), "{err}");
 }
+
+/// The point readers on the variants users' exports take: name columns `Group Target`, `Target` or
+/// none, comma or space separated, units from the header, decimal commas, a generic mapping.
+#[test]
+fn point_file_variants_read_alike() {
+    use dualcal::import::points::{ReadOptions, read};
+    use dualcal::import::{ColumnMap, PointTable, PointUnit};
+    let names: Vec<String> = ["a", "b", "c"].map(String::from).to_vec();
+    let o = ReadOptions {
+        format: None,
+        unit: None,
+        decimal_comma: false,
+        columns: None,
+        reflector_names: &names,
+        joint_names: None,
+        angle_unit: AngleUnit::Deg,
+    };
+    let p = Path::new("points.txt");
+    let points = |text: &str, o: &ReadOptions| match read(p, text, o).unwrap().table {
+        PointTable::Points(v) => v
+            .into_iter()
+            .map(|q| (q.target, q.position_mm))
+            .collect::<Vec<_>>(),
+        PointTable::Rows(_) => panic!("rows"),
+    };
+    let want = vec![
+        (
+            Some("L1_a".to_string()),
+            nalgebra::Vector3::new(1000.5, -2.0, 30.0),
+        ),
+        (
+            Some("L1_b".to_string()),
+            nalgebra::Vector3::new(1.0, 2.0, 3.0),
+        ),
+    ];
+    // Group Target X Y Z, comma separated, scientific notation, extra columns.
+    assert_eq!(
+        points(
+            "Group,Target,X,Y,Z,Tol\nG,L1_a,1.0005e3,-2,30,0.1\nG,L1_b,1,2,3,0.1\n",
+            &o
+        ),
+        want
+    );
+    // Target only, no header, space separated.
+    assert_eq!(points("L1_a 1000.5 -2 30\nL1_b 1 2 3\n", &o), want);
+    // Meters in the `//` header.
+    assert_eq!(
+        points(
+            "// Units: Meters\nL1_a 1.0005 -0.002 0.03\nL1_b 0.001 0.002 0.003\n",
+            &o
+        ),
+        want
+    );
+    // No names at all.
+    let unnamed = points("1000.5 -2 30\n", &o);
+    assert_eq!(unnamed, vec![(None, want[0].1)]);
+    // Decimal commas with `;` (Leica in a German locale), µm forced by the header.
+    let leica = "X  [mm];Y  [mm];Z  [mm];Target;Time Stamp\n1000,5;-2;30;L1_a;'11.10.2022 15:06:48.043\n\
+                 1;2;3;L1_b;'11.10.2022 15:06:49.043\n";
+    assert_eq!(points(leica, &o), want);
+    let file = read(p, leica, &o).unwrap();
+    assert_eq!(
+        (file.format, file.unit),
+        (PointsFormat::Leica, PointUnit::Mm)
+    );
+    // A generic file, one point per row, columns by header name, decimal commas and inches.
+    let map = ColumnMap::parse("target=Name,x=3,y=4,z=5").unwrap();
+    let g = ReadOptions {
+        columns: Some(&map),
+        unit: Some(PointUnit::In),
+        decimal_comma: true,
+        ..o.clone()
+    };
+    let got = points("Name;Station;East;North;Up\nL1_a;S1;10;0,5;-1\n", &g);
+    assert_eq!(got[0].0.as_deref(), Some("L1_a"));
+    assert!((got[0].1 - nalgebra::Vector3::new(254.0, 12.7, -25.4)).amax() < 1e-12);
+    // A generic file of whole configurations: id, reflectors, joints in degrees, split.
+    let map = ColumnMap::parse(
+        "id=1,a.x=2,a.y=3,a.z=4,b.x=5,b.y=6,b.z=7,c.x=8,c.y=9,c.z=10,q=11-12,split=13",
+    )
+    .unwrap();
+    let g = ReadOptions {
+        columns: Some(&map),
+        ..o.clone()
+    };
+    let file = read(p, "P1,1,2,3,4,5,6,7,8,9,90,-45,ver\n", &g).unwrap();
+    let PointTable::Rows(rows) = file.table else {
+        panic!("points")
+    };
+    assert_eq!(rows[0].id.as_deref(), Some("P1"));
+    assert_eq!(rows[0].points_mm[2], nalgebra::Vector3::new(7.0, 8.0, 9.0));
+    let q = rows[0].q_rad.as_ref().unwrap();
+    assert!(
+        (q[0] - std::f64::consts::FRAC_PI_2).abs() < 1e-15
+            && (q[1] + std::f64::consts::FRAC_PI_4).abs() < 1e-15
+    );
+    assert_eq!(rows[0].split, Some(Split::Ver));
+    // Mappings that cannot work are refused with the reason.
+    assert!(
+        ColumnMap::parse("x=1,a.x=2")
+            .unwrap_err()
+            .contains("either")
+    );
+    assert!(
+        ColumnMap::parse("x=0,y=1,z=2")
+            .unwrap_err()
+            .contains("from 1")
+    );
+    assert!(
+        ColumnMap::parse("x=1,y=2,z=3,w=4")
+            .unwrap_err()
+            .contains("unknown role")
+    );
+}
+
+/// A joint log with a header naming the URDF joints in another order is put in chain order by the
+/// names; a `[rad]` header sets the unit; the YuMi mapping and its preset name agree.
+#[test]
+fn joint_logs_by_names_units_and_mappings() {
+    use dualcal::import::joints::{JointLogOptions, read};
+    let robot = RobotDescription::builtin_irb14000();
+    let names = robot.arm_joint_names(Side::Left);
+    let mut header: Vec<String> = vec!["time".into(), "id".into()];
+    header.extend(names.iter().rev().map(|n| format!("{n} [rad]")));
+    let text = format!("{}\n0.5,P1,7,6,5,4,3,2,1\n", header.join(","));
+    let o = JointLogOptions {
+        joint_names: Some(&names),
+        id_prefix: "L",
+        ..Default::default()
+    };
+    let log = read(Path::new("j.csv"), &text, &o).unwrap();
+    assert_eq!(log.angle_unit, AngleUnit::Rad);
+    assert_eq!(log.rows[0].id, "P1");
+    assert_eq!(log.rows[0].q_rad, [1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0]);
+    assert_eq!(log.rows[0].time_s, Some(0.5));
+    assert_eq!(
+        import::parse_joint_order("yumi-abb").unwrap(),
+        YUMI_ABB_ORDER
+    );
+    assert_eq!(
+        import::parse_joint_order("1,2,7,3,4,5,6").unwrap(),
+        YUMI_ABB_ORDER
+    );
+    assert!(import::parse_joint_order("1,2,2").is_err());
+    // A log of ABB axes 1…7 (axis 7 third in chain order), no header, degrees.
+    let order = YUMI_ABB_ORDER;
+    let o = JointLogOptions {
+        joint_order: Some(&order),
+        id_prefix: "L",
+        ..Default::default()
+    };
+    let log = read(Path::new("j.csv"), "P1,10,20,30,40,50,60,70\n", &o).unwrap();
+    let deg: Vec<f64> = log.rows[0]
+        .q_rad
+        .iter()
+        .map(|q| q.to_degrees().round())
+        .collect();
+    assert_eq!(deg, [10.0, 20.0, 70.0, 30.0, 40.0, 50.0, 60.0]);
+}
