@@ -8,7 +8,8 @@ mod common;
 
 use dualcal::dataset::{self, AngleUnit, Dataset, LengthUnit, Split, Units};
 use dualcal::import::{
-    self, ArmFiles, ImportError, ImportOptions, Imported, MatchRule, PointsFormat, YUMI_ABB_ORDER,
+    self, ArmFiles, ColumnMap, ImportError, ImportOptions, Imported, MatchRule, PointsFormat,
+    YUMI_ABB_ORDER,
 };
 use dualcal::output::Overwrite;
 use dualcal::robot::RobotDescription;
@@ -884,4 +885,88 @@ fn joint_logs_by_names_units_and_mappings() {
         .map(|q| q.to_degrees().round())
         .collect();
     assert_eq!(deg, [10.0, 20.0, 70.0, 30.0, 40.0, 50.0, 60.0]);
+}
+
+/// Garbage and damaged files are refused or read, never a panic: random bytes, and valid files of each
+/// format with bytes changed, cut or repeated, through every reader.
+#[test]
+fn damaged_files_never_panic() {
+    use dualcal::import::joints::{self, JointLogOptions};
+    use dualcal::import::points::{ReadOptions, read};
+    use rand::{Rng, SeedableRng};
+    let sim = simulated(10);
+    let ds = &sim.dataset;
+    let names = ds.reflector_names.to_vec();
+    let joint_names = RobotDescription::builtin_irb14000().arm_joint_names(Side::Left);
+    let map =
+        ColumnMap::parse("id=1,a.x=2,a.y=3,a.z=4,b.x=5,b.y=6,b.z=7,c.x=8,c.y=9,c.z=10,q=11-17")
+            .unwrap();
+    let seeds: Vec<Vec<u8>> = vec![
+        spatial_analyzer(ds, Side::Left).into_bytes(),
+        leica(ds, Side::Left),
+        figaroh(ds, Side::Left).into_bytes(),
+        joint_log(ds, Side::Left, None, true).into_bytes(),
+    ];
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(22);
+    let alphabet = b"0123456789.,;:_ -+eE'\"\t\r\n#/[]abcxyzXYZ\xB5\xB0\xFF";
+    for round in 0..400 {
+        let mut bytes = seeds[round % seeds.len()].clone();
+        bytes.truncate(bytes.len().min(3000));
+        for _ in 0..rng.random_range(1..8) {
+            let k = rng.random_range(0..bytes.len().max(1));
+            match rng.random_range(0..4) {
+                0 if !bytes.is_empty() => {
+                    let at = k.min(bytes.len() - 1);
+                    bytes[at] = alphabet[rng.random_range(0..alphabet.len())];
+                }
+                1 => bytes.truncate(k),
+                2 if k < bytes.len() => {
+                    let tail = bytes[k..].to_vec();
+                    bytes.extend(tail.into_iter().take(200));
+                }
+                _ => bytes.insert(
+                    k.min(bytes.len()),
+                    alphabet[rng.random_range(0..alphabet.len())],
+                ),
+            }
+        }
+        if round % 10 == 0 {
+            bytes = (0..rng.random_range(0..300))
+                .map(|_| rng.random())
+                .collect();
+        }
+        let path = Path::new("damaged.csv");
+        let Ok(text) = import::text::decode(path, &bytes) else {
+            continue;
+        };
+        for format in [
+            None,
+            Some(PointsFormat::SpatialAnalyzer),
+            Some(PointsFormat::Leica),
+            Some(PointsFormat::Figaroh),
+            Some(PointsFormat::Generic),
+        ] {
+            let o = ReadOptions {
+                format,
+                unit: None,
+                decimal_comma: round % 3 == 0,
+                columns: Some(&map),
+                reflector_names: &names,
+                joint_names: Some(&joint_names),
+                angle_unit: AngleUnit::Deg,
+            };
+            let _ = read(path, &text, &o);
+        }
+        let order = YUMI_ABB_ORDER;
+        let _ = joints::read(
+            path,
+            &text,
+            &JointLogOptions {
+                joint_order: (round % 2 == 0).then_some(&order[..]),
+                joint_names: Some(&joint_names),
+                id_prefix: "L",
+                ..Default::default()
+            },
+        );
+    }
 }

@@ -822,7 +822,7 @@ fn read_generic(
         .iter()
         .filter(|(r, _)| matches!(r, ColumnRole::Axis(_) | ColumnRole::ReflectorAxis(..)))
         .filter_map(|(_, c)| match c {
-            ColumnRef::Number(n) => Some(n - 1),
+            ColumnRef::Number(n) => n.checked_sub(1),
             ColumnRef::Name(_) => None,
         })
         .collect();
@@ -844,7 +844,10 @@ fn read_generic(
     let resolve = |role: &ColumnRole| -> Result<Option<usize>, ImportError> {
         match map.get(role) {
             None => Ok(None),
-            Some(ColumnRef::Number(n)) => Ok(Some(n - 1)),
+            Some(ColumnRef::Number(n)) => n
+                .checked_sub(1)
+                .map(Some)
+                .ok_or_else(|| ImportError::Options("columns are counted from 1".to_string())),
             Some(ColumnRef::Name(name)) => header
                 .iter()
                 .position(|h| h == name || h.eq_ignore_ascii_case(name))

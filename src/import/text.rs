@@ -270,7 +270,7 @@ pub fn time_s(field: &str) -> Option<f64> {
     } else {
         return None;
     };
-    if !(1..=12).contains(&m) || !(1..=31).contains(&d) {
+    if !(1..=12).contains(&m) || !(1..=31).contains(&d) || !(1..=9999).contains(&y) {
         return None;
     }
     Some(days_from_civil(y, m, d) as f64 * 86_400.0 + tod)
@@ -313,5 +313,6 @@ mod tests {
         assert_eq!(time_s("12.5"), Some(12.5));
         assert_eq!(time_s("00:01:02.5"), Some(62.5));
         assert_eq!(time_s("yesterday"), None);
+        assert_eq!(time_s("11.10.9000000000000000000 15:06:48"), None);
     }
 }
