@@ -5,6 +5,8 @@
 //! reported; repeated shots are averaged with their spread.
 
 mod common;
+#[path = "fixtures/robots.rs"]
+mod robots;
 
 use dualcal::dataset::{self, AngleUnit, Dataset, LengthUnit, Split, Units};
 use dualcal::import::{
@@ -968,5 +970,134 @@ fn damaged_files_never_panic() {
                 ..Default::default()
             },
         );
+    }
+}
+
+/// A robot with a prismatic lift and a mimic joint (issue 19's test robot): figaroh's file gives the
+/// lift in metres (the URDF's units) and the arm's joints by name (the mimic follower has no column);
+/// a SpatialAnalyzer export with a joint log in degrees gives it in mm, or in metres with
+/// `joint_length_unit`. Each imports into the dataset's own values (mm), which the native reader
+/// loads back.
+#[test]
+fn a_prismatic_joint_imports_in_its_length_unit() {
+    let dir = tempfile::tempdir().unwrap();
+    let urdf = write(dir.path(), "lift_mimic.urdf", robots::lift_mimic_urdf());
+    let arms = PerSide::from_fn(|side| {
+        let (base, tip) = robots::LIFT_MIMIC_ARMS[usize::from(side == Side::Right)];
+        Some(dualcal::robot::ArmLinks::new(base, tip))
+    });
+    let robot = RobotDescription::load(
+        &urdf,
+        &dualcal::robot::LoadOptions {
+            arms: arms.clone(),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let sim = simulate_with_robot(&paper_options(3, 12, 8), &robot).unwrap();
+    let ds = &sim.dataset;
+    let joints = PerSide::from_fn(|s| robot.arm_joint_names(s));
+    let linear = PerSide::from_fn(|s| robot.arm(s).linear_joints());
+    assert_eq!(linear.left, [false, true, false, false, false, false]);
+    assert_eq!(joints.left.len(), 6, "the mimic follower is not a column");
+    let mut o = ImportOptions::new(
+        ds.reflector_names.to_vec(),
+        ds.nominal_reflectors_mm.clone(),
+    );
+    o.tracker = ds.tracker;
+    o.joint_names = PerSide::from_fn(|s| Some(joints[s].clone()));
+    o.linear_joints = linear.clone();
+    o.robot = Some(urdf.clone());
+    o.links = arms;
+    // The same joint values, each in a unit: angles in `deg`/`rad`, the lift in `mm`/`m`.
+    let value = |side: Side, k: usize, q: f64, metres: bool, radians: bool| -> String {
+        match (linear[side][k], metres, radians) {
+            (true, true, _) => num(q / 1000.0),
+            (true, false, _) => num(q),
+            (false, _, true) => num(q),
+            (false, _, false) => num(q.to_degrees()),
+        }
+    };
+    let close = |a: &Dataset, what: &str| {
+        for side in Side::BOTH {
+            for (m, n) in a
+                .arm(side)
+                .measurements
+                .iter()
+                .zip(&ds.arm(side).measurements)
+            {
+                for (k, (x, y)) in m.q_rad.iter().zip(&n.q_rad).enumerate() {
+                    assert!(
+                        (x - y).abs() < 1e-9,
+                        "{what} {side} {} q{}: {x} vs {y}",
+                        m.id,
+                        k + 1
+                    );
+                }
+            }
+            assert_eq!(a.arm(side).linear_joints, linear[side], "{what}");
+        }
+    };
+    // figaroh: metres and radians, columns by name (reversed).
+    let figaroh_inputs = PerSide::from_fn(|side| {
+        let mut cols: Vec<String> = (1..=ds.reflector_count())
+            .flat_map(|k| [format!("x{k}"), format!("y{k}"), format!("z{k}")])
+            .collect();
+        cols.extend(joints[side].iter().rev().cloned());
+        let mut text = cols.join(",") + "\n";
+        for m in &ds.arm(side).measurements {
+            let mut row: Vec<String> = m
+                .tracker_points_mm
+                .iter()
+                .flat_map(|p| [num(p.x / 1000.0), num(p.y / 1000.0), num(p.z / 1000.0)])
+                .collect();
+            let n = m.q_rad.len();
+            row.extend((0..n).rev().map(|k| value(side, k, m.q_rad[k], true, true)));
+            text += &(row.join(",") + "\n");
+        }
+        ArmFiles {
+            points: write(dir.path(), &format!("figaroh-{side}.csv"), text),
+            joints: None,
+        }
+    });
+    let imported = import::import(&OsFiles, &figaroh_inputs, &o).unwrap();
+    close(&imported.dataset, "figaroh");
+    // SpatialAnalyzer + a joint log in degrees, the lift in mm and then in metres.
+    for metres in [false, true] {
+        let inputs = PerSide::from_fn(|side| {
+            let mut log = String::from("id");
+            for k in 1..=joints[side].len() {
+                log += &format!(",q{k}");
+            }
+            log += ",split\n";
+            for m in &ds.arm(side).measurements {
+                let q: Vec<String> = (0..m.q_rad.len())
+                    .map(|k| value(side, k, m.q_rad[k], metres, false))
+                    .collect();
+                log += &format!("{},{},{}\n", m.id, q.join(","), m.split.name());
+            }
+            ArmFiles {
+                points: write(
+                    dir.path(),
+                    &format!("sa-{side}.txt"),
+                    spatial_analyzer(ds, side),
+                ),
+                joints: Some(write(dir.path(), &format!("log-{side}-{metres}.csv"), log)),
+            }
+        });
+        let mut o = o.clone();
+        o.joint_length_unit = metres.then_some(LengthUnit::M);
+        let imported = import::import(&OsFiles, &inputs, &o).unwrap();
+        close(
+            &imported.dataset,
+            if metres { "log in m" } else { "log in mm" },
+        );
+        if !metres {
+            // Written and loaded back as a user's dataset: the lift's column is read as a length.
+            let out = dir.path().join("imported-lift");
+            import::write(&imported, &inputs, &out, Overwrite::Refuse).unwrap();
+            let ws = dualcal::workspace::Workspace::load(&out, &Default::default()).unwrap();
+            close(&ws.dataset, "written and loaded");
+        }
     }
 }

@@ -34,6 +34,7 @@ macro_rules! outln {
 }
 
 mod calibrate_settings;
+mod import;
 mod outlier_study;
 mod paper_study;
 mod reproduce;
@@ -69,111 +70,7 @@ pub enum Command {
     Reproduce(ReproduceArgs),
     /// Make a dataset from tracker exports (SpatialAnalyzer, Leica Tracker Pilot, figaroh, any CSV
     /// with a column mapping) and the controller's joint logs (docs/formats.md).
-    Import(ImportArgs),
-}
-
-#[derive(Args, Debug)]
-pub struct ImportArgs {
-    /// Robot description (URDF) the joint counts and names are checked against, and that the dataset
-    /// refers to [default: the built-in IRB 14000].
-    #[arg(long)]
-    pub robot: Option<PathBuf>,
-    /// With --robot: the left arm's chain, BASE:TIP (default: the YuMi joint names).
-    #[arg(long, requires = "robot", value_parser = ArmLinks::parse)]
-    pub left_links: Option<ArmLinks>,
-    /// With --robot: the right arm's chain, BASE:TIP (default: the YuMi joint names).
-    #[arg(long, requires = "robot", value_parser = ArmLinks::parse)]
-    pub right_links: Option<ArmLinks>,
-    /// The left arm's point file (tracker export).
-    #[arg(long)]
-    pub left_points: PathBuf,
-    /// The left arm's joint log (`id,q1..qN`); not needed when the point file has the joints (figaroh).
-    #[arg(long)]
-    pub left_joints: Option<PathBuf>,
-    /// The right arm's point file (tracker export).
-    #[arg(long)]
-    pub right_points: PathBuf,
-    /// The right arm's joint log (`id,q1..qN`); not needed when the point file has the joints.
-    #[arg(long)]
-    pub right_joints: Option<PathBuf>,
-    /// Output dataset directory (created; must be empty or absent unless --force).
-    #[arg(long)]
-    pub out: PathBuf,
-    /// Write into an existing non-empty --out, replacing its dataset.
-    #[arg(long)]
-    pub force: bool,
-    /// The point files' format [default: recognised from each file].
-    #[arg(long, value_enum)]
-    pub points_format: Option<crate::import::PointsFormat>,
-    /// Column mapping of a generic CSV/TXT (implies --points-format generic): `target=1,x=2,y=3,z=4`
-    /// (a point per row) or `id=1,a.x=2,a.y=3,a.z=4,…,q=11-17,split=18` (a configuration per row);
-    /// columns by 1-based number or header name.
-    #[arg(long, value_parser = crate::import::ColumnMap::parse)]
-    pub columns: Option<crate::import::ColumnMap>,
-    /// Length unit of point files that do not state theirs [default: mm; m for figaroh].
-    #[arg(long, value_enum)]
-    pub length_unit: Option<crate::import::PointUnit>,
-    /// Angle unit of the joint logs [default: the header's `[deg]`/`[rad]`, else deg].
-    #[arg(long, value_enum)]
-    pub angle_unit: Option<AngleArg>,
-    /// Numbers with a decimal comma (`1234,56`; fields then separated by `;`, tabs or spaces).
-    #[arg(long)]
-    pub decimal_comma: bool,
-    /// The joint logs' column order: chain joint k is the log's joint column given k-th (1-based),
-    /// e.g. `1,2,7,3,4,5,6` (or `yumi-abb`) for the YuMi's ABB axes 1…7.
-    #[arg(long, value_parser = crate::import::parse_joint_order)]
-    pub joint_order: Option<JointOrder>,
-    /// How points find their configuration: target names `<id>_<reflector>`, file order, or time stamps.
-    #[arg(long = "match", value_enum, default_value_t = crate::import::MatchRule::Name)]
-    pub matching: crate::import::MatchRule,
-    /// With --match time: the largest time difference between a point and its configuration, s.
-    #[arg(long, default_value_t = 0.5)]
-    pub time_tolerance_s: f64,
-    /// A reflector and its nominal position in the tip (flange) frame, mm: NAME=X,Y,Z; repeat for each,
-    /// in order [default: a, b, c at the paper's positions].
-    #[arg(long = "reflector", value_parser = parse_reflector)]
-    pub reflectors: Vec<(String, nalgebra::Vector3<f64>)>,
-    /// The tracker's maximum permissible error, constant part, µm.
-    #[arg(long, default_value_t = dataset::TrackerSpec::default().mpe_um)]
-    pub mpe_um: f64,
-    /// The tracker's maximum permissible error, part per metre of distance, µm/m.
-    #[arg(long, default_value_t = dataset::TrackerSpec::default().mpe_um_per_m)]
-    pub mpe_um_per_m: f64,
-    /// The tracker station the left arm was measured from (when the arms were measured from two).
-    #[arg(long)]
-    pub left_station: Option<String>,
-    /// The tracker station the right arm was measured from.
-    #[arg(long)]
-    pub right_station: Option<String>,
-}
-
-/// A joint-order mapping (a type of its own: clap takes a `Vec` argument for a list of values).
-pub type JointOrder = Vec<usize>;
-
-/// Angle unit on the command line.
-#[derive(Clone, Copy, Debug, ValueEnum, PartialEq, Eq)]
-pub enum AngleArg {
-    Deg,
-    Rad,
-}
-
-fn parse_reflector(s: &str) -> std::result::Result<(String, nalgebra::Vector3<f64>), String> {
-    let (name, xyz) = s
-        .split_once('=')
-        .ok_or_else(|| format!("`{s}`: expected NAME=X,Y,Z (mm, tip frame)"))?;
-    let v: Vec<f64> = xyz
-        .split(',')
-        .map(|x| x.trim().parse::<f64>())
-        .collect::<std::result::Result<_, _>>()
-        .map_err(|_| format!("`{s}`: expected NAME=X,Y,Z with three numbers (mm)"))?;
-    match v.as_slice() {
-        [x, y, z] if v.iter().all(|c| c.is_finite()) => {
-            Ok((name.trim().to_string(), nalgebra::Vector3::new(*x, *y, *z)))
-        }
-        _ => Err(format!(
-            "`{s}`: expected NAME=X,Y,Z with three numbers (mm)"
-        )),
-    }
+    Import(import::ImportArgs),
 }
 
 #[derive(Args, Debug)]
@@ -407,96 +304,8 @@ fn run_command(command: Command) -> Result<()> {
         Command::Evaluate(a) => evaluate_cmd(&a),
         Command::Calibrate(a) => calibrate_cmd(&a),
         Command::Reproduce(a) => reproduce::run(&a),
-        Command::Import(a) => import_cmd(&a),
+        Command::Import(a) => import::run(&a),
     }
-}
-
-fn import_cmd(a: &ImportArgs) -> Result<()> {
-    use crate::import::{self, ArmFiles, ImportOptions};
-    let robot = match &a.robot {
-        Some(path) => RobotDescription::load(
-            path.as_path(),
-            &LoadOptions {
-                arms: PerSide::new(a.left_links.clone(), a.right_links.clone()),
-                ..Default::default()
-            },
-        )?,
-        None => RobotDescription::builtin_irb14000(),
-    };
-    for w in &robot.warnings {
-        eprintln!("warning: {w}");
-    }
-    let (names, positions): (Vec<String>, Vec<nalgebra::Vector3<f64>>) = if a.reflectors.is_empty()
-    {
-        let defaults = simulate::default_reflectors_for(&robot);
-        eprintln!(
-            "note: no --reflector given: reflectors a, b, c at the paper's nominal positions (mm, tip \
-             frame) {}",
-            defaults
-                .iter()
-                .map(|p| format!("({}, {}, {})", p.x, p.y, p.z))
-                .collect::<Vec<_>>()
-                .join(", ")
-        );
-        (
-            crate::kinematics::default_reflector_names(3).to_vec(),
-            defaults.to_vec(),
-        )
-    } else {
-        a.reflectors.iter().cloned().unzip()
-    };
-    let mut options = ImportOptions::new(names, positions);
-    options.points_format = a.points_format;
-    options.columns = a.columns.clone();
-    options.length_unit = a.length_unit;
-    options.angle_unit = a.angle_unit.map(|u| match u {
-        AngleArg::Deg => dataset::AngleUnit::Deg,
-        AngleArg::Rad => dataset::AngleUnit::Rad,
-    });
-    options.decimal_comma = a.decimal_comma;
-    options.joint_order = a.joint_order.clone();
-    options.matching = a.matching;
-    options.time_tolerance_s = a.time_tolerance_s;
-    options.tracker = dataset::TrackerSpec {
-        mpe_um: a.mpe_um,
-        mpe_um_per_m: a.mpe_um_per_m,
-    };
-    options.joint_names = PerSide::from_fn(|s| Some(robot.arm_joint_names(s)));
-    if let Some(path) = &a.robot {
-        options.robot = Some(path.canonicalize().unwrap_or_else(|_| path.clone()));
-        options.links = PerSide::from_fn(|s| Some(robot.arm(s).links.clone()));
-    }
-    options.stations = PerSide::new(a.left_station.clone(), a.right_station.clone());
-    let inputs = PerSide::new(
-        ArmFiles {
-            points: a.left_points.clone(),
-            joints: a.left_joints.clone(),
-        },
-        ArmFiles {
-            points: a.right_points.clone(),
-            joints: a.right_joints.clone(),
-        },
-    );
-    let imported = import::import(&crate::source::OsFiles, &inputs, &options)?;
-    outln!("{}", describe_robot(&robot));
-    outln!("{}", imported.report);
-    // Joint values outside the robot's limits are refused before anything is written.
-    let limits = PerSide::from_fn(|s| robot.joint_limits_rad(s));
-    dataset::check_joint_limits(&imported.dataset, &limits)?;
-    let overwrite = if a.force {
-        Overwrite::Allow
-    } else {
-        Overwrite::Refuse
-    };
-    import::write(&imported, &inputs, &a.out, overwrite)?;
-    outln!(
-        "wrote the dataset {} ({} + {} configurations; the report in {})",
-        a.out.display(),
-        imported.dataset.arms.left.measurements.len(),
-        imported.dataset.arms.right.measurements.len(),
-        a.out.join(import::REPORT_FILE).display()
-    );
-    Ok(())
 }
 
 fn simulate_cmd(a: &SimulateArgs) -> Result<()> {

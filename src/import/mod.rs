@@ -16,8 +16,8 @@ pub use points::{ColumnMap, ConfigRow, Point, PointFile, PointTable, PointsForma
 pub use text::PointUnit;
 
 use crate::dataset::{
-    self, AngleUnit, ArmData, ArmLinks, Dataset, MANIFEST_FILE, Measurement, Split, TrackerSpec,
-    Units,
+    self, AngleUnit, ArmData, ArmLinks, Dataset, LengthUnit, MANIFEST_FILE, Measurement, Split,
+    TrackerSpec, Units,
 };
 use crate::output::{OutputError, Overwrite, refuse_overwrite_input, write_atomic};
 use crate::side::{PerSide, Side};
@@ -78,6 +78,12 @@ pub struct ImportOptions {
     pub links: PerSide<Option<ArmLinks>>,
     /// The tracker station each arm was measured from.
     pub stations: PerSide<Option<String>>,
+    /// Which of each arm's joints (chain order) are prismatic (from the robot description; empty:
+    /// all revolute): their values are lengths, read with `joint_length_unit`.
+    pub linear_joints: PerSide<Vec<bool>>,
+    /// The unit of prismatic joints' values in the joint logs and mapped joint columns (`None`: mm;
+    /// m for figaroh, which writes the URDF's units).
+    pub joint_length_unit: Option<LengthUnit>,
 }
 
 impl ImportOptions {
@@ -99,6 +105,8 @@ impl ImportOptions {
             robot: None,
             links: PerSide::new(None, None),
             stations: PerSide::new(None, None),
+            linear_joints: PerSide::new(Vec::new(), Vec::new()),
+            joint_length_unit: None,
         }
     }
 }
@@ -320,16 +328,31 @@ fn import_arm(
     };
     report.matched = measurements.len();
     let file = input.joints.clone().unwrap_or_else(|| input.points.clone());
-    Ok((
-        ArmData {
-            side,
-            file,
-            links: o.links[side].clone(),
-            station: o.stations[side].clone(),
-            measurements,
+    let mut arm = ArmData {
+        side,
+        file,
+        links: o.links[side].clone(),
+        station: o.stations[side].clone(),
+        linear_joints: Vec::new(),
+        measurements,
+    };
+    // The readers convert every joint value with the angle unit; a prismatic joint's value is a
+    // length, converted again here with the units the joint values were written in.
+    let figaroh = pf.format == PointsFormat::Figaroh;
+    let units = Units {
+        length: o.joint_length_unit.unwrap_or(if figaroh {
+            LengthUnit::M
+        } else {
+            LengthUnit::Mm
+        }),
+        angle: match &log {
+            Some(log) => log.angle_unit,
+            None if figaroh => AngleUnit::Rad,
+            None => o.angle_unit.unwrap_or(AngleUnit::Deg),
         },
-        report,
-    ))
+    };
+    arm.set_linear_joints(&o.linear_joints[side], units)?;
+    Ok((arm, report))
 }
 
 /// The reflector a target name ends in: `L012_a` is (`L012`, a) when `a` is a reflector.

@@ -8,13 +8,6 @@ use std::path::Path;
 /// The largest input file read (a tracker export of a few thousand points is well below).
 const MAX_FILE_BYTES: u64 = 256 << 20;
 
-/// Windows-1252's characters for the bytes 0x80–0x9F (the rest of the code page is Latin-1). The five
-/// bytes the code page leaves undefined read as the C1 control of the same value.
-const CP1252_80_9F: [char; 32] = [
-    '€', '\u{81}', '‚', 'ƒ', '„', '…', '†', '‡', 'ˆ', '‰', 'Š', '‹', 'Œ', '\u{8D}', 'Ž', '\u{8F}',
-    '\u{90}', '‘', '’', '“', '”', '•', '–', '—', '˜', '™', 'š', '›', 'œ', '\u{9D}', 'ž', 'Ÿ',
-];
-
 /// A file's text: UTF-8 (a byte-order mark dropped) when it is valid UTF-8, else Windows-1252 (what
 /// tracker software on Windows writes: `µ` and `°` as single bytes). UTF-16 and binary files are
 /// refused.
@@ -36,13 +29,12 @@ pub fn decode(path: &Path, bytes: &[u8]) -> Result<String, ImportError> {
     let bytes = bytes.strip_prefix(&[0xEF, 0xBB, 0xBF]).unwrap_or(bytes);
     match std::str::from_utf8(bytes) {
         Ok(s) => Ok(s.to_string()),
-        Err(_) => Ok(bytes
-            .iter()
-            .map(|&b| match b {
-                0x80..=0x9F => CP1252_80_9F[usize::from(b - 0x80)],
-                _ => char::from(b),
-            })
-            .collect()),
+        // The WHATWG decoder: the five bytes the code page leaves undefined read as the C1 control
+        // of the same value; it never fails.
+        Err(_) => Ok(encoding_rs::WINDOWS_1252
+            .decode_without_bom_handling(bytes)
+            .0
+            .into_owned()),
     }
 }
 
@@ -216,17 +208,6 @@ pub fn name_and_unit(header: &str) -> (String, Option<String>) {
     (h.to_string(), None)
 }
 
-/// Days from 1970-01-01 to a date of the proleptic Gregorian calendar.
-fn days_from_civil(y: i64, m: i64, d: i64) -> i64 {
-    let y = if m <= 2 { y - 1 } else { y };
-    let era = y.div_euclid(400);
-    let yoe = y - era * 400;
-    let mp = (m + 9) % 12;
-    let doy = (153 * mp + 2) / 5 + d - 1;
-    let doe = yoe * 365 + yoe / 4 - yoe / 100 + doy;
-    era * 146_097 + doe - 719_468
-}
-
 /// `HH:MM:SS(.fff)` in seconds.
 fn time_of_day(s: &str) -> Option<f64> {
     let mut parts = s.split(':');
@@ -270,10 +251,19 @@ pub fn time_s(field: &str) -> Option<f64> {
     } else {
         return None;
     };
-    if !(1..=12).contains(&m) || !(1..=31).contains(&d) || !(1..=9999).contains(&y) {
+    if !(1..=9999).contains(&y) {
         return None;
     }
-    Some(days_from_civil(y, m, d) as f64 * 86_400.0 + tod)
+    // A calendar date (31 February is refused), as days since 1970-01-01.
+    let date = chrono::NaiveDate::from_ymd_opt(
+        i32::try_from(y).ok()?,
+        u32::try_from(m).ok()?,
+        u32::try_from(d).ok()?,
+    )?;
+    let days = date
+        .signed_duration_since(chrono::NaiveDate::default())
+        .num_days();
+    Some(days as f64 * 86_400.0 + tod)
 }
 
 #[cfg(test)]
@@ -313,6 +303,7 @@ mod tests {
         assert_eq!(time_s("12.5"), Some(12.5));
         assert_eq!(time_s("00:01:02.5"), Some(62.5));
         assert_eq!(time_s("yesterday"), None);
+        assert_eq!(time_s("31.02.2022 10:00:00"), None);
         assert_eq!(time_s("11.10.9000000000000000000 15:06:48"), None);
     }
 }
