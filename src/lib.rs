@@ -11,6 +11,7 @@ pub mod app;
 pub mod cli;
 pub mod collision;
 pub mod comparison;
+pub mod controller;
 pub mod dataset;
 pub mod exclusion;
 pub mod finite_difference;

@@ -14,9 +14,12 @@ fn main() -> std::process::ExitCode {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(err) => {
             eprintln!("error: {err:#}");
-            match err.downcast_ref::<dualcal::cli::NotConverged>() {
-                Some(_) => std::process::ExitCode::from(dualcal::cli::NotConverged::EXIT_CODE),
-                None => std::process::ExitCode::FAILURE,
+            if err.is::<dualcal::cli::NotConverged>() {
+                std::process::ExitCode::from(dualcal::cli::NotConverged::EXIT_CODE)
+            } else if err.is::<dualcal::cli::TargetsRefused>() {
+                std::process::ExitCode::from(dualcal::cli::TargetsRefused::EXIT_CODE)
+            } else {
+                std::process::ExitCode::FAILURE
             }
         }
     }

@@ -17,7 +17,13 @@ const LAYERS: &[&[&str]] = &[
     // The robot description (URDF, arms, shapes).
     &["robot"],
     // What is computed from a model and the data, and what is exported of a robot.
-    &["metrics", "collision", "urdf_export", "import"],
+    &[
+        "metrics",
+        "collision",
+        "urdf_export",
+        "import",
+        "controller",
+    ],
     // The screening, the solver, the simulator, the figures of a model.
     &["quality", "solver", "simulate", "analysis"],
     // What combines them: the load pipeline, exclusion and re-fit, the comparison, the parameter file.

@@ -34,6 +34,7 @@ macro_rules! outln {
 }
 
 mod calibrate_settings;
+mod controller;
 mod import;
 mod outlier_study;
 mod paper_study;
@@ -41,6 +42,7 @@ mod reproduce;
 mod timings;
 
 use calibrate_settings::{print_event, settings_from};
+pub use controller::TargetsRefused;
 
 /// Two-step minimax kinematic calibration of dual-arm robots from laser-tracker data.
 #[derive(Parser, Debug)]
@@ -71,6 +73,12 @@ pub enum Command {
     /// Make a dataset from tracker exports (SpatialAnalyzer, Leica Tracker Pilot, figaroh, any CSV
     /// with a column mapping) and the controller's joint logs (docs/formats.md).
     Import(import::ImportArgs),
+    /// Write the calibration in a controller's terms: the arms' base frames as an ABB `MOC.cfg`
+    /// fragment, the joint origins as a kinematics YAML for a xacro.
+    Export(controller::ExportArgs),
+    /// Move joint targets (or poses) so that the calibrated robot reaches what the controller's
+    /// nominal model meant: what the controller cannot take, compensated.
+    Compensate(controller::CompensateArgs),
 }
 
 #[derive(Args, Debug)]
@@ -305,6 +313,8 @@ fn run_command(command: Command) -> Result<()> {
         Command::Calibrate(a) => calibrate_cmd(&a),
         Command::Reproduce(a) => reproduce::run(&a),
         Command::Import(a) => import::run(&a),
+        Command::Export(a) => controller::run_export(&a),
+        Command::Compensate(a) => controller::run_compensate(&a),
     }
 }
 

@@ -33,7 +33,7 @@ pub use dh::{
     ABB_AXIS_OF_CHAIN, DhRow, IRB14000_NOMINAL_DH, JOINT_LIMITS_DEG, N_DH, N_JOINTS, N_PARAMS,
     ParamVector, PointJacobian, joint_limits_rad, param_is_angle, param_name,
 };
-use nalgebra::{DVector, Isometry3, Matrix3xX, Vector3};
+use nalgebra::{DVector, Isometry3, Matrix3xX, Matrix6xX, Vector3};
 pub use per_reflector::{MAX_REFLECTORS, PerReflector};
 use std::sync::Arc;
 
@@ -340,6 +340,43 @@ impl ArmModel {
             ArmKinematics::Dh(dh) => dh::frames(dh, q_rad).to_vec(),
             ArmKinematics::Chain { chain, corrections } => chain.joint_frames(corrections, q_rad),
         }
+    }
+
+    /// Tip pose in the model base frame and its Jacobian with respect to the joint values: 6 ×
+    /// [`ArmModel::joint_count`], rows the tip's velocity (mm per unit) then its angular velocity (rad
+    /// per unit), both in the base frame; a revolute joint's column is per rad, a prismatic one's per
+    /// mm. A mimic joint adds its multiplier times its own column to its leader's.
+    pub fn flange_jacobian(&self, q_rad: &[f64]) -> (Isometry3<f64>, Matrix6xX<f64>) {
+        let frames = self.joint_frames(q_rad);
+        let (tip, axes) = frames.split_last().expect("joint frames end with the tip");
+        let p_tip = tip.translation.vector;
+        let mut jac = Matrix6xX::zeros(self.joint_count());
+        // (kind is linear, column, coefficient) of each movable joint, in chain order.
+        let drives: Vec<(bool, usize, f64)> = match &self.kinematics {
+            ArmKinematics::Dh(_) => (0..N_JOINTS).map(|i| (false, i, 1.0)).collect(),
+            ArmKinematics::Chain { chain, .. } => chain
+                .joints
+                .iter()
+                .map(|j| match j.drive {
+                    chain::JointDrive::Variable(i) => (j.kind.is_linear(), i, 1.0),
+                    chain::JointDrive::Mimic {
+                        leader, multiplier, ..
+                    } => (j.kind.is_linear(), leader, multiplier),
+                })
+                .collect(),
+        };
+        for (frame, (linear, column, coefficient)) in axes.iter().zip(drives) {
+            let z = frame.rotation * Vector3::z();
+            let (v, w) = if linear {
+                (z, Vector3::zeros())
+            } else {
+                (z.cross(&(p_tip - frame.translation.vector)), z)
+            };
+            let mut col = jac.column_mut(column);
+            col.fixed_rows_mut::<3>(0).axpy(coefficient, &v, 1.0);
+            col.fixed_rows_mut::<3>(3).axpy(coefficient, &w, 1.0);
+        }
+        (*tip, jac)
     }
 
     /// The order in which the identifiability analysis considers the parameters (the preferred ones

@@ -165,4 +165,30 @@ impl CalibrationOverlay {
         }
         s
     }
+
+    /// The calibrated origins as a kinematics file a xacro reads (the form the UR description packages
+    /// use for their factory calibration): `kinematics: {<joint>: {x, y, z, roll, pitch, yaw}}`, metres
+    /// and radians, one entry per joint the calibration changed. A xacro takes them with
+    /// `${xacro.load_yaml(file)['kinematics']['<joint>']['x']}`, … (docs/formats.md).
+    pub fn to_kinematics_yaml(&self) -> String {
+        let mut s = format!(
+            "# Calibrated joint origins of {} (dualcal, {}): each joint's <origin xyz=\"x y z\" \
+             rpy=\"roll pitch yaw\">,\n# metres and radians, for a xacro that reads them with \
+             xacro.load_yaml.\nkinematics:\n",
+            self.robot, self.format
+        );
+        for j in &self.joints {
+            let [x, y, z] = j.origin.xyz;
+            let [roll, pitch, yaw] = j.origin.rpy;
+            s += &format!(
+                "  {}:\n    x: {x:?}\n    y: {y:?}\n    z: {z:?}\n    roll: {roll:?}\n    pitch: {pitch:?}\n    \
+                 yaw: {yaw:?}\n",
+                quoted(&j.name)
+            );
+        }
+        if self.joints.is_empty() {
+            s = s.replace("kinematics:\n", "kinematics: {}\n");
+        }
+        s
+    }
 }

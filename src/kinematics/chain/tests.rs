@@ -392,3 +392,51 @@ fn parallel_axes_and_reasons() {
     assert_eq!(chain.physical_reason(2 * 6 + 5), None);
     assert_eq!(minimal_parameter_count(chain.dof()), 27);
 }
+
+/// The tip pose's analytic joint Jacobian ([`ArmModel::flange_jacobian`], used by compensation)
+/// against central differences of the pose — position and rotation vector — for the DH table, a
+/// corrected YuMi-like chain and the lift-and-mimic chain (a prismatic column, a mimic leader).
+#[test]
+fn flange_jacobian_matches_finite_differences() {
+    let mut rng = ChaCha8Rng::seed_from_u64(7);
+    let mut models = vec![ArmModel::nominal_irb14000(reflectors())];
+    for (text, base, tip) in [
+        (yumi_like_urdf(), "yumi_body", "gripper_r_finger_r"),
+        (lift_mimic_urdf(), "torso", "left_flange"),
+    ] {
+        let chain = Arc::new(SerialChain::from_urdf(&parse(&text), base, tip).unwrap());
+        models.push(random_arm(&chain, &mut rng, 2.0, 0.01));
+    }
+    for model in &models {
+        let n = model.joint_count();
+        let limits = model.joint_limits_rad();
+        for _ in 0..5 {
+            let q: Vec<f64> = limits
+                .iter()
+                .map(|&(lo, hi)| rng.random_range(lo..hi))
+                .collect();
+            let (tip, jac) = model.flange_jacobian(&q);
+            let fk = model.base_from_flange(&q);
+            assert!((tip.to_homogeneous() - fk.to_homogeneous()).amax() < 1e-9);
+            for c in 0..n {
+                let h = 1e-6;
+                let mut qp = q.clone();
+                let mut qm = q.clone();
+                qp[c] += h;
+                qm[c] -= h;
+                let (tp, tm) = (model.base_from_flange(&qp), model.base_from_flange(&qm));
+                let dp = (tp.translation.vector - tm.translation.vector) / (2.0 * h);
+                let dw = (tp.rotation * tm.rotation.inverse()).scaled_axis() / (2.0 * h);
+                let col = jac.column(c);
+                let (ep, ew) = (
+                    (col.fixed_rows::<3>(0) - dp).amax(),
+                    (col.fixed_rows::<3>(3) - dw).amax(),
+                );
+                assert!(
+                    ep < 1e-5 * (1.0 + dp.amax()) && ew < 1e-7,
+                    "{n} joints, column {c}: position {ep:e}, rotation {ew:e}"
+                );
+            }
+        }
+    }
+}
