@@ -695,8 +695,13 @@ fn calibrate_cmd(a: &CalibrateArgs) -> Result<()> {
         std::time::Duration::from_secs_f64(result.elapsed_secs),
     ));
     print_identifiability(&result);
+    let uncertainty = crate::solver::uncertainty::for_result(&ds, &result);
+    print_uncertainty(&uncertainty);
     let excluded = &result.settings.exclude;
     let mut file = ParamsFile::from_calibration(&result, &ds);
+    if uncertainty.iter().any(|(_, u)| u.is_some()) {
+        file.uncertainty = serde_json::to_value(&uncertainty).ok();
+    }
     // The calibrated model's figures are the ones the parameter file records (computed once).
     let recorded: Option<StatisticsRecord> = file
         .statistics
@@ -731,6 +736,45 @@ fn calibrate_cmd(a: &CalibrateArgs) -> Result<()> {
         return Err(NotConverged(how.join("; ")).into());
     }
     Ok(())
+}
+
+/// Each arm's parameter uncertainty in a few lines (the parameter file has every σ).
+fn print_uncertainty(u: &PerSide<Option<crate::solver::uncertainty::ArmUncertainty>>) {
+    for (side, u) in u.iter() {
+        let Some(u) = u else { continue };
+        let largest = |unit: &str| {
+            u.largest(unit).map_or(String::new(), |p| {
+                format!("{:.4} {unit} ({})", p.sigma, p.name)
+            })
+        };
+        outln!(
+            "{side} arm: 1σ of the identified parameters (from the residuals: point noise {:.4} mm per axis; {} configurations): largest {}, {}; condition number {:.1}",
+            u.point_sigma_mm,
+            u.configurations,
+            largest("mm"),
+            largest("mrad"),
+            u.condition
+        );
+        if !u.correlations.is_empty() {
+            let pairs: Vec<String> = u
+                .correlations
+                .iter()
+                .take(5)
+                .map(|c| format!("{}–{} {:+.2}", c.a, c.b, c.correlation))
+                .collect();
+            outln!(
+                "  {} pair(s) correlated beyond ±{}: {}{}",
+                u.correlations.len(),
+                crate::solver::uncertainty::REPORTED_CORRELATION,
+                pairs.join(", "),
+                if u.correlations.len() > 5 {
+                    ", …"
+                } else {
+                    ""
+                }
+            );
+        }
+    }
 }
 
 fn print_identifiability(result: &CalibrationResult) {

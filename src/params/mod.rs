@@ -239,6 +239,10 @@ pub struct ParamsFile {
     /// `quality::QualityRecord`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub quality: Option<Value>,
+    /// The identified parameters' standard deviations, strong correlations and condition number per
+    /// arm (free form; dualcal writes `{"left": solver::uncertainty::ArmUncertainty, "right": …}`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub uncertainty: Option<Value>,
     /// Fields this version does not know; kept for round trips.
     #[serde(flatten)]
     pub extra: serde_json::Map<String, Value>,
@@ -260,6 +264,7 @@ impl ParamsFile {
             converged: None,
             provenance: None,
             quality: None,
+            uncertainty: None,
             extra: Default::default(),
         }
     }

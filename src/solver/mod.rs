@@ -39,6 +39,7 @@ mod result;
 mod run;
 pub mod sqp;
 mod stage;
+pub mod uncertainty;
 
 use crate::dataset::Split;
 use crate::side::{ConfigId, Side};

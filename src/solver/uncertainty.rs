@@ -1,0 +1,261 @@
+//! How well the data determine each identified parameter: standard deviations, strong correlations
+//! and the condition number of step 1's fit, from the residuals at the solution.
+//!
+//! The distance errors of step 1 are `r_ij,k = |m_i,k − m_j,k| − |p_i,k(x) − p_j,k(x)|` over every pair
+//! of configurations and reflector k. They are **not** independent: a measured point's error enters all
+//! n − 1 distances of its configuration, so `σ² (JᵀJ)⁻¹` (independent rows) would be too small by a
+//! factor of about √(n/4). With independent point errors `e_i,k` of variance `σ_p²` per axis, the
+//! least-squares estimate's covariance is the sandwich
+//!
+//! `C = (JᵀJ)⁻¹ (σ_p² Σ_i,k A_i,k A_i,kᵀ) (JᵀJ)⁻¹`,  `A_i,k = Σ_{j≠i} ∂r_ij,k/∂x · û_ij,kᵀ`
+//!
+//! (û the measured direction, as `r` depends on `e_i − e_j` through it), with J the Jacobian of the
+//! identified (free) parameters. `σ_p²` is estimated from the residuals at the solution,
+//! `Σ r² / (2 (rows − p))` (a distance error has the variance of two point errors along the line): a
+//! geometric model that does not explain the data counts as noise here, so the σ grow with it.
+//!
+//! What it means for the minimax fit: it is the covariance of the least-squares fit linearised at the
+//! minimax solution, a yardstick rather than the minimax estimate's exact spread (the two estimates
+//! differ in how they weigh the reflectors; `tests/uncertainty.rs` compares both with the spread over
+//! repeated simulated measurements). Beyond [`MAX_CONFIGURATIONS`] per arm the sums use every k-th
+//! configuration and the covariance is scaled by the fraction used (a covariance falls as 1/n).
+//! The condition number is that of the column-scaled Jacobian of the free parameters: how much a
+//! relative error of the data can grow in the parameters; above ~1e3 single parameters are poorly
+//! determined even when the fit's accuracy is good (they trade off against each other — the
+//! correlations say which).
+
+use crate::kinematics::{ArmJacobians, ArmModel};
+use nalgebra::{DMatrix, Vector3};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+/// At most this many configurations per arm enter the sums (every k-th beyond).
+pub const MAX_CONFIGURATIONS: usize = 240;
+/// Correlations at or above this magnitude are reported.
+pub const REPORTED_CORRELATION: f64 = 0.9;
+
+/// One identified parameter's standard deviation.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ParameterSigma {
+    pub name: String,
+    /// One standard deviation in `unit`.
+    pub sigma: f64,
+    /// `mm` or `mrad`.
+    pub unit: String,
+}
+
+/// Two parameters the data hardly tell apart.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CorrelatedPair {
+    pub a: String,
+    pub b: String,
+    pub correlation: f64,
+}
+
+/// The uncertainty of one arm's identified parameters (module documentation).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ArmUncertainty {
+    /// The point noise per axis estimated from the residuals, mm.
+    pub point_sigma_mm: f64,
+    /// Configurations of the fit, and how many entered the sums.
+    pub configurations: usize,
+    pub configurations_used: usize,
+    /// Condition number of the column-scaled Jacobian of the identified parameters.
+    pub condition: f64,
+    /// Every identified parameter, in parameter order.
+    pub parameters: Vec<ParameterSigma>,
+    /// Pairs with |correlation| ≥ [`REPORTED_CORRELATION`], strongest first.
+    pub correlations: Vec<CorrelatedPair>,
+}
+
+impl ArmUncertainty {
+    /// The parameter with the largest σ of `unit` (`mm` or `mrad`).
+    pub fn largest(&self, unit: &str) -> Option<&ParameterSigma> {
+        self.parameters
+            .iter()
+            .filter(|p| p.unit == unit)
+            .max_by(|a, b| a.sigma.total_cmp(&b.sigma))
+    }
+}
+
+/// Sums over the pairs of the configurations used.
+struct Sums {
+    jtj: DMatrix<f64>,
+    meat: DMatrix<f64>,
+    cost: f64,
+    rows: usize,
+}
+
+/// The uncertainty of `arm`'s parameters `free` (indices into its parameter vector) fitted to the
+/// configurations `qs` and their measured points `measured` (tracker frame, one per reflector).
+/// `None` with fewer than three configurations, no free parameter, or a singular fit.
+pub fn arm_uncertainty(
+    arm: &ArmModel,
+    qs: &[Vec<f64>],
+    measured: &[Vec<Vector3<f64>>],
+    free: &[usize],
+) -> Option<ArmUncertainty> {
+    let n_all = qs.len().min(measured.len());
+    let stride = n_all.div_ceil(MAX_CONFIGURATIONS).max(1);
+    let used: Vec<usize> = (0..n_all).step_by(stride).collect();
+    let (n, p) = (used.len(), free.len());
+    if n < 3 || p == 0 {
+        return None;
+    }
+    let jac: Vec<ArmJacobians> = used
+        .par_iter()
+        .map(|&i| arm.reflector_jacobians(&qs[i]))
+        .collect();
+    let points: Vec<&Vec<Vector3<f64>>> = used.iter().map(|&i| &measured[i]).collect();
+    let sums = pair_sums(&jac, &points, free, arm.reflector_count());
+    let dof = sums.rows.checked_sub(p).filter(|&d| d > 0)?;
+    let point_var = sums.cost / (2.0 * dof as f64);
+    let inverse = sums.jtj.clone().cholesky()?.inverse();
+    let mut cov = &inverse * &sums.meat * &inverse * point_var;
+    if n < n_all {
+        cov *= n as f64 / n_all as f64;
+    }
+    let sigma: Vec<f64> = (0..p).map(|c| cov[(c, c)].max(0.0).sqrt()).collect();
+    let parameters = free
+        .iter()
+        .zip(&sigma)
+        .map(|(&k, &s)| {
+            let angle = arm.param_is_angle(k);
+            ParameterSigma {
+                name: arm.param_name(k),
+                sigma: if angle { s * 1000.0 } else { s },
+                unit: if angle { "mrad" } else { "mm" }.to_string(),
+            }
+        })
+        .collect();
+    let mut correlations = Vec::new();
+    for a in 0..p {
+        for b in a + 1..p {
+            let rho = cov[(a, b)] / (sigma[a] * sigma[b]);
+            if rho.abs() >= REPORTED_CORRELATION {
+                correlations.push(CorrelatedPair {
+                    a: arm.param_name(free[a]),
+                    b: arm.param_name(free[b]),
+                    correlation: rho,
+                });
+            }
+        }
+    }
+    correlations.sort_by(|x, y| y.correlation.abs().total_cmp(&x.correlation.abs()));
+    Some(ArmUncertainty {
+        point_sigma_mm: point_var.sqrt(),
+        configurations: n_all,
+        configurations_used: n,
+        condition: scaled_condition(&sums.jtj),
+        parameters,
+        correlations,
+    })
+}
+
+/// JᵀJ, the sandwich's middle `Σ A Aᵀ`, Σ r² and the row count, per configuration in parallel (then
+/// summed in order): the
+/// rows of configuration i with every other j (`A_i,k = Rᵀ Û`, one matrix product) and, for j > i,
+/// its share of JᵀJ (`R₊ᵀ R₊`).
+fn pair_sums(
+    jac: &[ArmJacobians],
+    measured: &[&Vec<Vector3<f64>>],
+    free: &[usize],
+    reflectors: usize,
+) -> Sums {
+    let (n, p) = (jac.len(), free.len());
+    let zero = || Sums {
+        jtj: DMatrix::zeros(p, p),
+        meat: DMatrix::zeros(p, p),
+        cost: 0.0,
+        rows: 0,
+    };
+    (0..n)
+        .into_par_iter()
+        .map(|i| {
+            let mut s = zero();
+            let mut r = DMatrix::<f64>::zeros(n - 1, p);
+            let mut u = DMatrix::<f64>::zeros(n - 1, 3);
+            for k in 0..reflectors {
+                let mut row = 0;
+                // Rows with j > i first (they enter JᵀJ), then j < i.
+                for j in (i + 1..n).chain(0..i) {
+                    let v = jac[i].fk.points_mm[k] - jac[j].fk.points_mm[k];
+                    let m = measured[i][k] - measured[j][k];
+                    let (dist, measured_dist) = (v.norm(), m.norm());
+                    if !(dist > 0.0 && measured_dist > 0.0) {
+                        r.row_mut(row).fill(0.0);
+                        u.row_mut(row).fill(0.0);
+                        row += 1;
+                        continue;
+                    }
+                    let unit = v / dist;
+                    for (c, &f) in free.iter().enumerate() {
+                        let (a, b) = (jac[i].jacobians[k].column(f), jac[j].jacobians[k].column(f));
+                        r[(row, c)] = -((a - b).dot(&unit));
+                    }
+                    let um = m / measured_dist;
+                    u.row_mut(row).copy_from(&um.transpose());
+                    if j > i {
+                        let e = measured_dist - dist;
+                        s.cost += e * e;
+                        s.rows += 1;
+                    }
+                    row += 1;
+                }
+                let a = r.transpose() * &u;
+                s.meat += &a * a.transpose();
+                let upper = r.rows(0, n - 1 - i);
+                s.jtj += upper.transpose() * upper;
+            }
+            s
+        })
+        // Summed in configuration order: the same bits whatever the threads.
+        .collect::<Vec<Sums>>()
+        .into_iter()
+        .fold(zero(), |mut a, b| {
+            a.jtj += b.jtj;
+            a.meat += b.meat;
+            a.cost += b.cost;
+            a.rows += b.rows;
+            a
+        })
+}
+
+/// Condition number of `JᵀJ` with unit-scaled columns, as of J: √(λ_max / λ_min).
+fn scaled_condition(jtj: &DMatrix<f64>) -> f64 {
+    let d: Vec<f64> = (0..jtj.nrows())
+        .map(|c| 1.0 / jtj[(c, c)].max(f64::MIN_POSITIVE).sqrt())
+        .collect();
+    let scaled = DMatrix::from_fn(jtj.nrows(), jtj.ncols(), |a, b| jtj[(a, b)] * d[a] * d[b]);
+    let eig = scaled.symmetric_eigenvalues();
+    let (lo, hi) = eig.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &v| {
+        (lo.min(v), hi.max(v))
+    });
+    if lo > 0.0 {
+        (hi / lo).sqrt()
+    } else {
+        f64::INFINITY
+    }
+}
+
+/// The uncertainty of each arm's step-1 parameters of `result`, fitted to `dataset` (its split and
+/// exclusions); `None` for an arm the result did not fit with all reflectors by distances (the
+/// single-reflector and the absolute methods: not covered yet).
+pub fn for_result(
+    dataset: &crate::dataset::Dataset,
+    result: &super::CalibrationResult,
+) -> crate::side::PerSide<Option<ArmUncertainty>> {
+    let settings = &result.settings;
+    let kept = dataset.excluding(&settings.exclude);
+    crate::side::PerSide::from_fn(|side| {
+        if settings.method.is_absolute() || result.reflector_used[side].is_some() {
+            return None;
+        }
+        let report = result.identifiability[side].as_ref()?;
+        let ms = kept.arm(side).select(settings.split);
+        let qs: Vec<Vec<f64>> = ms.iter().map(|m| m.q_rad.clone()).collect();
+        let measured: Vec<Vec<Vector3<f64>>> =
+            ms.iter().map(|m| m.tracker_points_mm.clone()).collect();
+        arm_uncertainty(result.calibrated.arm(side), &qs, &measured, &report.free)
+    })
+}
