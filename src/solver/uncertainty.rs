@@ -3,9 +3,9 @@
 //!
 //! The distance errors of step 1 are `r_ij,k = |m_i,k − m_j,k| − |p_i,k(x) − p_j,k(x)|` over every pair
 //! of configurations and reflector k. They are **not** independent: a measured point's error enters all
-//! n − 1 distances of its configuration, so `σ² (JᵀJ)⁻¹` (independent rows) would be too small by a
-//! factor of about √(n/4). With independent point errors `e_i,k` of variance `σ_p²` per axis, the
-//! least-squares estimate's covariance is the sandwich
+//! n − 1 distances of its configuration, so `σ² (JᵀJ)⁻¹` (independent rows) would be too small.
+//! With independent point errors `e_i,k` of variance `σ_p²` per axis, the least-squares estimate's
+//! covariance is the sandwich
 //!
 //! `C = (JᵀJ)⁻¹ (σ_p² Σ_i,k A_i,k A_i,kᵀ) (JᵀJ)⁻¹`,  `A_i,k = Σ_{j≠i} ∂r_ij,k/∂x · û_ij,kᵀ`
 //!
