@@ -697,6 +697,7 @@ fn calibrate_cmd(a: &CalibrateArgs) -> Result<()> {
     print_identifiability(&result);
     let uncertainty = crate::solver::uncertainty::for_result(&ds, &result);
     print_uncertainty(&uncertainty);
+    phases.end("uncertainty of the identified parameters");
     let excluded = &result.settings.exclude;
     let mut file = ParamsFile::from_calibration(&result, &ds);
     if uncertainty.iter().any(|(_, u)| u.is_some()) {

@@ -25,12 +25,13 @@
 //! correlations say which).
 
 use crate::kinematics::{ArmJacobians, ArmModel};
-use nalgebra::{DMatrix, Vector3};
+use nalgebra::{DMatrix, Matrix3xX, Vector3};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-/// At most this many configurations per arm enter the sums (every k-th beyond).
-pub const MAX_CONFIGURATIONS: usize = 240;
+/// At most this many configurations per arm enter the sums (every k-th beyond; the pair sums grow as
+/// n², and 80 keep both arms at ~3 ms).
+pub const MAX_CONFIGURATIONS: usize = 80;
 /// Correlations at or above this magnitude are reported.
 pub const REPORTED_CORRELATION: f64 = 0.9;
 
@@ -153,9 +154,8 @@ pub fn arm_uncertainty(
 }
 
 /// JᵀJ, the sandwich's middle `Σ A Aᵀ`, Σ r² and the row count, per configuration in parallel (then
-/// summed in order): the
-/// rows of configuration i with every other j (`A_i,k = Rᵀ Û`, one matrix product) and, for j > i,
-/// its share of JᵀJ (`R₊ᵀ R₊`).
+/// summed in order): the rows R of configuration i with every other j (`A_i,k = Rᵀ Û`) and, for
+/// j > i, its share of JᵀJ (`R₊ᵀ R₊`), as matrix products into reused buffers.
 fn pair_sums(
     jac: &[ArmJacobians],
     measured: &[&Vec<Vector3<f64>>],
@@ -169,43 +169,56 @@ fn pair_sums(
         cost: 0.0,
         rows: 0,
     };
+    // The free columns of every configuration's reflector Jacobians, contiguous (3 × p each).
+    let free_jac: Vec<Vec<Matrix3xX<f64>>> = jac
+        .iter()
+        .map(|j| {
+            j.jacobians
+                .iter()
+                .map(|m| Matrix3xX::from_fn(p, |r, c| m[(r, free[c])]))
+                .collect()
+        })
+        .collect();
     (0..n)
         .into_par_iter()
         .map(|i| {
             let mut s = zero();
             let mut r = DMatrix::<f64>::zeros(n - 1, p);
             let mut u = DMatrix::<f64>::zeros(n - 1, 3);
+            let mut a = DMatrix::<f64>::zeros(p, 3);
             for k in 0..reflectors {
-                let mut row = 0;
                 // Rows with j > i first (they enter JᵀJ), then j < i.
-                for j in (i + 1..n).chain(0..i) {
+                for (row, j) in (i + 1..n).chain(0..i).enumerate() {
                     let v = jac[i].fk.points_mm[k] - jac[j].fk.points_mm[k];
                     let m = measured[i][k] - measured[j][k];
                     let (dist, measured_dist) = (v.norm(), m.norm());
                     if !(dist > 0.0 && measured_dist > 0.0) {
                         r.row_mut(row).fill(0.0);
                         u.row_mut(row).fill(0.0);
-                        row += 1;
                         continue;
                     }
                     let unit = v / dist;
-                    for (c, &f) in free.iter().enumerate() {
-                        let (a, b) = (jac[i].jacobians[k].column(f), jac[j].jacobians[k].column(f));
-                        r[(row, c)] = -((a - b).dot(&unit));
+                    let (ji, jj) = (free_jac[i][k].as_slice(), free_jac[j][k].as_slice());
+                    for c in 0..p {
+                        let d = |t: usize| ji[3 * c + t] - jj[3 * c + t];
+                        r[(row, c)] = -(d(0) * unit.x + d(1) * unit.y + d(2) * unit.z);
                     }
                     let um = m / measured_dist;
-                    u.row_mut(row).copy_from(&um.transpose());
+                    for c in 0..3 {
+                        u[(row, c)] = um[c];
+                    }
                     if j > i {
                         let e = measured_dist - dist;
                         s.cost += e * e;
                         s.rows += 1;
                     }
-                    row += 1;
                 }
-                let a = r.transpose() * &u;
-                s.meat += &a * a.transpose();
+                a.gemm_tr(1.0, &r, &u, 0.0);
+                for c in 0..3 {
+                    s.meat.ger(1.0, &a.column(c), &a.column(c), 1.0);
+                }
                 let upper = r.rows(0, n - 1 - i);
-                s.jtj += upper.transpose() * upper;
+                s.jtj.gemm_tr(1.0, &upper, &upper, 1.0);
             }
             s
         })
