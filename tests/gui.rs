@@ -124,6 +124,30 @@ fn calibrate_shows_calibrated_figures() {
         worst_after < worst_before,
         "{worst_after} >= {worst_before} mm"
     );
+    // The robot section gives the identified parameters' 1σ (issue 22).
+    let u = harness
+        .state()
+        .session()
+        .unwrap()
+        .calibrated
+        .as_ref()
+        .unwrap()
+        .uncertainty
+        .left
+        .clone();
+    let u = u.expect("the left arm's uncertainty");
+    harness.get_by_label("left joints and parameters").click();
+    harness.run_steps(2);
+    let header = format!(
+        "1σ of the identified parameters (point noise {:.4} mm, condition {:.1})",
+        u.point_sigma_mm, u.condition
+    );
+    harness.get_by_label(&header).click();
+    harness.run_steps(2);
+    for p in &u.parameters {
+        let text = format!("{:.4} {}", p.sigma, p.unit);
+        assert!(harness.query_all_by_label(&text).count() >= 1, "{text}");
+    }
 }
 
 #[test]

@@ -120,9 +120,11 @@ pub fn export_csv(session: &Session) -> anyhow::Result<Vec<u8>> {
 }
 
 /// The calibrated model as a `dualcal-params/1` file (the same file `dualcal calibrate --out` writes:
-/// the excluded configurations in `method.excluded`, the screening in `quality`).
+/// the excluded configurations in `method.excluded`, the screening in `quality`, the parameters'
+/// uncertainty in `uncertainty`).
 pub fn export_params(session: &Session, cal: &session::Calibrated) -> anyhow::Result<Vec<u8>> {
     let mut file = crate::params::ParamsFile::from_calibration(&cal.result, &session.dataset);
+    file.record_uncertainty(&cal.uncertainty);
     file.quality = serde_json::to_value(crate::quality::QualityRecord::new(
         &session.dataset,
         &cal.screening,
@@ -164,9 +166,11 @@ mod tests {
         .unwrap();
         let screening =
             crate::exclusion::screen_result(&session.dataset, &result, &Default::default());
+        let uncertainty = crate::solver::uncertainty::for_result(&session.dataset, &result);
         (
             session,
             Calibrated {
+                uncertainty,
                 result,
                 analysis,
                 screening,

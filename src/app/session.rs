@@ -23,6 +23,8 @@ pub struct Calibrated {
     pub analysis: Analysis,
     /// The configurations screened with the calibrated model ([`crate::exclusion::screen_result`]).
     pub screening: Screening,
+    /// Each arm's parameter uncertainty ([`crate::solver::uncertainty`]), computed once.
+    pub uncertainty: crate::side::PerSide<Option<crate::solver::uncertainty::ArmUncertainty>>,
     /// Time the solver's own steps took, s: without the live figures, the final figures and (stepped
     /// in frames) the frames between steps.
     pub solver_secs: f64,

@@ -413,10 +413,12 @@ pub(super) fn calibrated_outcome(
             let screening = screening.unwrap_or_else(|| {
                 crate::exclusion::screen_result(dataset, &result, &ScreenSettings::default())
             });
+            let uncertainty = crate::solver::uncertainty::for_result(dataset, &result);
             Outcome::Calibrated(Box::new(Calibrated {
                 result,
                 analysis,
                 screening,
+                uncertainty,
                 solver_secs,
             }))
         }

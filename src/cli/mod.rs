@@ -700,9 +700,7 @@ fn calibrate_cmd(a: &CalibrateArgs) -> Result<()> {
     phases.end("uncertainty of the identified parameters");
     let excluded = &result.settings.exclude;
     let mut file = ParamsFile::from_calibration(&result, &ds);
-    if uncertainty.iter().any(|(_, u)| u.is_some()) {
-        file.uncertainty = serde_json::to_value(&uncertainty).ok();
-    }
+    file.record_uncertainty(&uncertainty);
     // The calibrated model's figures are the ones the parameter file records (computed once).
     let recorded: Option<StatisticsRecord> = file
         .statistics

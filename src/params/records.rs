@@ -268,6 +268,19 @@ impl ParamsFile {
         )
     }
 
+    /// Record each arm's parameter uncertainty (`solver::uncertainty`; an arm without one is
+    /// `null`, none at all leaves the field out).
+    pub fn record_uncertainty(
+        &mut self,
+        uncertainty: &crate::side::PerSide<Option<crate::solver::uncertainty::ArmUncertainty>>,
+    ) {
+        self.uncertainty = uncertainty
+            .values()
+            .any(Option::is_some)
+            .then(|| serde_json::to_value(uncertainty).ok())
+            .flatten();
+    }
+
     /// The file of a calibration: the calibrated model plus method, fixed parameters and why, per-stage
     /// termination, accuracy on the cal and ver splits of `dataset`, conditioning and provenance, and
     /// `converged: false` when the run did not converge. The command line and the workbench both

@@ -415,7 +415,7 @@ fn arm_details_ui(ui: &mut egui::Ui, session: &Session, side: Side) {
     {
         ui.label(
             RichText::new(format!(
-                "last calibration: {} of {n} identified (condition {:.2e} → {:.2e}); fixed:",
+                "last calibration: {} of {n} identified (condition {:.2e} with every parameter, {:.2e} with the identified ones); fixed:",
                 report.free.len(),
                 report.condition_before,
                 report.condition_after
@@ -429,7 +429,51 @@ fn arm_details_ui(ui: &mut egui::Ui, session: &Session, side: Side) {
                     .color(Color32::GRAY),
             );
         }
+        if let Some(u) = &c.uncertainty[side] {
+            uncertainty_ui(ui, side, u);
+        }
     }
+}
+
+/// The identified parameters' 1σ, the strongly correlated pairs and the condition number.
+fn uncertainty_ui(ui: &mut egui::Ui, side: Side, u: &crate::solver::uncertainty::ArmUncertainty) {
+    egui::CollapsingHeader::new(
+        RichText::new(format!(
+            "1σ of the identified parameters (point noise {:.4} mm, condition {:.1})",
+            u.point_sigma_mm, u.condition
+        ))
+        .small(),
+    )
+    .id_salt(("uncertainty", side))
+    .show(ui, |ui| {
+        ui.label(
+            RichText::new(
+                "From the residuals at the solution: the covariance of the least-squares fit \
+                 linearised there (docs/solver.md, Uncertainty).",
+            )
+            .small()
+            .color(Color32::GRAY),
+        );
+        egui::Grid::new(("uncertainty grid", side))
+            .num_columns(2)
+            .show(ui, |ui| {
+                for p in &u.parameters {
+                    ui.label(RichText::new(p.name.as_str()).small().monospace());
+                    ui.label(RichText::new(format!("{:.4} {}", p.sigma, p.unit)).small());
+                    ui.end_row();
+                }
+            });
+        for c in &u.correlations {
+            ui.label(
+                RichText::new(format!(
+                    "{} and {} correlated {:+.2}",
+                    c.a, c.b, c.correlation
+                ))
+                .small()
+                .color(Color32::from_rgb(200, 140, 40)),
+            );
+        }
+    });
 }
 
 /// `295618` as `295 618`.
