@@ -13,7 +13,7 @@ impl Export {
     /// before any calibration; the plots, which are a screenshot: see [`encode_png`]).
     pub fn contents(self, session: &Session) -> Option<anyhow::Result<Vec<u8>>> {
         match (self, &session.calibrated) {
-            (Export::Params, Some(cal)) => Some(export_params(session, cal)),
+            (Export::Params, Some(cal)) => Some(export_params(cal)),
             (Export::Urdf, Some(cal)) => Some(export_urdf(session, cal)),
             (Export::Csv, _) => Some(export_csv(session)),
             (Export::Params | Export::Urdf, None) | (Export::PlotPng, _) => None,
@@ -119,19 +119,29 @@ pub fn export_csv(session: &Session) -> anyhow::Result<Vec<u8>> {
     w.into_inner().context("CSV buffer")
 }
 
-/// The calibrated model as a `dualcal-params/1` file (the same file `dualcal calibrate --out` writes:
-/// the excluded configurations in `method.excluded`, the screening in `quality`, the parameters'
+/// The calibration's `dualcal-params/1` file (the same file `dualcal calibrate --out` writes: the
+/// excluded configurations in `method.excluded`, the screening in `quality`, the parameters'
 /// uncertainty in `uncertainty`).
-pub fn export_params(session: &Session, cal: &session::Calibrated) -> anyhow::Result<Vec<u8>> {
-    let mut file = crate::params::ParamsFile::from_calibration(&cal.result, &session.dataset);
-    file.record_uncertainty(&cal.uncertainty);
+pub fn params_file(
+    dataset: &crate::dataset::Dataset,
+    result: &crate::solver::CalibrationResult,
+    screening: &crate::quality::Screening,
+    uncertainty: &crate::side::PerSide<Option<crate::solver::uncertainty::ArmUncertainty>>,
+) -> crate::params::ParamsFile {
+    let mut file = crate::params::ParamsFile::from_calibration(result, dataset);
     file.quality = serde_json::to_value(crate::quality::QualityRecord::new(
-        &session.dataset,
-        &cal.screening,
-        &cal.result.settings.exclude,
+        dataset,
+        screening,
+        &result.settings.exclude,
     ))
     .ok();
-    let mut text = serde_json::to_vec_pretty(&file)?;
+    file.record_uncertainty(uncertainty);
+    file
+}
+
+/// The calibrated model's parameter file as bytes (made once per calibration, [`params_file`]).
+pub fn export_params(cal: &session::Calibrated) -> anyhow::Result<Vec<u8>> {
+    let mut text = serde_json::to_vec_pretty(&cal.params)?;
     text.push(b'\n');
     Ok(text)
 }
@@ -167,10 +177,12 @@ mod tests {
         let screening =
             crate::exclusion::screen_result(&session.dataset, &result, &Default::default());
         let uncertainty = crate::solver::uncertainty::for_result(&session.dataset, &result);
+        let params = params_file(&session.dataset, &result, &screening, &uncertainty);
         (
             session,
             Calibrated {
                 uncertainty,
+                params,
                 result,
                 analysis,
                 screening,
@@ -203,7 +215,7 @@ mod tests {
     fn exports_read_back_as_the_calibrated_model() {
         let (session, cal) = calibrated_example();
 
-        let json = export_params(&session, &cal).unwrap();
+        let json = export_params(&cal).unwrap();
         let file = crate::params::ParamsFile::parse(Path::new("params.json"), &json).unwrap();
         let model = file.to_model().unwrap();
         assert!(max_dh_difference(&model, &cal.result.calibrated) < 1e-9);

@@ -25,6 +25,9 @@ pub struct Calibrated {
     pub screening: Screening,
     /// Each arm's parameter uncertainty ([`crate::solver::uncertainty`]), computed once.
     pub uncertainty: crate::side::PerSide<Option<crate::solver::uncertainty::ArmUncertainty>>,
+    /// The calibration's parameter file (the one `dualcal calibrate --out` writes, with the screening
+    /// and the uncertainty), made once: the export writes it, the browser's status shows it.
+    pub params: crate::params::ParamsFile,
     /// Time the solver's own steps took, s: without the live figures, the final figures and (stepped
     /// in frames) the frames between steps.
     pub solver_secs: f64,

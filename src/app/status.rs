@@ -76,9 +76,10 @@ impl StatusReport<'_> {
         let calibrated = self
             .session
             .and_then(|s| Some((s, s.calibrated.as_ref()?)))
-            .map(|(s, c)| {
-                let mut params = crate::params::ParamsFile::from_calibration(&c.result, &s.dataset);
-                // The date differs from run to run.
+            .map(|(_, c)| {
+                // The calibration's own file, made once (not per frame); the date differs from run
+                // to run.
+                let mut params = c.params.clone();
                 params.provenance = None;
                 json!({
                     "params": params,

@@ -414,11 +414,13 @@ pub(super) fn calibrated_outcome(
                 crate::exclusion::screen_result(dataset, &result, &ScreenSettings::default())
             });
             let uncertainty = crate::solver::uncertainty::for_result(dataset, &result);
+            let params = super::export::params_file(dataset, &result, &screening, &uncertainty);
             Outcome::Calibrated(Box::new(Calibrated {
                 result,
                 analysis,
                 screening,
                 uncertainty,
+                params,
                 solver_secs,
             }))
         }
