@@ -21,6 +21,7 @@ pub mod meshes;
 pub mod metrics;
 pub mod output;
 pub mod params;
+pub mod plan;
 pub mod quality;
 pub mod robot;
 pub mod side;

@@ -25,7 +25,7 @@ const LAYERS: &[&[&str]] = &[
         "controller",
     ],
     // The screening, the solver, the simulator, the figures of a model.
-    &["quality", "solver", "simulate", "analysis"],
+    &["quality", "solver", "simulate", "analysis", "plan"],
     // What combines them: the load pipeline, exclusion and re-fit, the comparison, the parameter file.
     &["workspace", "exclusion", "comparison", "params"],
     // The command line, then the workbench.

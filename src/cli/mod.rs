@@ -38,6 +38,7 @@ mod controller;
 mod import;
 mod outlier_study;
 mod paper_study;
+mod plan;
 mod reproduce;
 mod timings;
 
@@ -79,6 +80,10 @@ pub enum Command {
     /// Move joint targets (or poses) so that the calibrated robot reaches what the controller's
     /// nominal model meant: what the controller cannot take, compensated.
     Compensate(controller::CompensateArgs),
+    /// Plan the measurement: configurations that make every identifiable parameter well determined,
+    /// collision-free and facing the tracker, in a short visiting order (a dataset to fill in; RAPID
+    /// modules for the YuMi).
+    Plan(plan::PlanArgs),
 }
 
 #[derive(Args, Debug)]
@@ -315,6 +320,7 @@ fn run_command(command: Command) -> Result<()> {
         Command::Import(a) => import::run(&a),
         Command::Export(a) => controller::run_export(&a),
         Command::Compensate(a) => controller::run_compensate(&a),
+        Command::Plan(a) => plan::run(&a),
     }
 }
 

@@ -96,6 +96,30 @@ pub fn arm_uncertainty(
     measured: &[Vec<Vector3<f64>>],
     free: &[usize],
 ) -> Option<ArmUncertainty> {
+    uncertainty(arm, qs, measured, free, None)
+}
+
+/// The uncertainty a measurement of `arm` at `qs` would give with a tracker noise of `point_sigma_mm`
+/// per axis (measurement planning, [`crate::plan`]): the model's own points stand for the measured
+/// ones, and the noise is the one given rather than the residuals'.
+pub fn predicted(
+    arm: &ArmModel,
+    qs: &[Vec<f64>],
+    free: &[usize],
+    point_sigma_mm: f64,
+) -> Option<ArmUncertainty> {
+    let points: Vec<Vec<Vector3<f64>>> = qs.iter().map(|q| arm.reflector_fk(q).points_mm).collect();
+    uncertainty(arm, qs, &points, free, Some(point_sigma_mm))
+}
+
+/// [`arm_uncertainty`], the point noise estimated from the residuals or given.
+fn uncertainty(
+    arm: &ArmModel,
+    qs: &[Vec<f64>],
+    measured: &[Vec<Vector3<f64>>],
+    free: &[usize],
+    point_sigma_mm: Option<f64>,
+) -> Option<ArmUncertainty> {
     let n_all = qs.len().min(measured.len());
     let stride = n_all.div_ceil(MAX_CONFIGURATIONS).max(1);
     let used: Vec<usize> = (0..n_all).step_by(stride).collect();
@@ -110,7 +134,10 @@ pub fn arm_uncertainty(
     let points: Vec<&Vec<Vector3<f64>>> = used.iter().map(|&i| &measured[i]).collect();
     let sums = pair_sums(&jac, &points, free, arm.reflector_count());
     let dof = sums.rows.checked_sub(p).filter(|&d| d > 0)?;
-    let point_var = sums.cost / (2.0 * dof as f64);
+    let point_var = match point_sigma_mm {
+        Some(s) => s * s,
+        None => sums.cost / (2.0 * dof as f64),
+    };
     let inverse = sums.jtj.clone().cholesky()?.inverse();
     let mut cov = &inverse * &sums.meat * &inverse * point_var;
     if n < n_all {

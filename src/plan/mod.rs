@@ -1,0 +1,537 @@
+//! Planning the measurement: which configurations to measure so that every identifiable parameter is
+//! well determined, with every configuration collision-free and its reflectors facing the tracker.
+//!
+//! 1. **Candidates** ([`candidates`]): joint values drawn uniformly within the limits (less a margin),
+//!    kept when the reflectors' triangle faces the tracker within the incidence limit, lies within its
+//!    range, and the arm is clear of the body and the other arm (resting at its home pose) by the
+//!    clearance — the simulator's checks (parry3d), on the robot's own meshes.
+//! 2. **Selection**: greedy, over the identifiable parameters (columns scaled to unit RMS over the
+//!    candidates; the parameters distances can never identify,
+//!    [`crate::kinematics::ArmModel::unidentifiable_reason`], left out). The first two picks by
+//!    D-optimality of the reflector positions' scatter ([`select`]: distances taken as isotropic, the
+//!    information is that of the positions with the tracker's translation unknown); then
+//!    ([`select_by_distances`]) each next configuration the one that lowers most `trace(M⁻¹ P)` — the
+//!    predicted variance of a verification pair's distance error (I-optimality), with `M` the
+//!    information of the distances between the chosen configurations and `P` the mean information of a
+//!    pair of candidates — by the Woodbury identity.
+//! 3. **Order** ([`order`]): a short visiting sequence — nearest neighbour from the first pick, then
+//!    2-opt on the joint-space path length (rad; mm for a prismatic joint) — and each leg checked for
+//!    collisions at 2° steps.
+//!
+//! The predicted standard deviations of the parameters for the chosen set are those of
+//! [`crate::solver::uncertainty`] with the tracker's noise (`plan` in `dualcal plan` prints them).
+
+use crate::collision::CollisionWorld;
+use crate::kinematics::ArmModel;
+use crate::robot::RobotDescription;
+use crate::side::{PerSide, Side};
+use nalgebra::{DMatrix, Point3, Vector3};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+/// What the planner is told.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PlanOptions {
+    /// Configurations to choose per arm.
+    pub per_arm: usize,
+    /// Candidates drawn per arm (accepted ones).
+    pub candidates: usize,
+    pub seed: u64,
+    /// The tracker's position in the robot's body (root) frame, mm.
+    pub tracker_in_body_mm: Vector3<f64>,
+    /// Largest angle between the reflectors' facing direction and the line to the tracker, deg.
+    pub max_incidence_deg: f64,
+    /// Largest distance from the tracker to the flange, mm.
+    pub max_range_mm: f64,
+    /// Fraction of each joint's range kept clear at both ends.
+    pub joint_limit_margin_fraction: f64,
+    /// Clearance to the body and the other arm, mm.
+    pub clearance_mm: f64,
+    /// Random draws allowed per accepted candidate before giving up.
+    pub max_attempts_per_candidate: usize,
+}
+
+impl Default for PlanOptions {
+    fn default() -> Self {
+        Self {
+            per_arm: 20,
+            candidates: 600,
+            seed: 1,
+            tracker_in_body_mm: Vector3::new(2000.0, 0.0, 300.0),
+            max_incidence_deg: 60.0,
+            max_range_mm: 15_000.0,
+            joint_limit_margin_fraction: 0.05,
+            clearance_mm: 5.0,
+            max_attempts_per_candidate: 200,
+        }
+    }
+}
+
+/// Why a plan could not be made.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum PlanError {
+    #[error(
+        "{side} arm: only {found} of {wanted} candidate configurations face the tracker and are free \
+         of collisions after {attempts} draws ({facing} did not face it or were out of range, \
+         {colliding} collided): move the tracker, or allow a larger incidence angle"
+    )]
+    TooFewCandidates {
+        side: Side,
+        found: usize,
+        wanted: usize,
+        attempts: usize,
+        facing: usize,
+        colliding: usize,
+    },
+    #[error("{0}")]
+    Options(String),
+}
+
+/// One arm's plan.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ArmPlan {
+    /// The chosen configurations in visiting order (rad; mm for a prismatic joint).
+    pub configs: Vec<Vec<f64>>,
+    /// Candidates accepted, and draws made.
+    pub candidates: usize,
+    pub attempts: usize,
+    /// `log det` of the chosen set's (scaled) information, and that of the same number of candidates
+    /// taken in the order they were drawn (a random set), for comparison.
+    pub log_det: f64,
+    pub log_det_random: f64,
+    /// Joint-space length of the visiting path.
+    pub path_length: f64,
+    /// Legs of the path (from configuration k to k + 1) on which a collision was found.
+    pub colliding_legs: Vec<usize>,
+}
+
+/// Where each arm rests while the other one moves: its home pose.
+fn resting(robot: &RobotDescription) -> PerSide<Vec<f64>> {
+    PerSide::from_fn(|side| robot.home_q_rad(side))
+}
+
+/// Candidate configurations of `side` (module documentation, step 1): `(candidates, draws)`.
+pub fn candidates(
+    robot: &RobotDescription,
+    arm: &ArmModel,
+    side: Side,
+    world: &CollisionWorld,
+    options: &PlanOptions,
+) -> Result<(Vec<Vec<f64>>, usize), PlanError> {
+    let rest = resting(robot);
+    let body_from_base = robot.body_from_arm_base(side);
+    let tracker = body_from_base.inverse_transform_point(&Point3::from(options.tracker_in_body_mm));
+    let limits: Vec<(f64, f64)> = arm
+        .joint_limits_rad()
+        .into_iter()
+        .map(|(lo, hi)| {
+            let m = options.joint_limit_margin_fraction * (hi - lo);
+            (lo + m, hi - m)
+        })
+        .collect();
+    let axis = facing_axis(arm);
+    let cos_max = options.max_incidence_deg.to_radians().cos();
+    let mut rng = ChaCha8Rng::seed_from_u64(options.seed ^ (0x9e37 + side as u64));
+    let (mut out, mut attempts, mut facing, mut colliding) = (Vec::new(), 0, 0, 0);
+    let max_attempts = options.max_attempts_per_candidate * options.candidates;
+    while out.len() < options.candidates {
+        if attempts == max_attempts {
+            return Err(PlanError::TooFewCandidates {
+                side,
+                found: out.len(),
+                wanted: options.candidates,
+                attempts,
+                facing,
+                colliding,
+            });
+        }
+        attempts += 1;
+        let q: Vec<f64> = limits
+            .iter()
+            .map(|&(lo, hi)| {
+                if lo < hi {
+                    rng.random_range(lo..hi)
+                } else {
+                    lo
+                }
+            })
+            .collect();
+        let flange = arm.base_from_flange(&q);
+        let to_tracker = tracker - Point3::from(flange.translation.vector);
+        let dist = to_tracker.norm();
+        let normal = flange.rotation * axis;
+        if !(dist > 0.0
+            && dist <= options.max_range_mm
+            && normal.dot(&to_tracker) >= cos_max * dist)
+        {
+            facing += 1;
+            continue;
+        }
+        let clear = match side {
+            Side::Left => !world.in_collision(&q, &rest.right, options.clearance_mm),
+            Side::Right => !world.in_collision(&rest.left, &q, options.clearance_mm),
+        };
+        if clear {
+            out.push(q);
+        } else {
+            colliding += 1;
+        }
+    }
+    Ok((out, attempts))
+}
+
+/// The direction the reflectors face in the tip frame: their triangle's normal away from the tip
+/// (the tip's z axis with fewer than three reflectors).
+pub fn facing_axis(arm: &ArmModel) -> Vector3<f64> {
+    let t = &arm.reflectors_mm;
+    if t.len() < 3 {
+        return Vector3::z();
+    }
+    let n = (t[1] - t[0]).cross(&(t[2] - t[0]));
+    let Some(n) = n.try_normalize(1e-12) else {
+        return Vector3::z();
+    };
+    if n.dot(&(t[0] + t[1] + t[2])) < 0.0 {
+        -n
+    } else {
+        n
+    }
+}
+
+/// The reflector Jacobians of every candidate, the identifiable columns scaled to unit RMS scatter
+/// over the candidates: one `3·reflectors × p` matrix per candidate.
+pub fn scaled_jacobians(arm: &ArmModel, configs: &[Vec<f64>]) -> Vec<DMatrix<f64>> {
+    let free: Vec<usize> = (0..arm.param_count())
+        .filter(|&k| arm.unidentifiable_reason(k).is_none())
+        .collect();
+    let rows = 3 * arm.reflector_count();
+    let jac: Vec<DMatrix<f64>> = configs
+        .iter()
+        .map(|q| {
+            let j = arm.reflector_jacobians(q);
+            DMatrix::from_fn(rows, free.len(), |r, c| {
+                j.jacobians[r / 3][(r % 3, free[c])]
+            })
+        })
+        .collect();
+    let n = jac.len().max(1) as f64;
+    let mean = jac
+        .iter()
+        .fold(DMatrix::zeros(rows, free.len()), |a, j| a + j)
+        / n;
+    let scale: Vec<f64> = (0..free.len())
+        .map(|c| {
+            let ss: f64 = jac
+                .iter()
+                .map(|j| (j.column(c) - mean.column(c)).norm_squared())
+                .sum();
+            let rms = (ss / n).sqrt();
+            if rms > 0.0 { 1.0 / rms } else { 0.0 }
+        })
+        .collect();
+    jac.into_iter()
+        .map(|mut j| {
+            for (c, s) in scale.iter().enumerate() {
+                j.column_mut(c).scale_mut(*s);
+            }
+            j
+        })
+        .collect()
+}
+
+/// `log det` of the scatter of `chosen` (indices into `jac`), regularised by `1e-9 · p`.
+pub fn log_det(jac: &[DMatrix<f64>], chosen: &[usize]) -> f64 {
+    let Some(first) = jac.first() else {
+        return f64::NEG_INFINITY;
+    };
+    let p = first.ncols();
+    let n = chosen.len().max(1) as f64;
+    let mean = chosen
+        .iter()
+        .fold(DMatrix::zeros(first.nrows(), p), |a, &i| a + &jac[i])
+        / n;
+    let mut m = DMatrix::<f64>::identity(p, p) * 1e-9;
+    for &i in chosen {
+        let d = &jac[i] - &mean;
+        m += d.transpose() * d;
+    }
+    m.cholesky().map_or(f64::NEG_INFINITY, |c| {
+        2.0 * c.l().diagonal().map(f64::ln).sum()
+    })
+}
+
+/// Greedy D-optimal choice of `n` of the candidates (module documentation, step 2): their indices in
+/// the order chosen.
+pub fn select(jac: &[DMatrix<f64>], n: usize) -> Vec<usize> {
+    let Some(first) = jac.first() else {
+        return Vec::new();
+    };
+    let (rows, p) = first.shape();
+    let count = jac.len() as f64;
+    let pool_mean = jac.iter().fold(DMatrix::zeros(rows, p), |a, j| a + j) / count;
+    let start = (0..jac.len())
+        .max_by(|&a, &b| {
+            (&jac[a] - &pool_mean)
+                .norm_squared()
+                .total_cmp(&(&jac[b] - &pool_mean).norm_squared())
+        })
+        .unwrap_or(0);
+    let mut chosen = vec![start];
+    let mut taken = vec![false; jac.len()];
+    taken[start] = true;
+    let mut mean = jac[start].clone();
+    let mut info = DMatrix::<f64>::identity(p, p) * 1e-9;
+    while chosen.len() < n.min(jac.len()) {
+        let Some(chol) = info.clone().cholesky() else {
+            break;
+        };
+        let inverse = chol.inverse();
+        let k = chosen.len() as f64;
+        // Adding c: scatter += k/(k+1) · (J_c − J̄)ᵀ (J_c − J̄); the gain is log det(I + α D M⁻¹ Dᵀ).
+        let alpha = k / (k + 1.0);
+        let gain = |c: usize| -> f64 {
+            let d = &jac[c] - &mean;
+            let mut w = &d * &inverse * d.transpose() * alpha;
+            for r in 0..rows {
+                w[(r, r)] += 1.0;
+            }
+            w.cholesky().map_or(f64::NEG_INFINITY, |c| {
+                2.0 * c.l().diagonal().map(f64::ln).sum()
+            })
+        };
+        let best = (0..jac.len())
+            .filter(|&c| !taken[c])
+            .map(|c| (c, gain(c)))
+            .max_by(|a, b| a.1.total_cmp(&b.1));
+        let Some((c, _)) = best else { break };
+        let d = &jac[c] - &mean;
+        info += d.transpose() * &d * alpha;
+        mean = (&mean * k + &jac[c]) / (k + 1.0);
+        taken[c] = true;
+        chosen.push(c);
+    }
+    chosen
+}
+
+/// Greedy I-optimal choice on the exact distance information (module documentation, step 2): the
+/// rows `u_ij,kᵀ (J_i,k − J_j,k)` a candidate adds with every configuration chosen so far lower
+/// `trace(M⁻¹ P)` by `trace((I + G M⁻¹ Gᵀ)⁻¹ G M⁻¹ P M⁻¹ Gᵀ)`. `points[c]` are candidate c's model reflector positions, `jac[c]` its
+/// scaled Jacobian rows (3 per reflector). Starts from `start` (the isotropic design's first picks).
+pub fn select_by_distances(
+    points: &[Vec<Vector3<f64>>],
+    jac: &[DMatrix<f64>],
+    n: usize,
+    start: &[usize],
+) -> Vec<usize> {
+    let Some(first) = jac.first() else {
+        return Vec::new();
+    };
+    let p = first.ncols();
+    let reflectors = first.nrows() / 3;
+    let rows_with = |c: usize, chosen: &[usize]| -> DMatrix<f64> {
+        let mut g = DMatrix::<f64>::zeros(chosen.len() * reflectors, p);
+        for (r, (j, k)) in chosen
+            .iter()
+            .flat_map(|&j| (0..reflectors).map(move |k| (j, k)))
+            .enumerate()
+        {
+            let v = points[c][k] - points[j][k];
+            let Some(u) = v.try_normalize(1e-12) else {
+                continue;
+            };
+            for col in 0..p {
+                let mut acc = 0.0;
+                for t in 0..3 {
+                    acc += u[t] * (jac[c][(3 * k + t, col)] - jac[j][(3 * k + t, col)]);
+                }
+                g[(r, col)] = acc;
+            }
+        }
+        g
+    };
+    // The information of the pairs a verification would measure: the mean over pairs of candidates
+    // (every k-th pair, at most ~4000).
+    let count = jac.len();
+    let total = count * count.saturating_sub(1) / 2;
+    let stride = total.div_ceil(4000).max(1);
+    let mut pool_info = DMatrix::<f64>::zeros(p, p);
+    let mut sampled = 0usize;
+    let mut pair = 0usize;
+    for i in 0..count {
+        for j in i + 1..count {
+            if pair.is_multiple_of(stride) {
+                let g = rows_with(i, &[j]);
+                pool_info += g.transpose() * &g;
+                sampled += 1;
+            }
+            pair += 1;
+        }
+    }
+    pool_info /= sampled.max(1) as f64;
+    let mut chosen: Vec<usize> = start.iter().copied().take(n).collect();
+    let mut taken = vec![false; jac.len()];
+    let mut info = DMatrix::<f64>::identity(p, p) * 1e-9;
+    for (k, &c) in chosen.iter().enumerate() {
+        taken[c] = true;
+        let g = rows_with(c, &chosen[..k]);
+        info += g.transpose() * &g;
+    }
+    while chosen.len() < n.min(jac.len()) {
+        let Some(chol) = info.clone().cholesky() else {
+            break;
+        };
+        let inverse = chol.inverse();
+        // I-optimality: the candidate that lowers trace(M⁻¹ P) most — the predicted variance of a
+        // verification pair's distance error — by the Woodbury identity:
+        // Δ = trace((I + G M⁻¹ Gᵀ)⁻¹ G M⁻¹ P M⁻¹ Gᵀ).
+        let b = &inverse * &pool_info * &inverse;
+        let best = (0..jac.len())
+            .filter(|&c| !taken[c])
+            .map(|c| {
+                let g = rows_with(c, &chosen);
+                let mut w = &g * &inverse * g.transpose();
+                for r in 0..w.nrows() {
+                    w[(r, r)] += 1.0;
+                }
+                let gbg = &g * &b * g.transpose();
+                let gain = w
+                    .cholesky()
+                    .map_or(f64::NEG_INFINITY, |c| c.solve(&gbg).trace());
+                (c, gain)
+            })
+            .max_by(|a, b| a.1.total_cmp(&b.1));
+        let Some((c, _)) = best else { break };
+        let g = rows_with(c, &chosen);
+        info += g.transpose() * &g;
+        taken[c] = true;
+        chosen.push(c);
+    }
+    chosen
+}
+
+/// Joint-space distance (rad; mm for a prismatic joint).
+fn leg(a: &[f64], b: &[f64]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).powi(2))
+        .sum::<f64>()
+        .sqrt()
+}
+
+/// A short visiting order of `configs` (module documentation, step 3): nearest neighbour from the
+/// first, then 2-opt moves while they shorten the path.
+pub fn order(configs: &[Vec<f64>]) -> Vec<usize> {
+    let n = configs.len();
+    if n < 3 {
+        return (0..n).collect();
+    }
+    let mut path = vec![0];
+    let mut left: Vec<usize> = (1..n).collect();
+    while !left.is_empty() {
+        let last = &configs[*path.last().unwrap_or(&0)];
+        let (k, _) = left
+            .iter()
+            .enumerate()
+            .map(|(k, &c)| (k, leg(last, &configs[c])))
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .unwrap_or((0, 0.0));
+        path.push(left.swap_remove(k));
+    }
+    let d = |path: &[usize], a: usize, b: usize| leg(&configs[path[a]], &configs[path[b]]);
+    let mut improved = true;
+    let mut rounds = 0;
+    while improved && rounds < 100 {
+        improved = false;
+        rounds += 1;
+        for i in 0..n - 2 {
+            for j in i + 2..n - 1 {
+                let now = d(&path, i, i + 1) + d(&path, j, j + 1);
+                let swapped = d(&path, i, j) + d(&path, i + 1, j + 1);
+                if swapped + 1e-12 < now {
+                    path[i + 1..=j].reverse();
+                    improved = true;
+                }
+            }
+        }
+    }
+    path
+}
+
+/// The path's length and the legs on which the straight joint-space motion collides (checked every
+/// 2°, or 5 mm for a prismatic joint).
+fn check_path(
+    side: Side,
+    configs: &[Vec<f64>],
+    rest: &PerSide<Vec<f64>>,
+    world: &CollisionWorld,
+    clearance_mm: f64,
+) -> (f64, Vec<usize>) {
+    let mut length = 0.0;
+    let mut colliding = Vec::new();
+    for (k, pair) in configs.windows(2).enumerate() {
+        let (a, b) = (&pair[0], &pair[1]);
+        length += leg(a, b);
+        let largest = a
+            .iter()
+            .zip(b)
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0, f64::max);
+        let steps = (largest / 2f64.to_radians()).ceil().max(1.0) as usize;
+        let hit = (1..steps).any(|s| {
+            let t = s as f64 / steps as f64;
+            let q: Vec<f64> = a.iter().zip(b).map(|(x, y)| x + t * (y - x)).collect();
+            match side {
+                Side::Left => world.in_collision(&q, &rest.right, clearance_mm),
+                Side::Right => world.in_collision(&rest.left, &q, clearance_mm),
+            }
+        });
+        if hit {
+            colliding.push(k);
+        }
+    }
+    (length, colliding)
+}
+
+/// Plan both arms of `robot` with the reflectors `reflectors_mm` (tip frame).
+pub fn plan(
+    robot: &RobotDescription,
+    reflectors_mm: &[Vector3<f64>],
+    options: &PlanOptions,
+) -> Result<PerSide<ArmPlan>, PlanError> {
+    if options.per_arm < 2 || options.candidates < options.per_arm {
+        return Err(PlanError::Options(format!(
+            "{} configurations per arm from {} candidates: expected at least 2, and at least as many \
+             candidates",
+            options.per_arm, options.candidates
+        )));
+    }
+    let nominal = robot.nominal_model(reflectors_mm.to_vec());
+    let world = CollisionWorld::new(robot);
+    let rest = resting(robot);
+    PerSide::try_from_fn(|side| {
+        let arm = nominal.arm(side);
+        let (pool, attempts) = candidates(robot, arm, side, &world, options)?;
+        let jac = scaled_jacobians(arm, &pool);
+        let points: Vec<Vec<Vector3<f64>>> =
+            pool.iter().map(|q| arm.reflector_fk(q).points_mm).collect();
+        // The isotropic design's first two picks start the exact one (a single configuration has no
+        // distance yet).
+        let start = select(&jac, 2);
+        let chosen = select_by_distances(&points, &jac, options.per_arm, &start);
+        let random: Vec<usize> = (0..options.per_arm).collect();
+        let configs: Vec<Vec<f64>> = chosen.iter().map(|&i| pool[i].clone()).collect();
+        let path = order(&configs);
+        let configs: Vec<Vec<f64>> = path.iter().map(|&k| configs[k].clone()).collect();
+        let (path_length, colliding_legs) =
+            check_path(side, &configs, &rest, &world, options.clearance_mm);
+        Ok(ArmPlan {
+            configs,
+            candidates: pool.len(),
+            attempts,
+            log_det: log_det(&jac, &chosen),
+            log_det_random: log_det(&jac, &random),
+            path_length,
+            colliding_legs,
+        })
+    })
+}

@@ -1,0 +1,248 @@
+//! Planning the measurement (issue 23), simulated: the planner's configurations against random ones of
+//! the same number, measured on the same true robot by the same tracker, calibrated alike and judged
+//! on the same verification configurations against what the true parameters give there.
+
+mod common;
+
+use dualcal::collision::CollisionWorld;
+use dualcal::dataset::{Dataset, Measurement, Split};
+use dualcal::metrics::evaluate;
+use dualcal::plan::{PlanOptions, plan};
+use dualcal::robot::RobotDescription;
+use dualcal::side::{PerSide, Side};
+use dualcal::simulate::{SimOutput, default_reflectors_for, paper_options, simulate_with_robot};
+use dualcal::solver::CalibrationSettings;
+use nalgebra::{Point3, Vector3};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, StandardNormal};
+
+/// The true robot of `sim` at `configs`, seen by its tracker with the simulator's noise (half the
+/// MPE at the distance, per axis).
+fn measured(sim: &SimOutput, side: Side, configs: &[Vec<f64>], seed: u64) -> Vec<Measurement> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let tracker = sim.dataset.tracker;
+    let tracker_from_base = sim.tracker_from_left_base * sim.truth.left_base_from(side);
+    let prefix = if side == Side::Left { 'P' } else { 'Q' };
+    configs
+        .iter()
+        .enumerate()
+        .map(|(i, q)| {
+            let fk = sim.truth.arm(side).reflector_fk(q);
+            let tracker_points_mm = fk
+                .points_mm
+                .iter()
+                .map(|p| {
+                    let p = tracker_from_base.transform_point(&Point3::from(*p)).coords;
+                    let sigma = 0.5e-3 * (tracker.mpe_um + tracker.mpe_um_per_m * p.norm() / 1e3);
+                    let n: [f64; 3] = std::array::from_fn(|_| StandardNormal.sample(&mut rng));
+                    p + sigma * Vector3::from(n)
+                })
+                .collect();
+            Measurement {
+                id: format!("{prefix}{:03}", i + 1),
+                q_rad: q.clone(),
+                tracker_points_mm,
+                split: Split::Cal,
+                line: i + 2,
+            }
+        })
+        .collect()
+}
+
+/// The mean of both arms' relative verification RMS of the model calibrated on `configs`, over that of
+/// the true parameters.
+fn ratio_to_truth(sim: &SimOutput, configs: &PerSide<Vec<Vec<f64>>>, seed: u64) -> f64 {
+    let mut ds: Dataset = sim.dataset.clone();
+    for side in Side::BOTH {
+        let ver: Vec<Measurement> = ds
+            .arm(side)
+            .select(Split::Ver)
+            .into_iter()
+            .cloned()
+            .collect();
+        let mut ms = measured(sim, side, &configs[side], seed + side as u64);
+        ms.extend(ver);
+        ds.arms[side].measurements = ms;
+    }
+    let result = common::calibrate(&ds, &sim.nominal, &CalibrationSettings::default());
+    let rms = |model| {
+        let r = evaluate(&ds, model, Split::Ver).unwrap();
+        0.5 * (r.relative_left.pos_rms_mm + r.relative_right.pos_rms_mm)
+    };
+    rms(&result.calibrated) / rms(&sim.truth)
+}
+
+/// Plan `n` per arm for the simulation of `seed`; the planned and the first `n` random calibration
+/// configurations' ratios to the truth, and the plans.
+fn planned_and_random(
+    robot: &RobotDescription,
+    seed: u64,
+    n: usize,
+) -> (f64, f64, PerSide<dualcal::plan::ArmPlan>, PlanOptions) {
+    let sim = simulate_with_robot(&paper_options(seed, 220, 120), robot).unwrap();
+    let tracker_in_body = robot.body_from_arm_base(Side::Left)
+        * sim
+            .tracker_from_left_base
+            .inverse_transform_point(&Point3::origin());
+    let options = PlanOptions {
+        per_arm: n,
+        candidates: 600,
+        seed,
+        tracker_in_body_mm: tracker_in_body.coords,
+        ..PlanOptions::default()
+    };
+    let planned = plan(robot, &default_reflectors_for(robot), &options).unwrap();
+    let planned_configs = planned.as_ref().map(|_, p| p.configs.clone());
+    let random = PerSide::from_fn(|side| {
+        sim.dataset
+            .arm(side)
+            .select(Split::Cal)
+            .iter()
+            .take(n)
+            .map(|m| m.q_rad.clone())
+            .collect::<Vec<_>>()
+    });
+    (
+        ratio_to_truth(&sim, &planned_configs, 100 * seed),
+        ratio_to_truth(&sim, &random, 100 * seed),
+        planned,
+        options,
+    )
+}
+
+/// 20 planned configurations per arm against 20 random ones on four simulations (the IRB 14000, the
+/// paper's errors and tracker; each verified on the same 100 random configurations): every planned
+/// configuration is free of collisions, its design better than the random one's, and the planned
+/// sets calibrate better on average and far more evenly. The issue's target — within 1.10× of the
+/// true parameters' accuracy with 20 — is not reached: ~1.16 (docs/planning.md).
+#[test]
+fn twenty_planned_configurations_calibrate_better_than_twenty_random_ones() {
+    let robot = RobotDescription::builtin_irb14000();
+    let world = CollisionWorld::new(&robot);
+    let mut ratios = Vec::new();
+    for seed in [1, 2, 3, 4] {
+        let (rp, rr, planned, options) = planned_and_random(&robot, seed, 20);
+        for side in Side::BOTH {
+            let p = &planned[side];
+            assert_eq!(p.configs.len(), 20);
+            assert!(
+                p.log_det > p.log_det_random,
+                "{side}: {} vs {}",
+                p.log_det,
+                p.log_det_random
+            );
+            let home = robot.home_q_rad(side.other());
+            for q in &p.configs {
+                let free = match side {
+                    Side::Left => !world.in_collision(q, &home, options.clearance_mm),
+                    Side::Right => !world.in_collision(&home, q, options.clearance_mm),
+                };
+                assert!(free, "{side}: a planned configuration collides");
+            }
+        }
+        eprintln!(
+            "seed {seed}: verification RMS over the truth's — planned {rp:.3}, random {rr:.3}"
+        );
+        ratios.push((rp, rr));
+    }
+    let mean = |f: fn(&(f64, f64)) -> f64| ratios.iter().map(f).sum::<f64>() / ratios.len() as f64;
+    let spread = |f: fn(&(f64, f64)) -> f64| {
+        let v: Vec<f64> = ratios.iter().map(f).collect();
+        v.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+            - v.iter().copied().fold(f64::INFINITY, f64::min)
+    };
+    let (planned, random) = (mean(|r| r.0), mean(|r| r.1));
+    eprintln!(
+        "mean planned {planned:.3} (spread {:.3}), random {random:.3} (spread {:.3})",
+        spread(|r| r.0),
+        spread(|r| r.1)
+    );
+    assert!(planned < random, "{planned} vs {random}");
+    assert!(planned < 1.20, "{planned}");
+    assert!(spread(|r| r.0) < spread(|r| r.1));
+}
+
+/// The curve of docs/planning.md: verification RMS over the truth's against N, planned and random,
+/// four simulations each (`cargo test --release --test plan -- --ignored --nocapture`).
+#[test]
+#[ignore]
+fn accuracy_against_the_number_of_configurations() {
+    let robot = RobotDescription::builtin_irb14000();
+    eprintln!("N   planned (mean, min–max)   random (mean, min–max)");
+    for n in [10, 15, 20, 30, 40] {
+        let r: Vec<(f64, f64)> = [1, 2, 3, 4]
+            .iter()
+            .map(|&seed| {
+                let (p, q, _, _) = planned_and_random(&robot, seed, n);
+                (p, q)
+            })
+            .collect();
+        let stats = |f: fn(&(f64, f64)) -> f64| {
+            let v: Vec<f64> = r.iter().map(f).collect();
+            (
+                v.iter().sum::<f64>() / v.len() as f64,
+                v.iter().copied().fold(f64::INFINITY, f64::min),
+                v.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+            )
+        };
+        let (p, q) = (stats(|x| x.0), stats(|x| x.1));
+        eprintln!(
+            "{n:<3} {:.3} ({:.3}–{:.3})       {:.3} ({:.3}–{:.3})",
+            p.0, p.1, p.2, q.0, q.1, q.2
+        );
+    }
+}
+
+/// The command writes the two joint tables in visiting order, the manifest and the RAPID modules, and
+/// refuses a non-empty output directory.
+#[test]
+fn the_command_writes_a_dataset_to_fill_in() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("planned");
+    let run = |extra: &[&str]| {
+        let mut args = vec![
+            "plan",
+            "--tracker",
+            "2000,0,300",
+            "--n",
+            "8",
+            "--candidates",
+            "60",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        std::process::Command::new(env!("CARGO_BIN_EXE_dualcal"))
+            .args(&args)
+            .output()
+            .unwrap()
+    };
+    let first = run(&[]);
+    assert!(
+        first.status.success(),
+        "{}",
+        String::from_utf8_lossy(&first.stderr)
+    );
+    for side in ["left", "right"] {
+        let csv = std::fs::read_to_string(out.join(format!("{side}.csv"))).unwrap();
+        let rows: Vec<&str> = csv.lines().filter(|l| !l.starts_with('#')).collect();
+        assert_eq!(rows[0], "id,q1,q2,q3,q4,q5,q6,q7,split");
+        assert_eq!(rows.len(), 9);
+        assert!(
+            rows[1..]
+                .iter()
+                .all(|r| r.ends_with(",cal") && r.split(',').count() == 9)
+        );
+        let rapid = std::fs::read_to_string(out.join(format!("plan_{side}.mod"))).unwrap();
+        assert_eq!(rapid.matches("CONST jointtarget").count(), 8);
+        assert_eq!(rapid.matches("MoveAbsJ").count(), 8);
+    }
+    let manifest = std::fs::read_to_string(out.join("dataset.toml")).unwrap();
+    assert!(manifest.contains("[reflectors]") && manifest.matches("[[arms]]").count() == 2);
+    let stdout = String::from_utf8_lossy(&first.stdout);
+    assert!(stdout.contains("predicted 1σ"), "{stdout}");
+    let again = run(&[]);
+    assert_eq!(again.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&again.stderr).contains("already exists"));
+}
