@@ -3,6 +3,8 @@
 //! on the same verification configurations against what the true parameters give there.
 
 mod common;
+#[path = "fixtures/robots.rs"]
+mod robots;
 
 use dualcal::collision::CollisionWorld;
 use dualcal::dataset::{Dataset, Measurement, Split};
@@ -245,4 +247,52 @@ fn the_command_writes_a_dataset_to_fill_in() {
     let again = run(&[]);
     assert_eq!(again.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&again.stderr).contains("already exists"));
+}
+
+/// A description of the user's own (the lift-and-mimic test robot: a prismatic lift and a coupled
+/// joint on 6-variable arms) plans alike: its chains' limits hold (the lift within 0–300 mm).
+#[test]
+fn a_robot_with_a_lift_and_a_mimic_joint_plans_within_its_limits() {
+    let dir = tempfile::tempdir().unwrap();
+    let urdf = robots::write_file(
+        dir.path(),
+        "lift.urdf",
+        robots::lift_mimic_urdf().as_bytes(),
+    );
+    let arms = PerSide::new(
+        Some(dualcal::robot::ArmLinks::new(
+            robots::LIFT_MIMIC_ARMS[0].0,
+            robots::LIFT_MIMIC_ARMS[0].1,
+        )),
+        Some(dualcal::robot::ArmLinks::new(
+            robots::LIFT_MIMIC_ARMS[1].0,
+            robots::LIFT_MIMIC_ARMS[1].1,
+        )),
+    );
+    let robot = RobotDescription::load(
+        &urdf,
+        &dualcal::robot::LoadOptions {
+            arms,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let options = PlanOptions {
+        per_arm: 10,
+        candidates: 80,
+        tracker_in_body_mm: Vector3::new(2000.0, 0.0, 800.0),
+        ..PlanOptions::default()
+    };
+    let planned = plan(&robot, &default_reflectors_for(&robot), &options).unwrap();
+    for side in Side::BOTH {
+        let limits = robot.joint_limits_rad(side);
+        assert_eq!(planned[side].configs.len(), 10);
+        for q in &planned[side].configs {
+            assert_eq!(q.len(), 6);
+            for (v, (lo, hi)) in q.iter().zip(&limits) {
+                assert!(lo <= v && v <= hi, "{v} outside [{lo}, {hi}]");
+            }
+            assert!((0.0..=300.0).contains(&q[1]), "lift {}", q[1]);
+        }
+    }
 }
