@@ -26,6 +26,33 @@ use parry3d::shape::{Ball, Capsule, ConvexPolyhedron, Cuboid, Cylinder, Shape, T
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
+/// An axis-aligned box in the body frame, mm: a keep-out zone of the cell.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct KeepOutBox {
+    pub min_mm: Vector3<f64>,
+    pub max_mm: Vector3<f64>,
+}
+
+impl KeepOutBox {
+    /// `X0,Y0,Z0,X1,Y1,Z1` (mm, body frame; the corners in any order).
+    pub fn parse(s: &str) -> Result<Self, String> {
+        let v: Vec<f64> = s
+            .split(',')
+            .map(|x| x.trim().parse::<f64>())
+            .collect::<Result<_, _>>()
+            .map_err(|_| format!("`{s}`: expected X0,Y0,Z0,X1,Y1,Z1 (mm)"))?;
+        match v.as_slice() {
+            [a, b, c, d, e, f] if v.iter().all(|x| x.is_finite()) => Ok(Self {
+                min_mm: Vector3::new(a.min(*d), b.min(*e), c.min(*f)),
+                max_mm: Vector3::new(a.max(*d), b.max(*e), c.max(*f)),
+            }),
+            _ => Err(format!(
+                "`{s}`: expected X0,Y0,Z0,X1,Y1,Z1, six numbers (mm)"
+            )),
+        }
+    }
+}
+
 /// Number of sampled configurations used to find same-arm pairs that are always in contact.
 const ALWAYS_TOUCHING_SAMPLES: usize = 64;
 
@@ -394,6 +421,48 @@ impl CollisionWorld {
         self.pairs
             .iter()
             .any(|p| self.pair_hits(&placed, p, self.pair_margin(p, margin_mm)))
+    }
+
+    /// True if a link of either arm at `q_left`, `q_right` is within `margin_mm` of one of the
+    /// keep-out boxes (the cell's fixtures, the tracker's stand).
+    pub fn in_keep_out(
+        &self,
+        q_left: &[f64],
+        q_right: &[f64],
+        boxes: &[KeepOutBox],
+        margin_mm: f64,
+    ) -> bool {
+        if boxes.is_empty() {
+            return false;
+        }
+        let placed = self.place(q_left, q_right);
+        self.links.iter().zip(&placed).any(|(link, shapes)| {
+            matches!(self.kin.owner[link.link], Owner::Arm(_))
+                && link
+                    .shapes
+                    .iter()
+                    .zip(shapes)
+                    .any(|(shape, (pose, centre))| {
+                        boxes.iter().any(|b| {
+                            let half = (b.max_mm - b.min_mm) / 2.0;
+                            let mid = (b.max_mm + b.min_mm) / 2.0;
+                            if (centre - mid).norm()
+                                > half.norm() + shape.bound_radius_mm + margin_mm
+                            {
+                                return false;
+                            }
+                            let cuboid = Cuboid::new(Vector::new(
+                                half.x as f32,
+                                half.y as f32,
+                                half.z as f32,
+                            ));
+                            let box_pose =
+                                to_parry_pose(&Isometry3::translation(mid.x, mid.y, mid.z));
+                            query::distance(pose, shape.prim.shape(), &box_pose, &cuboid)
+                                .is_ok_and(|d| f64::from(d.distance) <= margin_mm)
+                        })
+                    })
+        })
     }
 
     /// Every colliding pair (link names and what kind of pair), for diagnostics and drawing.

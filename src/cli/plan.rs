@@ -52,9 +52,13 @@ pub struct PlanArgs {
     /// Fraction of each joint's range kept clear at both ends.
     #[arg(long, default_value_t = 0.05)]
     pub joint_margin: f64,
-    /// Clearance to the body and the other arm, mm.
+    /// Clearance to the body, the other arm and the keep-out boxes, mm.
     #[arg(long, default_value_t = 5.0)]
     pub clearance_mm: f64,
+    /// A keep-out box of the cell (a fixture, the tracker's stand): X0,Y0,Z0,X1,Y1,Z1, mm in the
+    /// robot's root frame; repeat for more.
+    #[arg(long = "keep-out", value_parser = crate::collision::KeepOutBox::parse)]
+    pub keep_out: Vec<crate::collision::KeepOutBox>,
     /// The tracker's maximum permissible error, constant part, µm (for the predicted σ).
     #[arg(long, default_value_t = TrackerSpec::default().mpe_um)]
     pub mpe_um: f64,
@@ -118,6 +122,7 @@ pub fn run(a: &PlanArgs) -> Result<()> {
         max_range_mm: a.max_range_m * 1000.0,
         joint_limit_margin_fraction: a.joint_margin,
         clearance_mm: a.clearance_mm,
+        keep_out: a.keep_out.clone(),
         ..PlanOptions::default()
     };
     let plans = plan(&robot, &reflectors, &options)?;

@@ -3,8 +3,8 @@
 //!
 //! 1. **Candidates** ([`candidates`]): joint values drawn uniformly within the limits (less a margin),
 //!    kept when the reflectors' triangle faces the tracker within the incidence limit, lies within its
-//!    range, and the arm is clear of the body and the other arm (resting at its home pose) by the
-//!    clearance — the simulator's checks (parry3d), on the robot's own meshes.
+//!    range, and the arm is clear of the body, the other arm (resting at its home pose) and the cell's
+//!    keep-out boxes by the clearance — the simulator's checks (parry3d), on the robot's own meshes.
 //! 2. **Selection**: greedy, over the identifiable parameters (columns scaled to unit RMS over the
 //!    candidates; the parameters distances can never identify,
 //!    [`crate::kinematics::ArmModel::unidentifiable_reason`], left out). The first two picks by
@@ -21,7 +21,7 @@
 //! The predicted standard deviations of the parameters for the chosen set are those of
 //! [`crate::solver::uncertainty`] with the tracker's noise (`plan` in `dualcal plan` prints them).
 
-use crate::collision::CollisionWorld;
+use crate::collision::{CollisionWorld, KeepOutBox};
 use crate::kinematics::ArmModel;
 use crate::robot::RobotDescription;
 use crate::side::{PerSide, Side};
@@ -49,6 +49,8 @@ pub struct PlanOptions {
     pub clearance_mm: f64,
     /// Random draws allowed per accepted candidate before giving up.
     pub max_attempts_per_candidate: usize,
+    /// Keep-out boxes of the cell (body frame): no arm link within the clearance of one.
+    pub keep_out: Vec<KeepOutBox>,
 }
 
 impl Default for PlanOptions {
@@ -63,6 +65,7 @@ impl Default for PlanOptions {
             joint_limit_margin_fraction: 0.05,
             clearance_mm: 5.0,
             max_attempts_per_candidate: 200,
+            keep_out: Vec::new(),
         }
     }
 }
@@ -167,10 +170,12 @@ pub fn candidates(
             facing += 1;
             continue;
         }
-        let clear = match side {
-            Side::Left => !world.in_collision(&q, &rest.right, options.clearance_mm),
-            Side::Right => !world.in_collision(&rest.left, &q, options.clearance_mm),
+        let (ql, qr) = match side {
+            Side::Left => (&q, &rest.right),
+            Side::Right => (&rest.left, &q),
         };
+        let clear = !world.in_collision(ql, qr, options.clearance_mm)
+            && !world.in_keep_out(ql, qr, &options.keep_out, options.clearance_mm);
         if clear {
             out.push(q);
         } else {
@@ -464,8 +469,9 @@ fn check_path(
     configs: &[Vec<f64>],
     rest: &PerSide<Vec<f64>>,
     world: &CollisionWorld,
-    clearance_mm: f64,
+    options: &PlanOptions,
 ) -> (f64, Vec<usize>) {
+    let clearance_mm = options.clearance_mm;
     let mut length = 0.0;
     let mut colliding = Vec::new();
     for (k, pair) in configs.windows(2).enumerate() {
@@ -480,10 +486,12 @@ fn check_path(
         let hit = (1..steps).any(|s| {
             let t = s as f64 / steps as f64;
             let q: Vec<f64> = a.iter().zip(b).map(|(x, y)| x + t * (y - x)).collect();
-            match side {
-                Side::Left => world.in_collision(&q, &rest.right, clearance_mm),
-                Side::Right => world.in_collision(&rest.left, &q, clearance_mm),
-            }
+            let (ql, qr) = match side {
+                Side::Left => (&q, &rest.right),
+                Side::Right => (&rest.left, &q),
+            };
+            world.in_collision(ql, qr, clearance_mm)
+                || world.in_keep_out(ql, qr, &options.keep_out, clearance_mm)
         });
         if hit {
             colliding.push(k);
@@ -522,8 +530,7 @@ pub fn plan(
         let configs: Vec<Vec<f64>> = chosen.iter().map(|&i| pool[i].clone()).collect();
         let path = order(&configs);
         let configs: Vec<Vec<f64>> = path.iter().map(|&k| configs[k].clone()).collect();
-        let (path_length, colliding_legs) =
-            check_path(side, &configs, &rest, &world, options.clearance_mm);
+        let (path_length, colliding_legs) = check_path(side, &configs, &rest, &world, options);
         Ok(ArmPlan {
             configs,
             candidates: pool.len(),
