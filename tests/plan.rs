@@ -344,3 +344,32 @@ fn keep_out_boxes_are_respected() {
         );
     }
 }
+
+/// Extending a dataset: its configurations start the design, the new ones are others, and the
+/// combined set's information exceeds the existing set's.
+#[test]
+fn extending_a_dataset_adds_new_configurations() {
+    let robot = RobotDescription::builtin_irb14000();
+    let sim = simulate_with_robot(&paper_options(5, 30, 20), &robot).unwrap();
+    let existing = PerSide::from_fn(|side| {
+        sim.dataset
+            .arm(side)
+            .measurements
+            .iter()
+            .take(12)
+            .map(|m| m.q_rad.clone())
+            .collect::<Vec<_>>()
+    });
+    let options = PlanOptions {
+        per_arm: 8,
+        candidates: 80,
+        existing: existing.clone(),
+        ..PlanOptions::default()
+    };
+    let planned = plan(&robot, &default_reflectors_for(&robot), &options).unwrap();
+    for side in Side::BOTH {
+        let new = &planned[side].configs;
+        assert_eq!(new.len(), 8);
+        assert!(new.iter().all(|q| !existing[side].contains(q)));
+    }
+}

@@ -38,6 +38,10 @@ pub struct PlanArgs {
     /// Write into an existing non-empty --out.
     #[arg(long)]
     pub force: bool,
+    /// Extend this dataset: its configurations (both splits) start the design and N new ones per arm
+    /// are added (written alone, ids after the dataset's).
+    #[arg(long)]
+    pub extend: Option<PathBuf>,
     /// Candidate configurations drawn per arm (collision-free and facing the tracker).
     #[arg(long, default_value_t = 600)]
     pub candidates: usize,
@@ -113,6 +117,20 @@ pub fn run(a: &PlanArgs) -> Result<()> {
         .into());
     }
     let reflectors = simulate::default_reflectors_for(&robot);
+    let existing = match &a.extend {
+        Some(dir) => {
+            // Through the load pipeline: a prismatic joint's column read in its length unit.
+            let ds = super::load_workspace(dir)?.dataset;
+            PerSide::from_fn(|side| {
+                ds.arm(side)
+                    .measurements
+                    .iter()
+                    .map(|m| m.q_rad.clone())
+                    .collect::<Vec<_>>()
+            })
+        }
+        None => PerSide::new(Vec::new(), Vec::new()),
+    };
     let options = PlanOptions {
         per_arm: a.n,
         candidates: a.candidates,
@@ -123,6 +141,7 @@ pub fn run(a: &PlanArgs) -> Result<()> {
         joint_limit_margin_fraction: a.joint_margin,
         clearance_mm: a.clearance_mm,
         keep_out: a.keep_out.clone(),
+        existing,
         ..PlanOptions::default()
     };
     let plans = plan(&robot, &reflectors, &options)?;
@@ -138,9 +157,16 @@ pub fn run(a: &PlanArgs) -> Result<()> {
         let p = &plans[side];
         let arm = nominal.arm(side);
         let linear = arm.linear_joints();
+        let prefix = match (side, a.extend.is_some()) {
+            (Side::Left, false) => "L",
+            (Side::Right, false) => "R",
+            // New ids beside the extended dataset's own.
+            (Side::Left, true) => "LP",
+            (Side::Right, true) => "RP",
+        };
         write_atomic(
             &a.out.join(format!("{}.csv", side.name())),
-            arm_csv(side, p, &linear).as_bytes(),
+            arm_csv(side, prefix, p, &linear).as_bytes(),
         )
         .with_context(|| format!("{}: cannot write", a.out.display()))?;
         outln!(
@@ -217,7 +243,7 @@ fn is_yumi(robot: &RobotDescription) -> bool {
 }
 
 /// `id,q1..qN,split`: degrees (mm for a prismatic joint), every configuration a calibration one.
-fn arm_csv(side: Side, p: &ArmPlan, linear: &[bool]) -> String {
+fn arm_csv(side: Side, prefix: &str, p: &ArmPlan, linear: &[bool]) -> String {
     let n = p.configs.first().map_or(0, Vec::len);
     let mut s = format!(
         "# dualcal plan: {side} arm, {} configurations in visiting order; q in degrees (mm for a \
@@ -229,7 +255,6 @@ fn arm_csv(side: Side, p: &ArmPlan, linear: &[bool]) -> String {
         let _ = write!(s, ",q{k}");
     }
     s.push_str(",split\n");
-    let prefix = if side == Side::Left { 'L' } else { 'R' };
     for (i, q) in p.configs.iter().enumerate() {
         let _ = write!(s, "{prefix}{:03}", i + 1);
         for (k, v) in q.iter().enumerate() {

@@ -51,6 +51,9 @@ pub struct PlanOptions {
     pub max_attempts_per_candidate: usize,
     /// Keep-out boxes of the cell (body frame): no arm link within the clearance of one.
     pub keep_out: Vec<KeepOutBox>,
+    /// Configurations already measured, per arm (extending a dataset): the design starts from them
+    /// and adds `per_arm` new ones.
+    pub existing: PerSide<Vec<Vec<f64>>>,
 }
 
 impl Default for PlanOptions {
@@ -66,6 +69,7 @@ impl Default for PlanOptions {
             clearance_mm: 5.0,
             max_attempts_per_candidate: 200,
             keep_out: Vec::new(),
+            existing: PerSide::new(Vec::new(), Vec::new()),
         }
     }
 }
@@ -518,14 +522,36 @@ pub fn plan(
     let rest = resting(robot);
     PerSide::try_from_fn(|side| {
         let arm = nominal.arm(side);
-        let (pool, attempts) = candidates(robot, arm, side, &world, options)?;
+        let (mut pool, attempts) = candidates(robot, arm, side, &world, options)?;
+        let drawn = pool.len();
+        // Configurations already measured join the pool and start the design.
+        let existing = &options.existing[side];
+        if let Some(q) = existing.iter().find(|q| q.len() != arm.joint_count()) {
+            return Err(PlanError::Options(format!(
+                "{side} arm: an existing configuration has {} joint values, the arm {}",
+                q.len(),
+                arm.joint_count()
+            )));
+        }
+        pool.extend(existing.iter().cloned());
         let jac = scaled_jacobians(arm, &pool);
         let points: Vec<Vec<Vector3<f64>>> =
             pool.iter().map(|q| arm.reflector_fk(q).points_mm).collect();
         // The isotropic design's first two picks start the exact one (a single configuration has no
-        // distance yet).
-        let start = select(&jac, 2);
-        let chosen = select_by_distances(&points, &jac, options.per_arm, &start);
+        // distance yet), or the existing configurations.
+        let start: Vec<usize> = if existing.is_empty() {
+            select(&jac, 2)
+        } else {
+            (drawn..pool.len()).collect()
+        };
+        let chosen: Vec<usize> = if existing.is_empty() {
+            select_by_distances(&points, &jac, options.per_arm, &start)
+        } else {
+            select_by_distances(&points, &jac, existing.len() + options.per_arm, &start)
+                .into_iter()
+                .filter(|&i| i < drawn)
+                .collect()
+        };
         let random: Vec<usize> = (0..options.per_arm).collect();
         let configs: Vec<Vec<f64>> = chosen.iter().map(|&i| pool[i].clone()).collect();
         let path = order(&configs);
@@ -533,7 +559,7 @@ pub fn plan(
         let (path_length, colliding_legs) = check_path(side, &configs, &rest, &world, options);
         Ok(ArmPlan {
             configs,
-            candidates: pool.len(),
+            candidates: drawn,
             attempts,
             log_det: log_det(&jac, &chosen),
             log_det_random: log_det(&jac, &random),
