@@ -420,3 +420,188 @@ fn the_commands_export_and_compensate() {
     );
     assert!(!dir.path().join("bad-out.csv").exists());
 }
+
+/// Poses in the tracker frame (`--frame tracker`): the calibrated model's own flange poses at some
+/// configurations, expressed in the tracker frame through the same registration, are reached — from
+/// seeds a few degrees off, by a configuration of the 7-joint arm's self-motion near the seed — and
+/// come back as those configurations when seeded with them.
+#[test]
+fn tracker_frame_poses_come_back_as_their_configurations() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+    let ok = |out: &std::process::Output| {
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    };
+    ok(&dualcal(&[
+        "simulate",
+        "--out",
+        &p("data"),
+        "--seed",
+        "9",
+        "--configs",
+        "70",
+        "--cal",
+        "50",
+    ]));
+    ok(&dualcal(&[
+        "calibrate",
+        &p("data"),
+        "--out",
+        &p("params.json"),
+    ]));
+    let ds = dualcal::dataset::load(&dir.path().join("data")).unwrap();
+    let robot = RobotDescription::builtin_irb14000();
+    let model = dualcal::params::ParamsFile::read(&dir.path().join("params.json"))
+        .unwrap()
+        .to_model_for(&robot)
+        .unwrap();
+    // The registration the command makes: both arms (one station).
+    let (mut tracker, mut world) = (Vec::new(), Vec::new());
+    for s in Side::BOTH {
+        for m in &ds.arm(s).measurements {
+            let fk = model.arm(s).reflector_fk(&m.q_rad);
+            for (q, t) in fk.points_mm.iter().zip(&m.tracker_points_mm) {
+                tracker.push(*t);
+                world.push(
+                    model
+                        .left_base_from(s)
+                        .transform_point(&Point3::from(*q))
+                        .coords,
+                );
+            }
+        }
+    }
+    let world_from_tracker = best_fit_rigid(&tracker, &world).unwrap();
+    let side = Side::Right;
+    let mut csv = String::from("id,x,y,z,qw,qx,qy,qz,q1,q2,q3,q4,q5,q6,q7\n");
+    let mut wanted = Vec::new();
+    for m in ds.arm(side).select(Split::Ver).iter().take(6) {
+        let pose = world_from_tracker.inverse()
+            * model.left_base_from(side)
+            * model.arm(side).base_from_flange(&m.q_rad);
+        let (t, r) = (pose.translation.vector, pose.rotation);
+        let seed: Vec<String> = m
+            .q_rad
+            .iter()
+            .map(|q| format!("{:?}", q.to_degrees()))
+            .collect();
+        csv += &format!(
+            "{},{:?},{:?},{:?},{:?},{:?},{:?},{:?},{}\n",
+            m.id,
+            t.x,
+            t.y,
+            t.z,
+            r.w,
+            r.i,
+            r.j,
+            r.k,
+            seed.join(",")
+        );
+        wanted.push((m.q_rad.clone(), pose));
+    }
+    // Seeded with the configurations, and a few degrees off.
+    let off = csv
+        .lines()
+        .enumerate()
+        .map(|(i, l)| {
+            if i == 0 {
+                return l.to_string();
+            }
+            let f: Vec<String> = l
+                .split(',')
+                .enumerate()
+                .map(|(k, v)| {
+                    if k >= 8 {
+                        format!("{:?}", v.parse::<f64>().unwrap() + 2.0)
+                    } else {
+                        v.to_string()
+                    }
+                })
+                .collect();
+            f.join(",")
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    std::fs::write(p("poses-off.csv"), off + "\n").unwrap();
+    std::fs::write(p("poses.csv"), csv).unwrap();
+    let out = dualcal(&[
+        "compensate",
+        &p("data"),
+        "--params",
+        &p("params.json"),
+        "--arm",
+        "right",
+        "--targets",
+        &p("poses.csv"),
+        "--out",
+        &p("joints.csv"),
+        "--frame",
+        "tracker",
+    ]);
+    ok(&out);
+    let table = std::fs::read_to_string(p("joints.csv")).unwrap();
+    for (row, (want, _)) in table.lines().skip(1).zip(&wanted) {
+        let f: Vec<&str> = row.split(',').collect();
+        assert_eq!(f.last(), Some(&"ok"), "{row}");
+        for (k, w) in want.iter().enumerate() {
+            let got: f64 = f[1 + k].parse().unwrap();
+            assert!((got - w.to_degrees()).abs() < 1e-6, "{row}: q{}", k + 1);
+        }
+    }
+    let out = dualcal(&[
+        "compensate",
+        &p("data"),
+        "--params",
+        &p("params.json"),
+        "--arm",
+        "right",
+        "--targets",
+        &p("poses-off.csv"),
+        "--out",
+        &p("joints-off.csv"),
+        "--frame",
+        "tracker",
+    ]);
+    ok(&out);
+    let table = std::fs::read_to_string(p("joints-off.csv")).unwrap();
+    for (row, (_, pose)) in table.lines().skip(1).zip(&wanted) {
+        let f: Vec<&str> = row.split(',').collect();
+        assert_eq!(f.last(), Some(&"ok"), "{row}");
+        let q: Vec<f64> = (1..=7)
+            .map(|k| f[k].parse::<f64>().unwrap().to_radians())
+            .collect();
+        let reached = world_from_tracker.inverse()
+            * model.left_base_from(side)
+            * model.arm(side).base_from_flange(&q);
+        let d = pose.inverse() * reached;
+        assert!(
+            d.translation.vector.norm() < 1e-5 && d.rotation.angle() < 1e-8,
+            "{row}"
+        );
+    }
+    // Joint targets cannot be given in the tracker frame.
+    std::fs::write(
+        p("joints-in.csv"),
+        "id,q1,q2,q3,q4,q5,q6,q7\nA,0,0,0,0,0,0,0\n",
+    )
+    .unwrap();
+    let out = dualcal(&[
+        "compensate",
+        &p("data"),
+        "--params",
+        &p("params.json"),
+        "--arm",
+        "right",
+        "--targets",
+        &p("joints-in.csv"),
+        "--out",
+        &p("x.csv"),
+        "--frame",
+        "tracker",
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+}

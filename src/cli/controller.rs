@@ -3,7 +3,7 @@
 
 use super::{describe_robot, load_workspace};
 use crate::controller::abb::{self, BaseFrame};
-use crate::controller::compensate::{CompensationSettings, ControllerBase, compensate_all};
+use crate::controller::compensate::{CompensationSettings, ControllerBase, Target, compensate_all};
 use crate::controller::{controller_base_frames, targets};
 use crate::dataset::{AngleUnit, LengthUnit};
 use crate::output::{refuse_overwrite_input, write_atomic};
@@ -139,6 +139,41 @@ pub fn run_export(a: &ExportArgs) -> Result<()> {
     Ok(())
 }
 
+/// The world (the left arm's model base frame) from the tracker frame of `side`'s measurements: the
+/// best rigid fit of the calibrated model's reflector points to the measured ones, over both arms
+/// when they share a station; with its RMS, mm.
+fn register_tracker(
+    ds: &crate::dataset::Dataset,
+    model: &crate::kinematics::DualArmModel,
+    side: Side,
+) -> Result<(Isometry3<f64>, f64)> {
+    let shared = ds.arm(Side::Left).station == ds.arm(Side::Right).station;
+    let (mut tracker, mut world) = (Vec::new(), Vec::new());
+    for s in Side::BOTH.into_iter().filter(|&s| shared || s == side) {
+        let base = model.left_base_from(s);
+        for m in &ds.arm(s).measurements {
+            let fk = model.arm(s).reflector_fk(&m.q_rad);
+            for (p, t) in fk.points_mm.iter().zip(&m.tracker_points_mm) {
+                tracker.push(*t);
+                world.push(base.transform_point(&nalgebra::Point3::from(*p)).coords);
+            }
+        }
+    }
+    let fit = crate::analysis::best_fit_rigid(&tracker, &world).ok_or_else(|| {
+        anyhow::anyhow!(
+            "the tracker frame cannot be registered: the measured points are degenerate"
+        )
+    })?;
+    let rms = (tracker
+        .iter()
+        .zip(&world)
+        .map(|(t, w)| (fit.transform_point(&nalgebra::Point3::from(*t)).coords - w).norm_squared())
+        .sum::<f64>()
+        / tracker.len().max(1) as f64)
+        .sqrt();
+    Ok((fit, rms))
+}
+
 fn unit_names(s: &str) -> Result<PerSide<String>> {
     match s.split(',').map(str::trim).collect::<Vec<_>>().as_slice() {
         [l, r] if !l.is_empty() && !r.is_empty() && l != r => {
@@ -162,6 +197,13 @@ pub enum ControllerBaseArg {
     Nominal,
     /// The calibrated frames of `dualcal export --abb-cfg` are loaded.
     Calibrated,
+}
+
+/// The frame of pose targets.
+#[derive(Clone, Copy, Debug, ValueEnum, PartialEq, Eq)]
+pub enum FrameArg {
+    Base,
+    Tracker,
 }
 
 /// Angle unit of the target list.
@@ -204,6 +246,11 @@ pub struct CompensateArgs {
     /// Length unit of positions and prismatic joints, in and out.
     #[arg(long, value_enum, default_value_t = LengthArg::Mm)]
     pub length_unit: LengthArg,
+    /// The frame of pose targets: `base` (the arm's model base frame, as the controller's nominal
+    /// model places the pose) or `tracker` (where the pose physically is, in the dataset's tracker
+    /// frame: registered with the calibrated model on the dataset's points).
+    #[arg(long, value_enum, default_value_t = FrameArg::Base)]
+    pub frame: FrameArg,
     /// Refuse a target whose compensation moves a revolute joint by more than this (near a singular
     /// configuration), degrees.
     #[arg(long, default_value_t = 20.0)]
@@ -253,7 +300,30 @@ pub fn run_compensate(a: &CompensateArgs) -> Result<()> {
     let linear = ws.nominal.arm(side).linear_joints();
     let text = std::fs::read_to_string(&a.targets)
         .with_context(|| format!("{}: cannot read", a.targets.display()))?;
-    let rows = targets::parse(&a.targets, &text, &names, &linear, units)?;
+    let mut rows = targets::parse(&a.targets, &text, &names, &linear, units)?;
+    if a.frame == FrameArg::Tracker {
+        let (world_from_tracker, rms_mm) = register_tracker(&ws.dataset, &model, side)?;
+        outln!(
+            "tracker frame registered on the dataset's points with the calibrated model (RMS {rms_mm:.4}              mm)"
+        );
+        for row in &mut rows {
+            match &row.target {
+                Target::Pose {
+                    base_from_flange,
+                    seed,
+                } => {
+                    row.target = Target::WorldPose {
+                        left_base_from_flange: world_from_tracker * base_from_flange,
+                        seed: seed.clone(),
+                    };
+                }
+                Target::Joints(_) | Target::WorldPose { .. } => bail!(
+                    "{}: --frame tracker takes poses (`id,x,y,z,qw,qx,qy,qz`), not joint targets",
+                    a.targets.display()
+                ),
+            }
+        }
+    }
     let settings = CompensationSettings {
         controller_base: match a.controller_base {
             ControllerBaseArg::Nominal => ControllerBase::Nominal,

@@ -78,6 +78,23 @@ pub enum Target {
         base_from_flange: Isometry3<f64>,
         seed: Vec<f64>,
     },
+    /// A flange pose where it is physically wanted, in the world (the left arm's model base frame;
+    /// from a tracker-frame pose through the tracker's registration), and the joint values to start
+    /// from. The controller's base frame plays no part.
+    WorldPose {
+        left_base_from_flange: Isometry3<f64>,
+        seed: Vec<f64>,
+    },
+}
+
+impl Target {
+    /// The joint values the solution starts from: the nominal target or the seed.
+    pub fn start(&self) -> &[f64] {
+        match self {
+            Target::Joints(q) => q,
+            Target::Pose { seed, .. } | Target::WorldPose { seed, .. } => seed,
+        }
+    }
 }
 
 /// A compensated target.
@@ -150,6 +167,10 @@ pub fn world_from_flange(
         Target::Pose {
             base_from_flange, ..
         } => base * base_from_flange,
+        Target::WorldPose {
+            left_base_from_flange,
+            ..
+        } => *left_base_from_flange,
     }
 }
 
@@ -164,10 +185,7 @@ pub fn compensate(
 ) -> Result<Compensated, Refusal> {
     let arm = calibrated.arm(side);
     let n = arm.joint_count();
-    let start = match target {
-        Target::Joints(q) => q,
-        Target::Pose { seed, .. } => seed,
-    };
+    let start = target.start();
     if start.len() != n {
         return Err(Refusal::JointCount {
             expected: n,
@@ -339,6 +357,16 @@ pub fn compensate_all<'t>(
             } if seed.is_empty() => {
                 seeded = Target::Pose {
                     base_from_flange: *base_from_flange,
+                    seed: previous.clone(),
+                };
+                &seeded
+            }
+            Target::WorldPose {
+                left_base_from_flange,
+                seed,
+            } if seed.is_empty() => {
+                seeded = Target::WorldPose {
+                    left_base_from_flange: *left_base_from_flange,
                     seed: previous.clone(),
                 };
                 &seeded

@@ -236,13 +236,10 @@ pub fn to_csv(
                     let _ = write!(s, ",{:?}", value(i, q));
                 }
                 // The largest change in the unit of the joint it belongs to.
-                let start = match &row.target {
-                    Target::Joints(q) => q.clone(),
-                    Target::Pose { seed, .. } => seed.clone(),
-                };
+                let start = row.target.start();
                 let change =
                     c.q.iter()
-                        .zip(&start)
+                        .zip(start)
                         .enumerate()
                         .map(|(i, (a, b))| (value(i, *a) - value(i, *b)).abs())
                         .fold(0.0, f64::max);
