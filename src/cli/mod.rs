@@ -84,6 +84,8 @@ pub enum Command {
     /// collision-free and facing the tracker, in a short visiting order (a dataset to fill in; RAPID
     /// modules for the YuMi).
     Plan(plan::PlanArgs),
+    /// Write the URDF a DH robot file (`dualcal-dh/1`, docs/formats.md) is read as.
+    UrdfFromDh(UrdfFromDhArgs),
 }
 
 #[derive(Args, Debug)]
@@ -321,7 +323,37 @@ fn run_command(command: Command) -> Result<()> {
         Command::Export(a) => controller::run_export(&a),
         Command::Compensate(a) => controller::run_compensate(&a),
         Command::Plan(a) => plan::run(&a),
+        Command::UrdfFromDh(a) => urdf_from_dh(&a),
     }
+}
+
+#[derive(Args, Debug)]
+pub struct UrdfFromDhArgs {
+    /// The DH robot file (`dualcal-dh/1`).
+    pub dh: PathBuf,
+    /// The URDF to write.
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+/// `dualcal urdf-from-dh`: the URDF is loaded back (its arms' forward kinematics are the table's)
+/// before it is written.
+fn urdf_from_dh(a: &UrdfFromDhArgs) -> Result<()> {
+    crate::output::refuse_overwrite_input(&a.out, &[a.dh.as_path()])?;
+    let text = std::fs::read_to_string(&a.dh)
+        .with_context(|| format!("{}: cannot read", a.dh.display()))?;
+    let urdf = crate::robot::dh_file::to_urdf(&text).map_err(|message| {
+        crate::robot::RobotError::DhFile {
+            path: a.dh.clone(),
+            message,
+        }
+    })?;
+    let robot = RobotDescription::load(a.dh.as_path(), &LoadOptions::default())?;
+    crate::output::write_atomic(&a.out, urdf.as_bytes())
+        .with_context(|| format!("{}: cannot write", a.out.display()))?;
+    outln!("{}", describe_robot(&robot));
+    outln!("wrote {}", a.out.display());
+    Ok(())
 }
 
 fn simulate_cmd(a: &SimulateArgs) -> Result<()> {

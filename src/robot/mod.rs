@@ -23,6 +23,7 @@
 
 mod arms;
 mod dh;
+pub mod dh_file;
 mod geometry;
 #[cfg(test)]
 mod tests;
@@ -73,6 +74,10 @@ pub enum RobotError {
         .path.display(), .path.display()
     )]
     Xacro { path: PathBuf },
+    /// A DH robot file (`dualcal-dh/1`) that cannot be read: what is wrong (toml's line and column
+    /// where it has them).
+    #[error("{}: {message}", .path.display())]
+    DhFile { path: PathBuf, message: String },
     #[error("{file}{}: not a valid URDF: {message}", at_line(.line))]
     Parse {
         file: String,
@@ -411,6 +416,20 @@ impl RobotDescription {
             },
         })?;
         let file = path.display().to_string();
+        if dh_file::is_dh_file(&text) {
+            // A DH table: read as the URDF it is equivalent to, its arms `body → <arm>_flange`.
+            let urdf = dh_file::to_urdf(&text).map_err(|message| RobotError::DhFile {
+                path: path.to_path_buf(),
+                message,
+            })?;
+            let mut options = options.clone();
+            for side in Side::BOTH {
+                if options.arms[side].is_none() {
+                    options.arms[side] = Some(dh_file::arm_links(side));
+                }
+            }
+            return Self::parse(&urdf, Some(path), &file, &options, ModelForm::Chain);
+        }
         Self::parse(&text, Some(path), &file, options, ModelForm::Chain)
     }
 

@@ -16,7 +16,7 @@ mod patch;
 
 use crate::kinematics::DualArmModel;
 use crate::robot::{ModelForm, RobotDescription, RobotError};
-use nalgebra::{Isometry3, Matrix3, Rotation3, Vector3};
+use nalgebra::Isometry3;
 pub use overlay::{
     CalibrationOverlay, JointOverlay, OriginOverlay, ReflectorOverlay, calibrated_overlay,
 };
@@ -25,26 +25,7 @@ fn export_err(message: String) -> RobotError {
     RobotError::Export { message }
 }
 
-/// URDF roll, pitch, yaw of a rotation (`R = Rz(yaw) Ry(pitch) Rx(roll)`).
-///
-/// Yaw and pitch are read from the first column; roll from `(Rz(yaw) Ry(pitch))ᵀ R`, so that the
-/// triple reproduces `R` to round-off even near gimbal lock (an error in yaw is absorbed by roll).
-pub fn rpy_from_rotation(r: &Rotation3<f64>) -> [f64; 3] {
-    let m: &Matrix3<f64> = r.matrix();
-    let yaw = if m[(1, 0)].abs() + m[(0, 0)].abs() > 1e-300 {
-        m[(1, 0)].atan2(m[(0, 0)])
-    } else {
-        0.0
-    };
-    let pitch = (-m[(2, 0)]).atan2(m[(0, 0)].hypot(m[(1, 0)]));
-    let rest = (Rotation3::from_axis_angle(&Vector3::z_axis(), yaw)
-        * Rotation3::from_axis_angle(&Vector3::y_axis(), pitch))
-    .inverse()
-        * r;
-    let k = rest.matrix();
-    let roll = (k[(2, 1)] - k[(1, 2)]).atan2(k[(1, 1)] + k[(2, 2)]);
-    [roll, pitch, yaw]
-}
+pub use crate::kinematics::rpy_from_rotation;
 
 /// A URDF `<origin>` (m, rpy) from an isometry in mm.
 pub fn urdf_pose_from_isometry(iso: &Isometry3<f64>) -> urdf_rs::Pose {

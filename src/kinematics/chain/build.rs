@@ -313,3 +313,24 @@ pub fn check_disjoint(left: &SerialChain, right: &SerialChain) -> Result<(), Cha
         None => Ok(()),
     }
 }
+
+/// URDF roll, pitch, yaw of a rotation (`R = Rz(yaw) Ry(pitch) Rx(roll)`).
+///
+/// Yaw and pitch are read from the first column; roll from `(Rz(yaw) Ry(pitch))ᵀ R`, so that the
+/// triple reproduces `R` to round-off even near gimbal lock (an error in yaw is absorbed by roll).
+pub fn rpy_from_rotation(r: &nalgebra::Rotation3<f64>) -> [f64; 3] {
+    let m: &nalgebra::Matrix3<f64> = r.matrix();
+    let yaw = if m[(1, 0)].abs() + m[(0, 0)].abs() > 1e-300 {
+        m[(1, 0)].atan2(m[(0, 0)])
+    } else {
+        0.0
+    };
+    let pitch = (-m[(2, 0)]).atan2(m[(0, 0)].hypot(m[(1, 0)]));
+    let rest = (nalgebra::Rotation3::from_axis_angle(&nalgebra::Vector3::z_axis(), yaw)
+        * nalgebra::Rotation3::from_axis_angle(&nalgebra::Vector3::y_axis(), pitch))
+    .inverse()
+        * r;
+    let k = rest.matrix();
+    let roll = (k[(2, 1)] - k[(1, 2)]).atan2(k[(1, 1)] + k[(2, 2)]);
+    [roll, pitch, yaw]
+}

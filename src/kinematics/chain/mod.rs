@@ -46,7 +46,7 @@ mod tests;
 
 use super::{ArmJacobians, REFLECTOR_NAMES, ReflectorFk};
 pub(crate) use build::finite_pose;
-pub use build::{check_disjoint, isometry_from_urdf_pose};
+pub use build::{check_disjoint, isometry_from_urdf_pose, rpy_from_rotation};
 use nalgebra::{Isometry3, Matrix3xX, Translation3, Unit, UnitQuaternion, Vector3};
 
 /// Correction parameters per movable joint: `tx, ty, tz` (mm), `rx, ry, rz` (rad).
