@@ -423,6 +423,51 @@ impl CollisionWorld {
             .any(|p| self.pair_hits(&placed, p, self.pair_margin(p, margin_mm)))
     }
 
+    /// True if the straight line from one of `points_mm` (body frame: the reflectors) to `target_mm`
+    /// (the tracker) passes through a link of the robot at `q_left`, `q_right` — the body or either
+    /// arm. The first `skip_mm` of each line are not checked (the reflector's own mount).
+    pub fn line_of_sight_blocked(
+        &self,
+        q_left: &[f64],
+        q_right: &[f64],
+        points_mm: &[Vector3<f64>],
+        target_mm: &Vector3<f64>,
+        skip_mm: f64,
+    ) -> bool {
+        let placed = self.place(q_left, q_right);
+        points_mm.iter().any(|p| {
+            let dir = target_mm - p;
+            let length = dir.norm();
+            if length <= skip_mm {
+                return false;
+            }
+            let unit = dir / length;
+            let start = p + unit * skip_mm;
+            let ray = parry3d::query::Ray::new(
+                Vector::new(start.x as f32, start.y as f32, start.z as f32),
+                Vector::new(unit.x as f32, unit.y as f32, unit.z as f32),
+            );
+            let reach = (length - skip_mm) as f32;
+            self.links.iter().zip(&placed).any(|(link, shapes)| {
+                link.shapes
+                    .iter()
+                    .zip(shapes)
+                    .any(|(shape, (pose, centre))| {
+                        // The segment's closest approach to the shape's bounding sphere first.
+                        let along = (centre - start).dot(&unit).clamp(0.0, length - skip_mm);
+                        if (start + unit * along - centre).norm() > shape.bound_radius_mm {
+                            return false;
+                        }
+                        shape
+                            .prim
+                            .shape()
+                            .cast_ray(pose, &ray, reach, true)
+                            .is_some()
+                    })
+            })
+        })
+    }
+
     /// True if a link of either arm at `q_left`, `q_right` is within `margin_mm` of one of the
     /// keep-out boxes (the cell's fixtures, the tracker's stand).
     pub fn in_keep_out(

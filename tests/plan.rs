@@ -373,3 +373,20 @@ fn extending_a_dataset_adds_new_configurations() {
         assert!(new.iter().all(|q| !existing[side].contains(q)));
     }
 }
+
+/// The line-of-sight check: from points in front of the robot a tracker behind its body is hidden, one
+/// in front is seen.
+#[test]
+fn the_body_hides_a_tracker_behind_it() {
+    let robot = RobotDescription::builtin_irb14000();
+    let world = CollisionWorld::new(&robot);
+    let home = PerSide::from_fn(|side| robot.home_q_rad(side));
+    let points = [
+        Vector3::new(400.0, 0.0, 250.0),
+        Vector3::new(400.0, 50.0, 250.0),
+    ];
+    let behind = Vector3::new(-2000.0, 0.0, 250.0);
+    let front = Vector3::new(2000.0, 0.0, 250.0);
+    assert!(world.line_of_sight_blocked(&home.left, &home.right, &points, &behind, 5.0));
+    assert!(!world.line_of_sight_blocked(&home.left, &home.right, &points, &front, 5.0));
+}

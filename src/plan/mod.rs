@@ -3,8 +3,9 @@
 //!
 //! 1. **Candidates** ([`candidates`]): joint values drawn uniformly within the limits (less a margin),
 //!    kept when the reflectors' triangle faces the tracker within the incidence limit, lies within its
-//!    range, and the arm is clear of the body, the other arm (resting at its home pose) and the cell's
-//!    keep-out boxes by the clearance — the simulator's checks (parry3d), on the robot's own meshes.
+//!    range, the arm is clear of the body, the other arm (resting at its home pose) and the cell's
+//!    keep-out boxes by the clearance — the simulator's checks (parry3d), on the robot's own meshes —
+//!    and no link of the robot lies on a reflector's line to the tracker.
 //! 2. **Selection**: greedy, over the identifiable parameters (columns scaled to unit RMS over the
 //!    candidates; the parameters distances can never identify,
 //!    [`crate::kinematics::ArmModel::unidentifiable_reason`], left out). The first two picks by
@@ -78,9 +79,10 @@ impl Default for PlanOptions {
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum PlanError {
     #[error(
-        "{side} arm: only {found} of {wanted} candidate configurations face the tracker and are free \
-         of collisions after {attempts} draws ({facing} did not face it or were out of range, \
-         {colliding} collided): move the tracker, or allow a larger incidence angle"
+        "{side} arm: only {found} of {wanted} candidate configurations face the tracker, are free \
+         of collisions and seen after {attempts} draws ({facing} did not face it or were out of range, \
+         {colliding} collided, {hidden} had a reflector hidden by the robot): move the tracker, or \
+         allow a larger incidence angle"
     )]
     TooFewCandidates {
         side: Side,
@@ -89,6 +91,7 @@ pub enum PlanError {
         attempts: usize,
         facing: usize,
         colliding: usize,
+        hidden: usize,
     },
     #[error("{0}")]
     Options(String),
@@ -139,7 +142,7 @@ pub fn candidates(
     let axis = facing_axis(arm);
     let cos_max = options.max_incidence_deg.to_radians().cos();
     let mut rng = ChaCha8Rng::seed_from_u64(options.seed ^ (0x9e37 + side as u64));
-    let (mut out, mut attempts, mut facing, mut colliding) = (Vec::new(), 0, 0, 0);
+    let (mut out, mut attempts, mut facing, mut colliding, mut hidden) = (Vec::new(), 0, 0, 0, 0);
     let max_attempts = options.max_attempts_per_candidate * options.candidates;
     while out.len() < options.candidates {
         if attempts == max_attempts {
@@ -150,6 +153,7 @@ pub fn candidates(
                 attempts,
                 facing,
                 colliding,
+                hidden,
             });
         }
         attempts += 1;
@@ -180,11 +184,22 @@ pub fn candidates(
         };
         let clear = !world.in_collision(ql, qr, options.clearance_mm)
             && !world.in_keep_out(ql, qr, &options.keep_out, options.clearance_mm);
-        if clear {
-            out.push(q);
-        } else {
+        if !clear {
             colliding += 1;
+            continue;
         }
+        // Every reflector seen: no link of the robot on its line to the tracker.
+        let reflectors: Vec<Vector3<f64>> = arm
+            .reflector_fk(&q)
+            .points_mm
+            .iter()
+            .map(|p| body_from_base.transform_point(&Point3::from(*p)).coords)
+            .collect();
+        if world.line_of_sight_blocked(ql, qr, &reflectors, &options.tracker_in_body_mm, 5.0) {
+            hidden += 1;
+            continue;
+        }
+        out.push(q);
     }
     Ok((out, attempts))
 }
