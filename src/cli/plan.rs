@@ -154,66 +154,7 @@ pub fn run(a: &PlanArgs) -> Result<()> {
     std::fs::create_dir_all(&a.out)
         .with_context(|| format!("{}: cannot create", a.out.display()))?;
     for side in Side::BOTH {
-        let p = &plans[side];
-        let arm = nominal.arm(side);
-        let linear = arm.linear_joints();
-        let prefix = match (side, a.extend.is_some()) {
-            (Side::Left, false) => "L",
-            (Side::Right, false) => "R",
-            // New ids beside the extended dataset's own.
-            (Side::Left, true) => "LP",
-            (Side::Right, true) => "RP",
-        };
-        write_atomic(
-            &a.out.join(format!("{}.csv", side.name())),
-            arm_csv(side, prefix, p, &linear).as_bytes(),
-        )
-        .with_context(|| format!("{}: cannot write", a.out.display()))?;
-        outln!(
-            "{side} arm: {} configurations chosen from {} candidates ({} draws); log det of the \
-             design {:.1} (the first {} candidates drawn: {:.1}); path {:.2} (joint space){}",
-            p.configs.len(),
-            p.candidates,
-            p.attempts,
-            p.log_det,
-            p.configs.len(),
-            p.log_det_random,
-            p.path_length,
-            if p.colliding_legs.is_empty() {
-                String::new()
-            } else {
-                format!(
-                    "; WARNING: the straight joint motion of legs {:?} collides — add a via point",
-                    p.colliding_legs.iter().map(|k| k + 1).collect::<Vec<_>>()
-                )
-            }
-        );
-        let free: Vec<usize> = (0..arm.param_count())
-            .filter(|&k| arm.unidentifiable_reason(k).is_none())
-            .collect();
-        // The noise at the tracker's distance to the arm's base (half the MPE, per axis).
-        let base = robot.body_from_arm_base(side).translation.vector;
-        let sigma_mm =
-            0.5e-3 * (tracker.mpe_um + tracker.mpe_um_per_m * (a.tracker - base).norm() / 1e3);
-        if let Some(u) = crate::solver::uncertainty::predicted(arm, &p.configs, &free, sigma_mm) {
-            let largest = |unit: &str| {
-                u.largest(unit).map_or(String::new(), |s| {
-                    format!("{:.4} {unit} ({})", s.sigma, s.name)
-                })
-            };
-            outln!(
-                "  predicted 1σ with {sigma_mm:.4} mm of tracker noise: largest {}, {}; condition \
-                 number {:.1}",
-                largest("mm"),
-                largest("mrad"),
-                u.condition
-            );
-        }
-        if is_yumi(&robot) {
-            let path = a.out.join(format!("plan_{}.mod", side.name()));
-            write_atomic(&path, rapid_module(side, p).as_bytes())
-                .with_context(|| format!("{}: cannot write", path.display()))?;
-        }
+        write_arm(a, &robot, nominal.arm(side), &tracker, side, &plans[side])?;
     }
     write_atomic(
         &a.out.join(crate::dataset::MANIFEST_FILE),
@@ -230,6 +171,76 @@ pub fn run(a: &PlanArgs) -> Result<()> {
             ""
         }
     );
+    Ok(())
+}
+
+/// One arm's table, its lines of the summary with the predicted σ, and for the YuMi its RAPID module.
+fn write_arm(
+    a: &PlanArgs,
+    robot: &RobotDescription,
+    arm: &crate::kinematics::ArmModel,
+    tracker: &TrackerSpec,
+    side: Side,
+    p: &ArmPlan,
+) -> Result<()> {
+    let linear = arm.linear_joints();
+    let prefix = match (side, a.extend.is_some()) {
+        (Side::Left, false) => "L",
+        (Side::Right, false) => "R",
+        // New ids beside the extended dataset's own.
+        (Side::Left, true) => "LP",
+        (Side::Right, true) => "RP",
+    };
+    write_atomic(
+        &a.out.join(format!("{}.csv", side.name())),
+        arm_csv(side, prefix, p, &linear).as_bytes(),
+    )
+    .with_context(|| format!("{}: cannot write", a.out.display()))?;
+    outln!(
+        "{side} arm: {} configurations chosen from {} candidates ({} draws); log det of the \
+         design {:.1} (the first {} candidates drawn: {:.1}); path {:.2} (joint space){}",
+        p.configs.len(),
+        p.candidates,
+        p.attempts,
+        p.log_det,
+        p.configs.len(),
+        p.log_det_random,
+        p.path_length,
+        if p.colliding_legs.is_empty() {
+            String::new()
+        } else {
+            format!(
+                "; WARNING: the straight joint motion of legs {:?} collides — add a via point",
+                p.colliding_legs.iter().map(|k| k + 1).collect::<Vec<_>>()
+            )
+        }
+    );
+    let free: Vec<usize> = (0..arm.param_count())
+        .filter(|&k| arm.unidentifiable_reason(k).is_none())
+        .collect();
+    // The noise at the tracker's distance to the arm's base (half the MPE, per axis).
+    let base = robot.body_from_arm_base(side).translation.vector;
+    let sigma_mm =
+        0.5e-3 * (tracker.mpe_um + tracker.mpe_um_per_m * (a.tracker - base).norm() / 1e3);
+    if let Some(u) = crate::solver::uncertainty::predicted(arm, &p.configs, &free, sigma_mm) {
+        let largest = |unit: &str| {
+            u.largest(unit).map_or(String::new(), |s| {
+                format!("{:.4} {unit} ({})", s.sigma, s.name)
+            })
+        };
+        outln!(
+            "  predicted 1σ with {sigma_mm:.4} mm of tracker noise: largest {}, {}; condition \
+             number {:.1}",
+            largest("mm"),
+            largest("mrad"),
+            u.condition
+        );
+    }
+    if is_yumi(robot) {
+        let path = a.out.join(format!("plan_{}.mod", side.name()));
+        write_atomic(&path, rapid_module(side, p).as_bytes())
+            .with_context(|| format!("{}: cannot write", path.display()))?;
+    }
     Ok(())
 }
 

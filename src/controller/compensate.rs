@@ -194,12 +194,55 @@ pub fn compensate(
     }
     let goal = calibrated.left_base_from(side).inverse()
         * world_from_flange(nominal, calibrated, side, target, settings);
-    let linear = arm.linear_joints();
+    let mut solver = PoseSolver {
+        arm,
+        goal,
+        settings,
+        lambda: 1e-3,
+        iterations: 0,
+    };
     let mut q = DVector::from_column_slice(start);
-    let error = |q: &DVector<f64>| -> (Vector6<f64>, f64, f64) {
-        let f = arm.base_from_flange(q.as_slice());
-        let dp = goal.translation.vector - f.translation.vector;
-        let dw = (goal.rotation * f.rotation.inverse()).scaled_axis();
+    let mut residual = solver.solve(&mut q);
+    if n > 6 && solver.reached(residual) {
+        residual = solver.back_towards(&mut q, start);
+    }
+    if !solver.reached(residual) {
+        return Err(Refusal::NotReached {
+            iterations: solver.iterations,
+            residual_mm: residual.0,
+            residual_rad: residual.1,
+        });
+    }
+    check_joints(arm, q.as_slice(), start, joint_names, settings)?;
+    let largest_change = q
+        .iter()
+        .zip(start)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    Ok(Compensated {
+        q: q.as_slice().to_vec(),
+        largest_change,
+        residual_mm: residual.0,
+        residual_rad: residual.1,
+        iterations: solver.iterations,
+    })
+}
+
+/// The damped Newton solver of one target: the calibrated arm, the flange pose wanted in its base.
+struct PoseSolver<'a> {
+    arm: &'a crate::kinematics::ArmModel,
+    goal: Isometry3<f64>,
+    settings: &'a CompensationSettings,
+    lambda: f64,
+    iterations: usize,
+}
+
+impl PoseSolver<'_> {
+    /// The weighted pose error at `q` (mm, and rad × [`MM_PER_RAD`]), with its position and angle.
+    fn error(&self, q: &DVector<f64>) -> (Vector6<f64>, f64, f64) {
+        let f = self.arm.base_from_flange(q.as_slice());
+        let dp = self.goal.translation.vector - f.translation.vector;
+        let dw = (self.goal.rotation * f.rotation.inverse()).scaled_axis();
         let e = Vector6::new(
             dp.x,
             dp.y,
@@ -209,56 +252,61 @@ pub fn compensate(
             dw.z * MM_PER_RAD,
         );
         (e, dp.norm(), dw.norm())
-    };
-    let jacobian = |q: &DVector<f64>| {
-        let (_, mut jac) = arm.flange_jacobian(q.as_slice());
+    }
+
+    /// The flange Jacobian with the rotation rows weighted alike.
+    fn jacobian(&self, q: &DVector<f64>) -> nalgebra::Matrix6xX<f64> {
+        let (_, mut jac) = self.arm.flange_jacobian(q.as_slice());
         for r in 3..6 {
             jac.row_mut(r).scale_mut(MM_PER_RAD);
         }
         jac
-    };
-    let reached = |r: (f64, f64)| r.0 <= settings.tolerance_mm && r.1 <= settings.tolerance_rad;
-    let mut iterations = 0;
-    let mut lambda = 1e-3;
-    // Damped Newton (Levenberg–Marquardt) steps on the pose error from `q`: a step is kept when the
-    // error decreases, the damping then lowered; raised and the step tried again otherwise.
-    let mut solve = |q: &mut DVector<f64>, iterations: &mut usize| -> (f64, f64) {
-        let (mut e, mut mm, mut rad) = error(q);
-        while !reached((mm, rad)) && *iterations < settings.max_iterations {
-            *iterations += 1;
-            let jac = jacobian(q);
+    }
+
+    fn reached(&self, (mm, rad): (f64, f64)) -> bool {
+        mm <= self.settings.tolerance_mm && rad <= self.settings.tolerance_rad
+    }
+
+    /// Damped Newton (Levenberg–Marquardt) steps from `q`: a step is kept when the error decreases,
+    /// the damping then lowered; raised and the step tried again otherwise. The final error (mm, rad).
+    fn solve(&mut self, q: &mut DVector<f64>) -> (f64, f64) {
+        let (mut e, mut mm, mut rad) = self.error(q);
+        while !self.reached((mm, rad)) && self.iterations < self.settings.max_iterations {
+            self.iterations += 1;
+            let jac = self.jacobian(q);
             let jt = jac.transpose();
             let mut improved = false;
             for _ in 0..30 {
-                let normal = &jac * &jt + Matrix6::identity() * (lambda * lambda);
+                let normal = &jac * &jt + Matrix6::identity() * (self.lambda * self.lambda);
                 let Some(chol) = normal.cholesky() else {
-                    lambda *= 4.0;
+                    self.lambda *= 4.0;
                     continue;
                 };
                 let trial = &*q + &jt * chol.solve(&e);
-                let (e2, mm2, rad2) = error(&trial);
+                let (e2, mm2, rad2) = self.error(&trial);
                 if e2.norm() < e.norm() {
                     (*q, e, mm, rad) = (trial, e2, mm2, rad2);
-                    lambda = (lambda / 3.0).max(1e-9);
+                    self.lambda = (self.lambda / 3.0).max(1e-9);
                     improved = true;
                     break;
                 }
-                lambda *= 4.0;
+                self.lambda *= 4.0;
             }
             if !improved {
                 break;
             }
         }
         (mm, rad)
-    };
-    let (mut residual_mm, mut residual_rad) = solve(&mut q, &mut iterations);
-    // A 7-joint arm: move back towards the start within the null space (its self-motion), then onto
-    // the pose again, while that brings the joints nearer the start.
-    if n > 6 && reached((residual_mm, residual_rad)) {
+    }
+
+    /// A redundant arm on the pose: self-motion (the Jacobian's null space) back towards `start`, then
+    /// onto the pose again, while that brings the joints nearer `start`. The final error.
+    fn back_towards(&mut self, q: &mut DVector<f64>, start: &[f64]) -> (f64, f64) {
         let q0 = DVector::from_column_slice(start);
+        let (_, mut mm, mut rad) = self.error(q);
         for _ in 0..20 {
-            let jac = jacobian(&q);
-            let back = &q0 - &q;
+            let jac = self.jacobian(q);
+            let back = &q0 - &*q;
             let Ok(ranged) = jac.clone().svd(true, true).solve(&(&jac * &back), 1e-9) else {
                 break;
             };
@@ -266,36 +314,46 @@ pub fn compensate(
             if self_motion.amax() < 1e-10 {
                 break;
             }
-            let mut trial = &q + self_motion;
-            let mut spent = 0;
-            let r = solve(&mut trial, &mut spent);
-            if reached(r) && (&trial - &q0).norm() < (&q - &q0).norm() {
-                (q, residual_mm, residual_rad) = (trial, r.0, r.1);
-                iterations += spent;
+            let mut trial = &*q + self_motion;
+            let before = self.iterations;
+            self.iterations = 0;
+            let r = self.solve(&mut trial);
+            let spent = self.iterations;
+            self.iterations = before;
+            if self.reached(r) && (&trial - &q0).norm() < (&*q - &q0).norm() {
+                (*q, mm, rad) = (trial, r.0, r.1);
+                self.iterations += spent;
             } else {
                 break;
             }
         }
+        (mm, rad)
     }
-    if !reached((residual_mm, residual_rad)) {
-        return Err(Refusal::NotReached {
-            iterations,
-            residual_mm,
-            residual_rad,
-        });
-    }
-    for (i, (&(lower, upper), &value)) in arm.joint_limits_rad().iter().zip(q.iter()).enumerate() {
+}
+
+/// A solution's joints within their limits and changed by no more than the settings allow.
+fn check_joints(
+    arm: &crate::kinematics::ArmModel,
+    q: &[f64],
+    start: &[f64],
+    joint_names: &[String],
+    settings: &CompensationSettings,
+) -> Result<(), Refusal> {
+    let linear = arm.linear_joints();
+    let name = |i: usize| {
+        joint_names
+            .get(i)
+            .cloned()
+            .unwrap_or_else(|| format!("q{}", i + 1))
+    };
+    for (i, (&(lower, upper), &value)) in arm.joint_limits_rad().iter().zip(q).enumerate() {
         if value < lower - 1e-12 || value > upper + 1e-12 {
-            let unit = if linear[i] { "mm" } else { "rad" };
             return Err(Refusal::JointLimit {
-                joint: joint_names
-                    .get(i)
-                    .cloned()
-                    .unwrap_or_else(|| format!("q{}", i + 1)),
+                joint: name(i),
                 value,
                 lower,
                 upper,
-                unit,
+                unit: if linear[i] { "mm" } else { "rad" },
             });
         }
     }
@@ -307,28 +365,14 @@ pub fn compensate(
         };
         if (a - b).abs() > limit {
             return Err(Refusal::LargeChange {
-                joint: joint_names
-                    .get(i)
-                    .cloned()
-                    .unwrap_or_else(|| format!("q{}", i + 1)),
+                joint: name(i),
                 change: (a - b).abs(),
                 limit,
                 unit,
             });
         }
     }
-    let largest_change = q
-        .iter()
-        .zip(start)
-        .map(|(a, b)| (a - b).abs())
-        .fold(0.0, f64::max);
-    Ok(Compensated {
-        q: q.as_slice().to_vec(),
-        largest_change,
-        residual_mm,
-        residual_rad,
-        iterations,
-    })
+    Ok(())
 }
 
 /// Compensate a list of targets in order. A pose without a seed starts from the previous target's

@@ -56,11 +56,10 @@ pub fn parse(
     linear: &[bool],
     units: TargetUnits,
 ) -> Result<Vec<TargetRow>, TargetsError> {
-    let err = |line: usize, field: &str, message: String| TargetsError {
-        path: path.to_path_buf(),
-        line,
-        field: field.to_string(),
-        message,
+    let cx = Context {
+        path,
+        linear,
+        units,
     };
     let mut rows = text
         .lines()
@@ -68,73 +67,108 @@ pub fn parse(
         .map(|(k, l)| (k + 1, l.trim_end_matches('\r')))
         .filter(|(_, l)| !l.trim().is_empty() && !l.trim_start().starts_with('#'));
     let Some((header_line, header)) = rows.next() else {
-        return Err(err(
+        return Err(cx.err(
             0,
             "id",
             "an empty file: expected a header `id,q1,…` or `id,x,y,z,qw,qx,qy,qz`".into(),
         ));
     };
-    let names: Vec<String> = header.split(',').map(|s| s.trim().to_string()).collect();
-    let n = joint_names.len();
-    if names.first().map(String::as_str) != Some("id") {
-        return Err(err(
-            header_line,
-            names.first().map_or("", String::as_str),
-            "expected `id` as the first column".into(),
-        ));
+    let layout = cx.header(header_line, header, joint_names)?;
+    let out = rows
+        .map(|(line, text)| cx.row(&layout, line, text))
+        .collect::<Result<Vec<_>, _>>()?;
+    if out.is_empty() {
+        return Err(cx.err(header_line, "id", "a header without targets".into()));
     }
-    let numbered: Vec<String> = (1..=n).map(|k| format!("q{k}")).collect();
-    let joint_columns = |from: usize| -> Option<Vec<usize>> {
-        let given = &names[from..];
-        if given.len() != n {
-            return None;
+    Ok(out)
+}
+
+/// What a target list's header says: its column names, whether rows are poses, where the joints are.
+struct Layout {
+    names: Vec<String>,
+    pose: bool,
+    joints: Option<Vec<usize>>,
+}
+
+/// The file and units the rows are read with.
+struct Context<'a> {
+    path: &'a Path,
+    linear: &'a [bool],
+    units: TargetUnits,
+}
+
+impl Context<'_> {
+    fn err(&self, line: usize, field: &str, message: String) -> TargetsError {
+        TargetsError {
+            path: self.path.to_path_buf(),
+            line,
+            field: field.to_string(),
+            message,
         }
-        if given == numbered.as_slice() || given == joint_names {
-            return Some((from..from + n).collect());
+    }
+
+    /// The header: `id`, then the joints (numbered or by name) or the pose and optional seeds.
+    fn header(
+        &self,
+        line: usize,
+        header: &str,
+        joint_names: &[String],
+    ) -> Result<Layout, TargetsError> {
+        let names: Vec<String> = header.split(',').map(|s| s.trim().to_string()).collect();
+        let n = joint_names.len();
+        if names.first().map(String::as_str) != Some("id") {
+            return Err(self.err(
+                line,
+                names.first().map_or("", String::as_str),
+                "expected `id` as the first column".into(),
+            ));
         }
-        None
-    };
-    const POSE: [&str; 7] = ["x", "y", "z", "qw", "qx", "qy", "qz"];
-    let is_pose = names.len() >= 8 && names[1..8].iter().zip(POSE).all(|(a, b)| a == b);
-    let (pose, joints) = if is_pose {
-        let seeds = if names.len() == 8 {
-            None
+        let numbered: Vec<String> = (1..=n).map(|k| format!("q{k}")).collect();
+        let joint_columns = |from: usize| -> Option<Vec<usize>> {
+            let given = &names[from..];
+            (given.len() == n && (given == numbered.as_slice() || given == joint_names))
+                .then(|| (from..from + n).collect())
+        };
+        const POSE: [&str; 7] = ["x", "y", "z", "qw", "qx", "qy", "qz"];
+        let pose = names.len() >= 8 && names[1..8].iter().zip(POSE).all(|(a, b)| a == b);
+        let joints = if pose {
+            if names.len() == 8 {
+                None
+            } else {
+                Some(joint_columns(8).ok_or_else(|| {
+                    self.err(
+                        line,
+                        &names[8],
+                        format!("after the pose, expected the {n} seed joints q1…q{n} (or none)"),
+                    )
+                })?)
+            }
         } else {
-            Some(joint_columns(8).ok_or_else(|| {
-                err(
-                    header_line,
-                    &names[8],
-                    format!("after the pose, expected the {n} seed joints q1…q{n} (or none)"),
+            Some(joint_columns(1).ok_or_else(|| {
+                self.err(
+                    line,
+                    names.get(1).map_or("", String::as_str),
+                    format!(
+                        "expected `id` and the arm's {n} joints `q1…q{n}` (or by name: {}), or a \
+                         pose `id,x,y,z,qw,qx,qy,qz`",
+                        joint_names.join(", ")
+                    ),
                 )
             })?)
         };
-        (true, seeds)
-    } else {
-        let cols = joint_columns(1).ok_or_else(|| {
-            err(
-                header_line,
-                names.get(1).map_or("", String::as_str),
-                format!(
-                    "expected `id` and the arm's {n} joints `q1…q{n}` (or by name: {}), or a pose \
-                     `id,x,y,z,qw,qx,qy,qz`",
-                    joint_names.join(", ")
-                ),
-            )
-        })?;
-        (false, Some(cols))
-    };
-    let joint_value = |i: usize, v: f64| {
-        if linear.get(i).copied().unwrap_or(false) {
-            units.length.to_mm(v)
-        } else {
-            units.angle.to_rad(v)
-        }
-    };
-    let mut out = Vec::new();
-    for (line, text) in rows {
+        Ok(Layout {
+            names,
+            pose,
+            joints,
+        })
+    }
+
+    /// One target row.
+    fn row(&self, layout: &Layout, line: usize, text: &str) -> Result<TargetRow, TargetsError> {
+        let names = &layout.names;
         let fields: Vec<&str> = text.split(',').map(str::trim).collect();
         if fields.len() != names.len() {
-            return Err(err(
+            return Err(self.err(
                 line,
                 "",
                 format!(
@@ -150,7 +184,7 @@ pub fn parse(
                 .ok()
                 .filter(|v| v.is_finite())
                 .ok_or_else(|| {
-                    err(
+                    self.err(
                         line,
                         &names[c],
                         format!(
@@ -162,9 +196,16 @@ pub fn parse(
         };
         let id = fields[0].to_string();
         if id.is_empty() {
-            return Err(err(line, "id", "an empty id".into()));
+            return Err(self.err(line, "id", "an empty id".into()));
         }
-        let q = match &joints {
+        let joint_value = |i: usize, v: f64| {
+            if self.linear.get(i).copied().unwrap_or(false) {
+                self.units.length.to_mm(v)
+            } else {
+                self.units.angle.to_rad(v)
+            }
+        };
+        let q = match &layout.joints {
             Some(cols) => cols
                 .iter()
                 .enumerate()
@@ -172,12 +213,12 @@ pub fn parse(
                 .collect::<Result<Vec<f64>, _>>()?,
             None => Vec::new(),
         };
-        let target = if pose {
+        let target = if layout.pose {
             let v = (1..8).map(number).collect::<Result<Vec<f64>, _>>()?;
             let quat = Quaternion::new(v[3], v[4], v[5], v[6]);
             let norm = quat.norm();
             if (norm - 1.0).abs() > 1e-3 {
-                return Err(err(
+                return Err(self.err(
                     line,
                     "qw",
                     format!(
@@ -185,13 +226,10 @@ pub fn parse(
                     ),
                 ));
             }
+            let mm = |k: usize| self.units.length.to_mm(v[k]);
             Target::Pose {
                 base_from_flange: Isometry3::from_parts(
-                    Translation3::new(
-                        units.length.to_mm(v[0]),
-                        units.length.to_mm(v[1]),
-                        units.length.to_mm(v[2]),
-                    ),
+                    Translation3::new(mm(0), mm(1), mm(2)),
                     UnitQuaternion::from_quaternion(quat),
                 ),
                 seed: q,
@@ -199,12 +237,8 @@ pub fn parse(
         } else {
             Target::Joints(q)
         };
-        out.push(TargetRow { id, line, target });
+        Ok(TargetRow { id, line, target })
     }
-    if out.is_empty() {
-        return Err(err(header_line, "id", "a header without targets".into()));
-    }
-    Ok(out)
 }
 
 /// The output table (module documentation): one row per target, `results[k]` for `rows[k]`.

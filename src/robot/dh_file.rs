@@ -209,94 +209,11 @@ fn arm_urdf(
     );
     // What the previous row left after its motion.
     let mut tail = Isometry3::identity();
-    for (k, j) in arm.joints.iter().enumerate() {
-        let field = format!("arms.{n}.joints[{k}] `{}`", j.name);
-        if [j.d, j.theta, j.a, j.alpha].iter().any(|v| !v.is_finite()) {
-            return Err(format!(
-                "{field}: d, theta, a, alpha: expected finite numbers"
-            ));
-        }
-        let prismatic = match j.kind.as_deref() {
-            None | Some("revolute") => false,
-            Some("prismatic") => true,
-            Some(other) => {
-                return Err(format!(
-                    "{field}: type `{other}`: expected `revolute` or `prismatic`"
-                ));
-            }
-        };
-        let (d, theta, a, alpha) = (
-            j.d * mm_per,
-            j.theta * rad_per,
-            j.a * mm_per,
-            j.alpha * rad_per,
-        );
-        let tz = |v: f64| Isometry3::translation(0.0, 0.0, v);
-        let tx = |v: f64| Isometry3::translation(v, 0.0, 0.0);
-        // The joint's origin (up to its motion) and what follows its motion.
-        let (origin, after) = match (convention, prismatic) {
-            (Convention::Standard, false) => (tail * rot_z(theta), tz(d) * tx(a) * rot_x(alpha)),
-            (Convention::Standard, true) => (tail * rot_z(theta) * tz(d), tx(a) * rot_x(alpha)),
-            (Convention::Modified, false) => (tail * rot_x(alpha) * tx(a) * rot_z(theta), tz(d)),
-            (Convention::Modified, true) => (
-                tail * rot_x(alpha) * tx(a) * rot_z(theta) * tz(d),
-                Isometry3::identity(),
-            ),
-        };
+    for k in 0..arm.joints.len() {
+        let units = Units { mm_per, rad_per };
+        let (xml, after) = joint_urdf(arm, k, convention, units, &tail)?;
+        s += &xml;
         tail = after;
-        let limits = match j.limits {
-            Some([lo, hi]) if lo.is_finite() && hi.is_finite() && lo < hi => {
-                let unit = if prismatic { mm_per / 1000.0 } else { rad_per };
-                Some((lo * unit, hi * unit))
-            }
-            Some(_) => {
-                return Err(format!(
-                    "{field}: limits: expected [lower, upper], lower < upper"
-                ));
-            }
-            None => None,
-        };
-        let kind = match (prismatic, limits) {
-            (true, _) => "prismatic",
-            (false, Some(_)) => "revolute",
-            (false, None) => "continuous",
-        };
-        if prismatic && limits.is_none() {
-            return Err(format!("{field}: a prismatic joint needs its limits"));
-        }
-        let mimic = match &j.mimic {
-            Some(m) => {
-                if !arm.joints[..k].iter().any(|o| o.name == m.joint) {
-                    return Err(format!(
-                        "{field}: mimic joint `{}`: expected an earlier joint of the same arm",
-                        m.joint
-                    ));
-                }
-                let offset =
-                    m.offset.unwrap_or(0.0) * if prismatic { mm_per / 1000.0 } else { rad_per };
-                format!(
-                    "\n    <mimic joint=\"{}\" multiplier=\"{:?}\" offset=\"{offset:?}\"/>",
-                    escape(&m.joint),
-                    m.multiplier.unwrap_or(1.0)
-                )
-            }
-            None => String::new(),
-        };
-        let limit = limits.map_or(String::new(), |(lo, hi)| {
-            format!(
-                "\n    <limit lower=\"{lo:?}\" upper=\"{hi:?}\" effort=\"100\" velocity=\"1\"/>"
-            )
-        });
-        let _ = write!(
-            s,
-            "  <link name=\"{n}_link_{}\"/>\n  <joint name=\"{}\" type=\"{kind}\">\n    <parent \
-             link=\"{n}_link_{k}\"/>\n    <child link=\"{n}_link_{}\"/>\n    {}\n    <axis xyz=\"0 0 \
-             1\"/>{limit}{mimic}\n  </joint>\n",
-            k + 1,
-            escape(&j.name),
-            k + 1,
-            origin_xml(&origin)
-        );
     }
     let last = arm.joints.len();
     fixed(
@@ -309,6 +226,104 @@ fn arm_urdf(
     Ok(format!(
         "  <link name=\"{n}_link_0\"/>\n  <link name=\"{n}_flange\"/>\n{s}"
     ))
+}
+
+/// The file's units: mm and rad per unit.
+#[derive(Clone, Copy)]
+struct Units {
+    mm_per: f64,
+    rad_per: f64,
+}
+
+/// Joint `k` of `arm` (its link and joint elements) after `tail`, and what its row leaves after
+/// the motion.
+fn joint_urdf(
+    arm: &RawArm,
+    k: usize,
+    convention: Convention,
+    Units { mm_per, rad_per }: Units,
+    tail: &Isometry3<f64>,
+) -> Result<(String, Isometry3<f64>), String> {
+    let (n, j) = (&arm.name, &arm.joints[k]);
+    let field = format!("arms.{n}.joints[{k}] `{}`", j.name);
+    if [j.d, j.theta, j.a, j.alpha].iter().any(|v| !v.is_finite()) {
+        return Err(format!(
+            "{field}: d, theta, a, alpha: expected finite numbers"
+        ));
+    }
+    let prismatic = match j.kind.as_deref() {
+        None | Some("revolute") => false,
+        Some("prismatic") => true,
+        Some(other) => {
+            return Err(format!(
+                "{field}: type `{other}`: expected `revolute` or `prismatic`"
+            ));
+        }
+    };
+    let (d, theta, a, alpha) = (
+        j.d * mm_per,
+        j.theta * rad_per,
+        j.a * mm_per,
+        j.alpha * rad_per,
+    );
+    let tz = |v: f64| Isometry3::translation(0.0, 0.0, v);
+    let tx = |v: f64| Isometry3::translation(v, 0.0, 0.0);
+    // The joint's origin (up to its motion) and what follows its motion.
+    let (origin, after) = match (convention, prismatic) {
+        (Convention::Standard, false) => (tail * rot_z(theta), tz(d) * tx(a) * rot_x(alpha)),
+        (Convention::Standard, true) => (tail * rot_z(theta) * tz(d), tx(a) * rot_x(alpha)),
+        (Convention::Modified, false) => (tail * rot_x(alpha) * tx(a) * rot_z(theta), tz(d)),
+        (Convention::Modified, true) => (
+            tail * rot_x(alpha) * tx(a) * rot_z(theta) * tz(d),
+            Isometry3::identity(),
+        ),
+    };
+    let unit = if prismatic { mm_per / 1000.0 } else { rad_per };
+    let limits = match j.limits {
+        Some([lo, hi]) if lo.is_finite() && hi.is_finite() && lo < hi => {
+            Some((lo * unit, hi * unit))
+        }
+        Some(_) => {
+            return Err(format!(
+                "{field}: limits: expected [lower, upper], lower < upper"
+            ));
+        }
+        None if prismatic => return Err(format!("{field}: a prismatic joint needs its limits")),
+        None => None,
+    };
+    let kind = match (prismatic, limits) {
+        (true, _) => "prismatic",
+        (false, Some(_)) => "revolute",
+        (false, None) => "continuous",
+    };
+    let mimic = match &j.mimic {
+        Some(m) if !arm.joints[..k].iter().any(|o| o.name == m.joint) => {
+            return Err(format!(
+                "{field}: mimic joint `{}`: expected an earlier joint of the same arm",
+                m.joint
+            ));
+        }
+        Some(m) => format!(
+            "\n    <mimic joint=\"{}\" multiplier=\"{:?}\" offset=\"{:?}\"/>",
+            escape(&m.joint),
+            m.multiplier.unwrap_or(1.0),
+            m.offset.unwrap_or(0.0) * unit
+        ),
+        None => String::new(),
+    };
+    let limit = limits.map_or(String::new(), |(lo, hi)| {
+        format!("\n    <limit lower=\"{lo:?}\" upper=\"{hi:?}\" effort=\"100\" velocity=\"1\"/>")
+    });
+    let xml = format!(
+        "  <link name=\"{n}_link_{}\"/>\n  <joint name=\"{}\" type=\"{kind}\">\n    <parent \
+         link=\"{n}_link_{k}\"/>\n    <child link=\"{n}_link_{}\"/>\n    {}\n    <axis xyz=\"0 0 \
+         1\"/>{limit}{mimic}\n  </joint>\n",
+        k + 1,
+        escape(&j.name),
+        k + 1,
+        origin_xml(&origin)
+    );
+    Ok((xml, after))
 }
 
 fn fixed(s: &mut String, name: &str, parent: &str, child: &str, origin: &Isometry3<f64>) {
