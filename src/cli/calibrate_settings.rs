@@ -1,7 +1,9 @@
-//! `dualcal calibrate`'s settings from its arguments (a reflector by the user's name) and its
-//! progress lines (one per outer iteration, each objective by the user's reflector name).
+//! `dualcal calibrate`'s settings from its arguments (a reflector by the user's name), its progress
+//! lines (one per outer iteration, each objective by the user's reflector name) and its lines on the
+//! parameters' uncertainty.
 
 use super::CalibrateArgs;
+use crate::side::PerSide;
 use crate::solver::{CalibrationEvent, CalibrationSettings, Reflector};
 use anyhow::Result;
 
@@ -97,6 +99,45 @@ pub fn print_event(event: &CalibrationEvent, reflectors: &[String]) {
         }
         CalibrationEvent::StageFinished { stage, termination } => {
             eprintln!("{stage}: {termination}")
+        }
+    }
+}
+
+/// Each arm's parameter uncertainty in a few lines (the parameter file has every σ).
+pub fn print_uncertainty(u: &PerSide<Option<crate::solver::uncertainty::ArmUncertainty>>) {
+    for (side, u) in u.iter() {
+        let Some(u) = u else { continue };
+        let largest = |unit: &str| {
+            u.largest(unit).map_or(String::new(), |p| {
+                format!("{:.4} {unit} ({})", p.sigma, p.name)
+            })
+        };
+        outln!(
+            "{side} arm: 1σ of the identified parameters (from the residuals: point noise {:.4} mm per axis; {} configurations): largest {}, {}; condition number {:.1}",
+            u.point_sigma_mm,
+            u.configurations,
+            largest("mm"),
+            largest("mrad"),
+            u.condition
+        );
+        if !u.correlations.is_empty() {
+            let pairs: Vec<String> = u
+                .correlations
+                .iter()
+                .take(5)
+                .map(|c| format!("{}–{} {:+.2}", c.a, c.b, c.correlation))
+                .collect();
+            outln!(
+                "  {} pair(s) correlated beyond ±{}: {}{}",
+                u.correlations.len(),
+                crate::solver::uncertainty::REPORTED_CORRELATION,
+                pairs.join(", "),
+                if u.correlations.len() > 5 {
+                    ", …"
+                } else {
+                    ""
+                }
+            );
         }
     }
 }

@@ -35,6 +35,7 @@ macro_rules! outln {
 
 mod calibrate_settings;
 mod controller;
+mod dh;
 mod import;
 mod outlier_study;
 mod paper_study;
@@ -42,7 +43,7 @@ mod plan;
 mod reproduce;
 mod timings;
 
-use calibrate_settings::{print_event, settings_from};
+use calibrate_settings::{print_event, print_uncertainty, settings_from};
 pub use controller::TargetsRefused;
 
 /// Two-step minimax kinematic calibration of dual-arm robots from laser-tracker data.
@@ -85,7 +86,7 @@ pub enum Command {
     /// modules for the YuMi).
     Plan(plan::PlanArgs),
     /// Write the URDF a DH robot file (`dualcal-dh/1`, docs/formats.md) is read as.
-    UrdfFromDh(UrdfFromDhArgs),
+    UrdfFromDh(dh::UrdfFromDhArgs),
 }
 
 #[derive(Args, Debug)]
@@ -323,37 +324,8 @@ fn run_command(command: Command) -> Result<()> {
         Command::Export(a) => controller::run_export(&a),
         Command::Compensate(a) => controller::run_compensate(&a),
         Command::Plan(a) => plan::run(&a),
-        Command::UrdfFromDh(a) => urdf_from_dh(&a),
+        Command::UrdfFromDh(a) => dh::run(&a),
     }
-}
-
-#[derive(Args, Debug)]
-pub struct UrdfFromDhArgs {
-    /// The DH robot file (`dualcal-dh/1`).
-    pub dh: PathBuf,
-    /// The URDF to write.
-    #[arg(long)]
-    pub out: PathBuf,
-}
-
-/// `dualcal urdf-from-dh`: the URDF is loaded back (its arms' forward kinematics are the table's)
-/// before it is written.
-fn urdf_from_dh(a: &UrdfFromDhArgs) -> Result<()> {
-    crate::output::refuse_overwrite_input(&a.out, &[a.dh.as_path()])?;
-    let text = std::fs::read_to_string(&a.dh)
-        .with_context(|| format!("{}: cannot read", a.dh.display()))?;
-    let urdf = crate::robot::dh_file::to_urdf(&text).map_err(|message| {
-        crate::robot::RobotError::DhFile {
-            path: a.dh.clone(),
-            message,
-        }
-    })?;
-    let robot = RobotDescription::load(a.dh.as_path(), &LoadOptions::default())?;
-    crate::output::write_atomic(&a.out, urdf.as_bytes())
-        .with_context(|| format!("{}: cannot write", a.out.display()))?;
-    outln!("{}", describe_robot(&robot));
-    outln!("wrote {}", a.out.display());
-    Ok(())
 }
 
 fn simulate_cmd(a: &SimulateArgs) -> Result<()> {
@@ -773,45 +745,6 @@ fn calibrate_cmd(a: &CalibrateArgs) -> Result<()> {
         return Err(NotConverged(how.join("; ")).into());
     }
     Ok(())
-}
-
-/// Each arm's parameter uncertainty in a few lines (the parameter file has every σ).
-fn print_uncertainty(u: &PerSide<Option<crate::solver::uncertainty::ArmUncertainty>>) {
-    for (side, u) in u.iter() {
-        let Some(u) = u else { continue };
-        let largest = |unit: &str| {
-            u.largest(unit).map_or(String::new(), |p| {
-                format!("{:.4} {unit} ({})", p.sigma, p.name)
-            })
-        };
-        outln!(
-            "{side} arm: 1σ of the identified parameters (from the residuals: point noise {:.4} mm per axis; {} configurations): largest {}, {}; condition number {:.1}",
-            u.point_sigma_mm,
-            u.configurations,
-            largest("mm"),
-            largest("mrad"),
-            u.condition
-        );
-        if !u.correlations.is_empty() {
-            let pairs: Vec<String> = u
-                .correlations
-                .iter()
-                .take(5)
-                .map(|c| format!("{}–{} {:+.2}", c.a, c.b, c.correlation))
-                .collect();
-            outln!(
-                "  {} pair(s) correlated beyond ±{}: {}{}",
-                u.correlations.len(),
-                crate::solver::uncertainty::REPORTED_CORRELATION,
-                pairs.join(", "),
-                if u.correlations.len() > 5 {
-                    ", …"
-                } else {
-                    ""
-                }
-            );
-        }
-    }
 }
 
 fn print_identifiability(result: &CalibrationResult) {
