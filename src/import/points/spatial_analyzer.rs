@@ -1,0 +1,165 @@
+//! SpatialAnalyzer ASCII/CSV exports: optional `//` header lines, name columns, X Y Z.
+
+use super::*;
+
+pub(super) fn read_spatial_analyzer(
+    path: &Path,
+    text: &str,
+    o: &ReadOptions,
+) -> Result<PointFile, ImportError> {
+    let mut unit_header: Option<(usize, String)> = None;
+    let mut frame = None;
+    let mut notes = Vec::new();
+    let mut header: Option<(usize, Vec<NameUnit>)> = None;
+    let mut layout: Option<Layout> = None;
+    let mut unit = o.unit.unwrap_or_default();
+    let mut points = Vec::new();
+    for (line, t) in lines(text) {
+        if let Some(comment) = t.strip_prefix("//") {
+            if let Some((key, value)) = header_comment(comment) {
+                if key.contains("unit") {
+                    unit_header = Some((line, value));
+                } else if key.contains("frame") {
+                    frame = Some(value);
+                }
+            }
+            continue;
+        }
+        if t.starts_with('#') {
+            continue;
+        }
+        if layout.is_none() {
+            let delimiter = Delimiter::of_line(t, o.decimal_comma);
+            let dc = o.decimal_comma || delimiter.allows_decimal_comma();
+            let fields = text::split(t, delimiter);
+            let numbers: Vec<bool> = fields
+                .iter()
+                .map(|f| text::number(f, dc).is_some())
+                .collect();
+            let first_xyz = (0..fields.len().saturating_sub(2))
+                .find(|&i| numbers[i] && numbers[i + 1] && numbers[i + 2]);
+            if header.is_none() && first_xyz.is_none() {
+                // Column names: `Collection Group Target X Y Z …`.
+                let names: Vec<NameUnit> = fields.iter().map(|f| text::name_and_unit(f)).collect();
+                let is = |n: &str| names.iter().any(|(m, _)| m.eq_ignore_ascii_case(n));
+                if !(is("x") && is("y") && is("z")) {
+                    return Err(ImportError::Header {
+                        path: path.to_path_buf(),
+                        line,
+                        field: "X".to_string(),
+                        message: format!(
+                            "expected column names with X, Y and Z (e.g. `Collection Group Target \
+                             X Y Z`) or a row of coordinates, found `{}`",
+                            crate::textfile::excerpt(t)
+                        ),
+                    });
+                }
+                header = Some((line, names));
+                continue;
+            }
+            let Some(i) = first_xyz else {
+                return Err(ImportError::Field {
+                    path: path.to_path_buf(),
+                    line,
+                    field: "X".to_string(),
+                    expected: "three numbers X Y Z after the name columns".to_string(),
+                    found: crate::textfile::excerpt(t),
+                });
+            };
+            let from_header = header
+                .as_ref()
+                .filter(|(_, names)| names.len() == fields.len());
+            let l = match from_header {
+                Some((hl, names)) => {
+                    let col = |n: &str| names.iter().position(|(m, _)| m.eq_ignore_ascii_case(n));
+                    let (x, y, z) = (col("x"), col("y"), col("z"));
+                    let (Some(x), Some(y), Some(z)) = (x, y, z) else {
+                        unreachable!("the header was checked for X, Y, Z")
+                    };
+                    if let Some(u) = &names[x].1 {
+                        match PointUnit::parse(u) {
+                            Some(p) if o.unit.is_none() => unit = p,
+                            Some(_) => {}
+                            None => {
+                                return Err(ImportError::Header {
+                                    path: path.to_path_buf(),
+                                    line: *hl,
+                                    field: "X".to_string(),
+                                    message: format!(
+                                        "unknown unit `{u}`: expected mm, m, µm, in or ft"
+                                    ),
+                                });
+                            }
+                        }
+                    }
+                    let target = names
+                        .iter()
+                        .position(|(m, _)| is_target_name(m))
+                        .or_else(|| x.checked_sub(1).filter(|&k| !numbers[k]));
+                    let time = names.iter().position(|(m, _)| is_time_name(m));
+                    Layout {
+                        delimiter,
+                        target,
+                        xyz: [x, y, z],
+                        time,
+                        needed: x.max(y).max(z) + 1,
+                    }
+                }
+                None => {
+                    if header.is_some() {
+                        notes.push(
+                            "the column names do not line up with the rows' fields: columns found \
+                             by position (names, then X Y Z)"
+                                .to_string(),
+                        );
+                    }
+                    Layout {
+                        delimiter,
+                        target: i.checked_sub(1),
+                        xyz: [i, i + 1, i + 2],
+                        time: None,
+                        needed: i + 3,
+                    }
+                }
+            };
+            layout = Some(l);
+        }
+        let Some(l) = &layout else { unreachable!() };
+        if points.is_empty() {
+            // The unit, once: the option, else the header's, else mm.
+            if o.unit.is_none() {
+                if let Some((ul, u)) = &unit_header {
+                    unit = PointUnit::parse(u).ok_or_else(|| ImportError::Header {
+                        path: path.to_path_buf(),
+                        line: *ul,
+                        field: "Units".to_string(),
+                        message: format!(
+                            "unknown unit `{}`: expected Millimeters, Meters, Inches, … (or give \
+                             the unit by option)",
+                            crate::textfile::excerpt(u)
+                        ),
+                    })?;
+                } else if header
+                    .as_ref()
+                    .is_none_or(|(_, n)| n.iter().all(|(_, u)| u.is_none()))
+                {
+                    notes.push("no unit in the file: read as mm".to_string());
+                }
+            }
+        }
+        points.push(point_row(path, line, t, l, unit, o.decimal_comma)?);
+    }
+    if layout.is_none() {
+        return Err(ImportError::Format {
+            path: path.to_path_buf(),
+            message: "no points: expected rows of (names) X Y Z".to_string(),
+        });
+    }
+    Ok(PointFile {
+        format: PointsFormat::SpatialAnalyzer,
+        unit,
+        frame,
+        table: PointTable::Points(points),
+        notes,
+    })
+}
