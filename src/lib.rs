@@ -23,6 +23,7 @@ pub mod output;
 pub mod params;
 pub mod plan;
 pub mod quality;
+pub mod report;
 pub mod robot;
 pub mod side;
 pub mod simulate;

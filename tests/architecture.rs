@@ -28,6 +28,8 @@ const LAYERS: &[&[&str]] = &[
     &["quality", "solver", "simulate", "analysis", "plan"],
     // What combines them: the load pipeline, exclusion and re-fit, the comparison, the parameter file.
     &["workspace", "exclusion", "comparison", "params"],
+    // What reports on a calibration: the HTML report (parameter file, figures, screening).
+    &["report"],
     // The command line, then the workbench.
     &["cli"],
     &["app"],
@@ -135,4 +137,5 @@ fn no_module_uses_one_of_a_higher_layer() {
     assert!(arrows["exclusion"].contains("solver") && arrows["exclusion"].contains("quality"));
     assert!(!arrows["quality"].contains("solver"));
     assert!(!arrows["dataset"].contains("robot") && !arrows["dataset"].contains("quality"));
+    assert!(arrows["report"].contains("params") && arrows["report"].contains("analysis"));
 }

@@ -1039,12 +1039,18 @@ fn a_dropped_urdf_replaces_the_robot_and_the_robot_section_lists_its_arms() {
         &drawn_pack(&harness).unwrap(),
         &simplified
     ));
+    // The view options are below the fold of the left panel: scrolled to first.
+    harness.get_by_label("full").scroll_to_me();
+    harness.run_steps(4);
     harness.get_by_label("full").click();
     harness.run_steps(2);
     assert!(std::sync::Arc::ptr_eq(
         &drawn_pack(&harness).unwrap(),
         &full
     ));
+    // The view options are below the fold of the left panel: scrolled to first.
+    harness.get_by_label("simplified").scroll_to_me();
+    harness.run_steps(4);
     harness.get_by_label("simplified").click();
     harness.run_steps(2);
     assert!(std::sync::Arc::ptr_eq(
@@ -1605,4 +1611,112 @@ fn the_robot_section_lists_prismatic_and_mimic_joints() {
     // Six columns q1 … q6 for seven movable joints.
     harness.get_by_label("q6");
     assert_eq!(harness.query_all_by_label("q7").count(), 0);
+}
+
+/// The example's measurements as a tracker would export them (SpatialAnalyzer-style points
+/// `<id>_<reflector> x y z` under a `//` header) and a controller's joint log, per arm.
+fn tracker_files(dir: &std::path::Path) -> PerSide<(std::path::PathBuf, std::path::PathBuf)> {
+    let example = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/datasets/example");
+    PerSide::from_fn(|side| {
+        let text = std::fs::read_to_string(example.join(format!("{side}.csv"))).unwrap();
+        let mut points = String::from("// exported for the test\n// units: mm\n");
+        let mut joints = String::from("id,q1,q2,q3,q4,q5,q6,q7\n");
+        for line in text.lines().filter(|l| !l.starts_with('#')).skip(1) {
+            let f: Vec<&str> = line.split(',').collect();
+            joints += &format!("{}\n", f[..8].join(","));
+            for (k, r) in ["a", "b", "c"].iter().enumerate() {
+                let xyz = &f[8 + 3 * k..11 + 3 * k];
+                points += &format!("{}_{r} {} {} {}\n", f[0], xyz[0], xyz[1], xyz[2]);
+            }
+        }
+        let p = dir.join(format!("{side}-points.txt"));
+        let j = dir.join(format!("{side}-joints.csv"));
+        std::fs::write(&p, points).unwrap();
+        std::fs::write(&j, joints).unwrap();
+        (p, j)
+    })
+}
+
+#[test]
+fn the_import_window_previews_the_files_then_writes_and_opens_the_dataset() {
+    let dir = tempfile::tempdir().unwrap();
+    let files = tracker_files(dir.path());
+    let mut harness = harness([1280.0, 800.0], AppLaunch::default());
+    loaded(&mut harness);
+    harness.get_by_label("Import…").click();
+    harness.run_steps(2);
+    assert!(harness.state().import_view().open);
+    harness.get_by_label("Choose both arms' point files.");
+    {
+        let view = harness.state_mut().import_view_mut();
+        for side in dualcal::side::Side::BOTH {
+            view.inputs.points[side] = files[side].0.display().to_string();
+            view.inputs.joints[side] = files[side].1.display().to_string();
+        }
+        // A joint order that does not parse: named in the preview, nothing to write.
+        view.inputs.joint_order = "1,2,9".into();
+        view.out_dir = dir.path().join("imported").display().to_string();
+    }
+    harness.run_steps(3);
+    let err = harness
+        .state()
+        .import_view()
+        .preview()
+        .unwrap()
+        .result
+        .as_ref()
+        .err()
+        .cloned()
+        .expect("the joint order is refused");
+    assert!(err.contains("joint order"), "{err}");
+    harness.get_by_label(&err);
+    harness
+        .state_mut()
+        .import_view_mut()
+        .inputs
+        .joint_order
+        .clear();
+    harness.run_steps(3);
+    // The preview: every configuration of both arms matched, nothing left over.
+    for side in ["left", "right"] {
+        let line =
+            format!("{side}: 220 configurations (SpatialAnalyzer export, mm; 660 points read)");
+        harness.get_by_label(&line);
+    }
+    harness.get_by_label("Write dataset and open").click();
+    harness.run_steps(2);
+    step_until(&mut harness, MAX_LOAD_FRAMES, "loading the import", |app| {
+        !app.is_loading()
+    });
+    let app = harness.state();
+    assert!(app.errors().is_empty(), "{:?}", app.errors());
+    assert!(!app.import_view().open);
+    let session = app.session().unwrap();
+    assert_eq!(session.dataset.dir, dir.path().join("imported"));
+    // The same measurements as the example (the import writes mm and rad at full precision).
+    let example = dualcal::dataset::load(
+        &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/datasets/example"),
+    )
+    .unwrap();
+    for side in dualcal::side::Side::BOTH {
+        let (a, b) = (
+            &example.arms[side].measurements,
+            &session.dataset.arms[side].measurements,
+        );
+        assert_eq!(a.len(), b.len());
+        for (x, y) in a.iter().zip(b) {
+            assert_eq!(x.id, y.id);
+            for (p, q) in x.tracker_points_mm.iter().zip(&y.tracker_points_mm) {
+                assert!((p - q).norm() < 1e-9);
+            }
+        }
+    }
+    // Written once: a second import into the same folder is refused, the view says why.
+    let view = harness.state_mut().import_view_mut();
+    view.open = true;
+    harness.run_steps(3);
+    harness.get_by_label("Write dataset and open").click();
+    harness.run_steps(2);
+    let err = harness.state().import_view().write_error.clone().unwrap();
+    assert!(err.contains("imported"), "{err}");
 }

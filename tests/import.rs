@@ -400,6 +400,16 @@ fn leica_points_match_by_time_stamp_within_the_tolerance() {
             .reason
             .contains("reflector c")
     );
+    // Such an import says what did not match, and is not written: the dataset would not load.
+    let out = dir.path().join("unmatched");
+    let err = import::write(&imported, &inputs, &out, Overwrite::Refuse)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("left-joints.csv: the left arm has 0 configurations"),
+        "{err}"
+    );
+    assert!(!out.exists());
 }
 
 /// The error of importing `left` points/joints texts (the right arm valid).

@@ -6,7 +6,9 @@
 #   tools/web.sh serve [PORT]  → build, then serve target/web on http://127.0.0.1:PORT (default 8080)
 #   tools/web.sh test          → build, then the browser test (web/tests/browser-test.mjs: Debian's
 #                                Chromium headless, driven by playwright-core from npm), comparing the
-#                                browser's calibrated parameters with the native command line's
+#                                browser's calibrated parameters with the native command line's;
+#                                then the calibration report of the same parameters
+#                                (web/tests/report-test.mjs: every section, no console error)
 #   tools/web.sh measure       → test, plus the native release command line's time for the same
 #                                calibration, and the README's screenshot (docs/screenshot-web.png);
 #                                prints the figures of docs/performance.md
@@ -118,6 +120,15 @@ browser_test() {
   say "browser test done in $((SECONDS - started)) s (after the build)"
 }
 
+# The calibration report (`dualcal report`) of the native parameters in the browser: every section
+# visible, no console error, a screenshot (target/web-test/report.png). After browser_test, whose
+# binary and parameters it uses.
+report_test() {
+  "$target_dir/debug/dualcal" report assets/datasets/example --params "$test_out/params-native.json" \
+    --out "$test_out/report.html"
+  node web/tests/report-test.mjs "$test_out/report.html"
+}
+
 case "${1:-}" in
   build)
     build
@@ -131,6 +142,7 @@ case "${1:-}" in
   test)
     build
     browser_test
+    report_test
     ;;
   measure)
     build

@@ -85,6 +85,14 @@ impl WorkbenchApp {
             Command::StartComparison => self.start_comparison(),
             Command::CancelComparison => self.jobs.cancel(ComparisonJob::lane()),
             Command::AdoptCompared(key) => self.adopt_compared(key),
+            Command::ShowImport(open) => {
+                self.import.open = open;
+                self.import.write_error = None;
+            }
+            Command::SetImportFile(slot, path) => self.import.set_file(slot, &path),
+            Command::SetImportFolder(path) => self.import.out_dir = path.display().to_string(),
+            Command::RefreshImport => self.refresh_import(true),
+            Command::FinishImport => self.finish_import(),
         }
     }
 
@@ -192,7 +200,9 @@ impl WorkbenchApp {
         let suggested = match (kind, &self.session) {
             (OpenKind::Dataset, Some(s)) => s.dataset.dir.join(crate::dataset::MANIFEST_FILE),
             (OpenKind::Urdf, Some(s)) => s.dataset.dir.join("robot.urdf"),
-            (_, None) => std::env::current_dir().unwrap_or_default(),
+            (OpenKind::ImportFile(_) | OpenKind::ImportFolder, _) | (_, None) => {
+                std::env::current_dir().unwrap_or_default()
+            }
         };
         self.prompt = Some(PathPrompt::new(PromptAction::Open(kind), suggested));
     }
@@ -277,4 +287,79 @@ fn refusal(session: &Session) -> Option<String> {
             refusals.join("; ")
         )
     })
+}
+
+/// The import view's work: its preview and its end.
+impl WorkbenchApp {
+    /// Preview the import again when its inputs or the robot changed (or `force`: read the files
+    /// again).
+    pub(super) fn refresh_import(&mut self, force: bool) {
+        if !self.import.open {
+            return;
+        }
+        let (robot, robot_path, names, positions) = match &self.session {
+            Some(s) => (
+                s.robot.clone(),
+                s.robot_source.clone(),
+                s.dataset.reflector_names.to_vec(),
+                s.dataset.nominal_reflectors_mm.clone(),
+            ),
+            None => {
+                let robot = self
+                    .builtin_robot
+                    .get_or_insert_with(|| {
+                        std::sync::Arc::new(crate::robot::RobotDescription::builtin_irb14000())
+                    })
+                    .clone();
+                let positions = crate::simulate::default_reflectors_for(&robot).to_vec();
+                let names = crate::kinematics::default_reflector_names(positions.len()).to_vec();
+                (robot, None, names, positions)
+            }
+        };
+        let target = super::import::ImportTarget {
+            robot: &robot,
+            robot_path: robot_path.as_deref(),
+            reflector_names: names,
+            nominal_reflectors_mm: positions,
+        };
+        self.import.refresh(&*self.input_files.0, &target, force);
+    }
+
+    /// Write the previewed import — into the folder chosen, or in a browser into memory — and open
+    /// it as the current dataset; on failure the view stays open with the reason.
+    fn finish_import(&mut self) {
+        self.import.write_error = None;
+        let written = match &self.memory_files {
+            Some(memory) => {
+                let dir = PathBuf::from(format!("/imports/{}", self.generation + 1));
+                match self.import.preview().and_then(|p| p.importable()) {
+                    Some(imported) => crate::import::files_of(imported, &dir)
+                        .map(|files| {
+                            for (path, bytes) in files {
+                                memory.insert(path, bytes);
+                            }
+                            dir
+                        })
+                        .map_err(|e| format!("{e:#}")),
+                    None => Err("nothing to import: the preview shows why".to_string()),
+                }
+            }
+            None => {
+                let out = PathBuf::from(self.import.out_dir.trim());
+                if out.as_os_str().is_empty() {
+                    Err("choose the folder to write the dataset to".to_string())
+                } else {
+                    super::import::write(&self.import, &out).map(|()| out)
+                }
+            }
+        };
+        match written {
+            Ok(dir) => {
+                self.import.open = false;
+                // The dataset names its robot (the one it was imported for).
+                self.start_load(dir, None);
+            }
+            Err(e) => self.import.write_error = Some(e),
+        }
+    }
 }

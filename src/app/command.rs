@@ -2,7 +2,7 @@
 //! the kinds they name. This file imports nothing of the app (the handler, [`super::apply`], does),
 //! so every module below the app can name a command without an import circle.
 
-use crate::side::ConfigId;
+use crate::side::{ConfigId, Side};
 use std::path::PathBuf;
 
 /// What the user wants to open.
@@ -12,6 +12,17 @@ pub enum OpenKind {
     Dataset,
     /// A robot description.
     Urdf,
+    /// A tracker export or joint log for the import view.
+    ImportFile(ImportSlot),
+    /// The folder the import view writes its dataset to.
+    ImportFolder,
+}
+
+/// A file of the import view: an arm's point file or its joint log.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ImportSlot {
+    pub side: Side,
+    pub joints: bool,
 }
 
 /// What to export.
@@ -21,6 +32,8 @@ pub enum Export {
     Urdf,
     Csv,
     PlotPng,
+    /// The calibration report (`dualcal report`): one self-contained HTML file.
+    Report,
 }
 
 /// Something the user asked for.
@@ -67,6 +80,16 @@ pub enum Command {
     CancelComparison,
     /// Make the compared method's result (by its key) the current calibration.
     AdoptCompared(&'static str),
+    /// Put a picked file into the import view.
+    SetImportFile(ImportSlot, PathBuf),
+    /// The folder the import view writes to.
+    SetImportFolder(PathBuf),
+    /// Open (or close) the import view.
+    ShowImport(bool),
+    /// Read the import's files again (they may have changed on disk).
+    RefreshImport,
+    /// Write the previewed import as a dataset (in a browser: in memory) and open it.
+    FinishImport,
 }
 
 impl Command {
@@ -75,6 +98,8 @@ impl Command {
         match kind {
             OpenKind::Dataset => Command::OpenDataset(path),
             OpenKind::Urdf => Command::OpenUrdf(path),
+            OpenKind::ImportFile(slot) => Command::SetImportFile(slot, path),
+            OpenKind::ImportFolder => Command::SetImportFolder(path),
         }
     }
 }

@@ -14,9 +14,10 @@ impl Export {
     pub fn contents(self, session: &Session) -> Option<anyhow::Result<Vec<u8>>> {
         match (self, &session.calibrated) {
             (Export::Params, Some(cal)) => Some(export_params(cal)),
+            (Export::Report, Some(cal)) => Some(export_report(session, cal)),
             (Export::Urdf, Some(cal)) => Some(export_urdf(session, cal)),
             (Export::Csv, _) => Some(export_csv(session)),
-            (Export::Params | Export::Urdf, None) | (Export::PlotPng, _) => None,
+            (Export::Params | Export::Urdf | Export::Report, None) | (Export::PlotPng, _) => None,
         }
     }
 
@@ -41,6 +42,12 @@ impl Export {
                     "configurations.csv",
                     "CSV",
                     &["csv"],
+                ),
+                Export::Report => (
+                    "Export calibration report (HTML)",
+                    "report.html",
+                    "HTML",
+                    &["html"],
                 ),
                 Export::PlotPng => (
                     "Export plots as PNG",
@@ -146,6 +153,26 @@ pub fn export_params(cal: &session::Calibrated) -> anyhow::Result<Vec<u8>> {
     Ok(text)
 }
 
+/// The name the workbench's report gives the parameters it shows: they are the session's last
+/// calibration (the file "Parameters (JSON)…" exports), not a file on disk.
+pub const REPORT_PARAMS_NAME: &str = "the workbench's calibration (Export → Parameters)";
+
+/// The calibration report of the last calibration, as `dualcal report` writes it for the exported
+/// parameter file (the same engine function, [`crate::report::Report::build_from`]).
+pub fn export_report(session: &Session, cal: &session::Calibrated) -> anyhow::Result<Vec<u8>> {
+    let input = crate::report::ReportInput {
+        dataset: &session.dataset,
+        robot: &session.robot,
+        nominal: &session.nominal.model,
+    };
+    let report = crate::report::Report::build_from(
+        input,
+        &cal.params,
+        std::path::Path::new(REPORT_PARAMS_NAME),
+    )?;
+    Ok(crate::report::render(&report).into_bytes())
+}
+
 /// The calibrated robot description.
 pub fn export_urdf(session: &Session, cal: &session::Calibrated) -> anyhow::Result<Vec<u8>> {
     let text = crate::urdf_export::calibrated_urdf(&session.robot, &cal.result.calibrated)?;
@@ -240,5 +267,40 @@ mod tests {
             + session.dataset.arms.right.measurements.len();
         assert_eq!(csv.lines().count(), n + 1);
         assert!(csv.starts_with("id,arm,split,worst_pos_mm"));
+
+        // The report of the workbench's calibration is the one `dualcal report` writes for the
+        // exported parameter file (but for the time it was made and the parameters' name).
+        let html = String::from_utf8(export_report(&session, &cal).unwrap()).unwrap();
+        let ws = crate::workspace::Workspace::load(
+            &session.dataset.dir,
+            &crate::workspace::WorkspaceOptions::default(),
+        )
+        .unwrap();
+        let mut cli =
+            crate::report::Report::build(&ws, &file, Path::new(REPORT_PARAMS_NAME)).unwrap();
+        let ours = crate::report::Report::build_from(
+            crate::report::ReportInput {
+                dataset: &session.dataset,
+                robot: &session.robot,
+                nominal: &session.nominal.model,
+            },
+            &cal.params,
+            Path::new(REPORT_PARAMS_NAME),
+        )
+        .unwrap();
+        cli.generated_utc.clone_from(&ours.generated_utc);
+        let (a, b) = (crate::report::render(&cli), crate::report::render(&ours));
+        let at = a.bytes().zip(b.bytes()).position(|(x, y)| x != y);
+        assert!(
+            at.is_none() && a.len() == b.len(),
+            "the reports differ at byte {at:?}: `{}` against `{}`",
+            at.map_or("", |k| &a[k.saturating_sub(80)..(k + 80).min(a.len())]),
+            at.map_or("", |k| &b[k.saturating_sub(80)..(k + 80).min(b.len())]),
+        );
+        assert!(
+            html.contains("<section id=\"warnings\">"),
+            "{}",
+            &html[..200]
+        );
     }
 }

@@ -27,6 +27,9 @@ pub struct Io {
     pub files: crate::source::Files,
     /// File dialogs (or a browser's file picker and downloads).
     pub dialogs: Box<dyn FileAccess>,
+    /// In a browser: the files in memory that `files` reads, where an import's dataset is written
+    /// (`None`: the file system, written with atomic writes).
+    pub memory: Option<crate::source::MemoryFiles>,
 }
 
 pub trait FileAccess {
@@ -85,6 +88,18 @@ impl FileAccess for NativeFiles {
                             crate::source::FileKind::robot_extensions().as_slice(),
                         )
                         .pick_file(),
+                    OpenKind::ImportFile(slot) => dialog
+                        .set_title(if slot.joints {
+                            "Joint log (CSV)"
+                        } else {
+                            "Tracker export (points)"
+                        })
+                        .add_filter("Text and CSV", &["txt", "csv", "tsv", "dat", "asc"])
+                        .add_filter("Any file", &["*"])
+                        .pick_file(),
+                    OpenKind::ImportFolder => dialog
+                        .set_title("Folder for the imported dataset")
+                        .pick_folder(),
                 };
                 reply.send(AppEvent::File(match picked {
                     Some(path) => FileReply::Open(kind, path),
@@ -162,6 +177,10 @@ impl PathPrompt {
         let (title, verb) = match &self.action {
             PromptAction::Open(OpenKind::Dataset) => ("Open dataset", "Open"),
             PromptAction::Open(OpenKind::Urdf) => ("Open robot description (URDF)", "Open"),
+            PromptAction::Open(OpenKind::ImportFile(_)) => ("Import: a tracker file", "Choose"),
+            PromptAction::Open(OpenKind::ImportFolder) => {
+                ("Import: the dataset's folder", "Choose")
+            }
             PromptAction::Save(r) => (r.title, "Save"),
         };
         let mut command = None;

@@ -18,6 +18,7 @@ mod example;
 pub mod export;
 pub mod files;
 mod frame_stats;
+pub mod import;
 pub mod job;
 mod panels;
 pub mod platform;
@@ -109,6 +110,12 @@ pub struct WorkbenchApp {
     files: Box<dyn FileAccess>,
     /// Where datasets and robots are read from (the file system; in a browser, files in memory).
     input_files: Files,
+    /// In a browser: the memory `input_files` reads, where an import's dataset is written.
+    memory_files: Option<crate::source::MemoryFiles>,
+    /// The import view (tracker exports and joint logs to a dataset, with a live preview).
+    import: import::ImportView,
+    /// The built-in robot, made when the import view needs it without a session.
+    builtin_robot: Option<std::sync::Arc<crate::robot::RobotDescription>>,
     /// The GPU adapter (name and backend), for the status a browser page publishes.
     renderer: String,
     frame_budget: FrameBudget,
@@ -181,6 +188,9 @@ impl WorkbenchApp {
             plots: PlotsView::default(),
             files: io.dialogs,
             input_files: io.files,
+            memory_files: io.memory,
+            import: import::ImportView::default(),
+            builtin_robot: None,
             renderer,
             frame_budget: platform::frame_budget(),
             last_run: None,
@@ -244,6 +254,15 @@ impl WorkbenchApp {
 
     pub fn compare_view_mut(&mut self) -> &mut compare::CompareView {
         &mut self.compare
+    }
+
+    /// The import view: its inputs and preview.
+    pub fn import_view(&self) -> &import::ImportView {
+        &self.import
+    }
+
+    pub fn import_view_mut(&mut self) -> &mut import::ImportView {
+        &mut self.import
     }
 
     /// Error messages currently shown.
@@ -472,6 +491,7 @@ impl eframe::App for WorkbenchApp {
     fn logic(&mut self, _ctx: &egui::Context, _frame: &mut eframe::Frame) {
         self.step_tasks_in_frame();
         self.poll_events();
+        self.refresh_import(false);
         if platform::PUBLISHES_STATUS {
             self.publish_status();
         }
@@ -487,6 +507,14 @@ impl eframe::App for WorkbenchApp {
         let mut commands = Vec::new();
         if self.panels_visible {
             self.panels_ui(ui, &mut commands);
+        }
+        if self.panels_visible && self.import.open {
+            let state = panels::ImportContext {
+                dialogs: self.files.dialogs_available(),
+                in_memory: self.memory_files.is_some(),
+                loading: self.jobs.is_running(LoadJob::lane()),
+            };
+            panels::import_ui(ui.ctx(), &mut self.import, state, &mut commands);
         }
         if let Some(prompt) = &mut self.prompt {
             commands.extend(prompt.ui(ui.ctx()));

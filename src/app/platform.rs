@@ -15,6 +15,7 @@ pub fn io(_ctx: &egui::Context) -> Io {
     Io {
         files: crate::source::Files::default(),
         dialogs: Box::new(super::files::NativeFiles),
+        memory: None,
     }
 }
 

@@ -64,6 +64,13 @@ pub fn mount(
             mounted.push(path);
         }
     }
+    // A file for the import view: the one picked.
+    if let Some(kind @ (OpenKind::ImportFile(_) | OpenKind::ImportFolder)) = wanted {
+        return match mounted.into_iter().next() {
+            Some(path) => FileReply::Open(kind, path),
+            None => FileReply::Cancelled,
+        };
+    }
     // The one rule for what a file is (`source::FileKind`); the shallowest of a kind wins.
     let shallowest = |is: fn(FileKind) -> bool, rank: fn(&Path) -> u8| {
         let mut found: Vec<&PathBuf> = mounted.iter().filter(|p| is(FileKind::of(p))).collect();

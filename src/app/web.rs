@@ -78,6 +78,7 @@ pub fn io(ctx: &egui::Context) -> Io {
     }
     Io {
         files: Files(Arc::new(memory.clone())),
+        memory: Some(memory.clone()),
         dialogs: Box::new(WebFiles {
             memory,
             ctx: ctx.clone(),
@@ -178,6 +179,9 @@ impl FileAccess for WebFiles {
         input.set_accept(match kind {
             OpenKind::Dataset => ".toml,.csv,.zip,.urdf,.stl,.dae,.obj",
             OpenKind::Urdf => ".urdf,.zip,.stl,.dae,.obj",
+            OpenKind::ImportFile(_) => ".txt,.csv,.tsv,.dat,.asc",
+            // The import view writes into memory in a browser: it asks for no folder.
+            OpenKind::ImportFolder => "",
         });
         let this = self.clone_handle();
         let target = input.clone();

@@ -161,7 +161,7 @@ pub fn run(a: &ImportArgs) -> Result<()> {
     } else {
         a.reflectors.iter().cloned().unzip()
     };
-    let mut options = ImportOptions::new(names, positions);
+    let mut options = ImportOptions::for_robot(&robot, a.robot.as_deref(), names, positions);
     options.points_format = a.points_format;
     options.columns = a.columns.clone();
     options.length_unit = a.length_unit;
@@ -177,13 +177,7 @@ pub fn run(a: &ImportArgs) -> Result<()> {
         mpe_um: a.mpe_um,
         mpe_um_per_m: a.mpe_um_per_m,
     };
-    options.joint_names = PerSide::from_fn(|s| Some(robot.arm_joint_names(s)));
-    if let Some(path) = &a.robot {
-        options.robot = Some(path.canonicalize().unwrap_or_else(|_| path.clone()));
-        options.links = PerSide::from_fn(|s| Some(robot.arm(s).links.clone()));
-    }
     options.stations = PerSide::new(a.left_station.clone(), a.right_station.clone());
-    options.linear_joints = PerSide::from_fn(|s| robot.arm(s).linear_joints());
     options.joint_length_unit = a.joint_length_unit.map(|u| match u {
         LengthArg::Mm => dataset::LengthUnit::Mm,
         LengthArg::M => dataset::LengthUnit::M,

@@ -40,6 +40,7 @@ mod import;
 mod outlier_study;
 mod paper_study;
 mod plan;
+mod report;
 mod reproduce;
 mod timings;
 
@@ -87,6 +88,10 @@ pub enum Command {
     Plan(plan::PlanArgs),
     /// Write the URDF a DH robot file (`dualcal-dh/1`, docs/formats.md) is read as.
     UrdfFromDh(dh::UrdfFromDhArgs),
+    /// Write a calibration report: one self-contained HTML file with the dataset, the method, the
+    /// identifiability, the parameters with their σ, the accuracy before and after, figures, the
+    /// worst configurations, the screening and warnings.
+    Report(report::ReportArgs),
 }
 
 #[derive(Args, Debug)]
@@ -325,6 +330,7 @@ fn run_command(command: Command) -> Result<()> {
         Command::Compensate(a) => controller::run_compensate(&a),
         Command::Plan(a) => plan::run(&a),
         Command::UrdfFromDh(a) => dh::run(&a),
+        Command::Report(a) => report::run(&a),
     }
 }
 

@@ -5,15 +5,14 @@ use super::describe_robot;
 use crate::dataset::TrackerSpec;
 use crate::kinematics::ArmLinks;
 use crate::output::{Overwrite, write_atomic};
-use crate::plan::{ArmPlan, PlanOptions, plan};
-use crate::robot::{LoadOptions, RobotDescription, arm_joint_name};
+use crate::plan::{ArmPlan, PlanOptions, PlanOutput, is_yumi, plan, plan_files, summary_line};
+use crate::robot::{LoadOptions, RobotDescription};
 use crate::side::{PerSide, Side};
 use crate::simulate;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 use nalgebra::Vector3;
-use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 #[derive(Args, Debug)]
 pub struct PlanArgs {
@@ -151,19 +150,34 @@ pub fn run(a: &PlanArgs) -> Result<()> {
         mpe_um: a.mpe_um,
         mpe_um_per_m: a.mpe_um_per_m,
     };
+    for side in Side::BOTH {
+        print_arm(
+            &robot,
+            nominal.arm(side),
+            &tracker,
+            &a.tracker,
+            side,
+            &plans[side],
+        );
+    }
+    let output = PlanOutput {
+        robot: &robot,
+        robot_path: a.robot.as_deref(),
+        reflectors_mm: &reflectors,
+        tracker,
+        extending: a.extend.is_some(),
+    };
     std::fs::create_dir_all(&a.out)
         .with_context(|| format!("{}: cannot create", a.out.display()))?;
-    for side in Side::BOTH {
-        write_arm(a, &robot, nominal.arm(side), &tracker, side, &plans[side])?;
+    for (name, text) in plan_files(&output, &plans) {
+        let path = a.out.join(name);
+        write_atomic(&path, text.as_bytes())
+            .with_context(|| format!("{}: cannot write", path.display()))?;
     }
-    write_atomic(
-        &a.out.join(crate::dataset::MANIFEST_FILE),
-        manifest(&robot, a.robot.as_deref(), &reflectors, &tracker).as_bytes(),
-    )
-    .with_context(|| format!("{}: cannot write", a.out.display()))?;
     outln!(
         "wrote {}: left.csv, right.csv (id,q1..qN in degrees, chain order — add the reflector columns \
-         from the measurement), dataset.toml{}",
+         from the measurement), path_left.csv and path_right.csv (the visiting sequence with its via \
+         points), dataset.toml{}",
         a.out.display(),
         if is_yumi(&robot) {
             ", plan_left.mod and plan_right.mod (RAPID MoveAbsJ targets)"
@@ -175,54 +189,24 @@ pub fn run(a: &PlanArgs) -> Result<()> {
 }
 
 /// One arm's table, its lines of the summary with the predicted σ, and for the YuMi its RAPID module.
-fn write_arm(
-    a: &PlanArgs,
+/// Print an arm's summary and its predicted σ.
+fn print_arm(
     robot: &RobotDescription,
     arm: &crate::kinematics::ArmModel,
     tracker: &TrackerSpec,
+    tracker_in_body_mm: &Vector3<f64>,
     side: Side,
     p: &ArmPlan,
-) -> Result<()> {
-    let linear = arm.linear_joints();
-    let prefix = match (side, a.extend.is_some()) {
-        (Side::Left, false) => "L",
-        (Side::Right, false) => "R",
-        // New ids beside the extended dataset's own.
-        (Side::Left, true) => "LP",
-        (Side::Right, true) => "RP",
-    };
-    write_atomic(
-        &a.out.join(format!("{}.csv", side.name())),
-        arm_csv(side, prefix, p, &linear).as_bytes(),
-    )
-    .with_context(|| format!("{}: cannot write", a.out.display()))?;
-    outln!(
-        "{side} arm: {} configurations chosen from {} candidates ({} draws); log det of the \
-         design {:.1} (the first {} candidates drawn: {:.1}); path {:.2} (joint space){}",
-        p.configs.len(),
-        p.candidates,
-        p.attempts,
-        p.log_det,
-        p.configs.len(),
-        p.log_det_random,
-        p.path_length,
-        if p.colliding_legs.is_empty() {
-            String::new()
-        } else {
-            format!(
-                "; WARNING: the straight joint motion of legs {:?} collides — add a via point",
-                p.colliding_legs.iter().map(|k| k + 1).collect::<Vec<_>>()
-            )
-        }
-    );
-    let free: Vec<usize> = (0..arm.param_count())
-        .filter(|&k| arm.unidentifiable_reason(k).is_none())
-        .collect();
-    // The noise at the tracker's distance to the arm's base (half the MPE, per axis).
-    let base = robot.body_from_arm_base(side).translation.vector;
-    let sigma_mm =
-        0.5e-3 * (tracker.mpe_um + tracker.mpe_um_per_m * (a.tracker - base).norm() / 1e3);
-    if let Some(u) = crate::solver::uncertainty::predicted(arm, &p.configs, &free, sigma_mm) {
+) {
+    outln!("{}", summary_line(side, p));
+    if let Some((sigma_mm, u)) = crate::solver::uncertainty::predicted_for_tracker(
+        robot,
+        arm,
+        side,
+        &p.configs,
+        tracker,
+        tracker_in_body_mm,
+    ) {
         let largest = |unit: &str| {
             u.largest(unit).map_or(String::new(), |s| {
                 format!("{:.4} {unit} ({})", s.sigma, s.name)
@@ -236,127 +220,4 @@ fn write_arm(
             u.condition
         );
     }
-    if is_yumi(robot) {
-        let path = a.out.join(format!("plan_{}.mod", side.name()));
-        write_atomic(&path, rapid_module(side, p).as_bytes())
-            .with_context(|| format!("{}: cannot write", path.display()))?;
-    }
-    Ok(())
-}
-
-fn is_yumi(robot: &RobotDescription) -> bool {
-    robot.is_builtin()
-        || robot
-            .urdf
-            .joints
-            .iter()
-            .any(|j| j.name == arm_joint_name(Side::Left, 0))
-}
-
-/// `id,q1..qN,split`: degrees (mm for a prismatic joint), every configuration a calibration one.
-fn arm_csv(side: Side, prefix: &str, p: &ArmPlan, linear: &[bool]) -> String {
-    let n = p.configs.first().map_or(0, Vec::len);
-    let mut s = format!(
-        "# dualcal plan: {side} arm, {} configurations in visiting order; q in degrees (mm for a \
-         prismatic joint), chain order. Add the reflector columns <name>x,<name>y,<name>z (mm) from the \
-         measurement.\nid",
-        p.configs.len()
-    );
-    for k in 1..=n {
-        let _ = write!(s, ",q{k}");
-    }
-    s.push_str(",split\n");
-    for (i, q) in p.configs.iter().enumerate() {
-        let _ = write!(s, "{prefix}{:03}", i + 1);
-        for (k, v) in q.iter().enumerate() {
-            let v = if linear.get(k).copied().unwrap_or(false) {
-                *v
-            } else {
-                v.to_degrees()
-            };
-            let _ = write!(s, ",{v:.6}");
-        }
-        s.push_str(",cal\n");
-    }
-    s
-}
-
-/// A RAPID module of `MoveAbsJ` targets for one YuMi arm: robot axes 1–6 (ABB order) and axis 7 as
-/// the external axis `eax_a`, in degrees; chain order is ABB axes 1, 2, 7, 3, 4, 5, 6.
-fn rapid_module(side: Side, p: &ArmPlan) -> String {
-    let name = format!("dualcal_plan_{}", side.name());
-    let mut s = format!(
-        "MODULE {name}\n    ! dualcal plan, {side} arm: {} configurations in visiting order.\n    ! Move \
-         to each, stop, measure the reflectors, go on.\n",
-        p.configs.len()
-    );
-    for (i, q) in p.configs.iter().enumerate() {
-        let d: Vec<f64> = q.iter().map(|v| v.to_degrees()).collect();
-        let _ = writeln!(
-            s,
-            "    CONST jointtarget p{:03} := [[{:.4},{:.4},{:.4},{:.4},{:.4},{:.4}],[{:.4},9E9,9E9,9E9,9E9,9E9]];",
-            i + 1,
-            d[0],
-            d[1],
-            d[3],
-            d[4],
-            d[5],
-            d[6],
-            d[2]
-        );
-    }
-    s.push_str("\n    PROC measure_all()\n");
-    for i in 0..p.configs.len() {
-        let _ = writeln!(
-            s,
-            "        MoveAbsJ p{:03}, v100, fine, tool0;\n        WaitTime 2; ! measure p{:03}",
-            i + 1,
-            i + 1
-        );
-    }
-    s.push_str("    ENDPROC\nENDMODULE\n");
-    s
-}
-
-/// The dataset manifest for the planned files.
-fn manifest(
-    robot: &RobotDescription,
-    robot_path: Option<&Path>,
-    reflectors: &[Vector3<f64>],
-    tracker: &TrackerSpec,
-) -> String {
-    let mut s = String::from("format = \"dualcal-dataset/1\"\n");
-    if let Some(path) = robot_path {
-        let path = path.canonicalize().unwrap_or_else(|_| path.to_path_buf());
-        let _ = writeln!(s, "robot = {:?}", path.display().to_string());
-    }
-    let _ = write!(
-        s,
-        "description = \"planned by dualcal plan: fill in the reflector columns\"\n\n[units]\nlength = \
-         \"mm\"\nangle = \"deg\"\n\n[tracker]\nmpe_um = {:?}\nmpe_um_per_m = {:?}\n\n[reflectors]\n",
-        tracker.mpe_um, tracker.mpe_um_per_m
-    );
-    for (name, r) in crate::kinematics::default_reflector_names(reflectors.len())
-        .iter()
-        .zip(reflectors)
-    {
-        let _ = writeln!(s, "{name} = [{:?}, {:?}, {:?}]", r.x, r.y, r.z);
-    }
-    for side in Side::BOTH {
-        let _ = write!(
-            s,
-            "\n[[arms]]\nname = \"{}\"\nfile = \"{}.csv\"\n",
-            side.name(),
-            side.name()
-        );
-        if robot_path.is_some() {
-            let links = &robot.arm(side).links;
-            let _ = write!(
-                s,
-                "base_link = {:?}\ntip_link = {:?}\n",
-                links.base_link, links.tip_link
-            );
-        }
-    }
-    s
 }

@@ -15,12 +15,13 @@ use crate::source::FileSource;
 pub use error::DatasetError;
 use error::read_text;
 use nalgebra::Vector3;
-pub use save::{save, save_with};
+pub use save::{dataset_files, save, save_with};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 pub use units::{AngleUnit, LengthUnit, Units};
 pub use validate::{
-    JOINT_LIMIT_TOLERANCE_RAD, MAX_COORDINATE_MM, MAX_JOINT_RAD, check_joint_limits,
+    JOINT_LIMIT_TOLERANCE_RAD, MAX_COORDINATE_MM, MAX_JOINT_RAD, check_arm_rows,
+    check_both as check_arms_differ, check_joint_limits,
 };
 
 /// The format tag written in `dataset.toml`.

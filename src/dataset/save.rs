@@ -7,7 +7,7 @@ use super::{
 };
 use crate::output::{Overwrite, refuse_existing, write_atomic};
 use crate::side::{PerSide, Side};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Shortest text that parses back to exactly `x` (Rust's `{:?}` of f64: round-trip, `.0` on integers).
 fn num(x: f64) -> String {
@@ -219,6 +219,29 @@ pub fn save_with(
         overwrite,
     )?;
     // Build everything before touching the disk.
+    let files = dataset_files(dataset, dir, units)?;
+    std::fs::create_dir_all(dir).map_err(|error| DatasetError::Write {
+        path: dir.to_path_buf(),
+        error,
+    })?;
+    for (path, bytes) in &files {
+        write_atomic(path, bytes).map_err(|error| DatasetError::Write {
+            path: path.clone(),
+            error,
+        })?;
+    }
+    Ok(())
+}
+
+/// The files [`save`] writes for `dataset` in `dir` — `left.csv`, `right.csv`, then `dataset.toml` —
+/// with their contents, written nowhere (a browser keeps them in memory).
+pub fn dataset_files(
+    dataset: &Dataset,
+    dir: &Path,
+    units: Units,
+) -> Result<Vec<(PathBuf, Vec<u8>)>, DatasetError> {
+    let manifest_path = dir.join(MANIFEST_FILE);
+    let csv_paths = PerSide::from_fn(|s| dir.join(format!("{s}.csv")));
     let manifest = manifest_text(dataset, dir, &manifest_path, units)?;
     let csv = PerSide::try_from_fn(|s| {
         arm_csv(
@@ -228,19 +251,10 @@ pub fn save_with(
             units,
         )
     })?;
-    std::fs::create_dir_all(dir).map_err(|error| DatasetError::Write {
-        path: dir.to_path_buf(),
-        error,
-    })?;
-    for (path, bytes) in [
-        (&csv_paths.left, &csv.left[..]),
-        (&csv_paths.right, &csv.right[..]),
-        (&manifest_path, manifest.as_bytes()),
-    ] {
-        write_atomic(path, bytes).map_err(|error| DatasetError::Write {
-            path: path.clone(),
-            error,
-        })?;
-    }
-    Ok(())
+    let PerSide { left, right } = csv;
+    Ok(vec![
+        (csv_paths.left, left),
+        (csv_paths.right, right),
+        (manifest_path, manifest.into_bytes()),
+    ])
 }

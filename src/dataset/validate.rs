@@ -246,6 +246,32 @@ fn near(ratio: f64, factor: f64) -> bool {
 
 /// One arm's rows against the manifest: the measured triangles' size fits the declared unit and the
 /// nominal triangle, no row's triangle is degenerate, no row repeats another's coordinates.
+/// The checks a dataset's CSV gets when it is loaded, for an arm's rows made elsewhere (an import):
+/// at least [`super::MIN_CONFIGS`] configurations, plausible reflector distances (the unit), no
+/// degenerate triangle, no row twice — each named by the arm's file and the row's line. Coordinates
+/// in mm.
+pub fn check_arm_rows(
+    arm: &super::ArmData,
+    nominal_mm: &[Vector3<f64>],
+    names: &[String],
+) -> Result<(), DatasetError> {
+    if arm.measurements.len() < super::MIN_CONFIGS {
+        return Err(DatasetError::TooFewConfigurations {
+            path: arm.file.clone(),
+            side: arm.side,
+            found: arm.measurements.len(),
+            min: super::MIN_CONFIGS,
+        });
+    }
+    check_arm(
+        &arm.file,
+        &arm.measurements,
+        LengthUnit::Mm,
+        nominal_mm,
+        names,
+    )
+}
+
 pub(super) fn check_arm(
     path: &Path,
     rows: &[Measurement],
@@ -364,7 +390,7 @@ fn duplicate(path: &Path, m: &Measurement, first_path: &Path, first: &Measuremen
 }
 
 /// No row of the right arm repeats a row of the left arm (a row pasted into the other arm's file).
-pub(super) fn check_both(arms: &PerSide<ArmData>) -> Result<(), DatasetError> {
+pub fn check_both(arms: &PerSide<ArmData>) -> Result<(), DatasetError> {
     let left: HashMap<Vec<u64>, &Measurement> =
         arms.left.measurements.iter().map(|m| (key(m), m)).collect();
     for m in &arms.right.measurements {

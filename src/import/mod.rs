@@ -20,6 +20,7 @@ use crate::dataset::{
     TrackerSpec, Units,
 };
 use crate::output::{OutputError, Overwrite, refuse_overwrite_input, write_atomic};
+use crate::robot::RobotDescription;
 use crate::side::{PerSide, Side};
 use crate::source::FileSource;
 use nalgebra::Vector3;
@@ -108,6 +109,28 @@ impl ImportOptions {
             linear_joints: PerSide::new(Vec::new(), Vec::new()),
             joint_length_unit: None,
         }
+    }
+}
+
+impl ImportOptions {
+    /// The defaults for a dataset of `robot` with these reflectors: each arm's joint names (counts
+    /// checked, named columns put in chain order) and prismatic joints from the description; the
+    /// dataset refers to `robot_path` and the arms' chains where the robot is a file (`None`: the
+    /// built-in IRB 14000).
+    pub fn for_robot(
+        robot: &RobotDescription,
+        robot_path: Option<&Path>,
+        reflector_names: Vec<String>,
+        nominal_reflectors_mm: Vec<Vector3<f64>>,
+    ) -> Self {
+        let mut options = Self::new(reflector_names, nominal_reflectors_mm);
+        options.joint_names = PerSide::from_fn(|s| Some(robot.arm_joint_names(s)));
+        if let Some(path) = robot_path {
+            options.robot = Some(path.canonicalize().unwrap_or_else(|_| path.to_path_buf()));
+            options.links = PerSide::from_fn(|s| Some(robot.arm(s).links.clone()));
+        }
+        options.linear_joints = PerSide::from_fn(|s| robot.arm(s).linear_joints());
+        options
     }
 }
 
@@ -690,6 +713,38 @@ fn match_rows(
     Ok(out)
 }
 
+/// What the dataset reader would refuse on loading the import's result, refused before it is
+/// written (by [`write`] and [`files_of`]): too few configurations matched, reflector distances
+/// that do not fit the nominal ones (the unit), degenerate reflector triangles, a row twice — named
+/// by the arm's file (its joint log, else its point file) and line. The import itself succeeds, so
+/// that its report says what did not match.
+pub fn check(imported: &Imported) -> Result<(), ImportError> {
+    let ds = &imported.dataset;
+    for side in Side::BOTH {
+        dataset::check_arm_rows(
+            &ds.arms[side],
+            &ds.nominal_reflectors_mm,
+            &ds.reflector_names,
+        )?;
+    }
+    dataset::check_arms_differ(&ds.arms)?;
+    Ok(())
+}
+
+/// The files [`write`] writes into `out` — the dataset's (mm and rad, full precision) and the
+/// report — with their contents, written nowhere (a browser keeps them in memory).
+pub fn files_of(imported: &Imported, out: &Path) -> Result<Vec<(PathBuf, Vec<u8>)>, ImportError> {
+    check(imported)?;
+    let mut ds = imported.dataset.clone();
+    ds.dir = out.to_path_buf();
+    let mut files = dataset::dataset_files(&ds, out, Units::MM_RAD)?;
+    files.push((
+        out.join(REPORT_FILE),
+        imported.report.to_string().into_bytes(),
+    ));
+    Ok(files)
+}
+
 /// The file the report is written to inside the dataset directory.
 pub const REPORT_FILE: &str = "import-report.txt";
 
@@ -722,6 +777,7 @@ pub fn write(
     for name in [MANIFEST_FILE, "left.csv", "right.csv", REPORT_FILE] {
         refuse_overwrite_input(&out.join(name), &input_paths)?;
     }
+    check(imported)?;
     let mut ds = imported.dataset.clone();
     ds.dir = out.to_path_buf();
     dataset::save_with(&ds, out, Units::MM_RAD, Overwrite::Allow)?;

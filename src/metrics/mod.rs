@@ -43,7 +43,8 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 pub use sweep::{PairSamples, SplitSweep, Sweep, sweep};
 pub use tables::{
-    NOT_MEASURABLE, format_comparison, format_comparison_named, format_table, format_table_named,
+    ComparisonBlock, ComparisonRow, NOT_MEASURABLE, comparison_blocks, format_comparison,
+    format_comparison_named, format_table, format_table_named,
 };
 
 /// The metrics need at least two configurations per arm (one pair); a calibration needs more

@@ -17,6 +17,9 @@ type RowValue = Box<dyn Fn(&AccuracyStats) -> Option<f64>>;
 /// How a row's value is read off the stats and printed.
 struct Row {
     label: String,
+    /// The field of [`AccuracyStats`] it shows (as serialised; `pos_rms_per_reflector_mm.<k>` for a
+    /// reflector's RMS).
+    key: String,
     /// `None`: not measurable from the data (the orientation with fewer than three reflectors).
     value: RowValue,
     kind: RowKind,
@@ -39,11 +42,13 @@ pub const NOT_MEASURABLE: &str = "not measurable";
 
 fn row(
     label: impl Into<String>,
+    key: impl Into<String>,
     kind: RowKind,
     value: impl Fn(&AccuracyStats) -> Option<f64> + 'static,
 ) -> Row {
     Row {
         label: label.into(),
+        key: key.into(),
         value: Box::new(value),
         kind,
     }
@@ -52,35 +57,64 @@ fn row(
 /// The rows, one per reflector of `reflector_names` for the per-reflector RMS.
 fn rows(reflector_names: &[String]) -> Vec<Row> {
     let mut out = vec![
-        row("configurations", RowKind::Count, |s| {
+        row("configurations", "n_configs", RowKind::Count, |s| {
             Some(s.n_configs as f64)
         }),
-        row("pairs", RowKind::Count, |s| Some(s.n_pairs as f64)),
-        row("positioning RMS (mm)", RowKind::Mm, |s| Some(s.pos_rms_mm)),
+        row("pairs", "n_pairs", RowKind::Count, |s| {
+            Some(s.n_pairs as f64)
+        }),
+        row("positioning RMS (mm)", "pos_rms_mm", RowKind::Mm, |s| {
+            Some(s.pos_rms_mm)
+        }),
     ];
     for (k, name) in reflector_names.iter().enumerate() {
         out.push(row(
             format!("  reflector {name} RMS (mm)"),
+            format!("pos_rms_per_reflector_mm.{k}"),
             RowKind::Mm,
             move |s| s.pos_rms_per_reflector_mm.get(k).copied(),
         ));
     }
     out.extend([
-        row("positioning max (mm)", RowKind::Mm, |s| Some(s.pos_max_mm)),
-        row("|Δd| ≤ 0.3 mm", RowKind::Percent, |s| {
-            Some(s.pos_within_0_3mm_frac)
+        row("positioning max (mm)", "pos_max_mm", RowKind::Mm, |s| {
+            Some(s.pos_max_mm)
         }),
-        row("|Δd| ≤ 0.6 mm", RowKind::Percent, |s| {
-            Some(s.pos_within_0_6mm_frac)
-        }),
-        row("orientation RMS (mrad)", RowKind::Mrad, |s| s.ori_rms_rad),
-        row("orientation max (mrad)", RowKind::Mrad, |s| s.ori_max_rad),
-        row("Δo ≤ 0.005 rad", RowKind::Percent, |s| {
-            s.ori_within_0_005rad_frac
-        }),
-        row("Δo ≤ 0.01 rad", RowKind::Percent, |s| {
-            s.ori_within_0_01rad_frac
-        }),
+        row(
+            "|Δd| ≤ 0.3 mm",
+            "pos_within_0_3mm_frac",
+            RowKind::Percent,
+            |s| Some(s.pos_within_0_3mm_frac),
+        ),
+        row(
+            "|Δd| ≤ 0.6 mm",
+            "pos_within_0_6mm_frac",
+            RowKind::Percent,
+            |s| Some(s.pos_within_0_6mm_frac),
+        ),
+        row(
+            "orientation RMS (mrad)",
+            "ori_rms_rad",
+            RowKind::Mrad,
+            |s| s.ori_rms_rad,
+        ),
+        row(
+            "orientation max (mrad)",
+            "ori_max_rad",
+            RowKind::Mrad,
+            |s| s.ori_max_rad,
+        ),
+        row(
+            "Δo ≤ 0.005 rad",
+            "ori_within_0_005rad_frac",
+            RowKind::Percent,
+            |s| s.ori_within_0_005rad_frac,
+        ),
+        row(
+            "Δo ≤ 0.01 rad",
+            "ori_within_0_01rad_frac",
+            RowKind::Percent,
+            |s| s.ori_within_0_01rad_frac,
+        ),
     ]);
     out
 }
@@ -172,35 +206,90 @@ pub fn format_comparison_named(
     labels: [&str; 2],
     reflector_names: &[String],
 ) -> String {
-    let rows = rows(reflector_names);
     let mut out = String::new();
-    for ((title, b), a) in COLUMN_TITLES
-        .iter()
-        .zip(stats_of(before))
-        .zip(stats_of(after))
-    {
+    for block in comparison_blocks(before, after, reflector_names) {
         if !out.is_empty() {
             out.push('\n');
         }
         let _ = writeln!(
             out,
             "{:<LABEL_WIDTH$}{:>14}{:>14}{:>14}",
-            title, labels[0], labels[1], "change"
+            block.title, labels[0], labels[1], "change"
         );
-        for row in &rows {
-            let (vb, va) = (
-                b.and_then(|b| (row.value)(b)),
-                a.and_then(|a| (row.value)(a)),
-            );
+        for row in &block.rows {
             let _ = writeln!(
                 out,
                 "{:<LABEL_WIDTH$}{:>14}{:>14}{:>14}",
-                row.label,
-                format_value(row.kind, vb),
-                format_value(row.kind, va),
-                format_change(row.kind, vb, va)
+                row.label, row.before, row.after, row.change
             );
         }
     }
     out
+}
+
+/// One set of pairs of a comparison ([`comparison_blocks`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ComparisonBlock {
+    /// `relative left`, `relative right`, `collaborative`.
+    pub title: &'static str,
+    /// The report's field: `relative_left`, `relative_right`, `collaborative`.
+    pub key: &'static str,
+    pub rows: Vec<ComparisonRow>,
+}
+
+/// One figure of a comparison: as the text table prints it, and the values behind it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ComparisonRow {
+    /// The text table's label (`positioning RMS (mm)`, `  reflector a RMS (mm)`, …).
+    pub label: String,
+    /// The [`AccuracyStats`] field it shows, as serialised (`pos_rms_mm`,
+    /// `pos_rms_per_reflector_mm.0`, …).
+    pub key: String,
+    /// The printed values: before, after (mm with 3 decimals, mrad, percent, counts, or
+    /// [`NOT_MEASURABLE`]) and the change (relative change of an error, percentage points of a
+    /// frequency).
+    pub before: String,
+    pub after: String,
+    pub change: String,
+    /// The values in the stats' own units (mm, rad, fraction, count); `None`: not measurable.
+    pub before_value: Option<f64>,
+    pub after_value: Option<f64>,
+}
+
+/// The rows of [`format_comparison_named`], one block per set of pairs: what the text table prints
+/// and an HTML report shows.
+pub fn comparison_blocks(
+    before: &AccuracyReport,
+    after: &AccuracyReport,
+    reflector_names: &[String],
+) -> Vec<ComparisonBlock> {
+    let rows = rows(reflector_names);
+    let keys = ["relative_left", "relative_right", "collaborative"];
+    COLUMN_TITLES
+        .iter()
+        .zip(keys)
+        .zip(stats_of(before).into_iter().zip(stats_of(after)))
+        .map(|((&title, key), (b, a))| ComparisonBlock {
+            title,
+            key,
+            rows: rows
+                .iter()
+                .map(|row| {
+                    let (vb, va) = (
+                        b.and_then(|b| (row.value)(b)),
+                        a.and_then(|a| (row.value)(a)),
+                    );
+                    ComparisonRow {
+                        label: row.label.clone(),
+                        key: row.key.clone(),
+                        before: format_value(row.kind, vb),
+                        after: format_value(row.kind, va),
+                        change: format_change(row.kind, vb, va),
+                        before_value: vb,
+                        after_value: va,
+                    }
+                })
+                .collect(),
+        })
+        .collect()
 }

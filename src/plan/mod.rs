@@ -17,7 +17,8 @@
 //!    pair of candidates — by the Woodbury identity.
 //! 3. **Order** ([`order`]): a short visiting sequence — nearest neighbour from the first pick, then
 //!    2-opt on the joint-space path length (rad; mm for a prismatic joint) — and each leg checked for
-//!    collisions at 2° steps.
+//!    collisions at 2° steps; a leg that collides is re-routed through a via point ([`reroute`]: the
+//!    home pose or a collision-free candidate, the shortest detour whose two legs are clear).
 //!
 //! The predicted standard deviations of the parameters for the chosen set are those of
 //! [`crate::solver::uncertainty`] with the tracker's noise (`plan` in `dualcal plan` prints them).
@@ -27,6 +28,9 @@ use crate::kinematics::ArmModel;
 use crate::robot::RobotDescription;
 use crate::side::{PerSide, Side};
 use nalgebra::{DMatrix, Point3, Vector3};
+
+mod files;
+pub use files::{PlanOutput, id_prefix, is_yumi, plan_files, summary_line};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -109,11 +113,26 @@ pub struct ArmPlan {
     /// taken in the order they were drawn (a random set), for comparison.
     pub log_det: f64,
     pub log_det_random: f64,
-    /// Joint-space length of the visiting path.
+    /// Joint-space length of the visiting path (through the via points).
     pub path_length: f64,
-    /// Legs of the path (from configuration k to k + 1) on which a collision was found.
+    /// Points the arm passes through, not measured, where the straight joint motion between two
+    /// chosen configurations would collide ([`reroute`]).
+    pub vias: Vec<Via>,
+    /// Legs of the path (from configuration k to k + 1) on which a collision was found and no via
+    /// point clears it.
     pub colliding_legs: Vec<usize>,
 }
+
+/// A via point: where the arm goes between `configs[leg]` and `configs[leg + 1]` instead of the
+/// straight joint motion, which collides.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Via {
+    pub leg: usize,
+    pub q: Vec<f64>,
+}
+
+/// How many via candidates (the shortest detours first) are checked for a colliding leg.
+const VIA_CANDIDATES: usize = 60;
 
 /// Where each arm rests while the other one moves: its home pose.
 fn resting(robot: &RobotDescription) -> PerSide<Vec<f64>> {
@@ -481,8 +500,36 @@ pub fn order(configs: &[Vec<f64>]) -> Vec<usize> {
     path
 }
 
-/// The path's length and the legs on which the straight joint-space motion collides (checked every
-/// 2°, or 5 mm for a prismatic joint).
+/// Whether the straight joint-space motion of `side` from `a` to `b` collides (checked every 2°, or
+/// 5 mm for a prismatic joint; the other arm resting).
+fn leg_collides(
+    side: Side,
+    a: &[f64],
+    b: &[f64],
+    rest: &PerSide<Vec<f64>>,
+    world: &CollisionWorld,
+    options: &PlanOptions,
+) -> bool {
+    let clearance_mm = options.clearance_mm;
+    let largest = a
+        .iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f64::max);
+    let steps = (largest / 2f64.to_radians()).ceil().max(1.0) as usize;
+    (1..steps).any(|s| {
+        let t = s as f64 / steps as f64;
+        let q: Vec<f64> = a.iter().zip(b).map(|(x, y)| x + t * (y - x)).collect();
+        let (ql, qr) = match side {
+            Side::Left => (&q, &rest.right),
+            Side::Right => (&rest.left, &q),
+        };
+        world.in_collision(ql, qr, clearance_mm)
+            || world.in_keep_out(ql, qr, &options.keep_out, clearance_mm)
+    })
+}
+
+/// The path's length and the legs on which the straight joint-space motion collides.
 fn check_path(
     side: Side,
     configs: &[Vec<f64>],
@@ -490,33 +537,56 @@ fn check_path(
     world: &CollisionWorld,
     options: &PlanOptions,
 ) -> (f64, Vec<usize>) {
-    let clearance_mm = options.clearance_mm;
     let mut length = 0.0;
     let mut colliding = Vec::new();
     for (k, pair) in configs.windows(2).enumerate() {
-        let (a, b) = (&pair[0], &pair[1]);
-        length += leg(a, b);
-        let largest = a
-            .iter()
-            .zip(b)
-            .map(|(x, y)| (x - y).abs())
-            .fold(0.0, f64::max);
-        let steps = (largest / 2f64.to_radians()).ceil().max(1.0) as usize;
-        let hit = (1..steps).any(|s| {
-            let t = s as f64 / steps as f64;
-            let q: Vec<f64> = a.iter().zip(b).map(|(x, y)| x + t * (y - x)).collect();
-            let (ql, qr) = match side {
-                Side::Left => (&q, &rest.right),
-                Side::Right => (&rest.left, &q),
-            };
-            world.in_collision(ql, qr, clearance_mm)
-                || world.in_keep_out(ql, qr, &options.keep_out, clearance_mm)
-        });
-        if hit {
+        length += leg(&pair[0], &pair[1]);
+        if leg_collides(side, &pair[0], &pair[1], rest, world, options) {
             colliding.push(k);
         }
     }
     (length, colliding)
+}
+
+/// Re-route each colliding leg through a via point: of the arm's home pose and the candidates
+/// (all collision-free), the [`VIA_CANDIDATES`] shortest detours `a → v → b` are tried in order and
+/// the first whose two straight motions are both clear is taken. The via points, the legs no via
+/// point clears, and the path's new length.
+#[allow(clippy::too_many_arguments)]
+pub fn reroute(
+    side: Side,
+    configs: &[Vec<f64>],
+    colliding: &[usize],
+    pool: &[Vec<f64>],
+    rest: &PerSide<Vec<f64>>,
+    world: &CollisionWorld,
+    options: &PlanOptions,
+    path_length: f64,
+) -> (Vec<Via>, Vec<usize>, f64) {
+    let (mut vias, mut left, mut length) = (Vec::new(), Vec::new(), path_length);
+    for &k in colliding {
+        let (a, b) = (&configs[k], &configs[k + 1]);
+        let mut tries: Vec<(f64, &Vec<f64>)> = std::iter::once(&rest[side])
+            .chain(pool)
+            .map(|v| (leg(a, v) + leg(v, b), v))
+            .collect();
+        tries.sort_by(|x, y| x.0.total_cmp(&y.0));
+        let found = tries.iter().take(VIA_CANDIDATES).find(|(_, v)| {
+            !leg_collides(side, a, v, rest, world, options)
+                && !leg_collides(side, v, b, rest, world, options)
+        });
+        match found {
+            Some((detour, v)) => {
+                length += detour - leg(a, b);
+                vias.push(Via {
+                    leg: k,
+                    q: (*v).clone(),
+                });
+            }
+            None => left.push(k),
+        }
+    }
+    (vias, left, length)
 }
 
 /// Plan both arms of `robot` with the reflectors `reflectors_mm` (tip frame).
@@ -525,6 +595,26 @@ pub fn plan(
     reflectors_mm: &[Vector3<f64>],
     options: &PlanOptions,
 ) -> Result<PerSide<ArmPlan>, PlanError> {
+    check_options(options)?;
+    let nominal = robot.nominal_model(reflectors_mm.to_vec());
+    let world = CollisionWorld::new(robot);
+    PerSide::try_from_fn(|side| plan_arm_with(robot, nominal.arm(side), &world, side, options))
+}
+
+/// Plan one arm (the other resting at its home pose): what [`plan`] does for each.
+pub fn plan_arm(
+    robot: &RobotDescription,
+    reflectors_mm: &[Vector3<f64>],
+    options: &PlanOptions,
+    side: Side,
+) -> Result<ArmPlan, PlanError> {
+    check_options(options)?;
+    let nominal = robot.nominal_model(reflectors_mm.to_vec());
+    let world = CollisionWorld::new(robot);
+    plan_arm_with(robot, nominal.arm(side), &world, side, options)
+}
+
+fn check_options(options: &PlanOptions) -> Result<(), PlanError> {
     if options.per_arm < 2 || options.candidates < options.per_arm {
         return Err(PlanError::Options(format!(
             "{} configurations per arm from {} candidates: expected at least 2, and at least as many \
@@ -532,54 +622,70 @@ pub fn plan(
             options.per_arm, options.candidates
         )));
     }
-    let nominal = robot.nominal_model(reflectors_mm.to_vec());
-    let world = CollisionWorld::new(robot);
+    Ok(())
+}
+
+fn plan_arm_with(
+    robot: &RobotDescription,
+    arm: &ArmModel,
+    world: &CollisionWorld,
+    side: Side,
+    options: &PlanOptions,
+) -> Result<ArmPlan, PlanError> {
     let rest = resting(robot);
-    PerSide::try_from_fn(|side| {
-        let arm = nominal.arm(side);
-        let (mut pool, attempts) = candidates(robot, arm, side, &world, options)?;
-        let drawn = pool.len();
-        // Configurations already measured join the pool and start the design.
-        let existing = &options.existing[side];
-        if let Some(q) = existing.iter().find(|q| q.len() != arm.joint_count()) {
-            return Err(PlanError::Options(format!(
-                "{side} arm: an existing configuration has {} joint values, the arm {}",
-                q.len(),
-                arm.joint_count()
-            )));
-        }
-        pool.extend(existing.iter().cloned());
-        let jac = scaled_jacobians(arm, &pool);
-        let points: Vec<Vec<Vector3<f64>>> =
-            pool.iter().map(|q| arm.reflector_fk(q).points_mm).collect();
-        // The isotropic design's first two picks start the exact one (a single configuration has no
-        // distance yet), or the existing configurations.
-        let start: Vec<usize> = if existing.is_empty() {
-            select(&jac, 2)
-        } else {
-            (drawn..pool.len()).collect()
-        };
-        let chosen: Vec<usize> = if existing.is_empty() {
-            select_by_distances(&points, &jac, options.per_arm, &start)
-        } else {
-            select_by_distances(&points, &jac, existing.len() + options.per_arm, &start)
-                .into_iter()
-                .filter(|&i| i < drawn)
-                .collect()
-        };
-        let random: Vec<usize> = (0..options.per_arm).collect();
-        let configs: Vec<Vec<f64>> = chosen.iter().map(|&i| pool[i].clone()).collect();
-        let path = order(&configs);
-        let configs: Vec<Vec<f64>> = path.iter().map(|&k| configs[k].clone()).collect();
-        let (path_length, colliding_legs) = check_path(side, &configs, &rest, &world, options);
-        Ok(ArmPlan {
-            configs,
-            candidates: drawn,
-            attempts,
-            log_det: log_det(&jac, &chosen),
-            log_det_random: log_det(&jac, &random),
-            path_length,
-            colliding_legs,
-        })
+    let (mut pool, attempts) = candidates(robot, arm, side, world, options)?;
+    let drawn = pool.len();
+    // Configurations already measured join the pool and start the design.
+    let existing = &options.existing[side];
+    if let Some(q) = existing.iter().find(|q| q.len() != arm.joint_count()) {
+        return Err(PlanError::Options(format!(
+            "{side} arm: an existing configuration has {} joint values, the arm {}",
+            q.len(),
+            arm.joint_count()
+        )));
+    }
+    pool.extend(existing.iter().cloned());
+    let jac = scaled_jacobians(arm, &pool);
+    let points: Vec<Vec<Vector3<f64>>> =
+        pool.iter().map(|q| arm.reflector_fk(q).points_mm).collect();
+    // The isotropic design's first two picks start the exact one (a single configuration has no
+    // distance yet), or the existing configurations.
+    let start: Vec<usize> = if existing.is_empty() {
+        select(&jac, 2)
+    } else {
+        (drawn..pool.len()).collect()
+    };
+    let chosen: Vec<usize> = if existing.is_empty() {
+        select_by_distances(&points, &jac, options.per_arm, &start)
+    } else {
+        select_by_distances(&points, &jac, existing.len() + options.per_arm, &start)
+            .into_iter()
+            .filter(|&i| i < drawn)
+            .collect()
+    };
+    let random: Vec<usize> = (0..options.per_arm).collect();
+    let configs: Vec<Vec<f64>> = chosen.iter().map(|&i| pool[i].clone()).collect();
+    let path = order(&configs);
+    let configs: Vec<Vec<f64>> = path.iter().map(|&k| configs[k].clone()).collect();
+    let (straight_length, colliding) = check_path(side, &configs, &rest, world, options);
+    let (vias, colliding_legs, path_length) = reroute(
+        side,
+        &configs,
+        &colliding,
+        &pool[..drawn],
+        &rest,
+        world,
+        options,
+        straight_length,
+    );
+    Ok(ArmPlan {
+        configs,
+        candidates: drawn,
+        attempts,
+        log_det: log_det(&jac, &chosen),
+        log_det_random: log_det(&jac, &random),
+        path_length,
+        vias,
+        colliding_legs,
     })
 }

@@ -112,6 +112,26 @@ pub fn predicted(
     uncertainty(arm, qs, &points, free, Some(point_sigma_mm))
 }
 
+/// [`predicted`] for a planned measurement of `side` of `robot`: the tracker's noise at its distance
+/// to the arm's base (half the MPE, per axis), over the parameters distances can identify. The noise
+/// (mm, per axis) and the prediction; `None` where the information is singular.
+pub fn predicted_for_tracker(
+    robot: &crate::robot::RobotDescription,
+    arm: &ArmModel,
+    side: crate::side::Side,
+    qs: &[Vec<f64>],
+    tracker: &crate::dataset::TrackerSpec,
+    tracker_in_body_mm: &Vector3<f64>,
+) -> Option<(f64, ArmUncertainty)> {
+    let free: Vec<usize> = (0..arm.param_count())
+        .filter(|&k| arm.unidentifiable_reason(k).is_none())
+        .collect();
+    let base = robot.body_from_arm_base(side).translation.vector;
+    let sigma_mm =
+        0.5e-3 * (tracker.mpe_um + tracker.mpe_um_per_m * (tracker_in_body_mm - base).norm() / 1e3);
+    predicted(arm, qs, &free, sigma_mm).map(|u| (sigma_mm, u))
+}
+
 /// [`arm_uncertainty`], the point noise estimated from the residuals or given.
 fn uncertainty(
     arm: &ArmModel,

@@ -218,6 +218,11 @@ try {
   const png = await download("Plots (PNG)…");
   check(png.name === "dualcal-plots.png" && png.bytes.subarray(1, 4).toString() === "PNG" && png.bytes.length > 2000,
     `"Plots (PNG)…" downloads ${png.name} (${png.bytes.length} bytes)`);
+  const report = await download("Calibration report (HTML)…");
+  const reportText = report.bytes.toString("utf8");
+  const reportSections = (reportText.match(/<section id="/g) || []).length;
+  check(report.name === "report.html" && reportSections === 10 && reportText.includes("the workbench&#39;s calibration"),
+    `"Calibration report (HTML)…" downloads ${report.name} (${reportSections} sections, ${report.bytes.length} bytes)`);
 
   // ---- open a dataset from files picked together ------------------------------------------------
   const example = path.join(root, "assets/datasets/example");
@@ -268,6 +273,38 @@ try {
   fs.rmSync(urdfDir, { recursive: true, force: true });
   check(s.errors.length === 0 && s.session.robot_warnings.length === 0 && s.session.robot_source.endsWith("/robot.urdf"),
     `"Open URDF…" opens a URDF with its loose mesh: ${s.session.robot_source}, warnings ${JSON.stringify(s.session.robot_warnings)}`);
+
+  // ---- the import window: each arm's tracker export and joint log picked, opened in memory -------
+  // The example's measurements as a SpatialAnalyzer-style export and a joint log per arm.
+  const trackerDir = fs.mkdtempSync(path.join(os.tmpdir(), "dualcal-import-"));
+  for (const side of ["left", "right"]) {
+    const rows = fs.readFileSync(path.join(example, `${side}.csv`), "utf8").split("\n")
+      .filter((l) => l && !l.startsWith("#")).slice(1).map((l) => l.split(","));
+    const points = ["// exported for the browser test", "// units: mm"];
+    const joints = ["id,q1,q2,q3,q4,q5,q6,q7"];
+    for (const f of rows) {
+      joints.push(f.slice(0, 8).join(","));
+      ["a", "b", "c"].forEach((r, k) => points.push(`${f[0]}_${r} ${f.slice(8 + 3 * k, 11 + 3 * k).join(" ")}`));
+    }
+    fs.writeFileSync(path.join(trackerDir, `${side}-points.txt`), points.join("\n") + "\n");
+    fs.writeFileSync(path.join(trackerDir, `${side}-joints.csv`), joints.join("\n") + "\n");
+  }
+  const beforeImport = s.session.dataset;
+  await clickWidget("button", "Import…");
+  for (const side of ["left", "right"]) {
+    for (const [kind, file] of [["points", `${side}-points.txt`], ["joints", `${side}-joints.csv`]]) {
+      const picker = page.waitForEvent("filechooser", { timeout: 20_000 });
+      await clickWidget("button", `${side} ${kind}…`);
+      await (await picker).setFiles([path.join(trackerDir, file)]);
+      await frames(3);
+    }
+  }
+  await clickWidget("button", "Open in the workbench");
+  s = await waitFor("opening the import",
+    idleWith((s) => s.session?.dataset !== beforeImport && s.session?.dataset.startsWith("/imports/")), 60_000);
+  fs.rmSync(trackerDir, { recursive: true, force: true });
+  check(s.errors.length === 0 && s.session.configurations.join("+") === "220+220",
+    `"Import…" previews the picked tracker files and opens them: ${s.session.dataset}, ${s.status}`);
 
   // ---- compute alone: with an unlimited budget the run is computed in as few frames as it can ---
   await page.goto(`${base}?budget_ms=60000`, { waitUntil: "load" });

@@ -118,6 +118,16 @@ impl LeftPanel<'_> {
             {
                 commands.push(Command::OpenDataset(bundled_example_path()));
             }
+            if ui
+                .add_enabled(!self.loading, egui::Button::new("Import…"))
+                .on_hover_text(
+                    "Make a dataset from tracker exports (SpatialAnalyzer, Leica, figaroh, any CSV) \
+                     and joint logs, with a live preview: `dualcal import`",
+                )
+                .clicked()
+            {
+                commands.push(Command::ShowImport(true));
+            }
         });
     }
 
@@ -228,7 +238,7 @@ impl LeftPanel<'_> {
         let has_cal = self.session.is_some_and(|s| s.calibrated.is_some());
         let mut button = |ui: &mut egui::Ui, label: &str, hover: &str, what: Export| {
             let mut response = ui.button(label).on_hover_text(hover);
-            if matches!(what, Export::Params | Export::Urdf) {
+            if matches!(what, Export::Params | Export::Urdf | Export::Report) {
                 response = response.on_disabled_hover_text("Calibrate first");
             }
             if response.clicked() {
@@ -247,6 +257,14 @@ impl LeftPanel<'_> {
                 "Calibrated URDF…",
                 "A copy of the robot description whose joints reproduce the calibrated model",
                 Export::Urdf,
+            );
+            button(
+                ui,
+                "Calibration report (HTML)…",
+                "One self-contained HTML file, as `dualcal report` writes it: dataset, method, \
+                 identifiability, parameters with σ, accuracy before and after, figures, worst \
+                 configurations, screening, warnings",
+                Export::Report,
             );
         });
         ui.add_enabled_ui(self.session.is_some(), |ui| {

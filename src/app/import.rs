@@ -1,0 +1,408 @@
+//! The import view's state: the tracker exports and joint logs the user picked, the options of
+//! `dualcal import`, and a live preview — the engine's [`crate::import::import`] run again whenever a
+//! file or an option changes, its report and its errors shown before anything is written. Finishing
+//! writes the dataset ([`crate::import::write`], or in a browser the same files in memory) and opens
+//! it. The view is drawn by [`super::panels::import_ui`].
+
+use crate::dataset::{AngleUnit, LengthUnit};
+use crate::import::{
+    self, ArmFiles, ColumnMap, ImportOptions, Imported, MatchRule, PointUnit, PointsFormat,
+};
+use crate::robot::RobotDescription;
+use crate::side::{PerSide, Side};
+use crate::source::FileSource;
+use nalgebra::Vector3;
+use std::path::{Path, PathBuf};
+
+pub use super::command::ImportSlot;
+
+/// The robot and reflectors an import is made for: the workbench's current ones (or the built-in
+/// IRB 14000 with the paper's reflectors).
+pub struct ImportTarget<'a> {
+    pub robot: &'a RobotDescription,
+    /// Where the robot description is (`None`: built in); the dataset refers to it.
+    pub robot_path: Option<&'a Path>,
+    pub reflector_names: Vec<String>,
+    pub nominal_reflectors_mm: Vec<Vector3<f64>>,
+}
+
+/// What the user has entered, as the command line's options.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImportInputs {
+    /// Per arm: the point file and the joint log (empty: none), as typed or picked.
+    pub points: PerSide<String>,
+    pub joints: PerSide<String>,
+    /// `None`: recognised from each file.
+    pub format: Option<PointsFormat>,
+    /// The generic format's column mapping (`--columns`).
+    pub columns: String,
+    pub length_unit: Option<PointUnit>,
+    pub angle_unit: Option<AngleUnit>,
+    pub joint_length_unit: Option<LengthUnit>,
+    pub decimal_comma: bool,
+    /// `--joint-order`: empty (chain order), `yumi-abb` or `1,2,7,3,4,5,6`.
+    pub joint_order: String,
+    pub matching: MatchRule,
+    pub time_tolerance_s: f64,
+    /// Per arm: the tracker station (empty: one station for both).
+    pub stations: PerSide<String>,
+}
+
+impl Default for ImportInputs {
+    fn default() -> Self {
+        Self {
+            points: PerSide::default(),
+            joints: PerSide::default(),
+            format: None,
+            columns: String::new(),
+            length_unit: None,
+            angle_unit: None,
+            joint_length_unit: None,
+            decimal_comma: false,
+            joint_order: String::new(),
+            matching: MatchRule::Name,
+            time_tolerance_s: 0.5,
+            stations: PerSide::default(),
+        }
+    }
+}
+
+/// The preview of the current inputs.
+pub struct Preview {
+    /// The import, or why it failed (the engine's message: file, line, field).
+    pub result: Result<Imported, String>,
+    /// Why the import cannot be written as it is: what the dataset reader would refuse (too few
+    /// configurations, degenerate triangles, a row twice: [`import::check`]) or joint values
+    /// outside the robot's limits.
+    pub refused: Option<String>,
+    /// The robot it was made for (its name, as the robot section shows it).
+    pub robot: String,
+}
+
+impl Preview {
+    /// The dataset to write, if the preview allows it.
+    pub fn importable(&self) -> Option<&Imported> {
+        match (&self.result, &self.refused) {
+            (Ok(imported), None) => Some(imported),
+            _ => None,
+        }
+    }
+}
+
+/// The view.
+#[derive(Default)]
+pub struct ImportView {
+    pub open: bool,
+    pub inputs: ImportInputs,
+    /// The folder the dataset is written to (native), as typed or picked.
+    pub out_dir: String,
+    /// Why the last "write and open" failed.
+    pub write_error: Option<String>,
+    /// The preview and the inputs (and robot) it was made of.
+    preview: Option<(ImportInputs, String, Preview)>,
+}
+
+impl ImportView {
+    /// Put a picked file into its slot.
+    pub fn set_file(&mut self, slot: ImportSlot, path: &Path) {
+        let text = path.display().to_string();
+        let field = if slot.joints {
+            &mut self.inputs.joints[slot.side]
+        } else {
+            &mut self.inputs.points[slot.side]
+        };
+        *field = text;
+        if self.out_dir.is_empty()
+            && !slot.joints
+            && let Some(dir) = path.parent()
+        {
+            self.out_dir = dir.join("dataset").display().to_string();
+        }
+    }
+
+    /// The preview of the inputs as they are (`None` until both point files are given).
+    pub fn preview(&self) -> Option<&Preview> {
+        self.preview.as_ref().map(|(_, _, p)| p)
+    }
+
+    /// Import again when the inputs or the robot changed since the last preview (or `force`: the
+    /// files may have changed on disk).
+    pub fn refresh(&mut self, files: &dyn FileSource, target: &ImportTarget<'_>, force: bool) {
+        let robot_key = format!("{:?} {}", target.robot_path, target.robot.name());
+        let stale = match &self.preview {
+            Some((inputs, robot, _)) => *inputs != self.inputs || *robot != robot_key,
+            None => true,
+        };
+        if !(stale || force) {
+            return;
+        }
+        if Side::BOTH
+            .iter()
+            .any(|&s| self.inputs.points[s].trim().is_empty())
+        {
+            self.preview = None;
+            return;
+        }
+        let preview = preview(files, &self.inputs, target);
+        self.preview = Some((self.inputs.clone(), robot_key, preview));
+    }
+
+    /// The arms' input files, as the engine takes them.
+    pub fn arm_files(&self) -> PerSide<ArmFiles> {
+        arm_files(&self.inputs)
+    }
+}
+
+fn arm_files(inputs: &ImportInputs) -> PerSide<ArmFiles> {
+    PerSide::from_fn(|s| ArmFiles {
+        points: PathBuf::from(inputs.points[s].trim()),
+        joints: Some(inputs.joints[s].trim())
+            .filter(|j| !j.is_empty())
+            .map(PathBuf::from),
+    })
+}
+
+/// The engine's options from the inputs; an option that does not parse is an error naming it.
+pub fn options(inputs: &ImportInputs, target: &ImportTarget<'_>) -> Result<ImportOptions, String> {
+    let mut o = ImportOptions::for_robot(
+        target.robot,
+        target.robot_path,
+        target.reflector_names.clone(),
+        target.nominal_reflectors_mm.clone(),
+    );
+    o.points_format = inputs.format;
+    let columns = inputs.columns.trim();
+    if !columns.is_empty() {
+        o.columns = Some(ColumnMap::parse(columns).map_err(|e| format!("column mapping: {e}"))?);
+        o.points_format.get_or_insert(PointsFormat::Generic);
+    }
+    o.length_unit = inputs.length_unit;
+    o.angle_unit = inputs.angle_unit;
+    o.joint_length_unit = inputs.joint_length_unit;
+    o.decimal_comma = inputs.decimal_comma;
+    let order = inputs.joint_order.trim();
+    if !order.is_empty() {
+        o.joint_order =
+            Some(import::parse_joint_order(order).map_err(|e| format!("joint order: {e}"))?);
+    }
+    o.matching = inputs.matching;
+    o.time_tolerance_s = inputs.time_tolerance_s;
+    o.stations = PerSide::from_fn(|s| {
+        Some(inputs.stations[s].trim().to_string()).filter(|st| !st.is_empty())
+    });
+    Ok(o)
+}
+
+/// Import with these inputs and check the joint limits, as `dualcal import` does before writing.
+fn preview(files: &dyn FileSource, inputs: &ImportInputs, target: &ImportTarget<'_>) -> Preview {
+    let robot = target.robot.name();
+    let result = options(inputs, target)
+        .and_then(|o| import::import(files, &arm_files(inputs), &o).map_err(|e| format!("{e:#}")));
+    let refused = result.as_ref().ok().and_then(|imported| {
+        let limits = PerSide::from_fn(|s| target.robot.joint_limits_rad(s));
+        import::check(imported)
+            .map_err(|e| format!("{e:#}"))
+            .and_then(|()| {
+                crate::dataset::check_joint_limits(&imported.dataset, &limits)
+                    .map_err(|e| e.to_string())
+            })
+            .err()
+    });
+    Preview {
+        result,
+        refused,
+        robot,
+    }
+}
+
+/// Write the previewed import into `out` (refusing a non-empty folder and the input files) — the
+/// command line's `dualcal import --out`.
+pub fn write(view: &ImportView, out: &Path) -> Result<(), String> {
+    let Some(imported) = view.preview().and_then(Preview::importable) else {
+        return Err("nothing to write: the preview shows why".to_string());
+    };
+    import::write(
+        imported,
+        &view.arm_files(),
+        out,
+        crate::output::Overwrite::Refuse,
+    )
+    .map_err(|e| format!("{e:#}"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::source::MemoryFiles;
+
+    /// A SpatialAnalyzer-style export and a joint log per arm, in memory: `n` configurations of
+    /// the built-in robot with reflectors a, b, c.
+    fn files(n: usize) -> MemoryFiles {
+        let memory = MemoryFiles::new();
+        for side in ["left", "right"] {
+            let mut points = String::from("// SpatialAnalyzer export\n// units: mm\n");
+            let mut joints = String::from("id,q1,q2,q3,q4,q5,q6,q7\n");
+            for k in 0..n {
+                let id = format!("{}{k:03}", &side[..1].to_uppercase());
+                // The nominal triangle (a, b, c) moved about: every side as the reflectors'.
+                let centre = Vector3::new(
+                    300.0 + k as f64 * 7.0 + if side == "left" { 0.0 } else { 500.0 },
+                    -200.0 + k as f64 * 3.0,
+                    400.0 + (k as f64).sin() * 50.0,
+                );
+                let nominal = [
+                    Vector3::new(45.0, 0.0, 40.0),
+                    Vector3::new(-25.0, 40.0, 40.0),
+                    Vector3::new(-25.0, -40.0, 40.0),
+                ];
+                for (p, name) in nominal.iter().zip(["a", "b", "c"]) {
+                    let x = centre + p;
+                    points += &format!("{id}_{name} {:.3} {:.3} {:.3}\n", x.x, x.y, x.z);
+                }
+                joints += &format!(
+                    "{id},{},{},{},{},{},{},{}\n",
+                    k as f64 * 0.5,
+                    -10.0 + k as f64,
+                    5.0,
+                    -20.0,
+                    10.0,
+                    30.0,
+                    -5.0
+                );
+            }
+            memory.insert(format!("/in/{side}-points.txt"), points.into_bytes());
+            memory.insert(format!("/in/{side}-joints.csv"), joints.into_bytes());
+        }
+        memory
+    }
+
+    fn target(robot: &RobotDescription) -> ImportTarget<'_> {
+        ImportTarget {
+            robot,
+            robot_path: None,
+            reflector_names: vec!["a".into(), "b".into(), "c".into()],
+            nominal_reflectors_mm: crate::simulate::default_reflectors_for(robot).to_vec(),
+        }
+    }
+
+    #[test]
+    fn the_preview_follows_the_inputs_and_names_what_is_wrong() {
+        let memory = files(6);
+        let robot = RobotDescription::builtin_irb14000();
+        let target = target(&robot);
+        let mut view = ImportView::default();
+        view.refresh(&memory, &target, false);
+        assert!(view.preview().is_none(), "no files yet");
+        for side in Side::BOTH {
+            view.set_file(
+                ImportSlot {
+                    side,
+                    joints: false,
+                },
+                Path::new(&format!("/in/{side}-points.txt")),
+            );
+            view.set_file(
+                ImportSlot { side, joints: true },
+                Path::new(&format!("/in/{side}-joints.csv")),
+            );
+        }
+        assert_eq!(view.out_dir, "/in/dataset");
+        view.refresh(&memory, &target, false);
+        let preview = view.preview().unwrap();
+        let imported = preview.importable().expect("imports");
+        assert_eq!(imported.dataset.arms.left.measurements.len(), 6);
+        assert_eq!(imported.dataset.arms.right.measurements.len(), 6);
+        assert_eq!(
+            imported.report.arms.left.format,
+            PointsFormat::SpatialAnalyzer
+        );
+
+        // A bad option: named, nothing importable.
+        view.inputs.joint_order = "1,2,x".into();
+        view.refresh(&memory, &target, false);
+        let err = view.preview().unwrap().result.as_ref().unwrap_err();
+        assert!(err.starts_with("joint order:"), "{err}");
+        view.inputs.joint_order.clear();
+        view.refresh(&memory, &target, false);
+        assert!(view.preview().unwrap().importable().is_some());
+
+        // A damaged file: the engine's message with file and line; the preview is made again only
+        // when asked (the inputs did not change).
+        memory.insert(
+            "/in/left-joints.csv",
+            b"id,q1,q2,q3,q4,q5,q6,q7\nL000,1,2,3,x,5,6,7\n".to_vec(),
+        );
+        view.refresh(&memory, &target, false);
+        assert!(view.preview().unwrap().importable().is_some());
+        view.refresh(&memory, &target, true);
+        let err = view.preview().unwrap().result.as_ref().unwrap_err();
+        assert!(err.contains("/in/left-joints.csv:2"), "{err}");
+
+        // Joint values outside the limits: imported, but refused as `dualcal import` refuses them.
+        memory.insert(
+            "/in/left-joints.csv",
+            b"id,q1,q2,q3,q4,q5,q6,q7\nL000,1,2,3,4,5,6,7\nL001,1,2,3,4,5,6,7\nL002,1,2,3,4,5,6,7\nL003,1,2,3,4,5,6,7\nL004,1,2,3,4,5,6,7\nL005,400,2,3,4,5,6,7\n"
+                .to_vec(),
+        );
+        view.refresh(&memory, &target, true);
+        let preview = view.preview().unwrap();
+        assert!(preview.result.is_ok());
+        assert!(
+            preview
+                .refused
+                .as_deref()
+                .is_some_and(|e| e.contains("/in/left-joints.csv:7: field `q1`")),
+            "{:?}",
+            preview.refused
+        );
+        assert!(preview.importable().is_none());
+
+        // Too few configurations for a dataset: the report is there, the dataset refused.
+        memory.insert(
+            "/in/left-joints.csv",
+            b"id,q1,q2,q3,q4,q5,q6,q7\nL000,1,2,3,4,5,6,7\nL001,1,2,3,4,5,6,8\n".to_vec(),
+        );
+        view.refresh(&memory, &target, true);
+        let preview = view.preview().unwrap();
+        let imported = preview.result.as_ref().unwrap();
+        assert_eq!(imported.report.arms.left.matched, 2);
+        assert!(
+            preview
+                .refused
+                .as_deref()
+                .is_some_and(|e| e.contains("/in/left-joints.csv: the left arm has 2")),
+            "{:?}",
+            preview.refused
+        );
+        assert!(preview.importable().is_none());
+    }
+
+    #[test]
+    fn the_written_dataset_is_the_command_lines() {
+        let memory = files(8);
+        let robot = RobotDescription::builtin_irb14000();
+        let target = target(&robot);
+        let mut view = ImportView::default();
+        for side in Side::BOTH {
+            view.inputs.points[side] = format!("/in/{side}-points.txt");
+            view.inputs.joints[side] = format!("/in/{side}-joints.csv");
+        }
+        view.refresh(&memory, &target, false);
+        let imported = view.preview().unwrap().importable().unwrap().clone();
+        // The files a browser keeps in memory are the ones written to disk.
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("ds");
+        let inputs = view.arm_files();
+        import::write(&imported, &inputs, &out, crate::output::Overwrite::Refuse).unwrap();
+        for (path, bytes) in import::files_of(&imported, &out).unwrap() {
+            assert_eq!(std::fs::read(&path).unwrap(), bytes, "{}", path.display());
+        }
+        // Refused a second time: the folder is not empty.
+        let err = import::write(&imported, &inputs, &out, crate::output::Overwrite::Refuse)
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains(&out.display().to_string()), "{err}");
+        let back = crate::dataset::load(&out).unwrap();
+        assert_eq!(back.arms.left.measurements.len(), 8);
+    }
+}
