@@ -1720,3 +1720,62 @@ fn the_import_window_previews_the_files_then_writes_and_opens_the_dataset() {
     let err = harness.state().import_view().write_error.clone().unwrap();
     assert!(err.contains("imported"), "{err}");
 }
+
+/// The planning window: plan both arms of the loaded robot in the background, the plan drawn in 3D
+/// (the tracker, its lines of sight, the planned reflectors) with the arm in the chosen planned
+/// pose; closing the window draws the dataset again. `DUALCAL_SCREENSHOT_OUT=docs/planning-view.png`
+/// also saves the window's picture (1280×800).
+#[test]
+fn the_planning_window_plans_and_draws_the_plan_with_the_tracker() {
+    let mut harness = harness([1280.0, 800.0], AppLaunch::default());
+    loaded(&mut harness);
+    harness.get_by_label("Plan measurements…").click();
+    harness.run_steps(2);
+    assert!(harness.state().plan_view().open);
+    {
+        let inputs = &mut harness.state_mut().plan_view_mut().inputs;
+        inputs.per_arm = 8;
+        inputs.candidates = 60;
+    }
+    harness.get_by_label("Plan").click();
+    harness.run_steps(2);
+    step_until(&mut harness, MAX_RUN_FRAMES, "planning", |app| {
+        app.plan_view()
+            .result
+            .as_ref()
+            .is_some_and(|r| r.plans().is_some())
+            || app.plan_view().error.is_some()
+    });
+    let app = harness.state();
+    assert!(
+        app.plan_view().error.is_none(),
+        "{:?}",
+        app.plan_view().error
+    );
+    let plans = app.plan_view().result.as_ref().unwrap().plans().unwrap();
+    assert_eq!(plans.left.configs.len(), 8);
+    // Drawn: the first planned pose of each arm, the tracker where it was put, every planned
+    // configuration's reflectors.
+    let overlay = app.viewport().plan.clone().expect("the plan is drawn");
+    assert_eq!(overlay.q_rad.left.as_ref(), Some(&plans.left.configs[0]));
+    assert_eq!(
+        overlay.tracker_mm,
+        nalgebra::Vector3::new(2000.0, 0.0, 300.0)
+    );
+    assert_eq!(overlay.points_mm.right.len(), 8);
+    // Another planned pose of the right arm.
+    harness.get_by_label("R003").scroll_to_me();
+    harness.run_steps(4);
+    harness.get_by_label("R003").click();
+    harness.run_steps(3);
+    let overlay = harness.state().viewport().plan.clone().unwrap();
+    assert_eq!(overlay.q_rad.right.as_ref(), Some(&plans.right.configs[2]));
+    if let Some(out) = std::env::var_os("DUALCAL_SCREENSHOT_OUT") {
+        harness.run_steps(3);
+        harness.render().unwrap().save(out).unwrap();
+    }
+    // Closed: the dataset is drawn again.
+    harness.state_mut().apply(Command::ShowPlan(false));
+    harness.run_steps(3);
+    assert!(harness.state().viewport().plan.is_none());
+}

@@ -93,6 +93,22 @@ impl WorkbenchApp {
             Command::SetImportFolder(path) => self.import.out_dir = path.display().to_string(),
             Command::RefreshImport => self.refresh_import(true),
             Command::FinishImport => self.finish_import(),
+            Command::ShowPlan(open) => self.plan_view.open = open,
+            Command::StartPlan => {
+                let target = self.plan_target();
+                self.start_plan(target);
+            }
+            Command::SavePlan => match self.plan_view.zip() {
+                Ok(bytes) => self.save(SaveRequest {
+                    title: "Save plan (.zip)",
+                    file_name: "plan.zip".into(),
+                    filter_name: "ZIP archive",
+                    extensions: &["zip"],
+                    bytes,
+                }),
+                Err(e) => self.plan_view.error = Some(e),
+            },
+            Command::ShowPlannedPose(side, pose) => self.plan_view.shown[side] = pose,
         }
     }
 
@@ -360,6 +376,44 @@ impl WorkbenchApp {
                 self.start_load(dir, None);
             }
             Err(e) => self.import.write_error = Some(e),
+        }
+    }
+}
+
+impl WorkbenchApp {
+    /// What a plan is made for: the session's robot, reflectors, tracker and configurations (the
+    /// built-in IRB 14000 with the paper's reflectors before any).
+    fn plan_target(&mut self) -> super::plan_view::PlanTarget {
+        match &self.session {
+            Some(s) => super::plan_view::PlanTarget {
+                robot: s.robot.clone(),
+                robot_path: s.robot_source.clone(),
+                reflectors_mm: s.dataset.nominal_reflectors_mm.clone(),
+                tracker: s.dataset.tracker,
+                existing: crate::side::PerSide::from_fn(|side| {
+                    s.dataset
+                        .arm(side)
+                        .measurements
+                        .iter()
+                        .map(|m| m.q_rad.clone())
+                        .collect()
+                }),
+            },
+            None => {
+                let robot = self
+                    .builtin_robot
+                    .get_or_insert_with(|| {
+                        std::sync::Arc::new(crate::robot::RobotDescription::builtin_irb14000())
+                    })
+                    .clone();
+                super::plan_view::PlanTarget {
+                    reflectors_mm: crate::simulate::default_reflectors_for(&robot).to_vec(),
+                    robot,
+                    robot_path: None,
+                    tracker: crate::dataset::TrackerSpec::default(),
+                    existing: crate::side::PerSide::new(Vec::new(), Vec::new()),
+                }
+            }
         }
     }
 }

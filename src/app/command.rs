@@ -90,6 +90,14 @@ pub enum Command {
     RefreshImport,
     /// Write the previewed import as a dataset (in a browser: in memory) and open it.
     FinishImport,
+    /// Open (or close) the planning view.
+    ShowPlan(bool),
+    /// Plan the measurement with the planning view's inputs, in the background.
+    StartPlan,
+    /// Save the plan's files as one `.zip`.
+    SavePlan,
+    /// Draw an arm in one of its planned configurations (`None`: home).
+    ShowPlannedPose(Side, Option<usize>),
 }
 
 impl Command {

@@ -21,6 +21,7 @@ mod frame_stats;
 pub mod import;
 pub mod job;
 mod panels;
+pub mod plan_view;
 pub mod platform;
 pub mod plots;
 pub mod session;
@@ -114,6 +115,8 @@ pub struct WorkbenchApp {
     memory_files: Option<crate::source::MemoryFiles>,
     /// The import view (tracker exports and joint logs to a dataset, with a live preview).
     import: import::ImportView,
+    /// The planning view (`dualcal plan` in a window, the plan drawn in 3D).
+    plan_view: plan_view::PlanView,
     /// The built-in robot, made when the import view needs it without a session.
     builtin_robot: Option<std::sync::Arc<crate::robot::RobotDescription>>,
     /// The GPU adapter (name and backend), for the status a browser page publishes.
@@ -190,6 +193,7 @@ impl WorkbenchApp {
             input_files: io.files,
             memory_files: io.memory,
             import: import::ImportView::default(),
+            plan_view: plan_view::PlanView::default(),
             builtin_robot: None,
             renderer,
             frame_budget: platform::frame_budget(),
@@ -254,6 +258,15 @@ impl WorkbenchApp {
 
     pub fn compare_view_mut(&mut self) -> &mut compare::CompareView {
         &mut self.compare
+    }
+
+    /// The planning view: its inputs, the plan, the pose shown.
+    pub fn plan_view(&self) -> &plan_view::PlanView {
+        &self.plan_view
+    }
+
+    pub fn plan_view_mut(&mut self) -> &mut plan_view::PlanView {
+        &mut self.plan_view
     }
 
     /// The import view: its inputs and preview.
@@ -515,6 +528,28 @@ impl eframe::App for WorkbenchApp {
                 loading: self.jobs.is_running(LoadJob::lane()),
             };
             panels::import_ui(ui.ctx(), &mut self.import, state, &mut commands);
+        }
+        if self.panels_visible && self.plan_view.open {
+            let state = panels::PlanContext {
+                planning: self.jobs.is_running(job::plan::PlanJob::lane()),
+                has_dataset: self.session.is_some(),
+                robot: self
+                    .session
+                    .as_ref()
+                    .map_or_else(|| "the built-in IRB 14000".to_string(), |s| s.robot.name()),
+            };
+            panels::plan_ui(ui.ctx(), &mut self.plan_view, state, &mut commands);
+        }
+        if let Some(overlay) = self.plan_view.overlay_if_changed() {
+            let robot = self
+                .plan_view
+                .result
+                .as_ref()
+                .map(|r| r.target.robot.clone());
+            match robot {
+                Some(robot) => self.viewport.set_plan(overlay, &robot),
+                None => self.viewport.plan = None,
+            }
         }
         if let Some(prompt) = &mut self.prompt {
             commands.extend(prompt.ui(ui.ctx()));

@@ -68,6 +68,7 @@ impl WorkbenchApp {
         self.compare.comparison = None;
         self.compare.progress = None;
         self.compare.adopted = None;
+        self.plan_view.dataset_replaced();
         self.selection = None;
         self.urdf_override = urdf;
         self.viewport.reset_poses();

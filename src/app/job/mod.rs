@@ -13,6 +13,7 @@ pub mod calibration;
 pub mod comparison;
 pub mod load;
 pub mod meshes;
+pub mod plan;
 
 use super::WorkbenchApp;
 use super::task::{BackgroundTask, TaskId, TaskReport, Work};

@@ -1,7 +1,7 @@
 //! The panels around the viewport: the left panel (dataset, robot, settings, export and the view
 //! options: [`settings`], [`view_options`]), the plots ([`PlotsView`]), the configurations
 //! ([`configurations`]), the status bar ([`status_bar`]), the comparison view ([`compare`]) and the
-//! import window ([`import`]).
+//! import and planning windows ([`import`], [`plan`]).
 //!
 //! A panel is given the state it shows, borrowed: what it only reads by shared reference, what it
 //! edits in place (view state: the calibration settings, the display options, plot tabs, the table's
@@ -12,6 +12,7 @@
 mod compare;
 mod configurations;
 mod import;
+mod plan;
 mod settings;
 mod status_bar;
 mod view_options;
@@ -19,6 +20,7 @@ mod view_options;
 pub use compare::{CompareState, compare_ui};
 pub use configurations::TablePanel;
 pub use import::{ImportContext, import_ui};
+pub use plan::{PlanContext, plan_ui};
 pub use settings::LeftPanel;
 pub use status_bar::StatusBar;
 

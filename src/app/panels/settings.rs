@@ -129,6 +129,16 @@ impl LeftPanel<'_> {
                 commands.push(Command::ShowImport(true));
             }
         });
+        if ui
+            .button("Plan measurements…")
+            .on_hover_text(
+                "Choose the configurations to measure: collision-free, seen by the tracker, the \
+                 most informative (`dualcal plan`), drawn in 3D with the tracker",
+            )
+            .clicked()
+        {
+            commands.push(Command::ShowPlan(true));
+        }
     }
 
     /// Which robot and which arms the figures are of (the same as the command line's `robot:` line),

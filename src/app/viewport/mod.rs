@@ -53,6 +53,8 @@ pub struct ViewportState {
     /// The adapter renders on the CPU (lavapipe, llvmpipe, SwiftShader): `MeshDetail::Auto` draws
     /// the simplified meshes.
     pub software_renderer: bool,
+    /// A measurement plan drawn instead of the dataset (the planning view, while it is open).
+    pub plan: Option<scene::PlanOverlay>,
 }
 
 /// What the cached scene was built from.
@@ -63,6 +65,7 @@ struct SceneKey {
     options: SceneOptions,
     poses: PerSide<Option<usize>>,
     selection: Option<ConfigId>,
+    plan: Option<scene::PlanOverlay>,
 }
 
 /// Each arm drawn in its first configuration.
@@ -82,6 +85,7 @@ impl Default for ViewportState {
             hovered_config: None,
             auto_scale: true,
             software_renderer: false,
+            plan: None,
         }
     }
 }
@@ -100,6 +104,38 @@ impl ViewportState {
     /// The scene last built (what the GPU draws).
     pub fn scene(&self) -> &SceneData {
         &self.scene
+    }
+
+    /// Show a plan (or the dataset again, `None`); a new plan is framed with the tracker in view
+    /// (the robot at home, the tracker, the planned reflectors).
+    pub fn set_plan(
+        &mut self,
+        plan: Option<scene::PlanOverlay>,
+        robot: &crate::robot::RobotDescription,
+    ) {
+        let new_plan = plan.as_ref().is_some_and(|p| {
+            self.plan
+                .as_ref()
+                .is_none_or(|old| old.revision != p.revision)
+        });
+        if let (true, Some(p)) = (new_plan, &plan) {
+            let q = PerSide::from_fn(|side| robot.home_q_rad(side));
+            let points: Vec<nalgebra::Vector3<f32>> = robot
+                .link_poses(&q.left, &q.right)
+                .into_iter()
+                .map(|(_, pose)| pose.translation.vector)
+                .chain(std::iter::once(p.tracker_mm))
+                .chain(
+                    p.points_mm
+                        .iter()
+                        .flat_map(|(_, c)| c.iter().flatten().copied()),
+                )
+                .filter(|v| v.iter().all(|c| c.is_finite()))
+                .map(|v| v.cast())
+                .collect();
+            self.camera = OrbitCamera::framing(&points);
+        }
+        self.plan = plan;
     }
 
     /// Frame a new robot and its data: the built-in robot's default view, any other robot seen from
@@ -180,6 +216,16 @@ impl ViewportState {
         if !self.paint_scene(&painter, rect, frame, &view_proj) {
             return clicked;
         }
+        if self.plan.is_some() {
+            // A plan, not the dataset: its own label, no error legend, no dataset selection.
+            corner_label(
+                &painter,
+                rect,
+                "measurement plan: tracker yellow, lines of sight; planned reflectors of the left \
+                 arm blue, of the right arm orange",
+            );
+            return None;
+        }
         self.legends_ui(&painter, rect, session);
         if let Some(session) = session {
             self.model_label_ui(&painter, rect, session);
@@ -216,13 +262,25 @@ impl ViewportState {
             options: self.options.clone(),
             poses: self.poses,
             selection,
+            plan: self.plan.clone(),
         };
         if self.scene_key.as_ref() == Some(&key) {
             return;
         }
         self.version += 1;
-        self.scene = Arc::new(match session {
-            Some(session) => scene::build_scene(
+        self.scene = Arc::new(match (session, &self.plan) {
+            (_, Some(plan)) => {
+                let robot: &crate::robot::RobotDescription = match session {
+                    Some(s) => &s.robot,
+                    None => scene::builtin_robot(),
+                };
+                let meshes = session.and_then(|s| {
+                    s.meshes
+                        .packed_for(self.options.mesh_detail.simplified(self.software_renderer))
+                });
+                scene::build_plan_scene(robot, meshes, plan, &self.options, self.version)
+            }
+            (Some(session), None) => scene::build_scene(
                 session,
                 &self.options,
                 self.poses,
@@ -230,7 +288,9 @@ impl ViewportState {
                 self.software_renderer,
                 self.version,
             ),
-            None => scene::build_robot_scene(scene::builtin_robot(), &self.options, self.version),
+            (None, None) => {
+                scene::build_robot_scene(scene::builtin_robot(), &self.options, self.version)
+            }
         });
         self.scene_key = Some(key);
     }
@@ -552,6 +612,24 @@ fn nice_round(x: f64) -> f64 {
         10.0
     };
     m * p
+}
+
+/// A label in the viewport's top-left corner, on a dark backing.
+fn corner_label(painter: &egui::Painter, rect: Rect, text: &str) {
+    let color = Color32::from_gray(220);
+    let galley = painter.layout(
+        text.to_string(),
+        egui::FontId::proportional(13.0),
+        color,
+        (rect.width() - 32.0).max(40.0),
+    );
+    let pos = rect.left_top() + Vec2::new(12.0, 10.0);
+    painter.rect_filled(
+        Rect::from_min_size(pos, galley.size()).expand(4.0),
+        3.0,
+        Color32::from_black_alpha(150),
+    );
+    painter.galley(pos, galley, color);
 }
 
 #[cfg(test)]

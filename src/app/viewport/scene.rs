@@ -13,7 +13,7 @@ use crate::app::session::Session;
 use crate::dataset::Split;
 use crate::quality::Screening;
 use crate::robot::{GeometryKind, PlacedShape, RobotDescription, ShapeKind};
-use crate::side::{ConfigId, PerSide};
+use crate::side::{ConfigId, PerSide, Side};
 use nalgebra::{Isometry3, Matrix3, Matrix4, Vector3};
 use std::sync::Arc;
 
@@ -611,6 +611,71 @@ pub fn build_scene(
                     Vector3::repeat(8.0),
                     c,
                 ));
+            }
+        }
+    }
+    scene
+}
+
+/// A measurement plan, drawn instead of the dataset while the planning view is open: the arms in a
+/// planned configuration, the tracker, the lines of sight from the shown reflectors to it, and every
+/// planned configuration's reflectors.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PlanOverlay {
+    /// Identifies the plan.
+    pub revision: u64,
+    /// The tracker in the robot's root (body) frame, mm.
+    pub tracker_mm: Vector3<f64>,
+    /// The planned configuration each arm is drawn in (`None`: home).
+    pub q_rad: PerSide<Option<Vec<f64>>>,
+    /// Every planned configuration's reflectors (body frame, mm), per arm.
+    pub points_mm: PerSide<Vec<Vec<Vector3<f64>>>>,
+    /// The reflectors of the arms as drawn: a line of sight from each to the tracker.
+    pub sight_mm: Vec<Vector3<f64>>,
+}
+
+/// Colour of each arm's planned reflectors (sRGB).
+const PLAN_COLORS: PerSide<[u8; 3]> = PerSide::new([90, 160, 255], [255, 150, 60]);
+/// The tracker's marker: radius, mm.
+const TRACKER_MM: f64 = 40.0;
+
+/// The robot in the plan's poses, the tracker, the lines of sight and the planned reflectors.
+pub fn build_plan_scene(
+    robot: &RobotDescription,
+    meshes: Option<&Arc<PackedMeshes>>,
+    plan: &PlanOverlay,
+    options: &SceneOptions,
+    version: u64,
+) -> SceneData {
+    let q_rad = PerSide::from_fn(|side| {
+        plan.q_rad[side]
+            .clone()
+            .unwrap_or_else(|| robot.home_q_rad(side))
+    });
+    let mut scene = robot_scene(robot, meshes, q_rad, options, version);
+    let t = plan.tracker_mm;
+    scene.instances.push(MeshInstance::new(
+        Primitive::Sphere,
+        &Isometry3::translation(t.x, t.y, t.z),
+        Vector3::repeat(TRACKER_MM),
+        srgb_linear([250, 210, 60], 1.0),
+    ));
+    for p in &plan.sight_mm {
+        line(&mut scene.lines, *p, t, srgb_linear([250, 210, 60], 0.9));
+    }
+    for side in Side::BOTH {
+        let color = srgb_linear(PLAN_COLORS[side], 0.85);
+        for points in &plan.points_mm[side] {
+            for p in points {
+                scene.instances.push(MeshInstance::new(
+                    Primitive::Sphere,
+                    &Isometry3::translation(p.x, p.y, p.z),
+                    Vector3::repeat(MARKER_MM),
+                    color,
+                ));
+            }
+            for (i, j) in outline(points.len()) {
+                line(&mut scene.lines, points[i], points[j], color);
             }
         }
     }
