@@ -67,7 +67,15 @@ fn ratio_to_truth(sim: &SimOutput, configs: &PerSide<Vec<Vec<f64>>>, seed: u64) 
         ms.extend(ver);
         ds.arms[side].measurements = ms;
     }
-    let result = common::calibrate(&ds, &sim.nominal, &CalibrationSettings::default());
+    // `DUALCAL_PLAN_METHOD=lsq` calibrates by least squares in the curve (minimax by default).
+    let settings = match std::env::var("DUALCAL_PLAN_METHOD").as_deref() {
+        Ok("lsq") => CalibrationSettings {
+            method: dualcal::solver::Method::LeastSquares,
+            ..CalibrationSettings::default()
+        },
+        _ => CalibrationSettings::default(),
+    };
+    let result = common::calibrate(&ds, &sim.nominal, &settings);
     let rms = |model| {
         let r = evaluate(&ds, model, Split::Ver).unwrap();
         0.5 * (r.relative_left.pos_rms_mm + r.relative_right.pos_rms_mm)
@@ -87,9 +95,14 @@ fn planned_and_random(
         * sim
             .tracker_from_left_base
             .inverse_transform_point(&Point3::origin());
+    // `DUALCAL_PLAN_CANDIDATES` tries another pool size in the curve below (600 by default).
+    let candidates = std::env::var("DUALCAL_PLAN_CANDIDATES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(600);
     let options = PlanOptions {
         per_arm: n,
-        candidates: 600,
+        candidates,
         seed,
         tracker_in_body_mm: tracker_in_body.coords,
         ..PlanOptions::default()
@@ -166,13 +179,19 @@ fn twenty_planned_configurations_calibrate_better_than_twenty_random_ones() {
 }
 
 /// The curve of docs/planning.md: verification RMS over the truth's against N, planned and random,
-/// four simulations each (`cargo test --release --test plan -- --ignored --nocapture`).
+/// four simulations each (`cargo test --release --test plan -- --ignored --nocapture`;
+/// `DUALCAL_PLAN_N=20` for one N, `DUALCAL_PLAN_CANDIDATES=3000` for another pool,
+/// `DUALCAL_PLAN_METHOD=lsq` to calibrate by least squares).
 #[test]
 #[ignore]
 fn accuracy_against_the_number_of_configurations() {
     let robot = RobotDescription::builtin_irb14000();
+    let ns: Vec<usize> = std::env::var("DUALCAL_PLAN_N").map_or_else(
+        |_| vec![10, 15, 20, 30, 40],
+        |v| v.split(',').filter_map(|n| n.trim().parse().ok()).collect(),
+    );
     eprintln!("N   planned (mean, min–max)   random (mean, min–max)");
-    for n in [10, 15, 20, 30, 40] {
+    for n in ns {
         let r: Vec<(f64, f64)> = [1, 2, 3, 4]
             .iter()
             .map(|&seed| {
