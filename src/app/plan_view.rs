@@ -10,7 +10,7 @@ use crate::dataset::TrackerSpec;
 use crate::plan::{ArmPlan, PlanOptions, PlanOutput, plan_files};
 use crate::robot::RobotDescription;
 use crate::side::{PerSide, Side};
-use crate::solver::uncertainty::ArmUncertainty;
+use crate::solver::uncertainty::PredictedDesign;
 use nalgebra::{Point3, Vector3};
 use std::io::Write as _;
 use std::path::PathBuf;
@@ -69,10 +69,10 @@ pub struct PlanTarget {
     pub existing: PerSide<Vec<Vec<f64>>>,
 }
 
-/// One arm's plan and its predicted σ (the tracker noise per axis, mm, and the parameters').
+/// One arm's plan and what it predicts (the parameters' σ, the verification accuracy).
 pub struct ArmOutcome {
     pub plan: ArmPlan,
-    pub sigma: Option<(f64, ArmUncertainty)>,
+    pub sigma: Option<PredictedDesign>,
 }
 
 /// A plan, filled in as each arm is planned.

@@ -199,25 +199,34 @@ fn print_arm(
     p: &ArmPlan,
 ) {
     outln!("{}", summary_line(side, p));
-    if let Some((sigma_mm, u)) = crate::solver::uncertainty::predicted_for_tracker(
+    if let Some(d) = crate::solver::uncertainty::predicted_for_tracker(
         robot,
         arm,
         side,
         &p.configs,
+        &p.sample,
         tracker,
         tracker_in_body_mm,
     ) {
+        let u = &d.uncertainty;
         let largest = |unit: &str| {
             u.largest(unit).map_or(String::new(), |s| {
                 format!("{:.4} {unit} ({})", s.sigma, s.name)
             })
         };
         outln!(
-            "  predicted 1σ with {sigma_mm:.4} mm of tracker noise: largest {}, {}; condition \
-             number {:.1}",
+            "  predicted 1σ with {:.4} mm of tracker noise: largest {}, {}; condition number {:.1}",
+            d.point_sigma_mm,
             largest("mm"),
             largest("mrad"),
             u.condition
         );
+        if let Some(ratio) = d.verification_ratio {
+            outln!(
+                "  predicted verification accuracy: {ratio:.3}× the noise floor (least squares, on \
+                 {} unchosen candidates; the true parameters give 1.000×)",
+                p.sample.len()
+            );
+        }
     }
 }

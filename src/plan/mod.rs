@@ -121,7 +121,13 @@ pub struct ArmPlan {
     /// Legs of the path (from configuration k to k + 1) on which a collision was found and no via
     /// point clears it.
     pub colliding_legs: Vec<usize>,
+    /// Candidates the design did not choose (up to [`SAMPLE`], evenly spread over the pool): where
+    /// the robot goes, for the predicted verification accuracy.
+    pub sample: Vec<Vec<f64>>,
 }
+
+/// How many unchosen candidates [`ArmPlan::sample`] keeps.
+pub const SAMPLE: usize = 60;
 
 /// A via point: where the arm goes between `configs[leg]` and `configs[leg + 1]` instead of the
 /// straight joint motion, which collides.
@@ -678,7 +684,15 @@ fn plan_arm_with(
         options,
         straight_length,
     );
+    let unchosen: Vec<usize> = (0..drawn).filter(|i| !chosen.contains(i)).collect();
+    let stride = unchosen.len().div_ceil(SAMPLE).max(1);
+    let sample = unchosen
+        .iter()
+        .step_by(stride)
+        .map(|&i| pool[i].clone())
+        .collect();
     Ok(ArmPlan {
+        sample,
         configs,
         candidates: drawn,
         attempts,

@@ -112,24 +112,46 @@ pub fn predicted(
     uncertainty(arm, qs, &points, free, Some(point_sigma_mm))
 }
 
+/// What a planned measurement predicts ([`predicted_for_tracker`]).
+#[derive(Clone, Debug)]
+pub struct PredictedDesign {
+    /// The tracker's noise per axis at the arm, mm (half its MPE at the distance).
+    pub point_sigma_mm: f64,
+    pub uncertainty: ArmUncertainty,
+    /// [`predicted_verification_ratio`] on the sample given (`None` without one).
+    pub verification_ratio: Option<f64>,
+}
+
 /// [`predicted`] for a planned measurement of `side` of `robot`: the tracker's noise at its distance
-/// to the arm's base (half the MPE, per axis), over the parameters distances can identify. The noise
-/// (mm, per axis) and the prediction; `None` where the information is singular.
+/// to the arm's base (half the MPE, per axis), over the parameters distances can identify; and the
+/// verification accuracy predicted on `ver` (configurations where the robot goes). `None` where the
+/// information is singular.
 pub fn predicted_for_tracker(
     robot: &crate::robot::RobotDescription,
     arm: &ArmModel,
     side: crate::side::Side,
     qs: &[Vec<f64>],
+    ver: &[Vec<f64>],
     tracker: &crate::dataset::TrackerSpec,
     tracker_in_body_mm: &Vector3<f64>,
-) -> Option<(f64, ArmUncertainty)> {
+) -> Option<PredictedDesign> {
     let free: Vec<usize> = (0..arm.param_count())
         .filter(|&k| arm.unidentifiable_reason(k).is_none())
         .collect();
     let base = robot.body_from_arm_base(side).translation.vector;
     let sigma_mm =
         0.5e-3 * (tracker.mpe_um + tracker.mpe_um_per_m * (tracker_in_body_mm - base).norm() / 1e3);
-    predicted(arm, qs, &free, sigma_mm).map(|u| (sigma_mm, u))
+    let uncertainty = predicted(arm, qs, &free, sigma_mm)?;
+    let verification_ratio = if ver.len() >= 2 {
+        predicted_verification_ratio(arm, qs, ver, &free, sigma_mm)
+    } else {
+        None
+    };
+    Some(PredictedDesign {
+        point_sigma_mm: sigma_mm,
+        uncertainty,
+        verification_ratio,
+    })
 }
 
 /// [`arm_uncertainty`], the point noise estimated from the residuals or given.
@@ -163,6 +185,92 @@ fn uncertainty(
     if n < n_all {
         cov *= n as f64 / n_all as f64;
     }
+    Some(summarise(arm, free, &cov, point_var, n, n_all, &sums.jtj))
+}
+
+/// The covariance (rows and columns: `free`) the least-squares fit of `arm` at `qs` would have with a
+/// point noise of `point_sigma_mm` per axis — the matrix behind [`predicted`]'s σ.
+pub fn predicted_covariance(
+    arm: &ArmModel,
+    qs: &[Vec<f64>],
+    free: &[usize],
+    point_sigma_mm: f64,
+) -> Option<DMatrix<f64>> {
+    let n_all = qs.len();
+    let stride = n_all.div_ceil(MAX_CONFIGURATIONS).max(1);
+    let used: Vec<usize> = (0..n_all).step_by(stride).collect();
+    let (n, p) = (used.len(), free.len());
+    if n < 3 || p == 0 {
+        return None;
+    }
+    let jac: Vec<ArmJacobians> = used
+        .par_iter()
+        .map(|&i| arm.reflector_jacobians(&qs[i]))
+        .collect();
+    let points: Vec<&Vec<Vector3<f64>>> = jac.iter().map(|j| &j.fk.points_mm).collect();
+    let sums = pair_sums(&jac, &points, free, arm.reflector_count());
+    sums.rows.checked_sub(p).filter(|&d| d > 0)?;
+    let inverse = sums.jtj.clone().cholesky()?.inverse();
+    let mut cov = &inverse * &sums.meat * &inverse * (point_sigma_mm * point_sigma_mm);
+    if n < n_all {
+        cov *= n as f64 / n_all as f64;
+    }
+    Some(cov)
+}
+
+/// The verification accuracy a design predicts, as a multiple of the noise floor: over the pairs of
+/// the configurations `ver` (where the robot will be verified or used) and every reflector, the mean
+/// squared distance error of the model calibrated from `design` — the tracker's noise on a distance,
+/// `2σ²`, plus the parameters' uncertainty carried to it, `gᵀ C g` with `g = (J_i − J_j)ᵀ u` and `C`
+/// of [`predicted_covariance`] — over the noise's alone, square-rooted. 1.0: the true parameters'
+/// accuracy. A least-squares prediction (minimax fits spread wider: docs/solver.md).
+pub fn predicted_verification_ratio(
+    arm: &ArmModel,
+    design: &[Vec<f64>],
+    ver: &[Vec<f64>],
+    free: &[usize],
+    point_sigma_mm: f64,
+) -> Option<f64> {
+    let cov = predicted_covariance(arm, design, free, point_sigma_mm)?;
+    let jac: Vec<ArmJacobians> = ver.iter().map(|q| arm.reflector_jacobians(q)).collect();
+    let (mut sum, mut count) = (0.0, 0usize);
+    let mut g = nalgebra::DVector::<f64>::zeros(free.len());
+    for i in 0..jac.len() {
+        for j in i + 1..jac.len() {
+            for k in 0..arm.reflector_count() {
+                let v = jac[i].fk.points_mm[k] - jac[j].fk.points_mm[k];
+                let dist = v.norm();
+                if dist <= 0.0 {
+                    continue;
+                }
+                let u = v / dist;
+                for (c, &f) in free.iter().enumerate() {
+                    let d = jac[i].jacobians[k].column(f) - jac[j].jacobians[k].column(f);
+                    g[c] = d.dot(&u);
+                }
+                sum += (cov.transpose() * &g).dot(&g);
+                count += 1;
+            }
+        }
+    }
+    if count == 0 {
+        return None;
+    }
+    let noise = 2.0 * point_sigma_mm * point_sigma_mm;
+    Some(((noise + sum / count as f64) / noise).sqrt())
+}
+
+/// The report of a covariance: σ per parameter, the correlated pairs, the condition number.
+fn summarise(
+    arm: &ArmModel,
+    free: &[usize],
+    cov: &DMatrix<f64>,
+    point_var: f64,
+    n: usize,
+    n_all: usize,
+    jtj: &DMatrix<f64>,
+) -> ArmUncertainty {
+    let p = free.len();
     let sigma: Vec<f64> = (0..p).map(|c| cov[(c, c)].max(0.0).sqrt()).collect();
     let parameters = free
         .iter()
@@ -190,14 +298,14 @@ fn uncertainty(
         }
     }
     correlations.sort_by(|x, y| y.correlation.abs().total_cmp(&x.correlation.abs()));
-    Some(ArmUncertainty {
+    ArmUncertainty {
         point_sigma_mm: point_var.sqrt(),
         configurations: n_all,
         configurations_used: n,
-        condition: scaled_condition(&sums.jtj),
+        condition: scaled_condition(jtj),
         parameters,
         correlations,
-    })
+    }
 }
 
 /// JᵀJ, the sandwich's middle `Σ A Aᵀ`, Σ r² and the row count, per configuration in parallel (then

@@ -37,6 +37,7 @@ impl Work for PlanWork {
                     arm.arm(side),
                     side,
                     &plan.configs,
+                    &plan.sample,
                     &t.tracker,
                     &self.options.tracker_in_body_mm,
                 );

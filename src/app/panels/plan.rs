@@ -211,18 +211,26 @@ fn arm_ui(
             .color(WARNING_COLOR),
         );
     }
-    if let Some((noise, u)) = &arm.sigma {
+    if let Some(d) = &arm.sigma {
+        let u = &d.uncertainty;
         let largest = |unit: &str| {
             u.largest(unit).map_or(String::new(), |s| {
                 format!("{:.4} {unit} ({})", s.sigma, s.name)
             })
         };
         ui.label(format!(
-            "predicted 1σ with {noise:.4} mm of tracker noise: largest {}, {}; condition {:.1}",
+            "predicted 1σ with {:.4} mm of tracker noise: largest {}, {}; condition {:.1}",
+            d.point_sigma_mm,
             largest("mm"),
             largest("mrad"),
             u.condition
         ));
+        if let Some(ratio) = d.verification_ratio {
+            ui.label(format!(
+                "predicted verification accuracy: {ratio:.3}× the noise floor (least squares; \
+                 the true parameters give 1.000×)"
+            ));
+        }
     }
     ui.horizontal_wrapped(|ui| {
         ui.label("show:");
