@@ -148,6 +148,12 @@ fn calibrate_shows_calibrated_figures() {
         let text = format!("{:.4} {}", p.sigma, p.unit);
         assert!(harness.query_all_by_label(&text).count() >= 1, "{text}");
     }
+    // The parameters distances never see are listed once (not again under the calibration's).
+    let why = "joint 1 d: a translation along the first axis";
+    let listed = harness
+        .query_all(egui_kittest::kittest::by().label_contains(why))
+        .count();
+    assert_eq!(listed, 1, "{why} listed {listed} times");
 }
 
 #[test]

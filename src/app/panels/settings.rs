@@ -441,16 +441,28 @@ fn arm_details_ui(ui: &mut egui::Ui, session: &Session, side: Side) {
     if let Some(c) = &session.calibrated
         && let Some(report) = &c.result.identifiability[side]
     {
+        // The parameters distances can never see are listed above: only the others the calibration
+        // held (numerically dependent on this data) are listed again.
+        let also: Vec<_> = report
+            .fixed
+            .iter()
+            .filter(|f| !unidentifiable.iter().any(|(name, _)| *name == f.name))
+            .collect();
         ui.label(
             RichText::new(format!(
-                "last calibration: {} of {n} identified (condition {:.2e} with every parameter, {:.2e} with the identified ones); fixed:",
+                "last calibration: {} of {n} identified (condition {:.2e} with every parameter, {:.2e} with the identified ones){}",
                 report.free.len(),
                 report.condition_before,
-                report.condition_after
+                report.condition_after,
+                if also.is_empty() {
+                    "; none held besides those above"
+                } else {
+                    "; also held, as this data cannot tell them apart:"
+                }
             ))
             .small(),
         );
-        for f in &report.fixed {
+        for f in also {
             ui.label(
                 RichText::new(format!("{}: {}", f.name, f.reason))
                     .small()
