@@ -1689,6 +1689,14 @@ fn the_import_window_previews_the_files_then_writes_and_opens_the_dataset() {
             format!("{side}: 220 configurations (SpatialAnalyzer export, mm; 660 points read)");
         harness.get_by_label(&line);
     }
+    // `DUALCAL_SCREENSHOT_OUT=docs/import-window.png` saves the window with its preview (1280×800).
+    if let Some(out) = std::env::var_os("DUALCAL_SCREENSHOT_OUT") {
+        harness.get_by_label("Report").click();
+        harness.run_steps(3);
+        harness.render().unwrap().save(out).unwrap();
+        harness.get_by_label("Report").click();
+        harness.run_steps(2);
+    }
     harness.get_by_label("Write dataset and open").click();
     harness.run_steps(2);
     step_until(&mut harness, MAX_LOAD_FRAMES, "loading the import", |app| {

@@ -31,6 +31,7 @@ pub fn import_ui(
     egui::Window::new("Import tracker files")
         .open(&mut open)
         .default_width(560.0)
+        .default_height(ctx.content_rect().height() * 0.7)
         .max_height(ctx.content_rect().height() * 0.9)
         .vscroll(true)
         .show(ctx, |ui| {
@@ -42,6 +43,7 @@ pub fn import_ui(
             preview_ui(ui, view.preview(), commands);
             ui.separator();
             finish_ui(ui, view, &state, commands);
+            report_ui(ui, view.preview());
         });
     if !open {
         commands.push(Command::ShowImport(false));
@@ -262,17 +264,24 @@ fn preview_ui(ui: &mut egui::Ui, preview: Option<&Preview>, commands: &mut Vec<C
             if let Some(refused) = &preview.refused {
                 ui.label(RichText::new(refused).color(ERROR_COLOR));
             }
-            egui::CollapsingHeader::new("Report")
-                .default_open(false)
-                .show(ui, |ui| {
-                    egui::ScrollArea::vertical()
-                        .max_height(220.0)
-                        .show(ui, |ui| {
-                            ui.label(RichText::new(imported.report.to_string()).monospace());
-                        });
-                });
         }
     }
+}
+
+/// The whole import report (`import-report.txt`), folded.
+fn report_ui(ui: &mut egui::Ui, preview: Option<&Preview>) {
+    let Some(Ok(imported)) = preview.map(|p| &p.result) else {
+        return;
+    };
+    egui::CollapsingHeader::new("Report")
+        .default_open(false)
+        .show(ui, |ui| {
+            egui::ScrollArea::vertical()
+                .max_height(220.0)
+                .show(ui, |ui| {
+                    ui.label(RichText::new(imported.report.to_string()).monospace());
+                });
+        });
 }
 
 /// One arm's outcome in a line: format, matched, and what was left over.
