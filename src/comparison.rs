@@ -317,6 +317,26 @@ pub struct BoxStats {
 }
 
 impl BoxStats {
+    /// The box plot's strokes at `x` (plot units; the box 0.6 wide): the box, the median, the
+    /// whiskers and their caps — what the report and the study figures draw.
+    pub fn strokes(&self, x: f64) -> [Vec<(f64, f64)>; 6] {
+        let b = self;
+        [
+            vec![
+                (x - 0.3, b.q1),
+                (x + 0.3, b.q1),
+                (x + 0.3, b.q3),
+                (x - 0.3, b.q3),
+                (x - 0.3, b.q1),
+            ],
+            vec![(x - 0.3, b.median), (x + 0.3, b.median)],
+            vec![(x, b.q3), (x, b.whisker_hi)],
+            vec![(x, b.q1), (x, b.whisker_lo)],
+            vec![(x - 0.15, b.whisker_hi), (x + 0.15, b.whisker_hi)],
+            vec![(x - 0.15, b.whisker_lo), (x + 0.15, b.whisker_lo)],
+        ]
+    }
+
     /// The figures of `samples` (non-finite ones are left out); `None` without a finite sample.
     pub fn of(samples: &[f32]) -> Option<Self> {
         let mut v: Vec<f64> = samples

@@ -321,12 +321,7 @@ impl WorkbenchApp {
                 s.dataset.nominal_reflectors_mm.clone(),
             ),
             None => {
-                let robot = self
-                    .builtin_robot
-                    .get_or_insert_with(|| {
-                        std::sync::Arc::new(crate::robot::RobotDescription::builtin_irb14000())
-                    })
-                    .clone();
+                let robot = self.builtin_robot();
                 let positions = crate::simulate::default_reflectors_for(&robot).to_vec();
                 let names = crate::kinematics::default_reflector_names(positions.len()).to_vec();
                 (robot, None, names, positions)
@@ -400,12 +395,7 @@ impl WorkbenchApp {
                 }),
             },
             None => {
-                let robot = self
-                    .builtin_robot
-                    .get_or_insert_with(|| {
-                        std::sync::Arc::new(crate::robot::RobotDescription::builtin_irb14000())
-                    })
-                    .clone();
+                let robot = self.builtin_robot();
                 super::plan_view::PlanTarget {
                     reflectors_mm: crate::simulate::default_reflectors_for(&robot).to_vec(),
                     robot,
@@ -415,5 +405,17 @@ impl WorkbenchApp {
                 }
             }
         }
+    }
+}
+
+impl WorkbenchApp {
+    /// The built-in IRB 14000, made once (what the import and planning windows are for without a
+    /// dataset).
+    fn builtin_robot(&mut self) -> std::sync::Arc<crate::robot::RobotDescription> {
+        self.builtin_robot
+            .get_or_insert_with(|| {
+                std::sync::Arc::new(crate::robot::RobotDescription::builtin_irb14000())
+            })
+            .clone()
     }
 }

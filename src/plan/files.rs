@@ -186,7 +186,8 @@ fn rapid_module(side: Side, prefix: &str, p: &ArmPlan) -> String {
     let name = format!("dualcal_plan_{}", side.name());
     let mut s = format!(
         "MODULE {name}\n    ! dualcal plan, {side} arm: {} configurations in visiting order ({prefix}001 \
-         is p001).\n    ! Move to each, stop, measure the reflectors, go on.\n",
+         is p001).\n    ! Move to each, stop, measure the reflectors, go on.\n    ! The other arm rests at its \
+         home pose meanwhile: the plan's collision checks assume it there.\n",
         p.configs.len()
     );
     let target = |s: &mut String, name: &str, q: &[f64]| {

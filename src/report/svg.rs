@@ -154,20 +154,7 @@ fn draw_box(chart: &mut Chart<'_, '_>, x: f64, b: &BoxStats, c: RGBColor) -> Res
         )])
         .map_err(err)?;
     let style = c.stroke_width(2);
-    for path in [
-        vec![
-            (x - 0.3, b.q1),
-            (x + 0.3, b.q1),
-            (x + 0.3, b.q3),
-            (x - 0.3, b.q3),
-            (x - 0.3, b.q1),
-        ],
-        vec![(x - 0.3, b.median), (x + 0.3, b.median)],
-        vec![(x, b.q3), (x, b.whisker_hi)],
-        vec![(x, b.q1), (x, b.whisker_lo)],
-        vec![(x - 0.15, b.whisker_hi), (x + 0.15, b.whisker_hi)],
-        vec![(x - 0.15, b.whisker_lo), (x + 0.15, b.whisker_lo)],
-    ] {
+    for path in b.strokes(x) {
         chart
             .draw_series(LineSeries::new(path, style))
             .map_err(err)?;

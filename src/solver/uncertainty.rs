@@ -162,6 +162,38 @@ fn uncertainty(
     free: &[usize],
     point_sigma_mm: Option<f64>,
 ) -> Option<ArmUncertainty> {
+    let fit = covariance(arm, qs, measured, free, point_sigma_mm)?;
+    Some(summarise(
+        arm,
+        free,
+        &fit.cov,
+        fit.point_var,
+        fit.used,
+        fit.configurations,
+        &fit.jtj,
+    ))
+}
+
+/// A fit's covariance and what it was made of.
+struct Covariance {
+    /// Rows and columns: the free parameters.
+    cov: DMatrix<f64>,
+    /// The point noise per axis, squared (given, or estimated from the residuals).
+    point_var: f64,
+    configurations: usize,
+    used: usize,
+    jtj: DMatrix<f64>,
+}
+
+/// The sandwich covariance of the least-squares distance fit of `arm` at `qs` against `measured`
+/// (at most [`MAX_CONFIGURATIONS`] of them in the sums, the covariance scaled by the fraction used).
+fn covariance(
+    arm: &ArmModel,
+    qs: &[Vec<f64>],
+    measured: &[Vec<Vector3<f64>>],
+    free: &[usize],
+    point_sigma_mm: Option<f64>,
+) -> Option<Covariance> {
     let n_all = qs.len().min(measured.len());
     let stride = n_all.div_ceil(MAX_CONFIGURATIONS).max(1);
     let used: Vec<usize> = (0..n_all).step_by(stride).collect();
@@ -185,7 +217,13 @@ fn uncertainty(
     if n < n_all {
         cov *= n as f64 / n_all as f64;
     }
-    Some(summarise(arm, free, &cov, point_var, n, n_all, &sums.jtj))
+    Some(Covariance {
+        cov,
+        point_var,
+        configurations: n_all,
+        used: n,
+        jtj: sums.jtj,
+    })
 }
 
 /// The covariance (rows and columns: `free`) the least-squares fit of `arm` at `qs` would have with a
@@ -196,26 +234,8 @@ pub fn predicted_covariance(
     free: &[usize],
     point_sigma_mm: f64,
 ) -> Option<DMatrix<f64>> {
-    let n_all = qs.len();
-    let stride = n_all.div_ceil(MAX_CONFIGURATIONS).max(1);
-    let used: Vec<usize> = (0..n_all).step_by(stride).collect();
-    let (n, p) = (used.len(), free.len());
-    if n < 3 || p == 0 {
-        return None;
-    }
-    let jac: Vec<ArmJacobians> = used
-        .par_iter()
-        .map(|&i| arm.reflector_jacobians(&qs[i]))
-        .collect();
-    let points: Vec<&Vec<Vector3<f64>>> = jac.iter().map(|j| &j.fk.points_mm).collect();
-    let sums = pair_sums(&jac, &points, free, arm.reflector_count());
-    sums.rows.checked_sub(p).filter(|&d| d > 0)?;
-    let inverse = sums.jtj.clone().cholesky()?.inverse();
-    let mut cov = &inverse * &sums.meat * &inverse * (point_sigma_mm * point_sigma_mm);
-    if n < n_all {
-        cov *= n as f64 / n_all as f64;
-    }
-    Some(cov)
+    let points: Vec<Vec<Vector3<f64>>> = qs.iter().map(|q| arm.reflector_fk(q).points_mm).collect();
+    covariance(arm, qs, &points, free, Some(point_sigma_mm)).map(|c| c.cov)
 }
 
 /// The verification accuracy a design predicts, as a multiple of the noise floor: over the pairs of

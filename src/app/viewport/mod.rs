@@ -440,13 +440,7 @@ impl ViewportState {
             _ => ("nominal model".to_string(), Color32::from_gray(220)),
         };
         let galley = painter.layout_no_wrap(text, egui::FontId::proportional(13.0), color);
-        let pos = rect.left_top() + Vec2::new(12.0, 10.0);
-        painter.rect_filled(
-            Rect::from_min_size(pos, galley.size()).expand(4.0),
-            3.0,
-            Color32::from_black_alpha(150),
-        );
-        painter.galley(pos, galley, color);
+        backed_galley(painter, rect, galley, color);
     }
 
     /// Label the selected configuration where it is drawn.
@@ -623,6 +617,16 @@ fn corner_label(painter: &egui::Painter, rect: Rect, text: &str) {
         color,
         (rect.width() - 32.0).max(40.0),
     );
+    backed_galley(painter, rect, galley, color);
+}
+
+/// Text laid out in the viewport's top-left corner, on a dark backing.
+fn backed_galley(
+    painter: &egui::Painter,
+    rect: Rect,
+    galley: std::sync::Arc<egui::Galley>,
+    color: Color32,
+) {
     let pos = rect.left_top() + Vec2::new(12.0, 10.0);
     painter.rect_filled(
         Rect::from_min_size(pos, galley.size()).expand(4.0),

@@ -454,20 +454,7 @@ fn box_panel(
             .map_err(err)?
             .label(format!("{} {name}", k + 1))
             .legend(move |(px, py)| Rectangle::new([(px, py - 4), (px + 10, py + 4)], c.filled()));
-        for path in [
-            vec![
-                (x - 0.3, b.q1),
-                (x + 0.3, b.q1),
-                (x + 0.3, b.q3),
-                (x - 0.3, b.q3),
-                (x - 0.3, b.q1),
-            ],
-            vec![(x - 0.3, b.median), (x + 0.3, b.median)],
-            vec![(x, b.q3), (x, b.whisker_hi)],
-            vec![(x, b.q1), (x, b.whisker_lo)],
-            vec![(x - 0.15, b.whisker_hi), (x + 0.15, b.whisker_hi)],
-            vec![(x - 0.15, b.whisker_lo), (x + 0.15, b.whisker_lo)],
-        ] {
+        for path in b.strokes(x) {
             chart
                 .draw_series(LineSeries::new(path, style))
                 .map_err(err)?;
