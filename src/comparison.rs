@@ -317,6 +317,20 @@ pub struct BoxStats {
 }
 
 impl BoxStats {
+    /// The value range a box plot of `boxes` spans, from the lowest `min` to the highest `max`, widened
+    /// by 5 % at both ends; `None` without a finite, non-empty range.
+    pub fn padded_range<'a>(boxes: impl IntoIterator<Item = &'a BoxStats>) -> Option<(f64, f64)> {
+        let (lo, hi) = boxes
+            .into_iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), b| {
+                (lo.min(b.min), hi.max(b.max))
+            });
+        (lo.is_finite() && hi > lo).then(|| {
+            let pad = 0.05 * (hi - lo);
+            (lo - pad, hi + pad)
+        })
+    }
+
     /// The box plot's strokes at `x` (plot units; the box 0.6 wide): the box, the median, the
     /// whiskers and their caps — what the report and the study figures draw.
     pub fn strokes(&self, x: f64) -> [Vec<(f64, f64)>; 6] {

@@ -88,18 +88,8 @@ pub fn box_plot(
     boxes: &[(&str, Option<BoxStats>)],
     colour: RGBColor,
 ) -> Result<String, String> {
-    let present: Vec<&BoxStats> = boxes.iter().filter_map(|b| b.1.as_ref()).collect();
-    let lo = present.iter().map(|b| b.min).fold(f64::INFINITY, f64::min);
-    let hi = present
-        .iter()
-        .map(|b| b.max)
-        .fold(f64::NEG_INFINITY, f64::max);
-    let (lo, hi) = if lo.is_finite() && hi > lo {
-        let pad = 0.05 * (hi - lo);
-        (lo - pad, hi + pad)
-    } else {
-        (-1.0, 1.0)
-    };
+    let (lo, hi) =
+        BoxStats::padded_range(boxes.iter().filter_map(|b| b.1.as_ref())).unwrap_or((-1.0, 1.0));
     let n = boxes.len();
     let names: Vec<String> = boxes.iter().map(|b| b.0.to_string()).collect();
     let mut svg = String::new();

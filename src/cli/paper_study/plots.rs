@@ -403,18 +403,8 @@ fn box_panel(
     indicator: Indicator,
     boxes: &[(String, RGBColor, Option<BoxStats>)],
 ) -> Result<()> {
-    let present: Vec<&BoxStats> = boxes.iter().filter_map(|b| b.2.as_ref()).collect();
-    let lo = present.iter().map(|b| b.min).fold(f64::INFINITY, f64::min);
-    let hi = present
-        .iter()
-        .map(|b| b.max)
-        .fold(f64::NEG_INFINITY, f64::max);
-    let (lo, hi) = if lo.is_finite() && hi > lo {
-        let pad = 0.05 * (hi - lo);
-        (lo - pad, hi + pad)
-    } else {
-        (0.0, 1.0)
-    };
+    let (lo, hi) =
+        BoxStats::padded_range(boxes.iter().filter_map(|b| b.2.as_ref())).unwrap_or((0.0, 1.0));
     let n = boxes.len();
     let names: Vec<String> = (1..=n).map(|k| k.to_string()).collect();
     let mut chart = ChartBuilder::on(area)
