@@ -34,6 +34,7 @@ const GAUSS_NEWTON_ALL: MethodSpec = MethodSpec {
     takes_reflector: false,
     solver: SolverKind::LeastSquares,
     set_up: gauss_newton_all,
+    tree_set_up: None,
 };
 
 fn gauss_newton_all(s: &ArmSetUp) -> Result<ArmStage, CalibrationError> {

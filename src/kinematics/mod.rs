@@ -21,6 +21,7 @@
 pub mod chain;
 pub mod dh;
 mod per_reflector;
+pub mod shared;
 #[cfg(test)]
 pub(crate) mod tests;
 
@@ -35,6 +36,7 @@ pub use dh::{
 };
 use nalgebra::{DVector, Isometry3, Matrix3xX, Matrix6xX, Vector3};
 pub use per_reflector::{MAX_REFLECTORS, PerReflector};
+pub use shared::SharedJoints;
 use std::sync::Arc;
 
 /// Reflector labels of the paper's set-up, in file order.
@@ -423,6 +425,11 @@ impl DualArmModel {
             Side::Left => Isometry3::identity(),
             Side::Right => self.left_base_from_right_base,
         }
+    }
+
+    /// The joints both arms' chains hold (a torso): identified once, from both arms' data.
+    pub fn shared_joints(&self) -> SharedJoints {
+        SharedJoints::of(&self.arms.left, &self.arms.right)
     }
 
     /// A description of the first problem that keeps this model from being used with `joint_counts`

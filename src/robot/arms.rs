@@ -134,7 +134,8 @@ pub(super) fn check_yumi_chain(
     ))
 }
 
-/// Build both arms' chains and check that they share no movable joint.
+/// Build both arms' chains (they may share joints: a torso above both, see
+/// [`crate::kinematics::SharedJoints`]).
 pub(super) fn build_arms(
     urdf: &urdf_rs::Robot,
     links: PerSide<ArmLinks>,
@@ -152,8 +153,6 @@ pub(super) fn build_arms(
             chain: Arc::new(chain),
         })
     })?;
-    crate::kinematics::chain::check_disjoint(&arms.left.chain, &arms.right.chain)
-        .map_err(|source| chain_error(msg, Side::Right, &arms.right.links, source))?;
     Ok(arms)
 }
 

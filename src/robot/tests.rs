@@ -113,10 +113,11 @@ fn dataset_links_without_a_robot_must_be_the_builtin_arms() {
     );
 }
 
-/// A robot whose arms share a joint is refused in one sentence, however the error is printed (the
-/// command line and the workbench print the error with its causes, `{:#}`).
+/// A robot whose arms share a joint (a torso above both base links) loads: the joint is on both
+/// chains, its value comes from the left arm's columns when the whole robot is posed, and its link
+/// belongs to the body (it carries both arms), each arm owning the links below its own first joint.
 #[test]
-fn shared_joint_refusal_says_it_once() {
+fn a_shared_torso_joint_loads_once() {
     let torso = crate::test_robots::yumi_like_urdf().replace(
         "<joint name=\"yumi_base_link_to_body\" type=\"fixed\">",
         "<joint name=\"yumi_base_link_to_body\" type=\"continuous\">\n    <axis xyz=\"0 0 1\"/>",
@@ -132,22 +133,23 @@ fn shared_joint_refusal_says_it_once() {
         text: &torso,
         path: Some(Path::new("torso.urdf")),
     };
-    let err = RobotDescription::load(source, &options).unwrap_err();
-    let printed = format!("{:#}", anyhow::Error::new(err));
-    assert_eq!(
-        printed.matches("choose base links below it").count(),
-        1,
-        "{printed}"
-    );
-    assert_eq!(
-        printed.matches("is in both arm chains").count(),
-        1,
-        "{printed}"
-    );
-    assert!(
-        printed.starts_with("torso.urdf")
-            && printed.contains("yumi_base_link_to_body")
-            && printed.contains("the right arm"),
-        "{printed}"
-    );
+    let robot = RobotDescription::load(source, &options).unwrap();
+    let nominal = robot.nominal_model([nalgebra::Vector3::zeros()]);
+    let shared = nominal.shared_joints();
+    assert_eq!(shared.names, ["yumi_base_link_to_body"]);
+    assert_eq!(nominal.arm(Side::Left).joint_count(), 8);
+    let kin = &robot.kin;
+    let link = |name: &str| kin.link_names.iter().position(|n| n == name).unwrap();
+    assert_eq!(kin.owner[link("yumi_body")], Owner::Body);
+    assert_eq!(kin.owner[link("yumi_link_1_l")], Owner::Arm(Side::Left));
+    assert_eq!(kin.owner[link("yumi_link_1_r")], Owner::Arm(Side::Right));
+    // The torso turned by the left values: both arms turn with it.
+    let mut q_left = vec![0.0; 8];
+    q_left[0] = 0.7;
+    let turned = kin.body_from_links(&q_left, &[0.0; 8]);
+    let still = kin.body_from_links(&[0.0; 8], &[0.0; 8]);
+    let moved = |name: &str| {
+        (turned[link(name)].translation.vector - still[link(name)].translation.vector).norm()
+    };
+    assert!(moved("yumi_link_1_l") > 1.0 && moved("yumi_link_1_r") > 1.0);
 }

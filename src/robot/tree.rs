@@ -38,6 +38,8 @@ pub(crate) struct KinJoint {
     pub(crate) arm: Option<(Side, usize)>,
     /// How an arm joint gets its value from the arm's variables (its own, or a mimic's leader).
     pub(crate) drive: Option<JointDrive>,
+    /// On both arms' chains (a torso): `arm` is the left arm's position.
+    pub(crate) shared: bool,
 }
 
 /// The description compiled for fast forward kinematics.
@@ -211,10 +213,16 @@ pub(crate) fn compile(
     msg: &Messages,
     warnings: &mut Vec<String>,
 ) -> Result<Kinematics, RobotError> {
-    // Each arm's movable joints with their chain position.
+    // Each arm's movable joints with their chain position. A joint on both chains (a shared torso)
+    // keeps the left arm's: posing the whole robot, its value is the left arm's column.
     for (side, spec) in arms.iter() {
         for (k, joint) in spec.chain.joints.iter().enumerate() {
-            if let Some(ji) = tree.joint_names.iter().position(|n| *n == joint.name) {
+            let Some(ji) = tree.joint_names.iter().position(|n| *n == joint.name) else {
+                continue;
+            };
+            if tree.joints[ji].arm.is_some() {
+                tree.joints[ji].shared = true;
+            } else {
                 tree.joints[ji].arm = Some((side, k));
                 tree.joints[ji].drive = Some(joint.drive);
             }
@@ -295,8 +303,9 @@ fn dh_base_frames(kin: &Kinematics, arms: &PerSide<ArmSpec>) -> PerSide<Isometry
         let j1 = kin
             .joints
             .iter()
-            .find(|j| j.arm == Some((side, 0)))
-            .expect("every arm has a first movable joint");
+            .filter(|j| !j.shared && matches!(j.arm, Some((s, _)) if s == side))
+            .min_by_key(|j| j.arm.map_or(0, |(_, k)| k))
+            .expect("every arm has a first movable joint of its own");
         poses[j1.parent] * j1.parent_from_joint * joint1_from_dh_base()
     })
 }
@@ -357,6 +366,7 @@ fn parse_joints(
             motion,
             arm: None,
             drive: None,
+            shared: false,
         });
     }
     check_mimics(urdf, msg, warnings)?;
@@ -487,12 +497,19 @@ fn order_tree(
     })
 }
 
-/// Owners: every link below an arm's first movable joint belongs to that arm, the rest to the body.
+/// Owners: every link below an arm's first movable joint of its own (the first one the other arm's
+/// chain does not hold) belongs to that arm, the rest to the body (a shared torso carries both).
 fn owners(kin: &Kinematics) -> Vec<Owner> {
+    let mut first_own: PerSide<Option<usize>> = PerSide::default();
+    for j in kin.joints.iter().filter(|j| !j.shared) {
+        if let Some((side, k)) = j.arm {
+            first_own[side] = Some(first_own[side].map_or(k, |f: usize| f.min(k)));
+        }
+    }
     let mut owner = vec![Owner::Body; kin.link_names.len()];
     for j in &kin.joints {
         owner[j.child] = match j.arm {
-            Some((side, 0)) => Owner::Arm(side),
+            Some((side, k)) if !j.shared && first_own[side] == Some(k) => Owner::Arm(side),
             _ => owner[j.parent],
         };
     }

@@ -84,9 +84,19 @@ pub fn simulate_with_robot(
     }
     let world = CollisionWorld::new(robot);
     let parked = resting_poses(robot, &world, opts.seed)?;
+    // A joint both arms' chains hold (a torso) takes the measured arm's value.
+    let shared = nominal.shared_joints();
     let collides = |side: Side, q: &[f64]| match side {
-        Side::Left => world.in_collision(q, &parked.right, CLEARANCE_MM),
-        Side::Right => world.in_collision(&parked.left, q, CLEARANCE_MM),
+        Side::Left => world.in_collision(
+            q,
+            &shared.right_with_left_values(q, &parked.right),
+            CLEARANCE_MM,
+        ),
+        Side::Right => world.in_collision(
+            &shared.left_with_right_values(&parked.left, q),
+            q,
+            CLEARANCE_MM,
+        ),
     };
     let mut opts = opts.clone();
     opts.body_from_left_base = robot.body_from_arm_base(Side::Left);

@@ -123,15 +123,26 @@ pub(super) fn perturb_model(
         };
         PerSide::from_fn(|_| pick())
     });
+    let mut arms = PerSide::from_fn(|side| {
+        true_arm(
+            nominal.arm(side),
+            &delta[side],
+            targets.map(|t| t[side]),
+            &configs[side],
+        )
+    });
+    // Joints on both chains (a torso) are one joint: the right arm's copy takes the left's errors, and
+    // the arms hang from one body, so there is no mounting error between their base links (each arm's
+    // own mounting is the correction of its first joint past the torso).
+    let shared = nominal.shared_joints();
+    let base_error = if shared.is_empty() {
+        error
+    } else {
+        arms.right = shared.copy_to_right(&arms.left, &arms.right);
+        Isometry3::identity()
+    };
     DualArmModel {
-        arms: PerSide::from_fn(|side| {
-            true_arm(
-                nominal.arm(side),
-                &delta[side],
-                targets.map(|t| t[side]),
-                &configs[side],
-            )
-        }),
-        left_base_from_right_base: nominal.left_base_from_right_base * error,
+        arms,
+        left_base_from_right_base: nominal.left_base_from_right_base * base_error,
     }
 }

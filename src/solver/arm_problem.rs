@@ -111,6 +111,11 @@ impl ArmProblem {
         self
     }
 
+    /// Number of reflectors (objectives).
+    pub fn reflector_count(&self) -> usize {
+        self.measured.len()
+    }
+
     pub fn free(&self) -> &[usize] {
         &self.free
     }

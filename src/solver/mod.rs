@@ -39,6 +39,7 @@ mod result;
 mod run;
 pub mod sqp;
 mod stage;
+pub mod tree_problem;
 pub mod uncertainty;
 
 use crate::dataset::Split;
@@ -154,6 +155,9 @@ impl Default for CalibrationSettings {
 pub enum Stage {
     /// Step 1: geometric parameters of one arm.
     Arm(Side),
+    /// Step 1 of a robot whose arms share joints (a torso): both arms' parameters in one fit, the
+    /// shared joints' corrections once ([`tree_problem`]).
+    Arms,
     /// Step 2: right-arm base in the left-arm base frame.
     Base,
 }
@@ -207,6 +211,7 @@ impl std::fmt::Display for Stage {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             Stage::Arm(side) => write!(f, "step 1 ({side} arm)"),
+            Stage::Arms => f.write_str("step 1 (both arms, shared joints)"),
             Stage::Base => f.write_str("step 2 (base)"),
         }
     }
@@ -315,6 +320,12 @@ pub enum CalibrationError {
          methods can)"
     )]
     NeedsThreeReflectors { side: Side, found: usize },
+    /// The arms share joints (a torso) and the method has no fit of both arms at once.
+    #[error(
+        "the arms share joint(s) {joints}: their corrections must be identified once, from both arms' \
+         data, and method `{}` cannot fit both arms at once; use {}", method.name(), tree_methods()
+    )]
+    SharedJointsUnsupported { joints: String, method: Method },
     /// Settings that do not fit together (e.g. a reflector chosen for a method that uses all three).
     #[error("invalid calibration settings: {0}")]
     InvalidSettings(String),
@@ -329,6 +340,16 @@ pub enum CalibrationError {
         id: String,
         area_mm2: f64,
     },
+}
+
+/// The methods that fit both arms at once (robots whose arms share joints), for messages.
+fn tree_methods() -> String {
+    Method::ALL
+        .iter()
+        .filter(|m| m.spec().tree_set_up.is_some())
+        .map(|m| format!("`{}`", m.name()))
+        .collect::<Vec<_>>()
+        .join(" or ")
 }
 
 /// Summary of one stage.

@@ -1,6 +1,7 @@
 //! The interface between the minimax problems of the two steps and the SQP machinery.
 
 use crate::kinematics::ArmModel;
+use crate::side::PerSide;
 use nalgebra::{DMatrix, DVector, Isometry3};
 
 /// Values and first derivatives of a minimax problem at one (scaled) point.
@@ -53,6 +54,8 @@ pub struct LeastSquaresSystem {
 #[derive(Clone, Debug, PartialEq)]
 pub enum StageParams {
     Arm(Box<ArmModel>),
+    /// Both arms (step 1 of arms that share joints).
+    Arms(Box<PerSide<ArmModel>>),
     Base(Isometry3<f64>),
 }
 

@@ -10,7 +10,7 @@ use crate::metrics::{ConfigResiduals, MetricsError, PairKind, PairResiduals};
 use crate::side::{PerSide, Side};
 use nalgebra::Isometry3;
 
-/// The stages of a two-step calibration, in the order they run.
+/// The stages of a two-step calibration, in the order they run (arms that share no joint).
 pub const STAGES: [Stage; 3] = [Stage::Arm(Side::Left), Stage::Arm(Side::Right), Stage::Base];
 
 /// The outcome of a calibration run: the model reached, the history and, per stage, why it ended.
@@ -59,16 +59,22 @@ impl CalibrationResult {
     }
 
     /// The stages the data call for: both arms, and the base unless it is not measurable.
+    /// (Arms that share joints: both in one stage, [`Stage::Arms`].)
     pub fn planned_stages(&self) -> impl Iterator<Item = Stage> + '_ {
-        STAGES
-            .into_iter()
-            .filter(|&s| s != Stage::Base || self.base_not_measurable.is_none())
+        let arms: &[Stage] = if self.nominal.shared_joints().is_empty() {
+            &STAGES[..2]
+        } else {
+            &[Stage::Arms]
+        };
+        arms.iter()
+            .copied()
+            .chain((self.base_not_measurable.is_none()).then_some(Stage::Base))
     }
 
     /// Was `stage` solved by the paper's SQP (the minimax methods) rather than least squares?
     pub fn uses_sqp(&self, stage: Stage) -> bool {
         let solver = match stage {
-            Stage::Arm(_) => self.settings.method.spec().solver,
+            Stage::Arm(_) | Stage::Arms => self.settings.method.spec().solver,
             Stage::Base => self.settings.base_method.spec().solver,
         };
         solver == super::SolverKind::Sqp

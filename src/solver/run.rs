@@ -5,7 +5,7 @@
 
 use super::identifiability::{self, IdentifiabilityReport};
 use super::methods::Method;
-use super::methods::set_up::{ArmData, ArmSetUp, BaseSetUp, IDENTIFIABILITY_PAIRS};
+use super::methods::set_up::{ArmData, ArmSetUp, BaseSetUp, IDENTIFIABILITY_PAIRS, TreeSetUp};
 use super::problem::StageParams;
 use super::result::CalibrationResult;
 use super::stage::StageSolver;
@@ -14,7 +14,7 @@ use super::{
     StageSummary, Termination,
 };
 use crate::dataset::Dataset;
-use crate::kinematics::DualArmModel;
+use crate::kinematics::{ArmModel, DualArmModel, SharedJoints};
 use crate::side::{ConfigId, PerSide, Side};
 use nalgebra::{Isometry3, Vector3};
 use std::collections::VecDeque;
@@ -166,6 +166,8 @@ pub struct CalibrationRun {
     /// The model with the parameters of the finished stages.
     committed: DualArmModel,
     inputs: PerSide<ArmData>,
+    /// The joints both arms' chains hold (a torso): step 1 is then one fit of both arms.
+    shared: SharedJoints,
     active: Option<ActiveStage>,
     /// The stages after the active one, in order.
     plan: VecDeque<Stage>,
@@ -205,7 +207,23 @@ impl CalibrationRun {
                 dataset.arms.right.station.as_deref().unwrap_or("")
             )
         });
-        let mut plan = VecDeque::from([Stage::Arm(Side::Left), Stage::Arm(Side::Right)]);
+        let shared = nominal.shared_joints();
+        if !shared.is_empty() && settings.method.spec().tree_set_up.is_none() {
+            return Err(CalibrationError::SharedJointsUnsupported {
+                joints: shared
+                    .names
+                    .iter()
+                    .map(|n| format!("`{n}`"))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                method: settings.method,
+            });
+        }
+        let mut plan = if shared.is_empty() {
+            VecDeque::from([Stage::Arm(Side::Left), Stage::Arm(Side::Right)])
+        } else {
+            VecDeque::from([Stage::Arms])
+        };
         if base_not_measurable.is_none() {
             plan.push_back(Stage::Base);
         }
@@ -214,6 +232,7 @@ impl CalibrationRun {
             nominal: nominal.clone(),
             committed: nominal.clone(),
             inputs,
+            shared,
             active: None,
             plan,
             base_not_measurable,
@@ -373,11 +392,18 @@ impl CalibrationRun {
         };
         if let Some(params) = params {
             apply(&mut self.committed, active.stage, params);
+            if active.stage == Stage::Base && !self.shared.is_empty() {
+                // Both arms start at one link: the base correction is how the right arm sits on the
+                // shared joints.
+                self.committed = self
+                    .shared
+                    .fold_base(&self.committed, &self.nominal.left_base_from_right_base);
+            }
             let frames = active.solver.tracker_frames();
             for side in Side::BOTH {
                 let identified = match active.stage {
                     Stage::Arm(s) => s == side,
-                    Stage::Base => true,
+                    Stage::Arms | Stage::Base => true,
                 };
                 if identified && frames[side].is_some() {
                     self.tracker_from_base[side] = frames[side];
@@ -430,6 +456,13 @@ impl CalibrationRun {
                 let n = self.inputs[side].qs.len();
                 (n, n * n.saturating_sub(1) / 2)
             }
+            Stage::Arms => {
+                let (l, r) = (self.inputs.left.qs.len(), self.inputs.right.qs.len());
+                (
+                    l + r,
+                    l * l.saturating_sub(1) / 2 + r * r.saturating_sub(1) / 2,
+                )
+            }
             Stage::Base => {
                 let (l, r) = (self.inputs.left.qs.len(), self.inputs.right.qs.len());
                 (l + r, l * r)
@@ -450,6 +483,26 @@ impl CalibrationRun {
                 self.identifiability[side] = Some(arm.identifiability);
                 self.reflector_used[side] = arm.reflector;
                 arm.solver
+            }
+            Stage::Arms => {
+                let method = self.settings.method;
+                let tree_set_up = method.spec().tree_set_up.ok_or_else(|| {
+                    CalibrationError::SharedJointsUnsupported {
+                        joints: self.shared.names.join(", "),
+                        method,
+                    }
+                })?;
+                let set_up = TreeSetUp {
+                    data: &self.inputs,
+                    start: &self.nominal,
+                    shared: &self.shared,
+                    settings: &self.settings,
+                };
+                let tree = tree_set_up(&set_up)?;
+                for (side, report) in tree.identifiability.into_iter() {
+                    self.identifiability[side] = Some(report);
+                }
+                tree.solver
             }
             Stage::Base => {
                 let set_up = BaseSetUp {
@@ -472,9 +525,17 @@ impl CalibrationRun {
 
     /// Why step-1 parameters are implausible (moved too far from the nominal model), if they are.
     fn implausible(&self, stage: Stage, params: &StageParams) -> Option<String> {
-        let (Stage::Arm(side), StageParams::Arm(arm)) = (stage, params) else {
-            return None;
-        };
+        match (stage, params) {
+            (Stage::Arm(side), StageParams::Arm(arm)) => self.implausible_arm(side, arm),
+            (Stage::Arms, StageParams::Arms(arms)) => Side::BOTH
+                .into_iter()
+                .find_map(|side| self.implausible_arm(side, &arms[side])),
+            _ => None,
+        }
+    }
+
+    /// Why one arm's step-1 parameters are implausible, if they are.
+    fn implausible_arm(&self, side: Side, arm: &ArmModel) -> Option<String> {
         let now = arm.to_vector();
         let nominal = self.nominal.arm(side).to_vector();
         (0..now.len().min(nominal.len())).find_map(|k| {
@@ -500,6 +561,16 @@ impl CalibrationRun {
             Stage::Arm(side) => self.inputs[side]
                 .distance_probe(self.committed.arm(side))
                 .start_objectives_mm2(),
+            Stage::Arms => {
+                let mut f = vec![0.0; self.committed.arm(Side::Left).reflector_count()];
+                for side in Side::BOTH {
+                    let arm = self.inputs[side].distance_probe(self.committed.arm(side));
+                    for (fk, v) in f.iter_mut().zip(arm.start_objectives_mm2()) {
+                        *fk += v;
+                    }
+                }
+                f
+            }
             Stage::Base => vec![f64::NAN; self.committed.arm(Side::Left).reflector_count()],
         }
     }
@@ -658,10 +729,9 @@ fn arm_input(
 fn apply(model: &mut DualArmModel, stage: Stage, params: StageParams) {
     match (stage, params) {
         (Stage::Arm(side), StageParams::Arm(arm)) => *model.arm_mut(side) = *arm,
+        (Stage::Arms, StageParams::Arms(arms)) => model.arms = *arms,
         (_, StageParams::Base(base)) => model.left_base_from_right_base = base,
-        (Stage::Base, StageParams::Arm(_)) => {
-            debug_assert!(false, "step 2 identifies the base, not an arm")
-        }
+        (stage, _) => debug_assert!(false, "{stage} does not identify these parameters"),
     }
 }
 
@@ -669,6 +739,9 @@ fn apply(model: &mut DualArmModel, stage: Stage, params: StageParams) {
 fn params_finite(params: &StageParams) -> bool {
     match params {
         StageParams::Arm(arm) => arm.to_vector().iter().all(|v| v.is_finite()),
+        StageParams::Arms(arms) => arms
+            .iter()
+            .all(|(_, arm)| arm.to_vector().iter().all(|v| v.is_finite())),
         StageParams::Base(b) => {
             b.translation.vector.iter().all(|v| v.is_finite())
                 && b.rotation.coords.iter().all(|v| v.is_finite())

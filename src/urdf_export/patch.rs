@@ -190,6 +190,29 @@ pub(super) fn calibrated_chain_urdf(
     if root.tag_name().name() != "robot" {
         return Err(export_err("the root element is not <robot>".into()));
     }
+    // Joints on both chains (a torso) are written once, from the left arm's model; the base
+    // correction of such a robot is how the right arm sits on them (`SharedJoints::fold_base`).
+    let shared = model.shared_joints();
+    let folded;
+    let model = if shared.is_empty() {
+        model
+    } else {
+        let (l, r) = (
+            model.arm(Side::Left).to_vector(),
+            model.arm(Side::Right).to_vector(),
+        );
+        if let Some(&(a, b)) = shared.params.iter().find(|&&(a, b)| l[a] != r[b]) {
+            return Err(export_err(format!(
+                "the arms' models disagree on the shared joint parameter `{}` ({} and {}): a \
+                 shared joint has one correction",
+                model.arm(Side::Left).param_name(a),
+                l[a],
+                r[b]
+            )));
+        }
+        folded = shared.fold_base(model, &robot.nominal_left_base_from_right_base());
+        &folded
+    };
     let mut edits: Vec<(Range<usize>, String)> = Vec::new();
     let mut appended = String::new();
     for side in Side::BOTH {
@@ -207,7 +230,7 @@ pub(super) fn calibrated_chain_urdf(
             )));
         }
         let mut origins = chain.corrected_origins(corrections);
-        if side == Side::Right {
+        if side == Side::Right && shared.is_empty() {
             origins[0].1 = chain.first_origin_with_base_correction(
                 &origins[0].1,
                 &robot.nominal_left_base_from_right_base(),
@@ -216,8 +239,10 @@ pub(super) fn calibrated_chain_urdf(
         }
         for (k, (name, origin)) in origins.iter().enumerate() {
             // A joint without correction (the first one, always fixed) keeps its text.
-            let moved = corrections[k].iter().any(|v| *v != 0.0) || (side == Side::Right && k == 0);
-            if moved {
+            let moved = corrections[k].iter().any(|v| *v != 0.0)
+                || (side == Side::Right && k == 0 && shared.is_empty());
+            let written_by_left = side == Side::Right && shared.joints.iter().any(|j| j.1 == k);
+            if moved && !written_by_left {
                 origin_edits(text, root, name, origin, &mut edits)?;
             }
         }
@@ -249,9 +274,17 @@ pub(super) fn calibrated_chain_urdf(
         root.range().start..root.range().start,
         format!(
             "<!-- Calibrated by dualcal {} from {from}: only the arm joints' origins differ (each by the \
-             identified correction; the right arm's first joint also by the base correction); the \
-             identified reflectors are the {reflector_links}. -->\n",
-            env!("CARGO_PKG_VERSION")
+             identified correction; {}); the identified reflectors are the {reflector_links}. -->\n",
+            env!("CARGO_PKG_VERSION"),
+            if shared.is_empty() {
+                "the right arm's first joint also by the base correction".to_string()
+            } else {
+                format!(
+                    "the joints both arms share ({}) once; the right arm's first joint of its own \
+                     also by the base correction",
+                    shared.names.join(", ").replace("--", "- -")
+                )
+            }
         ),
     ));
     let out = apply(text, edits);

@@ -299,21 +299,6 @@ fn resolve_drives(robot: &urdf_rs::Robot, joints: &mut [ChainJoint]) -> Result<u
     Ok(variables)
 }
 
-/// Refuse two arm chains that share a movable joint (a torso joint above both bases, as on a Nextage
-/// described from `WAIST`): the two arms' measurements would each move it on their own.
-pub fn check_disjoint(left: &SerialChain, right: &SerialChain) -> Result<(), ChainError> {
-    match left
-        .joints
-        .iter()
-        .find(|j| right.joints.iter().any(|k| k.name == j.name))
-    {
-        Some(j) => Err(ChainError::SharedJoint {
-            joint: j.name.clone(),
-        }),
-        None => Ok(()),
-    }
-}
-
 /// URDF roll, pitch, yaw of a rotation (`R = Rz(yaw) Ry(pitch) Rx(roll)`).
 ///
 /// Yaw and pitch are read from the first column; roll from `(Rz(yaw) Ry(pitch))ᵀ R`, so that the

@@ -46,7 +46,7 @@ mod tests;
 
 use super::{ArmJacobians, REFLECTOR_NAMES, ReflectorFk};
 pub(crate) use build::finite_pose;
-pub use build::{check_disjoint, isometry_from_urdf_pose, rpy_from_rotation};
+pub use build::{isometry_from_urdf_pose, rpy_from_rotation};
 use nalgebra::{Isometry3, Matrix3xX, Translation3, Unit, UnitQuaternion, Vector3};
 
 /// Correction parameters per movable joint: `tx, ty, tz` (mm), `rx, ry, rz` (rad).
@@ -96,11 +96,6 @@ pub enum ChainError {
         "no revolute, continuous or prismatic joint driven by its own value between `{base}` and `{tip}`"
     )]
     NoMovableJoint { base: String, tip: String },
-    #[error(
-        "joint `{joint}` is in both arm chains; each arm's data would move it on its own — choose base \
-         links below it"
-    )]
-    SharedJoint { joint: String },
 }
 
 impl ChainError {
@@ -115,8 +110,7 @@ impl ChainError {
             | ChainError::BadMimic { joint }
             | ChainError::BadAxis { joint, .. }
             | ChainError::NonFiniteOrigin { joint }
-            | ChainError::BadLimits { joint, .. }
-            | ChainError::SharedJoint { joint } => Some(joint),
+            | ChainError::BadLimits { joint, .. } => Some(joint),
         }
     }
 }
@@ -301,6 +295,15 @@ pub fn correction_transform(c: &[f64; PARAMS_PER_JOINT]) -> Isometry3<f64> {
         Translation3::new(c[0], c[1], c[2]),
         rot_x(c[3]) * rot_y(c[4]) * rot_z(c[5]),
     )
+}
+
+/// The angles `(a, b, c)` with `q = Rx(a) · Ry(b) · Rz(c)` (the rotation of [`correction_transform`]).
+pub fn xyz_angles(q: &UnitQuaternion<f64>) -> [f64; 3] {
+    let m = q.to_rotation_matrix().into_inner();
+    let b = m[(0, 2)].clamp(-1.0, 1.0).asin();
+    let a = (-m[(1, 2)]).atan2(m[(2, 2)]);
+    let c = (-m[(0, 1)]).atan2(m[(0, 0)]);
+    [a, b, c]
 }
 
 /// The number of parameters distance-only data can identify for an arm of `revolute` revolute
@@ -567,6 +570,44 @@ impl SerialChain {
         p.inverse() * f_from_base_nominal.inverse() * f_from_base_calibrated * p * first_origin
     }
 
+    /// The correction of joint `k` that puts the part of the chain from joint `k` on where a base
+    /// correction puts it, the joints before `k` at their values for all-zero joint values: for a
+    /// chain whose first joints are shared with the other arm (a torso), whose base cannot move on its
+    /// own. With `A` joint `k`'s aligned frame before its correction (in the base frame), `N` and `C`
+    /// the base in F nominal and calibrated: `Δ'ₖ = A⁻¹ N⁻¹ C A Δₖ`. Exact for every configuration
+    /// where the base correction commutes with the motion of the joints before `k` (a turn about and a
+    /// shift along a shared joint's axis — what the arm's own distances cannot see); at the shared
+    /// joints' zero otherwise.
+    pub fn correction_with_base_correction(
+        &self,
+        corrections: &[[f64; PARAMS_PER_JOINT]],
+        k: usize,
+        f_from_base_nominal: &Isometry3<f64>,
+        f_from_base_calibrated: &Isometry3<f64>,
+    ) -> [f64; PARAMS_PER_JOINT] {
+        let q0 = vec![0.0; self.dof()];
+        let mut a = Isometry3::identity();
+        for ((b, c), j) in self
+            .prev_aligned_from_aligned
+            .iter()
+            .zip(corrections)
+            .zip(&self.joints)
+            .take(k)
+        {
+            a *= b;
+            a *= j.moved(c, j.drive.value(&q0));
+        }
+        a *= self.prev_aligned_from_aligned[k];
+        let delta = a.inverse()
+            * f_from_base_nominal.inverse()
+            * f_from_base_calibrated
+            * a
+            * correction_transform(&corrections[k]);
+        let t = delta.translation.vector;
+        let [rx, ry, rz] = xyz_angles(&delta.rotation);
+        [t.x, t.y, t.z, rx, ry, rz]
+    }
+
     /// Is joint `k`'s axis parallel to joint `k − 1`'s (at q = 0, within 1e-6 rad)?
     pub fn parallel_to_previous(&self, k: usize) -> bool {
         if k == 0 || k >= self.joint_count() {
@@ -610,7 +651,7 @@ impl SerialChain {
         if self.joints[joint].kind.is_linear() && joint > 0 {
             return match c {
                 0 | 1 | 5 => Some(format!(
-                    "`{name}` is prismatic: its axis is a direction, so shifting it or turning about it                      moves what follows as the next joint's origin does"
+                    "`{name}` is prismatic: its axis is a direction, so shifting it or turning about it moves what follows as the next joint's origin does"
                 )),
                 _ => None,
             };

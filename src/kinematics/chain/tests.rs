@@ -230,25 +230,43 @@ fn refusals_name_the_link_or_joint() {
     assert!(chain.warnings[0].contains("left_shoulder_pan_joint"));
 }
 
+/// A joint above both arms' chains (a torso) is on both: `SharedJoints` finds it by name, with its
+/// parameters and its joint-value column in each arm; chains below it share nothing.
 #[test]
-fn shared_torso_joints_are_refused() {
+fn shared_torso_joints_are_found() {
     let torso = yumi_like_urdf().replace(
         "<joint name=\"yumi_base_link_to_body\" type=\"fixed\">",
         "<joint name=\"yumi_base_link_to_body\" type=\"continuous\">\n    <axis xyz=\"0 0 1\"/>",
     );
     let robot = parse(&torso);
-    let l = SerialChain::from_urdf(&robot, "yumi_base_link", "yumi_link_7_l").unwrap();
-    let r = SerialChain::from_urdf(&robot, "yumi_base_link", "yumi_link_7_r").unwrap();
-    assert_eq!(l.joints[0].limits, None);
-    assert_eq!(
-        check_disjoint(&l, &r).unwrap_err(),
-        ChainError::SharedJoint {
-            joint: "yumi_base_link_to_body".into()
-        }
+    let arm = |base: &str, tip: &str| {
+        let chain = SerialChain::from_urdf(&robot, base, tip).unwrap();
+        crate::kinematics::ArmModel::nominal_chain(
+            std::sync::Arc::new(chain),
+            vec![Vector3::zeros()],
+        )
+    };
+    let (l, r) = (
+        arm("yumi_base_link", "yumi_link_7_l"),
+        arm("yumi_base_link", "yumi_link_7_r"),
     );
-    let l = SerialChain::from_urdf(&robot, "yumi_body", "yumi_link_7_l").unwrap();
-    let r = SerialChain::from_urdf(&robot, "yumi_body", "yumi_link_7_r").unwrap();
-    assert!(check_disjoint(&l, &r).is_ok());
+    assert_eq!(l.chain().unwrap().joints[0].limits, None);
+    let shared = crate::kinematics::SharedJoints::of(&l, &r);
+    assert_eq!(shared.names, ["yumi_base_link_to_body"]);
+    assert_eq!(shared.joints, [(0, 0)]);
+    assert_eq!(shared.variables, [(0, 0)]);
+    assert_eq!(shared.params, (0..6).map(|i| (i, i)).collect::<Vec<_>>());
+    assert_eq!(shared.right_param_of(3), Some(3));
+    assert_eq!(shared.right_param_of(6), None);
+    assert_eq!(
+        shared.right_with_left_values(&[0.5, 1.0], &[-0.5, 2.0]),
+        [0.5, 2.0]
+    );
+    let (l, r) = (
+        arm("yumi_body", "yumi_link_7_l"),
+        arm("yumi_body", "yumi_link_7_r"),
+    );
+    assert!(crate::kinematics::SharedJoints::of(&l, &r).is_empty());
 }
 
 #[test]

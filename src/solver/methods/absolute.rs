@@ -34,6 +34,7 @@ pub const POSE: MethodSpec = MethodSpec {
         };
         set_up(s, data, "poses", LsqAlgorithm::GaussNewtonQr)
     },
+    tree_set_up: None,
 };
 
 pub const POSITION: MethodSpec = MethodSpec {
@@ -61,6 +62,7 @@ pub const POSITION: MethodSpec = MethodSpec {
             LsqAlgorithm::LevenbergMarquardt,
         )
     },
+    tree_set_up: None,
 };
 
 /// The stage of an absolute method fitting `data` (`what`, for the reasons) by `algorithm`.

@@ -29,6 +29,7 @@ pub const DISTANCE_SINGLE: MethodSpec = MethodSpec {
     takes_reflector: true,
     solver: SolverKind::LeastSquares,
     set_up,
+    tree_set_up: None,
 };
 
 fn set_up(s: &ArmSetUp) -> Result<ArmStage, CalibrationError> {

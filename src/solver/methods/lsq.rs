@@ -2,7 +2,7 @@
 //! minimax objective is compared with (it bounds the sum, not the worst reflector, and ignores the
 //! reflector-triangle constraints).
 
-use super::set_up::{ArmSetUp, ArmStage, least_squares_solver};
+use super::set_up::{ArmSetUp, ArmStage, TreeSetUp, TreeStage, least_squares_solver};
 use super::{MethodSpec, Observes, SolverKind};
 use crate::solver::CalibrationError;
 use crate::solver::least_squares::{DistanceLeastSquares, LsqAlgorithm};
@@ -25,6 +25,7 @@ pub const LSQ: MethodSpec = MethodSpec {
     takes_reflector: false,
     solver: SolverKind::LeastSquares,
     set_up,
+    tree_set_up: Some(tree_set_up),
 };
 
 fn set_up(s: &ArmSetUp) -> Result<ArmStage, CalibrationError> {
@@ -37,5 +38,18 @@ fn set_up(s: &ArmSetUp) -> Result<ArmStage, CalibrationError> {
         solver: least_squares_solver(problem, LsqAlgorithm::LevenbergMarquardt, s.settings),
         identifiability: start.report,
         reflector: None,
+    })
+}
+
+/// Both arms at once (shared joints): least squares of both arms' distance errors.
+fn tree_set_up(s: &TreeSetUp) -> Result<TreeStage, CalibrationError> {
+    let start = s.all_distances()?;
+    let problem = DistanceLeastSquares {
+        reflectors: vec![true; s.start.arm(crate::side::Side::Left).reflector_count()],
+        problem: start.problem,
+    };
+    Ok(TreeStage {
+        solver: least_squares_solver(problem, LsqAlgorithm::LevenbergMarquardt, s.settings),
+        identifiability: start.reports,
     })
 }

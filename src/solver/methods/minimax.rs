@@ -1,8 +1,8 @@
 //! The paper's Algorithm I: minimax of the three reflectors' summed squared distance errors, by SQP.
 
-use super::set_up::{ArmSetUp, ArmStage, sqp_solver};
+use super::set_up::{ArmSetUp, ArmStage, TreeSetUp, TreeStage, sqp_solver};
 use super::{MethodSpec, Observes, SolverKind};
-use crate::solver::CalibrationError;
+use crate::solver::{CalibrationError, Stage};
 
 pub const MINIMAX: MethodSpec = MethodSpec {
     name: "minimax",
@@ -22,6 +22,7 @@ pub const MINIMAX: MethodSpec = MethodSpec {
     takes_reflector: false,
     solver: SolverKind::Sqp,
     set_up,
+    tree_set_up: Some(tree_set_up),
 };
 
 fn set_up(s: &ArmSetUp) -> Result<ArmStage, CalibrationError> {
@@ -30,5 +31,15 @@ fn set_up(s: &ArmSetUp) -> Result<ArmStage, CalibrationError> {
         solver: sqp_solver(start.problem, s.stage(), start.h0, s.settings)?,
         identifiability: start.report,
         reflector: None,
+    })
+}
+
+/// Both arms at once (shared joints): the minimax over the reflectors of both arms' summed squared
+/// distance errors ([`crate::solver::tree_problem`]).
+fn tree_set_up(s: &TreeSetUp) -> Result<TreeStage, CalibrationError> {
+    let start = s.all_distances()?;
+    Ok(TreeStage {
+        solver: sqp_solver(start.problem, Stage::Arms, start.h0, s.settings)?,
+        identifiability: start.reports,
     })
 }

@@ -17,7 +17,7 @@ mod lsq;
 mod minimax;
 pub mod set_up;
 
-pub use set_up::{ArmData, ArmSetUp, ArmStage, BaseSetUp, worst_reflector};
+pub use set_up::{ArmData, ArmSetUp, ArmStage, BaseSetUp, TreeSetUp, TreeStage, worst_reflector};
 
 use super::{CalibrationError, StageSolver};
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
@@ -40,6 +40,9 @@ pub enum SolverKind {
     /// Gauss–Newton or Levenberg–Marquardt on a sum of squares.
     LeastSquares,
 }
+
+/// A method's set-up for both arms at once (arms that share joints).
+pub type TreeSetUpFn = fn(&TreeSetUp<'_>) -> Result<TreeStage, CalibrationError>;
 
 /// Everything about one step-1 method (each arm's parameters).
 pub struct MethodSpec {
@@ -73,6 +76,9 @@ pub struct MethodSpec {
     pub solver: SolverKind,
     /// Its stage's set-up: identifiability, scaling and the solver on the identifiable parameters.
     pub set_up: fn(&ArmSetUp<'_>) -> Result<ArmStage, CalibrationError>,
+    /// Its set-up for both arms at once, where the arms share joints (a torso); `None`: the method
+    /// cannot fit such a robot ([`CalibrationError::SharedJointsUnsupported`]).
+    pub tree_set_up: Option<TreeSetUpFn>,
 }
 
 /// Everything about one step-2 method (the right-arm base in the left-arm base).

@@ -12,8 +12,9 @@ use super::super::identifiability::{self, IdentifiabilityReport, ParameterInfo};
 use super::super::least_squares::{LeastSquaresProblem, LsqAlgorithm, LsqState};
 use super::super::problem::MinimaxProblem;
 use super::super::sqp::{SqpSettings, SqpState};
+use super::super::tree_problem::{TreeLayout, TreeProblem};
 use super::super::{CalibrationError, CalibrationSettings, Reflector, Stage, StageSolver};
-use crate::kinematics::{ArmKinematics, ArmModel, DualArmModel};
+use crate::kinematics::{ArmKinematics, ArmModel, DualArmModel, SharedJoints};
 use crate::side::{PerSide, Side};
 use nalgebra::{DMatrix, DVector, Isometry3, Vector3};
 
@@ -285,6 +286,113 @@ impl ArmSetUp<'_> {
             problem: probe.with_free(report.free.clone(), scale),
             h0,
             report,
+        })
+    }
+}
+
+/// What a step-1 method's set-up for both arms at once is given, where the arms share joints (a
+/// torso): both arms' data, the start (nominal) model, its shared joints, the settings.
+pub struct TreeSetUp<'a> {
+    pub data: &'a PerSide<ArmData>,
+    pub start: &'a DualArmModel,
+    pub shared: &'a SharedJoints,
+    pub settings: &'a CalibrationSettings,
+}
+
+/// What a set-up for both arms at once returns: the stage's solver and each arm's identifiability
+/// (the tree's, split: a shared parameter is in both).
+pub struct TreeStage {
+    pub solver: Box<dyn StageSolver>,
+    pub identifiability: PerSide<IdentifiabilityReport>,
+}
+
+/// The tree's distance problem on its identifiable parameters, scaled, with the Gauss–Newton start
+/// Hessian, and each arm's part of the identifiability report.
+pub struct TreeStart {
+    pub problem: TreeProblem,
+    pub h0: DMatrix<f64>,
+    pub reports: PerSide<IdentifiabilityReport>,
+}
+
+impl TreeSetUp<'_> {
+    /// The set-up of the distance methods for both arms at once: the identifiability analysis of the
+    /// tree's parameters on both arms' sampled pair Jacobians (one Gram matrix), every free parameter
+    /// scaled by its RMS sensitivity, H₀ the Gauss–Newton matrix in those variables.
+    pub fn all_distances(&self) -> Result<TreeStart, CalibrationError> {
+        let arms = &self.start.arms;
+        let layout = TreeLayout::new(&arms.left, &arms.right, self.shared);
+        let probes = PerSide::from_fn(|side| self.data[side].distance_probe(&arms[side]));
+        let columns = PerSide::from_fn(|side| {
+            probes[side].sample_pair_jacobian(
+                &DVector::zeros(arms[side].param_count()),
+                IDENTIFIABILITY_PAIRS,
+            )
+        });
+        let mut m = DMatrix::zeros(layout.len, columns.left.ncols() + columns.right.ncols());
+        let mut first = 0;
+        for side in Side::BOTH {
+            let c = &columns[side];
+            for (k, &x) in layout.index[side].iter().enumerate() {
+                for j in 0..c.ncols() {
+                    m[(x, first + j)] = c[(k, j)];
+                }
+            }
+            first += c.ncols();
+        }
+        let gram = identifiability::gram_by_product(&m);
+        // Each arm's preference order, interleaved (both arms' reflectors first, then the joints
+        // from the base: a shared joint once, where the left arm's order puts it).
+        let orders = arms.as_ref().map(|_, a| a.identifiability_order());
+        let mut order: Vec<usize> = Vec::with_capacity(layout.len);
+        for i in 0..orders.left.len().max(orders.right.len()) {
+            for side in Side::BOTH {
+                if let Some(&k) = orders[side].get(i) {
+                    let x = layout.index[side][k];
+                    if !order.contains(&x) {
+                        order.push(x);
+                    }
+                }
+            }
+        }
+        let allowed = vec![true; layout.len];
+        let name = |x: usize| {
+            let (side, k) = layout.owner(x);
+            if layout.is_shared(x) {
+                format!("{} (shared)", arms[side].param_name(k))
+            } else {
+                format!("{side} {}", arms[side].param_name(k))
+            }
+        };
+        let reason = |x: usize| {
+            let (side, k) = layout.owner(x);
+            arms[side].unidentifiable_reason(k)
+        };
+        let report = identifiability::analyse(
+            &gram,
+            &ParameterInfo {
+                order: &order,
+                allowed: &allowed,
+                name: &name,
+                reason: &reason,
+                data: ParameterInfo::DISTANCES,
+                not_allowed: ParameterInfo::FIXED_BY_USER,
+            },
+        );
+        if report.free.is_empty() {
+            return Err(CalibrationError::RankDeficient {
+                stage: Stage::Arms,
+                detail: "no parameter is identifiable from these configurations".into(),
+            });
+        }
+        let scale = DVector::from_vec(column_scales(&gram, report.free.iter().copied()));
+        let h0 = DMatrix::from_fn(report.free.len(), report.free.len(), |i, j| {
+            2.0 * gram[(report.free[i], report.free[j])] * scale[i] * scale[j]
+        });
+        let reports = layout.split_report(&report, arms);
+        Ok(TreeStart {
+            problem: TreeProblem::new(probes, &layout, &report.free, &scale),
+            h0,
+            reports,
         })
     }
 }

@@ -137,6 +137,7 @@ impl CalibrationRun {
             nominal: self.nominal.clone(),
             committed: self.nominal.clone(),
             inputs: self.inputs.clone(),
+            shared: self.shared.clone(),
             active: None,
             plan: VecDeque::new(),
             replaying: None,

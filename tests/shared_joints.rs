@@ -1,0 +1,252 @@
+//! Arms that share joints (issue 19): a torso on both arms' chains — a revolute waist, and a waist
+//! with a prismatic lift — moved in every configuration. Simulated on robots the tests write (the
+//! YuMi-like URDF on a torso); step 1 is one fit of both arms with the shared joints' corrections
+//! once ([`Stage::Arms`]); each case calibrated to within 10% of what the true parameters give on the
+//! verification split, the shared joints' corrections the same in both arms, the calibrated URDF
+//! keeping the robot (every link, visual and collision), changing the shared joints once, loading
+//! back and accepted by ROS's `check_urdf`. A method without a fit of both arms says so.
+
+mod common;
+#[path = "fixtures/robots.rs"]
+mod robots;
+
+use dualcal::dataset::{self, Dataset, Split, Units};
+use dualcal::kinematics::DualArmModel;
+use dualcal::metrics::evaluate;
+use dualcal::robot::{ArmLinks, LoadOptions, RobotDescription};
+use dualcal::side::{PerSide, Side};
+use dualcal::simulate::{paper_options, simulate_with_robot};
+use dualcal::solver::{CalibrationError, CalibrationSettings, Calibrator, Method, Stage};
+
+fn load_robot(path: &std::path::Path) -> RobotDescription {
+    let [(lb, lt), (rb, rt)] = robots::SHARED_TORSO_ARMS;
+    let options = LoadOptions {
+        arms: PerSide::new(Some(ArmLinks::new(lb, lt)), Some(ArmLinks::new(rb, rt))),
+        ..Default::default()
+    };
+    RobotDescription::load(path, &options).unwrap()
+}
+
+struct Case {
+    robot: RobotDescription,
+    dataset: Dataset,
+    truth: DualArmModel,
+}
+
+/// Simulate `lift` (a waist, or a waist and a lift) with the reflectors `keep` (indices into a, b, c),
+/// written and read back through the dataset files.
+fn simulate(
+    dir: &std::path::Path,
+    lift: bool,
+    seed: u64,
+    keep: &[usize],
+    (configs, cal): (usize, usize),
+) -> Case {
+    let urdf = dir.join(format!("torso-{lift}.urdf"));
+    std::fs::write(&urdf, robots::shared_torso_urdf(lift)).unwrap();
+    let robot = load_robot(&urdf);
+    let sim = simulate_with_robot(&paper_options(seed, configs, cal), &robot).unwrap();
+    let mut ds = sim.dataset.clone();
+    let mut truth = sim.truth.clone();
+    let pick = |v: &Vec<nalgebra::Vector3<f64>>| keep.iter().map(|&k| v[k]).collect::<Vec<_>>();
+    let names: Vec<String> = keep
+        .iter()
+        .map(|&k| ds.reflector_names[k].clone())
+        .collect();
+    ds.nominal_reflectors_mm = pick(&ds.nominal_reflectors_mm);
+    ds.reflector_names = names.clone().into();
+    for (_, arm) in ds.arms.iter_mut() {
+        for m in &mut arm.measurements {
+            m.tracker_points_mm = pick(&m.tracker_points_mm);
+        }
+    }
+    for side in Side::BOTH {
+        let arm = truth.arm_mut(side);
+        arm.reflectors_mm = pick(&arm.reflectors_mm);
+        arm.reflector_names = names.clone().into();
+    }
+    let out = dir.join(format!("data-{lift}-{seed}"));
+    dataset::save(&ds, &out, Units::MM_DEG).unwrap();
+    // Through the load pipeline: the lift's column is a length, known from the robot.
+    let [(lb, lt), (rb, rt)] = robots::SHARED_TORSO_ARMS;
+    let ws = dualcal::workspace::Workspace::load(
+        &out,
+        &dualcal::workspace::WorkspaceOptions {
+            robot: Some(urdf.clone()),
+            arms: PerSide::new(Some(ArmLinks::new(lb, lt)), Some(ArmLinks::new(rb, rt))),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert!(ws.refusals().is_empty(), "{:?}", ws.refusals());
+    let dataset = ws.dataset;
+    Case {
+        robot,
+        dataset,
+        truth,
+    }
+}
+
+fn check(case: &Case, name: &str, dir: &std::path::Path) {
+    let nominal = case.robot.nominal_model_for(&case.dataset);
+    let shared = nominal.shared_joints();
+    assert!(!shared.is_empty(), "{name}: the torso is on both chains");
+    // The truth's torso is one joint, and the arms move it differently in their configurations.
+    let (tl, tr) = (
+        case.truth.arm(Side::Left).to_vector(),
+        case.truth.arm(Side::Right).to_vector(),
+    );
+    assert!(shared.params.iter().all(|&(a, b)| tl[a] == tr[b]));
+    let torso_values = |side: Side| {
+        let arm = &case.dataset.arms[side];
+        let (a, b) = shared.variables[0];
+        let col = if side == Side::Left { a } else { b };
+        let v: Vec<f64> = arm.measurements.iter().map(|m| m.q_rad[col]).collect();
+        v.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+            - v.iter().copied().fold(f64::INFINITY, f64::min)
+    };
+    assert!(torso_values(Side::Left) > 0.5 && torso_values(Side::Right) > 0.5);
+
+    let settings = CalibrationSettings {
+        max_iterations: 400,
+        ..CalibrationSettings::default()
+    };
+    let result = common::calibrate(&case.dataset, &nominal, &settings);
+    assert!(result.is_converged(), "{name}: {:?}", result.warnings());
+    let stages: Vec<Stage> = result.stages.iter().map(|s| s.stage).collect();
+    assert_eq!(stages, [Stage::Arms, Stage::Base], "{name}");
+    // The shared joints' corrections: one value, in both arms' models.
+    let (cl, cr) = (
+        result.calibrated.arm(Side::Left).to_vector(),
+        result.calibrated.arm(Side::Right).to_vector(),
+    );
+    for &(a, b) in &shared.params {
+        assert_eq!(cl[a], cr[b], "{name}: shared parameter {a}");
+    }
+    // Both arms' identifiability reports hold the shared parameters alike.
+    let reports = result
+        .identifiability
+        .as_ref()
+        .map(|_, r| r.clone().unwrap());
+    for &(a, b) in &shared.params {
+        assert_eq!(
+            reports.left.free.contains(&a),
+            reports.right.free.contains(&b),
+            "{name}: shared parameter {a} / {b}"
+        );
+    }
+    // The base of two chains from one link stays nominal: step 2's correction is the right arm's
+    // mounting on the torso.
+    assert_eq!(
+        result.calibrated.left_base_from_right_base,
+        nominal.left_base_from_right_base
+    );
+
+    let at = |m: &DualArmModel| evaluate(&case.dataset, m, Split::Ver).unwrap();
+    let (n, t, c) = (at(&nominal), at(&case.truth), at(&result.calibrated));
+    let figures = |r: &dualcal::metrics::AccuracyReport| {
+        [
+            ("relative left", r.relative_left.pos_rms_mm),
+            ("relative right", r.relative_right.pos_rms_mm),
+            ("collaborative", r.collaborative.unwrap().pos_rms_mm),
+        ]
+    };
+    for ((label, n), ((_, t), (_, c))) in figures(&n)
+        .into_iter()
+        .zip(figures(&t).into_iter().zip(figures(&c)))
+    {
+        eprintln!("{name} {label}: nominal {n:.4} mm, truth {t:.4} mm, calibrated {c:.4} mm");
+        assert!(n > 10.0 * t, "{name} {label}: nominal {n} vs truth {t}");
+        assert!(c <= 1.1 * t, "{name} {label}: calibrated {c} vs truth {t}");
+    }
+
+    // The calibrated URDF: the robot kept, the shared joints changed once, loads back to the model.
+    let text = dualcal::urdf_export::calibrated_urdf(&case.robot, &result.calibrated).unwrap();
+    let original = &case.robot.text;
+    for tag in ["<link ", "<visual>", "<collision>", "<joint "] {
+        assert_eq!(
+            text.matches(tag).count(),
+            original.matches(tag).count()
+                + if tag == "<visual>" || tag == "<link " || tag == "<joint " {
+                    // The identified reflectors are written as links on fixed joints (with a visual).
+                    text.matches("<link name=\"reflector_").count()
+                } else {
+                    0
+                },
+            "{name}: {tag}"
+        );
+    }
+    for joint in &shared.names {
+        assert_eq!(
+            text.matches(&format!("<joint name=\"{joint}\"")).count(),
+            1,
+            "{name}: {joint}"
+        );
+    }
+    assert!(text.contains("once"), "{name}: the header says so");
+    let out = dir.join(format!("{}.urdf", name.replace(' ', "-")));
+    std::fs::write(&out, &text).unwrap();
+    let back = load_robot(&out);
+    let model = back.nominal_model_named(
+        &result.calibrated.arm(Side::Left).reflector_names,
+        &result.calibrated.arm(Side::Left).reflectors_mm,
+    );
+    let back_figures = at(&model);
+    for ((_, c), (_, b)) in figures(&c).into_iter().zip(figures(&back_figures)) {
+        assert!(
+            (c - b).abs() < 1e-6,
+            "{name}: model {c} vs written URDF {b}"
+        );
+    }
+    let o = std::process::Command::new("check_urdf")
+        .arg(&out)
+        .output()
+        .unwrap_or_else(|e| {
+            panic!("this test needs ROS's check_urdf (Debian: liburdfdom-tools, which tools/test installs): {e}")
+        });
+    assert!(
+        o.status.success(),
+        "{name}: check_urdf: {}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+}
+
+#[test]
+fn a_moving_revolute_torso_shared_by_both_arms() {
+    let dir = tempfile::tempdir().unwrap();
+    let case = simulate(dir.path(), false, 91, &[0, 1, 2], (300, 200));
+    check(&case, "revolute torso", dir.path());
+}
+
+#[test]
+fn a_waist_and_prismatic_lift_shared_by_both_arms_with_one_reflector_per_arm() {
+    let dir = tempfile::tempdir().unwrap();
+    // One marker per hand gives a third of the distances: as many configurations as the DLR data has.
+    let case = simulate(dir.path(), true, 92, &[0], (500, 400));
+    check(&case, "waist and lift, one reflector", dir.path());
+}
+
+#[test]
+fn a_method_without_a_fit_of_both_arms_says_why() {
+    let dir = tempfile::tempdir().unwrap();
+    let case = simulate(dir.path(), false, 93, &[0, 1, 2], (60, 40));
+    let nominal = case.robot.nominal_model_for(&case.dataset);
+    let settings = CalibrationSettings {
+        method: Method::DistanceSingle,
+        ..CalibrationSettings::default()
+    };
+    let err = Calibrator::new(&case.dataset, &nominal)
+        .settings(settings)
+        .run()
+        .unwrap_err();
+    assert!(
+        matches!(err, CalibrationError::SharedJointsUnsupported { .. }),
+        "{err}"
+    );
+    let text = err.to_string();
+    assert!(
+        text.contains("yumi_base_link_to_body") && text.contains("`minimax`"),
+        "{text}"
+    );
+}
