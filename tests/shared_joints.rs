@@ -250,3 +250,185 @@ fn a_method_without_a_fit_of_both_arms_says_why() {
         "{text}"
     );
 }
+
+/// The command line on a torso robot: `simulate --urdf` → `calibrate --urdf` → `evaluate` →
+/// `report`, the run's one step-1 stage and the shared joint said once.
+#[test]
+fn a_shared_torso_from_the_command_line() {
+    use std::process::Command;
+    let dir = tempfile::tempdir().unwrap();
+    let urdf = dir.path().join("torso.urdf");
+    std::fs::write(&urdf, robots::shared_torso_urdf(false)).unwrap();
+    let s = |p: &std::path::Path| p.to_str().unwrap().to_owned();
+    let ok = |args: &[String]| {
+        let out = Command::new(env!("CARGO_BIN_EXE_dualcal"))
+            .args(args)
+            .env_remove("DISPLAY")
+            .env_remove("WAYLAND_DISPLAY")
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "dualcal {args:?}:\n{}\n{}",
+            String::from_utf8_lossy(&out.stdout),
+            String::from_utf8_lossy(&out.stderr)
+        );
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    };
+    let args = |v: &[&str]| v.iter().map(|a| a.to_string()).collect::<Vec<_>>();
+    let [(lb, lt), (rb, rt)] = robots::SHARED_TORSO_ARMS;
+    let data = dir.path().join("sim");
+    ok(&args(&[
+        "simulate",
+        "--urdf",
+        &s(&urdf),
+        "--left",
+        &format!("{lb}:{lt}"),
+        "--right",
+        &format!("{rb}:{rt}"),
+        "--out",
+        &s(&data),
+    ]));
+    let (p, cal, report) = (
+        dir.path().join("p.json"),
+        dir.path().join("cal.urdf"),
+        dir.path().join("report.html"),
+    );
+    let out = ok(&args(&[
+        "calibrate",
+        &s(&data),
+        "--out",
+        &s(&p),
+        "--urdf",
+        &s(&cal),
+    ]));
+    assert!(out.contains("step 1 (both arms, shared joints)"), "{out}");
+    assert!(!out.contains("step 1 (left arm)"), "{out}");
+    assert!(out.contains("yumi_base_link_to_body"), "{out}");
+    let rms = |json: &str| {
+        let v: serde_json::Value = serde_json::from_str(json).unwrap();
+        ["relative_left", "relative_right", "collaborative"]
+            .map(|k| v[k]["pos_rms_mm"].as_f64().unwrap())
+    };
+    let evaluate = |params: &std::path::Path| {
+        rms(&ok(&args(&[
+            "evaluate",
+            &s(&data),
+            "--params",
+            &s(params),
+            "--split",
+            "ver",
+            "--json",
+        ])))
+    };
+    let (truth, calibrated) = (evaluate(&data.join("truth.json")), evaluate(&p));
+    for k in 0..3 {
+        assert!(calibrated[k] < 1.1 * truth[k], "{calibrated:?} {truth:?}");
+    }
+    let text = std::fs::read_to_string(&cal).unwrap();
+    assert_eq!(
+        text.matches("<joint name=\"yumi_base_link_to_body\"")
+            .count(),
+        1
+    );
+    ok(&args(&[
+        "report",
+        &s(&data),
+        "--params",
+        &s(&p),
+        "--out",
+        &s(&report),
+    ]));
+    let html = std::fs::read_to_string(&report).unwrap();
+    assert!(html.contains("yumi_base_link_to_body"));
+}
+
+/// The predicted σ of a tree fit (both arms' sums in one covariance, a shared parameter one column)
+/// against the spread over repeated measurements: one simulated lift robot and set of configurations,
+/// fresh 20 µm noise per trial, least squares (the fit the formula describes).
+#[test]
+fn the_predicted_sigma_of_shared_parameters_match_their_spread() {
+    use dualcal::solver::uncertainty::for_result;
+    use nalgebra::{Point3, Vector3};
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, Normal};
+    let dir = tempfile::tempdir().unwrap();
+    let urdf = dir.path().join("lift.urdf");
+    std::fs::write(&urdf, robots::shared_torso_urdf(true)).unwrap();
+    let robot = load_robot(&urdf);
+    let sim = simulate_with_robot(&paper_options(21, 160, 120), &robot).unwrap();
+    let shared = sim.nominal.shared_joints();
+    let renoised = |seed: u64| {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        let noise = Normal::new(0.0, 0.02).unwrap();
+        let mut ds = sim.dataset.clone();
+        for side in Side::BOTH {
+            let tracker_from_base = sim.tracker_from_left_base * sim.truth.left_base_from(side);
+            for m in &mut ds.arms[side].measurements {
+                let fk = sim.truth.arm(side).reflector_fk(&m.q_rad);
+                for (p, t) in m.tracker_points_mm.iter_mut().zip(&fk.points_mm) {
+                    *p = tracker_from_base.transform_point(&Point3::from(*t)).coords
+                        + Vector3::from_fn(|_, _| noise.sample(&mut rng));
+                }
+            }
+        }
+        ds
+    };
+    let settings = CalibrationSettings {
+        method: Method::LeastSquares,
+        split: Split::Cal,
+        ..CalibrationSettings::default()
+    };
+    let trials = 16;
+    let mut vectors = Vec::new();
+    let mut predicted = None;
+    for t in 0..trials {
+        let ds = renoised(300 + t);
+        let result = common::calibrate(&ds, &sim.nominal, &settings);
+        assert_eq!(result.stages[0].stage, Stage::Arms);
+        if t == 0 {
+            let u = for_result(&ds, &result);
+            let (l, r) = (u.left.clone().unwrap(), u.right.clone().unwrap());
+            // A shared parameter has one σ, reported by both arms.
+            for p in l
+                .parameters
+                .iter()
+                .filter(|p| p.name.starts_with("yumi_lift"))
+            {
+                let q = r.parameters.iter().find(|q| q.name == p.name).unwrap();
+                assert_eq!(p.sigma, q.sigma, "{}", p.name);
+            }
+            assert!(l.condition.is_finite() && r.condition.is_finite());
+            assert!(
+                (l.point_sigma_mm / 0.02 - 1.0).abs() < 0.2,
+                "{}",
+                l.point_sigma_mm
+            );
+            predicted = Some((l, result.identifiability.left.clone().unwrap().free));
+        }
+        vectors.push(result.calibrated.arm(Side::Left).to_vector());
+    }
+    let (predicted, free) = predicted.unwrap();
+    let arm = sim.nominal.arm(Side::Left);
+    let mut ratios = Vec::new();
+    for (c, &k) in free.iter().enumerate() {
+        let mean = vectors.iter().map(|v| v[k]).sum::<f64>() / trials as f64;
+        let var = vectors.iter().map(|v| (v[k] - mean).powi(2)).sum::<f64>() / (trials - 1) as f64;
+        let unit = if arm.param_is_angle(k) { 1000.0 } else { 1.0 };
+        let ratio = var.sqrt() * unit / predicted.parameters[c].sigma;
+        if arm.param_name(k).starts_with("yumi_lift") {
+            eprintln!("{}: spread / predicted σ = {ratio:.2}", arm.param_name(k));
+        }
+        ratios.push(ratio);
+    }
+    assert!(shared.params.iter().any(|&(a, _)| free.contains(&a)));
+    ratios.sort_by(f64::total_cmp);
+    let median = ratios[ratios.len() / 2];
+    eprintln!(
+        "tree fit, {} parameters: spread / predicted σ median {median:.2} ({:.2} … {:.2})",
+        ratios.len(),
+        ratios[0],
+        ratios[ratios.len() - 1]
+    );
+    assert!((0.7..1.4).contains(&median), "{median}");
+}

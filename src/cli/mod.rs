@@ -484,8 +484,24 @@ pub fn describe_robot(robot: &RobotDescription) -> String {
         .iter()
         .map(|(side, a)| format!("{side} arm {} ({} joints)", a.links, a.chain.dof()))
         .collect();
+    let left = robot.arm(crate::side::Side::Left).chain.joint_names();
+    let shared: Vec<&str> = robot
+        .arm(crate::side::Side::Right)
+        .chain
+        .joint_names()
+        .into_iter()
+        .filter(|n| left.contains(n))
+        .collect();
+    let shared = if shared.is_empty() {
+        String::new()
+    } else {
+        format!(
+            "; shared by both arms: {} (identified once, from both arms' data)",
+            shared.join(", ")
+        )
+    };
     format!(
-        "robot: {}; {}; nominal model: {}",
+        "robot: {}; {}{shared}; nominal model: {}",
         robot.name(),
         arms.join(", "),
         if robot.is_builtin() {

@@ -40,6 +40,9 @@ pub(crate) struct KinJoint {
     pub(crate) drive: Option<JointDrive>,
     /// On both arms' chains (a torso): `arm` is the left arm's position.
     pub(crate) shared: bool,
+    /// For a shared joint: how the right arm's variables drive it (used when only the right arm's
+    /// values are given).
+    pub(crate) right_drive: Option<JointDrive>,
 }
 
 /// The description compiled for fast forward kinematics.
@@ -66,7 +69,11 @@ pub(crate) struct Kinematics {
 impl Kinematics {
     fn motion(&self, joint: &KinJoint, q_left: &[f64], q_right: &[f64]) -> Isometry3<f64> {
         let q = match (joint.arm, joint.drive) {
-            (Some((Side::Left, _)), Some(d)) => d.value(q_left),
+            // A shared joint: the left arm's value, or the right arm's when only those are given.
+            (Some((Side::Left, _)), Some(d)) => match joint.right_drive {
+                Some(r) if q_left.is_empty() => r.value(q_right),
+                _ => d.value(q_left),
+            },
             (Some((Side::Right, _)), Some(d)) => d.value(q_right),
             _ => 0.0,
         };
@@ -222,6 +229,7 @@ pub(crate) fn compile(
             };
             if tree.joints[ji].arm.is_some() {
                 tree.joints[ji].shared = true;
+                tree.joints[ji].right_drive = Some(joint.drive);
             } else {
                 tree.joints[ji].arm = Some((side, k));
                 tree.joints[ji].drive = Some(joint.drive);
@@ -367,6 +375,7 @@ fn parse_joints(
             arm: None,
             drive: None,
             shared: false,
+            right_drive: None,
         });
     }
     check_mimics(urdf, msg, warnings)?;

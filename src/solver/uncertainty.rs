@@ -435,6 +435,10 @@ pub fn for_result(
 ) -> crate::side::PerSide<Option<ArmUncertainty>> {
     let settings = &result.settings;
     let kept = dataset.excluding(&settings.exclude);
+    let shared = result.calibrated.shared_joints();
+    if !shared.is_empty() {
+        return tree_uncertainty(&kept, result, &shared).unwrap_or_default();
+    }
     crate::side::PerSide::from_fn(|side| {
         if settings.method.is_absolute() || result.reflector_used[side].is_some() {
             return None;
@@ -446,4 +450,88 @@ pub fn for_result(
             ms.iter().map(|m| m.tracker_points_mm.clone()).collect();
         arm_uncertainty(result.calibrated.arm(side), &qs, &measured, &report.free)
     })
+}
+
+/// [`for_result`] of arms that share joints (a torso), fitted at once: both arms' sums in the tree's
+/// free parameters (a shared one is one column; `solver::tree_problem`), one covariance, each arm's
+/// part of it reported in that arm's names (a shared parameter in both, with the same σ). `None` where
+/// the fit cannot be summarised (too few configurations, a singular fit).
+fn tree_uncertainty(
+    kept: &crate::dataset::Dataset,
+    result: &super::CalibrationResult,
+    shared: &crate::kinematics::SharedJoints,
+) -> Option<crate::side::PerSide<Option<ArmUncertainty>>> {
+    use crate::side::{PerSide, Side};
+    let settings = &result.settings;
+    let reports =
+        PerSide::try_from_fn(|side| result.identifiability[side].as_ref().ok_or(())).ok()?;
+    // The tree's columns: the left arm's free parameters, then the right arm's that are not shared.
+    let mut cols: PerSide<Vec<usize>> = PerSide::default();
+    cols.left = (0..reports.left.free.len()).collect();
+    let mut next = reports.left.free.len();
+    for &b in &reports.right.free {
+        let col = match shared.left_param_of(b) {
+            Some(a) => reports.left.free.iter().position(|&k| k == a)?,
+            None => {
+                next += 1;
+                next - 1
+            }
+        };
+        cols.right.push(col);
+    }
+    let p = next;
+    let mut jtj = DMatrix::<f64>::zeros(p, p);
+    let mut meat = DMatrix::<f64>::zeros(p, p);
+    let (mut cost, mut rows, mut used_all, mut n_all_all) = (0.0, 0usize, 0usize, 0usize);
+    let mut counts: PerSide<(usize, usize)> = PerSide::default();
+    for side in Side::BOTH {
+        let arm = result.calibrated.arm(side);
+        let ms = kept.arm(side).select(settings.split);
+        let n_all = ms.len();
+        let stride = n_all.div_ceil(MAX_CONFIGURATIONS).max(1);
+        let used: Vec<usize> = (0..n_all).step_by(stride).collect();
+        if used.len() < 3 {
+            return None;
+        }
+        let jac: Vec<ArmJacobians> = used
+            .par_iter()
+            .map(|&i| arm.reflector_jacobians(&ms[i].q_rad))
+            .collect();
+        let points: Vec<&Vec<Vector3<f64>>> =
+            used.iter().map(|&i| &ms[i].tracker_points_mm).collect();
+        let sums = pair_sums(&jac, &points, &reports[side].free, arm.reflector_count());
+        let c = &cols[side];
+        for i in 0..c.len() {
+            for j in 0..c.len() {
+                jtj[(c[i], c[j])] += sums.jtj[(i, j)];
+                meat[(c[i], c[j])] += sums.meat[(i, j)];
+            }
+        }
+        cost += sums.cost;
+        rows += sums.rows;
+        counts[side] = (used.len(), n_all);
+        used_all += used.len();
+        n_all_all += n_all;
+    }
+    let dof = rows.checked_sub(p).filter(|&d| d > 0)?;
+    let point_var = cost / (2.0 * dof as f64);
+    let inverse = jtj.clone().cholesky()?.inverse();
+    let mut cov = &inverse * &meat * &inverse * point_var;
+    if used_all < n_all_all {
+        cov *= used_all as f64 / n_all_all as f64;
+    }
+    Some(PerSide::from_fn(|side| {
+        let c = &cols[side];
+        let sub = |m: &DMatrix<f64>| DMatrix::from_fn(c.len(), c.len(), |i, j| m[(c[i], c[j])]);
+        let (used, n_all) = counts[side];
+        Some(summarise(
+            result.calibrated.arm(side),
+            &reports[side].free,
+            &sub(&cov),
+            point_var,
+            used,
+            n_all,
+            &sub(&jtj),
+        ))
+    }))
 }

@@ -84,7 +84,17 @@ impl PlotsView {
             ui.selectable_value(&mut view.tab, PlotTab::Summary, "Summary");
             ui.separator();
             if view.tab == PlotTab::Convergence {
-                for stage in plots::STAGES {
+                // Arms that share joints are fitted in one stage.
+                let shared = session.is_some_and(|s| !s.nominal.model.shared_joints().is_empty());
+                let stages: &[Stage] = if shared {
+                    &[Stage::Arms, Stage::Base]
+                } else {
+                    &plots::STAGES
+                };
+                if !stages.contains(&view.stage) {
+                    view.stage = stages[0];
+                }
+                for &stage in stages {
                     ui.selectable_value(&mut view.stage, stage, stage.to_string());
                 }
                 return;

@@ -303,6 +303,15 @@ fn robot_summary_ui(ui: &mut egui::Ui, session: &Session) {
     };
     ui.label(RichText::new(name).strong())
         .on_hover_text(robot.name());
+    let shared = session.nominal.model.shared_joints();
+    if !shared.is_empty() {
+        ui.label(format!("shared by both arms: {}", shared.names.join(", ")))
+            .on_hover_text(
+                "Joints on both arms' chains (a torso): one joint of the robot, its corrections \
+                 identified once from both arms' data (step 1 fits both arms at once), changed once \
+                 in the calibrated URDF; both arms' files carry its value",
+            );
+    }
     // The chain in monospace: the proportional font has no arrow glyph.
     for (side, arm) in robot.arms().iter() {
         let hover = format!(

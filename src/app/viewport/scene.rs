@@ -500,10 +500,16 @@ pub fn build_scene(
     software_renderer: bool,
     version: u64,
 ) -> SceneData {
-    let q_rad = poses.map(|side, pose| {
+    let mut q_rad = poses.map(|side, pose| {
         pose.and_then(|i| session.dataset.arm(side).measurements.get(i))
             .map_or_else(|| session.robot.home_q_rad(side), |m| m.q_rad.clone())
     });
+    // Joints both arms share (a torso) are posed by the left arm's values — by the right arm's when a
+    // right configuration is selected.
+    if selection.is_some_and(|c| c.side == Side::Right) {
+        let shared = session.nominal.model.shared_joints();
+        q_rad.left = shared.left_with_right_values(&q_rad.left, &q_rad.right);
+    }
     let mut scene = robot_scene(
         &session.robot,
         session
