@@ -466,8 +466,8 @@ fn tree_uncertainty(
     let reports =
         PerSide::try_from_fn(|side| result.identifiability[side].as_ref().ok_or(())).ok()?;
     // The tree's columns: the left arm's free parameters, then the right arm's that are not shared.
-    let mut cols: PerSide<Vec<usize>> = PerSide::default();
-    cols.left = (0..reports.left.free.len()).collect();
+    let mut cols: PerSide<Vec<usize>> =
+        PerSide::new((0..reports.left.free.len()).collect(), Vec::new());
     let mut next = reports.left.free.len();
     for &b in &reports.right.free {
         let col = match shared.left_param_of(b) {
