@@ -115,6 +115,7 @@ impl Workspace {
         let limits = PerSide::from_fn(|side| robot.joint_limits_rad(side));
         dataset::check_joint_limits(&dataset, &limits).map_err(LoadError::JointLimits)?;
         let nominal = robot.nominal_model_for(&dataset);
+        dataset::check_measured_together(&dataset, &nominal.shared_joints())?;
         let screening = quality::screen(&dataset, &nominal, screen);
         Ok(Self {
             dataset,

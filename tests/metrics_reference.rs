@@ -133,6 +133,7 @@ fn simulate(truth: &DualArmModel, n: [usize; 2], noise_mm: f64, seed: u64) -> Da
         nominal_reflectors_mm: common::reflectors_mm().to_vec(),
         reflector_names: dualcal::kinematics::default_reflector_names(3),
         arms: PerSide::new(left, right),
+        measured_together: false,
     }
 }
 

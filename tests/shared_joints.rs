@@ -432,3 +432,80 @@ fn the_predicted_sigma_of_shared_parameters_match_their_spread() {
     );
     assert!((0.7..1.4).contains(&median), "{median}");
 }
+
+/// Both hands measured at one instant (`measured_together = true`): a left and a right row of one id
+/// are one pose, so the torso has one value in them — calibrated as any other data; a row whose torso
+/// value disagrees is refused naming the file, its line and the column.
+#[test]
+fn measured_together_rows_hold_one_torso_value() {
+    use nalgebra::{Point3, Vector3};
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, Normal};
+    let dir = tempfile::tempdir().unwrap();
+    let urdf = dir.path().join("torso.urdf");
+    std::fs::write(&urdf, robots::shared_torso_urdf(false)).unwrap();
+    let robot = load_robot(&urdf);
+    let sim = simulate_with_robot(&paper_options(94, 300, 200), &robot).unwrap();
+    let shared = sim.nominal.shared_joints();
+    let mut ds = sim.dataset.clone();
+    // Row i of each arm becomes one pose: the right row takes the left row's id, split and torso
+    // value, and its points are measured again there (the truth, fresh 20 µm noise).
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(94);
+    let noise = Normal::new(0.0, 0.02).unwrap();
+    let tracker_from_right = sim.tracker_from_left_base * sim.truth.left_base_from(Side::Right);
+    let left = ds.arms.left.measurements.clone();
+    for (r, l) in ds.arms.right.measurements.iter_mut().zip(&left) {
+        r.id = l.id.clone();
+        r.split = l.split;
+        r.q_rad = shared.right_with_left_values(&l.q_rad, &r.q_rad);
+        let fk = sim.truth.arm(Side::Right).reflector_fk(&r.q_rad);
+        for (p, t) in r.tracker_points_mm.iter_mut().zip(&fk.points_mm) {
+            *p = tracker_from_right.transform_point(&Point3::from(*t)).coords
+                + Vector3::from_fn(|_, _| noise.sample(&mut rng));
+        }
+    }
+    ds.measured_together = true;
+    let [(lb, lt), (rb, rt)] = robots::SHARED_TORSO_ARMS;
+    let options = dualcal::workspace::WorkspaceOptions {
+        robot: Some(urdf.clone()),
+        arms: PerSide::new(Some(ArmLinks::new(lb, lt)), Some(ArmLinks::new(rb, rt))),
+        ..Default::default()
+    };
+    let out = dir.path().join("together");
+    dataset::save(&ds, &out, Units::MM_DEG).unwrap();
+    let manifest = std::fs::read_to_string(out.join(dataset::MANIFEST_FILE)).unwrap();
+    assert!(manifest.contains("measured_together = true"), "{manifest}");
+    let ws = dualcal::workspace::Workspace::load(&out, &options).unwrap();
+    assert!(ws.dataset.measured_together);
+    let case = Case {
+        robot: ws.robot.clone(),
+        dataset: ws.dataset.clone(),
+        truth: sim.truth.clone(),
+    };
+    check(&case, "measured together", dir.path());
+
+    // One right row's torso a milliradian off its left row's: refused, naming file, line, column.
+    let mut bad = ds.clone();
+    let (_, b) = shared.variables[0];
+    bad.arms.right.measurements[7].q_rad[b] += 1e-3;
+    let out = dir.path().join("disagree");
+    dataset::save(&bad, &out, Units::MM_DEG).unwrap();
+    let err = dualcal::workspace::Workspace::load(&out, &options).unwrap_err();
+    let text = format!("{err:#}");
+    let line = bad.arms.right.measurements[7].line;
+    let id = &bad.arms.right.measurements[7].id;
+    eprintln!("{text}");
+    assert!(
+        text.contains("right.csv")
+            && text.contains("field `q1`")
+            && text.contains("yumi_base_link_to_body")
+            && text.contains(&format!("`{id}`"))
+            && text.contains("measured_together"),
+        "{text} (line {line})"
+    );
+    // Without the declaration the same rows are two moments: nothing to check.
+    bad.measured_together = false;
+    let out = dir.path().join("apart");
+    dataset::save(&bad, &out, Units::MM_DEG).unwrap();
+    assert!(dualcal::workspace::Workspace::load(&out, &options).is_ok());
+}

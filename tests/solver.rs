@@ -115,6 +115,7 @@ fn synthetic(seed: u64, n: usize, n_cal: usize, noise_mm: f64) -> Synthetic {
             nominal_reflectors_mm: common::reflectors_mm().to_vec(),
             reflector_names: dualcal::kinematics::default_reflector_names(3),
             arms: PerSide::new(left, right),
+            measured_together: false,
         },
         truth,
     }

@@ -27,6 +27,7 @@ struct RawManifest {
     tracker: Option<Spanned<RawTracker>>,
     reflectors: Option<Spanned<RawReflectors>>,
     arms: Option<Vec<Spanned<RawArm>>>,
+    measured_together: Option<bool>,
 }
 
 #[derive(serde::Deserialize)]
@@ -77,6 +78,8 @@ pub(super) struct Manifest {
     pub reflector_names: Vec<String>,
     /// CSV path and chain links of each arm.
     pub arms: PerSide<ManifestArm>,
+    /// Both hands measured at one instant (rows of one id in both files are one pose).
+    pub measured_together: bool,
 }
 
 struct ManifestCtx<'a> {
@@ -143,6 +146,7 @@ pub(super) fn parse(
         reflectors_mm,
         reflector_names,
         arms,
+        measured_together: raw.measured_together.unwrap_or(false),
     })
 }
 

@@ -21,7 +21,7 @@ use std::sync::Arc;
 pub use units::{AngleUnit, LengthUnit, Units};
 pub use validate::{
     JOINT_LIMIT_TOLERANCE_RAD, MAX_COORDINATE_MM, MAX_JOINT_RAD, check_arm_rows,
-    check_both as check_arms_differ, check_joint_limits,
+    check_both as check_arms_differ, check_joint_limits, check_measured_together,
 };
 
 /// The format tag written in `dataset.toml`.
@@ -197,6 +197,10 @@ pub struct Dataset {
     /// paper's set-up.
     pub reflector_names: Arc<[String]>,
     pub arms: PerSide<ArmData>,
+    /// Both hands were measured at one instant (the manifest's `measured_together = true`): a row of
+    /// the left file and a row of the right file with the same id are one pose of the robot, so the
+    /// joints both arms share (a torso) have one value in them ([`check_measured_together`]).
+    pub measured_together: bool,
 }
 
 impl Dataset {
@@ -359,6 +363,7 @@ pub fn load_from(files: &dyn FileSource, path: &Path) -> Result<(Dataset, Units)
             nominal_reflectors_mm: m.reflectors_mm,
             reflector_names: m.reflector_names.into(),
             arms,
+            measured_together: m.measured_together,
         },
         m.units,
     ))
@@ -427,6 +432,7 @@ mod tests {
                 random_arm(&mut rng, Side::Left, 9, 7),
                 random_arm(&mut rng, Side::Right, 7, 7),
             ),
+            measured_together: false,
         }
     }
 

@@ -155,6 +155,9 @@ fn manifest_text(
             .ok_or_else(|| content_err(format!("robot path {} is not valid UTF-8", p.display())))?;
         s += &format!("robot = {}\n", toml_str(p));
     }
+    if dataset.measured_together {
+        s += "measured_together = true\n";
+    }
     s += &format!(
         "\n[units]\nlength = {}\nangle = {}\n",
         toml_str(units.length.name()),

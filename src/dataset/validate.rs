@@ -560,6 +560,75 @@ pub fn check_joint_limits(
     Ok(())
 }
 
+/// Rows measured together (the manifest's `measured_together = true`): a left row and a right row with
+/// the same id are one pose of the robot, so each joint both arms share (`shared`: a torso) has one
+/// value in them. The first disagreement (beyond 1e-9 of the value, rad or mm) is refused naming the
+/// right file, its line and column and the left row it disagrees with; so is a dataset that declares
+/// it and has no id in both files. Without the declaration nothing is checked.
+pub fn check_measured_together(
+    dataset: &Dataset,
+    shared: &crate::kinematics::SharedJoints,
+) -> Result<(), DatasetError> {
+    if !dataset.measured_together {
+        return Ok(());
+    }
+    let (left, right) = (&dataset.arms.left, &dataset.arms.right);
+    let by_id: std::collections::HashMap<&str, &crate::dataset::Measurement> = left
+        .measurements
+        .iter()
+        .map(|m| (m.id.as_str(), m))
+        .collect();
+    let mut pairs = 0;
+    for r in &right.measurements {
+        let Some(l) = by_id.get(r.id.as_str()) else {
+            continue;
+        };
+        pairs += 1;
+        for (k, &(a, b)) in shared.variables.iter().enumerate() {
+            let (Some(&va), Some(&vb)) = (l.q_rad.get(a), r.q_rad.get(b)) else {
+                continue;
+            };
+            if (va - vb).abs() > 1e-9 * (1.0 + va.abs()) {
+                let unit = if right.is_linear_joint(b) {
+                    "mm"
+                } else {
+                    "rad"
+                };
+                return Err(DatasetError::Field {
+                    path: right.file.clone(),
+                    line: r.line,
+                    field: format!("q{}", b + 1),
+                    message: format!(
+                        "row `{}`: joint `{}`, which both arms share, is {vb} {unit} here but {va} \
+                         {unit} in {} line {} (q{}); the dataset says both hands were measured \
+                         together (`measured_together = true`), so a shared joint has one value per \
+                         id",
+                        r.id,
+                        shared.names.get(k).map_or("?", |n| n.as_str()),
+                        left.file.display(),
+                        l.line,
+                        a + 1
+                    ),
+                });
+            }
+        }
+    }
+    if pairs == 0 {
+        return Err(DatasetError::Field {
+            path: right.file.clone(),
+            line: 1,
+            field: "id".into(),
+            message: format!(
+                "the dataset says both hands were measured together (`measured_together = true`), \
+                 but no id of this file is in {}: rows measured at one instant carry one id in both \
+                 files",
+                left.file.display()
+            ),
+        });
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -215,6 +215,7 @@ pub fn import(
             nominal_reflectors_mm: options.nominal_reflectors_mm.clone(),
             reflector_names: options.reflector_names.clone().into(),
             arms: data,
+            measured_together: false,
         },
         report: ImportReport { arms: reports },
     })

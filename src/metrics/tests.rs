@@ -111,6 +111,7 @@ fn simulate(
         nominal_reflectors_mm: nominal_reflectors().to_vec(),
         reflector_names: crate::kinematics::default_reflector_names(3),
         arms: PerSide::new(left, right),
+        measured_together: false,
     }
 }
 

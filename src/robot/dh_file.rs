@@ -5,7 +5,9 @@
 //! convention `Rz(θ + q) · Tz(d) · Tx(a) · Rx(α)` or the modified one (Craig)
 //! `Rx(α) · Tx(a) · Rz(θ + q) · Tz(d)` — for a prismatic joint `q` adds to `d` instead — then the
 //! `tool` (the flange in the last frame). A joint may follow another of its arm linearly
-//! (`mimic = { joint, multiplier, offset }`, a URDF `<mimic>`).
+//! (`mimic = { joint, multiplier, offset }`, a URDF `<mimic>`). An optional `[torso]` (its `base` in
+//! the body frame and its rows, the same way) carries both arms: each arm's `base` is then in the
+//! torso's last frame, and both arms' chains hold the torso's joints (shared joints, identified once).
 //!
 //! The URDF ([`to_urdf`]): link `body`; per arm a fixed joint `<arm>_base` to `<arm>_link_0` (frame
 //! 0), the joints by their names from `<arm>_link_{k-1}` to `<arm>_link_k`, each about its z axis, and a
@@ -31,7 +33,16 @@ struct RawFile {
     name: Option<String>,
     convention: Convention,
     units: RawUnits,
+    torso: Option<RawTorso>,
     arms: Vec<RawArm>,
+}
+
+/// `[torso]`: rows both arms hang from.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawTorso {
+    base: Option<RawPose>,
+    joints: Vec<RawJoint>,
 }
 
 #[derive(Deserialize, Clone, Copy, PartialEq, Eq)]
@@ -126,15 +137,26 @@ pub fn to_urdf(text: &str) -> Result<String, String> {
         },
         escape(robot)
     );
+    // The torso, written as a chain `torso` from the body; the arms hang from its last frame.
+    let torso = raw.torso.map(|t| RawArm {
+        name: "torso".into(),
+        base: t.base,
+        tool: None,
+        joints: t.joints,
+    });
     let mut all_names: Vec<&str> = Vec::new();
-    for arm in &raw.arms {
+    let mut parent = "body";
+    for arm in torso.iter().chain(&raw.arms) {
         for j in &arm.joints {
             if all_names.contains(&j.name.as_str()) {
                 return Err(format!("joint `{}` named twice", j.name));
             }
             all_names.push(&j.name);
         }
-        urdf += &arm_urdf(arm, raw.convention, mm_per, rad_per)?;
+        urdf += &arm_urdf(arm, raw.convention, mm_per, rad_per, parent)?;
+        if arm.name == "torso" {
+            parent = "torso_flange";
+        }
     }
     urdf += "</robot>\n";
     Ok(urdf)
@@ -180,11 +202,14 @@ fn rot_x(a: f64) -> Isometry3<f64> {
     )
 }
 
+/// The URDF of one arm (or the torso) of a DH file, from `parent` (`body`, or the torso's last frame)
+/// to `<arm>_flange`.
 fn arm_urdf(
     arm: &RawArm,
     convention: Convention,
     mm_per: f64,
     rad_per: f64,
+    parent: &str,
 ) -> Result<String, String> {
     let n = &arm.name;
     let base = pose(
@@ -203,7 +228,7 @@ fn arm_urdf(
     fixed(
         &mut s,
         &format!("{n}_base"),
-        "body",
+        parent,
         &format!("{n}_link_0"),
         &base,
     );

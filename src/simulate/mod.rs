@@ -368,6 +368,7 @@ pub fn simulate(
             nominal_reflectors_mm: nominal.arm(Side::Left).reflectors_mm.clone(),
             reflector_names: nominal.arm(Side::Left).reflector_names.clone(),
             arms,
+            measured_together: false,
         },
         truth,
         nominal: nominal.clone(),
