@@ -121,6 +121,7 @@ fn simulate(truth: &DualArmModel, n: [usize; 2], noise_mm: f64, seed: u64) -> Da
             file: PathBuf::from(format!("{}.csv", side.name())),
             station: None,
             linear_joints: Vec::new(),
+            nominal_reflectors_mm: None,
             measurements,
         }
     };

@@ -279,3 +279,60 @@ fn arms_measured_from_two_stations() {
         ws.warnings()
     );
 }
+
+/// An arm's own nominal reflector coordinates (`[[arms]] reflectors = {…}`, the DLR data's markers sit
+/// differently on each hand): read back from the files, the right arm's nominal model starts there,
+/// the calibration reaches the truth's accuracy; naming a reflector the dataset does not have is
+/// refused with the line and field.
+#[test]
+fn an_arm_with_its_own_reflector_coordinates() {
+    let dir = tempfile::tempdir().unwrap();
+    let robot = RobotDescription::builtin_irb14000();
+    let sim = simulate_with_robot(&paper_options(73, 300, 200), &robot).unwrap();
+    let mut ds = sim.dataset.clone();
+    let mut truth = sim.truth.clone();
+    keep_reflectors(&mut ds, &mut [&mut truth], &[0]);
+    // The right hand's marker sits 50 mm aside and 20 mm lower than the left's.
+    let offset = nalgebra::Vector3::new(0.0, 50.0, -20.0);
+    let tracker_from_right = sim.tracker_from_left_base * truth.left_base_from(Side::Right);
+    for m in &mut ds.arms.right.measurements {
+        let flange = tracker_from_right * truth.arm(Side::Right).base_from_flange(&m.q_rad);
+        m.tracker_points_mm[0] += flange.rotation * offset;
+    }
+    truth.arm_mut(Side::Right).reflectors_mm[0] += offset;
+    ds.arms.right.nominal_reflectors_mm = Some(vec![ds.nominal_reflectors_mm[0] + offset]);
+    let out = dir.path().join("own-reflectors");
+    dataset::save(&ds, &out, Units::MM_DEG).unwrap();
+    let manifest = std::fs::read_to_string(out.join(dataset::MANIFEST_FILE)).unwrap();
+    assert!(manifest.contains("reflectors = { a = ["), "{manifest}");
+    let back = dataset::load(&out).unwrap();
+    assert_eq!(
+        back.arms.right.nominal_reflectors_mm,
+        ds.arms.right.nominal_reflectors_mm
+    );
+    assert_eq!(back.arms.left.nominal_reflectors_mm, None);
+    let case = Case {
+        robot,
+        dataset: back,
+        truth,
+    };
+    let nominal = nominal(&case);
+    assert_eq!(
+        nominal.arm(Side::Right).reflectors_mm[0],
+        ds.nominal_reflectors_mm[0] + offset
+    );
+    assert_eq!(
+        nominal.arm(Side::Left).reflectors_mm[0],
+        ds.nominal_reflectors_mm[0]
+    );
+    check_case(&case, "own reflector coordinates");
+
+    // A reflector the dataset does not have: refused, naming the line and field.
+    let bad = manifest.replace("reflectors = { a = [", "reflectors = { z = [");
+    std::fs::write(out.join(dataset::MANIFEST_FILE), bad).unwrap();
+    let err = dataset::load(&out).unwrap_err().to_string();
+    assert!(
+        err.contains("dataset.toml:") && err.contains("arms.reflectors") && err.contains(" z "),
+        "{err}"
+    );
+}

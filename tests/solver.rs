@@ -102,6 +102,7 @@ fn synthetic(seed: u64, n: usize, n_cal: usize, noise_mm: f64) -> Synthetic {
             links: None,
             station: None,
             linear_joints: Vec::new(),
+            nominal_reflectors_mm: None,
             measurements,
         }
     };

@@ -58,6 +58,7 @@ struct RawArm {
     base_link: Option<Spanned<String>>,
     tip_link: Option<Spanned<String>>,
     station: Option<Spanned<String>>,
+    reflectors: Option<Spanned<RawReflectors>>,
 }
 
 /// One `[[arms]]` entry: its CSV and, optionally, its chain in the robot description and the tracker
@@ -66,6 +67,9 @@ pub(super) struct ManifestArm {
     pub file: PathBuf,
     pub links: Option<ArmLinks>,
     pub station: Option<String>,
+    /// The arm's own nominal reflector coordinates (`[[arms]] reflectors = {…}`: the dataset's names,
+    /// in its order), mm.
+    pub reflectors_mm: Option<Vec<Vector3<f64>>>,
 }
 
 /// What `dataset.toml` says, validated and in mm.
@@ -138,7 +142,13 @@ pub(super) fn parse(
         Some(t) => parse_tracker(&cx, t)?,
     };
     let (reflector_names, reflectors_mm) = parse_reflectors(&cx, raw.reflectors, units.length)?;
-    let arms = parse_arms(&cx, dir, raw.arms.unwrap_or_default())?;
+    let arms = parse_arms(
+        &cx,
+        dir,
+        raw.arms.unwrap_or_default(),
+        &reflector_names,
+        units.length,
+    )?;
     Ok(Manifest {
         units,
         robot,
@@ -437,6 +447,8 @@ fn parse_arms(
     cx: &ManifestCtx,
     dir: &Path,
     arms: Vec<Spanned<RawArm>>,
+    names: &[String],
+    length: LengthUnit,
 ) -> Result<PerSide<ManifestArm>, DatasetError> {
     let mut files: PerSide<Option<ManifestArm>> = PerSide::default();
     let mut arm_lines: PerSide<usize> = PerSide::default();
@@ -509,10 +521,48 @@ fn parse_arms(
                 Some(text.to_string())
             }
         };
+        let reflectors_mm = match arm.reflectors {
+            None => None,
+            Some(r) => {
+                let line = Some(cx.line_of(r.span()));
+                let (own, coords) = parse_reflectors(cx, Some(r), length)?;
+                // The dataset's reflectors, in its order (the CSV's columns), at this arm's positions.
+                let mut ordered = Vec::with_capacity(names.len());
+                for name in names {
+                    let Some(k) = own.iter().position(|n| n == name) else {
+                        return Err(cx.err(
+                            line,
+                            "arms.reflectors",
+                            format!(
+                                "the {side} arm's reflectors name {} but [reflectors] names {}: an \
+                                 arm's own coordinates are for the dataset's reflectors (the same \
+                                 names; the CSV columns are theirs)",
+                                own.join(", "),
+                                names.join(", ")
+                            ),
+                        ));
+                    };
+                    ordered.push(coords[k]);
+                }
+                if own.len() != names.len() {
+                    return Err(cx.err(
+                        line,
+                        "arms.reflectors",
+                        format!(
+                            "the {side} arm's reflectors name {} but [reflectors] names {}",
+                            own.join(", "),
+                            names.join(", ")
+                        ),
+                    ));
+                }
+                Some(ordered)
+            }
+        };
         files[side] = Some(ManifestArm {
             file: path,
             links,
             station,
+            reflectors_mm,
         });
         arm_lines[side] = name_line;
     }

@@ -114,6 +114,10 @@ pub struct ArmData {
     /// Which joint columns are lengths — prismatic joints, in mm — rather than angles (rad); empty:
     /// all angles. Set from the robot ([`ArmData::set_linear_joints`]).
     pub linear_joints: Vec<bool>,
+    /// The arm's own nominal reflector coordinates in its tip frame (`[[arms]] reflectors`, the
+    /// dataset's reflectors in its order), mm; `None`: the dataset's `[reflectors]`
+    /// ([`Dataset::nominal_reflectors`]).
+    pub nominal_reflectors_mm: Option<Vec<Vector3<f64>>>,
     pub measurements: Vec<Measurement>,
 }
 
@@ -214,6 +218,14 @@ impl Dataset {
     /// collaborative figures need it.
     pub fn one_tracker_frame(&self) -> bool {
         self.arms.left.station == self.arms.right.station
+    }
+
+    /// `side`'s nominal reflector coordinates: its own (`[[arms]] reflectors`), else the dataset's, mm.
+    pub fn nominal_reflectors(&self, side: Side) -> &[Vector3<f64>] {
+        self.arms[side]
+            .nominal_reflectors_mm
+            .as_deref()
+            .unwrap_or(&self.nominal_reflectors_mm)
     }
 
     pub fn arm(&self, side: Side) -> &ArmData {
@@ -342,7 +354,7 @@ pub fn load_from(files: &dyn FileSource, path: &Path) -> Result<(Dataset, Units)
             &arm.file,
             side,
             m.units,
-            &m.reflectors_mm,
+            arm.reflectors_mm.as_ref().unwrap_or(&m.reflectors_mm),
             &m.reflector_names,
         )?;
         Ok::<_, DatasetError>(ArmData {
@@ -351,6 +363,7 @@ pub fn load_from(files: &dyn FileSource, path: &Path) -> Result<(Dataset, Units)
             links: arm.links,
             station: arm.station,
             linear_joints: Vec::new(),
+            nominal_reflectors_mm: arm.reflectors_mm,
             measurements,
         })
     })?;
@@ -411,6 +424,7 @@ mod tests {
             links: None,
             station: None,
             linear_joints: Vec::new(),
+            nominal_reflectors_mm: None,
             measurements,
         }
     }

@@ -196,6 +196,25 @@ fn manifest_text(
         if let Some(station) = &dataset.arms[side].station {
             s += &format!("station = {}\n", toml_str(station));
         }
+        if let Some(own) = &dataset.arms[side].nominal_reflectors_mm {
+            check_finite(
+                path,
+                "an arm's nominal reflectors",
+                &own.iter()
+                    .flat_map(|r| r.iter().copied())
+                    .collect::<Vec<_>>(),
+            )?;
+            let entries: Vec<String> = dataset
+                .reflector_names
+                .iter()
+                .zip(own)
+                .map(|(name, r)| {
+                    let v: Vec<String> = r.iter().map(|&x| num(units.length.from_mm(x))).collect();
+                    format!("{name} = [{}]", v.join(", "))
+                })
+                .collect();
+            s += &format!("reflectors = {{ {} }}\n", entries.join(", "));
+        }
     }
     Ok(s)
 }

@@ -358,6 +358,7 @@ fn import_arm(
         links: o.links[side].clone(),
         station: o.stations[side].clone(),
         linear_joints: Vec::new(),
+        nominal_reflectors_mm: None,
         measurements,
     };
     // The readers convert every joint value with the angle unit; a prismatic joint's value is a

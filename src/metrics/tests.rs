@@ -99,6 +99,7 @@ fn simulate(
             links: None,
             station: None,
             linear_joints: Vec::new(),
+            nominal_reflectors_mm: None,
             measurements,
         }
     };

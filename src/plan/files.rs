@@ -67,11 +67,17 @@ pub fn id_prefix(side: Side, extending: bool) -> &'static str {
 /// gets RAPID modules.
 pub fn is_yumi(robot: &RobotDescription) -> bool {
     robot.is_builtin()
-        || robot
+        || (robot
             .urdf
             .joints
             .iter()
             .any(|j| j.name == arm_joint_name(Side::Left, 0))
+            // The YuMi's seven axes per arm, nothing shared: a YuMi-named robot on a torso is not one
+            // whose controller takes these targets.
+            && Side::BOTH
+                .into_iter()
+                .all(|side| robot.arm(side).chain.dof() == 7)
+            && robot.shared_joints().is_empty())
 }
 
 /// The line `dualcal plan` prints for an arm: how many configurations from how many candidates, the

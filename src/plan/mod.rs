@@ -140,9 +140,34 @@ pub struct Via {
 /// How many via candidates (the shortest detours first) are checked for a colliding leg.
 const VIA_CANDIDATES: usize = 60;
 
-/// Where each arm rests while the other one moves: its home pose.
-fn resting(robot: &RobotDescription) -> PerSide<Vec<f64>> {
-    PerSide::from_fn(|side| robot.home_q_rad(side))
+/// Where each arm rests while the other one moves (its home pose), and the joints both arms share (a
+/// torso: they follow the moving arm).
+pub struct Resting {
+    pub q: PerSide<Vec<f64>>,
+    pub shared: crate::kinematics::SharedJoints,
+}
+
+impl Resting {
+    fn of(robot: &RobotDescription) -> Self {
+        Self {
+            q: PerSide::from_fn(|side| robot.home_q_rad(side)),
+            shared: robot.shared_joints(),
+        }
+    }
+
+    /// Both arms' joint values with `side` at `q` and the other resting; shared joints take `q`'s.
+    fn posed(&self, side: Side, q: &[f64]) -> (Vec<f64>, Vec<f64>) {
+        match side {
+            Side::Left => (
+                q.to_vec(),
+                self.shared.right_with_left_values(q, &self.q.right),
+            ),
+            Side::Right => (
+                self.shared.left_with_right_values(&self.q.left, q),
+                q.to_vec(),
+            ),
+        }
+    }
 }
 
 /// Candidate configurations of `side` (module documentation, step 1): `(candidates, draws)`.
@@ -153,7 +178,7 @@ pub fn candidates(
     world: &CollisionWorld,
     options: &PlanOptions,
 ) -> Result<(Vec<Vec<f64>>, usize), PlanError> {
-    let rest = resting(robot);
+    let rest = Resting::of(robot);
     let body_from_base = robot.body_from_arm_base(side);
     let tracker = body_from_base.inverse_transform_point(&Point3::from(options.tracker_in_body_mm));
     let limits: Vec<(f64, f64)> = arm
@@ -203,10 +228,8 @@ pub fn candidates(
             facing += 1;
             continue;
         }
-        let (ql, qr) = match side {
-            Side::Left => (&q, &rest.right),
-            Side::Right => (&rest.left, &q),
-        };
+        let (ql, qr) = rest.posed(side, &q);
+        let (ql, qr) = (&ql, &qr);
         let clear = !world.in_collision(ql, qr, options.clearance_mm)
             && !world.in_keep_out(ql, qr, &options.keep_out, options.clearance_mm);
         if !clear {
@@ -512,7 +535,7 @@ fn leg_collides(
     side: Side,
     a: &[f64],
     b: &[f64],
-    rest: &PerSide<Vec<f64>>,
+    rest: &Resting,
     world: &CollisionWorld,
     options: &PlanOptions,
 ) -> bool {
@@ -526,10 +549,8 @@ fn leg_collides(
     (1..steps).any(|s| {
         let t = s as f64 / steps as f64;
         let q: Vec<f64> = a.iter().zip(b).map(|(x, y)| x + t * (y - x)).collect();
-        let (ql, qr) = match side {
-            Side::Left => (&q, &rest.right),
-            Side::Right => (&rest.left, &q),
-        };
+        let (ql, qr) = rest.posed(side, &q);
+        let (ql, qr) = (&ql, &qr);
         world.in_collision(ql, qr, clearance_mm)
             || world.in_keep_out(ql, qr, &options.keep_out, clearance_mm)
     })
@@ -539,7 +560,7 @@ fn leg_collides(
 fn check_path(
     side: Side,
     configs: &[Vec<f64>],
-    rest: &PerSide<Vec<f64>>,
+    rest: &Resting,
     world: &CollisionWorld,
     options: &PlanOptions,
 ) -> (f64, Vec<usize>) {
@@ -564,7 +585,7 @@ pub fn reroute(
     configs: &[Vec<f64>],
     colliding: &[usize],
     pool: &[Vec<f64>],
-    rest: &PerSide<Vec<f64>>,
+    rest: &Resting,
     world: &CollisionWorld,
     options: &PlanOptions,
     path_length: f64,
@@ -572,7 +593,7 @@ pub fn reroute(
     let (mut vias, mut left, mut length) = (Vec::new(), Vec::new(), path_length);
     for &k in colliding {
         let (a, b) = (&configs[k], &configs[k + 1]);
-        let mut tries: Vec<(f64, &Vec<f64>)> = std::iter::once(&rest[side])
+        let mut tries: Vec<(f64, &Vec<f64>)> = std::iter::once(&rest.q[side])
             .chain(pool)
             .map(|v| (leg(a, v) + leg(v, b), v))
             .collect();
@@ -638,7 +659,7 @@ fn plan_arm_with(
     side: Side,
     options: &PlanOptions,
 ) -> Result<ArmPlan, PlanError> {
-    let rest = resting(robot);
+    let rest = Resting::of(robot);
     let (mut pool, attempts) = candidates(robot, arm, side, world, options)?;
     let drawn = pool.len();
     // Configurations already measured join the pool and start the design.

@@ -681,8 +681,31 @@ impl RobotDescription {
 
     /// The nominal model for `dataset`: its reflectors, with their names (a calibrated URDF's links
     /// `reflector_<name>_<tip>` for those names win, as in [`RobotDescription::nominal_model`]).
+    /// The joints both arms' chains hold (a torso; none for the built-in robot).
+    pub fn shared_joints(&self) -> crate::kinematics::SharedJoints {
+        let arm = |side: Side| ArmModel::nominal_chain(self.arms[side].chain.clone(), Vec::new());
+        crate::kinematics::SharedJoints::of(&arm(Side::Left), &arm(Side::Right))
+    }
+
+    /// (Each arm with its own nominal reflectors where the dataset gives them, `[[arms]] reflectors`.)
     pub fn nominal_model_for(&self, dataset: &crate::dataset::Dataset) -> DualArmModel {
-        self.nominal_model_named(&dataset.reflector_names, &dataset.nominal_reflectors_mm)
+        let mut model =
+            self.nominal_model_named(&dataset.reflector_names, &dataset.nominal_reflectors_mm);
+        for side in Side::BOTH {
+            let Some(own) = &dataset.arms[side].nominal_reflectors_mm else {
+                continue;
+            };
+            // Reflector links of a calibrated description still win, as for the dataset-wide ones.
+            if self.form == ModelForm::Chain
+                && self
+                    .reflector_links_named(side, &dataset.reflector_names)
+                    .is_some()
+            {
+                continue;
+            }
+            model.arm_mut(side).reflectors_mm = own.clone();
+        }
+        model
     }
 
     /// [`RobotDescription::nominal_model`] with reflectors named `names` (one per entry of

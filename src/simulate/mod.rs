@@ -343,6 +343,7 @@ pub fn simulate(
                 Vec::new()
             }
         },
+        nominal_reflectors_mm: None,
         measurements: measure_arm(
             opts,
             side,
