@@ -509,3 +509,41 @@ fn measured_together_rows_hold_one_torso_value() {
     dataset::save(&bad, &out, Units::MM_DEG).unwrap();
     assert!(dualcal::workspace::Workspace::load(&out, &options).is_ok());
 }
+
+/// `dualcal plan` on a torso robot: each arm's planned configurations are collision-free with the
+/// torso where that arm's own values put it (the other arm resting), and a YuMi-named robot on a
+/// torso gets no RAPID module (its controller's 6 + 1 axes per arm would not take these targets).
+#[test]
+fn planning_a_robot_whose_arms_share_a_torso() {
+    use dualcal::plan::{PlanOptions, plan};
+    let dir = tempfile::tempdir().unwrap();
+    let urdf = dir.path().join("lift.urdf");
+    std::fs::write(&urdf, robots::shared_torso_urdf(true)).unwrap();
+    let robot = load_robot(&urdf);
+    let shared = robot.shared_joints();
+    assert_eq!(shared.names, ["yumi_base_link_to_body", "yumi_lift"]);
+    let options = PlanOptions {
+        per_arm: 8,
+        candidates: 60,
+        tracker_in_body_mm: nalgebra::Vector3::new(2000.0, 0.0, 500.0),
+        ..PlanOptions::default()
+    };
+    let reflectors = dualcal::simulate::default_reflectors_for(&robot);
+    let planned = plan(&robot, &reflectors, &options).unwrap();
+    let world = dualcal::collision::CollisionWorld::new(&robot);
+    let home = PerSide::from_fn(|side| robot.home_q_rad(side));
+    for side in Side::BOTH {
+        assert_eq!(planned[side].configs.len(), 8);
+        for q in &planned[side].configs {
+            let (ql, qr) = match side {
+                Side::Left => (q.clone(), shared.right_with_left_values(q, &home.right)),
+                Side::Right => (shared.left_with_right_values(&home.left, q), q.clone()),
+            };
+            assert!(
+                !world.in_collision(&ql, &qr, options.clearance_mm),
+                "{side} {q:?}"
+            );
+        }
+    }
+    assert!(!dualcal::plan::is_yumi(&robot));
+}
