@@ -547,3 +547,56 @@ fn planning_a_robot_whose_arms_share_a_torso() {
     }
     assert!(!dualcal::plan::is_yumi(&robot));
 }
+
+/// Compensated targets of a torso robot hold the shared joints (moving the torso for one arm's target
+/// would move the other arm): the arm's own joints reach the pose the nominal model meant.
+#[test]
+fn compensation_holds_the_shared_torso() {
+    use dualcal::controller::compensate::{CompensationSettings, Target, compensate};
+    let dir = tempfile::tempdir().unwrap();
+    let urdf = dir.path().join("lift.urdf");
+    std::fs::write(&urdf, robots::shared_torso_urdf(true)).unwrap();
+    let robot = load_robot(&urdf);
+    let sim = simulate_with_robot(&paper_options(95, 40, 30), &robot).unwrap();
+    let shared = sim.nominal.shared_joints();
+    let settings = CompensationSettings::default();
+    for side in Side::BOTH {
+        let names: Vec<String> = robot
+            .arm(side)
+            .chain
+            .joint_names()
+            .iter()
+            .map(|n| n.to_string())
+            .collect();
+        let mut reached = 0;
+        for m in sim.dataset.arm(side).measurements.iter().take(10) {
+            let done = match compensate(
+                &sim.nominal,
+                &sim.truth,
+                side,
+                &Target::Joints(m.q_rad.clone()),
+                &names,
+                &settings,
+            ) {
+                Ok(done) => done,
+                Err(why) => {
+                    eprintln!("{side} {}: {why}", m.id);
+                    continue;
+                }
+            };
+            reached += 1;
+            for &(a, b) in &shared.variables {
+                let k = if side == Side::Left { a } else { b };
+                assert_eq!(done.q[k], m.q_rad[k], "{side}: shared joint moved");
+            }
+            let want =
+                sim.nominal.left_base_from(side) * sim.nominal.arm(side).base_from_flange(&m.q_rad);
+            let got =
+                sim.truth.left_base_from(side) * sim.truth.arm(side).base_from_flange(&done.q);
+            let d = want.inverse() * got;
+            assert!(d.translation.vector.norm() < 0.01, "{side}: {d:?}");
+        }
+        eprintln!("{side}: {reached} of 10 targets compensated with the torso held");
+        assert!(reached >= 8, "{side}: {reached} of 10");
+    }
+}

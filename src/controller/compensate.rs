@@ -21,6 +21,10 @@
 //! [`CompensationSettings::max_change_rad`] (20°; 50 mm for a prismatic joint) the target is refused. The result is accepted when the pose
 //! error is below the tolerances (checked on the forward kinematics, not on the linearisation) and
 //! every joint is within its limits; otherwise the target is refused with the reason.
+//!
+//! Joints both arms share (a torso, [`crate::kinematics::SharedJoints`]) are held at the target's
+//! values: moving them for one arm's target would move the other arm. The arm's own joints reach the
+//! pose alone, or the target is refused.
 
 use crate::kinematics::DualArmModel;
 use crate::side::Side;
@@ -194,16 +198,23 @@ pub fn compensate(
     }
     let goal = calibrated.left_base_from(side).inverse()
         * world_from_flange(nominal, calibrated, side, target, settings);
+    let held: Vec<usize> = calibrated
+        .shared_joints()
+        .variables
+        .iter()
+        .map(|&(a, b)| if side == Side::Left { a } else { b })
+        .collect();
     let mut solver = PoseSolver {
         arm,
         goal,
         settings,
         lambda: 1e-3,
         iterations: 0,
+        held: &held,
     };
     let mut q = DVector::from_column_slice(start);
     let mut residual = solver.solve(&mut q);
-    if n > 6 && solver.reached(residual) {
+    if n - held.len().min(n) > 6 && solver.reached(residual) {
         residual = solver.back_towards(&mut q, start);
     }
     if !solver.reached(residual) {
@@ -235,6 +246,8 @@ struct PoseSolver<'a> {
     settings: &'a CompensationSettings,
     lambda: f64,
     iterations: usize,
+    /// Joint values that stay as they are (the joints both arms share).
+    held: &'a [usize],
 }
 
 impl PoseSolver<'_> {
@@ -259,6 +272,11 @@ impl PoseSolver<'_> {
         let (_, mut jac) = self.arm.flange_jacobian(q.as_slice());
         for r in 3..6 {
             jac.row_mut(r).scale_mut(MM_PER_RAD);
+        }
+        for &c in self.held {
+            if c < jac.ncols() {
+                jac.column_mut(c).fill(0.0);
+            }
         }
         jac
     }
@@ -310,7 +328,12 @@ impl PoseSolver<'_> {
             let Ok(ranged) = jac.clone().svd(true, true).solve(&(&jac * &back), 1e-9) else {
                 break;
             };
-            let self_motion = back - ranged;
+            let mut self_motion = back - ranged;
+            for &c in self.held {
+                if c < self_motion.len() {
+                    self_motion[c] = 0.0;
+                }
+            }
             if self_motion.amax() < 1e-10 {
                 break;
             }
