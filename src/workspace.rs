@@ -14,7 +14,7 @@
 //! whole-file findings are not errors of the load: a [`Workspace`] with [`Workspace::refusals`] is
 //! still shown by the workbench (with the refusals), and refused by the command line.
 
-use crate::dataset::{self, Dataset, DatasetError};
+use crate::dataset::{self, Dataset, DatasetError, Units};
 use crate::kinematics::DualArmModel;
 use crate::meshes::PackageMap;
 use crate::quality::{self, Finding, ScreenSettings, Screening, Severity};
@@ -96,6 +96,9 @@ impl Workspace {
             let linear = robot.arm(side).linear_joints();
             dataset.arms[side].set_linear_joints(&linear, units)?;
         }
+        // Shared joints that disagree between rows measured together, in the file's units.
+        let shared = robot.shared_joints();
+        dataset::check_measured_together(&dataset, &shared, units)?;
         Self::new(dataset, robot, &options.screen)
     }
 
@@ -115,7 +118,8 @@ impl Workspace {
         let limits = PerSide::from_fn(|side| robot.joint_limits_rad(side));
         dataset::check_joint_limits(&dataset, &limits).map_err(LoadError::JointLimits)?;
         let nominal = robot.nominal_model_for(&dataset);
-        dataset::check_measured_together(&dataset, &nominal.shared_joints())?;
+        // Units of a dataset in memory: the program's (the load above checks in the file's first).
+        dataset::check_measured_together(&dataset, &nominal.shared_joints(), Units::MM_RAD)?;
         let screening = quality::screen(&dataset, &nominal, screen);
         Ok(Self {
             dataset,

@@ -500,7 +500,8 @@ fn measured_together_rows_hold_one_torso_value() {
             && text.contains("field `q1`")
             && text.contains("yumi_base_link_to_body")
             && text.contains(&format!("`{id}`"))
-            && text.contains("measured_together"),
+            && text.contains("measured_together")
+            && text.contains(" deg here but "),
         "{text} (line {line})"
     );
     // Without the declaration the same rows are two moments: nothing to check.

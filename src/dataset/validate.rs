@@ -565,9 +565,11 @@ pub fn check_joint_limits(
 /// value in them. The first disagreement (beyond 1e-9 of the value, rad or mm) is refused naming the
 /// right file, its line and column and the left row it disagrees with; so is a dataset that declares
 /// it and has no id in both files. Without the declaration nothing is checked.
+/// The values are printed in the file's `units`.
 pub fn check_measured_together(
     dataset: &Dataset,
     shared: &crate::kinematics::SharedJoints,
+    units: crate::dataset::Units,
 ) -> Result<(), DatasetError> {
     if !dataset.measured_together {
         return Ok(());
@@ -589,11 +591,12 @@ pub fn check_measured_together(
                 continue;
             };
             if (va - vb).abs() > 1e-9 * (1.0 + va.abs()) {
-                let unit = if right.is_linear_joint(b) {
-                    "mm"
+                let (show, unit) = if right.is_linear_joint(b) {
+                    (units.length.from_mm(1.0), units.length.name())
                 } else {
-                    "rad"
+                    (units.angle.from_rad(1.0), units.angle.name())
                 };
+                let (va, vb) = (va * show, vb * show);
                 return Err(DatasetError::Field {
                     path: right.file.clone(),
                     line: r.line,
