@@ -5,36 +5,13 @@
 
 mod common;
 
-use dualcal::dataset::{Dataset, Split};
+use dualcal::dataset::Split;
 use dualcal::robot::RobotDescription;
 use dualcal::side::Side;
-use dualcal::simulate::{SimOutput, paper_options, simulate_with_robot};
+use dualcal::simulate::{paper_options, simulate_with_robot};
 use dualcal::solver::uncertainty::{arm_uncertainty, for_result};
 use dualcal::solver::{CalibrationSettings, Method};
-use nalgebra::{DVector, Point3, Vector3};
-use rand::SeedableRng;
-use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, Normal};
-
-/// The dataset with its points replaced by the true points plus fresh noise of `sigma_mm` per axis.
-fn renoised(sim: &SimOutput, seed: u64, sigma_mm: f64) -> Dataset {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let noise = Normal::new(0.0, sigma_mm).unwrap();
-    let mut ds = sim.dataset.clone();
-    for side in Side::BOTH {
-        let tracker_from_base = sim.tracker_from_left_base * sim.truth.left_base_from(side);
-        for m in &mut ds.arms[side].measurements {
-            let fk = sim.truth.arm(side).reflector_fk(&m.q_rad);
-            for (p, truth) in m.tracker_points_mm.iter_mut().zip(&fk.points_mm) {
-                let t = tracker_from_base
-                    .transform_point(&Point3::from(*truth))
-                    .coords;
-                *p = t + Vector3::from_fn(|_, _| noise.sample(&mut rng));
-            }
-        }
-    }
-    ds
-}
+use nalgebra::{DVector, Vector3};
 
 /// Per free parameter of the left arm: (predicted σ from the first trial, spread over the trials).
 fn predicted_and_spread(method: Method, trials: u64) -> Vec<(String, f64, f64)> {
@@ -52,7 +29,7 @@ fn predicted_and_spread(method: Method, trials: u64) -> Vec<(String, f64, f64)> 
     let mut predicted = None;
     let mut free = Vec::new();
     for t in 0..trials {
-        let ds = renoised(&sim, 100 + t, 0.02);
+        let ds = common::renoised(&sim, 100 + t, 0.02);
         let result = common::calibrate(&ds, &sim.nominal, &settings);
         if t == 0 {
             let u = for_result(&ds, &result);

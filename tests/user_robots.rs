@@ -353,16 +353,8 @@ fn assert_export(flow: &Flow, name: &str) {
         );
         assert!((file - cal).abs() < 1e-9, "{name} {side}: {file} vs {cal}");
     }
-    // ROS's check_urdf accepts it (Debian's liburdfdom-tools, which `tools/test` installs).
-    let o = Command::new("check_urdf").arg(&out).output().unwrap_or_else(|e| {
-        panic!("this test needs ROS's check_urdf (Debian: liburdfdom-tools, which tools/test installs): {e}")
-    });
-    assert!(
-        o.status.success(),
-        "{name}: check_urdf: {}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    );
+    // ROS's check_urdf accepts it.
+    common::assert_check_urdf(&out, name);
 }
 
 #[test]

@@ -92,3 +92,77 @@ fn find_python(imports: &str) -> Result<String, String> {
     }
     Err(tried.join("; "))
 }
+
+/// Relative (both arms) and collaborative position RMS of a report, labelled, mm.
+pub fn position_figures(r: &dualcal::metrics::AccuracyReport) -> [(&'static str, f64); 3] {
+    [
+        ("relative left", r.relative_left.pos_rms_mm),
+        ("relative right", r.relative_right.pos_rms_mm),
+        (
+            "collaborative",
+            r.collaborative.map_or(f64::NAN, |c| c.pos_rms_mm),
+        ),
+    ]
+}
+
+/// The set-up tests' bar: on the verification split each figure of the calibrated model within 10%
+/// of the truth's, the nominal model's more than ten times off (printed as it goes).
+pub fn assert_near_truth(
+    name: &str,
+    nominal: &dualcal::metrics::AccuracyReport,
+    truth: &dualcal::metrics::AccuracyReport,
+    calibrated: &dualcal::metrics::AccuracyReport,
+) {
+    for ((label, n), ((_, t), (_, c))) in position_figures(nominal).into_iter().zip(
+        position_figures(truth)
+            .into_iter()
+            .zip(position_figures(calibrated)),
+    ) {
+        eprintln!("{name} {label}: nominal {n:.4} mm, truth {t:.4} mm, calibrated {c:.4} mm");
+        assert!(n > 10.0 * t, "{name} {label}: nominal {n} vs truth {t}");
+        assert!(c <= 1.1 * t, "{name} {label}: calibrated {c} vs truth {t}");
+    }
+}
+
+/// The simulated dataset with its points replaced by the true points plus fresh noise of `sigma_mm`
+/// per axis (repeated measurements of one robot at one set of configurations).
+pub fn renoised(sim: &dualcal::simulate::SimOutput, seed: u64, sigma_mm: f64) -> Dataset {
+    use rand::SeedableRng;
+    use rand_distr::Distribution;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let noise = rand_distr::Normal::new(0.0, sigma_mm).unwrap();
+    let mut ds = sim.dataset.clone();
+    for side in dualcal::side::Side::BOTH {
+        let tracker_from_base = sim.tracker_from_left_base * sim.truth.left_base_from(side);
+        for m in &mut ds.arms[side].measurements {
+            let fk = sim.truth.arm(side).reflector_fk(&m.q_rad);
+            for (p, truth) in m.tracker_points_mm.iter_mut().zip(&fk.points_mm) {
+                let t = tracker_from_base
+                    .transform_point(&nalgebra::Point3::from(*truth))
+                    .coords;
+                *p = t + Vector3::from_fn(|_, _| noise.sample(&mut rng));
+            }
+        }
+    }
+    ds
+}
+
+/// ROS's `check_urdf` accepts the URDF at `path` (Debian's liburdfdom-tools, which `tools/test`
+/// installs); `name` labels the failure.
+pub fn assert_check_urdf(path: &std::path::Path, name: &str) {
+    let o = std::process::Command::new("check_urdf")
+        .arg(path)
+        .output()
+        .unwrap_or_else(|e| {
+            panic!(
+                "this test needs ROS's check_urdf (Debian: liburdfdom-tools, which tools/test \
+                 installs): {e}"
+            )
+        });
+    assert!(
+        o.status.success(),
+        "{name}: check_urdf: {}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+}
