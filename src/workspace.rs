@@ -96,10 +96,7 @@ impl Workspace {
             let linear = robot.arm(side).linear_joints();
             dataset.arms[side].set_linear_joints(&linear, units)?;
         }
-        // Shared joints that disagree between rows measured together, in the file's units.
-        let shared = robot.shared_joints();
-        dataset::check_measured_together(&dataset, &shared, units)?;
-        Self::new(dataset, robot, &options.screen)
+        Self::checked(dataset, robot, &options.screen, units)
     }
 
     /// A dataset and a robot description already in hand (simulated, imported, compiled in): checked
@@ -108,6 +105,16 @@ impl Workspace {
         dataset: Dataset,
         robot: RobotDescription,
         screen: &ScreenSettings,
+    ) -> Result<Self, LoadError> {
+        Self::checked(dataset, robot, screen, Units::MM_RAD)
+    }
+
+    /// [`Workspace::new`], messages about joint values in `units` (the files', when loaded).
+    fn checked(
+        dataset: Dataset,
+        robot: RobotDescription,
+        screen: &ScreenSettings,
+        units: Units,
     ) -> Result<Self, LoadError> {
         robot
             .check_dataset(&dataset)
@@ -118,8 +125,8 @@ impl Workspace {
         let limits = PerSide::from_fn(|side| robot.joint_limits_rad(side));
         dataset::check_joint_limits(&dataset, &limits).map_err(LoadError::JointLimits)?;
         let nominal = robot.nominal_model_for(&dataset);
-        // Units of a dataset in memory: the program's (the load above checks in the file's first).
-        dataset::check_measured_together(&dataset, &nominal.shared_joints(), Units::MM_RAD)?;
+        // Shared joints that disagree between rows measured together.
+        dataset::check_measured_together(&dataset, &nominal.shared_joints(), units)?;
         let screening = quality::screen(&dataset, &nominal, screen);
         Ok(Self {
             dataset,

@@ -209,15 +209,7 @@ impl CalibrationRun {
         });
         let shared = nominal.shared_joints();
         if !shared.is_empty() && settings.method.spec().tree_set_up.is_none() {
-            return Err(CalibrationError::SharedJointsUnsupported {
-                joints: shared
-                    .names
-                    .iter()
-                    .map(|n| format!("`{n}`"))
-                    .collect::<Vec<_>>()
-                    .join(", "),
-                method: settings.method,
-            });
+            return Err(unsupported(&shared, settings.method));
         }
         let mut plan = if shared.is_empty() {
             VecDeque::from([Stage::Arm(Side::Left), Stage::Arm(Side::Right)])
@@ -486,12 +478,10 @@ impl CalibrationRun {
             }
             Stage::Arms => {
                 let method = self.settings.method;
-                let tree_set_up = method.spec().tree_set_up.ok_or_else(|| {
-                    CalibrationError::SharedJointsUnsupported {
-                        joints: self.shared.names.join(", "),
-                        method,
-                    }
-                })?;
+                let tree_set_up = method
+                    .spec()
+                    .tree_set_up
+                    .ok_or_else(|| unsupported(&self.shared, method))?;
                 let set_up = TreeSetUp {
                     data: &self.inputs,
                     start: &self.nominal,
@@ -629,6 +619,19 @@ impl CalibrationRun {
             base_not_measurable: self.base_not_measurable.clone(),
             elapsed_secs: self.started.elapsed().as_secs_f64(),
         }
+    }
+}
+
+/// The refusal of a method without a fit of both arms on a robot whose arms share `shared`.
+fn unsupported(shared: &SharedJoints, method: Method) -> CalibrationError {
+    CalibrationError::SharedJointsUnsupported {
+        joints: shared
+            .names
+            .iter()
+            .map(|n| format!("`{n}`"))
+            .collect::<Vec<_>>()
+            .join(", "),
+        method,
     }
 }
 
