@@ -44,8 +44,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         };
         println!(
             "| truth | | {} | {} | {} | |",
-            cell(&truth.relative_left, &truth.relative_left),
-            cell(&truth.relative_right, &truth.relative_right),
+            cell(&truth.relative_left.unwrap(), &truth.relative_left.unwrap()),
+            cell(
+                &truth.relative_right.unwrap(),
+                &truth.relative_right.unwrap()
+            ),
             cell(&truth.collaborative.unwrap(), &truth.collaborative.unwrap())
         );
         let combos = Method::ALL
@@ -72,8 +75,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 "| {} | {} | {} | {} | {} | {ms:.0} ms{} |",
                 method.name(),
                 base_method.name(),
-                cell(&v.relative_left, &truth.relative_left),
-                cell(&v.relative_right, &truth.relative_right),
+                cell(&v.relative_left.unwrap(), &truth.relative_left.unwrap()),
+                cell(&v.relative_right.unwrap(), &truth.relative_right.unwrap()),
                 cell(&v.collaborative.unwrap(), &truth.collaborative.unwrap()),
                 if r.is_converged() {
                     String::new()
@@ -136,8 +139,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 let w = evaluate(ds, &model, Split::Ver)?;
                 println!(
                     "| distance-single, then the unseen reflectors fitted to their distances | (step 2 not redone) | {} | {} | – | – | |",
-                    cell(&w.relative_left, &truth.relative_left),
-                    cell(&w.relative_right, &truth.relative_right),
+                    cell(&w.relative_left.unwrap(), &truth.relative_left.unwrap()),
+                    cell(&w.relative_right.unwrap(), &truth.relative_right.unwrap()),
                 );
             }
         }

@@ -424,7 +424,9 @@ impl Analysis {
                 .sum();
             Ok((fit, sum_sq, from.len()))
         };
-        let (left_base_from_station, registration_rms_mm) = if one_frame {
+        let (left_base_from_station, registration_rms_mm) = if one_frame || !dataset.both_measured()
+        {
+            // One frame, or one arm alone: one registration of every point.
             let (fit, sum_sq, n) = register(None)?;
             (PerSide::new(fit, fit), (sum_sq / n.max(1) as f64).sqrt())
         } else {

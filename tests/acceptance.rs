@@ -28,8 +28,8 @@ fn run(
 
 fn stats(r: &AccuracyReport) -> [(&'static str, &AccuracyStats); 3] {
     [
-        ("relative left", &r.relative_left),
-        ("relative right", &r.relative_right),
+        ("relative left", r.relative_left.as_ref().unwrap()),
+        ("relative right", r.relative_right.as_ref().unwrap()),
         ("collaborative", r.collaborative.as_ref().unwrap()),
     ]
 }

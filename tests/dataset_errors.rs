@@ -2,6 +2,7 @@
 //! nothing panics on any input.
 
 use dualcal::dataset::{self, Dataset, DatasetError, MIN_CONFIGS, Split};
+use dualcal::side::Side;
 use nalgebra::{UnitQuaternion, Vector3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -508,11 +509,29 @@ fn stations_on_both_arms_or_neither() {
 }
 
 #[test]
-fn missing_arm() {
+fn one_arm_alone_and_no_arm() {
+    // One entry: a dataset of that arm alone (the other arm not measured, not an error).
     let manifest = MANIFEST.replace("[[arms]]\nname = \"right\"\nfile = \"right.csv\"\n", "");
-    let err = Fixture::with_manifest(&manifest).load().unwrap_err();
+    let ds = Fixture::with_manifest(&manifest).load().unwrap();
+    assert_eq!(ds.measured_sides(), vec![Side::Left]);
+    assert!(!ds.arm(Side::Right).is_measured() && !ds.one_tracker_frame());
+    assert!(
+        ds.base_not_measurable()
+            .unwrap()
+            .contains("only the left arm")
+    );
+    // An arm alone may name its station.
+    let station = manifest.replace(
+        "file = \"left.csv\"\n",
+        "file = \"left.csv\"\nstation = \"A\"\n",
+    );
+    assert!(Fixture::with_manifest(&station).load().is_ok());
+    // No entry at all: refused.
+    let none = manifest.replace("[[arms]]\nname = \"left\"\nfile = \"left.csv\"\n", "");
+    assert!(!none.contains("[[arms]]"), "{none}");
+    let err = Fixture::with_manifest(&none).load().unwrap_err();
     assert!(matches!(err, DatasetError::Manifest { ref field, .. } if field == "arms"));
-    assert_names(&err, &["dataset.toml", "`arms`", "right"]);
+    assert_names(&err, &["dataset.toml", "`arms`", "left", "right"]);
 }
 
 #[test]

@@ -320,8 +320,8 @@ fn a_torso_both_arms_hang_from() {
     let (truth, cal) = (at(&sim.truth), at(&result.calibrated));
     for side in Side::BOTH {
         let (t, c) = (
-            truth.relative(side).pos_rms_mm,
-            cal.relative(side).pos_rms_mm,
+            truth.relative(side).unwrap().pos_rms_mm,
+            cal.relative(side).unwrap().pos_rms_mm,
         );
         eprintln!("DH torso, relative {side}: truth {t:.4} mm, calibrated {c:.4} mm");
         assert!(c <= 1.1 * t, "{side}: {c} vs {t}");

@@ -97,7 +97,7 @@ fn calibrate_shows_calibrated_figures() {
             .report
             .as_ref()
             .expect("verification report");
-        let rms = format!("{:.3}", ver.relative_left.pos_rms_mm);
+        let rms = format!("{:.3}", ver.relative_left.unwrap().pos_rms_mm);
         assert!(
             harness.query_all_by_label(&rms).count() >= 1,
             "{rms} mm not shown"
@@ -1792,4 +1792,89 @@ fn the_planning_window_plans_and_draws_the_plan_with_the_tracker() {
     harness.state_mut().apply(Command::ShowPlan(false));
     harness.run_steps(3);
     assert!(harness.state().viewport().plan.is_none());
+}
+
+/// One arm alone (a dataset with one `[[arms]]` entry): the dataset section says the other arm was
+/// not measured, the convergence tabs list only its stage, the calibration, the accuracy and summary
+/// tabs, the comparison and the exports work, and the figures of the other arm and the collaborative
+/// pairs are absent, never zero.
+#[test]
+fn one_arm_alone_calibrates_compares_and_exports() {
+    use dualcal::dataset::Split;
+    use dualcal::side::Side;
+    let dir = tempfile::tempdir().unwrap();
+    let robot = dualcal::robot::RobotDescription::builtin_irb14000();
+    let sim = dualcal::simulate::simulate_with_robot(
+        &dualcal::simulate::paper_options(12, 120, 80),
+        &robot,
+    )
+    .unwrap();
+    let mut ds = sim.dataset.clone();
+    ds.arms.right = dualcal::dataset::ArmData::not_measured(Side::Right);
+    dualcal::dataset::save(&ds, dir.path(), dualcal::dataset::Units::MM_DEG).unwrap();
+    let mut harness = open_at(dir.path());
+    shown(&harness, "right: not measured");
+    shown(&harness, "one arm alone (left)");
+    harness.get_by_label("step 1 (left arm)");
+    assert_eq!(
+        harness.query_all_by_label("step 1 (right arm)").count(),
+        0,
+        "the right arm has no stage"
+    );
+    calibrate(&mut harness);
+    let app = harness.state();
+    assert!(app.errors().is_empty(), "{:?}", app.errors());
+    let c = app
+        .session()
+        .unwrap()
+        .calibrated
+        .as_ref()
+        .expect("a result");
+    assert!(c.result.is_converged(), "{:?}", c.result.warnings());
+    let ver = c.analysis.ver.report.expect("verification figures");
+    assert!(ver.relative_left.unwrap().pos_rms_mm < 0.05);
+    assert!(ver.relative_right.is_none() && ver.collaborative.is_none());
+    for tab in ["Accuracy", "Summary", "Convergence"] {
+        harness.get_by_label(tab).click();
+        harness.run_steps(3);
+    }
+    let params = dualcal::app::export::Export::Params
+        .contents(harness.state().session().unwrap())
+        .unwrap()
+        .unwrap();
+    let params: serde_json::Value = serde_json::from_slice(&params).unwrap();
+    assert!(
+        params["statistics"]["ver"]["relative_right"].is_null(),
+        "{params}"
+    );
+    // The comparison view: each method on the one arm.
+    harness.get_by_label("Compare methods…").click();
+    harness.run_steps(2);
+    harness
+        .state_mut()
+        .compare_view_mut()
+        .pick(&["minimax", "lsq"]);
+    harness.run_steps(2);
+    harness.get_by_label("Run comparison").click();
+    harness.step();
+    step_until(&mut harness, MAX_RUN_FRAMES, "comparison", |app| {
+        !app.is_comparing()
+    });
+    let app = harness.state();
+    assert!(app.errors().is_empty(), "{:?}", app.errors());
+    let comparison = app
+        .compare_view()
+        .comparison
+        .as_ref()
+        .expect("a comparison");
+    for key in ["minimax", "lsq"] {
+        let report = comparison
+            .method(key)
+            .and_then(|m| m.figures())
+            .and_then(|f| f.report(Split::Ver))
+            .unwrap_or_else(|| panic!("{key}: no figures"));
+        assert!(report.relative_left.unwrap().pos_rms_mm < 0.05, "{key}");
+        assert!(report.relative_right.is_none(), "{key}");
+    }
+    harness.run_steps(3);
 }

@@ -97,7 +97,11 @@ fn a_method_outside_the_table_runs_through_the_one_executor() {
     );
     // Gauss–Newton on noise-free distances recovers the truth (as `lsq` does).
     let v = evaluate(&sim.dataset, &result.calibrated, Split::Ver).unwrap();
-    for s in [v.relative_left, v.relative_right, v.collaborative.unwrap()] {
+    for s in [
+        v.relative_left.unwrap(),
+        v.relative_right.unwrap(),
+        v.collaborative.unwrap(),
+    ] {
         assert!(s.pos_rms_mm < 1e-5, "{s:?}");
     }
     // The parameter file names it by its spellings.

@@ -72,7 +72,11 @@ fn each_new_method_recovers_known_parameters_from_noise_free_data() {
     for method in [Method::Position, Method::Pose] {
         let r = run(&sim.dataset, &sim, settings(method, BaseMethod::Absolute));
         let v = ver(&r);
-        for s in [v.relative_left, v.relative_right, v.collaborative.unwrap()] {
+        for s in [
+            v.relative_left.unwrap(),
+            v.relative_right.unwrap(),
+            v.collaborative.unwrap(),
+        ] {
             assert!(s.pos_rms_mm < 1e-5, "{method:?}: {s:?}");
             assert!(s.ori_rms_rad.unwrap() < 1e-7, "{method:?}: {s:?}");
         }
@@ -131,7 +135,7 @@ fn each_new_method_recovers_known_parameters_from_noise_free_data() {
         let k = reflector.index();
         for side in Side::BOTH {
             assert_eq!(r.reflector_used[side], Some(reflector));
-            let rms = v.relative(side).pos_rms_per_reflector_mm[k];
+            let rms = v.relative(side).unwrap().pos_rms_per_reflector_mm[k];
             assert!(rms < 1e-5, "reflector {reflector} {side}: {rms}");
             let rep = r.identifiability[side].as_ref().unwrap();
             let others: Vec<_> = rep
@@ -174,8 +178,8 @@ fn new_methods_work_on_a_urdf_chain() {
         let k = r.reflector_used.left.map(|r| r.index());
         for side in Side::BOTH {
             let rms = match k {
-                Some(k) => v.relative(side).pos_rms_per_reflector_mm[k],
-                None => v.relative(side).pos_rms_mm,
+                Some(k) => v.relative(side).unwrap().pos_rms_per_reflector_mm[k],
+                None => v.relative(side).unwrap().pos_rms_mm,
             };
             assert!(rms < 1e-4, "{method:?} {side}: {rms} mm");
         }
@@ -187,8 +191,12 @@ fn new_methods_work_on_a_urdf_chain() {
 
 /// What the acceptance compares: positioning RMS* and orientation RMS on the verification split.
 fn figures(r: &AccuracyReport) -> [(f64, f64); 3] {
-    [r.relative_left, r.relative_right, r.collaborative.unwrap()]
-        .map(|s| (s.pos_rms_mm, s.ori_rms_rad.unwrap()))
+    [
+        r.relative_left.unwrap(),
+        r.relative_right.unwrap(),
+        r.collaborative.unwrap(),
+    ]
+    .map(|s| (s.pos_rms_mm, s.ori_rms_rad.unwrap()))
 }
 
 #[test]
@@ -247,12 +255,12 @@ fn paper_like_data_every_method_reaches_the_noise_floor_where_its_model_can() {
         let k = r.reflector_used[side].unwrap().index();
         within(
             &format!("distance-single {side} reflector {k} pos RMS mm"),
-            v.relative(side).pos_rms_per_reflector_mm[k],
-            floor.relative(side).pos_rms_per_reflector_mm[k],
+            v.relative(side).unwrap().pos_rms_per_reflector_mm[k],
+            floor.relative(side).unwrap().pos_rms_per_reflector_mm[k],
         );
         let (single, paper) = (
-            v.relative(side).ori_rms_rad.unwrap(),
-            minimax_ver.relative(side).ori_rms_rad.unwrap(),
+            v.relative(side).unwrap().ori_rms_rad.unwrap(),
+            minimax_ver.relative(side).unwrap().ori_rms_rad.unwrap(),
         );
         eprintln!("distance-single {side} ori RMS {single:.6} rad, minimax {paper:.6} rad");
         assert!(single >= 2.0 * paper, "{side}: {single} vs minimax {paper}");

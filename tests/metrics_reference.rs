@@ -304,13 +304,13 @@ fn assert_agree(rust: &AccuracyReport, reference: &AccuracyReport, what: &str) {
     let sets = [
         (
             "relative_left",
-            &rust.relative_left,
-            &reference.relative_left,
+            &rust.relative_left.unwrap(),
+            &reference.relative_left.unwrap(),
         ),
         (
             "relative_right",
-            &rust.relative_right,
-            &reference.relative_right,
+            &rust.relative_right.unwrap(),
+            &reference.relative_right.unwrap(),
         ),
         (
             "collaborative",
@@ -332,8 +332,8 @@ fn assert_agree(rust: &AccuracyReport, reference: &AccuracyReport, what: &str) {
 /// The figures must be non-trivial for the comparison to mean something.
 fn assert_nontrivial(r: &AccuracyReport) {
     for s in [
-        &r.relative_left,
-        &r.relative_right,
+        &r.relative_left.unwrap(),
+        &r.relative_right.unwrap(),
         &r.collaborative.unwrap(),
     ] {
         assert!(

@@ -78,7 +78,7 @@ fn ratio_to_truth(sim: &SimOutput, configs: &PerSide<Vec<Vec<f64>>>, seed: u64) 
     let result = common::calibrate(&ds, &sim.nominal, &settings);
     let rms = |model| {
         let r = evaluate(&ds, model, Split::Ver).unwrap();
-        0.5 * (r.relative_left.pos_rms_mm + r.relative_right.pos_rms_mm)
+        0.5 * (r.relative_left.unwrap().pos_rms_mm + r.relative_right.unwrap().pos_rms_mm)
     };
     rms(&result.calibrated) / rms(&sim.truth)
 }

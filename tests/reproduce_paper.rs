@@ -465,6 +465,7 @@ fn engine_comparison_records_failures_and_cancels() {
         .report(Split::Ver)
         .unwrap()
         .relative_left
+        .unwrap()
         .pos_rms_mm;
     for m in &c.methods {
         let run = m
@@ -475,7 +476,11 @@ fn engine_comparison_records_failures_and_cancels() {
             Observes::ThreeReflectors => 0.1 * nominal,
             Observes::OneReflector => nominal,
         };
-        assert!(ver.relative_left.pos_rms_mm < bound, "{}", m.entry.key);
+        assert!(
+            ver.relative_left.unwrap().pos_rms_mm < bound,
+            "{}",
+            m.entry.key
+        );
     }
 
     // Three calibration configurations per arm: the methods cannot run, the nominal figures can.
@@ -560,12 +565,18 @@ fn comparison_figures_leave_out_the_excluded_configurations() {
         for split in [Split::Cal, Split::Ver] {
             let want = dualcal::metrics::evaluate(&kept, &figures.model, split).unwrap();
             let got = figures.report(split).unwrap();
-            assert_eq!(got.relative_left.n_configs, want.relative_left.n_configs);
+            assert_eq!(
+                got.relative_left.unwrap().n_configs,
+                want.relative_left.unwrap().n_configs
+            );
             assert_eq!(
                 got.collaborative.unwrap().n_pairs,
                 want.collaborative.unwrap().n_pairs
             );
-            let (a, b) = (got.relative_left.pos_rms_mm, want.relative_left.pos_rms_mm);
+            let (a, b) = (
+                got.relative_left.unwrap().pos_rms_mm,
+                want.relative_left.unwrap().pos_rms_mm,
+            );
             assert!((a - b).abs() <= 1e-12 * b, "{split:?}: {a} vs {b}");
         }
     }

@@ -90,8 +90,8 @@ fn check_case(case: &Case, name: &str) {
     let three = case.dataset.reflector_count() == 3;
     for r in [&n, &t, &c] {
         for stats in [
-            &r.relative_left,
-            &r.relative_right,
+            &r.relative_left.unwrap(),
+            &r.relative_right.unwrap(),
             &r.collaborative.unwrap(),
         ] {
             assert_eq!(
@@ -250,7 +250,10 @@ fn arms_measured_from_two_stations() {
     let (t, c) = (at(&case.truth), at(&result.calibrated));
     assert!(t.collaborative.is_none() && c.collaborative.is_none());
     for side in Side::BOTH {
-        let (t, c) = (t.relative(side).pos_rms_mm, c.relative(side).pos_rms_mm);
+        let (t, c) = (
+            t.relative(side).unwrap().pos_rms_mm,
+            c.relative(side).unwrap().pos_rms_mm,
+        );
         eprintln!("two stations, relative {side}: truth {t:.4} mm, calibrated {c:.4} mm");
         assert!(c <= 1.1 * t, "{side}: calibrated {c} vs truth {t}");
     }

@@ -232,8 +232,8 @@ fn identifiability_names_joint1_d_theta_and_joint7() {
 fn accuracy(ds: &Dataset, model: &DualArmModel, split: Split) -> [(&'static str, f64, f64); 3] {
     let r = evaluate(ds, model, split).expect("metrics");
     [
-        ("relative left", &r.relative_left),
-        ("relative right", &r.relative_right),
+        ("relative left", &r.relative_left.unwrap()),
+        ("relative right", &r.relative_right.unwrap()),
         ("collaborative", &r.collaborative.unwrap()),
     ]
     .map(|(name, s)| (name, s.pos_rms_mm, s.ori_rms_rad.unwrap()))

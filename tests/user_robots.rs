@@ -149,8 +149,8 @@ fn run_flow(urdf_path: &Path, arms: [(&str, &str); 2], seed: u64, configs: (usiz
 
 fn stats(r: &AccuracyReport) -> [(&'static str, f64); 3] {
     [
-        ("relative left", r.relative_left.pos_rms_mm),
-        ("relative right", r.relative_right.pos_rms_mm),
+        ("relative left", r.relative_left.unwrap().pos_rms_mm),
+        ("relative right", r.relative_right.unwrap().pos_rms_mm),
         ("collaborative", r.collaborative.unwrap().pos_rms_mm),
     ]
 }

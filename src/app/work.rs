@@ -646,7 +646,7 @@ mod tests {
                 Stage::Arm(crate::side::Side::Right)
             ]
         );
-        let nominal_rms = |a: &Analysis| a.ver.report.unwrap().relative_left.pos_rms_mm;
+        let nominal_rms = |a: &Analysis| a.ver.report.unwrap().relative_left.unwrap().pos_rms_mm;
         let after_left = live.iter().find(|l| l.stage_finished).unwrap();
         assert!(nominal_rms(&after_left.analysis) < 0.1 * nominal_rms(&loaded.session.nominal));
         match events.last() {

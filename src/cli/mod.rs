@@ -479,6 +479,15 @@ fn print_flags(title: &str, screening: &quality::Screening, excluded: &[ConfigId
 
 /// `robot: FILE; left arm BASE → TIP (N joints: …), right arm …; nominal model …`.
 pub fn describe_robot(robot: &RobotDescription) -> String {
+    if robot.is_one_arm() {
+        let arm = robot.arm(crate::side::Side::Left);
+        return format!(
+            "robot: {}; one arm {} ({} joints); nominal model: the URDF's joint origins",
+            robot.name(),
+            arm.links,
+            arm.chain.dof()
+        );
+    }
     let arms: Vec<String> = robot
         .arms()
         .iter()
@@ -865,18 +874,8 @@ pub fn comparison_table(
     recorded: Option<&StatisticsRecord>,
 ) -> Result<String> {
     let mut out = String::new();
-    let has = |split: Split| {
-        Side::BOTH.iter().all(|s| {
-            ds.arm(*s)
-                .measurements
-                .iter()
-                .filter(|m| m.split == split)
-                .count()
-                >= 2
-        })
-    };
     for (split, name) in [(Split::Cal, "calibration"), (Split::Ver, "verification")] {
-        if !has(split) {
+        if !metrics::has_split(ds, split) {
             continue;
         }
         let before = metrics::evaluate(ds, &result.nominal, split)?;

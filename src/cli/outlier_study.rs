@@ -7,7 +7,7 @@ use crate::dataset::Split;
 use crate::metrics::{self, AccuracyReport};
 use crate::quality::{self, ScreenSettings};
 use crate::robot::RobotDescription;
-use crate::side::ConfigId;
+use crate::side::{ConfigId, Side};
 use crate::simulate::{self, GrossError, GrossErrorModel, SimOptions};
 use crate::solver::{CalibrationSettings, Calibrator};
 use anyhow::Result;
@@ -36,7 +36,12 @@ const KIND_NAMES: [&str; 3] = [
 ];
 
 fn three(r: &AccuracyReport, pick: fn(&metrics::AccuracyStats) -> f64) -> [f64; 3] {
-    [r.relative_left, r.relative_right, r.collaborative_or_nan()].map(|s| pick(&s))
+    [
+        r.relative_or_nan(Side::Left),
+        r.relative_or_nan(Side::Right),
+        r.collaborative_or_nan(),
+    ]
+    .map(|s| pick(&s))
 }
 
 fn fmt3(v: [f64; 3], digits: usize) -> String {

@@ -90,14 +90,22 @@ pub(crate) fn run(a: &ReproduceArgs) -> Result<()> {
                 let ver = metrics::evaluate(&sub, &res.calibrated, Split::Ver)?;
                 outln!(
                     "| {n} | {:.4} / {:.4} | {:.4} / {:.4} | {:.5} / {:.5} | {:.5} / {:.5} |",
-                    cal.relative_left.pos_rms_mm,
-                    ver.relative_left.pos_rms_mm,
-                    cal.relative_right.pos_rms_mm,
-                    ver.relative_right.pos_rms_mm,
-                    cal.relative_left.ori_rms_rad.unwrap_or(f64::NAN),
-                    ver.relative_left.ori_rms_rad.unwrap_or(f64::NAN),
-                    cal.relative_right.ori_rms_rad.unwrap_or(f64::NAN),
-                    ver.relative_right.ori_rms_rad.unwrap_or(f64::NAN)
+                    cal.relative_or_nan(Side::Left).pos_rms_mm,
+                    ver.relative_or_nan(Side::Left).pos_rms_mm,
+                    cal.relative_or_nan(Side::Right).pos_rms_mm,
+                    ver.relative_or_nan(Side::Right).pos_rms_mm,
+                    cal.relative_or_nan(Side::Left)
+                        .ori_rms_rad
+                        .unwrap_or(f64::NAN),
+                    ver.relative_or_nan(Side::Left)
+                        .ori_rms_rad
+                        .unwrap_or(f64::NAN),
+                    cal.relative_or_nan(Side::Right)
+                        .ori_rms_rad
+                        .unwrap_or(f64::NAN),
+                    ver.relative_or_nan(Side::Right)
+                        .ori_rms_rad
+                        .unwrap_or(f64::NAN)
                 );
             }
         }
@@ -114,11 +122,17 @@ pub(crate) fn run(a: &ReproduceArgs) -> Result<()> {
                 let truth_ver = metrics::evaluate(&sim.dataset, &sim.truth, Split::Ver)?;
                 outln!(
                     "| {seed} | truth | – | – | – | – | – | – | {:.4} / {:.4} / {:.4} | {:.5} / {:.5} / {:.5} |",
-                    truth_ver.relative_left.pos_rms_mm,
-                    truth_ver.relative_right.pos_rms_mm,
+                    truth_ver.relative_or_nan(Side::Left).pos_rms_mm,
+                    truth_ver.relative_or_nan(Side::Right).pos_rms_mm,
                     truth_ver.collaborative_or_nan().pos_rms_mm,
-                    truth_ver.relative_left.ori_rms_rad.unwrap_or(f64::NAN),
-                    truth_ver.relative_right.ori_rms_rad.unwrap_or(f64::NAN),
+                    truth_ver
+                        .relative_or_nan(Side::Left)
+                        .ori_rms_rad
+                        .unwrap_or(f64::NAN),
+                    truth_ver
+                        .relative_or_nan(Side::Right)
+                        .ori_rms_rad
+                        .unwrap_or(f64::NAN),
                     truth_ver
                         .collaborative_or_nan()
                         .ori_rms_rad
@@ -151,11 +165,15 @@ pub(crate) fn run(a: &ReproduceArgs) -> Result<()> {
                         psi[0],
                         psi[1],
                         psi[2],
-                        ver.relative_left.pos_rms_mm,
-                        ver.relative_right.pos_rms_mm,
+                        ver.relative_or_nan(Side::Left).pos_rms_mm,
+                        ver.relative_or_nan(Side::Right).pos_rms_mm,
                         ver.collaborative_or_nan().pos_rms_mm,
-                        ver.relative_left.ori_rms_rad.unwrap_or(f64::NAN),
-                        ver.relative_right.ori_rms_rad.unwrap_or(f64::NAN),
+                        ver.relative_or_nan(Side::Left)
+                            .ori_rms_rad
+                            .unwrap_or(f64::NAN),
+                        ver.relative_or_nan(Side::Right)
+                            .ori_rms_rad
+                            .unwrap_or(f64::NAN),
                         ver.collaborative_or_nan().ori_rms_rad.unwrap_or(f64::NAN)
                     );
                 }
@@ -239,7 +257,12 @@ fn robustness_study(a: &ReproduceArgs, robot: &RobotDescription) -> Result<()> {
                 let ver = metrics::evaluate(&sim.dataset, &res.calibrated, Split::Ver)?;
                 let cal = metrics::evaluate(&sim.dataset, &res.calibrated, Split::Cal)?;
                 let three = |r: &metrics::AccuracyReport, pick: Pick| {
-                    [r.relative_left, r.relative_right, r.collaborative_or_nan()].map(|s| pick(&s))
+                    [
+                        r.relative_or_nan(Side::Left),
+                        r.relative_or_nan(Side::Right),
+                        r.collaborative_or_nan(),
+                    ]
+                    .map(|s| pick(&s))
                 };
                 let f = |v: [f64; 3], digits: usize| v.map(|x| format!("{x:.digits$}")).join(" / ");
                 let final_lambda = |side: Side| {

@@ -80,8 +80,8 @@ pub(super) struct Manifest {
     pub reflectors_mm: Vec<Vector3<f64>>,
     /// The reflectors' names, in the manifest's order (the CSV's column order).
     pub reflector_names: Vec<String>,
-    /// CSV path and chain links of each arm.
-    pub arms: PerSide<ManifestArm>,
+    /// CSV path and chain links of each arm; `None`: the arm was not measured (a dataset of one arm).
+    pub arms: PerSide<Option<ManifestArm>>,
     /// Both hands measured at one instant (rows of one id in both files are one pose).
     pub measured_together: bool,
 }
@@ -441,15 +441,15 @@ fn parse_links(
     }
 }
 
-/// `[[arms]]`: one entry per arm with its `name` (`left`/`right`), CSV `file` and optionally its chain
-/// (`base_link`, `tip_link`).
+/// `[[arms]]`: one entry per measured arm — both, or one alone — with its `name` (`left`/`right`), CSV
+/// `file` and optionally its chain (`base_link`, `tip_link`), station and own reflector coordinates.
 fn parse_arms(
     cx: &ManifestCtx,
     dir: &Path,
     arms: Vec<Spanned<RawArm>>,
     names: &[String],
     length: LengthUnit,
-) -> Result<PerSide<ManifestArm>, DatasetError> {
+) -> Result<PerSide<Option<ManifestArm>>, DatasetError> {
     let mut files: PerSide<Option<ManifestArm>> = PerSide::default();
     let mut arm_lines: PerSide<usize> = PerSide::default();
     let mut station_lines: PerSide<usize> = PerSide::default();
@@ -566,19 +566,22 @@ fn parse_arms(
         });
         arm_lines[side] = name_line;
     }
-    let arms = files.try_map(|side, file| {
-        file.ok_or_else(|| {
-            cx.err(
-                None,
-                "arms",
-                format!("missing [[arms]] entry with name = \"{side}\"; both arms are needed"),
-            )
-        })
-    })?;
-    // Stations: on both arms or on neither (one station, as files without the key).
+    if files.values().all(Option::is_none) {
+        return Err(cx.err(
+            None,
+            "arms",
+            "no [[arms]] entry; expected one with name = \"left\" and/or one with name = \"right\" \
+             (both arms, or the one arm measured)",
+        ));
+    }
+    // Stations: on both arms or on neither (one station, as files without the key). An arm measured
+    // alone may name its station.
     for side in Side::BOTH {
         let other = side.other();
-        if arms[side].station.is_some() && arms[other].station.is_none() {
+        if let (Some(a), Some(b)) = (&files[side], &files[other])
+            && a.station.is_some()
+            && b.station.is_none()
+        {
             return Err(cx.err(
                 Some(station_lines[side]),
                 "arms.station",
@@ -589,5 +592,6 @@ fn parse_arms(
             ));
         }
     }
+    let arms = files;
     Ok(arms)
 }

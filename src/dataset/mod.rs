@@ -122,6 +122,25 @@ pub struct ArmData {
 }
 
 impl ArmData {
+    /// An arm the dataset has no measurements of (a dataset of the other arm alone).
+    pub fn not_measured(side: Side) -> Self {
+        Self {
+            side,
+            file: PathBuf::new(),
+            links: None,
+            station: None,
+            linear_joints: Vec::new(),
+            nominal_reflectors_mm: None,
+            measurements: Vec::new(),
+        }
+    }
+
+    /// Was this arm measured? An arm of the dataset has at least four configurations (the loader
+    /// checks), so an arm without any is one the dataset does not have ([`ArmData::not_measured`]).
+    pub fn is_measured(&self) -> bool {
+        !self.measurements.is_empty()
+    }
+
     /// Is joint column `i` (0-based) a prismatic joint's length (mm)?
     pub fn is_linear_joint(&self, i: usize) -> bool {
         self.linear_joints.get(i).copied().unwrap_or(false)
@@ -217,7 +236,36 @@ impl Dataset {
     /// arms)? Only then do distances between the two arms' reflectors mean anything: step 2 and the
     /// collaborative figures need it.
     pub fn one_tracker_frame(&self) -> bool {
-        self.arms.left.station == self.arms.right.station
+        self.both_measured() && self.arms.left.station == self.arms.right.station
+    }
+
+    /// Were both arms measured? A dataset may hold one arm alone (one `[[arms]]` entry).
+    pub fn both_measured(&self) -> bool {
+        self.arms.values().all(ArmData::is_measured)
+    }
+
+    /// The arms the dataset has measurements of, left first: both, or one alone.
+    pub fn measured_sides(&self) -> Vec<Side> {
+        Side::BOTH
+            .into_iter()
+            .filter(|&s| self.arms[s].is_measured())
+            .collect()
+    }
+
+    /// Why step 2 (the right-arm base) and the collaborative figures cannot be computed from this
+    /// data, if they cannot: one arm measured alone, or the arms measured from different tracker
+    /// stations (their coordinates unrelated).
+    pub fn base_not_measurable(&self) -> Option<String> {
+        if let [side] = self.measured_sides().as_slice() {
+            return Some(format!("only the {side} arm was measured"));
+        }
+        (!self.one_tracker_frame()).then(|| {
+            format!(
+                "the arms were measured from different tracker stations (left `{}`, right `{}`)",
+                self.arms.left.station.as_deref().unwrap_or(""),
+                self.arms.right.station.as_deref().unwrap_or("")
+            )
+        })
     }
 
     /// `side`'s nominal reflector coordinates: its own (`[[arms]] reflectors`), else the dataset's, mm.
@@ -349,6 +397,9 @@ pub fn load_from(files: &dyn FileSource, path: &Path) -> Result<(Dataset, Units)
     let text = read_text(files, &manifest_path)?;
     let m = manifest::parse(files, &manifest_path, &dir, &text)?;
     let arms = m.arms.try_map(|side, arm| {
+        let Some(arm) = arm else {
+            return Ok(ArmData::not_measured(side));
+        };
         let measurements = csv::read_arm(
             files,
             &arm.file,

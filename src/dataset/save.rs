@@ -6,7 +6,7 @@ use super::{
     ArmData, DATASET_FORMAT, Dataset, MANIFEST_FILE, MIN_CONFIGS, SPLIT_COLUMN, Split, csv_columns,
 };
 use crate::output::{Overwrite, refuse_existing, write_atomic};
-use crate::side::{PerSide, Side};
+use crate::side::PerSide;
 use std::path::{Path, PathBuf};
 
 /// Shortest text that parses back to exactly `x` (Rust's `{:?}` of f64: round-trip, `.0` on integers).
@@ -180,7 +180,8 @@ fn manifest_text(
         let v: Vec<String> = r.iter().map(|&x| num(units.length.from_mm(x))).collect();
         s += &format!("{name} = [{}]\n", v.join(", "));
     }
-    for side in Side::BOTH {
+    // An arm not measured (a dataset of one arm) has no entry.
+    for side in dataset.measured_sides() {
         s += &format!(
             "\n[[arms]]\nname = {}\nfile = {}\n",
             toml_str(side.name()),
@@ -255,7 +256,8 @@ pub fn save_with(
     Ok(())
 }
 
-/// The files [`save`] writes for `dataset` in `dir` — `left.csv`, `right.csv`, then `dataset.toml` —
+/// The files [`save`] writes for `dataset` in `dir` — `left.csv`, `right.csv` (each measured arm's),
+/// then `dataset.toml` —
 /// with their contents, written nowhere (a browser keeps them in memory).
 pub fn dataset_files(
     dataset: &Dataset,
@@ -265,18 +267,16 @@ pub fn dataset_files(
     let manifest_path = dir.join(MANIFEST_FILE);
     let csv_paths = PerSide::from_fn(|s| dir.join(format!("{s}.csv")));
     let manifest = manifest_text(dataset, dir, &manifest_path, units)?;
-    let csv = PerSide::try_from_fn(|s| {
-        arm_csv(
+    let mut files: Vec<(PathBuf, Vec<u8>)> = Vec::new();
+    for s in dataset.measured_sides() {
+        let csv = arm_csv(
             &dataset.arms[s],
             &dataset.reflector_names,
             &csv_paths[s],
             units,
-        )
-    })?;
-    let PerSide { left, right } = csv;
-    Ok(vec![
-        (csv_paths.left, left),
-        (csv_paths.right, right),
-        (manifest_path, manifest.into_bytes()),
-    ])
+        )?;
+        files.push((csv_paths[s].clone(), csv));
+    }
+    files.push((manifest_path, manifest.into_bytes()));
+    Ok(files)
 }

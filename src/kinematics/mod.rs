@@ -427,6 +427,15 @@ impl DualArmModel {
         }
     }
 
+    /// Are both "arms" one chain (a single-arm robot, its one arm given for both sides: the same
+    /// tip link and joints)?
+    pub fn is_one_arm(&self) -> bool {
+        match (self.arms.left.chain(), self.arms.right.chain()) {
+            (Some(l), Some(r)) => l.tip_link == r.tip_link && l.joint_names() == r.joint_names(),
+            _ => false,
+        }
+    }
+
     /// The joints both arms' chains hold (a torso): identified once, from both arms' data.
     pub fn shared_joints(&self) -> SharedJoints {
         SharedJoints::of(&self.arms.left, &self.arms.right)

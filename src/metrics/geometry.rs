@@ -129,7 +129,8 @@ pub(super) fn arm_geometry(
         .enumerate()
         .filter(|(_, m)| split.contains(m.split))
         .collect();
-    if selected.len() < MIN_METRIC_CONFIGS {
+    // An arm the dataset does not have (one arm measured alone) has no geometry, and no figures.
+    if selected.len() < MIN_METRIC_CONFIGS && data.is_measured() {
         return Err(MetricsError::TooFewConfigurations {
             side,
             split,

@@ -86,31 +86,49 @@ pub struct AccuracyStats {
 /// `{"relative_left": {...}, "relative_right": {...}, "collaborative": {...}}`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct AccuracyReport {
-    pub relative_left: AccuracyStats,
-    pub relative_right: AccuracyStats,
+    /// The left arm's relative figures; `None`: the arm was not measured (a dataset of the right
+    /// arm alone; serialised as `null`).
+    pub relative_left: Option<AccuracyStats>,
+    /// The right arm's relative figures; `None`: not measured.
+    pub relative_right: Option<AccuracyStats>,
     /// `None`: not measurable from this data — the arms were measured from different tracker
-    /// stations, so distances between their reflectors mean nothing (serialised as `null`).
+    /// stations, so distances between their reflectors mean nothing, or one arm alone was measured
+    /// (serialised as `null`).
     pub collaborative: Option<AccuracyStats>,
 }
 
 impl AccuracyReport {
-    /// The relative figures of one arm.
-    pub fn relative(&self, side: Side) -> &AccuracyStats {
+    /// The relative figures of one arm (`None`: the arm was not measured).
+    pub fn relative(&self, side: Side) -> Option<&AccuracyStats> {
         match side {
-            Side::Left => &self.relative_left,
-            Side::Right => &self.relative_right,
+            Side::Left => self.relative_left.as_ref(),
+            Side::Right => self.relative_right.as_ref(),
         }
     }
 
     /// The collaborative figures, NaN where they are not measurable: for the studies' tables over
     /// simulated one-station data, where they always exist.
     pub fn collaborative_or_nan(&self) -> AccuracyStats {
-        self.collaborative.unwrap_or(AccuracyStats {
+        self.collaborative.unwrap_or_else(|| self.nan())
+    }
+
+    /// One arm's relative figures, NaN where the arm was not measured (the studies' tables).
+    pub fn relative_or_nan(&self, side: Side) -> AccuracyStats {
+        self.relative(side).copied().unwrap_or_else(|| self.nan())
+    }
+
+    /// Figures of nothing: NaN, no orientation, no pairs (as many reflectors as the others have).
+    fn nan(&self) -> AccuracyStats {
+        let reflectors = [self.relative_left, self.relative_right, self.collaborative]
+            .into_iter()
+            .flatten()
+            .next()
+            .map_or_else(PerReflector::default, |r| {
+                r.pos_rms_per_reflector_mm.map(|_| f64::NAN)
+            });
+        AccuracyStats {
             pos_rms_mm: f64::NAN,
-            pos_rms_per_reflector_mm: self
-                .relative_left
-                .pos_rms_per_reflector_mm
-                .map(|_| f64::NAN),
+            pos_rms_per_reflector_mm: reflectors,
             pos_max_mm: f64::NAN,
             ori_rms_rad: None,
             ori_max_rad: None,
@@ -120,13 +138,13 @@ impl AccuracyReport {
             ori_within_0_01rad_frac: None,
             n_configs: 0,
             n_pairs: 0,
-        })
+        }
     }
 
     /// The figures of one kind of pairs (`None`: not measurable from the data).
     pub fn stats(&self, kind: PairKind) -> Option<&AccuracyStats> {
         match kind {
-            PairKind::Relative(side) => Some(self.relative(side)),
+            PairKind::Relative(side) => self.relative(side),
             PairKind::Collaborative => self.collaborative.as_ref(),
         }
     }
@@ -245,6 +263,20 @@ pub enum MetricsError {
     NonFiniteResult { what: String },
 }
 
+/// Has every measured arm of `dataset` enough configurations of `split` for the figures
+/// ([`MIN_METRIC_CONFIGS`])? (An arm not measured has none and needs none.)
+pub fn has_split(dataset: &Dataset, split: Split) -> bool {
+    dataset.measured_sides().iter().all(|&s| {
+        dataset
+            .arm(s)
+            .measurements
+            .iter()
+            .filter(|m| m.split == split)
+            .count()
+            >= MIN_METRIC_CONFIGS
+    })
+}
+
 /// All accuracy figures of `model` on the configurations of `split`.
 pub fn evaluate(
     dataset: &Dataset,
@@ -253,17 +285,21 @@ pub fn evaluate(
 ) -> Result<AccuracyReport, MetricsError> {
     let (left, right) = both_arms(dataset, model, split)?;
     // The right arm's model is expressed in the left base; relative figures do not depend on the frame.
+    let relative = |g: &ArmGeom| {
+        let data = dataset.arm(g.side);
+        data.is_measured()
+            .then(|| {
+                relative_accumulate(&g.geom).finish(
+                    g.geom.len(),
+                    g.orientation,
+                    &format!("{} relative", g.side),
+                )
+            })
+            .transpose()
+    };
     Ok(AccuracyReport {
-        relative_left: relative_accumulate(&left.geom).finish(
-            left.geom.len(),
-            left.orientation,
-            "left relative",
-        )?,
-        relative_right: relative_accumulate(&right.geom).finish(
-            right.geom.len(),
-            right.orientation,
-            "right relative",
-        )?,
+        relative_left: relative(&left)?,
+        relative_right: relative(&right)?,
         collaborative: if dataset.one_tracker_frame() {
             Some(collaborative_accumulate(&left.geom, &right.geom).finish(
                 left.geom.len() + right.geom.len(),

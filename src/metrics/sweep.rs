@@ -452,7 +452,10 @@ pub fn sweep(dataset: &Dataset, model: &DualArmModel) -> Result<Sweep, MetricsEr
     let [cal_samples, ver_samples] = samples;
     let split = |g: usize, samples: [PairSamples; 3]| -> Result<Option<SplitSweep>, MetricsError> {
         let (l, r) = (arms.left.range(g).len(), arms.right.range(g).len());
-        if l < MIN_METRIC_CONFIGS || r < MIN_METRIC_CONFIGS {
+        // Each measured arm needs its figures' minimum (an arm not measured has none).
+        let short =
+            |side: Side, n: usize| dataset.arm(side).is_measured() && n < MIN_METRIC_CONFIGS;
+        if short(Side::Left, l) || short(Side::Right, r) || l + r == 0 {
             return Ok(None);
         }
         let acc = &totals.acc[g];
@@ -460,8 +463,12 @@ pub fn sweep(dataset: &Dataset, model: &DualArmModel) -> Result<Sweep, MetricsEr
         let one_frame = dataset.one_tracker_frame();
         Ok(Some(SplitSweep {
             report: AccuracyReport {
-                relative_left: acc[REL_LEFT].finish(l, ol, "left relative")?,
-                relative_right: acc[REL_RIGHT].finish(r, or, "right relative")?,
+                relative_left: (l > 0)
+                    .then(|| acc[REL_LEFT].finish(l, ol, "left relative"))
+                    .transpose()?,
+                relative_right: (r > 0)
+                    .then(|| acc[REL_RIGHT].finish(r, or, "right relative"))
+                    .transpose()?,
                 collaborative: if one_frame {
                     Some(acc[COLLAB].finish(l + r, ol && or, "collaborative")?)
                 } else {

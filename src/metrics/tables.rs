@@ -7,8 +7,12 @@ const COLUMN_TITLES: [&str; 3] = ["relative left", "relative right", "collaborat
 
 /// The reflector names of a report without names at hand: a, b, c, … by position.
 fn default_names(report: &AccuracyReport) -> Vec<String> {
-    crate::kinematics::default_reflector_names(report.relative_left.pos_rms_per_reflector_mm.len())
-        .to_vec()
+    let n = stats_of(report)
+        .into_iter()
+        .flatten()
+        .next()
+        .map_or(0, |s| s.pos_rms_per_reflector_mm.len());
+    crate::kinematics::default_reflector_names(n).to_vec()
 }
 
 /// Reads a row's value off the stats; `None` where the data cannot give it.
@@ -131,11 +135,12 @@ fn format_value(kind: RowKind, v: Option<f64>) -> String {
     }
 }
 
-/// The three columns; `None` for a kind of pairs the data cannot measure.
+/// The three columns; `None` for a kind of pairs the data cannot measure (an arm not measured, the
+/// collaborative pairs of arms in different tracker frames or of one arm alone).
 fn stats_of(report: &AccuracyReport) -> [Option<&AccuracyStats>; 3] {
     [
-        Some(&report.relative_left),
-        Some(&report.relative_right),
+        report.relative_left.as_ref(),
+        report.relative_right.as_ref(),
         report.collaborative.as_ref(),
     ]
 }
@@ -210,6 +215,16 @@ pub fn format_comparison_named(
     for block in comparison_blocks(before, after, reflector_names) {
         if !out.is_empty() {
             out.push('\n');
+        }
+        // Pairs the data do not have (an arm not measured; the collaborative pairs of arms in
+        // different tracker frames or of one arm alone): one line, not a column of blanks.
+        if block
+            .rows
+            .iter()
+            .all(|r| r.before_value.is_none() && r.after_value.is_none())
+        {
+            let _ = writeln!(out, "{}: {NOT_MEASURABLE} from this data", block.title);
+            continue;
         }
         let _ = writeln!(
             out,

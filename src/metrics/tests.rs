@@ -137,7 +137,11 @@ fn true_model(rng: &mut ChaCha8Rng) -> DualArmModel {
 }
 
 fn all_stats(r: &AccuracyReport) -> [AccuracyStats; 3] {
-    [r.relative_left, r.relative_right, r.collaborative.unwrap()]
+    [
+        r.relative_left.unwrap(),
+        r.relative_right.unwrap(),
+        r.collaborative.unwrap(),
+    ]
 }
 
 fn assert_reports_close(a: &AccuracyReport, b: &AccuracyReport, tol: f64) {
@@ -171,8 +175,8 @@ fn perfect_model_on_noise_free_data_gives_zero() {
         assert_eq!(s.pos_within_0_3mm_frac, 1.0);
         assert_eq!(s.ori_within_0_005rad_frac.unwrap(), 1.0);
     }
-    assert_eq!(r.relative_left.n_pairs, 15 * 14 / 2);
-    assert_eq!(r.relative_right.n_pairs, 12 * 11 / 2);
+    assert_eq!(r.relative_left.unwrap().n_pairs, 15 * 14 / 2);
+    assert_eq!(r.relative_right.unwrap().n_pairs, 12 * 11 / 2);
     assert_eq!(r.collaborative.unwrap().n_pairs, 15 * 12);
     assert_eq!(r.collaborative.unwrap().n_configs, 27);
     // The nominal model on the same data is clearly wrong (mm-level), so the check above can fail.
@@ -197,10 +201,10 @@ fn split_selects_configurations() {
     let ds = simulate(&truth, &Isometry3::identity(), [9, 7], 0.01, 4);
     let cal = evaluate(&ds, &truth, Split::Cal).unwrap();
     let ver = evaluate(&ds, &truth, Split::Ver).unwrap();
-    assert_eq!(cal.relative_left.n_configs, 6);
-    assert_eq!(ver.relative_left.n_configs, 3);
-    assert_eq!(cal.relative_right.n_configs, 5);
-    assert_eq!(ver.relative_right.n_configs, 2);
+    assert_eq!(cal.relative_left.unwrap().n_configs, 6);
+    assert_eq!(ver.relative_left.unwrap().n_configs, 3);
+    assert_eq!(cal.relative_right.unwrap().n_configs, 5);
+    assert_eq!(ver.relative_right.unwrap().n_configs, 2);
     assert_eq!(ver.collaborative.unwrap().n_pairs, 6);
     let p = relative_pairs(&ds, &truth, Side::Left, Split::Ver).unwrap();
     let ids: Vec<_> = p
@@ -261,7 +265,9 @@ fn base_translation_error_gives_the_expected_collaborative_error() {
     assert!((r.collaborative.unwrap().pos_rms_mm - 2.0).abs() < 1e-12);
     assert!((r.collaborative.unwrap().pos_max_mm - 2.0).abs() < 1e-12);
     assert_eq!(r.collaborative.unwrap().pos_within_0_6mm_frac, 0.0);
-    assert!(r.relative_left.pos_max_mm < 1e-12 && r.relative_right.pos_max_mm < 1e-12);
+    assert!(
+        r.relative_left.unwrap().pos_max_mm < 1e-12 && r.relative_right.unwrap().pos_max_mm < 1e-12
+    );
 }
 
 #[test]
@@ -302,7 +308,10 @@ fn base_translation_error_on_a_real_arm() {
     }
     assert_eq!(n, 5 * 6 * 3);
     let r = evaluate(&ds, &wrong, Split::All).unwrap();
-    assert!(r.relative_left.pos_max_mm < 1e-9 && r.relative_right.ori_max_rad.unwrap() < 1e-7);
+    assert!(
+        r.relative_left.unwrap().pos_max_mm < 1e-9
+            && r.relative_right.unwrap().ori_max_rad.unwrap() < 1e-7
+    );
 }
 
 #[test]
@@ -331,12 +340,12 @@ fn rotating_one_measured_triangle_gives_that_orientation_error() {
         assert!((p.ori_error_rad.unwrap() - expected).abs() < 1e-9, "{p:?}");
     }
     let r = evaluate(&ds, &truth, Split::All).unwrap();
-    assert!((r.relative_left.ori_max_rad.unwrap() - alpha).abs() < 1e-9);
-    assert!(r.relative_right.ori_max_rad.unwrap() < 1e-7);
+    assert!((r.relative_left.unwrap().ori_max_rad.unwrap() - alpha).abs() < 1e-9);
+    assert!(r.relative_right.unwrap().ori_max_rad.unwrap() < 1e-7);
     // 5 of 15 left pairs involve configuration 2.
     let expected_rms = (5.0 / 15.0f64).sqrt() * alpha;
-    assert!((r.relative_left.ori_rms_rad.unwrap() - expected_rms).abs() < 1e-9);
-    assert!((r.relative_left.ori_within_0_005rad_frac.unwrap() - 1.0).abs() < 1e-12);
+    assert!((r.relative_left.unwrap().ori_rms_rad.unwrap() - expected_rms).abs() < 1e-9);
+    assert!((r.relative_left.unwrap().ori_within_0_005rad_frac.unwrap() - 1.0).abs() < 1e-12);
     let per = per_config(&ds, &truth, Split::All).unwrap();
     assert_eq!(per.len(), 11);
     assert!((per[2].relative_ori_max_rad.unwrap() - alpha).abs() < 1e-9);
@@ -435,11 +444,11 @@ fn stats_agree_with_the_pair_lists() {
         assert!((ori - s.ori_rms_rad.unwrap()).abs() < 1e-12);
     };
     check(
-        &r.relative_left,
+        &r.relative_left.unwrap(),
         &relative_pairs(&ds, &model, Side::Left, Split::Cal).unwrap(),
     );
     check(
-        &r.relative_right,
+        &r.relative_right.unwrap(),
         &relative_pairs(&ds, &model, Side::Right, Split::Cal).unwrap(),
     );
     check(
@@ -447,12 +456,12 @@ fn stats_agree_with_the_pair_lists() {
         &collaborative_pairs(&ds, &model, Split::Cal).unwrap(),
     );
     // Not all trivially 0 or 1, so the frequency checks mean something.
-    assert!(r.relative_left.pos_within_0_3mm_frac < 1.0);
-    assert!(r.relative_right.pos_within_0_6mm_frac > 0.0);
+    assert!(r.relative_left.unwrap().pos_within_0_3mm_frac < 1.0);
+    assert!(r.relative_right.unwrap().pos_within_0_6mm_frac > 0.0);
     let alone = relative_stats(&ds, &model.arms.left, Side::Left, Split::Cal).unwrap();
     assert_reports_close(
         &AccuracyReport {
-            relative_left: alone,
+            relative_left: Some(alone),
             ..r
         },
         &r,
@@ -653,8 +662,8 @@ fn tables_show_the_figures() {
         n_pairs: 4950,
     };
     let before = AccuracyReport {
-        relative_left: stats(1.0),
-        relative_right: stats(1.0),
+        relative_left: Some(stats(1.0)),
+        relative_right: Some(stats(1.0)),
         collaborative: Some(stats(1.0)),
     };
     let t = format_table(&before);
@@ -675,7 +684,7 @@ fn tables_show_the_figures() {
     let widths: Vec<usize> = t.lines().map(|l| l.chars().count()).collect();
     assert!(widths.windows(2).all(|w| w[0] == w[1]), "{t}");
     let after = AccuracyReport {
-        relative_left: stats(0.1),
+        relative_left: Some(stats(0.1)),
         ..before
     };
     let c = format_comparison(&before, &after, ["nominal", "calibrated"]);

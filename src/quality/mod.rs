@@ -277,7 +277,7 @@ pub(crate) fn mpe_mm(dataset: &Dataset, side: Side) -> f64 {
 pub fn screen(dataset: &Dataset, nominal: &DualArmModel, settings: &ScreenSettings) -> Screening {
     let mut out = Screening::default();
     let fits = residual::fits(dataset, nominal);
-    for side in Side::BOTH {
+    for side in dataset.measured_sides() {
         out.flags.extend(triangle::flags(dataset, side, settings));
         out.flags.extend(residual::flags_with(
             dataset, nominal, &fits, side, settings,
@@ -285,7 +285,7 @@ pub fn screen(dataset: &Dataset, nominal: &DualArmModel, settings: &ScreenSettin
     }
     out.findings
         .extend(frames::nominal_findings(dataset, nominal));
-    for side in Side::BOTH {
+    for side in dataset.measured_sides() {
         let suspects = out.suspect_rows(side);
         out.findings.extend(frames::tracker_moved_with(
             dataset,
@@ -310,7 +310,7 @@ pub fn screen_model(
 ) -> Screening {
     let mut out = Screening::default();
     let fits = residual::fits(dataset, model);
-    for side in Side::BOTH {
+    for side in dataset.measured_sides() {
         out.flags.extend(triangle::flags(dataset, side, settings));
         out.flags
             .extend(residual::flags_with(dataset, model, &fits, side, settings));
@@ -322,7 +322,9 @@ pub fn screen_model(
             settings,
         ));
     }
-    out.findings.extend(frames::base_deviation(nominal, model));
+    if dataset.one_tracker_frame() {
+        out.findings.extend(frames::base_deviation(nominal, model));
+    }
     out.sort();
     out
 }

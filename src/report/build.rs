@@ -9,7 +9,7 @@ use crate::analysis::{Analysis, Indicator};
 use crate::comparison::BoxStats;
 use crate::dataset::{Dataset, Split};
 use crate::kinematics::{ArmModel, DualArmModel};
-use crate::metrics::{self, MIN_METRIC_CONFIGS};
+use crate::metrics;
 use crate::params::{MethodRecord, ParamsFile, Provenance, StatisticsRecord, utc_timestamp};
 use crate::quality::{self, Flag, QualityRecord};
 use crate::robot::RobotDescription;
@@ -173,18 +173,6 @@ fn excluded_configs(
     out
 }
 
-/// Whether both arms have enough configurations of `split` for the metrics.
-fn has_split(ds: &Dataset, split: Split) -> bool {
-    Side::BOTH.iter().all(|&s| {
-        ds.arm(s)
-            .measurements
-            .iter()
-            .filter(|m| m.split == split)
-            .count()
-            >= MIN_METRIC_CONFIGS
-    })
-}
-
 /// Nominal and calibrated accuracy ([`metrics::evaluate`]) on each split with enough configurations.
 fn accuracy(
     kept: &Dataset,
@@ -193,7 +181,7 @@ fn accuracy(
 ) -> Result<Vec<SplitAccuracy>, ReportError> {
     let mut out = Vec::new();
     for split in [Split::Cal, Split::Ver] {
-        if !has_split(kept, split) {
+        if !metrics::has_split(kept, split) {
             continue;
         }
         let evaluate = |model| {
@@ -233,6 +221,7 @@ fn dataset_summary(ds: &Dataset, excluded: &[ConfigId]) -> DatasetSummary {
         tracker: ds.tracker,
         mpe_mm: PerSide::from_fn(|side| quality::mpe_mm(ds, side)),
         one_station: ds.one_tracker_frame(),
+        measured: PerSide::from_fn(|side| ds.arm(side).is_measured()),
     }
 }
 

@@ -28,7 +28,7 @@ use crate::params::{
     ConditioningRecord, FixedParameter, MethodRecord, ParamsError, Provenance, StatisticsRecord,
 };
 use crate::quality::{Flag, QualityRecord};
-use crate::side::PerSide;
+use crate::side::{PerSide, Side};
 use crate::solver::StageSummary;
 use crate::solver::uncertainty::ArmUncertainty;
 use nalgebra::{Isometry3, Vector3};
@@ -102,6 +102,15 @@ pub struct DatasetSummary {
     pub mpe_mm: PerSide<f64>,
     /// Both arms measured from one tracker station.
     pub one_station: bool,
+    /// Which arms were measured (both, or one alone: the other has no data, no fit and no figures).
+    pub measured: PerSide<bool>,
+}
+
+impl Report {
+    /// The arms the dataset has measurements of, left first.
+    pub fn measured_sides(&self) -> impl Iterator<Item = Side> + '_ {
+        Side::BOTH.into_iter().filter(|&s| self.dataset.measured[s])
+    }
 }
 
 /// One arm's measurements.

@@ -80,7 +80,7 @@ pub fn noise_checks(
         .or_else(|| accuracy.first());
     PerSide::from_fn(|side| {
         let a = chosen?;
-        let rms_mm = a.after.relative(side).pos_rms_mm;
+        let rms_mm = a.after.relative(side)?.pos_rms_mm;
         let mpe = mpe_mm[side];
         (mpe > 0.0 && rms_mm.is_finite()).then_some(NoiseCheck {
             split: a.split,

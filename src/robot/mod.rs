@@ -447,12 +447,43 @@ impl RobotDescription {
             ..options.clone()
         };
         let robot = match robot.or(dataset.robot.as_deref()) {
-            Some(path) => Self::load_file(path, &options)?,
+            Some(path) => match (
+                Self::load_file(path, &options),
+                Self::one_arm_links(dataset, &options),
+            ) {
+                // One arm measured alone on a description that has no second arm (a single robot):
+                // its chain stands for both sides (`is_one_arm`); only the measured one has data.
+                (Err(RobotError::NoArms { .. }), Some(links)) => {
+                    let options = LoadOptions {
+                        arms: PerSide::new(Some(links.clone()), Some(links)),
+                        ..options.clone()
+                    };
+                    Self::load_file(path, &options)?
+                }
+                (loaded, _) => loaded?,
+            },
             // Links given without a robot file must be the built-in robot's own arms.
             None => Self::builtin_with(&options, Some(dataset))?,
         };
         robot.check_dataset(dataset)?;
         Ok(robot)
+    }
+
+    /// The links of the one arm `dataset` measured, when it measured one alone and gave its chain
+    /// (and `options` give the other arm none).
+    fn one_arm_links(dataset: &crate::dataset::Dataset, options: &LoadOptions) -> Option<ArmLinks> {
+        let [side] = dataset.measured_sides()[..] else {
+            return None;
+        };
+        if options.arms[side.other()].is_some() {
+            return None;
+        }
+        options.arms[side].clone()
+    }
+
+    /// Is the robot one arm (a single robot measured alone: both sides are its one chain)?
+    pub fn is_one_arm(&self) -> bool {
+        self.arms.left.links == self.arms.right.links
     }
 
     fn parse(
@@ -532,7 +563,7 @@ impl RobotDescription {
 
     /// Refuse a dataset whose joint columns do not match the arms' joint counts.
     pub fn check_dataset(&self, dataset: &crate::dataset::Dataset) -> Result<(), RobotError> {
-        for side in Side::BOTH {
+        for side in dataset.measured_sides() {
             let data = dataset.arm(side);
             let spec = &self.arms[side];
             let found = data.joint_count();

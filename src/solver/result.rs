@@ -48,6 +48,9 @@ pub struct CalibrationResult {
     /// Why step 2 was not run, when the data cannot measure the base (the arms were measured from
     /// different tracker stations): the base stays nominal and is no calibration result.
     pub base_not_measurable: Option<String>,
+    /// The arm measured alone, when the dataset has one arm only: its stage is the only one (the
+    /// other arm keeps its nominal parameters, and has no figures).
+    pub alone: Option<Side>,
     pub elapsed_secs: f64,
 }
 
@@ -59,15 +62,15 @@ impl CalibrationResult {
     }
 
     /// The stages the data call for: both arms, and the base unless it is not measurable.
-    /// (Arms that share joints: both in one stage, [`Stage::Arms`].)
+    /// (Arms that share joints: both in one stage, [`Stage::Arms`]; one arm measured alone: its
+    /// stage only.)
     pub fn planned_stages(&self) -> impl Iterator<Item = Stage> + '_ {
-        let arms: &[Stage] = if self.nominal.shared_joints().is_empty() {
-            &STAGES[..2]
-        } else {
-            &[Stage::Arms]
+        let arms: Vec<Stage> = match self.alone {
+            Some(side) => vec![Stage::Arm(side)],
+            None if self.nominal.shared_joints().is_empty() => STAGES[..2].to_vec(),
+            None => vec![Stage::Arms],
         };
-        arms.iter()
-            .copied()
+        arms.into_iter()
             .chain((self.base_not_measurable.is_none()).then_some(Stage::Base))
     }
 

@@ -166,8 +166,11 @@ pub struct CalibrationRun {
     /// The model with the parameters of the finished stages.
     committed: DualArmModel,
     inputs: PerSide<ArmData>,
-    /// The joints both arms' chains hold (a torso): step 1 is then one fit of both arms.
+    /// The joints both arms' chains hold (a torso): step 1 is then one fit of both arms (empty when
+    /// one arm was measured alone).
     shared: SharedJoints,
+    /// The arm measured alone, if the dataset has one arm only: its stage is the only one.
+    alone: Option<Side>,
     active: Option<ActiveStage>,
     /// The stages after the active one, in order.
     plan: VecDeque<Stage>,
@@ -199,32 +202,33 @@ impl CalibrationRun {
         cancel: Arc<AtomicBool>,
     ) -> Result<Self, CalibrationError> {
         check_settings(&settings)?;
-        let inputs = PerSide::try_from_fn(|side| arm_input(dataset, nominal, side, &settings))?;
-        let base_not_measurable = (!dataset.one_tracker_frame()).then(|| {
-            format!(
-                "the arms were measured from different tracker stations (left `{}`, right `{}`)",
-                dataset.arms.left.station.as_deref().unwrap_or(""),
-                dataset.arms.right.station.as_deref().unwrap_or("")
-            )
-        });
-        let shared = nominal.shared_joints();
+        let inputs = PerSide::try_from_fn(|side| {
+            if dataset.arm(side).is_measured() {
+                arm_input(dataset, nominal, side, &settings)
+            } else {
+                Ok(ArmData::none(side))
+            }
+        })?;
+        let base_not_measurable = dataset.base_not_measurable();
+        // With one arm measured alone its chain is fitted whole, torso included (the other arm's
+        // copy of the torso follows it when the stage ends).
+        let shared = if dataset.both_measured() {
+            nominal.shared_joints()
+        } else {
+            SharedJoints::default()
+        };
+        let alone = alone_arm(dataset);
         if !shared.is_empty() && settings.method.spec().tree_set_up.is_none() {
             return Err(unsupported(&shared, settings.method));
         }
-        let mut plan = if shared.is_empty() {
-            VecDeque::from([Stage::Arm(Side::Left), Stage::Arm(Side::Right)])
-        } else {
-            VecDeque::from([Stage::Arms])
-        };
-        if base_not_measurable.is_none() {
-            plan.push_back(Stage::Base);
-        }
+        let plan = VecDeque::from(planned_stages(dataset, nominal));
         Ok(Self {
             settings,
             nominal: nominal.clone(),
             committed: nominal.clone(),
             inputs,
             shared,
+            alone,
             active: None,
             plan,
             base_not_measurable,
@@ -384,6 +388,9 @@ impl CalibrationRun {
         };
         if let Some(params) = params {
             apply(&mut self.committed, active.stage, params);
+            if let Some(side) = self.alone {
+                self.committed = follow_torso(&self.committed, side);
+            }
             if active.stage == Stage::Base && !self.shared.is_empty() {
                 // Both arms start at one link: the base correction is how the right arm sits on the
                 // shared joints.
@@ -617,6 +624,7 @@ impl CalibrationRun {
             reflector_used: self.reflector_used,
             tracker_from_base: self.tracker_from_base,
             base_not_measurable: self.base_not_measurable.clone(),
+            alone: self.alone,
             elapsed_secs: self.started.elapsed().as_secs_f64(),
         }
     }
@@ -726,6 +734,57 @@ fn arm_input(
         measured,
         side_tolerance_mm,
     })
+}
+
+/// The arm measured alone, when `dataset` has one arm only.
+fn alone_arm(dataset: &Dataset) -> Option<Side> {
+    match dataset.measured_sides().as_slice() {
+        [side] => Some(*side),
+        _ => None,
+    }
+}
+
+/// The stages a calibration of `dataset` from `nominal` runs, in order: each arm's step 1 (one stage
+/// of both where their chains share joints; the one arm's where one arm was measured alone), then
+/// step 2 unless the data cannot measure the base ([`Dataset::base_not_measurable`]).
+pub fn planned_stages(dataset: &Dataset, nominal: &DualArmModel) -> Vec<Stage> {
+    let mut plan = match alone_arm(dataset) {
+        Some(side) => vec![Stage::Arm(side)],
+        None if nominal.shared_joints().is_empty() => {
+            vec![Stage::Arm(Side::Left), Stage::Arm(Side::Right)]
+        }
+        None => vec![Stage::Arms],
+    };
+    if dataset.base_not_measurable().is_none() {
+        plan.push(Stage::Base);
+    }
+    plan
+}
+
+/// `model` with the other arm's copy of the joints both chains hold (a torso) corrected as `side`'s
+/// (the arm measured alone), so that the robot has one torso. Unchanged without shared joints.
+fn follow_torso(model: &DualArmModel, side: Side) -> DualArmModel {
+    let shared = model.shared_joints();
+    if shared.is_empty() {
+        return model.clone();
+    }
+    let mut out = model.clone();
+    if model.is_one_arm() {
+        // A single-arm robot: the other "arm" is the same chain; it is the arm calibrated.
+        *out.arm_mut(side.other()) = model.arm(side).clone();
+        return out;
+    }
+    let x = model.arm(side).to_vector();
+    let mut other = model.arm(side.other()).to_vector();
+    for &(a, b) in &shared.params {
+        let (from, to) = match side {
+            Side::Left => (a, b),
+            Side::Right => (b, a),
+        };
+        other[to] = x[from];
+    }
+    *out.arm_mut(side.other()) = model.arm(side.other()).with_vector(&other);
+    out
 }
 
 /// Put a stage's parameters into `model`.

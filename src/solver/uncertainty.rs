@@ -436,7 +436,9 @@ pub fn for_result(
     let settings = &result.settings;
     let kept = dataset.excluding(&settings.exclude);
     let shared = result.calibrated.shared_joints();
-    if !shared.is_empty() {
+    // Arms that share joints were fitted at once, unless one arm was measured alone (its chain is
+    // then fitted whole, as any arm's).
+    if !shared.is_empty() && dataset.both_measured() {
         return tree_uncertainty(&kept, result, &shared).unwrap_or_default();
     }
     crate::side::PerSide::from_fn(|side| {

@@ -246,6 +246,10 @@ pub(super) fn calibrated_chain_urdf(
                 origin_edits(text, root, name, origin, &mut edits)?;
             }
         }
+        if side == Side::Right && model.is_one_arm() {
+            // A single-arm robot: its one arm's reflectors are the left's, written already.
+            continue;
+        }
         reflector_edits(
             root,
             side,

@@ -96,8 +96,8 @@ fn find_python(imports: &str) -> Result<String, String> {
 /// Relative (both arms) and collaborative position RMS of a report, labelled, mm.
 pub fn position_figures(r: &dualcal::metrics::AccuracyReport) -> [(&'static str, f64); 3] {
     [
-        ("relative left", r.relative_left.pos_rms_mm),
-        ("relative right", r.relative_right.pos_rms_mm),
+        ("relative left", r.relative_left.unwrap().pos_rms_mm),
+        ("relative right", r.relative_right.unwrap().pos_rms_mm),
         (
             "collaborative",
             r.collaborative.map_or(f64::NAN, |c| c.pos_rms_mm),

@@ -61,11 +61,12 @@ fn row_figures(report: Option<&crate::metrics::AccuracyReport>) -> Option<[f64; 
         ]
     };
     let mut out = [0.0; 12];
-    let collaborative = r.collaborative_or_nan();
-    for (k, s) in [&r.relative_left, &r.relative_right, &collaborative]
-        .into_iter()
-        .enumerate()
-    {
+    let stats = [
+        r.relative_or_nan(Side::Left),
+        r.relative_or_nan(Side::Right),
+        r.collaborative_or_nan(),
+    ];
+    for (k, s) in stats.iter().enumerate() {
         out[4 * k..4 * k + 4].copy_from_slice(&four(s));
     }
     Some(out)

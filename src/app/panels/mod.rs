@@ -84,13 +84,11 @@ impl PlotsView {
             ui.selectable_value(&mut view.tab, PlotTab::Summary, "Summary");
             ui.separator();
             if view.tab == PlotTab::Convergence {
-                // Arms that share joints are fitted in one stage.
-                let shared = session.is_some_and(|s| !s.nominal.model.shared_joints().is_empty());
-                let stages: &[Stage] = if shared {
-                    &[Stage::Arms, Stage::Base]
-                } else {
-                    &plots::STAGES
-                };
+                // The stages this dataset calls for (arms that share joints in one stage, one
+                // arm measured alone, no base where it is not measurable).
+                let planned =
+                    session.map(|s| crate::solver::planned_stages(&s.dataset, &s.nominal.model));
+                let stages: &[Stage] = planned.as_deref().unwrap_or(&plots::STAGES);
                 if !stages.contains(&view.stage) {
                     view.stage = stages[0];
                 }

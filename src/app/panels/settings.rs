@@ -58,14 +58,15 @@ impl LeftPanel<'_> {
                 let d = &s.dataset;
                 ui.label(RichText::new(file_name(&d.dir)).strong())
                     .on_hover_text(d.dir.display().to_string());
-                let count = |side: Side, split: Split| d.arm(side).select(split).len();
-                ui.label(format!(
-                    "left: {} cal + {} ver\nright: {} cal + {} ver",
-                    count(Side::Left, Split::Cal),
-                    count(Side::Left, Split::Ver),
-                    count(Side::Right, Split::Cal),
-                    count(Side::Right, Split::Ver),
-                ));
+                let count = |side: Side| {
+                    if d.arm(side).is_measured() {
+                        let n = |split: Split| d.arm(side).select(split).len();
+                        format!("{side}: {} cal + {} ver", n(Split::Cal), n(Split::Ver))
+                    } else {
+                        format!("{side}: not measured")
+                    }
+                };
+                ui.label(format!("{}\n{}", count(Side::Left), count(Side::Right)));
                 ui.label(format!(
                     "tracker MPE {} µm + {} µm/m",
                     d.tracker.mpe_um, d.tracker.mpe_um_per_m
@@ -82,7 +83,21 @@ impl LeftPanel<'_> {
                     "fewer than three reflectors: the flange's orientation is not measurable; its \
                      figures read \"not measurable\""
                 });
-                if !d.one_tracker_frame() {
+                if let [side] = d.measured_sides().as_slice() {
+                    ui.label(
+                        RichText::new(format!(
+                            "one arm alone ({side}) — base and collaborative figures not \
+                             measurable"
+                        ))
+                        .color(egui::Color32::from_rgb(230, 180, 80)),
+                    )
+                    .on_hover_text(format!(
+                        "The dataset has the {side} arm's measurements only (one [[arms]] entry): \
+                         step 1 calibrates it; the {} arm keeps its nominal parameters, step 2 is \
+                         not run and there are no collaborative figures.",
+                        side.other()
+                    ));
+                } else if !d.one_tracker_frame() {
                     ui.label(
                         RichText::new(format!(
                             "stations: left `{}`, right `{}` — base and collaborative figures not \
@@ -304,7 +319,13 @@ fn robot_summary_ui(ui: &mut egui::Ui, session: &Session) {
     ui.label(RichText::new(name).strong())
         .on_hover_text(robot.name());
     let shared = session.nominal.model.shared_joints();
-    if !shared.is_empty() {
+    let one_arm = robot.is_one_arm();
+    if one_arm {
+        ui.label("one arm (a single robot)").on_hover_text(
+            "The description has one arm: the dataset's one arm is its chain (a single robot \
+             measured alone)",
+        );
+    } else if !shared.is_empty() {
         ui.label(format!("shared by both arms: {}", shared.names.join(", ")))
             .on_hover_text(
                 "Joints on both arms' chains (a torso): one joint of the robot, its corrections \
@@ -313,7 +334,13 @@ fn robot_summary_ui(ui: &mut egui::Ui, session: &Session) {
             );
     }
     // The chain in monospace: the proportional font has no arrow glyph.
-    for (side, arm) in robot.arms().iter() {
+    let sides: &[Side] = if one_arm {
+        &session.dataset.measured_sides()
+    } else {
+        &Side::BOTH
+    };
+    for &side in sides {
+        let arm = robot.arm(side);
         let hover = format!(
             "The {side} arm: the chain from its base link to its tip link; its joints, in the CSV's order: {}",
             arm.joint_names().join(", ")

@@ -503,7 +503,7 @@ fn fig4_svg(plan: &Plan, runs: &[SeedRun]) -> Result<String> {
                                     .filter(|p| p.n == n && p.key == m.key)
                                     .map(|p| {
                                         let rep = if split == Split::Cal { p.cal } else { p.ver };
-                                        rep.map_or(f64::NAN, |rep| pick(rep.relative(side)))
+                                        rep.map_or(f64::NAN, |rep| pick(&rep.relative_or_nan(side)))
                                     })
                                     .collect();
                                 let (mean, sd, _, _, count) = summary(&v);

@@ -85,7 +85,7 @@ enum Pairs {
 impl Pairs {
     fn of(self, r: &AccuracyReport) -> AccuracyStats {
         match self {
-            Pairs::Relative(s) => *r.relative(s),
+            Pairs::Relative(s) => r.relative_or_nan(s),
             Pairs::Collaborative => r.collaborative_or_nan(),
         }
     }
@@ -503,7 +503,7 @@ fn fig4(plan: &Plan, runs: &[SeedRun]) -> (String, String) {
                             .iter()
                             .map(|p| {
                                 let r = if split == Split::Cal { p.cal } else { p.ver };
-                                r.map_or(f64::NAN, |r| pick(r.relative(side)))
+                                r.map_or(f64::NAN, |r| pick(&r.relative_or_nan(side)))
                             })
                             .collect();
                         let (mean, sd, _, _, k) = summary(&values);
@@ -523,7 +523,7 @@ fn fig4(plan: &Plan, runs: &[SeedRun]) -> (String, String) {
                                 .map(|p| {
                                     let r = if split == Split::Cal { p.cal } else { p.ver };
                                     r.map_or(f64::NAN, |r| {
-                                        r.relative(side).ori_rms_rad.unwrap_or(f64::NAN)
+                                        r.relative_or_nan(side).ori_rms_rad.unwrap_or(f64::NAN)
                                     })
                                 })
                                 .collect();
@@ -651,8 +651,8 @@ pub(crate) fn runs_csv(runs: &[SeedRun]) -> Result<String> {
                     continue;
                 };
                 for (pairs, s) in [
-                    ("relative_left", &rep.relative_left),
-                    ("relative_right", &rep.relative_right),
+                    ("relative_left", &rep.relative_or_nan(Side::Left)),
+                    ("relative_right", &rep.relative_or_nan(Side::Right)),
                     ("collaborative", &rep.collaborative_or_nan()),
                 ] {
                     let mut rec = vec![
@@ -736,7 +736,7 @@ fn own_reflector_rms(r: &SeedRun, key: &str, side: Side, model: Model) -> Option
     let k = r.comparison.method(key)?.run()?.result.reflector_used[side]?.index();
     model
         .report(&r.comparison, Split::Ver)
-        .map(|rep| rep.relative(side).pos_rms_per_reflector_mm[k])
+        .map(|rep| rep.relative_or_nan(side).pos_rms_per_reflector_mm[k])
 }
 
 fn ver_stat(r: &SeedRun, model: Model, pairs: Pairs, pick: Pick) -> Option<f64> {

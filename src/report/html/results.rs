@@ -173,7 +173,7 @@ pub(super) fn worst(r: &Report) -> String {
          it. Rigidity: the largest deviation of the measured distances between its reflectors from \
          the model's.</p>",
     );
-    for (side, rows) in r.worst.iter() {
+    for (side, rows) in r.worst.iter().filter(|(s, _)| r.dataset.measured[*s]) {
         let rows: Vec<Vec<String>> = rows
             .iter()
             .enumerate()

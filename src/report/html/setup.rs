@@ -8,9 +8,9 @@ use std::fmt::Write as _;
 pub(super) fn dataset(r: &Report) -> String {
     let d = &r.dataset;
     let mut rows = vec![("directory", d.dir.display().to_string())];
-    let arm_rows: Vec<Vec<String>> = d
-        .arms
-        .iter()
+    let arm_rows: Vec<Vec<String>> = r
+        .measured_sides()
+        .map(|side| (side, &d.arms[side]))
         .map(|(side, a)| {
             vec![
                 td(side.name()),
@@ -23,16 +23,29 @@ pub(super) fn dataset(r: &Report) -> String {
             ]
         })
         .collect();
+    let at: Vec<String> = r
+        .measured_sides()
+        .map(|side| format!("{:.4} mm ({side})", d.mpe_mm[side]))
+        .collect();
     rows.push((
         "tracker (MPE)",
         format!(
-            "{} µm + {} µm/m; at the arms' mean measuring distance {:.4} mm (left), {:.4} mm (right)",
-            d.tracker.mpe_um, d.tracker.mpe_um_per_m, d.mpe_mm.left, d.mpe_mm.right
+            "{} µm + {} µm/m; at the arms' mean measuring distance {}",
+            d.tracker.mpe_um,
+            d.tracker.mpe_um_per_m,
+            at.join(", ")
         ),
     ));
+    let alone: Vec<Side> = r.measured_sides().collect();
     rows.push((
         "stations",
-        if d.one_station {
+        if let [side] = alone.as_slice() {
+            format!(
+                "one arm measured alone ({side}): no step 2 and no collaborative figures; the \
+                 {} arm keeps its nominal parameters",
+                side.other()
+            )
+        } else if d.one_station {
             "one: both arms measured in one tracker frame".into()
         } else {
             "two: each arm in its own tracker frame (no collaborative figures)".into()
@@ -204,7 +217,7 @@ pub(super) fn identifiability(r: &Report) -> String {
          Jacobian: how much a relative error of the data can grow in the parameters. Above ~1e3 \
          single parameters are poorly determined even when the fit is accurate.</p>",
     );
-    for (side, arm) in r.arms.iter() {
+    for (side, arm) in r.arms.iter().filter(|(s, _)| r.dataset.measured[*s]) {
         let identified = arm.parameters.iter().filter(|p| p.fixed.is_none()).count();
         let _ = write!(
             out,
@@ -249,7 +262,7 @@ pub(super) fn parameters(r: &Report) -> String {
          the minimax fit it is a yardstick, the least-squares fit's covariance at the minimax \
          solution.</p>",
     );
-    for (side, arm) in r.arms.iter() {
+    for (side, arm) in r.arms.iter().filter(|(s, _)| r.dataset.measured[*s]) {
         out.push_str(&arm_parameters(side, arm));
     }
     out.push_str(&base(r));

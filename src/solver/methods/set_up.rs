@@ -35,6 +35,17 @@ pub struct ArmData {
 }
 
 impl ArmData {
+    /// No data: the arm a dataset of the other arm alone does not have (no stage fits it).
+    pub fn none(side: Side) -> Self {
+        Self {
+            side,
+            ids: Vec::new(),
+            qs: Vec::new(),
+            measured: Vec::new(),
+            side_tolerance_mm: f64::NAN,
+        }
+    }
+
     /// The distance problem of `arm` on these data with every parameter free at unit scale (the
     /// probe of the identifiability analysis; [`ArmProblem::with_free`] makes it the stage's).
     pub fn distance_probe(&self, arm: &ArmModel) -> ArmProblem {

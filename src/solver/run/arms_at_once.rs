@@ -138,6 +138,7 @@ impl CalibrationRun {
             committed: self.nominal.clone(),
             inputs: self.inputs.clone(),
             shared: self.shared.clone(),
+            alone: self.alone,
             active: None,
             plan: VecDeque::new(),
             replaying: None,
