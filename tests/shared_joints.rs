@@ -561,3 +561,53 @@ fn compensation_holds_the_shared_torso() {
         assert!(reached >= 8, "{side}: {reached} of 10");
     }
 }
+
+/// The absolute positions (ref. [18], `--method position`) of a torso robot with one marker per hand
+/// — the DLR data's set-up: both arms and one tracker (camera) frame in one fit, the shared joints
+/// once; the relative and collaborative figures as the distance methods reach them, and the absolute
+/// position error near the noise.
+#[test]
+fn the_position_method_fits_both_arms_and_one_tracker_frame() {
+    let dir = tempfile::tempdir().unwrap();
+    let case = simulate(dir.path(), true, 94, &[0], (400, 300));
+    let nominal = case.robot.nominal_model_for(&case.dataset);
+    let shared = nominal.shared_joints();
+    let settings = CalibrationSettings {
+        method: Method::Position,
+        max_iterations: 400,
+        ..CalibrationSettings::default()
+    };
+    let result = common::calibrate(&case.dataset, &nominal, &settings);
+    assert!(result.is_converged(), "{:?}", result.warnings());
+    assert_eq!(result.stages[0].stage, Stage::Arms);
+    let (cl, cr) = (
+        result.calibrated.arm(Side::Left).to_vector(),
+        result.calibrated.arm(Side::Right).to_vector(),
+    );
+    for &(a, b) in &shared.params {
+        assert_eq!(cl[a], cr[b], "shared parameter {a}");
+    }
+    let frames = result.tracker_from_base;
+    let (tl, tr) = (frames.left.unwrap(), frames.right.unwrap());
+    assert!((tl.translation.vector - tr.translation.vector).norm() < 1e-9);
+    let at = |m: &DualArmModel| evaluate(&case.dataset, m, Split::Ver).unwrap();
+    let (n, t, c) = (at(&nominal), at(&case.truth), at(&result.calibrated));
+    common::assert_near_truth("position method, torso, one marker", &n, &t, &c);
+    let abs =
+        dualcal::metrics::absolute_stats(&case.dataset, &result.calibrated, &frames, Split::Ver)
+            .unwrap()
+            .unwrap();
+    // Noise: σ = MPE/2 per axis ≈ 0.009 mm at 2 m, so |e| ≈ 0.016 mm on average.
+    eprintln!(
+        "position method, torso, one marker: absolute error on verification mean {:.4} mm, RMS {:.4} \
+         mm, max {:.4} mm ({} points)",
+        abs.mean_mm, abs.rms_mm, abs.max_mm, abs.n_points
+    );
+    assert!(abs.mean_mm < 0.03 && abs.n_points == 2 * 100, "{abs:?}");
+    // Without a frame there are no absolute figures.
+    assert!(
+        dualcal::metrics::absolute_stats(&case.dataset, &nominal, &PerSide::default(), Split::Ver)
+            .unwrap()
+            .is_none()
+    );
+}

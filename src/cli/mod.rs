@@ -528,15 +528,28 @@ fn evaluate_cmd(a: &EvaluateArgs) -> Result<()> {
         nominal,
         ..
     } = load_workspace(&a.dataset)?;
-    let model = match &a.params {
-        Some(p) => ParamsFile::read(p)?
-            .to_model_for(&robot)
-            .map_err(|e| anyhow::anyhow!("{}: {e}", p.display()))?,
-        None => nominal,
+    let (model, frames) = match &a.params {
+        Some(p) => {
+            let file = ParamsFile::read(p)?;
+            let model = file
+                .to_model_for(&robot)
+                .map_err(|e| anyhow::anyhow!("{}: {e}", p.display()))?;
+            let frames = file
+                .tracker_from_base()
+                .map_err(|e| anyhow::anyhow!("{}: {e}", p.display()))?;
+            (model, frames)
+        }
+        None => (nominal, PerSide::default()),
     };
     let report = metrics::evaluate(&ds, &model, a.split)?;
+    // Where a method identified the tracker (camera) frame: the absolute position errors too.
+    let absolute = metrics::absolute_stats(&ds, &model, &frames, a.split)?;
     if a.json {
-        outln!("{}", serde_json::to_string_pretty(&report)?);
+        let mut value = serde_json::to_value(report)?;
+        if let (Some(abs), Some(obj)) = (absolute, value.as_object_mut()) {
+            obj.insert("absolute".into(), serde_json::to_value(abs)?);
+        }
+        outln!("{}", serde_json::to_string_pretty(&value)?);
     } else {
         let what = match &a.params {
             Some(p) => format!("parameters {}", p.display()),
@@ -552,6 +565,16 @@ fn evaluate_cmd(a: &EvaluateArgs) -> Result<()> {
             "{}",
             metrics::format_table_named(&report, &ds.reflector_names)
         );
+        if let Some(abs) = absolute {
+            outln!(
+                "absolute position error (the parameter file's tracker frame): mean {:.3} mm, RMS \
+                 {:.3} mm, max {:.3} mm over {} measured points",
+                abs.mean_mm,
+                abs.rms_mm,
+                abs.max_mm,
+                abs.n_points
+            );
+        }
     }
     Ok(())
 }

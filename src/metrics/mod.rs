@@ -22,6 +22,7 @@
 //! computes the figures of both splits, every configuration's residuals and histogram samples in one
 //! pass that visits each pair once (what the workbench shows of a model).
 
+mod absolute;
 mod geometry;
 mod kabsch;
 mod sweep;
@@ -32,6 +33,7 @@ mod tests;
 use crate::dataset::{ArmData, Dataset, Split};
 use crate::kinematics::{ArmModel, DualArmModel, PerReflector};
 use crate::side::{ConfigId, Side};
+pub use absolute::{AbsoluteStats, absolute_stats};
 pub use geometry::orientation_measurable;
 use geometry::{
     ArmGeom, against, arm_geometry, both_arms, collaborative_accumulate, pair_residual,

@@ -312,6 +312,11 @@ impl AbsoluteProblem {
         &self.free
     }
 
+    /// Reflectors per configuration.
+    pub fn reflector_count(&self) -> usize {
+        self.reflectors
+    }
+
     fn n_free(&self) -> usize {
         self.free.len()
     }

@@ -39,6 +39,7 @@ mod result;
 mod run;
 pub mod sqp;
 mod stage;
+pub mod tree_absolute;
 pub mod tree_problem;
 pub mod uncertainty;
 

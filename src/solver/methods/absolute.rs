@@ -4,13 +4,24 @@
 //! its own Jacobian at the start (the transform's six columns first), column scaling, and the solver
 //! on the identifiable parameters.
 
-use super::set_up::{ArmSetUp, ArmStage, column_scales, least_squares_solver, require_kinematics};
+use super::set_up::{
+    ArmSetUp, ArmStage, TreeSetUp, TreeStage, column_scales, least_squares_solver,
+    require_kinematics,
+};
 use super::{MethodSpec, Observes, SolverKind};
+use crate::side::{PerSide, Side};
 use crate::solver::CalibrationError;
-use crate::solver::absolute_problem::{AbsoluteData, AbsoluteProblem, transform_param_name};
+use crate::solver::Stage;
+use crate::solver::absolute_problem::{
+    AbsoluteData, AbsoluteProblem, as_triangle, moore_penrose_fit, transform_param_name,
+    triangle_area_mm2,
+};
 use crate::solver::identifiability::{self, IdentifiabilityReport, ParameterInfo};
 use crate::solver::least_squares::LsqAlgorithm;
+use crate::solver::tree_absolute::TreeAbsoluteProblem;
+use crate::solver::tree_problem::TreeLayout;
 use nalgebra::DVector;
+use nalgebra::{DMatrix, Vector3};
 
 pub const POSE: MethodSpec = MethodSpec {
     name: "pose",
@@ -62,7 +73,7 @@ pub const POSITION: MethodSpec = MethodSpec {
             LsqAlgorithm::LevenbergMarquardt,
         )
     },
-    tree_set_up: None,
+    tree_set_up: Some(|s| tree_set_up(s, "absolute positions", LsqAlgorithm::LevenbergMarquardt)),
 };
 
 /// The stage of an absolute method fitting `data` (`what`, for the reasons) by `algorithm`.
@@ -135,5 +146,142 @@ fn set_up(
         solver: least_squares_solver(probe.with_free(free, scale), algorithm, s.settings),
         identifiability: arm_report,
         reflector: None,
+    })
+}
+
+/// Both arms at once (a robot whose arms share joints) with one tracker frame: the positions of both
+/// arms' reflectors (`solver::tree_absolute`). The identifiability analysis runs on the tree's
+/// parameters and the transform (transform first, then each arm's preference order interleaved, a
+/// shared joint once), on both arms' Gram matrices summed.
+fn tree_set_up(
+    s: &TreeSetUp,
+    what: &str,
+    algorithm: LsqAlgorithm,
+) -> Result<TreeStage, CalibrationError> {
+    let arms = &s.start.arms;
+    let base = &s.start.left_base_from_right_base;
+    if base.translation.vector.norm() > 1e-9 || base.rotation.angle() > 1e-12 {
+        return Err(CalibrationError::InvalidSettings(
+            "the absolute positions of arms that share joints are fitted with one tracker frame, \
+             which needs both arms' chains to start at one link (their base_link)"
+                .into(),
+        ));
+    }
+    let layout = TreeLayout::new(&arms.left, &arms.right, s.shared);
+    // One start of the transform, from both arms' points.
+    let (mut model, mut measured): (Vec<Vector3<f64>>, Vec<Vector3<f64>>) = (vec![], vec![]);
+    for side in Side::BOTH {
+        let d = &s.data[side];
+        model.extend(
+            d.qs.iter()
+                .flat_map(|q| arms[side].reflector_fk(q).points_mm),
+        );
+        measured.extend(d.measured.iter().flatten().copied());
+    }
+    let t0 = moore_penrose_fit(&model, &measured).ok_or_else(|| CalibrationError::NonFinite {
+        stage: Stage::Arms,
+        detail: "the tracker-from-base fit of the start model".into(),
+    })?;
+    let probes = PerSide::try_from_fn(|side| {
+        let (d, arm) = (&s.data[side], &arms[side]);
+        let n = arm.param_count();
+        AbsoluteProblem::new(
+            AbsoluteData::Position,
+            side,
+            d.qs.clone(),
+            d.measured.clone(),
+            arm,
+            t0,
+            (0..n).collect(),
+            DVector::from_element(n + 6, 1.0),
+        )
+        .map_err(|i| CalibrationError::DegenerateReflectors {
+            side,
+            id: d.ids[i].clone(),
+            area_mm2: as_triangle(&d.measured[i]).map_or(0.0, |t| triangle_area_mm2(t).0),
+        })
+    })?;
+    let n_x = layout.len;
+    let transform = n_x..n_x + 6;
+    let mut gram = DMatrix::zeros(n_x + 6, n_x + 6);
+    for side in Side::BOTH {
+        let g = probes[side].gram();
+        let index: Vec<usize> = layout.index[side]
+            .iter()
+            .copied()
+            .chain(transform.clone())
+            .collect();
+        for (a, &ia) in index.iter().enumerate() {
+            for (b, &ib) in index.iter().enumerate() {
+                gram[(ia, ib)] += g[(a, b)];
+            }
+        }
+    }
+    let orders = arms.as_ref().map(|_, a| a.identifiability_order());
+    let mut order: Vec<usize> = transform.clone().collect();
+    for i in 0..orders.left.len().max(orders.right.len()) {
+        for side in Side::BOTH {
+            if let Some(&k) = orders[side].get(i) {
+                let x = layout.index[side][k];
+                if !order.contains(&x) {
+                    order.push(x);
+                }
+            }
+        }
+    }
+    let name = |x: usize| {
+        if x >= n_x {
+            return transform_param_name(Side::Left, x - n_x);
+        }
+        let (side, k) = layout.owner(x);
+        if layout.is_shared(x) {
+            format!("{} (shared)", arms[side].param_name(k))
+        } else {
+            format!("{side} {}", arms[side].param_name(k))
+        }
+    };
+    let reason = |x: usize| {
+        (x < n_x)
+            .then(|| layout.owner(x))
+            .and_then(|(side, k)| arms[side].unidentifiable_reason(k))
+    };
+    let report = identifiability::analyse(
+        &gram,
+        &ParameterInfo {
+            order: &order,
+            allowed: &vec![true; n_x + 6],
+            name: &name,
+            reason: &reason,
+            data: what,
+            not_allowed: ParameterInfo::FIXED_BY_USER,
+        },
+    );
+    if let Some(f) = report.fixed.iter().find(|f| f.index >= n_x) {
+        return Err(CalibrationError::RankDeficient {
+            stage: Stage::Arms,
+            detail: format!(
+                "the tracker-from-base transform is not identifiable from these configurations \
+                 ({}: {})",
+                f.name, f.reason
+            ),
+        });
+    }
+    let free: Vec<usize> = report.free.iter().copied().filter(|&x| x < n_x).collect();
+    let tree_report = IdentifiabilityReport {
+        free: free.clone(),
+        ..report
+    };
+    let reports = layout.split_report(&tree_report, arms);
+    for side in Side::BOTH {
+        require_kinematics(Stage::Arms, &arms[side], &reports[side])?;
+    }
+    let scale = DVector::from_vec(column_scales(&gram, free.iter().copied().chain(transform)));
+    Ok(TreeStage {
+        solver: least_squares_solver(
+            TreeAbsoluteProblem::new(probes, &layout, &free, &scale),
+            algorithm,
+            s.settings,
+        ),
+        identifiability: reports,
     })
 }
