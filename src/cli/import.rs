@@ -196,7 +196,7 @@ pub fn run(a: &ImportArgs) -> Result<()> {
     outln!("{}", describe_robot(&robot));
     outln!("{}", imported.report);
     // Joint values outside the robot's limits are refused before anything is written.
-    let limits = PerSide::from_fn(|s| robot.joint_limits_rad(s));
+    let limits = PerSide::from_fn(|s| robot.joint_limits_checked_rad(s));
     dataset::check_joint_limits(&imported.dataset, &limits)?;
     let overwrite = if a.force {
         Overwrite::Allow
