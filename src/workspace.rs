@@ -122,7 +122,7 @@ impl Workspace {
                 dataset_dir: dataset.dir.clone(),
                 source,
             })?;
-        let limits = PerSide::from_fn(|side| robot.joint_limits_rad(side));
+        let limits = PerSide::from_fn(|side| robot.joint_limits_checked_rad(side));
         dataset::check_joint_limits(&dataset, &limits).map_err(LoadError::JointLimits)?;
         let nominal = robot.nominal_model_for(&dataset);
         // Shared joints that disagree between rows measured together.

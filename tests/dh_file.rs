@@ -333,3 +333,94 @@ fn a_torso_both_arms_hang_from() {
     eprintln!("DH torso, collaborative: truth {t:.4} mm, calibrated {c:.4} mm");
     assert!(c <= 1.1 * t, "collaborative: {c} vs {t}");
 }
+
+/// `tools/real-data/dlr-justin.dh.toml` (DLR's Agile Justin, issue 20's nominal table): both arms'
+/// chains hold the torso's four joints and their seven, and the forward kinematics is issue 20's rows
+/// composed by hand — the torso base at z = 0.5884 m, the torso rows, each arm's base given there
+/// as a rotation matrix, the arm's rows and the TCP matrix, Craig's convention — at random joint
+/// values (the passive joint −(tilt 1 + tilt 2)).
+#[test]
+fn the_dlr_justin_file_is_issue_20s_table() {
+    use nalgebra::{Matrix3, Rotation3, Translation3};
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/real-data/dlr-justin.dh.toml");
+    let robot = RobotDescription::load(path.as_path(), &LoadOptions::default()).unwrap();
+    let model = robot.nominal_model(vec![Vector3::new(-100.0, 0.0, 75.0)]);
+    assert_eq!(
+        model.shared_joints().names,
+        ["torso_pan", "torso_tilt_1", "torso_tilt_2", "torso_passive"]
+    );
+    let d = std::f64::consts::PI / 180.0;
+    // (d m, θ deg, a m, α deg) as issue 20 lists them; the ± signs right's first.
+    let torso = [
+        (0.1055, 0.0, 0.0, 0.0),
+        (0.0, -90.0, 0.0, -90.0),
+        (0.0, 0.0, 0.3, 0.0),
+        (0.0, 0.0, 0.3, 0.0),
+    ];
+    let arm_rows = |s: f64, right: bool| {
+        [
+            (0.0, 0.0, 0.0, if right { 0.0 } else { 180.0 }),
+            (0.0, 0.0, 0.0, 90.0),
+            (0.4 * s, -90.0, 0.0, -90.0),
+            (0.0, 0.0, 0.0, 90.0),
+            (0.39 * s, if right { -180.0 } else { 0.0 }, 0.0, -90.0),
+            (0.0, 90.0, 0.0, 90.0 * s),
+            (0.0, -90.0, 0.0, 90.0 * s),
+        ]
+    };
+    let frame = |r: [[f64; 3]; 3], p: [f64; 3]| {
+        let m = Matrix3::from_row_slice(&r.concat());
+        Isometry3::from_parts(
+            Translation3::new(p[0] * 1000.0, p[1] * 1000.0, p[2] * 1000.0),
+            UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(m)),
+        )
+    };
+    let (c, s30) = ((30.0 * d).cos(), (30.0 * d).sin());
+    let base = |right: bool| {
+        if right {
+            frame(
+                [[-c, 0.0, s30], [0.0, 1.0, 0.0], [-s30, 0.0, -c]],
+                [0.190, 0.088, -0.256],
+            )
+        } else {
+            frame(
+                [[c, 0.0, s30], [0.0, 1.0, 0.0], [-s30, 0.0, c]],
+                [0.190, 0.088, 0.256],
+            )
+        }
+    };
+    let tcp = frame(
+        [[-1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0]],
+        [0.0, 0.118, 0.0],
+    );
+    let row = |(dd, theta, a, alpha): (f64, f64, f64, f64), q: f64| {
+        rx(alpha * d) * t(a * 1000.0, 0.0, 0.0) * rz(theta * d + q) * t(0.0, 0.0, dd * 1000.0)
+    };
+    let mut rng = ChaCha8Rng::seed_from_u64(20);
+    for side in Side::BOTH {
+        let right = side == Side::Right;
+        assert_eq!(model.arm(side).joint_count(), 11, "{side}");
+        for _ in 0..20 {
+            let mut q: Vec<f64> = (0..11).map(|_| rng.random_range(-2.5..2.5)).collect();
+            q[3] = -(q[1] + q[2]);
+            let mut want = t(0.0, 0.0, 588.4);
+            for (k, r) in torso.into_iter().enumerate() {
+                want *= row(r, q[k]);
+            }
+            want *= base(right);
+            for (k, r) in arm_rows(if right { 1.0 } else { -1.0 }, right)
+                .into_iter()
+                .enumerate()
+            {
+                want *= row(r, q[4 + k]);
+            }
+            want *= tcp;
+            let got = robot.body_from_arm_base(side) * model.arm(side).base_from_flange(&q);
+            let e = want.inverse() * got;
+            assert!(
+                e.translation.vector.norm() < 1e-9 && e.rotation.angle() < 1e-12,
+                "{side}: {e:?}"
+            );
+        }
+    }
+}

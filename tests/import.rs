@@ -1111,3 +1111,536 @@ fn a_prismatic_joint_imports_in_its_length_unit() {
         }
     }
 }
+
+/// A float as numpy prints it in scientific notation (`9.665453830000000e-01`), with 16 significant
+/// digits (numpy's default is 8; more here so that the simulated poses survive the text).
+fn numpy_float(x: f64) -> String {
+    let s = format!("{x:.15e}");
+    let (mantissa, exponent) = s.split_once('e').unwrap();
+    let e: i32 = exponent.parse().unwrap();
+    format!("{mantissa}e{}{:02}", if e < 0 { '-' } else { '+' }, e.abs())
+}
+
+/// A vector as numpy prints it: `[ 1.0e+00 -2.0e+00 …]`, the elements right-aligned to one width
+/// (a positive number gets the sign's space), lines wrapped at 75 characters with `wrap`.
+fn numpy_vector(items: &[String], wrap: bool) -> String {
+    let w = items.iter().map(String::len).max().unwrap_or(0);
+    let mut out = String::from("[");
+    let mut line = 1;
+    for (k, item) in items.iter().enumerate() {
+        if k > 0 {
+            if wrap && line + 1 + w > 75 {
+                out += "\n ";
+                line = 1;
+            } else {
+                out.push(' ');
+                line += 1;
+            }
+        }
+        out += &format!("{item:>w$}");
+        line += w;
+    }
+    out + "]"
+}
+
+/// Both hands of [`robots::coupled_torso_dh`] measured at one instant, with one marker each: per pose
+/// the 19 joint values in DLR's order (torso 3, right arm 7, left arm 7, head 2) and the markers
+/// (right hand first), as written to the file, with the true model of one reflector.
+struct TogetherPoses {
+    /// The nominal position of reflector `a` in the tip frame, mm.
+    nominal_mm: nalgebra::Vector3<f64>,
+    joints: Vec<Vec<f64>>,
+    markers_m: Vec<[[f64; 3]; 2]>,
+    truth: dualcal::kinematics::DualArmModel,
+}
+
+/// Simulate `n` poses of the robot: each simulated left row's torso made coupled (the passive joint
+/// `−(tilt 1 + tilt 2)`) and given to the right row of the same index, both hands' marker (reflector
+/// `a`) measured there (the true model, 20 µm noise).
+fn together_poses(robot: &RobotDescription, seed: u64, n: usize) -> TogetherPoses {
+    use nalgebra::Point3;
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, Normal};
+    let sim = simulate_with_robot(&paper_options(seed, n, n / 2), robot).unwrap();
+    let shared = sim.nominal.shared_joints();
+    assert_eq!(shared.variables, [(0, 0), (1, 1), (2, 2), (3, 3)]);
+    let mut truth = sim.truth.clone();
+    for side in Side::BOTH {
+        let arm = truth.arm_mut(side);
+        arm.reflectors_mm.truncate(1);
+        arm.reflector_names = vec!["a".to_string()].into();
+    }
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let noise = Normal::new(0.0, 0.02).unwrap();
+    let mut poses = TogetherPoses {
+        nominal_mm: sim.dataset.nominal_reflectors_mm[0],
+        joints: Vec::new(),
+        markers_m: Vec::new(),
+        truth,
+    };
+    for (l, r) in sim
+        .dataset
+        .arms
+        .left
+        .measurements
+        .iter()
+        .zip(&sim.dataset.arms.right.measurements)
+    {
+        let mut ql = l.q_rad.clone();
+        ql[3] = -(ql[1] + ql[2]);
+        let qr = shared.right_with_left_values(&ql, &r.q_rad);
+        let mut marker = |side: Side, q: &[f64]| {
+            let p = poses.truth.arm(side).reflector_fk(q).points_mm[0];
+            let t = sim.tracker_from_left_base * poses.truth.left_base_from(side);
+            let p = t.transform_point(&Point3::from(p)).coords;
+            [0, 1, 2].map(|k| (p[k] + noise.sample(&mut rng)) / 1000.0)
+        };
+        let markers = [marker(Side::Right, &qr), marker(Side::Left, &ql)];
+        let mut j: Vec<f64> = ql[..3].to_vec();
+        j.extend(&qr[4..]);
+        j.extend(&ql[4..]);
+        j.extend([0.0, 0.0]);
+        poses.joints.push(j);
+        poses.markers_m.push(markers);
+    }
+    poses
+}
+
+/// The poses in DLR's layout, as pandas writes a frame of numpy arrays: header `,joints,markers`, an
+/// unnamed index column, the joints vector (every third row wrapped over lines, and so quoted), the
+/// markers a quoted two-line matrix. Returns the file and the values as written (read back from
+/// their text).
+fn dlr_layout(poses: &TogetherPoses) -> (String, Vec<Vec<f64>>) {
+    let mut text = String::from(",joints,markers\n");
+    let mut written = Vec::new();
+    for (i, (j, m)) in poses.joints.iter().zip(&poses.markers_m).enumerate() {
+        let mut items: Vec<String> = j.iter().map(|&x| numpy_float(x)).collect();
+        // The head's zeros as numpy prints them in fixed notation, in some rows.
+        if i % 2 == 1 {
+            items[17] = "0.".to_string();
+            items[18] = "0.".to_string();
+        }
+        written.push(items.iter().map(|s| s.parse::<f64>().unwrap()).collect());
+        let joints = numpy_vector(&items, i % 3 == 0);
+        let joints = if joints.contains('\n') {
+            format!("\"{joints}\"")
+        } else {
+            joints
+        };
+        let row = |p: &[f64; 3]| numpy_vector(&p.map(|x| format!("{x:?}")), false);
+        text += &format!("{i},{joints},\"[{}\n {}]\"\n", row(&m[0]), row(&m[1]));
+    }
+    (text, written)
+}
+
+/// The imported dataset holds the values as written: the torso, the computed passive joint and the
+/// arm's own seven joints; the marker of the arm's hand (right: row 0) in mm; the last `verify`
+/// poses verification; one id per pose on both arms, measured together.
+fn assert_imported_as_written(
+    ds: &Dataset,
+    poses: &TogetherPoses,
+    written: &[Vec<f64>],
+    verify: usize,
+) {
+    assert!(ds.measured_together);
+    let n = written.len();
+    for side in Side::BOTH {
+        let (arm_cols, row) = if side == Side::Right { (3, 0) } else { (10, 1) };
+        let ms = &ds.arm(side).measurements;
+        assert_eq!(ms.len(), n, "{side}");
+        for (i, m) in ms.iter().enumerate() {
+            let w = &written[i];
+            let mut want: Vec<f64> = w[..3].to_vec();
+            want.push(-w[1] - w[2]);
+            want.extend(&w[arm_cols..arm_cols + 7]);
+            assert_eq!(m.q_rad.len(), 11);
+            for (k, (got, want)) in m.q_rad.iter().zip(&want).enumerate() {
+                assert!(
+                    (got - want).abs() <= 1e-9,
+                    "{side} {i} q{}: {got} vs {want}",
+                    k + 1
+                );
+            }
+            let p = poses.markers_m[i][row].map(|x| x * 1000.0);
+            assert!((m.tracker_points_mm[0] - nalgebra::Vector3::from(p)).amax() <= 1e-9);
+            assert_eq!(m.id, i.to_string());
+            let ver = i >= n - verify;
+            assert_eq!(
+                m.split,
+                if ver { Split::Ver } else { Split::Cal },
+                "{side} {i}"
+            );
+        }
+    }
+}
+
+const DLR_LEFT: &str = "id=1,q=joints[0-2],q=-joints[1]-joints[2],q=joints[10-16],\
+                        a.x=markers[1][0],a.y=markers[1][1],a.z=markers[1][2]";
+const DLR_RIGHT: &str = "id=1,q=joints[0-2],q=-joints[1]-joints[2],q=joints[3-9],\
+                         a.x=markers[0][0],a.y=markers[0][1],a.z=markers[0][2]";
+
+/// DLR's Agile Justin file layout (issue 20) — numpy vectors and a quoted two-line markers matrix per
+/// row, both hands measured at one instant — written here from a simulated Justin-like robot (a DH
+/// file with a torso whose fourth joint is passive, `−(tilt 1 + tilt 2)`), imported by `dualcal
+/// import` with per-arm mappings, `--measured-together` and `--verify-last`, loaded as a workspace
+/// and calibrated: the imported values are the written ones, the calibration reaches the truth's
+/// accuracy. A mapping whose torso disagrees between the arms, and a `--verify-last` that leaves
+/// nothing to calibrate with, are refused.
+#[test]
+fn a_numpy_printed_file_of_both_hands_imports_and_calibrates() {
+    let dir = tempfile::tempdir().unwrap();
+    let robot_path = write(
+        dir.path(),
+        "justin-like.dh.toml",
+        robots::coupled_torso_dh(),
+    );
+    let robot = RobotDescription::load(&robot_path, &Default::default()).unwrap();
+    let (n, verify) = (300, 100);
+    let poses = together_poses(&robot, 41, n);
+    let (text, written) = dlr_layout(&poses);
+    assert!(text.lines().count() > 2 * n, "quoted cells span lines");
+    let file = write(dir.path(), "measurements.csv", &text);
+    let out = dir.path().join("imported");
+    let a = poses.nominal_mm;
+    let reflector = format!("a={},{},{}", a.x, a.y, a.z);
+    let args = |left: &str, right: &str, verify: usize, out: &Path| -> Vec<String> {
+        let f = file.to_str().unwrap();
+        [
+            "import",
+            "--robot",
+            robot_path.to_str().unwrap(),
+            "--left-points",
+            f,
+            "--right-points",
+            f,
+            "--left-columns",
+            left,
+            "--right-columns",
+            right,
+            "--length-unit",
+            "m",
+            "--angle-unit",
+            "rad",
+            "--reflector",
+            &reflector,
+            "--measured-together",
+            "--verify-last",
+            &verify.to_string(),
+            "--out",
+            out.to_str().unwrap(),
+        ]
+        .map(String::from)
+        .to_vec()
+    };
+    let run = |a: Vec<String>| dualcal(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    let o = run(args(DLR_LEFT, DLR_RIGHT, verify, &out));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        o.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(
+        stdout.contains(&format!("{n} configurations matched")),
+        "{stdout}"
+    );
+
+    let ws = dualcal::workspace::Workspace::load(&out, &Default::default()).unwrap();
+    assert!(ws.refusals().is_empty(), "{:?}", ws.refusals());
+    let ds = &ws.dataset;
+    assert_imported_as_written(ds, &poses, &written, verify);
+
+    let settings = CalibrationSettings {
+        max_iterations: 400,
+        ..CalibrationSettings::default()
+    };
+    let result = common::calibrate(ds, &ws.nominal, &settings);
+    assert!(result.is_converged(), "{:?}", result.warnings());
+    let at = |m: &dualcal::kinematics::DualArmModel| {
+        dualcal::metrics::evaluate(ds, m, Split::Ver).unwrap()
+    };
+    let (nominal, truth, calibrated) = (at(&ws.nominal), at(&poses.truth), at(&result.calibrated));
+    common::assert_near_truth("justin-like", &nominal, &truth, &calibrated);
+
+    // The right arm's torso taken from other elements: the rows of one pose disagree, refused
+    // naming the file, the line and the column.
+    let wrong = DLR_RIGHT.replace("q=joints[0-2]", "q=joints[0],q=joints[2],q=joints[1]");
+    let o = run(args(DLR_LEFT, &wrong, verify, &dir.path().join("wrong")));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(
+        err.contains("measurements.csv:2: field `q2`") && err.contains("measured_together"),
+        "{err}"
+    );
+    // Nothing left to calibrate with.
+    let o = run(args(DLR_LEFT, DLR_RIGHT, n, &dir.path().join("all-ver")));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(
+        err.contains(&format!(
+            "--verify-last {n}: the left arm has {n} configurations"
+        )),
+        "{err}"
+    );
+}
+
+/// Both arms in one plain table of another layout — `;`-separated with decimal commas, a pose per
+/// row, each arm's joints and reflectors in columns named its own way — imported with per-arm
+/// mappings (columns by name and by number, a `q=` range and single joints appended): the native
+/// dataset's measurements, and its calibration.
+#[test]
+fn a_plain_table_of_both_arms_imports_with_per_arm_mappings() {
+    let dir = tempfile::tempdir().unwrap();
+    let sim = simulated(12);
+    let native = native(&sim, dir.path(), Units::MM_DEG);
+    let ds = &sim.dataset;
+    let names = &ds.reflector_names;
+    let comma = |x: f64| num(x).replace('.', ",");
+    let mut header = vec!["Nr".to_string(), "Zeit".to_string()];
+    for side in ["L", "R"] {
+        header.extend((1..=7).map(|k| format!("J{k} {side}")));
+    }
+    for side in ["L", "R"] {
+        for n in names.iter() {
+            header.extend(["X", "Y", "Z"].map(|a| format!("{side} {n}{a} [mm]")));
+        }
+    }
+    header.push("Split".into());
+    let mut text = header.join(";") + "\n";
+    let (left, right) = (&ds.arms.left.measurements, &ds.arms.right.measurements);
+    for (k, (l, r)) in left.iter().zip(right).enumerate() {
+        assert_eq!(l.split, r.split);
+        let mut row = vec![format!("P{k}"), format!("{k},5")];
+        row.extend(
+            l.q_rad
+                .iter()
+                .chain(&r.q_rad)
+                .map(|q| comma(q.to_degrees())),
+        );
+        for m in [l, r] {
+            row.extend(
+                m.tracker_points_mm
+                    .iter()
+                    .flat_map(|p| [p.x, p.y, p.z])
+                    .map(comma),
+            );
+        }
+        row.push(l.split.name().to_string());
+        text += &(row.join(";") + "\n");
+    }
+    let file = write(dir.path(), "poses.txt", &text);
+    // Left: joints by a range of column numbers; right: by name, one at a time, then a range.
+    let reflectors = |side: &str| -> String {
+        names
+            .iter()
+            .flat_map(|n| {
+                // The header's names without their bracketed units.
+                ["x", "y", "z"].map(|a| format!("{n}.{a}={side} {n}{}", a.to_uppercase()))
+            })
+            .collect::<Vec<_>>()
+            .join(",")
+    };
+    let left_map = format!("id=Nr,q=3-9,{},split=Split", reflectors("L"));
+    let right_map = format!(
+        "id=1,q=J1 R,q=J2 R,q=12-16,{},split=${}",
+        reflectors("R"),
+        header.len()
+    );
+    let out = dir.path().join("imported");
+    let f = file.to_str().unwrap();
+    let mut args = vec![
+        "import",
+        "--left-points",
+        f,
+        "--right-points",
+        f,
+        "--left-columns",
+        &left_map,
+        "--right-columns",
+        &right_map,
+        "--angle-unit",
+        "deg",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    let refl: Vec<String> = names
+        .iter()
+        .zip(&ds.nominal_reflectors_mm)
+        .map(|(n, p)| format!("{n}={},{},{}", p.x, p.y, p.z))
+        .collect();
+    for r in &refl {
+        args.extend(["--reflector", r]);
+    }
+    let o = dualcal(&args);
+    assert!(
+        o.status.success(),
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let back = dataset::load(&out).unwrap();
+    assert!(!back.measured_together);
+    assert_eq!(back.arms.right.measurements[3].id, "P3");
+    assert_same_measurements(&native, &back, false, true);
+    assert_same_calibration(&native, &back, Split::Cal);
+}
+
+/// A small file in DLR's layout with records on lines 2, 4, 6, 8 (each two lines long, the
+/// markers a quoted matrix); `bad_joints`, `bad_markers` replace record 2's (line 6) cells, `tail`
+/// follows.
+fn small_dlr_file(bad_joints: Option<&str>, bad_markers: Option<&str>, tail: &str) -> String {
+    let vector = |i: usize| -> String {
+        let v: Vec<String> = (0..19)
+            .map(|k| format!("{}", i as f64 + k as f64 / 10.0))
+            .collect();
+        format!("[{}]", v.join(" "))
+    };
+    let markers = |i: usize| format!("\"[[{i}.1 {i}.2 {i}.3]\n [{i}.4 {i}.5 {i}.6]]\"");
+    let mut text = String::from(",joints,markers\n");
+    for i in 0..4 {
+        let (j, m) = if i == 2 {
+            (
+                bad_joints.map_or_else(|| vector(i), String::from),
+                bad_markers.map_or_else(|| markers(i), String::from),
+            )
+        } else {
+            (vector(i), markers(i))
+        };
+        text += &format!("{i},{j},{m}\n");
+    }
+    text + tail
+}
+
+/// The malformed-cell cases: (file, mapping, line, column, what the message says).
+fn malformed_cell_cases() -> Vec<(String, String, usize, &'static str, &'static str)> {
+    let file = small_dlr_file;
+    let good = DLR_LEFT.replace("q=joints[0-2],q=-joints[1]-joints[2],", "");
+    vec![
+        (
+            file(Some("[0.5 1.5 2.5"), None, ""),
+            good.clone(),
+            6,
+            "joints",
+            "`[` not closed",
+        ),
+        (
+            file(None, Some("\"[[1 2 3]\n [4 5]]\""), ""),
+            good.clone(),
+            6,
+            "markers",
+            "row 1 has 2 values, row 0 has 3",
+        ),
+        (
+            file(Some("[1 2 x 4]"), None, ""),
+            good.clone(),
+            6,
+            "joints",
+            "element 2 `x` is not a finite number",
+        ),
+        (
+            file(Some("0.5"), None, ""),
+            good.clone(),
+            6,
+            "joints",
+            "an element reference on a plain cell `0.5`",
+        ),
+        (
+            file(None, None, ""),
+            good.replace("joints[10-16]", "joints[10-19]"),
+            2,
+            "joints",
+            "joints[19] (for q10): index [19] is beyond the vector's 19 values (indices 0…18)",
+        ),
+        (
+            file(None, None, ""),
+            good.replace("markers[1][0]", "markers[1]"),
+            2,
+            "markers",
+            "[1] is a row; write [1][j]",
+        ),
+        (
+            file(None, None, ""),
+            good.replace("markers[1][2]", "markers[2][2]"),
+            2,
+            "markers",
+            "row index [2] is beyond the matrix's 2 rows",
+        ),
+        (
+            file(None, None, ""),
+            good.replace("q=joints[10-16]", "q=joints"),
+            2,
+            "joints",
+            "is a vector or matrix cell: map one of its elements for q1, e.g. joints[0]",
+        ),
+        (
+            file(None, None, "4,[1 2],\"[[1 2 3]\n [4 5 6]]\n"),
+            good.clone(),
+            10,
+            "markers",
+            "a quote (`\"`) opened in this record is not closed",
+        ),
+    ]
+}
+
+/// Malformed vector and matrix cells, and element references that do not fit the cells, are refused
+/// naming the file, the record's first line (records span lines: a quoted matrix has two) and the
+/// column, and saying what is wrong.
+#[test]
+fn malformed_vector_and_matrix_cells_are_refused_with_file_line_and_column() {
+    let dir = tempfile::tempdir().unwrap();
+    let good = DLR_LEFT.replace("q=joints[0-2],q=-joints[1]-joints[2],", "");
+    let cases = malformed_cell_cases();
+    for (k, (text, mapping, line, column, what)) in cases.into_iter().enumerate() {
+        let path = write(dir.path(), &format!("measurements-{k}.csv"), &text);
+        let inputs = PerSide::from_fn(|_| ArmFiles {
+            points: path.clone(),
+            joints: None,
+        });
+        let mut o = ImportOptions::new(
+            vec!["a".into()],
+            vec![nalgebra::Vector3::new(45.0, 0.0, 40.0)],
+        );
+        o.arm_columns = PerSide::from_fn(|_| Some(ColumnMap::parse(&mapping).unwrap()));
+        o.length_unit = Some(dualcal::import::PointUnit::M);
+        o.angle_unit = Some(AngleUnit::Rad);
+        let err = import::import(&OsFiles, &inputs, &o).unwrap_err();
+        let msg = err.to_string();
+        eprintln!("{msg}");
+        let at = format!("measurements-{k}.csv:{line}: column `{column}`: ");
+        assert!(msg.contains(&at) && msg.contains(what), "case {k}: {msg}");
+        assert_eq!(
+            (err.line(), err.field()),
+            (Some(line), Some(column)),
+            "case {k}"
+        );
+        assert!(matches!(err, ImportError::Cell { .. }), "case {k}");
+    }
+    // The same file, well formed: every record read, at its first line.
+    let path = write(
+        dir.path(),
+        "measurements.csv",
+        small_dlr_file(None, None, ""),
+    );
+    let map = ColumnMap::parse(&good).unwrap();
+    let names = vec!["a".to_string()];
+    let o = dualcal::import::points::ReadOptions {
+        format: None,
+        unit: Some(dualcal::import::PointUnit::M),
+        decimal_comma: false,
+        columns: Some(&map),
+        reflector_names: &names,
+        joint_names: None,
+        angle_unit: AngleUnit::Rad,
+    };
+    let read =
+        dualcal::import::points::read(&path, &std::fs::read_to_string(&path).unwrap(), &o).unwrap();
+    let dualcal::import::PointTable::Rows(rows) = read.table else {
+        panic!("points")
+    };
+    assert_eq!(
+        rows.iter().map(|r| r.line).collect::<Vec<_>>(),
+        [2, 4, 6, 8]
+    );
+    assert_eq!(rows[2].q_rad.as_ref().unwrap()[0], 2.0 + 1.0);
+    assert!((rows[3].points_mm[0] - nalgebra::Vector3::new(3400.0, 3500.0, 3600.0)).amax() < 1e-9);
+}

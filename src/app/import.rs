@@ -199,7 +199,7 @@ fn preview(files: &dyn FileSource, inputs: &ImportInputs, target: &ImportTarget<
     let result = options(inputs, target)
         .and_then(|o| import::import(files, &arm_files(inputs), &o).map_err(|e| format!("{e:#}")));
     let refused = result.as_ref().ok().and_then(|imported| {
-        let limits = PerSide::from_fn(|s| target.robot.joint_limits_rad(s));
+        let limits = PerSide::from_fn(|s| target.robot.joint_limits_checked_rad(s));
         import::check(imported)
             .map_err(|e| format!("{e:#}"))
             .and_then(|()| {

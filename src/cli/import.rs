@@ -46,9 +46,29 @@ pub struct ImportArgs {
     pub points_format: Option<crate::import::PointsFormat>,
     /// Column mapping of a generic CSV/TXT (implies --points-format generic): `target=1,x=2,y=3,z=4`
     /// (a point per row) or `id=1,a.x=2,a.y=3,a.z=4,…,q=11-17,split=18` (a configuration per row);
-    /// columns by 1-based number or header name.
+    /// columns by 1-based number or header name. Vector and matrix cells as numpy prints them:
+    /// `COL[i]`, `COL[i][j]` (0-based), `q=COL[i-j]` (elements i…j as the next joints); a joint
+    /// computed from others: `q4=-joints[1]-joints[2]`, `0.5*COL[1]+$3+0.1` (`$N`: column N). Each
+    /// `q=` appends joints after those mapped so far. docs/formats.md, "Generic CSV/TXT".
     #[arg(long, value_parser = crate::import::ColumnMap::parse)]
     pub columns: Option<crate::import::ColumnMap>,
+    /// The left arm's own column mapping (as --columns, which it replaces for the left arm): both arms
+    /// in one file, e.g. `id=1,q=joints[0-2],q=-joints[1]-joints[2],q=joints[10-16],m.x=markers[1][0],
+    /// m.y=markers[1][1],m.z=markers[1][2]`.
+    #[arg(long, value_parser = crate::import::ColumnMap::parse, value_name = "SPEC")]
+    pub left_columns: Option<crate::import::ColumnMap>,
+    /// The right arm's own column mapping (as --columns, which it replaces for the right arm).
+    #[arg(long, value_parser = crate::import::ColumnMap::parse, value_name = "SPEC")]
+    pub right_columns: Option<crate::import::ColumnMap>,
+    /// Both hands were measured at one instant (a motion-capture system seeing both markers): a left
+    /// and a right configuration with the same id are one pose; the joints both arms share (a torso)
+    /// must then have one value per id. Writes `measured_together = true`.
+    #[arg(long)]
+    pub measured_together: bool,
+    /// The last N configurations of each arm (file order) are verification (`ver`), the others
+    /// calibration (`cal`), whatever the files say [default: the files' split, else `cal`].
+    #[arg(long, value_name = "N")]
+    pub verify_last: Option<usize>,
     /// Length unit of point files that do not state theirs [default: mm; m for figaroh].
     #[arg(long, value_enum)]
     pub length_unit: Option<crate::import::PointUnit>,
@@ -76,6 +96,14 @@ pub struct ImportArgs {
     /// in order [default: a, b, c at the paper's positions].
     #[arg(long = "reflector", value_parser = parse_reflector)]
     pub reflectors: Vec<(String, nalgebra::Vector3<f64>)>,
+    /// The left arm's own nominal reflector position (markers that sit differently on each hand):
+    /// NAME=X,Y,Z, mm, tip frame; one for each reflector of --reflector (same names) [default: those
+    /// of --reflector].
+    #[arg(long = "left-reflector", value_parser = parse_reflector, value_name = "NAME=X,Y,Z")]
+    pub left_reflectors: Vec<(String, nalgebra::Vector3<f64>)>,
+    /// The right arm's own nominal reflector position, as --left-reflector.
+    #[arg(long = "right-reflector", value_parser = parse_reflector, value_name = "NAME=X,Y,Z")]
+    pub right_reflectors: Vec<(String, nalgebra::Vector3<f64>)>,
     /// The tracker's maximum permissible error, constant part, µm.
     #[arg(long, default_value_t = dataset::TrackerSpec::default().mpe_um)]
     pub mpe_um: f64,
@@ -126,6 +154,39 @@ fn parse_reflector(s: &str) -> std::result::Result<(String, nalgebra::Vector3<f6
     }
 }
 
+/// An arm's own reflector positions (`--left-reflector`), in the order of the dataset's `names`:
+/// every name once, no other.
+fn arm_reflectors(
+    side: crate::side::Side,
+    given: &[(String, nalgebra::Vector3<f64>)],
+    names: &[String],
+) -> Result<Option<Vec<nalgebra::Vector3<f64>>>> {
+    if given.is_empty() {
+        return Ok(None);
+    }
+    for (k, (name, _)) in given.iter().enumerate() {
+        if !names.contains(name) || given[..k].iter().any(|(n, _)| n == name) {
+            anyhow::bail!(
+                "--{side}-reflector {name}=…: give each of the dataset's reflectors ({}) once",
+                names.join(", ")
+            );
+        }
+    }
+    names
+        .iter()
+        .map(|n| {
+            given
+                .iter()
+                .find(|(g, _)| g == n)
+                .map(|(_, p)| *p)
+                .ok_or_else(|| {
+                    anyhow::anyhow!("--{side}-reflector: no position for reflector `{n}`")
+                })
+        })
+        .collect::<Result<Vec<_>>>()
+        .map(Some)
+}
+
 /// `dualcal import`: read the files, print the robot and the report, check the joint limits, write.
 pub fn run(a: &ImportArgs) -> Result<()> {
     use crate::import::{self, ArmFiles, ImportOptions};
@@ -161,9 +222,15 @@ pub fn run(a: &ImportArgs) -> Result<()> {
     } else {
         a.reflectors.iter().cloned().unzip()
     };
+    let own = PerSide::new(&a.left_reflectors, &a.right_reflectors);
+    let arm_reflectors_mm = PerSide::try_from_fn(|side| arm_reflectors(side, own[side], &names))?;
     let mut options = ImportOptions::for_robot(&robot, a.robot.as_deref(), names, positions);
+    options.arm_reflectors_mm = arm_reflectors_mm;
     options.points_format = a.points_format;
     options.columns = a.columns.clone();
+    options.arm_columns = PerSide::new(a.left_columns.clone(), a.right_columns.clone());
+    options.measured_together = a.measured_together;
+    options.verify_last = a.verify_last;
     options.length_unit = a.length_unit;
     options.angle_unit = a.angle_unit.map(|u| match u {
         AngleArg::Deg => dataset::AngleUnit::Deg,
@@ -196,7 +263,7 @@ pub fn run(a: &ImportArgs) -> Result<()> {
     outln!("{}", describe_robot(&robot));
     outln!("{}", imported.report);
     // Joint values outside the robot's limits are refused before anything is written.
-    let limits = PerSide::from_fn(|s| robot.joint_limits_rad(s));
+    let limits = PerSide::from_fn(|s| robot.joint_limits_checked_rad(s));
     dataset::check_joint_limits(&imported.dataset, &limits)?;
     let overwrite = if a.force {
         Overwrite::Allow

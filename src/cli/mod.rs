@@ -75,7 +75,7 @@ pub enum Command {
     Reproduce(ReproduceArgs),
     /// Make a dataset from tracker exports (SpatialAnalyzer, Leica Tracker Pilot, figaroh, any CSV
     /// with a column mapping) and the controller's joint logs (docs/formats.md).
-    Import(import::ImportArgs),
+    Import(Box<import::ImportArgs>),
     /// Write the calibration in a controller's terms: the arms' base frames as an ABB `MOC.cfg`
     /// fragment, the joint origins as a kinematics YAML for a xacro.
     Export(controller::ExportArgs),

@@ -37,6 +37,17 @@ pub enum ImportError {
         expected: String,
         found: String,
     },
+    /// A cell is malformed, or lacks the element a mapping refers to: a bracket or quote not closed,
+    /// an index beyond a vector's length, matrix rows of different lengths, text where a number was
+    /// expected, an element reference on a plain cell. `line` is the first line of the record (a
+    /// quoted cell may span lines), `field` the column as the mapping or the header names it.
+    #[error("{path}:{line}: column `{field}`: {message}")]
+    Cell {
+        path: PathBuf,
+        line: usize,
+        field: String,
+        message: String,
+    },
     /// A row has fewer fields than the columns that are read.
     #[error("{path}:{line}: expected at least {expected} fields, found {found}")]
     FieldCount {
@@ -79,6 +90,7 @@ impl ImportError {
         match self {
             ImportError::Header { line, .. }
             | ImportError::Field { line, .. }
+            | ImportError::Cell { line, .. }
             | ImportError::FieldCount { line, .. }
             | ImportError::DuplicateId { line, .. } => Some(*line),
             _ => None,
@@ -88,7 +100,9 @@ impl ImportError {
     /// The field (column) the error is about, where it is about one.
     pub fn field(&self) -> Option<&str> {
         match self {
-            ImportError::Header { field, .. } | ImportError::Field { field, .. } => Some(field),
+            ImportError::Header { field, .. }
+            | ImportError::Field { field, .. }
+            | ImportError::Cell { field, .. } => Some(field),
             ImportError::DuplicateId { .. } => Some("id"),
             _ => None,
         }
@@ -102,6 +116,7 @@ impl ImportError {
             | ImportError::Format { path, .. }
             | ImportError::Header { path, .. }
             | ImportError::Field { path, .. }
+            | ImportError::Cell { path, .. }
             | ImportError::FieldCount { path, .. }
             | ImportError::DuplicateId { path, .. }
             | ImportError::Content { path, .. }

@@ -19,6 +19,7 @@ use crate::dataset::{
     self, AngleUnit, ArmData, ArmLinks, Dataset, LengthUnit, MANIFEST_FILE, Measurement, Split,
     TrackerSpec, Units,
 };
+use crate::kinematics::SharedJoints;
 use crate::output::{OutputError, Overwrite, refuse_overwrite_input, write_atomic};
 use crate::robot::RobotDescription;
 use crate::side::{PerSide, Side};
@@ -56,6 +57,9 @@ pub struct ImportOptions {
     pub points_format: Option<PointsFormat>,
     /// The generic format's column mapping.
     pub columns: Option<ColumnMap>,
+    /// An arm's own mapping, in place of `columns` for that arm (`--left-columns`,
+    /// `--right-columns`: both arms in one file, each with its columns or elements).
+    pub arm_columns: PerSide<Option<ColumnMap>>,
     /// The unit of point files that do not state theirs (`None`: mm; m for figaroh).
     pub length_unit: Option<PointUnit>,
     /// The unit of joint logs (`None`: the header's `[deg]`/`[rad]`, else degrees) and of a mapping's
@@ -70,6 +74,9 @@ pub struct ImportOptions {
     /// The dataset's reflectors: names (target suffixes) and nominal positions in the tip frame, mm.
     pub reflector_names: Vec<String>,
     pub nominal_reflectors_mm: Vec<Vector3<f64>>,
+    /// An arm's own nominal reflector positions (markers that sit differently on each hand), in the
+    /// order of `reflector_names`, mm: the dataset's `[[arms]] reflectors`.
+    pub arm_reflectors_mm: PerSide<Option<Vec<Vector3<f64>>>>,
     pub tracker: TrackerSpec,
     /// Each arm's joints in chain order (from the robot description): counts checked, figaroh's
     /// columns and named log columns put in chain order.
@@ -85,6 +92,17 @@ pub struct ImportOptions {
     /// The unit of prismatic joints' values in the joint logs and mapped joint columns (`None`: mm;
     /// m for figaroh, which writes the URDF's units).
     pub joint_length_unit: Option<LengthUnit>,
+    /// Both hands were measured at one instant (the dataset's `measured_together`): a left and a
+    /// right configuration with one id are one pose, so the joints both arms share have one value
+    /// in them (checked as the loader does). Ids made up for files without ids are then the same
+    /// on both arms (`C001`, …) rather than `L001`/`R001`.
+    pub measured_together: bool,
+    /// The joints both arms share (from the robot description; a torso): what `measured_together`
+    /// checks.
+    pub shared_joints: SharedJoints,
+    /// The last N configurations of each arm, in file order, are verification (`ver`), the others
+    /// calibration (`cal`), whatever the files say. `None`: the files' splits, else `cal`.
+    pub verify_last: Option<usize>,
 }
 
 impl ImportOptions {
@@ -108,6 +126,11 @@ impl ImportOptions {
             stations: PerSide::new(None, None),
             linear_joints: PerSide::new(Vec::new(), Vec::new()),
             joint_length_unit: None,
+            arm_columns: PerSide::new(None, None),
+            arm_reflectors_mm: PerSide::new(None, None),
+            measured_together: false,
+            shared_joints: SharedJoints::default(),
+            verify_last: None,
         }
     }
 }
@@ -130,6 +153,7 @@ impl ImportOptions {
             options.links = PerSide::from_fn(|s| Some(robot.arm(s).links.clone()));
         }
         options.linear_joints = PerSide::from_fn(|s| robot.arm(s).linear_joints());
+        options.shared_joints = robot.shared_joints();
         options
     }
 }
@@ -203,22 +227,63 @@ pub fn import(
 ) -> Result<Imported, ImportError> {
     check_options(options)?;
     let arms = PerSide::try_from_fn(|side| import_arm(files, side, &inputs[side], options))?;
-    let (data, reports) = (
+    let (mut data, mut reports) = (
         PerSide::new(arms.left.0.clone(), arms.right.0.clone()),
         PerSide::new(arms.left.1.clone(), arms.right.1.clone()),
     );
+    if let Some(n) = options.verify_last {
+        for side in Side::BOTH {
+            verify_last(&mut data[side], n, &mut reports[side])?;
+        }
+    }
+    let dataset = Dataset {
+        dir: PathBuf::new(),
+        robot: options.robot.clone(),
+        tracker: options.tracker,
+        nominal_reflectors_mm: options.nominal_reflectors_mm.clone(),
+        reflector_names: options.reflector_names.clone().into(),
+        arms: data,
+        measured_together: options.measured_together,
+    };
+    if options.measured_together {
+        // What the loader refuses, refused here with the input files' lines (values shown in the
+        // files' units).
+        let units = Units {
+            length: options.joint_length_unit.unwrap_or(LengthUnit::Mm),
+            angle: options.angle_unit.unwrap_or(AngleUnit::Deg),
+        };
+        dataset::check_measured_together(&dataset, &options.shared_joints, units)?;
+    }
     Ok(Imported {
-        dataset: Dataset {
-            dir: PathBuf::new(),
-            robot: options.robot.clone(),
-            tracker: options.tracker,
-            nominal_reflectors_mm: options.nominal_reflectors_mm.clone(),
-            reflector_names: options.reflector_names.clone().into(),
-            arms: data,
-            measured_together: false,
-        },
+        dataset,
         report: ImportReport { arms: reports },
     })
+}
+
+/// `--verify-last n`: the arm's last `n` configurations (file order) `ver`, the others `cal`.
+fn verify_last(arm: &mut ArmData, n: usize, report: &mut ArmReport) -> Result<(), ImportError> {
+    let count = arm.measurements.len();
+    if n >= count {
+        return Err(ImportError::Content {
+            path: arm.file.clone(),
+            message: format!(
+                "--verify-last {n}: the {} arm has {count} configurations, so none would be left \
+                 to calibrate with; give a number below {count}",
+                arm.side
+            ),
+        });
+    }
+    for (k, m) in arm.measurements.iter_mut().enumerate() {
+        m.split = if k + n >= count {
+            Split::Ver
+        } else {
+            Split::Cal
+        };
+    }
+    report.notes.push(format!(
+        "split: the last {n} of {count} configurations `ver` (--verify-last), the others `cal`"
+    ));
+    Ok(())
 }
 
 fn check_options(o: &ImportOptions) -> Result<(), ImportError> {
@@ -229,6 +294,19 @@ fn check_options(o: &ImportOptions) -> Result<(), ImportError> {
             names.len(),
             o.nominal_reflectors_mm.len()
         )));
+    }
+    for (side, own) in o.arm_reflectors_mm.iter() {
+        if let Some(own) = own
+            && own.len() != names.len()
+        {
+            return Err(ImportError::Options(format!(
+                "{} nominal reflector positions of the {side} arm for the dataset's {} reflectors \
+                 ({})",
+                own.len(),
+                names.len(),
+                names.join(", ")
+            )));
+        }
     }
     for (k, n) in names.iter().enumerate() {
         let ok = !n.is_empty()
@@ -267,16 +345,13 @@ fn import_arm(
         format: o.points_format,
         unit: o.length_unit,
         decimal_comma: o.decimal_comma,
-        columns: o.columns.as_ref(),
+        columns: o.arm_columns[side].as_ref().or(o.columns.as_ref()),
         reflector_names: &o.reflector_names,
         joint_names,
         angle_unit: o.angle_unit.unwrap_or(AngleUnit::Deg),
     };
     let pf = points::read(&input.points, &text, &read_options)?;
-    let prefix = match side {
-        Side::Left => "L",
-        Side::Right => "R",
-    };
+    let prefix = id_prefix(side, o.measured_together);
     let log = match &input.joints {
         Some(path) => {
             let text = text::read(files, path)?;
@@ -358,7 +433,7 @@ fn import_arm(
         links: o.links[side].clone(),
         station: o.stations[side].clone(),
         linear_joints: Vec::new(),
-        nominal_reflectors_mm: None,
+        nominal_reflectors_mm: o.arm_reflectors_mm[side].clone(),
         measurements,
     };
     // The readers convert every joint value with the angle unit; a prismatic joint's value is a
@@ -378,6 +453,16 @@ fn import_arm(
     };
     arm.set_linear_joints(&o.linear_joints[side], units)?;
     Ok((arm, report))
+}
+
+/// The prefix of ids made up for rows without one (`L001`, `R001`): the same on both arms (`C001`)
+/// when the rows are poses of both.
+fn id_prefix(side: Side, measured_together: bool) -> &'static str {
+    match side {
+        _ if measured_together => "C",
+        Side::Left => "L",
+        Side::Right => "R",
+    }
 }
 
 /// The reflector a target name ends in: `L012_a` is (`L012`, a) when `a` is a reflector.
@@ -725,7 +810,7 @@ pub fn check(imported: &Imported) -> Result<(), ImportError> {
     for side in Side::BOTH {
         dataset::check_arm_rows(
             &ds.arms[side],
-            &ds.nominal_reflectors_mm,
+            ds.nominal_reflectors(side),
             &ds.reflector_names,
         )?;
     }

@@ -111,6 +111,88 @@ pub fn split(line: &str, delimiter: Delimiter) -> Vec<String> {
     out
 }
 
+/// A record of a delimited text: its fields (as [`split`] gives them) and its first line (1-based).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Record {
+    pub line: usize,
+    pub fields: Vec<String>,
+}
+
+/// A double quote that a text opened and did not close, by the first line of its record and the
+/// field (0-based) it is in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct OpenQuote {
+    pub line: usize,
+    pub field: usize,
+}
+
+/// Is a quote open after `s`, starting with `quoted`? The same reading of quotes as [`split`]: a `"`
+/// opens or closes, `""` inside quotes is one quote.
+fn quote_open_after(s: &str, mut quoted: bool) -> bool {
+    let mut chars = s.chars().peekable();
+    while let Some(c) = chars.next() {
+        if c == '"' {
+            if quoted && chars.peek() == Some(&'"') {
+                chars.next();
+            } else {
+                quoted = !quoted;
+            }
+        }
+    }
+    quoted
+}
+
+/// The records of a delimited text, in order: a line each, except that a double-quoted field may
+/// hold line ends (CSV writers quote a cell with line breaks: pandas a printed matrix), so a record
+/// spans the lines up to its closing quote. Between records, blank lines and the lines `skip`
+/// accepts (comments) are left out; lines are trimmed. With [`Delimiter::Whitespace`] quotes never
+/// span lines. A quote still open at the end of the text is refused with its record's first line.
+pub fn records(
+    text: &str,
+    delimiter: Delimiter,
+    skip: impl Fn(&str) -> bool,
+) -> Result<Vec<Record>, OpenQuote> {
+    let spans = delimiter != Delimiter::Whitespace;
+    let mut out = Vec::new();
+    // The record being read: its first line and its text so far.
+    let mut open: Option<(usize, String)> = None;
+    for (i, raw) in text.lines().enumerate() {
+        let (line, buffer) = match open.take() {
+            Some((first, mut buffer)) => {
+                buffer.push('\n');
+                buffer.push_str(raw);
+                if quote_open_after(raw, true) {
+                    open = Some((first, buffer));
+                    continue;
+                }
+                (first, buffer)
+            }
+            None => {
+                let t = raw.trim();
+                if t.is_empty() || skip(t) {
+                    continue;
+                }
+                if spans && quote_open_after(t, false) {
+                    open = Some((i + 1, t.to_string()));
+                    continue;
+                }
+                (i + 1, t.to_string())
+            }
+        };
+        out.push(Record {
+            line,
+            fields: split(buffer.trim(), delimiter),
+        });
+    }
+    match open {
+        Some((line, buffer)) => Err(OpenQuote {
+            line,
+            field: split(&buffer, delimiter).len() - 1,
+        }),
+        None => Ok(out),
+    }
+}
+
 fn unquote(s: &str) -> String {
     let s = s.trim();
     match s.strip_prefix('"').and_then(|t| t.strip_suffix('"')) {
@@ -305,5 +387,35 @@ mod tests {
         assert_eq!(time_s("yesterday"), None);
         assert_eq!(time_s("31.02.2022 10:00:00"), None);
         assert_eq!(time_s("11.10.9000000000000000000 15:06:48"), None);
+    }
+
+    #[test]
+    fn quoted_fields_span_lines_and_records_keep_their_first_line() {
+        let text = "# comment\n,joints,markers\n\n0,[1 2],\"[[1 2 3]\n [4 5 6]]\"\n\
+                    1,[3 4],\"[[7 8 9]\r\n # not a comment\n [1 2 3]]\"\n2,\"a \"\"b\"\"\",x\n";
+        let r = records(text, Delimiter::Comma, |l| l.starts_with('#')).unwrap();
+        let lines: Vec<usize> = r.iter().map(|r| r.line).collect();
+        assert_eq!(lines, [2, 4, 6, 9]);
+        assert_eq!(r[0].fields, ["", "joints", "markers"]);
+        assert_eq!(r[1].fields, ["0", "[1 2]", "[[1 2 3]\n [4 5 6]]"]);
+        assert_eq!(r[2].fields[2], "[[7 8 9]\n # not a comment\n [1 2 3]]");
+        assert_eq!(r[3].fields, ["2", "a \"b\"", "x"]);
+        // One line per record as `split` reads a line, where no quote spans lines.
+        let plain = "a, \"b,c\" ,\n1;2\n";
+        let r = records(plain, Delimiter::Comma, |_| false).unwrap();
+        assert_eq!(r[0].fields, split("a, \"b,c\" ,", Delimiter::Comma));
+        assert_eq!(r[1].fields, ["1;2"]);
+        // A quote never closed: the record's first line and its field.
+        let open = "id,m\n1,\"[1 2]\"\n2,\"[3 4]\n3,[5 6]\n";
+        assert_eq!(
+            records(open, Delimiter::Comma, |_| false),
+            Err(OpenQuote { line: 3, field: 1 })
+        );
+        // White space separated: quotes stay on their line.
+        let ws = "a \"b\nc d\n";
+        assert_eq!(
+            records(ws, Delimiter::Whitespace, |_| false).unwrap().len(),
+            2
+        );
     }
 }

@@ -624,6 +624,19 @@ impl RobotDescription {
         self.arms[side].joint_limits_rad()
     }
 
+    /// The limits a dataset's joint values are checked against ([`crate::dataset::check_joint_limits`]),
+    /// in chain order, rad (mm for a prismatic joint): the description's limits, and none for a
+    /// continuous joint — any angle is a value it can take (a waist logged at 199°), where
+    /// [`Self::joint_limits_rad`] gives ±π, the range plans and simulations draw from.
+    pub fn joint_limits_checked_rad(&self, side: Side) -> Vec<(f64, f64)> {
+        let unbounded = (f64::NEG_INFINITY, f64::INFINITY);
+        self.arms[side]
+            .chain
+            .variable_joints()
+            .map(|j| j.limits.unwrap_or(unbounded))
+            .collect()
+    }
+
     /// A resting pose of `side`: the YuMi's home pose for a YuMi-named seven-joint arm, else every
     /// joint at zero (or the nearest limit).
     pub fn home_q_rad(&self, side: Side) -> Vec<f64> {

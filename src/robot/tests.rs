@@ -2,6 +2,7 @@
 
 use super::*;
 use crate::kinematics::{ArmModel, N_JOINTS, rotation_angle_rad};
+use std::f64::consts::PI;
 
 #[test]
 fn builtin_loads_without_warnings() {
@@ -152,4 +153,10 @@ fn a_shared_torso_joint_loads_once() {
         (turned[link(name)].translation.vector - still[link(name)].translation.vector).norm()
     };
     assert!(moved("yumi_link_1_l") > 1.0 && moved("yumi_link_1_r") > 1.0);
+    // The continuous torso: drawn from ±π, checked against nothing (any angle is a value it
+    // takes); the arm's revolute joints keep their limits.
+    assert_eq!(robot.joint_limits_rad(Side::Left)[0], (-PI, PI));
+    let checked = robot.joint_limits_checked_rad(Side::Left);
+    assert_eq!(checked[0], (f64::NEG_INFINITY, f64::INFINITY));
+    assert_eq!(checked[1..], robot.joint_limits_rad(Side::Left)[1..]);
 }

@@ -132,7 +132,9 @@ fn options_ui(ui: &mut egui::Ui, inputs: &mut ImportInputs) {
             .on_hover_text(
                 "A generic CSV/TXT: `target=1,x=2,y=3,z=4` (a point per row) or \
                  `id=1,a.x=2,a.y=3,a.z=4,…,q=11-17` (a configuration per row); columns by 1-based \
-                 number or header name",
+                 number or header name; elements of numpy vector and matrix cells `COL[i]`, \
+                 `COL[i][j]`, `q=COL[i-j]`; a computed joint `q4=-joints[1]-joints[2]` \
+                 (docs/formats.md, \"Generic CSV/TXT\")",
             );
             ui.end_row();
             ui.label("point unit");

@@ -9,12 +9,15 @@ use crate::dataset::{AngleUnit, Split};
 use nalgebra::Vector3;
 use std::path::Path;
 
+mod cells;
 mod figaroh;
 mod generic;
 mod leica;
+mod mapping;
 mod spatial_analyzer;
 
-pub use generic::{ColumnMap, ColumnRef, ColumnRole};
+pub use cells::Array;
+pub use mapping::{CellRef, ColumnMap, ColumnRef, ColumnRole, Formula, Source};
 
 /// The formats of point files.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
