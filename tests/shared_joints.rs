@@ -611,3 +611,41 @@ fn the_position_method_fits_both_arms_and_one_tracker_frame() {
             .is_none()
     );
 }
+
+/// `--hold-kinematics`: only the tracker frame and the reflectors are fitted (the nominal robot's
+/// figure with its frame and markers known); refused with a method that does not see the frame.
+#[test]
+fn holding_the_kinematics_fits_only_the_frame_and_the_reflectors() {
+    let dir = tempfile::tempdir().unwrap();
+    let case = simulate(dir.path(), false, 95, &[0], (120, 80));
+    let nominal = case.robot.nominal_model_for(&case.dataset);
+    let settings = CalibrationSettings {
+        method: Method::Position,
+        hold_kinematics: true,
+        ..CalibrationSettings::default()
+    };
+    let result = common::calibrate(&case.dataset, &nominal, &settings);
+    assert!(result.is_converged(), "{:?}", result.warnings());
+    let stages: Vec<Stage> = result.stages.iter().map(|s| s.stage).collect();
+    assert_eq!(stages, [Stage::Arms], "no step 2");
+    for side in Side::BOTH {
+        let (arm, start) = (result.calibrated.arm(side), nominal.arm(side));
+        let (now, was) = (arm.to_vector(), start.to_vector());
+        let k = start.reflector_offset();
+        assert_eq!(now.rows(0, k), was.rows(0, k), "{side}: kinematics held");
+        assert!((now.rows(k, now.len() - k) - was.rows(k, was.len() - k)).norm() > 1e-3);
+        assert!(result.tracker_from_base[side].is_some());
+    }
+    assert_eq!(
+        result.calibrated.left_base_from_right_base,
+        nominal.left_base_from_right_base
+    );
+    let err = Calibrator::new(&case.dataset, &nominal)
+        .settings(CalibrationSettings {
+            hold_kinematics: true,
+            ..CalibrationSettings::default()
+        })
+        .run()
+        .unwrap_err();
+    assert!(err.to_string().contains("`position` or `pose`"), "{err}");
+}

@@ -52,6 +52,7 @@ pub(super) fn settings_from(
         max_iterations: a.max_iterations,
         step_tolerance: a.tolerance,
         progress_tolerance: a.progress_tolerance,
+        hold_kinematics: a.hold_kinematics,
         ..CalibrationSettings::default()
     })
 }

@@ -159,6 +159,10 @@ pub struct EvaluateArgs {
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,
+    /// Write every measured point's absolute position error (`arm,id,reflector,error_mm`) to this
+    /// CSV file, where the parameter file has the tracker frame.
+    #[arg(long)]
+    pub absolute_csv: Option<PathBuf>,
 }
 
 #[derive(Args, Debug)]
@@ -200,6 +204,11 @@ pub struct CalibrateArgs {
     /// Also stop when ψ fell by less than this (relative) over the last five iterations; 0 disables.
     #[arg(long, default_value_t = crate::solver::sqp::PROGRESS_RTOL)]
     pub progress_tolerance: f64,
+    /// Fit only the tracker (camera) frame and the reflector coordinates, the arms' kinematic
+    /// parameters held nominal (an absolute method: `--method position` or `pose`): what the nominal
+    /// robot reaches once its frame and markers are known. No step 2.
+    #[arg(long)]
+    pub hold_kinematics: bool,
     /// Only the summary, no per-iteration lines.
     #[arg(long, short)]
     pub quiet: bool,
@@ -544,6 +553,35 @@ fn evaluate_cmd(a: &EvaluateArgs) -> Result<()> {
     let report = metrics::evaluate(&ds, &model, a.split)?;
     // Where a method identified the tracker (camera) frame: the absolute position errors too.
     let absolute = metrics::absolute_stats(&ds, &model, &frames, a.split)?;
+    if let Some(path) = &a.absolute_csv {
+        if absolute.is_none() {
+            anyhow::bail!(
+                "--absolute-csv {}: the parameter file has no tracker frame (an absolute method \
+                 identifies it: --method position or pose)",
+                path.display()
+            );
+        }
+        let mut text = String::from("arm,id,reflector,error_mm\n");
+        for e in metrics::absolute_errors(&ds, &model, &frames, a.split)? {
+            let id = if e.id.contains([',', '"']) {
+                format!("\"{}\"", e.id.replace('"', "\"\""))
+            } else {
+                e.id
+            };
+            text.push_str(&format!(
+                "{},{id},{},{}\n",
+                e.side, ds.reflector_names[e.reflector], e.error_mm
+            ));
+        }
+        let inputs: Vec<PathBuf> = std::iter::once(ds.dir.join(crate::dataset::MANIFEST_FILE))
+            .chain(ds.arms.values().map(|arm| arm.file.clone()))
+            .chain(a.params.clone())
+            .collect();
+        let inputs: Vec<&Path> = inputs.iter().map(PathBuf::as_path).collect();
+        crate::output::refuse_overwrite_input(path, &inputs)?;
+        crate::output::write_atomic(path, text.as_bytes())
+            .with_context(|| format!("writing {}", path.display()))?;
+    }
     if a.json {
         let mut value = serde_json::to_value(report)?;
         if let (Some(abs), Some(obj)) = (absolute, value.as_object_mut()) {

@@ -21,16 +21,26 @@ pub struct AbsoluteStats {
     pub n_points: usize,
 }
 
-/// The absolute position errors of `model` on `split`, each arm's points placed by its
-/// `tracker_from_base` frame; arms without a frame (or without measurements) are left out. `None`
-/// when no arm has both.
-pub fn absolute_stats(
+/// One measured point's absolute error.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AbsoluteError {
+    pub side: Side,
+    /// The configuration's id.
+    pub id: String,
+    /// Index of the reflector (the dataset's order).
+    pub reflector: usize,
+    pub error_mm: f64,
+}
+
+/// Every measured point's absolute error under `model` on `split` (left arm first, file order), each
+/// arm's points placed by its `tracker_from_base` frame; arms without a frame are left out.
+pub fn absolute_errors(
     dataset: &Dataset,
     model: &DualArmModel,
     tracker_from_base: &PerSide<Option<Isometry3<f64>>>,
     split: Split,
-) -> Result<Option<AbsoluteStats>, MetricsError> {
-    let mut errors_mm = Vec::new();
+) -> Result<Vec<AbsoluteError>, MetricsError> {
+    let mut out = Vec::new();
     for side in Side::BOTH {
         let Some(t) = tracker_from_base[side] else {
             continue;
@@ -46,11 +56,31 @@ pub fn absolute_stats(
                 });
             }
             let points = arm.reflector_fk(&m.q_rad).points_mm;
-            for (p, measured) in points.iter().zip(&m.tracker_points_mm) {
-                errors_mm.push((measured - (t * Point3::from(*p)).coords).norm());
+            for (k, (p, measured)) in points.iter().zip(&m.tracker_points_mm).enumerate() {
+                out.push(AbsoluteError {
+                    side,
+                    id: m.id.clone(),
+                    reflector: k,
+                    error_mm: (measured - (t * Point3::from(*p)).coords).norm(),
+                });
             }
         }
     }
+    Ok(out)
+}
+
+/// The absolute position errors of `model` on `split` summarised ([`absolute_errors`]). `None` when
+/// no arm has both a frame and measurements.
+pub fn absolute_stats(
+    dataset: &Dataset,
+    model: &DualArmModel,
+    tracker_from_base: &PerSide<Option<Isometry3<f64>>>,
+    split: Split,
+) -> Result<Option<AbsoluteStats>, MetricsError> {
+    let errors_mm: Vec<f64> = absolute_errors(dataset, model, tracker_from_base, split)?
+        .iter()
+        .map(|e| e.error_mm)
+        .collect();
     if errors_mm.is_empty() {
         return Ok(None);
     }

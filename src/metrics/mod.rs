@@ -33,7 +33,7 @@ mod tests;
 use crate::dataset::{ArmData, Dataset, Split};
 use crate::kinematics::{ArmModel, DualArmModel, PerReflector};
 use crate::side::{ConfigId, Side};
-pub use absolute::{AbsoluteStats, absolute_stats};
+pub use absolute::{AbsoluteError, AbsoluteStats, absolute_errors, absolute_stats};
 pub use geometry::orientation_measurable;
 use geometry::{
     ArmGeom, against, arm_geometry, both_arms, collaborative_accumulate, pair_residual,

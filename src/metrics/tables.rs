@@ -234,12 +234,25 @@ pub fn format_comparison_named(
         for row in &block.rows {
             let _ = writeln!(
                 out,
-                "{:<LABEL_WIDTH$}{:>14}{:>14}{:>14}",
-                row.label, row.before, row.after, row.change
+                "{:<LABEL_WIDTH$}{}{}{:>14}",
+                row.label,
+                cell(&row.before),
+                cell(&row.after),
+                row.change
             );
         }
     }
     out
+}
+
+/// A value right-aligned in a column of 14, with a space before one that fills it ("not
+/// measurable"), so that two never run together.
+fn cell(text: &str) -> String {
+    if text.chars().count() >= 14 {
+        format!(" {text}")
+    } else {
+        format!("{text:>14}")
+    }
 }
 
 /// One set of pairs of a comparison ([`comparison_blocks`]).

@@ -136,8 +136,9 @@ pub struct BaseTransform {
 
 /// Each arm's model base in the tracker frame, written by the methods that identify it (the absolute
 /// methods `pose`, `position` in step 1 and `absolute` in step 2): a point `p` of the arm's base maps
-/// to `rotation · p + translation` in the tracker frame. Informative: a model needs neither (the
-/// distance methods cannot see them), and `evaluate` reads the file the same with or without.
+/// to `rotation · p + translation` in the tracker frame. A model needs neither (the distance methods
+/// cannot see them): `evaluate`'s distance figures are the same with or without; its absolute figures
+/// (the markers' position errors in the tracker frame) need them.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct TrackerFrames {
     #[serde(default, skip_serializing_if = "Option::is_none")]

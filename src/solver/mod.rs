@@ -128,6 +128,11 @@ pub struct CalibrationSettings {
     /// [`crate::quality`]). Indices refer to the dataset given to the calibration.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub exclude: Vec<ConfigId>,
+    /// Fit only the tracker frame and the reflector coordinates, the kinematic parameters held at the
+    /// start model's (the absolute methods only; no step 2): the nominal robot's figure with its frame
+    /// and markers fitted.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub hold_kinematics: bool,
 }
 
 fn default_progress_tolerance() -> f64 {
@@ -147,6 +152,7 @@ impl Default for CalibrationSettings {
             progress_tolerance: default_progress_tolerance(),
             max_qp_iterations: 2000,
             exclude: Vec::new(),
+            hold_kinematics: false,
         }
     }
 }

@@ -209,7 +209,11 @@ impl CalibrationRun {
                 Ok(ArmData::none(side))
             }
         })?;
-        let base_not_measurable = dataset.base_not_measurable();
+        let base_not_measurable = dataset.base_not_measurable().or_else(|| {
+            settings.hold_kinematics.then(|| {
+                "the kinematics are held: only the tracker frame and reflectors are fitted".into()
+            })
+        });
         // With one arm measured alone its chain is fitted whole, torso included (the other arm's
         // copy of the torso follows it when the stage ends).
         let shared = if dataset.both_measured() {
@@ -221,7 +225,10 @@ impl CalibrationRun {
         if !shared.is_empty() && settings.method.spec().tree_set_up.is_none() {
             return Err(unsupported(&shared, settings.method));
         }
-        let plan = VecDeque::from(planned_stages(dataset, nominal));
+        let mut plan = VecDeque::from(planned_stages(dataset, nominal));
+        if settings.hold_kinematics {
+            plan.retain(|s| *s != Stage::Base);
+        }
         Ok(Self {
             settings,
             nominal: nominal.clone(),
@@ -645,6 +652,13 @@ fn unsupported(shared: &SharedJoints, method: Method) -> CalibrationError {
 
 /// Settings that cannot work together are refused before any work.
 fn check_settings(settings: &CalibrationSettings) -> Result<(), CalibrationError> {
+    if settings.hold_kinematics && !settings.method.is_absolute() {
+        return Err(CalibrationError::InvalidSettings(format!(
+            "holding the kinematics (fitting only the tracker frame and the reflectors) needs a \
+             method that identifies the tracker frame (`position` or `pose`), not `{}`",
+            settings.method.name()
+        )));
+    }
     if let Some(r) = settings.reflector
         && !settings.method.spec().takes_reflector
     {

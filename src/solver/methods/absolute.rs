@@ -93,11 +93,16 @@ fn set_up(
     // The transform first: what it absorbs (a rigid motion of the whole arm) is fixed in the arm.
     let mut order: Vec<usize> = (n_params..n_params + 6).collect();
     order.extend(start.identifiability_order());
+    // Held kinematics: only the reflector coordinates and the transform are free.
+    let hold = s.settings.hold_kinematics;
+    let allowed: Vec<bool> = (0..n_params + 6)
+        .map(|p| !hold || p >= start.reflector_offset())
+        .collect();
     let report = identifiability::analyse(
         &gram,
         &ParameterInfo {
             order: &order,
-            allowed: &vec![true; n_params + 6],
+            allowed: &allowed,
             name: &|p| {
                 if p < n_params {
                     start.param_name(p)
@@ -137,7 +142,9 @@ fn set_up(
         fixed: report.fixed.clone(),
         ..report
     };
-    require_kinematics(stage, start, &arm_report)?;
+    if !hold {
+        require_kinematics(stage, start, &arm_report)?;
+    }
     let scale = DVector::from_vec(column_scales(
         &gram,
         free.iter().copied().chain(n_params..n_params + 6),
@@ -245,11 +252,20 @@ fn tree_set_up(
             .then(|| layout.owner(x))
             .and_then(|(side, k)| arms[side].unidentifiable_reason(k))
     };
+    let hold = s.settings.hold_kinematics;
+    let allowed: Vec<bool> = (0..n_x + 6)
+        .map(|x| {
+            !hold || x >= n_x || {
+                let (side, k) = layout.owner(x);
+                k >= arms[side].reflector_offset()
+            }
+        })
+        .collect();
     let report = identifiability::analyse(
         &gram,
         &ParameterInfo {
             order: &order,
-            allowed: &vec![true; n_x + 6],
+            allowed: &allowed,
             name: &name,
             reason: &reason,
             data: what,
@@ -272,8 +288,10 @@ fn tree_set_up(
         ..report
     };
     let reports = layout.split_report(&tree_report, arms);
-    for side in Side::BOTH {
-        require_kinematics(Stage::Arms, &arms[side], &reports[side])?;
+    if !hold {
+        for side in Side::BOTH {
+            require_kinematics(Stage::Arms, &arms[side], &reports[side])?;
+        }
     }
     let scale = DVector::from_vec(column_scales(&gram, free.iter().copied().chain(transform)));
     Ok(TreeStage {
