@@ -5,7 +5,8 @@
 //! convention `Rz(θ + q) · Tz(d) · Tx(a) · Rx(α)` or the modified one (Craig)
 //! `Rx(α) · Tx(a) · Rz(θ + q) · Tz(d)` — for a prismatic joint `q` adds to `d` instead — then the
 //! `tool` (the flange in the last frame). A joint may follow another of its arm linearly
-//! (`mimic = { joint, multiplier, offset }`, a URDF `<mimic>`). An optional `[torso]` (its `base` in
+//! (`mimic = { joint, multiplier, offset }`, a URDF `<mimic>`), or several (a list: coaxial mimic
+//! joints in a row, one per leader, that add up). An optional `[torso]` (its `base` in
 //! the body frame and its rows, the same way) carries both arms: each arm's `base` is then in the
 //! torso's last frame, and both arms' chains hold the torso's joints (shared joints, identified once).
 //!
@@ -86,7 +87,26 @@ struct RawJoint {
     a: f64,
     alpha: f64,
     limits: Option<[f64; 2]>,
-    mimic: Option<RawMimic>,
+    mimic: Option<MimicSpec>,
+}
+
+/// A joint's coupling: one leader (a URDF `<mimic>`), or several — `q = Σ multiplierᵢ · leaderᵢ +
+/// Σ offsetᵢ` (DLR's passive torso joint, `−(q₁ + q₂)`) — written as that many coaxial joints in a
+/// row, each mimicking one leader (turns about one axis add up).
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum MimicSpec {
+    One(RawMimic),
+    Many(Vec<RawMimic>),
+}
+
+impl MimicSpec {
+    fn leaders(&self) -> &[RawMimic] {
+        match self {
+            MimicSpec::One(m) => std::slice::from_ref(m),
+            MimicSpec::Many(v) => v,
+        }
+    }
 }
 
 #[derive(Deserialize)]
@@ -321,33 +341,70 @@ fn joint_urdf(
         (false, Some(_)) => "revolute",
         (false, None) => "continuous",
     };
-    let mimic = match &j.mimic {
-        Some(m) if !arm.joints[..k].iter().any(|o| o.name == m.joint) => {
+    let leaders = j.mimic.as_ref().map_or(&[][..], MimicSpec::leaders);
+    if j.mimic.is_some() && leaders.is_empty() {
+        return Err(format!(
+            "{field}: mimic: expected a leader (or a list of leaders)"
+        ));
+    }
+    for m in leaders {
+        if !arm.joints[..k].iter().any(|o| o.name == m.joint) {
             return Err(format!(
                 "{field}: mimic joint `{}`: expected an earlier joint of the same arm",
                 m.joint
             ));
         }
-        Some(m) => format!(
+        if !m.multiplier.unwrap_or(1.0).is_finite() || !m.offset.unwrap_or(0.0).is_finite() {
+            return Err(format!(
+                "{field}: mimic joint `{}`: expected finite multiplier and offset",
+                m.joint
+            ));
+        }
+    }
+    let mimic_xml = |m: &RawMimic| {
+        format!(
             "\n    <mimic joint=\"{}\" multiplier=\"{:?}\" offset=\"{:?}\"/>",
             escape(&m.joint),
             m.multiplier.unwrap_or(1.0),
             m.offset.unwrap_or(0.0) * unit
-        ),
-        None => String::new(),
+        )
     };
     let limit = limits.map_or(String::new(), |(lo, hi)| {
         format!("\n    <limit lower=\"{lo:?}\" upper=\"{hi:?}\" effort=\"100\" velocity=\"1\"/>")
     });
-    let xml = format!(
-        "  <link name=\"{n}_link_{}\"/>\n  <joint name=\"{}\" type=\"{kind}\">\n    <parent \
-         link=\"{n}_link_{k}\"/>\n    <child link=\"{n}_link_{}\"/>\n    {}\n    <axis xyz=\"0 0 \
-         1\"/>{limit}{mimic}\n  </joint>\n",
-        k + 1,
-        escape(&j.name),
-        k + 1,
-        origin_xml(&origin)
-    );
+    // With several leaders the row's motion is split over coaxial joints, one per leader: the first
+    // carries the row's name and origin, the others (`<name>_coupling_<i>`) sit on it.
+    let parts = leaders.len().max(1);
+    let child = |i: usize| {
+        if i + 1 == parts {
+            format!("{n}_link_{}", k + 1)
+        } else {
+            format!("{n}_link_{}_coupling_{}", k + 1, i + 1)
+        }
+    };
+    let mut xml = String::new();
+    for i in 0..parts {
+        let (name, parent, origin) = if i == 0 {
+            (j.name.clone(), format!("{n}_link_{k}"), origin_xml(&origin))
+        } else {
+            (
+                format!("{}_coupling_{}", j.name, i + 1),
+                child(i - 1),
+                origin_xml(&Isometry3::identity()),
+            )
+        };
+        let _ = write!(
+            xml,
+            "  <link name=\"{}\"/>\n  <joint name=\"{}\" type=\"{kind}\">\n    <parent \
+             link=\"{}\"/>\n    <child link=\"{}\"/>\n    {origin}\n    <axis xyz=\"0 0 \
+             1\"/>{limit}{}\n  </joint>\n",
+            escape(&child(i)),
+            escape(&name),
+            escape(&parent),
+            escape(&child(i)),
+            leaders.get(i).map_or(String::new(), mimic_xml)
+        );
+    }
     Ok((xml, after))
 }
 

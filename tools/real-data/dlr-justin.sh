@@ -51,11 +51,12 @@ fi
 
 mkdir -p "$out"
 # Row 0 of the markers matrix is the right hand, row 1 the left (tools/real-data/README.md); the
-# passive torso joint is computed, q4 = -(q2 + q3); the 19 values are torso 3, right 7, left 7, head 2.
+# 19 values are torso 3, right 7, left 7, head 2; the passive torso joint, -(tilt 1 + tilt 2), is the
+# robot file's coupling (no column).
 "$dualcal" import --robot "$model" \
     --left-points "$raw" --right-points "$raw" \
-    --left-columns "id=1,q=joints[0-2],q=-joints[1]-joints[2],q=joints[10-16],m.x=markers[1][0],m.y=markers[1][1],m.z=markers[1][2]" \
-    --right-columns "id=1,q=joints[0-2],q=-joints[1]-joints[2],q=joints[3-9],m.x=markers[0][0],m.y=markers[0][1],m.z=markers[0][2]" \
+    --left-columns "id=1,q=joints[0-2],q=joints[10-16],m.x=markers[1][0],m.y=markers[1][1],m.z=markers[1][2]" \
+    --right-columns "id=1,q=joints[0-2],q=joints[3-9],m.x=markers[0][0],m.y=markers[0][1],m.z=markers[0][2]" \
     --length-unit m --angle-unit rad \
     --reflector m=-100,0,75 --left-reflector m=-100,30,50 --right-reflector m=-100,-30,100 \
     --measured-together --verify-last 100 --force --out "$out/dataset" >"$out/import.log"
