@@ -36,16 +36,18 @@ fn reflector_arg(name: &str, names: &[String]) -> Result<Reflector> {
 
 pub(super) fn settings_from(
     a: &CalibrateArgs,
-    reflector_names: &[String],
+    dataset: &crate::dataset::Dataset,
 ) -> Result<CalibrationSettings> {
     let reflector = a
         .reflector
         .as_deref()
-        .map(|r| reflector_arg(r, reflector_names))
+        .map(|r| reflector_arg(r, &dataset.reflector_names))
         .transpose()?;
     Ok(CalibrationSettings {
         split: a.split,
-        method: a.method,
+        method: a
+            .method
+            .unwrap_or_else(|| crate::solver::default_method(dataset)),
         base_method: a.base_method,
         reflector,
         qp: a.qp,

@@ -171,9 +171,11 @@ pub struct CalibrateArgs {
     pub dataset: PathBuf,
     #[arg(long, value_enum, default_value_t = Split::Cal)]
     pub split: Split,
-    /// Step 1 (each arm): what is fitted, and how (the methods' table; see docs/solver.md).
-    #[arg(long, value_enum, default_value_t = Method::Minimax)]
-    pub method: Method,
+    /// Step 1 (each arm): what is fitted, and how (the methods' table; see docs/solver.md)
+    /// [default: minimax; position where the data call for it — one marker per hand, both measured
+    /// together in one tracker frame — so that the camera frame is identified].
+    #[arg(long, value_enum)]
+    pub method: Option<Method>,
     /// Step 2 (the right-arm base in the left-arm base): what is fitted, and how.
     #[arg(long, value_enum, default_value_t = BaseMethod::Minimax)]
     pub base_method: BaseMethod,
@@ -773,7 +775,16 @@ fn calibrate_cmd(a: &CalibrateArgs) -> Result<()> {
     if !a.quiet {
         eprintln!("{}", describe_robot(&ws.robot));
     }
-    let mut settings = settings_from(a, &ws.dataset.reflector_names)?;
+    let mut settings = settings_from(a, &ws.dataset)?;
+    if a.method.is_none()
+        && let Some(why) = crate::solver::default_method_reason(&ws.dataset)
+    {
+        outln!(
+            "method: step 1 `{}` by default for this data ({why}); --method minimax fits the \
+             distances alone",
+            settings.method.name()
+        );
+    }
     for spec in &a.exclude {
         let config = ws
             .dataset

@@ -47,7 +47,10 @@ use crate::dataset::Split;
 use crate::side::{ConfigId, Side};
 pub use methods::{BaseMethod, BaseMethodSpec, Method, MethodSpec, Observes, SolverKind};
 pub use result::{CalibrationResult, STAGES};
-pub use run::{CalibrationRun, Calibrator, Observer, Progress, planned_stages};
+pub use run::{
+    CalibrationRun, Calibrator, Observer, Progress, default_method, default_method_reason,
+    planned_stages,
+};
 use serde::{Deserialize, Serialize};
 pub use stage::{IterState, StageSolver};
 

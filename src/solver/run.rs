@@ -750,6 +750,29 @@ fn arm_input(
     })
 }
 
+/// The step-1 method a calibration of `dataset` uses unless told otherwise: the paper's minimax on
+/// distances, or the absolute positions ([`Method::Position`]) where the data call for it
+/// ([`default_method_reason`]).
+pub fn default_method(dataset: &Dataset) -> Method {
+    if default_method_reason(dataset).is_some() {
+        Method::Position
+    } else {
+        Method::Minimax
+    }
+}
+
+/// Why [`default_method`] is the absolute positions for `dataset`, if it is: one marker per hand and
+/// both hands measured together in one tracker frame (a motion-capture camera, as DLR's data) —
+/// distances of one marker see a third of what three do and nothing of the camera frame, which the
+/// absolute positions identify with the arms.
+pub fn default_method_reason(dataset: &Dataset) -> Option<&'static str> {
+    (dataset.reflector_count() == 1 && dataset.measured_together && dataset.one_tracker_frame())
+        .then_some(
+            "one marker per hand, both measured together in one tracker frame: the absolute \
+             positions, the camera frame identified with the arms",
+        )
+}
+
 /// The arm measured alone, when `dataset` has one arm only.
 fn alone_arm(dataset: &Dataset) -> Option<Side> {
     match dataset.measured_sides().as_slice() {
