@@ -649,3 +649,35 @@ fn holding_the_kinematics_fits_only_the_frame_and_the_reflectors() {
         .unwrap_err();
     assert!(err.to_string().contains("`position` or `pose`"), "{err}");
 }
+
+/// Without `--method`: the absolute positions for one marker per hand measured together in one
+/// frame (the camera frame is what such data can give), the paper's minimax otherwise.
+#[test]
+fn the_default_method_follows_the_data() {
+    use dualcal::solver::{default_method, default_method_reason};
+    let dir = tempfile::tempdir().unwrap();
+    let mut ds = simulate(dir.path(), false, 96, &[0], (60, 40)).dataset;
+    assert_eq!(
+        default_method(&ds),
+        Method::Minimax,
+        "not measured together"
+    );
+    ds.measured_together = true;
+    assert_eq!(default_method(&ds), Method::Position);
+    assert!(
+        default_method_reason(&ds)
+            .unwrap()
+            .contains("one marker per hand")
+    );
+    ds.arms.right.station = Some("B".into());
+    ds.arms.left.station = Some("A".into());
+    assert_eq!(
+        default_method(&ds),
+        Method::Minimax,
+        "two stations: no one frame"
+    );
+    let three = simulate(dir.path(), true, 97, &[0, 1, 2], (60, 40)).dataset;
+    let mut three = three;
+    three.measured_together = true;
+    assert_eq!(default_method(&three), Method::Minimax, "three reflectors");
+}
