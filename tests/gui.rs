@@ -1878,3 +1878,50 @@ fn one_arm_alone_calibrates_compares_and_exports() {
     }
     harness.run_steps(3);
 }
+
+/// The step-1 method follows the data until the user picks one: the absolute positions for one
+/// marker per hand measured together in one frame (as `dualcal calibrate`'s default), said under the
+/// settings; the paper's minimax for the example.
+#[test]
+fn the_method_follows_the_data_until_picked() {
+    use dualcal::side::Side;
+    use dualcal::solver::Method;
+    let dir = tempfile::tempdir().unwrap();
+    let robot = dualcal::robot::RobotDescription::builtin_irb14000();
+    let sim = dualcal::simulate::simulate_with_robot(
+        &dualcal::simulate::paper_options(13, 60, 40),
+        &robot,
+    )
+    .unwrap();
+    let mut ds = sim.dataset.clone();
+    ds.nominal_reflectors_mm.truncate(1);
+    ds.reflector_names = ds.reflector_names[..1].to_vec().into();
+    for side in Side::BOTH {
+        for (i, m) in ds.arms[side].measurements.iter_mut().enumerate() {
+            m.tracker_points_mm.truncate(1);
+            m.id = format!("P{i:03}");
+        }
+    }
+    ds.measured_together = true;
+    dualcal::dataset::save(&ds, dir.path(), dualcal::dataset::Units::MM_DEG).unwrap();
+    let mut harness = harness([1400.0, 900.0], AppLaunch::default());
+    loaded(&mut harness);
+    assert_eq!(harness.state().settings().method, Method::Minimax);
+    harness
+        .state_mut()
+        .apply(Command::OpenDataset(dir.path().to_path_buf()));
+    step_until(&mut harness, MAX_LOAD_FRAMES, "loading", |app| {
+        !app.is_loading()
+    });
+    assert_eq!(harness.state().settings().method, Method::Position);
+    shown(&harness, "position: the default for this data");
+    // Picked by the user: kept for the next dataset.
+    pick_in_combo(&mut harness, "Method", "minimax (paper, Algorithm I)");
+    harness
+        .state_mut()
+        .apply(Command::OpenDataset(dir.path().to_path_buf()));
+    step_until(&mut harness, MAX_LOAD_FRAMES, "loading", |app| {
+        !app.is_loading()
+    });
+    assert_eq!(harness.state().settings().method, Method::Minimax);
+}

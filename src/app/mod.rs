@@ -102,6 +102,8 @@ pub struct WorkbenchApp {
     /// The comparison view.
     compare: compare::CompareView,
     status: Status,
+    /// Has the user picked the step-1 method (else it follows each dataset's default)?
+    method_picked: bool,
     errors: Vec<String>,
     selection: Option<ConfigId>,
     scroll_table_to_selection: bool,
@@ -183,6 +185,7 @@ impl WorkbenchApp {
             jobs: Jobs::default(),
             compare: compare::CompareView::default(),
             status: Status::Idle("Ready.".into()),
+            method_picked: false,
             errors: Vec::new(),
             selection: None,
             scroll_table_to_selection: false,
@@ -245,9 +248,14 @@ impl WorkbenchApp {
         self.session.as_mut()
     }
 
-    /// A new session replaces the current one.
+    /// A new session replaces the current one. Until the user picks a step-1 method, it follows the
+    /// data as the command line's default does (`solver::default_method`: the absolute positions for
+    /// one marker per hand measured together in one frame, else minimax).
     fn set_session(&mut self, session: Session) {
         self.generation += 1;
+        if !self.method_picked {
+            self.settings.method = crate::solver::default_method(&session.dataset);
+        }
         self.session = Some(session);
     }
 
@@ -322,8 +330,15 @@ impl WorkbenchApp {
         self.execution = execution;
     }
 
+    /// The calibration settings, to change them (the step-1 method then counts as picked: a new
+    /// dataset no longer sets its default).
     pub fn settings_mut(&mut self) -> &mut CalibrationSettings {
+        self.method_picked = true;
         &mut self.settings
+    }
+
+    pub fn settings(&self) -> &CalibrationSettings {
+        &self.settings
     }
 
     pub fn viewport(&self) -> &ViewportState {
@@ -441,6 +456,7 @@ impl WorkbenchApp {
             }
             .ui(ui, commands)
         });
+        let method_before = self.settings.method;
         egui::Panel::left("settings")
             .default_size((window.x * 0.19).clamp(230.0, 300.0))
             .size_range(200.0..=(window.x * 0.3).max(240.0))
@@ -459,6 +475,9 @@ impl WorkbenchApp {
                 }
                 .ui(ui, commands)
             });
+        if self.settings.method != method_before {
+            self.method_picked = true;
+        }
         if self.compare.open {
             // The comparison takes the rest of the window.
             return;

@@ -43,6 +43,24 @@ impl LeftPanel<'_> {
             ui.add_enabled_ui(!self.calibrating, |ui| {
                 calibration_settings_ui(ui, &mut *self.settings, names)
             });
+            if let Some(why) = self
+                .session
+                .and_then(|s| crate::solver::default_method_reason(&s.dataset))
+                && self.settings.method
+                    == crate::solver::default_method(&self.session.unwrap().dataset)
+            {
+                ui.label(
+                    RichText::new(format!(
+                        "{}: the default for this data",
+                        self.settings.method.name()
+                    ))
+                    .small()
+                    .color(Color32::GRAY),
+                )
+                .on_hover_text(format!(
+                    "{why}. Pick minimax for the distances alone (as the paper)."
+                ));
+            }
             self.calibration_buttons_ui(ui, commands);
             ui.separator();
             self.export_section_ui(ui, commands);
