@@ -46,6 +46,13 @@ pub struct ImportInputs {
     pub time_tolerance_s: f64,
     /// Per arm: the tracker station (empty: one station for both).
     pub stations: PerSide<String>,
+    /// Per arm: its own column mapping (`--left-columns`, `--right-columns`; empty: `columns`), as
+    /// for one file of both arms.
+    pub arm_columns: PerSide<String>,
+    /// Both hands measured at one instant (`--measured-together`).
+    pub measured_together: bool,
+    /// `--verify-last N`: the last N configurations of each arm verify (empty: the file's split).
+    pub verify_last: String,
 }
 
 impl Default for ImportInputs {
@@ -63,6 +70,9 @@ impl Default for ImportInputs {
             matching: MatchRule::Name,
             time_tolerance_s: 0.5,
             stations: PerSide::default(),
+            arm_columns: PerSide::default(),
+            measured_together: false,
+            verify_last: String::new(),
         }
     }
 }
@@ -190,6 +200,22 @@ pub fn options(inputs: &ImportInputs, target: &ImportTarget<'_>) -> Result<Impor
     o.stations = PerSide::from_fn(|s| {
         Some(inputs.stations[s].trim().to_string()).filter(|st| !st.is_empty())
     });
+    for side in Side::BOTH {
+        let spec = inputs.arm_columns[side].trim();
+        if !spec.is_empty() {
+            o.arm_columns[side] =
+                Some(ColumnMap::parse(spec).map_err(|e| format!("{side} column mapping: {e}"))?);
+            o.points_format.get_or_insert(PointsFormat::Generic);
+        }
+    }
+    o.measured_together = inputs.measured_together;
+    let last = inputs.verify_last.trim();
+    if !last.is_empty() {
+        o.verify_last =
+            Some(last.parse::<usize>().map_err(|_| {
+                format!("verify the last: `{last}` is not a number of configurations")
+            })?);
+    }
     Ok(o)
 }
 
@@ -283,6 +309,78 @@ mod tests {
             reflector_names: vec!["a".into(), "b".into(), "c".into()],
             nominal_reflectors_mm: crate::simulate::default_reflectors_for(robot).to_vec(),
         }
+    }
+
+    /// Both arms in one file: each arm's own mapping, measured together, the last rows verifying —
+    /// as `--left-columns`, `--right-columns`, `--measured-together`, `--verify-last`.
+    #[test]
+    fn one_file_of_both_arms_imports_with_per_arm_mappings() {
+        let memory = MemoryFiles::new();
+        let names = ["a", "b", "c"];
+        let mut header = String::from("id");
+        for arm in ["l", "r"] {
+            header += &(1..=7).map(|j| format!(",{arm}q{j}")).collect::<String>();
+            for n in names {
+                header += &format!(",{arm}{n}x,{arm}{n}y,{arm}{n}z");
+            }
+        }
+        let mut text = header + "\n";
+        let nominal =
+            crate::simulate::default_reflectors_for(&RobotDescription::builtin_irb14000());
+        for k in 0..8 {
+            text += &format!("P{k}");
+            for arm in 0..2 {
+                text += &(0..7)
+                    .map(|j| format!(",{}", (k * 3 + j + arm) as f64 * 0.7))
+                    .collect::<String>();
+                let centre = Vector3::new(300.0 + 9.0 * k as f64, 500.0 * arm as f64, 400.0);
+                for p in &nominal {
+                    let x = centre + p;
+                    text += &format!(",{},{},{}", x.x, x.y, x.z);
+                }
+            }
+            text += "\n";
+        }
+        memory.insert("/in/both.csv", text.into_bytes());
+        let mapping = |arm: &str| {
+            let mut m = String::from("id=id");
+            for j in 1..=7 {
+                m += &format!(",q{j}={arm}q{j}");
+            }
+            for n in names {
+                m += &format!(",{n}.x={arm}{n}x,{n}.y={arm}{n}y,{n}.z={arm}{n}z");
+            }
+            m
+        };
+        let mut inputs = ImportInputs {
+            points: PerSide::new("/in/both.csv".into(), "/in/both.csv".into()),
+            arm_columns: PerSide::new(mapping("l"), mapping("r")),
+            measured_together: true,
+            verify_last: "3".into(),
+            ..ImportInputs::default()
+        };
+        let robot = RobotDescription::builtin_irb14000();
+        let target = target(&robot);
+        let preview = super::preview(&memory, &inputs, &target);
+        let imported = preview.result.as_ref().expect("imported");
+        assert!(imported.dataset.measured_together);
+        for side in Side::BOTH {
+            let arm = &imported.dataset.arms[side];
+            assert_eq!(arm.measurements.len(), 8, "{side}");
+            let ver = arm
+                .measurements
+                .iter()
+                .filter(|m| m.split == crate::dataset::Split::Ver)
+                .count();
+            assert_eq!(ver, 3, "{side}");
+            assert_eq!(arm.measurements[0].id, "P0");
+        }
+        // The right arm's joints are its own columns.
+        let q = |side: Side| imported.dataset.arms[side].measurements[1].q_rad[0];
+        assert!((q(Side::Right) - q(Side::Left) - 0.7f64.to_radians()).abs() < 1e-12);
+        inputs.verify_last = "three".into();
+        let err = options(&inputs, &target).unwrap_err();
+        assert!(err.contains("verify the last"), "{err}");
     }
 
     #[test]

@@ -39,6 +39,9 @@ pub fn import_ui(
             egui::CollapsingHeader::new("Options")
                 .default_open(false)
                 .show(ui, |ui| options_ui(ui, &mut view.inputs));
+            egui::CollapsingHeader::new("Both arms in one file")
+                .default_open(false)
+                .show(ui, |ui| one_file_options_ui(ui, &mut view.inputs));
             ui.separator();
             preview_ui(ui, view.preview(), commands);
             ui.separator();
@@ -217,6 +220,44 @@ fn options_ui(ui: &mut egui::Ui, inputs: &mut ImportInputs) {
                 );
                 ui.end_row();
             }
+        });
+}
+
+/// Both arms in one file (a motion-capture export): each arm's own mapping, measured together, the
+/// verification rows — `dualcal import`'s `--left-columns`, `--right-columns`, `--measured-together`,
+/// `--verify-last`.
+fn one_file_options_ui(ui: &mut egui::Ui, inputs: &mut ImportInputs) {
+    egui::Grid::new("import one-file options")
+        .num_columns(2)
+        .show(ui, |ui| {
+            for side in Side::BOTH {
+                ui.label(format!("{side} mapping"));
+                ui.add(
+                    egui::TextEdit::singleline(&mut inputs.arm_columns[side])
+                        .hint_text("the column mapping above")
+                        .desired_width(300.0),
+                )
+                .on_hover_text(
+                    "This arm's own mapping (one file holding both arms: give it as both arms' \
+                     point file), e.g. `id=1,q=joints[0-2],q=joints[10-16],m.x=markers[1][0],…`",
+                );
+                ui.end_row();
+            }
+            ui.label("measured together");
+            ui.checkbox(&mut inputs.measured_together, "both hands at one instant")
+                .on_hover_text(
+                    "Rows of both arms with the same id are one pose (a motion-capture system \
+                     seeing both markers): the joints both arms share must agree",
+                );
+            ui.end_row();
+            ui.label("verify the last");
+            ui.add(
+                egui::TextEdit::singleline(&mut inputs.verify_last)
+                    .hint_text("the file's split")
+                    .desired_width(80.0),
+            )
+            .on_hover_text("The last N configurations of each arm verify, the others calibrate");
+            ui.end_row();
         });
 }
 
