@@ -36,6 +36,7 @@ macro_rules! outln {
 mod calibrate_settings;
 mod controller;
 mod dh;
+mod evaluate;
 mod import;
 mod outlier_study;
 mod paper_study;
@@ -46,6 +47,7 @@ mod timings;
 
 use calibrate_settings::{print_event, print_uncertainty, settings_from};
 pub use controller::TargetsRefused;
+pub use evaluate::EvaluateArgs;
 
 /// Two-step minimax kinematic calibration of dual-arm robots from laser-tracker data.
 #[derive(Parser, Debug)]
@@ -141,28 +143,6 @@ pub struct SimulateArgs {
     /// With --urdf: the right arm's chain, BASE:TIP (default: the YuMi joint names).
     #[arg(long, requires = "urdf", value_parser = ArmLinks::parse)]
     pub right: Option<ArmLinks>,
-}
-
-#[derive(Args, Debug)]
-pub struct EvaluateArgs {
-    /// Dataset directory or its dataset.toml.
-    pub dataset: PathBuf,
-    /// Parameter file (dualcal-params/1).
-    #[arg(long, conflicts_with = "nominal", required_unless_present = "nominal")]
-    pub params: Option<PathBuf>,
-    /// Use the nominal model: the dataset's robot description (Table 3 for the built-in IRB 14000, else
-    /// the URDF's own arm chains), the dataset's nominal reflectors and the URDF's base transform.
-    #[arg(long)]
-    pub nominal: bool,
-    #[arg(long, value_enum, default_value_t = Split::All)]
-    pub split: Split,
-    /// Print JSON instead of a table.
-    #[arg(long)]
-    pub json: bool,
-    /// Write every measured point's absolute position error (`arm,id,reflector,error_mm`) to this
-    /// CSV file, where the parameter file has the tracker frame.
-    #[arg(long)]
-    pub absolute_csv: Option<PathBuf>,
 }
 
 #[derive(Args, Debug)]
@@ -333,7 +313,7 @@ fn run_command(command: Command) -> Result<()> {
             bail!("this build of dualcal has no workbench (built without the `gui` feature)")
         }
         Command::Simulate(a) => simulate_cmd(&a),
-        Command::Evaluate(a) => evaluate_cmd(&a),
+        Command::Evaluate(a) => evaluate::run(&a),
         Command::Calibrate(a) => calibrate_cmd(&a),
         Command::Reproduce(a) => reproduce::run(&a),
         Command::Import(a) => import::run(&a),
@@ -530,93 +510,6 @@ pub fn describe_robot(robot: &RobotDescription) -> String {
             "the URDF's joint origins"
         }
     )
-}
-
-fn evaluate_cmd(a: &EvaluateArgs) -> Result<()> {
-    let Workspace {
-        dataset: ds,
-        robot,
-        nominal,
-        ..
-    } = load_workspace(&a.dataset)?;
-    let (model, frames) = match &a.params {
-        Some(p) => {
-            let file = ParamsFile::read(p)?;
-            let model = file
-                .to_model_for(&robot)
-                .map_err(|e| anyhow::anyhow!("{}: {e}", p.display()))?;
-            let frames = file
-                .tracker_from_base()
-                .map_err(|e| anyhow::anyhow!("{}: {e}", p.display()))?;
-            (model, frames)
-        }
-        None => (nominal, PerSide::default()),
-    };
-    let report = metrics::evaluate(&ds, &model, a.split)?;
-    // Where a method identified the tracker (camera) frame: the absolute position errors too.
-    let absolute = metrics::absolute_stats(&ds, &model, &frames, a.split)?;
-    if let Some(path) = &a.absolute_csv {
-        if absolute.is_none() {
-            anyhow::bail!(
-                "--absolute-csv {}: the parameter file has no tracker frame (an absolute method \
-                 identifies it: --method position or pose)",
-                path.display()
-            );
-        }
-        let mut text = String::from("arm,id,reflector,error_mm\n");
-        for e in metrics::absolute_errors(&ds, &model, &frames, a.split)? {
-            let id = if e.id.contains([',', '"']) {
-                format!("\"{}\"", e.id.replace('"', "\"\""))
-            } else {
-                e.id
-            };
-            text.push_str(&format!(
-                "{},{id},{},{}\n",
-                e.side, ds.reflector_names[e.reflector], e.error_mm
-            ));
-        }
-        let inputs: Vec<PathBuf> = std::iter::once(ds.dir.join(crate::dataset::MANIFEST_FILE))
-            .chain(ds.arms.values().map(|arm| arm.file.clone()))
-            .chain(a.params.clone())
-            .collect();
-        let inputs: Vec<&Path> = inputs.iter().map(PathBuf::as_path).collect();
-        crate::output::refuse_overwrite_input(path, &inputs)?;
-        crate::output::write_atomic(path, text.as_bytes())
-            .with_context(|| format!("writing {}", path.display()))?;
-    }
-    if a.json {
-        let mut value = serde_json::to_value(report)?;
-        if let (Some(abs), Some(obj)) = (absolute, value.as_object_mut()) {
-            obj.insert("absolute".into(), serde_json::to_value(abs)?);
-        }
-        outln!("{}", serde_json::to_string_pretty(&value)?);
-    } else {
-        let what = match &a.params {
-            Some(p) => format!("parameters {}", p.display()),
-            None => "nominal model".to_string(),
-        };
-        outln!(
-            "Accuracy of the {what} on {} (split: {:?})",
-            ds.dir.display(),
-            a.split
-        );
-        outln!("{}", describe_robot(&robot));
-        outln!(
-            "{}",
-            metrics::format_table_named(&report, &ds.reflector_names)
-        );
-        if let Some(abs) = absolute {
-            outln!(
-                "absolute position error (the parameter file's tracker frame): mean {:.3} mm, RMS \
-                 {:.3} mm, max {:.3} mm over {} measured points",
-                abs.mean_mm,
-                abs.rms_mm,
-                abs.max_mm,
-                abs.n_points
-            );
-        }
-    }
-    Ok(())
 }
 
 /// A calibration that ran but did not converge (a stage hit the iteration limit, stalled or was
