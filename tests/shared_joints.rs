@@ -146,6 +146,30 @@ fn check(case: &Case, name: &str, dir: &std::path::Path) {
     let (n, t, c) = (at(&nominal), at(&case.truth), at(&result.calibrated));
     assert!(c.collaborative.is_some());
     common::assert_near_truth(name, &n, &t, &c);
+    // Both hands measured together: the pairs of one instant have their own figures.
+    assert_eq!(
+        c.collaborative_same_instant.is_some(),
+        case.dataset.measured_together,
+        "{name}"
+    );
+    if let (Some(ns), Some(ts), Some(cs)) = (
+        n.collaborative_same_instant,
+        t.collaborative_same_instant,
+        c.collaborative_same_instant,
+    ) {
+        eprintln!(
+            "{name}, same instant: nominal {:.4} mm, truth {:.4} mm, calibrated {:.4} mm ({} pairs)",
+            ns.pos_rms_mm, ts.pos_rms_mm, cs.pos_rms_mm, cs.n_pairs
+        );
+        assert!(cs.pos_rms_mm <= 1.1 * ts.pos_rms_mm && ns.pos_rms_mm > 10.0 * ts.pos_rms_mm);
+        assert!(cs.n_pairs > 0 && cs.n_pairs < c.collaborative.unwrap().n_pairs);
+        // The workbench's sweep gives the same figures as `evaluate`, to the bit.
+        let sweep = dualcal::metrics::sweep(&case.dataset, &result.calibrated).unwrap();
+        assert_eq!(
+            sweep.ver.unwrap().report.collaborative_same_instant,
+            Some(cs)
+        );
+    }
 
     // The calibrated URDF: the robot kept, the shared joints changed once, loads back to the model.
     let text = dualcal::urdf_export::calibrated_urdf(&case.robot, &result.calibrated).unwrap();

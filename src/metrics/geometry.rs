@@ -416,6 +416,32 @@ pub(super) fn collaborative_accumulate(left: &[ConfigGeom], right: &[ConfigGeom]
     )
 }
 
+/// The pairs of one id in both arms — both hands at one instant (`measured_together` data) — among
+/// `left` and `right` (selected configurations' geometry, each with its index into the arm's
+/// measurements), accumulated; and how many there are.
+pub(super) fn same_instant_accumulate(
+    dataset: &Dataset,
+    (left, left_indices): (&[ConfigGeom], &[usize]),
+    (right, right_indices): (&[ConfigGeom], &[usize]),
+) -> (Accumulator, usize) {
+    let id = |side: Side, i: usize| dataset.arm(side).measurements[i].id.as_str();
+    let right_of: std::collections::HashMap<&str, usize> = right_indices
+        .iter()
+        .enumerate()
+        .map(|(k, &i)| (id(Side::Right, i), k))
+        .collect();
+    let mut acc = Accumulator::default();
+    let mut pairs = 0;
+    for (k, &i) in left_indices.iter().enumerate() {
+        if let Some(&r) = right_of.get(id(Side::Left, i)) {
+            let (dd, o) = pair_residual(&left[k], &right[r]);
+            acc.add(&dd, o);
+            pairs += 1;
+        }
+    }
+    (acc, pairs)
+}
+
 /// Both arms' geometry with the model expressed in the left-arm base frame.
 pub(super) fn both_arms(
     dataset: &Dataset,

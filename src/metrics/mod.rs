@@ -97,6 +97,11 @@ pub struct AccuracyReport {
     /// stations, so distances between their reflectors mean nothing, or one arm alone was measured
     /// (serialised as `null`).
     pub collaborative: Option<AccuracyStats>,
+    /// The collaborative figures of the pairs taken at one instant (both hands measured together:
+    /// the left and right rows of one id), where the dataset says so (`measured_together`); absent
+    /// otherwise. The hands' error relative to each other in one pose of the robot.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub collaborative_same_instant: Option<AccuracyStats>,
 }
 
 impl AccuracyReport {
@@ -311,7 +316,33 @@ pub fn evaluate(
         } else {
             None
         },
+        collaborative_same_instant: same_instant(
+            dataset,
+            (&left.geom, &left.indices),
+            (&right.geom, &right.indices),
+            left.orientation && right.orientation,
+        )?,
     })
+}
+
+/// The same-instant collaborative figures ([`AccuracyReport::collaborative_same_instant`]) of two
+/// arms' selected geometry, where the dataset measured both hands together in one frame and has
+/// pairs of one id.
+fn same_instant(
+    dataset: &Dataset,
+    left: (&[geometry::ConfigGeom], &[usize]),
+    right: (&[geometry::ConfigGeom], &[usize]),
+    orientation: bool,
+) -> Result<Option<AccuracyStats>, MetricsError> {
+    if !(dataset.measured_together && dataset.one_tracker_frame()) {
+        return Ok(None);
+    }
+    let (acc, pairs) = geometry::same_instant_accumulate(dataset, left, right);
+    if pairs == 0 {
+        return Ok(None);
+    }
+    acc.finish(2 * pairs, orientation, "same-instant collaborative")
+        .map(Some)
 }
 
 /// Relative accuracy of one arm alone (needs no base transform; for single-arm calibration).

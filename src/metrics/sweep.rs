@@ -129,6 +129,12 @@ impl Ordered {
     }
 
     /// The positions of group `g`.
+    /// The geometry and measurement indices of split group `g` (0: calibration, 1: verification).
+    fn slices(&self, g: usize) -> (&[ConfigGeom], &[usize]) {
+        let r = self.range(g);
+        (&self.geom[r.clone()], &self.indices[r])
+    }
+
     fn range(&self, g: usize) -> std::ops::Range<usize> {
         if g == 0 {
             0..self.n_cal
@@ -474,6 +480,12 @@ pub fn sweep(dataset: &Dataset, model: &DualArmModel) -> Result<Sweep, MetricsEr
                 } else {
                     None
                 },
+                collaborative_same_instant: super::same_instant(
+                    dataset,
+                    arms.left.slices(g),
+                    arms.right.slices(g),
+                    ol && or,
+                )?,
             },
             samples,
         }))

@@ -3,7 +3,20 @@
 use super::{AccuracyReport, AccuracyStats};
 use std::fmt::Write as _;
 
-const COLUMN_TITLES: [&str; 3] = ["relative left", "relative right", "collaborative"];
+/// The sets of pairs, as titled in the tables and named in the report's JSON; the fourth only where a
+/// report has it (both hands measured together).
+const COLUMN_TITLES: [&str; 4] = [
+    "relative left",
+    "relative right",
+    "collaborative",
+    "same instant",
+];
+const COLUMN_KEYS: [&str; 4] = [
+    "relative_left",
+    "relative_right",
+    "collaborative",
+    "collaborative_same_instant",
+];
 
 /// The reflector names of a report without names at hand: a, b, c, … by position.
 fn default_names(report: &AccuracyReport) -> Vec<String> {
@@ -135,14 +148,28 @@ fn format_value(kind: RowKind, v: Option<f64>) -> String {
     }
 }
 
-/// The three columns; `None` for a kind of pairs the data cannot measure (an arm not measured, the
-/// collaborative pairs of arms in different tracker frames or of one arm alone).
-fn stats_of(report: &AccuracyReport) -> [Option<&AccuracyStats>; 3] {
+/// The columns; `None` for a kind of pairs the data cannot measure (an arm not measured, the
+/// collaborative pairs of arms in different tracker frames or of one arm alone, the same-instant pairs
+/// of arms not measured together).
+fn stats_of(report: &AccuracyReport) -> [Option<&AccuracyStats>; 4] {
     [
         report.relative_left.as_ref(),
         report.relative_right.as_ref(),
         report.collaborative.as_ref(),
+        report.collaborative_same_instant.as_ref(),
     ]
+}
+
+/// How many of [`COLUMN_TITLES`] the reports show: the same-instant pairs only where one has them.
+fn shown_columns(reports: &[&AccuracyReport]) -> usize {
+    if reports
+        .iter()
+        .any(|r| r.collaborative_same_instant.is_some())
+    {
+        4
+    } else {
+        3
+    }
 }
 
 const LABEL_WIDTH: usize = 24;
@@ -154,16 +181,17 @@ pub fn format_table(report: &AccuracyReport) -> String {
 
 /// A table of one report, the per-reflector rows named `reflector_names`.
 pub fn format_table_named(report: &AccuracyReport, reflector_names: &[String]) -> String {
+    let n = shown_columns(&[report]);
     let stats = stats_of(report);
     let mut out = String::new();
     let _ = write!(out, "{:<LABEL_WIDTH$}", "");
-    for t in COLUMN_TITLES {
+    for t in &COLUMN_TITLES[..n] {
         let _ = write!(out, "{t:>16}");
     }
     out.push('\n');
     for row in &rows(reflector_names) {
         let _ = write!(out, "{:<LABEL_WIDTH$}", row.label);
-        for s in stats {
+        for s in &stats[..n] {
             let _ = write!(
                 out,
                 "{:>16}",
@@ -292,11 +320,12 @@ pub fn comparison_blocks(
     reflector_names: &[String],
 ) -> Vec<ComparisonBlock> {
     let rows = rows(reflector_names);
-    let keys = ["relative_left", "relative_right", "collaborative"];
+    let n = shown_columns(&[before, after]);
     COLUMN_TITLES
         .iter()
-        .zip(keys)
+        .zip(COLUMN_KEYS)
         .zip(stats_of(before).into_iter().zip(stats_of(after)))
+        .take(n)
         .map(|((&title, key), (b, a))| ComparisonBlock {
             title,
             key,

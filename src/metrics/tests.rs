@@ -665,8 +665,13 @@ fn tables_show_the_figures() {
         relative_left: Some(stats(1.0)),
         relative_right: Some(stats(1.0)),
         collaborative: Some(stats(1.0)),
+        collaborative_same_instant: None,
     };
     let t = format_table(&before);
+    assert!(
+        !t.contains("same instant"),
+        "no column without same-instant pairs:\n{t}"
+    );
     for s in [
         "relative left",
         "collaborative",
@@ -688,6 +693,17 @@ fn tables_show_the_figures() {
         ..before
     };
     let c = format_comparison(&before, &after, ["nominal", "calibrated"]);
+    // Both hands measured together: a fourth set of pairs, in the table and the comparison.
+    let together = AccuracyReport {
+        collaborative_same_instant: Some(stats(2.0)),
+        ..before
+    };
+    let t4 = format_table(&together);
+    assert!(t4.lines().next().unwrap().contains("same instant"), "{t4}");
+    let widths: Vec<usize> = t4.lines().map(|l| l.chars().count()).collect();
+    assert!(widths.windows(2).all(|w| w[0] == w[1]), "{t4}");
+    let c4 = format_comparison(&before, &together, ["nominal", "calibrated"]);
+    assert!(c4.contains("same instant"), "{c4}");
     for s in [
         "nominal",
         "calibrated",
