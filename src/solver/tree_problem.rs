@@ -61,6 +61,35 @@ impl TreeLayout {
         unreachable!("every entry of X belongs to an arm")
     }
 
+    /// The entries of `X` in the identifiability analysis' preference order: each arm's own order
+    /// interleaved (both arms' reflectors first, then the joints from the base), a shared one once,
+    /// where the left arm's order puts it.
+    pub fn interleaved_order(&self, arms: &PerSide<ArmModel>) -> Vec<usize> {
+        let orders = arms.as_ref().map(|_, a| a.identifiability_order());
+        let mut order: Vec<usize> = Vec::with_capacity(self.len);
+        for i in 0..orders.left.len().max(orders.right.len()) {
+            for side in Side::BOTH {
+                if let Some(&k) = orders[side].get(i) {
+                    let x = self.index[side][k];
+                    if !order.contains(&x) {
+                        order.push(x);
+                    }
+                }
+            }
+        }
+        order
+    }
+
+    /// How the analysis names entry `x`: `left a3`, or `d1 (shared)` for one both arms hold.
+    pub fn param_name(&self, x: usize, arms: &PerSide<ArmModel>) -> String {
+        let (side, k) = self.owner(x);
+        if self.is_shared(x) {
+            format!("{} (shared)", arms[side].param_name(k))
+        } else {
+            format!("{side} {}", arms[side].param_name(k))
+        }
+    }
+
     /// Is entry `x` of `X` held by both arms?
     pub fn is_shared(&self, x: usize) -> bool {
         Side::BOTH

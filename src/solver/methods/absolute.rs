@@ -224,27 +224,14 @@ fn tree_set_up(
             }
         }
     }
-    let orders = arms.as_ref().map(|_, a| a.identifiability_order());
+    // The transform first: what it absorbs (a rigid motion of the whole robot) is fixed in the arms.
     let mut order: Vec<usize> = transform.clone().collect();
-    for i in 0..orders.left.len().max(orders.right.len()) {
-        for side in Side::BOTH {
-            if let Some(&k) = orders[side].get(i) {
-                let x = layout.index[side][k];
-                if !order.contains(&x) {
-                    order.push(x);
-                }
-            }
-        }
-    }
+    order.extend(layout.interleaved_order(arms));
     let name = |x: usize| {
         if x >= n_x {
-            return transform_param_name(Side::Left, x - n_x);
-        }
-        let (side, k) = layout.owner(x);
-        if layout.is_shared(x) {
-            format!("{} (shared)", arms[side].param_name(k))
+            transform_param_name(Side::Left, x - n_x)
         } else {
-            format!("{side} {}", arms[side].param_name(k))
+            layout.param_name(x, arms)
         }
     };
     let reason = |x: usize| {

@@ -351,29 +351,9 @@ impl TreeSetUp<'_> {
             first += c.ncols();
         }
         let gram = identifiability::gram_by_product(&m);
-        // Each arm's preference order, interleaved (both arms' reflectors first, then the joints
-        // from the base: a shared joint once, where the left arm's order puts it).
-        let orders = arms.as_ref().map(|_, a| a.identifiability_order());
-        let mut order: Vec<usize> = Vec::with_capacity(layout.len);
-        for i in 0..orders.left.len().max(orders.right.len()) {
-            for side in Side::BOTH {
-                if let Some(&k) = orders[side].get(i) {
-                    let x = layout.index[side][k];
-                    if !order.contains(&x) {
-                        order.push(x);
-                    }
-                }
-            }
-        }
+        let order = layout.interleaved_order(arms);
         let allowed = vec![true; layout.len];
-        let name = |x: usize| {
-            let (side, k) = layout.owner(x);
-            if layout.is_shared(x) {
-                format!("{} (shared)", arms[side].param_name(k))
-            } else {
-                format!("{side} {}", arms[side].param_name(k))
-            }
-        };
+        let name = |x: usize| layout.param_name(x, arms);
         let reason = |x: usize| {
             let (side, k) = layout.owner(x);
             arms[side].unidentifiable_reason(k)
