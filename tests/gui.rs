@@ -1794,6 +1794,22 @@ fn the_planning_window_plans_and_draws_the_plan_with_the_tracker() {
     assert!(harness.state().viewport().plan.is_none());
 }
 
+/// A simulated dataset of the built-in robot (`seed`, configurations, calibration ones), changed by
+/// `edit`, saved in `dir`.
+fn save_simulated(
+    dir: &std::path::Path,
+    (seed, n, n_cal): (u64, usize, usize),
+    edit: impl FnOnce(&mut dualcal::dataset::Dataset),
+) {
+    let robot = dualcal::robot::RobotDescription::builtin_irb14000();
+    let opts = dualcal::simulate::paper_options(seed, n, n_cal);
+    let mut ds = dualcal::simulate::simulate_with_robot(&opts, &robot)
+        .unwrap()
+        .dataset;
+    edit(&mut ds);
+    dualcal::dataset::save(&ds, dir, dualcal::dataset::Units::MM_DEG).unwrap();
+}
+
 /// One arm alone (a dataset with one `[[arms]]` entry): the dataset section says the other arm was
 /// not measured, the convergence tabs list only its stage, the calibration, the accuracy and summary
 /// tabs, the comparison and the exports work, and the figures of the other arm and the collaborative
@@ -1803,15 +1819,9 @@ fn one_arm_alone_calibrates_compares_and_exports() {
     use dualcal::dataset::Split;
     use dualcal::side::Side;
     let dir = tempfile::tempdir().unwrap();
-    let robot = dualcal::robot::RobotDescription::builtin_irb14000();
-    let sim = dualcal::simulate::simulate_with_robot(
-        &dualcal::simulate::paper_options(12, 120, 80),
-        &robot,
-    )
-    .unwrap();
-    let mut ds = sim.dataset.clone();
-    ds.arms.right = dualcal::dataset::ArmData::not_measured(Side::Right);
-    dualcal::dataset::save(&ds, dir.path(), dualcal::dataset::Units::MM_DEG).unwrap();
+    save_simulated(dir.path(), (12, 120, 80), |ds| {
+        ds.arms.right = dualcal::dataset::ArmData::not_measured(Side::Right);
+    });
     let mut harness = open_at(dir.path());
     shown(&harness, "right: not measured");
     shown(&harness, "one arm alone (left)");
@@ -1887,23 +1897,17 @@ fn the_method_follows_the_data_until_picked() {
     use dualcal::side::Side;
     use dualcal::solver::Method;
     let dir = tempfile::tempdir().unwrap();
-    let robot = dualcal::robot::RobotDescription::builtin_irb14000();
-    let sim = dualcal::simulate::simulate_with_robot(
-        &dualcal::simulate::paper_options(13, 60, 40),
-        &robot,
-    )
-    .unwrap();
-    let mut ds = sim.dataset.clone();
-    ds.nominal_reflectors_mm.truncate(1);
-    ds.reflector_names = ds.reflector_names[..1].to_vec().into();
-    for side in Side::BOTH {
-        for (i, m) in ds.arms[side].measurements.iter_mut().enumerate() {
-            m.tracker_points_mm.truncate(1);
-            m.id = format!("P{i:03}");
+    save_simulated(dir.path(), (13, 60, 40), |ds| {
+        ds.nominal_reflectors_mm.truncate(1);
+        ds.reflector_names = ds.reflector_names[..1].to_vec().into();
+        for side in Side::BOTH {
+            for (i, m) in ds.arms[side].measurements.iter_mut().enumerate() {
+                m.tracker_points_mm.truncate(1);
+                m.id = format!("P{i:03}");
+            }
         }
-    }
-    ds.measured_together = true;
-    dualcal::dataset::save(&ds, dir.path(), dualcal::dataset::Units::MM_DEG).unwrap();
+        ds.measured_together = true;
+    });
     let mut harness = harness([1400.0, 900.0], AppLaunch::default());
     loaded(&mut harness);
     assert_eq!(harness.state().settings().method, Method::Minimax);

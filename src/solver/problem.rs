@@ -49,6 +49,17 @@ pub struct LeastSquaresSystem {
     pub jtr: DVector<f64>,
 }
 
+impl LeastSquaresSystem {
+    /// The normal equations of residuals `r` and their Jacobian `j` (∂r/∂y).
+    pub fn of_residuals(r: &DVector<f64>, j: &DMatrix<f64>) -> Self {
+        Self {
+            cost: r.norm_squared(),
+            jtj: j.tr_mul(j),
+            jtr: j.tr_mul(r),
+        }
+    }
+}
+
 /// What a stage identifies: one arm's model (step 1) or the right-arm base in the left-arm base
 /// (step 2).
 #[derive(Clone, Debug, PartialEq)]

@@ -133,11 +133,7 @@ impl LeastSquaresProblem for TreeAbsoluteProblem {
 
     fn normal_equations(&self, y: &DVector<f64>) -> LeastSquaresSystem {
         let (r, j) = self.jacobian(y);
-        LeastSquaresSystem {
-            cost: r.norm_squared(),
-            jtj: j.tr_mul(&j),
-            jtr: j.tr_mul(&r),
-        }
+        LeastSquaresSystem::of_residuals(&r, &j)
     }
 
     fn residuals_jacobian(&self, y: &DVector<f64>) -> Option<(DVector<f64>, DMatrix<f64>)> {
