@@ -1294,6 +1294,18 @@ fn calibrated_ver_collab(app: &WorkbenchApp) -> f64 {
         .pos_rms_mm
 }
 
+/// Press "Run comparison" and wait for it to end, without errors.
+fn run_comparison(harness: &mut Harness<'_, WorkbenchApp>) {
+    harness.get_by_label("Run comparison").click();
+    harness.step();
+    assert!(harness.state().is_comparing());
+    step_until(harness, MAX_RUN_FRAMES, "comparison", |app| {
+        !app.is_comparing()
+    });
+    let app = harness.state();
+    assert!(app.errors().is_empty(), "{:?}", app.errors());
+}
+
 /// The `method` record of the parameter file the workbench exports.
 fn exported_method(app: &WorkbenchApp) -> serde_json::Value {
     let bytes = dualcal::app::export::Export::Params
@@ -1378,14 +1390,8 @@ fn the_comparison_lists_each_method_and_adopting_one_changes_the_export() {
     // The picker adds least squares.
     harness.get_by_label("least squares").click();
     harness.run_steps(2);
-    harness.get_by_label("Run comparison").click();
-    harness.step();
-    assert!(harness.state().is_comparing());
-    step_until(&mut harness, MAX_RUN_FRAMES, "comparison", |app| {
-        !app.is_comparing()
-    });
+    run_comparison(&mut harness);
     let app = harness.state();
-    assert!(app.errors().is_empty(), "{:?}", app.errors());
     let comparison = app
         .compare_view()
         .comparison
@@ -1865,13 +1871,8 @@ fn one_arm_alone_calibrates_compares_and_exports() {
         .compare_view_mut()
         .pick(&["minimax", "lsq"]);
     harness.run_steps(2);
-    harness.get_by_label("Run comparison").click();
-    harness.step();
-    step_until(&mut harness, MAX_RUN_FRAMES, "comparison", |app| {
-        !app.is_comparing()
-    });
+    run_comparison(&mut harness);
     let app = harness.state();
-    assert!(app.errors().is_empty(), "{:?}", app.errors());
     let comparison = app
         .compare_view()
         .comparison

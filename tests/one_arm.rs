@@ -22,6 +22,24 @@ fn dualcal() -> Command {
     Command::new(env!("CARGO_BIN_EXE_dualcal"))
 }
 
+/// `dualcal calibrate DATA --out PARAMS --urdf URDF`: whether it succeeded, its stdout and stderr.
+fn calibrate_cli(data: &Path, params: &Path, urdf: &Path) -> (bool, String, String) {
+    let out = dualcal()
+        .arg("calibrate")
+        .arg(data)
+        .arg("--out")
+        .arg(params)
+        .arg("--urdf")
+        .arg(urdf)
+        .output()
+        .unwrap();
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
 /// `ds` with only `side`'s measurements, saved in `dir` (the manifest's one `[[arms]]` entry).
 fn save_one_arm(ds: &Dataset, side: Side, dir: &Path) {
     let mut one = ds.clone();
@@ -136,18 +154,8 @@ fn the_command_line_on_one_arm() {
     save_one_arm(&sim.dataset, Side::Right, &data);
     let params = dir.path().join("params.json");
     let urdf = dir.path().join("calibrated.urdf");
-    let out = dualcal()
-        .arg("calibrate")
-        .arg(&data)
-        .arg("--out")
-        .arg(&params)
-        .arg("--urdf")
-        .arg(&urdf)
-        .output()
-        .unwrap();
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "{stdout}\n{stderr}");
+    let (ok, stdout, stderr) = calibrate_cli(&data, &params, &urdf);
+    assert!(ok, "{stdout}\n{stderr}");
     assert!(stdout.contains("step 1 (right arm): converged"), "{stdout}");
     assert!(!stdout.contains("step 1 (left arm)"), "{stdout}");
     assert!(
@@ -234,21 +242,9 @@ fn a_single_robot_with_no_second_arm() {
 
     let params = dir.path().join("params.json");
     let out_urdf = dir.path().join("calibrated.urdf");
-    let out = dualcal()
-        .arg("calibrate")
-        .arg(&data)
-        .arg("--out")
-        .arg(&params)
-        .arg("--urdf")
-        .arg(&out_urdf)
-        .output()
-        .unwrap();
-    let text = format!(
-        "{}\n{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    assert!(out.status.success(), "{text}");
+    let (ok, stdout, stderr) = calibrate_cli(&data, &params, &out_urdf);
+    let text = format!("{stdout}\n{stderr}");
+    assert!(ok, "{text}");
     assert!(
         text.contains("one arm arm_base_link → arm_ee_link (6 joints)"),
         "{text}"

@@ -43,11 +43,9 @@ impl LeftPanel<'_> {
             ui.add_enabled_ui(!self.calibrating, |ui| {
                 calibration_settings_ui(ui, &mut *self.settings, names)
             });
-            if let Some(why) = self
-                .session
-                .and_then(|s| crate::solver::default_method_reason(&s.dataset))
-                && self.settings.method
-                    == crate::solver::default_method(&self.session.unwrap().dataset)
+            if let Some(s) = self.session
+                && let Some(why) = crate::solver::default_method_reason(&s.dataset)
+                && self.settings.method == crate::solver::default_method(&s.dataset)
             {
                 ui.label(
                     RichText::new(format!(
