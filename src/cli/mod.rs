@@ -191,6 +191,16 @@ pub struct CalibrateArgs {
     /// robot reaches once its frame and markers are known. No step 2.
     #[arg(long)]
     pub hold_kinematics: bool,
+    /// The model identified with the geometry: `geometric` (the paper's), `elastic-axis` (each joint
+    /// giving about its axis under gravity, lumped masses), `elastic` (about its axis and across it),
+    /// `harmonic` (first and second harmonics of each joint's angle), `full` (elastic and harmonic);
+    /// see docs/solver.md. The calibrated URDF carries only the geometry.
+    #[arg(long, value_parser = crate::kinematics::ErrorTerms::from_name, default_value = "geometric")]
+    pub model: crate::kinematics::ErrorTerms,
+    /// Gravity's direction in the robot's root link frame, for the elastic models (default 0,0,-1:
+    /// the robot standing upright).
+    #[arg(long, value_name = "X,Y,Z", value_parser = plan::parse_xyz)]
+    pub gravity: Option<nalgebra::Vector3<f64>>,
     /// Only the summary, no per-iteration lines.
     #[arg(long, short)]
     pub quiet: bool,
@@ -669,6 +679,8 @@ fn calibrate_cmd(a: &CalibrateArgs) -> Result<()> {
         eprintln!("{}", describe_robot(&ws.robot));
     }
     let mut settings = settings_from(a, &ws.dataset)?;
+    settings.model = a.model;
+    settings.gravity_in_left_base = Some(ws.robot.gravity_in_left_base(a.gravity));
     if a.method.is_none()
         && let Some(why) = crate::solver::default_method_reason(&ws.dataset)
     {

@@ -70,7 +70,7 @@ pub struct PlanArgs {
     pub mpe_um_per_m: f64,
 }
 
-fn parse_xyz(s: &str) -> std::result::Result<Vector3<f64>, String> {
+pub(super) fn parse_xyz(s: &str) -> std::result::Result<Vector3<f64>, String> {
     let v: Vec<f64> = s
         .split(',')
         .map(|x| x.trim().parse::<f64>())

@@ -20,6 +20,7 @@
 
 pub mod chain;
 pub mod dh;
+pub mod joint_errors;
 mod per_reflector;
 pub mod shared;
 #[cfg(test)]
@@ -34,6 +35,7 @@ pub use dh::{
     ABB_AXIS_OF_CHAIN, DhRow, IRB14000_NOMINAL_DH, JOINT_LIMITS_DEG, N_DH, N_JOINTS, N_PARAMS,
     ParamVector, PointJacobian, joint_limits_rad, param_is_angle, param_name,
 };
+pub use joint_errors::{ErrorTerms, JointErrorModel, JointErrors};
 use nalgebra::{DVector, Isometry3, Matrix3xX, Matrix6xX, Vector3};
 pub use per_reflector::{MAX_REFLECTORS, PerReflector};
 pub use shared::SharedJoints;
@@ -91,6 +93,9 @@ pub struct ArmModel {
     pub reflectors_mm: Vec<Vector3<f64>>,
     /// The reflectors' names, one per entry of `reflectors_mm` (the dataset's `[reflectors]` keys).
     pub reflector_names: Arc<[String]>,
+    /// Errors no geometry explains (joint elasticity, transmission harmonics; [`joint_errors`]): none
+    /// in the paper's geometric model. Their parameters follow the reflector coordinates.
+    pub errors: JointErrors,
 }
 
 /// Reflector positions and tip pose of one configuration.
@@ -118,6 +123,7 @@ impl ArmModel {
             kinematics: ArmKinematics::Dh(IRB14000_NOMINAL_DH),
             reflector_names: default_reflector_names(reflectors_mm.len()),
             reflectors_mm,
+            errors: JointErrors::default(),
         }
     }
 
@@ -144,6 +150,7 @@ impl ArmModel {
             kinematics: ArmKinematics::Chain { chain, corrections },
             reflector_names: default_reflector_names(reflectors_mm.len()),
             reflectors_mm,
+            errors: JointErrors::default(),
         }
     }
 
@@ -207,9 +214,53 @@ impl ArmModel {
         }
     }
 
-    /// Number of parameters: the kinematic ones and three coordinates per reflector.
+    /// Number of parameters: the kinematic ones, three coordinates per reflector, then the error
+    /// parameters (none in the geometric model).
     pub fn param_count(&self) -> usize {
+        self.error_offset() + self.errors.count()
+    }
+
+    /// Index of the first error parameter (after the reflector coordinates).
+    pub fn error_offset(&self) -> usize {
         self.reflector_offset() + 3 * self.reflector_count()
+    }
+
+    /// The same model with the error terms `terms` at their start values on this model's geometry as
+    /// the reference (gravity along `gravity_in_base`); the geometric model for
+    /// [`ErrorTerms::GEOMETRIC`].
+    pub fn with_error_terms(mut self, terms: ErrorTerms, gravity_in_base: Vector3<f64>) -> Self {
+        self.errors = JointErrors::new(&self.kinematics, terms, gravity_in_base);
+        self
+    }
+
+    /// The geometric part of the model (its errors dropped).
+    pub fn geometric(&self) -> Self {
+        Self {
+            errors: JointErrors::default(),
+            ..self.clone()
+        }
+    }
+
+    /// The kinematics at configuration `q`: the geometric parameters moved by the error model's
+    /// increments there (borrowed as they are for the geometric model).
+    fn kinematics_at(&self, q_rad: &[f64]) -> std::borrow::Cow<'_, ArmKinematics> {
+        match self.errors.increments(q_rad) {
+            Some(inc) => {
+                std::borrow::Cow::Owned(joint_errors::moved_kinematics(&self.kinematics, &inc))
+            }
+            None => std::borrow::Cow::Borrowed(&self.kinematics),
+        }
+    }
+
+    /// Unit of parameter `k`: `mm` or `rad` for the geometry and reflectors, the error parameters'
+    /// own (`µrad/(N·m)`, `kg`, `kg·mm`, `rad`).
+    pub fn param_unit(&self, k: usize) -> &'static str {
+        let off = self.error_offset();
+        match &self.errors.model {
+            Some(m) if k >= off => m.param_unit(k - off),
+            _ if self.param_is_angle(k) => "rad",
+            _ => "mm",
+        }
     }
 
     /// Index of the first reflector coordinate in the parameter vector.
@@ -223,6 +274,12 @@ impl ArmModel {
     /// Name of parameter `k`: `a1 … alpha7` (DH) or `<joint>.tx … <joint>.rz` (chain), then
     /// `t_a.x … t_c.z`.
     pub fn param_name(&self, k: usize) -> String {
+        let eoff = self.error_offset();
+        if let Some(m) = &self.errors.model
+            && k >= eoff
+        {
+            return m.param_name(k - eoff);
+        }
         let off = self.reflector_offset();
         if k >= off && k < self.param_count() {
             return format!(
@@ -239,6 +296,12 @@ impl ArmModel {
 
     /// Is parameter `k` an angle (rad) rather than a length (mm)?
     pub fn param_is_angle(&self, k: usize) -> bool {
+        let eoff = self.error_offset();
+        if let Some(m) = &self.errors.model
+            && k >= eoff
+        {
+            return m.param_is_angle(k - eoff);
+        }
         match &self.kinematics {
             ArmKinematics::Dh(_) => param_is_angle(k),
             ArmKinematics::Chain { chain, .. } => chain.param_is_angle(k),
@@ -264,6 +327,10 @@ impl ArmModel {
                 v[off + 3 * r + c] = t[c];
             }
         }
+        let eoff = self.error_offset();
+        for (i, e) in self.errors.values.iter().enumerate() {
+            v[eoff + i] = *e;
+        }
         v
     }
 
@@ -286,10 +353,16 @@ impl ArmModel {
                     .collect(),
             },
         };
+        let eoff = self.error_offset();
+        let errors = JointErrors {
+            model: self.errors.model.clone(),
+            values: (0..self.errors.count()).map(|i| at(eoff + i)).collect(),
+        };
         Self {
             kinematics,
             reflectors_mm,
             reflector_names: self.reflector_names.clone(),
+            errors,
         }
     }
 
@@ -304,7 +377,7 @@ impl ArmModel {
     /// Tip pose in the model base frame (the flange for DH). `q_rad` in chain order; it must have
     /// [`ArmModel::joint_count`] values (missing ones count as zero, extra ones are ignored).
     pub fn base_from_flange(&self, q_rad: &[f64]) -> Isometry3<f64> {
-        match &self.kinematics {
+        match self.kinematics_at(q_rad).as_ref() {
             ArmKinematics::Dh(dh) => dh::base_from_flange(dh, q_rad),
             ArmKinematics::Chain { chain, corrections } => chain.base_from_tip(corrections, q_rad),
         }
@@ -327,18 +400,33 @@ impl ArmModel {
     /// Reflector positions and their analytic Jacobians with respect to every parameter (eq. 4 for
     /// DH; see [`chain`] for the chain form).
     pub fn reflector_jacobians(&self, q_rad: &[f64]) -> ArmJacobians {
-        match &self.kinematics {
-            ArmKinematics::Dh(dh) => dh::reflector_jacobians(dh, &self.reflectors_mm, q_rad),
-            ArmKinematics::Chain { chain, corrections } => {
-                chain.reflector_jacobians(corrections, &self.reflectors_mm, q_rad)
+        let Some(inc) = self.errors.increments(q_rad) else {
+            return geometric_jacobians(&self.kinematics, &self.reflectors_mm, q_rad);
+        };
+        // The geometric Jacobians at the moved parameters are exact (the increments do not depend on
+        // the geometry); an error parameter's column is the chain rule through the slots it moves.
+        let moved = joint_errors::moved_kinematics(&self.kinematics, &inc);
+        let mut out = geometric_jacobians(&moved, &self.reflectors_mm, q_rad);
+        let eoff = self.error_offset();
+        let n = self.param_count();
+        for jac in &mut out.jacobians {
+            let mut full = Matrix3xX::zeros(n);
+            full.columns_mut(0, eoff).copy_from(jac);
+            for (slot, _, row) in &inc.slots {
+                let col = jac.column(*slot).into_owned();
+                for &(i, d) in row {
+                    full.column_mut(eoff + i).axpy(d, &col, 1.0);
+                }
             }
+            *jac = full;
         }
+        out
     }
 
     /// One frame per movable joint, in the model base frame, whose z axis is that joint's axis and
     /// whose origin lies on it (DH frames 0 … 6, or the chain's aligned joint frames), then the tip.
     pub fn joint_frames(&self, q_rad: &[f64]) -> Vec<Isometry3<f64>> {
-        match &self.kinematics {
+        match self.kinematics_at(q_rad).as_ref() {
             ArmKinematics::Dh(dh) => dh::frames(dh, q_rad).to_vec(),
             ArmKinematics::Chain { chain, corrections } => chain.joint_frames(corrections, q_rad),
         }
@@ -385,17 +473,42 @@ impl ArmModel {
     /// first): the reflector coordinates, then for DH joints 2 … 6, joint 1 and joint 7, for a chain
     /// base first (see [`SerialChain::preference_order`]).
     pub fn identifiability_order(&self) -> Vec<usize> {
-        match &self.kinematics {
+        let mut order = match &self.kinematics {
             ArmKinematics::Dh(_) => dh::preference_order(self.reflector_count()),
             ArmKinematics::Chain { chain, .. } => chain.preference_order(self.reflector_count()),
+        };
+        if let Some(m) = &self.errors.model {
+            let eoff = self.error_offset();
+            order.extend(m.preference_order().into_iter().map(|i| eoff + i));
         }
+        order
     }
 
     /// Why parameter `k` cannot be identified from distances, when physics says so.
     pub fn unidentifiable_reason(&self, k: usize) -> Option<String> {
+        let eoff = self.error_offset();
+        if let Some(m) = &self.errors.model
+            && k >= eoff
+        {
+            return m.physical_reason(k - eoff);
+        }
         match &self.kinematics {
             ArmKinematics::Dh(_) => dh::physical_reason(k).map(str::to_string),
             ArmKinematics::Chain { chain, .. } => chain.physical_reason(k),
+        }
+    }
+}
+
+/// Reflector positions and Jacobians of the geometric kinematics `kinematics`.
+fn geometric_jacobians(
+    kinematics: &ArmKinematics,
+    reflectors_mm: &[Vector3<f64>],
+    q_rad: &[f64],
+) -> ArmJacobians {
+    match kinematics {
+        ArmKinematics::Dh(dh) => dh::reflector_jacobians(dh, reflectors_mm, q_rad),
+        ArmKinematics::Chain { chain, corrections } => {
+            chain.reflector_jacobians(corrections, reflectors_mm, q_rad)
         }
     }
 }
@@ -425,6 +538,39 @@ impl DualArmModel {
             Side::Left => Isometry3::identity(),
             Side::Right => self.left_base_from_right_base,
         }
+    }
+
+    /// The same model with error terms `terms` on both arms at their start values, gravity along
+    /// `gravity_in_left_base` (in the left arm's model base frame; the right arm's follows from
+    /// [`DualArmModel::left_base_from_right_base`]). Each arm's reference geometry is its own current one.
+    pub fn with_error_terms(
+        mut self,
+        terms: ErrorTerms,
+        gravity_in_left_base: Vector3<f64>,
+    ) -> Self {
+        let in_right = self
+            .left_base_from_right_base
+            .rotation
+            .inverse_transform_vector(&gravity_in_left_base);
+        let PerSide { left, right } = self.arms;
+        self.arms = PerSide::new(
+            left.with_error_terms(terms, gravity_in_left_base),
+            right.with_error_terms(terms, in_right),
+        );
+        self
+    }
+
+    /// The geometric part of the model (both arms' errors dropped): what a URDF can hold.
+    pub fn geometric(&self) -> Self {
+        Self {
+            arms: self.arms.as_ref().map(|_, a| a.geometric()),
+            left_base_from_right_base: self.left_base_from_right_base,
+        }
+    }
+
+    /// The error terms of the model (the left arm's; both arms carry the same terms).
+    pub fn error_terms(&self) -> ErrorTerms {
+        self.arms.left.errors.terms()
     }
 
     /// Are both "arms" one chain (a single-arm robot, its one arm given for both sides: the same

@@ -14,12 +14,12 @@ fn nominal() -> ArmModel {
     ])
 }
 
-fn random_q(rng: &mut ChaCha8Rng) -> [f64; N_JOINTS] {
+pub(crate) fn random_q(rng: &mut ChaCha8Rng) -> [f64; N_JOINTS] {
     let lim = joint_limits_rad();
     std::array::from_fn(|i| rng.random_range(lim[i].0..lim[i].1))
 }
 
-fn perturbed(rng: &mut ChaCha8Rng) -> ArmModel {
+pub(crate) fn perturbed(rng: &mut ChaCha8Rng) -> ArmModel {
     let m = nominal();
     let mut v = m.to_vector();
     for k in 0..N_PARAMS {

@@ -232,6 +232,7 @@ fn base_translation_error_gives_the_expected_collaborative_error() {
         ),
         reflectors_mm: nominal_reflectors().to_vec(),
         reflector_names: crate::kinematics::default_reflector_names(3),
+        errors: Default::default(),
     };
     let truth = DualArmModel {
         arms: PerSide::new(zero_arm.clone(), zero_arm.clone()),

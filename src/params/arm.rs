@@ -2,7 +2,10 @@
 //! of a URDF chain, and the reflectors.
 
 use super::{ParamsError, invalid};
-use crate::kinematics::{ArmKinematics, ArmModel, DhRow, N_JOINTS, PARAMS_PER_JOINT, SerialChain};
+use crate::kinematics::{
+    ArmKinematics, ArmModel, DhRow, ErrorTerms, IRB14000_NOMINAL_DH, JointErrors, N_JOINTS,
+    PARAMS_PER_JOINT, SerialChain,
+};
 use crate::robot::RobotDescription;
 use crate::side::Side;
 use nalgebra::Vector3;
@@ -88,8 +91,74 @@ impl<'de> Deserialize<'de> for ReflectorsEntry {
     }
 }
 
-/// One arm: either 7 DH rows in chain order (`dh`) or a chain's corrections (`chain`), and the
-/// reflectors.
+/// Named numbers in the model's order: a JSON object `{"name": value, …}` written and read in that
+/// order (not sorted).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct NamedValues(pub Vec<(String, f64)>);
+
+impl Serialize for NamedValues {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut map = serializer.serialize_map(Some(self.0.len()))?;
+        for (name, v) in &self.0 {
+            map.serialize_entry(name, v)?;
+        }
+        map.end()
+    }
+}
+
+impl<'de> Deserialize<'de> for NamedValues {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct InOrder;
+        impl<'de> serde::de::Visitor<'de> for InOrder {
+            type Value = NamedValues;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("an object of parameters, each name with a number")
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(
+                self,
+                mut map: A,
+            ) -> Result<Self::Value, A::Error> {
+                let mut out: Vec<(String, f64)> = Vec::new();
+                while let Some((name, v)) = map.next_entry::<String, f64>()? {
+                    if out.iter().any(|(n, _)| *n == name) {
+                        return Err(serde::de::Error::custom(format!(
+                            "parameter `{name}` given twice"
+                        )));
+                    }
+                    out.push((name, v));
+                }
+                Ok(NamedValues(out))
+            }
+        }
+        deserializer.deserialize_map(InOrder)
+    }
+}
+
+/// What the parameter file says of the units of [`ErrorsEntry::parameters`].
+pub const ERROR_UNITS_NOTE: &str = "fixed units whatever the file's: harmonics rad, compliances \
+     µrad/(N·m), lumped masses kg, their first moments kg·mm; the compliances are those of the masses' \
+     scale (only compliance × mass is identifiable)";
+
+/// An arm's errors beyond geometry ([`crate::kinematics::joint_errors`]): the terms, gravity, and
+/// every parameter by name.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ErrorsEntry {
+    /// The model's name (`elastic`, `harmonic`, …; informative: `terms` is what is read).
+    #[serde(default)]
+    pub model: String,
+    pub terms: ErrorTerms,
+    /// Unit vector of gravity in the arm's model base frame.
+    pub gravity_in_base: [f64; 3],
+    /// The units of `parameters`.
+    #[serde(default)]
+    pub units: String,
+    pub parameters: NamedValues,
+}
+
+/// One arm: either 7 DH rows in chain order (`dh`) or a chain's corrections (`chain`), the
+/// reflectors, and the errors beyond geometry if the model has them.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ArmParams {
@@ -98,6 +167,8 @@ pub struct ArmParams {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub chain: Option<ChainParams>,
     pub reflectors: ReflectorsEntry,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub errors: Option<ErrorsEntry>,
 }
 
 /// Mm and rad per file unit.
@@ -146,6 +217,23 @@ pub(super) fn arm_params(arm: &ArmModel) -> ArmParams {
             .map(|(name, v)| (name.clone(), [v.x, v.y, v.z]))
             .collect(),
     );
+    let errors = arm.errors.model.as_ref().map(|m| {
+        let off = arm.error_offset();
+        ErrorsEntry {
+            model: m.terms.name(),
+            terms: m.terms,
+            gravity_in_base: m.gravity_in_base.into(),
+            units: ERROR_UNITS_NOTE.to_string(),
+            parameters: NamedValues(
+                arm.errors
+                    .values
+                    .iter()
+                    .enumerate()
+                    .map(|(i, v)| (arm.param_name(off + i), *v))
+                    .collect(),
+            ),
+        }
+    });
     match &arm.kinematics {
         ArmKinematics::Dh(dh) => ArmParams {
             dh: Some(
@@ -160,6 +248,7 @@ pub(super) fn arm_params(arm: &ArmModel) -> ArmParams {
             ),
             chain: None,
             reflectors,
+            errors,
         },
         ArmKinematics::Chain { chain, corrections } => ArmParams {
             dh: None,
@@ -182,8 +271,72 @@ pub(super) fn arm_params(arm: &ArmModel) -> ArmParams {
                     .collect(),
             }),
             reflectors,
+            errors,
         },
     }
+}
+
+/// The errors of an arm entry on `model` (its geometry; the reference of the torques is `reference`,
+/// the nominal geometry the calibration started from): every parameter of the terms by name, finite.
+fn with_errors(
+    side: &str,
+    arm: &ArmParams,
+    model: ArmModel,
+    reference: &ArmKinematics,
+) -> Result<ArmModel, ParamsError> {
+    let Some(e) = &arm.errors else {
+        return Ok(model);
+    };
+    let field = format!("arms.{side}.errors");
+    if e.terms.harmonics > 2 {
+        return Err(invalid(
+            format!("{field}.terms.harmonics"),
+            format!("{}; expected 0, 1 or 2", e.terms.harmonics),
+        ));
+    }
+    finite(&format!("{field}.gravity_in_base"), &e.gravity_in_base)?;
+    let g = nalgebra::Vector3::from(e.gravity_in_base);
+    if g.norm() < 1e-9 {
+        return Err(invalid(
+            format!("{field}.gravity_in_base"),
+            "a zero vector; expected gravity's direction",
+        ));
+    }
+    let mut errors = JointErrors::new(reference, e.terms, g);
+    let off = model.error_offset();
+    let probe = ArmModel {
+        errors: errors.clone(),
+        ..model
+    };
+    for (name, _) in &e.parameters.0 {
+        if !(0..errors.count()).any(|i| probe.param_name(off + i) == *name) {
+            return Err(invalid(
+                format!("{field}.parameters.{name}"),
+                format!(
+                    "not a parameter of the `{}` model of this arm",
+                    e.terms.name()
+                ),
+            ));
+        }
+    }
+    for i in 0..errors.count() {
+        let name = probe.param_name(off + i);
+        let value = e
+            .parameters
+            .0
+            .iter()
+            .find(|(n, _)| *n == name)
+            .map(|(_, v)| *v)
+            .ok_or_else(|| {
+                invalid(
+                    format!("{field}.parameters"),
+                    format!("`{name}` is missing"),
+                )
+            })?;
+        finite(&format!("{field}.parameters.{name}"), &[value])?;
+        errors.values[i] = value;
+    }
+    Ok(ArmModel { errors, ..probe })
 }
 
 /// Reflector names and their coordinates (mm), in the same order.
@@ -342,11 +495,17 @@ pub(super) fn arm_model(
 ) -> Result<ArmModel, ParamsError> {
     let (reflector_names, reflectors_mm) = reflectors_mm(side, &arm.reflectors, scale)?;
     match one_form(side, arm)? {
-        Form::Dh(rows) => Ok(ArmModel {
-            kinematics: ArmKinematics::Dh(dh_rows(side, rows, scale)?),
-            reflectors_mm,
-            reflector_names,
-        }),
+        Form::Dh(rows) => with_errors(
+            side,
+            arm,
+            ArmModel {
+                kinematics: ArmKinematics::Dh(dh_rows(side, rows, scale)?),
+                reflectors_mm,
+                reflector_names,
+                errors: JointErrors::default(),
+            },
+            &ArmKinematics::Dh(IRB14000_NOMINAL_DH),
+        ),
         Form::Chain(_) => Err(invalid(
             format!("arms.{side}.chain"),
             "chain parameters need the robot description they belong to (ParamsFile::to_model_for)",
@@ -407,14 +566,24 @@ pub(super) fn arm_model_for(
                 ));
             }
             let (reflector_names, reflectors_mm) = reflectors_mm(side, &arm.reflectors, scale)?;
-            Ok(ArmModel {
-                kinematics: ArmKinematics::Chain {
-                    chain: chain.clone(),
-                    corrections: corrections(side, params, scale)?,
+            let reference = ArmKinematics::Chain {
+                chain: chain.clone(),
+                corrections: vec![[0.0; PARAMS_PER_JOINT]; chain.joint_count()],
+            };
+            with_errors(
+                side,
+                arm,
+                ArmModel {
+                    kinematics: ArmKinematics::Chain {
+                        chain: chain.clone(),
+                        corrections: corrections(side, params, scale)?,
+                    },
+                    reflectors_mm,
+                    reflector_names,
+                    errors: JointErrors::default(),
                 },
-                reflectors_mm,
-                reflector_names,
-            })
+                &reference,
+            )
         }
     }
 }

@@ -372,6 +372,15 @@ impl ParamsFile {
                     names
                 }
             };
+            // An arm with errors beyond geometry names their parameters too (as its `errors` lists them).
+            let names = match &self.arms[side].errors {
+                Some(e) => {
+                    let mut names = names;
+                    names.extend(e.parameters.0.iter().map(|(n, _)| n.clone()));
+                    names
+                }
+                None => names,
+            };
             for (i, f) in list.iter().enumerate() {
                 if !names.contains(&f.name) {
                     return Err(invalid(

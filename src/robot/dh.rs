@@ -186,6 +186,7 @@ impl RobotDescription {
                 kinematics: ArmKinematics::Dh(dh),
                 reflectors_mm: reflectors,
                 reflector_names: reflector_names.clone(),
+                errors: Default::default(),
             })
         })?;
         let base = PerSide::from_fn(|side| self.body_from_dh_base(side));

@@ -709,6 +709,16 @@ impl RobotDescription {
     }
 
     /// The right arm's model base frame in the left arm's, as the URDF places them.
+    /// Gravity's direction in the left arm's model base frame, given it in the root (body) link's frame
+    /// (`None`: −z of the root link, a robot standing upright).
+    pub fn gravity_in_left_base(&self, gravity_in_body: Option<Vector3<f64>>) -> [f64; 3] {
+        let g = gravity_in_body.unwrap_or(-Vector3::z());
+        self.body_from_arm_base(Side::Left)
+            .rotation
+            .inverse_transform_vector(&g)
+            .into()
+    }
+
     pub fn nominal_left_base_from_right_base(&self) -> Isometry3<f64> {
         self.body_from_arm_base(Side::Left).inverse() * self.body_from_arm_base(Side::Right)
     }

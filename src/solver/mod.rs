@@ -44,6 +44,7 @@ pub mod tree_problem;
 pub mod uncertainty;
 
 use crate::dataset::Split;
+use crate::kinematics::ErrorTerms;
 use crate::side::{ConfigId, Side};
 pub use methods::{BaseMethod, BaseMethodSpec, Method, MethodSpec, Observes, SolverKind};
 pub use result::{CalibrationResult, STAGES};
@@ -136,6 +137,14 @@ pub struct CalibrationSettings {
     /// and markers fitted.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub hold_kinematics: bool,
+    /// The model's errors beyond geometry, identified with it by step 1's method
+    /// ([`crate::kinematics::joint_errors`]); geometric (the paper's) by default.
+    #[serde(default, skip_serializing_if = "ErrorTerms::is_geometric")]
+    pub model: ErrorTerms,
+    /// Gravity's direction in the left arm's model base frame, for the elastic terms (`None`: −z of that
+    /// frame; the command line and the workbench give the robot's: −z of its root link).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gravity_in_left_base: Option<[f64; 3]>,
 }
 
 fn default_progress_tolerance() -> f64 {
@@ -156,6 +165,8 @@ impl Default for CalibrationSettings {
             max_qp_iterations: 2000,
             exclude: Vec::new(),
             hold_kinematics: false,
+            model: ErrorTerms::GEOMETRIC,
+            gravity_in_left_base: None,
         }
     }
 }

@@ -202,6 +202,22 @@ impl CalibrationRun {
         cancel: Arc<AtomicBool>,
     ) -> Result<Self, CalibrationError> {
         check_settings(&settings)?;
+        // The model the settings ask for: the nominal geometry with their error terms at the start
+        // values (its figures are the geometric model's exactly), or without any.
+        let with_terms;
+        let nominal = if nominal.error_terms() != settings.model {
+            let gravity = settings
+                .gravity_in_left_base
+                .map_or(-nalgebra::Vector3::z(), nalgebra::Vector3::from);
+            with_terms = DualArmModel {
+                arms: nominal.arms.as_ref().map(|_, a| a.geometric()),
+                left_base_from_right_base: nominal.left_base_from_right_base,
+            }
+            .with_error_terms(settings.model, gravity);
+            &with_terms
+        } else {
+            nominal
+        };
         let inputs = PerSide::try_from_fn(|side| {
             if dataset.arm(side).is_measured() {
                 arm_input(dataset, nominal, side, &settings)
@@ -542,7 +558,8 @@ impl CalibrationRun {
     fn implausible_arm(&self, side: Side, arm: &ArmModel) -> Option<String> {
         let now = arm.to_vector();
         let nominal = self.nominal.arm(side).to_vector();
-        (0..now.len().min(nominal.len())).find_map(|k| {
+        // The geometry and reflectors (the error terms have no nominal value to stray from).
+        (0..arm.error_offset().min(nominal.len())).find_map(|k| {
             let moved = (now[k] - nominal[k]).abs();
             let (limit, unit) = if arm.param_is_angle(k) {
                 (super::DIVERGED_ANGLE_RAD, "rad")

@@ -50,10 +50,27 @@ pub fn calibrated_urdf(
             "the {side} arm's parameter `{name}` is not finite"
         )));
     }
-    match robot.model_form() {
-        ModelForm::Dh => dh::calibrated_dh_urdf(robot, model),
-        ModelForm::Chain => patch::calibrated_chain_urdf(robot, model),
+    // A URDF holds geometry only: the joints' origins and the reflectors. The errors beyond it
+    // (compliances, lumped masses, harmonics) stay in the parameter file, and the file says so.
+    let terms = model.error_terms();
+    let geometric = model.geometric();
+    let text = match robot.model_form() {
+        ModelForm::Dh => dh::calibrated_dh_urdf(robot, &geometric),
+        ModelForm::Chain => patch::calibrated_chain_urdf(robot, &geometric),
+    }?;
+    if terms.is_geometric() {
+        return Ok(text);
     }
+    let note = format!(
+        "<!-- dualcal: the calibration's `{}` model also has errors beyond geometry (joint compliances, \
+         lumped masses, harmonics); a URDF cannot hold them: this file is its geometry only, the \
+         parameter file has the whole model. -->\n",
+        terms.name()
+    );
+    Ok(match text.find("<!-- Calibrated by dualcal") {
+        Some(at) => format!("{}{note}{}", &text[..at], &text[at..]),
+        None => format!("{note}{text}"),
+    })
 }
 
 #[cfg(test)]

@@ -1,23 +1,28 @@
 #!/usr/bin/env bash
 # DLR's Agile Justin, calibrated with dualcal commands (issue 20; docs/real-data.md).
 #
-#   tools/real-data/dlr-justin.sh RAW_CSV OUT [--model DH_FILE]
+#   tools/real-data/dlr-justin.sh RAW_CSV OUT [--model MODEL] [--robot DH_FILE]
+#
+# MODEL: the model identified with the geometry (`dualcal calibrate --model`: geometric, the default;
+# elastic-axis, elastic, harmonic, full — issue 21). DH_FILE: the robot (default dlr-justin.dh.toml).
 #
 # RAW_CSV: DLR's dataset/measurements.csv (dlr-alr/dlr-elastic-calibration at commit b74d13b; never
 # committed here). OUT gets:
 #   dataset/               the imported dualcal-dataset/1 (first 400 rows calibrate, last 100 verify)
 #   params-nominal.json    the camera frame and the marker points fitted, the kinematics nominal
-#   params.json            the geometric calibration (--method position: both arms, the shared torso
+#   params-geometric.json  the geometric calibration (--method position: both arms, the shared torso
 #                          once, one camera frame)
-#   calibrated.urdf        the calibrated robot (markers as reflector links)
+#   params.json            the calibration with MODEL (the same file as params-geometric.json's
+#                          content for the geometric model)
+#   calibrated.urdf        the calibrated robot's geometry (markers as reflector links)
 #   evaluate-ver.json      `dualcal evaluate --json` of params.json on the verification rows
-#   evaluate-ver-nominal.json, absolute-ver.csv, absolute-ver-nominal.csv (every marker's error)
+#   evaluate-ver-nominal.json, evaluate-ver-geometric.json, absolute-ver*.csv (every marker's error)
 # and prints the table. DUALCAL names the binary (default: `dualcal` on PATH, else the release build
 # of this checkout, built if needed).
 set -euo pipefail
 
 usage() {
-    echo "usage: $0 RAW_CSV OUT [--model DH_FILE]" >&2
+    echo "usage: $0 RAW_CSV OUT [--model MODEL] [--robot DH_FILE]" >&2
     exit 2
 }
 [ $# -ge 2 ] || usage
@@ -25,9 +30,15 @@ raw=$1
 out=$2
 shift 2
 here=$(cd "$(dirname "$0")" && pwd)
-model="$here/dlr-justin.dh.toml"
+robot="$here/dlr-justin.dh.toml"
+model=geometric
 while [ $# -gt 0 ]; do
     case $1 in
+    --robot)
+        [ $# -ge 2 ] || usage
+        robot=$2
+        shift 2
+        ;;
     --model)
         [ $# -ge 2 ] || usage
         model=$2
@@ -37,7 +48,7 @@ while [ $# -gt 0 ]; do
     esac
 done
 [ -f "$raw" ] || { echo "$raw: no such file" >&2; exit 2; }
-[ -f "$model" ] || { echo "$model: no such file" >&2; exit 2; }
+[ -f "$robot" ] || { echo "$robot: no such file" >&2; exit 2; }
 
 if [ -n "${DUALCAL:-}" ]; then
     dualcal=$DUALCAL
@@ -53,7 +64,7 @@ mkdir -p "$out"
 # Row 0 of the markers matrix is the right hand, row 1 the left (tools/real-data/README.md); the
 # 19 values are torso 3, right 7, left 7, head 2; the passive torso joint, -(tilt 1 + tilt 2), is the
 # robot file's coupling (no column).
-"$dualcal" import --robot "$model" \
+"$dualcal" import --robot "$robot" \
     --left-points "$raw" --right-points "$raw" \
     --left-columns "id=1,q=joints[0-2],q=joints[10-16],m.x=markers[1][0],m.y=markers[1][1],m.z=markers[1][2]" \
     --right-columns "id=1,q=joints[0-2],q=joints[3-9],m.x=markers[0][0],m.y=markers[0][1],m.z=markers[0][2]" \
@@ -66,15 +77,22 @@ mkdir -p "$out"
     --out "$out/params-nominal.json" >"$out/calibrate-nominal.log" 2>&1
 # Geometric calibration: every identifiable joint-origin correction, the torso once, one camera frame.
 "$dualcal" calibrate "$out/dataset" --method position --quiet \
-    --out "$out/params.json" --urdf "$out/calibrated.urdf" >"$out/calibrate.log" 2>&1
+    --out "$out/params-geometric.json" --urdf "$out/calibrated.urdf" >"$out/calibrate-geometric.log" 2>&1
+# The chosen model, identified with the geometry (the same fit for the geometric model).
+if [ "$model" = geometric ]; then
+    cp "$out/params-geometric.json" "$out/params.json"
+    cp "$out/calibrate-geometric.log" "$out/calibrate.log"
+else
+    "$dualcal" calibrate "$out/dataset" --method position --model "$model" --quiet \
+        --out "$out/params.json" --urdf "$out/calibrated.urdf" >"$out/calibrate.log" 2>&1
+fi
 
-for which in nominal calibrated; do
-    params="$out/params.json"
-    suffix=""
-    if [ "$which" = nominal ]; then
-        params="$out/params-nominal.json"
-        suffix="-nominal"
-    fi
+for which in nominal geometric model; do
+    case $which in
+    nominal) params="$out/params-nominal.json" suffix="-nominal" ;;
+    geometric) params="$out/params-geometric.json" suffix="-geometric" ;;
+    model) params="$out/params.json" suffix="" ;;
+    esac
     "$dualcal" evaluate "$out/dataset" --params "$params" --split ver --json \
         --absolute-csv "$out/absolute-ver$suffix.csv" >"$out/evaluate-ver$suffix.json"
 done
@@ -87,9 +105,12 @@ row() { # label, csv
 echo "DLR Agile Justin, last 100 rows (verification), marker position error in the camera frame, mm"
 printf "%-44s %8s %8s %8s %6s\n" "model" "mean" "RMS" "max" "points"
 row "nominal (camera frame and markers fitted)" "$out/absolute-ver-nominal.csv"
-row "geometric calibration (--method position)" "$out/absolute-ver.csv"
+row "geometric calibration (--method position)" "$out/absolute-ver-geometric.csv"
+if [ "$model" != geometric ]; then
+    row "$model model (--method position --model $model)" "$out/absolute-ver.csv"
+fi
 echo
-echo "histogram (2 mm bins): nominal | calibrated"
+echo "histogram (2 mm bins): nominal | $model"
 awk -F, 'FNR == 1 { f++; next } { b = int($4 / 2); if (b > 30) b = 30; c[f, b]++; if (b > top) top = b }
     END { for (b = 0; b <= top; b++) {
         lo = 2 * b; label = (b == 30) ? sprintf(">= %2d", lo) : sprintf("%2d-%2d", lo, lo + 2);

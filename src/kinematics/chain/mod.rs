@@ -42,7 +42,7 @@
 
 mod build;
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;
 
 use super::{ArmJacobians, REFLECTOR_NAMES, ReflectorFk};
 pub(crate) use build::finite_pose;

@@ -1,0 +1,582 @@
+//! Errors no geometry explains: joints that give under gravity, and gears that do not turn exactly as
+//! commanded (issue 21). Both are modelled as configuration-dependent increments of the arm's own
+//! geometric parameters, so every step-1 method identifies them jointly with the geometry and the
+//! Jacobians stay exact.
+//!
+//! **Joint elasticity.** A revolute joint `j` deflects about its axis by `δ = κ·τ`, `τ` the gravity
+//! torque about that axis of everything beyond the joint and `κ` its compliance (µrad/(N·m)); with
+//! [`ErrorTerms::bending`] it also deflects about the two axes across it (a chain joint's aligned `x`,
+//! `y`; a DH row's α axis `x_j`, as DLR's model of Agile Justin bends) with compliances of their own.
+//! The deflection about the axis is added to the joint's zero offset (`rz`, DH `θ`), the bending to
+//! `rx`, `ry` (DH `α`): the arm at that configuration is the geometric model with those parameters
+//! moved.
+//!
+//! The torque is that of **lumped masses**, one per link: the link after movable joint `k` carries a
+//! mass `m_k` (kg) whose first moment about the next joint frame's origin is `s_k = m_k·c_k`
+//! (kg·mm, in that frame). For a hinge with pivot `p` and unit axis `e`, gravity `g·ĝ`:
+//!
+//! ```text
+//! τ = g/1000 · Σ_{k ≥ j} [ m_k (o_{k+1} − p)·(ĝ × e) + s_k·(R_{k+1}ᵀ (ĝ × e)) ]      (N·m)
+//! ```
+//!
+//! (`o_{k+1}`, `R_{k+1}` the frame after link k: the next joint's, or the tip). This is a
+//! **mass-free** form: a robot given only as a DH table (DLR's Justin) has no masses, and only the
+//! products `κ·m`, `κ·s` reach the data. The masses are **held** at 1 kg per link at the next joint's
+//! origin (`s = 0`) and each hinge's compliance is identified: a linear parameter, identifiable from
+//! the first configuration on, zero at the start (the start model is the geometric one exactly). The
+//! compliances are therefore those *of this mass distribution*: compare them between joints of one
+//! calibration, not with a datasheet. Identifying the masses too (`κ` and `m, s` bilinear; the mass
+//! scale is a gauge) was tried on DLR's Agile Justin and left alone: from compliances near zero the
+//! masses' columns vanish, and Levenberg–Marquardt walked a joint origin 100 mm off while the cost
+//! fell (docs/real-data.md); a different held distribution (mass ∝ link length, at the link's middle)
+//! changed the verification mean by 0.02 mm there. The masses stay parameters of the file, so a
+//! robot's own (URDF inertials) can be given later.
+//!
+//! The torques are computed on the **reference geometry** (the nominal kinematics the error model was
+//! attached to), not on the calibrated one: the two differ by millimetres, which changes a torque by
+//! well under 0.1 %; in exchange the increments do not depend on the geometric parameters, so the
+//! geometric Jacobians at the moved parameters are exact and the error columns are the chain rule of
+//! them. The deflection's own effect on the torques (DLR iterates a fixed point) is of the order of the
+//! deflection, ~10⁻³ relative, and is not modelled.
+//!
+//! **Transmission errors.** With [`ErrorTerms::harmonics`] = 1 or 2, each revolute joint's angle is off
+//! by `c₁ cos θ + s₁ sin θ (+ c₂ cos 2θ + s₂ sin 2θ)` (rad), `θ` the joint's value (a mimic joint's
+//! own). A constant offset is the geometry's `rz`/`θ` and is not repeated. Motor-side harmonics (with a
+//! gear ratio) are not modelled.
+//!
+//! Prismatic joints carry neither (their links carry masses for the joints before them).
+
+use super::chain::PARAMS_PER_JOINT;
+#[cfg(test)]
+mod tests;
+use super::ArmKinematics;
+use super::dh::{self, DhRow, N_JOINTS};
+use nalgebra::{Isometry3, Vector3};
+use serde::{Deserialize, Serialize};
+use std::sync::Arc;
+
+/// Standard gravity, m/s².
+pub const STANDARD_GRAVITY_M_S2: f64 = 9.80665;
+/// The lumped mass of each link, kg, at the next joint's origin (its first moment 0): held.
+pub const START_MASS_KG: f64 = 1.0;
+
+/// Which non-geometric errors the model has (none: the paper's geometric model).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ErrorTerms {
+    /// Each revolute joint deflects about its axis under the gravity torque.
+    #[serde(default)]
+    pub elastic: bool,
+    /// … and about the two axes across it (DH: its α axis).
+    #[serde(default)]
+    pub bending: bool,
+    /// Harmonics of each revolute joint's angle: 0 (none), 1 or 2.
+    #[serde(default)]
+    pub harmonics: u8,
+}
+
+impl ErrorTerms {
+    /// The paper's geometric model.
+    pub const GEOMETRIC: ErrorTerms = ErrorTerms {
+        elastic: false,
+        bending: false,
+        harmonics: 0,
+    };
+
+    /// The named models, for the command line and the workbench: name, terms, description.
+    pub const NAMED: [(&'static str, ErrorTerms, &'static str); 5] = [
+        (
+            "geometric",
+            ErrorTerms::GEOMETRIC,
+            "joint origins and reflectors only (the paper's model)",
+        ),
+        (
+            "elastic-axis",
+            ErrorTerms {
+                elastic: true,
+                bending: false,
+                harmonics: 0,
+            },
+            "geometry + each joint giving about its axis under gravity (lumped masses)",
+        ),
+        (
+            "elastic",
+            ErrorTerms {
+                elastic: true,
+                bending: true,
+                harmonics: 0,
+            },
+            "geometry + each joint giving about its axis and across it under gravity",
+        ),
+        (
+            "harmonic",
+            ErrorTerms {
+                elastic: false,
+                bending: false,
+                harmonics: 2,
+            },
+            "geometry + first and second harmonics of each joint's angle",
+        ),
+        (
+            "full",
+            ErrorTerms {
+                elastic: true,
+                bending: true,
+                harmonics: 2,
+            },
+            "elastic and harmonic together",
+        ),
+    ];
+
+    pub fn is_geometric(&self) -> bool {
+        !self.elastic && !self.bending && self.harmonics == 0
+    }
+
+    /// The terms of a named model (`geometric`, `elastic-axis`, `elastic`, `harmonic`, `full`).
+    pub fn from_name(name: &str) -> Result<ErrorTerms, String> {
+        Self::NAMED
+            .iter()
+            .find(|(n, ..)| n.eq_ignore_ascii_case(name.trim()))
+            .map(|&(_, t, _)| t)
+            .ok_or_else(|| {
+                format!(
+                    "unknown model `{name}`: expected one of {}",
+                    Self::NAMED.map(|(n, ..)| n).join(", ")
+                )
+            })
+    }
+
+    /// The model's name (one of [`ErrorTerms::NAMED`], or a description of another combination).
+    pub fn name(&self) -> String {
+        match Self::NAMED.iter().find(|(_, t, _)| t == self) {
+            Some((n, ..)) => (*n).to_string(),
+            None => format!(
+                "elastic {}, bending {}, harmonics {}",
+                self.elastic, self.bending, self.harmonics
+            ),
+        }
+    }
+
+    /// Deflections under gravity at all (about the axis or across it)?
+    pub fn has_elasticity(&self) -> bool {
+        self.elastic || self.bending
+    }
+}
+
+/// About which axis a hinge turns.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum HingeAxis {
+    /// The joint's own axis (the zero-offset slot).
+    Axis,
+    /// The chain joint's aligned x / y (slots `rx`, `ry`).
+    CrossX,
+    CrossY,
+    /// A DH row's α axis: `x` of the frame after the row, through its origin.
+    Alpha,
+}
+
+impl HingeAxis {
+    fn suffix(self) -> &'static str {
+        match self {
+            HingeAxis::Axis => "k_axis",
+            HingeAxis::CrossX => "k_x",
+            HingeAxis::CrossY => "k_y",
+            HingeAxis::Alpha => "k_alpha",
+        }
+    }
+}
+
+/// One compliance: a joint, the axis it gives about, and the geometric parameter it moves.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Hinge {
+    joint: usize,
+    axis: HingeAxis,
+    slot: usize,
+}
+
+/// The structure of one arm's non-geometric errors: which terms, gravity, the reference geometry, and
+/// the parameters' layout. The values live in [`JointErrors`].
+#[derive(Debug, PartialEq)]
+pub struct JointErrorModel {
+    pub terms: ErrorTerms,
+    /// Unit vector of gravity in the arm's model base frame.
+    pub gravity_in_base: Vector3<f64>,
+    /// The geometry the torques are computed on.
+    reference: ArmKinematics,
+    /// Movable joints' names (DH: `j1 … j7`), chain order.
+    joint_names: Vec<String>,
+    /// The revolute joints with harmonics.
+    harmonic_joints: Vec<usize>,
+    hinges: Vec<Hinge>,
+    /// Links carrying a lumped mass: one per movable joint (0 without elasticity).
+    links: usize,
+}
+
+/// One geometric parameter's increment: its index, the increment, and `(error parameter,
+/// ∂increment/∂it)` for every error parameter it depends on.
+pub type SlotIncrement = (usize, f64, Vec<(usize, f64)>);
+
+/// The increments of the geometric parameters at one configuration and their derivatives with respect
+/// to the error parameters.
+#[derive(Clone, Debug, Default)]
+pub struct Increments {
+    /// Geometric parameter index, increment, and `(error parameter, ∂increment/∂it)`.
+    pub slots: Vec<SlotIncrement>,
+}
+
+impl Increments {
+    fn add(&mut self, slot: usize, value: f64, row: Vec<(usize, f64)>) {
+        match self.slots.iter_mut().find(|(s, ..)| *s == slot) {
+            Some((_, v, r)) => {
+                *v += value;
+                r.extend(row);
+            }
+            None => self.slots.push((slot, value, row)),
+        }
+    }
+}
+
+impl JointErrorModel {
+    /// The error model of an arm whose geometry is `reference`, with `terms`, gravity along
+    /// `gravity_in_base` (any length; normalised; −z when zero or not finite).
+    pub fn new(
+        reference: &ArmKinematics,
+        terms: ErrorTerms,
+        gravity_in_base: Vector3<f64>,
+    ) -> Self {
+        let g = gravity_in_base
+            .try_normalize(1e-12)
+            .filter(|g| g.iter().all(|v| v.is_finite()))
+            .unwrap_or(-Vector3::z());
+        // (name, revolute, axis slot, cross slots) per movable joint.
+        let joints: Vec<(String, bool, usize)> = match reference {
+            ArmKinematics::Dh(_) => (0..N_JOINTS)
+                .map(|j| (format!("j{}", j + 1), true, 4 * j + 2))
+                .collect(),
+            ArmKinematics::Chain { chain, .. } => chain
+                .joints
+                .iter()
+                .enumerate()
+                .map(|(j, cj)| {
+                    (
+                        cj.name.clone(),
+                        !cj.kind.is_linear(),
+                        PARAMS_PER_JOINT * j + 5,
+                    )
+                })
+                .collect(),
+        };
+        let revolute: Vec<usize> = (0..joints.len()).filter(|&j| joints[j].1).collect();
+        let harmonic_joints = if terms.harmonics > 0 {
+            revolute.clone()
+        } else {
+            Vec::new()
+        };
+        let dh_form = matches!(reference, ArmKinematics::Dh(_));
+        let mut hinges = Vec::new();
+        for &j in &revolute {
+            let axis = joints[j].2;
+            if terms.elastic {
+                hinges.push(Hinge {
+                    joint: j,
+                    axis: HingeAxis::Axis,
+                    slot: axis,
+                });
+            }
+            if terms.bending {
+                if dh_form {
+                    hinges.push(Hinge {
+                        joint: j,
+                        axis: HingeAxis::Alpha,
+                        slot: 4 * j + 3,
+                    });
+                } else {
+                    hinges.push(Hinge {
+                        joint: j,
+                        axis: HingeAxis::CrossX,
+                        slot: axis - 2,
+                    });
+                    hinges.push(Hinge {
+                        joint: j,
+                        axis: HingeAxis::CrossY,
+                        slot: axis - 1,
+                    });
+                }
+            }
+        }
+        let links = if hinges.is_empty() { 0 } else { joints.len() };
+        Self {
+            terms,
+            gravity_in_base: g,
+            reference: reference.clone(),
+            joint_names: joints.into_iter().map(|j| j.0).collect(),
+            harmonic_joints,
+            hinges,
+            links,
+        }
+    }
+
+    fn harmonics_count(&self) -> usize {
+        2 * self.terms.harmonics as usize * self.harmonic_joints.len()
+    }
+
+    fn compliance_offset(&self) -> usize {
+        self.harmonics_count()
+    }
+
+    fn mass_offset(&self) -> usize {
+        self.compliance_offset() + self.hinges.len()
+    }
+
+    /// Number of error parameters.
+    pub fn param_count(&self) -> usize {
+        self.mass_offset() + 4 * self.links
+    }
+
+    /// The start values: no harmonics, zero compliances, 1 kg per link at the next joint's origin
+    /// (held): the start model is the geometric one exactly.
+    pub fn start_values(&self) -> Vec<f64> {
+        let mut v = vec![0.0; self.param_count()];
+        for k in 0..self.links {
+            v[self.mass_offset() + 4 * k] = START_MASS_KG;
+        }
+        v
+    }
+
+    /// Name of error parameter `i`: `<joint>.h1_cos` …, `<joint>.k_axis` …, `<link>.mass`,
+    /// `<link>.moment_x` … (a link named by the joint before it: `after_<joint>`).
+    pub fn param_name(&self, i: usize) -> String {
+        let h = self.harmonics_count();
+        if i < h {
+            let per = 2 * self.terms.harmonics as usize;
+            let joint = &self.joint_names[self.harmonic_joints[i / per]];
+            let r = i % per;
+            let kind = if r.is_multiple_of(2) { "cos" } else { "sin" };
+            return format!("{joint}.h{}_{kind}", r / 2 + 1);
+        }
+        if i < self.mass_offset() {
+            let hinge = self.hinges[i - h];
+            return format!("{}.{}", self.joint_names[hinge.joint], hinge.axis.suffix());
+        }
+        let m = i - self.mass_offset();
+        let link = format!("after_{}", self.joint_names[m / 4]);
+        match m % 4 {
+            0 => format!("{link}.mass"),
+            c => format!("{link}.moment_{}", ["x", "y", "z"][c - 1]),
+        }
+    }
+
+    /// Unit of error parameter `i`.
+    pub fn param_unit(&self, i: usize) -> &'static str {
+        if i < self.harmonics_count() {
+            "rad"
+        } else if i < self.mass_offset() {
+            "µrad/(N·m)"
+        } else if (i - self.mass_offset()).is_multiple_of(4) {
+            "kg"
+        } else {
+            "kg·mm"
+        }
+    }
+
+    /// Is error parameter `i` an angle (a harmonic amplitude)?
+    pub fn param_is_angle(&self, i: usize) -> bool {
+        i < self.harmonics_count()
+    }
+
+    /// Is error parameter `i` a lumped mass or moment (known only up to the common mass scale)?
+    pub fn param_is_mass(&self, i: usize) -> bool {
+        i >= self.mass_offset() && i < self.param_count()
+    }
+
+    /// Is error parameter `i` a compliance?
+    pub fn param_is_compliance(&self, i: usize) -> bool {
+        i >= self.compliance_offset() && i < self.mass_offset()
+    }
+
+    /// The identifiability analysis' order of the error parameters: harmonics, then compliances (from
+    /// the base). The lumped masses are held (not identified; see the module documentation).
+    pub fn preference_order(&self) -> Vec<usize> {
+        (0..self.mass_offset()).collect()
+    }
+
+    /// Why error parameter `i` may be held.
+    pub fn physical_reason(&self, i: usize) -> Option<String> {
+        self.param_is_mass(i)
+            .then(|| "the lumped masses are held (only compliance × mass shows in the data)".into())
+    }
+
+    /// Joint `j`'s value at `q`.
+    fn joint_value(&self, j: usize, q: &[f64]) -> f64 {
+        match &self.reference {
+            ArmKinematics::Dh(_) => q.get(j).copied().unwrap_or(0.0),
+            ArmKinematics::Chain { chain, .. } => chain.joints[j].drive.value(q),
+        }
+    }
+
+    /// The reference geometry's frames at `q`: one per movable joint (before its motion), then the
+    /// tip.
+    fn reference_frames(&self, q: &[f64]) -> Vec<Isometry3<f64>> {
+        match &self.reference {
+            ArmKinematics::Dh(dh) => dh::frames(dh, q).to_vec(),
+            ArmKinematics::Chain { chain, corrections } => chain.joint_frames(corrections, q),
+        }
+    }
+
+    /// The gravity torque of hinge `h` at the reference frames, N·m, and its derivatives with respect to
+    /// the masses (error parameter index, ∂τ/∂it).
+    fn torque(
+        &self,
+        h: &Hinge,
+        frames: &[Isometry3<f64>],
+        values: &[f64],
+    ) -> (f64, Vec<(usize, f64)>) {
+        let (pivot, axis) = match h.axis {
+            HingeAxis::Axis => (frames[h.joint], Vector3::z()),
+            HingeAxis::CrossX => (frames[h.joint], Vector3::x()),
+            HingeAxis::CrossY => (frames[h.joint], Vector3::y()),
+            HingeAxis::Alpha => (frames[h.joint + 1], Vector3::x()),
+        };
+        let p = pivot.translation.vector;
+        let e = pivot.rotation * axis;
+        let gxe = self.gravity_in_base.cross(&e) * (STANDARD_GRAVITY_M_S2 / 1000.0);
+        let off = self.mass_offset();
+        let mut tau = 0.0;
+        let mut row = Vec::with_capacity(4 * (self.links - h.joint));
+        for k in h.joint..self.links {
+            let f = &frames[k + 1];
+            let dm = (f.translation.vector - p).dot(&gxe);
+            let ds = f.rotation.inverse_transform_vector(&gxe);
+            let i = off + 4 * k;
+            tau +=
+                values[i] * dm + values[i + 1] * ds.x + values[i + 2] * ds.y + values[i + 3] * ds.z;
+            row.push((i, dm));
+            row.extend((0..3).map(|c| (i + 1 + c, ds[c])));
+        }
+        (tau, row)
+    }
+
+    /// The geometric parameters' increments at `q` and their derivatives with respect to `values`.
+    pub fn increments(&self, values: &[f64], q: &[f64]) -> Increments {
+        let mut out = Increments::default();
+        let per = 2 * self.terms.harmonics as usize;
+        for (n, &j) in self.harmonic_joints.iter().enumerate() {
+            let theta = self.joint_value(j, q);
+            let first = per * n;
+            let (mut value, mut row) = (0.0, Vec::with_capacity(per));
+            for order in 0..self.terms.harmonics as usize {
+                let (s, c) = ((order + 1) as f64 * theta).sin_cos();
+                let i = first + 2 * order;
+                value += values[i] * c + values[i + 1] * s;
+                row.push((i, c));
+                row.push((i + 1, s));
+            }
+            let slot = self.axis_slot(j);
+            out.add(slot, value, row);
+        }
+        if !self.hinges.is_empty() {
+            let frames = self.reference_frames(q);
+            let c0 = self.compliance_offset();
+            for (n, h) in self.hinges.iter().enumerate() {
+                let (tau, dtau) = self.torque(h, &frames, values);
+                let kappa = values[c0 + n] * 1e-6;
+                let mut row: Vec<(usize, f64)> =
+                    dtau.into_iter().map(|(i, d)| (i, kappa * d)).collect();
+                row.push((c0 + n, tau * 1e-6));
+                out.add(h.slot, kappa * tau, row);
+            }
+        }
+        out
+    }
+
+    fn axis_slot(&self, j: usize) -> usize {
+        match &self.reference {
+            ArmKinematics::Dh(_) => 4 * j + 2,
+            ArmKinematics::Chain { .. } => PARAMS_PER_JOINT * j + 5,
+        }
+    }
+
+    /// The model with another reference geometry of the same form (a parameter file read for a robot).
+    pub fn with_reference(&self, reference: &ArmKinematics) -> Self {
+        Self::new(reference, self.terms, self.gravity_in_base)
+    }
+
+    /// The names of the movable joints the model was built for.
+    pub fn joint_names(&self) -> &[String] {
+        &self.joint_names
+    }
+}
+
+/// One arm's non-geometric errors: the model (none: geometric) and its parameter values.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct JointErrors {
+    pub model: Option<Arc<JointErrorModel>>,
+    pub values: Vec<f64>,
+}
+
+impl JointErrors {
+    /// The errors of `terms` on `reference` at their start values (none for the geometric model).
+    pub fn new(
+        reference: &ArmKinematics,
+        terms: ErrorTerms,
+        gravity_in_base: Vector3<f64>,
+    ) -> Self {
+        if terms.is_geometric() {
+            return Self::default();
+        }
+        let model = JointErrorModel::new(reference, terms, gravity_in_base);
+        Self {
+            values: model.start_values(),
+            model: Some(Arc::new(model)),
+        }
+    }
+
+    pub fn count(&self) -> usize {
+        self.values.len()
+    }
+
+    pub fn is_geometric(&self) -> bool {
+        self.model.is_none()
+    }
+
+    /// The terms (geometric when there is no model).
+    pub fn terms(&self) -> ErrorTerms {
+        self.model
+            .as_ref()
+            .map_or(ErrorTerms::GEOMETRIC, |m| m.terms)
+    }
+
+    /// The geometric parameters' increments at `q` (none for the geometric model).
+    pub fn increments(&self, q: &[f64]) -> Option<Increments> {
+        self.model.as_ref().map(|m| m.increments(&self.values, q))
+    }
+}
+
+/// `kinematics` with the geometric parameters moved by `inc`.
+pub fn moved_kinematics(kinematics: &ArmKinematics, inc: &Increments) -> ArmKinematics {
+    match kinematics {
+        ArmKinematics::Dh(rows) => {
+            let mut rows: [DhRow; N_JOINTS] = *rows;
+            for &(slot, v, _) in &inc.slots {
+                let row = &mut rows[slot / 4];
+                match slot % 4 {
+                    0 => row.a_mm += v,
+                    1 => row.d_mm += v,
+                    2 => row.theta_rad += v,
+                    _ => row.alpha_rad += v,
+                }
+            }
+            ArmKinematics::Dh(rows)
+        }
+        ArmKinematics::Chain { chain, corrections } => {
+            let mut corrections = corrections.clone();
+            for &(slot, v, _) in &inc.slots {
+                corrections[slot / PARAMS_PER_JOINT][slot % PARAMS_PER_JOINT] += v;
+            }
+            ArmKinematics::Chain {
+                chain: Arc::clone(chain),
+                corrections,
+            }
+        }
+    }
+}

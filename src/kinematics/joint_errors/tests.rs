@@ -1,0 +1,135 @@
+//! The error model's Jacobian columns against central differences (DH and chain forms, every term),
+//! and its parameters through the parameter vector.
+
+use super::*;
+use crate::kinematics::chain::tests::{random_arm, random_q};
+use crate::kinematics::tests::{check_arm_jacobian, stacked_jacobian};
+use crate::kinematics::{ArmModel, SerialChain};
+use crate::test_robots::{lift_mimic_urdf, yumi_like_urdf};
+use nalgebra::DVector;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+const FULL: ErrorTerms = ErrorTerms {
+    elastic: true,
+    bending: true,
+    harmonics: 2,
+};
+
+/// `model` with random error values of a realistic size: compliances 5–80 µrad/(N·m), masses 0.5–4 kg,
+/// moments within ±400 kg·mm, harmonics within ±1 mrad.
+fn with_random_errors(model: ArmModel, rng: &mut ChaCha8Rng) -> ArmModel {
+    let model = model.with_error_terms(FULL, Vector3::new(0.1, -0.2, -1.0));
+    let off = model.error_offset();
+    let m = model.errors.model.clone().unwrap();
+    let mut v = model.to_vector();
+    for i in 0..m.param_count() {
+        v[off + i] = if m.param_is_compliance(i) {
+            rng.random_range(5.0..80.0)
+        } else if m.param_unit(i) == "kg" {
+            rng.random_range(0.5..4.0)
+        } else if m.param_is_mass(i) {
+            rng.random_range(-400.0..400.0)
+        } else {
+            rng.random_range(-1e-3..1e-3)
+        };
+    }
+    model.with_vector(&v)
+}
+
+#[test]
+fn dh_error_columns_match_central_differences() {
+    let mut rng = ChaCha8Rng::seed_from_u64(21);
+    for _ in 0..5 {
+        let model = with_random_errors(crate::kinematics::tests::perturbed(&mut rng), &mut rng);
+        assert_eq!(model.param_count(), 28 + 9 + 7 * 4 + 14 + 4 * 7);
+        let q = crate::kinematics::tests::random_q(&mut rng);
+        if let Err(e) = check_arm_jacobian(&model, &q, &stacked_jacobian(&model, &q)) {
+            panic!("q {q:?}: {e}");
+        }
+    }
+}
+
+#[test]
+fn chain_error_columns_match_central_differences() {
+    let mut rng = ChaCha8Rng::seed_from_u64(22);
+    for (text, base, tip) in [
+        (yumi_like_urdf(), "yumi_body", "yumi_link_7_l"),
+        (lift_mimic_urdf(), "torso", "left_flange"),
+    ] {
+        let robot = urdf_rs::read_from_string(&text).unwrap();
+        let chain = Arc::new(SerialChain::from_urdf(&robot, base, tip).unwrap());
+        for _ in 0..4 {
+            let model = with_random_errors(random_arm(&chain, &mut rng, 1.0, 0.01), &mut rng);
+            let q = random_q(&chain, &mut rng);
+            if let Err(e) = check_arm_jacobian(&model, &q, &stacked_jacobian(&model, &q)) {
+                panic!("{base} → {tip}, q {q:?}: {e}");
+            }
+        }
+    }
+}
+
+#[test]
+fn start_model_is_the_geometric_model() {
+    let mut rng = ChaCha8Rng::seed_from_u64(23);
+    let geometric = crate::kinematics::tests::perturbed(&mut rng);
+    let start = geometric.clone().with_error_terms(FULL, -Vector3::z());
+    for _ in 0..5 {
+        let q = crate::kinematics::tests::random_q(&mut rng);
+        assert_eq!(
+            start.reflector_fk(&q).points_mm,
+            geometric.reflector_fk(&q).points_mm
+        );
+    }
+    // Names are unique and the vector round-trips.
+    let names: std::collections::HashSet<String> = (0..start.param_count())
+        .map(|k| start.param_name(k))
+        .collect();
+    assert_eq!(names.len(), start.param_count());
+    let v = DVector::from_fn(start.param_count(), |k, _| k as f64 * 0.1);
+    assert_eq!(start.with_vector(&v).to_vector(), v);
+}
+
+#[test]
+fn an_axis_deflection_is_the_gravity_torque_times_the_compliance() {
+    // One joint's arm: a 2 kg mass 500 mm out along x of the tip, the joint axis horizontal (y):
+    // τ = 2 kg · 9.80665 m/s² · 0.5 m about the axis; with 100 µrad/(N·m) the joint gives 0.98 mrad.
+    let urdf = r#"<robot name="one"><link name="base"/><link name="tip"/>
+        <joint name="j" type="revolute"><parent link="base"/><child link="tip"/>
+        <origin xyz="0 0 0" rpy="0 0 0"/><axis xyz="0 1 0"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+        </robot>"#;
+    let robot = urdf_rs::read_from_string(urdf).unwrap();
+    let chain = Arc::new(SerialChain::from_urdf(&robot, "base", "tip").unwrap());
+    let terms = ErrorTerms::from_name("elastic-axis").unwrap();
+    let model = ArmModel::nominal_chain(chain, [Vector3::new(500.0, 0.0, 0.0)])
+        .with_error_terms(terms, -Vector3::z());
+    let mut v = model.to_vector();
+    let off = model.error_offset();
+    let name = |k: usize| model.param_name(k);
+    let find = |n: &str| (off..model.param_count()).find(|&k| name(k) == n).unwrap();
+    v[find("j.k_axis")] = 100.0;
+    v[find("after_j.mass")] = 2.0;
+    v[find("after_j.moment_x")] = 2.0 * 500.0;
+    let model = model.with_vector(&v);
+    let inc = model.errors.increments(&[0.0]).unwrap();
+    let expected = 100e-6 * 2.0 * STANDARD_GRAVITY_M_S2 * 0.5;
+    assert_eq!(inc.slots.len(), 1);
+    let (_, value, _) = &inc.slots[0];
+    // The mass on +x under −z gravity turns the arm about +y positively (x → −z).
+    assert!(
+        (value.abs() - expected).abs() < 1e-12,
+        "{value} vs {expected}"
+    );
+    let p = model.reflector_fk(&[0.0]).points_mm[0];
+    assert!((p.z.abs() - 500.0 * expected.sin()).abs() < 1e-9, "{p:?}");
+    assert!(p.z < 0.0, "the tip sags: {p:?}");
+}
+
+#[test]
+fn model_names_parse() {
+    for (name, terms, _) in ErrorTerms::NAMED {
+        assert_eq!(ErrorTerms::from_name(name).unwrap(), terms);
+        assert_eq!(terms.name(), name);
+    }
+    assert!(ErrorTerms::from_name("elastics").is_err());
+}
