@@ -172,5 +172,37 @@ fn identifiability(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bench);
+/// Issue 21's models on the paper's protocol with the robustness study's joint errors (2 × 120
+/// calibration configurations, the built-in IRB 14000, minimax): the full model's calibration against
+/// the geometric one's (target: within 3×).
+fn models(c: &mut Criterion) {
+    let robot = RobotDescription::builtin_irb14000();
+    let opts = dualcal::simulate::SimOptions {
+        joint_error: Some(dualcal::simulate::unmodelled_joint_errors()),
+        ..paper_options(7, 220, 120)
+    };
+    let sim = simulate_with_robot(&opts, &robot).expect("simulation");
+    let ds = sim.dataset.with_cal_subset(120);
+    let mut group = c.benchmark_group("models_120_configs_per_arm");
+    group.sample_size(10);
+    for (name, terms, _) in dualcal::kinematics::ErrorTerms::NAMED {
+        let settings = CalibrationSettings {
+            model: terms,
+            gravity_in_left_base: Some(robot.gravity_in_left_base(None)),
+            ..Default::default()
+        };
+        group.bench_function(name, |b| {
+            b.iter(|| {
+                let r = Calibrator::new(black_box(&ds), &sim.nominal)
+                    .settings(settings.clone())
+                    .run()
+                    .expect("calibration");
+                black_box(r.calibrated)
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench, models);
 criterion_main!(benches);
