@@ -6,7 +6,7 @@
 //! The noise floor is what the *true* full model gives on the verification configurations: the true
 //! geometry with the simulator's compliance and gear errors written as the error model's parameters
 //! (the simulator's torque proxy is one unit mass at each frame origin downstream of the joint — the
-//! error model's held lumped masses — so `κ = c·1000/g` µrad/(N·m) for `c` mrad/m, and
+//! error model's held lumped masses — so `κ = c/g` mrad/(N·m) for `c` mrad/m, and
 //! `A sin(2q + φ) = A sin φ cos 2q + A cos φ sin 2q`). The test prints every figure.
 
 mod common;
@@ -52,7 +52,7 @@ fn true_full_model(sim: &SimOutput, gravity_in_left_base: Vector3<f64>) -> DualA
             let joint = |n: &str| n[1..2].parse::<usize>().unwrap() - 1;
             let phase = |n: &str| sim.joint_error_phases_rad[side][joint(n)];
             v[k] = if name.ends_with(".k_axis") {
-                j.compliance_mrad_per_m * 1000.0 / STANDARD_GRAVITY_M_S2
+                j.compliance_mrad_per_m / STANDARD_GRAVITY_M_S2
             } else if name.ends_with(".h2_cos") {
                 j.periodic_amplitude_mrad * 1e-3 * phase(&name).sin()
             } else if name.ends_with(".h2_sin") {

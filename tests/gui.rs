@@ -1930,3 +1930,98 @@ fn the_method_follows_the_data_until_picked() {
     });
     assert_eq!(harness.state().settings().method, Method::Minimax);
 }
+
+/// Issue 21 in the workbench: the Model picker calibrates beyond geometry; the Accuracy tab shows the
+/// geometric calibration of the same data between nominal and the full model; the identified
+/// compliances and harmonics are listed with their σ; the exported parameter file carries them.
+#[test]
+fn the_model_picker_calibrates_beyond_geometry_beside_the_geometric_fit() {
+    use dualcal::dataset::Split;
+    use dualcal::kinematics::ErrorTerms;
+    let robot = dualcal::robot::RobotDescription::builtin_irb14000();
+    let opts = dualcal::simulate::SimOptions {
+        joint_error: Some(dualcal::simulate::unmodelled_joint_errors()),
+        ..dualcal::simulate::paper_options(5, 220, 120)
+    };
+    let sim = dualcal::simulate::simulate_with_robot(&opts, &robot).expect("simulation");
+    let dir = tempfile::tempdir().unwrap();
+    dualcal::dataset::save(&sim.dataset, dir.path(), dualcal::dataset::Units::MM_DEG).unwrap();
+    let mut harness = open_at(dir.path());
+    pick_in_combo(&mut harness, "Model", "full model");
+    assert_eq!(
+        harness.state_mut().settings_mut().model,
+        ErrorTerms::from_name("full").unwrap()
+    );
+    calibrate(&mut harness);
+    let app = harness.state();
+    assert!(app.errors().is_empty(), "{:?}", app.errors());
+    let session = app.session().unwrap();
+    let c = session.calibrated.as_ref().expect("calibrated");
+    assert_eq!(c.result.calibrated.error_terms().name(), "full");
+    // The geometric reference is the geometric calibration of the same data: far above the full
+    // model on this data (unmodelled joint errors for it).
+    let geometric = session.geometric.as_ref().expect("the geometric reference");
+    let rms = |a: &dualcal::analysis::Analysis| {
+        a.figures(Split::Ver)
+            .and_then(|f| f.report.as_ref())
+            .map(|r| r.relative_left.unwrap().pos_rms_mm)
+            .unwrap()
+    };
+    let (g, f) = (rms(geometric), rms(&c.analysis));
+    eprintln!("workbench, relative left RMS on verification: geometric {g:.4} mm, full {f:.4} mm");
+    assert!(g > 10.0 * f, "geometric {g} vs full {f}");
+    harness.get_by_label("Accuracy").click();
+    harness.run_steps(3);
+    shown(&harness, "geometric");
+    // The robot section lists the identified compliances and harmonics with their σ.
+    harness.get_by_label("left joints and parameters").click();
+    harness.run_steps(2);
+    harness
+        .get_by_label("beyond geometry: the `full` model's compliances and harmonics")
+        .click();
+    harness.run_steps(2);
+    let c = harness
+        .state()
+        .session()
+        .unwrap()
+        .calibrated
+        .as_ref()
+        .unwrap();
+    let u = c
+        .uncertainty
+        .left
+        .as_ref()
+        .expect("the left arm's uncertainty");
+    let sigma = u
+        .parameters
+        .iter()
+        .find(|p| p.name == "j2.k_axis")
+        .expect("j2's compliance identified");
+    assert_eq!(sigma.unit, "mrad/(N·m)");
+    shown(&harness, &format!("± {:.4} mrad/(N·m)", sigma.sigma));
+    shown(&harness, "j2.h2_cos");
+    let bytes = dualcal::app::export::Export::Params
+        .contents(harness.state().session().unwrap())
+        .expect("a calibration to export")
+        .expect("the parameter file");
+    let file: serde_json::Value = serde_json::from_slice(&bytes).unwrap();
+    assert_eq!(file["arms"]["left"]["errors"]["model"], "full");
+    assert!(file["arms"]["left"]["errors"]["parameters"]["j2.k_axis"].is_number());
+    // Back to the geometric model: no reference column, no errors in the result.
+    harness.get_by_label("left joints and parameters").click();
+    harness.run_steps(2);
+    harness.state_mut().settings_mut().model = ErrorTerms::GEOMETRIC;
+    calibrate(&mut harness);
+    let session = harness.state().session().unwrap();
+    assert!(session.geometric.is_none());
+    assert!(
+        session
+            .calibrated
+            .as_ref()
+            .unwrap()
+            .result
+            .calibrated
+            .error_terms()
+            .is_geometric()
+    );
+}

@@ -177,7 +177,7 @@ impl ComparisonWork {
             nominal: session.nominal.model.clone(),
             body_from_left_base: session.body_from_left_base(),
             entries,
-            common,
+            common: session.with_gravity(common),
             nominal_done: false,
             next: 0,
             run: None,

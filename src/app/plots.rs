@@ -199,21 +199,29 @@ pub fn live_marker_ui(ui: &mut egui::Ui, after: Option<After<'_>>) {
 /// below the numbers.
 pub fn accuracy_ui(ui: &mut egui::Ui, session: &Session, indicator: Indicator, split: Split) {
     let after = session.after();
-    let figures = [Some(&session.nominal), after.map(|a| a.analysis())]
-        .map(|a| a.and_then(|a| a.figures(split)));
-    let names = [
-        "nominal".to_string(),
-        after.map_or_else(|| "calibrated".into(), After::short_name),
-    ];
-    let colors = [
-        NOMINAL_COLOR,
-        if matches!(after, Some(After::Live(_))) {
-            LIVE_COLOR
-        } else {
-            CALIBRATED_COLOR
-        },
-    ];
-    let histograms: Vec<(&str, &Histogram, Color32)> = (0..2)
+    // Beside a calibration with errors beyond geometry, the geometric calibration of the same data
+    // between the two ("geometric" against "calibrated"/"iteration k": the full model).
+    let geometric = session.geometric.as_ref().filter(|_| after.is_some());
+    let mut analyses = vec![Some(&session.nominal)];
+    let mut names = vec!["nominal".to_string()];
+    let mut colors = vec![NOMINAL_COLOR];
+    if let Some(g) = geometric {
+        analyses.push(Some(g));
+        names.push("geometric".into());
+        colors.push(GEOMETRIC_COLOR);
+    }
+    analyses.push(after.map(|a| a.analysis()));
+    names.push(after.map_or_else(|| "calibrated".into(), After::short_name));
+    colors.push(if matches!(after, Some(After::Live(_))) {
+        LIVE_COLOR
+    } else {
+        CALIBRATED_COLOR
+    });
+    let figures: Vec<Option<&SplitFigures>> = analyses
+        .iter()
+        .map(|a| a.and_then(|a| a.figures(split)))
+        .collect();
+    let histograms: Vec<(&str, &Histogram, Color32)> = (0..figures.len())
         .filter_map(|k| {
             let h = figures[k].and_then(|f| f.histogram(indicator))?;
             Some((names[k].as_str(), h, colors[k]))
@@ -226,7 +234,7 @@ pub fn accuracy_ui(ui: &mut egui::Ui, session: &Session, indicator: Indicator, s
     let numbers = |ui: &mut egui::Ui| {
         ui.vertical(|ui| {
             ui.set_width(NUMBERS_WIDTH);
-            accuracy_numbers_ui(ui, indicator, split, figures, &names, after);
+            accuracy_numbers_ui(ui, indicator, split, &figures, &names, after);
         });
     };
     let n = histograms.len().max(1) as f32;
@@ -280,8 +288,8 @@ fn accuracy_numbers_ui(
     ui: &mut egui::Ui,
     indicator: Indicator,
     split: Split,
-    figures: [Option<&SplitFigures>; 2],
-    names: &[String; 2],
+    figures: &[Option<&SplitFigures>],
+    names: &[String],
     after: Option<After<'_>>,
 ) {
     let unit = if indicator.is_position() { "mm" } else { "rad" };
@@ -299,16 +307,22 @@ fn accuracy_numbers_ui(
     };
     egui::Grid::new(("accuracy numbers", indicator.label(), split))
         .striped(true)
-        .num_columns(3)
+        .num_columns(1 + names.len())
         .show(ui, |ui| {
             ui.label("");
             for name in names {
                 ui.label(name);
             }
             ui.end_row();
-            let reports = figures.map(|f| f.and_then(|f| f.report.as_ref()));
+            let reports: Vec<_> = figures
+                .iter()
+                .map(|f| f.and_then(|f| f.report.as_ref()))
+                .collect();
             // `None` without a report; `Some(None)`: the data cannot measure it.
-            let summaries = reports.map(|r| r.map(|r| indicator.summary(r)));
+            let summaries: Vec<_> = reports
+                .iter()
+                .map(|r| r.map(|r| indicator.summary(r)))
+                .collect();
             let cell = |ui: &mut egui::Ui, v: Option<Option<String>>| {
                 ui.label(match v {
                     None => "—".into(),
@@ -318,24 +332,24 @@ fn accuracy_numbers_ui(
             };
             let digits = if indicator.is_position() { 3 } else { 5 };
             ui.label(format!("RMS ({unit})"));
-            for s in summaries {
+            for &s in &summaries {
                 cell(ui, s.map(|s| s.map(|s| format!("{:.digits$}", s.0))));
             }
             ui.end_row();
             ui.label(format!("max ({unit})"));
-            for s in summaries {
+            for &s in &summaries {
                 cell(ui, s.map(|s| s.map(|s| format!("{:.digits$}", s.1))));
             }
             ui.end_row();
             for (t, label) in thresholds.iter().enumerate() {
                 ui.label(label);
-                for s in summaries {
+                for &s in &summaries {
                     cell(ui, s.map(|s| s.map(|s| format!("{:.1} %", 100.0 * s.2[t]))));
                 }
                 ui.end_row();
             }
             ui.label("pairs");
-            for r in reports {
+            for &r in &reports {
                 let stats = r.and_then(|r| r.stats(indicator.pair_kind()));
                 cell(ui, stats.map(|s| Some(s.n_pairs.to_string())));
             }
@@ -348,6 +362,8 @@ fn accuracy_numbers_ui(
 
 const NOMINAL_COLOR: Color32 = Color32::from_rgb(230, 120, 90);
 const CALIBRATED_COLOR: Color32 = Color32::from_rgb(100, 190, 235);
+/// The geometric calibration beside one with errors beyond geometry.
+const GEOMETRIC_COLOR: Color32 = Color32::from_rgb(170, 150, 220);
 
 /// One histogram of `size`: symmetric range for signed Δd, from zero for Δo; the paper's thresholds
 /// as lines when they fall in range.
@@ -368,10 +384,10 @@ fn histogram_plot_ui(
     let extent = histogram.hi;
     // The id does not depend on the name ("iteration k" changes during a run): the plot keeps its
     // state while the live figures update.
-    let slot = if name == "nominal" {
-        "nominal"
-    } else {
-        "after"
+    let slot = match name {
+        "nominal" => "nominal",
+        "geometric" => "geometric",
+        _ => "after",
     };
     Plot::new(("histogram", indicator.label(), split, slot))
         .width(size.x.max(MIN_HISTOGRAM_WIDTH * 0.5))

@@ -168,6 +168,10 @@ pub struct Session {
     pub calibrated: Option<Calibrated>,
     /// While a calibration runs: the model it has reached (cleared when it ends).
     pub live: Option<LiveFigures>,
+    /// Beside a calibration with errors beyond geometry (`Model` other than geometric): the geometric
+    /// model's calibration of the same data and settings, evaluated — the accuracy view's "geometric"
+    /// column between nominal and the full model.
+    pub geometric: Option<Analysis>,
 }
 
 impl Session {
@@ -230,6 +234,7 @@ impl Session {
             auto_exclusion: None,
             calibrated: None,
             live: None,
+            geometric: None,
         })
     }
 
@@ -282,6 +287,15 @@ impl Session {
             .errors()
             .map(|f| f.message.as_str())
             .collect()
+    }
+
+    /// `settings` with gravity's direction for the elastic models: the robot's (−z of its root link
+    /// in the left arm's base) unless the settings name one.
+    pub fn with_gravity(&self, mut settings: CalibrationSettings) -> CalibrationSettings {
+        settings
+            .gravity_in_left_base
+            .get_or_insert_with(|| self.robot.gravity_in_left_base(None));
+        settings
     }
 
     pub fn body_from_left_base(&self) -> Isometry3<f64> {

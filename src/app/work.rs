@@ -49,6 +49,9 @@ pub enum RunEvent {
     Live(Box<LiveFigures>),
     /// The nominal model's figures without the configurations it leaves out.
     Nominal(Box<Analysis>),
+    /// Before a calibration with errors beyond geometry: the geometric model's calibration of the same
+    /// data and settings, evaluated (`None`: a geometric run, no reference).
+    Geometric(Option<Box<Analysis>>),
     /// What Auto-exclude removed (before its [`RunEvent::Calibrated`]).
     AutoExcluded(AutoExcludeSummary),
     /// It ended (its last event).
@@ -359,7 +362,7 @@ impl CalibrationWork {
         Self {
             dataset: session.dataset.clone(),
             nominal: session.nominal.model.clone(),
-            settings,
+            settings: session.with_gravity(settings),
             body_from_left_base: session.body_from_left_base(),
             nominal_excluded: session.nominal.excluded.clone(),
             run: None,
@@ -367,6 +370,25 @@ impl CalibrationWork {
             solver: Duration::ZERO,
             panic_at_start: false,
         }
+    }
+
+    /// With a model beyond geometry: the geometric calibration of the same data and settings,
+    /// evaluated (run to its end here: as long as one geometric calibration, tens of milliseconds at
+    /// the paper's size), for the accuracy view's comparison. `None` for a geometric run, or when that
+    /// calibration fails (the run itself then says why).
+    fn geometric_reference(&self) -> Option<Box<Analysis>> {
+        if self.settings.model.is_geometric() {
+            return None;
+        }
+        let settings = CalibrationSettings {
+            model: crate::kinematics::ErrorTerms::GEOMETRIC,
+            ..self.settings.clone()
+        };
+        let result = Calibrator::new(&self.dataset, &self.nominal)
+            .settings(settings)
+            .run()
+            .ok()?;
+        self.analysis(&result.calibrated).ok().map(Box::new)
     }
 
     fn analysis(&self, model: &DualArmModel) -> Result<Analysis, AnalysisError> {
@@ -450,6 +472,7 @@ impl Work for CalibrationWork {
                 self.nominal_excluded = self.settings.exclude.clone();
             }
             let setup = Instant::now();
+            task.report(RunEvent::Geometric(self.geometric_reference()));
             let started = Calibrator::new(&self.dataset, &self.nominal)
                 .settings(self.settings.clone())
                 .cancel(task.cancel_flag().clone())
@@ -523,7 +546,7 @@ impl AutoExcludeWork {
         Self {
             dataset: session.dataset.clone(),
             nominal: session.nominal.model.clone(),
-            settings,
+            settings: session.with_gravity(settings),
             body_from_left_base: session.body_from_left_base(),
         }
     }

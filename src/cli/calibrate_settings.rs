@@ -123,6 +123,17 @@ pub fn print_uncertainty(u: &PerSide<Option<crate::solver::uncertainty::ArmUncer
             largest("mrad"),
             u.condition
         );
+        // The errors beyond geometry, each unit once (`--model`).
+        let mut units: Vec<&str> = Vec::new();
+        for p in &u.parameters {
+            if p.unit != "mm" && p.unit != "mrad" && !units.contains(&p.unit.as_str()) {
+                units.push(&p.unit);
+            }
+        }
+        if !units.is_empty() {
+            let parts: Vec<String> = units.iter().map(|unit| largest(unit)).collect();
+            outln!("  beyond geometry: largest {}", parts.join(", "));
+        }
         if !u.correlations.is_empty() {
             let pairs: Vec<String> = u
                 .correlations

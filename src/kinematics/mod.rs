@@ -244,7 +244,7 @@ impl ArmModel {
     /// The kinematics at configuration `q`: the geometric parameters moved by the error model's
     /// increments there (borrowed as they are for the geometric model).
     fn kinematics_at(&self, q_rad: &[f64]) -> std::borrow::Cow<'_, ArmKinematics> {
-        match self.errors.increments(q_rad) {
+        match self.errors.increment_values(q_rad) {
             Some(inc) => {
                 std::borrow::Cow::Owned(joint_errors::moved_kinematics(&self.kinematics, &inc))
             }
@@ -253,7 +253,7 @@ impl ArmModel {
     }
 
     /// Unit of parameter `k`: `mm` or `rad` for the geometry and reflectors, the error parameters'
-    /// own (`µrad/(N·m)`, `kg`, `kg·mm`, `rad`).
+    /// own (`mrad/(N·m)`, `kg`, `kg·mm`, `rad`).
     pub fn param_unit(&self, k: usize) -> &'static str {
         let off = self.error_offset();
         match &self.errors.model {

@@ -137,7 +137,7 @@ impl<'de> Deserialize<'de> for NamedValues {
 
 /// What the parameter file says of the units of [`ErrorsEntry::parameters`].
 pub const ERROR_UNITS_NOTE: &str = "fixed units whatever the file's: harmonics rad, compliances \
-     µrad/(N·m), lumped masses kg, their first moments kg·mm; the compliances are those of the masses' \
+     mrad/(N·m), lumped masses kg, their first moments kg·mm; the compliances are those of the masses' \
      scale (only compliance × mass is identifiable)";
 
 /// An arm's errors beyond geometry ([`crate::kinematics::joint_errors`]): the terms, gravity, and

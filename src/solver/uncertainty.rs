@@ -41,7 +41,7 @@ pub struct ParameterSigma {
     pub name: String,
     /// One standard deviation in `unit`.
     pub sigma: f64,
-    /// `mm` or `mrad`.
+    /// `mm` or `mrad`; an error parameter's own (`mrad/(N·m)`, …).
     pub unit: String,
 }
 
@@ -296,11 +296,15 @@ fn summarise(
         .iter()
         .zip(&sigma)
         .map(|(&k, &s)| {
-            let angle = arm.param_is_angle(k);
+            // Angles in mrad; lengths in mm; the error parameters in their own units.
+            let (sigma, unit) = match arm.param_unit(k) {
+                "rad" => (s * 1000.0, "mrad"),
+                unit => (s, unit),
+            };
             ParameterSigma {
                 name: arm.param_name(k),
-                sigma: if angle { s * 1000.0 } else { s },
-                unit: if angle { "mrad" } else { "mm" }.to_string(),
+                sigma,
+                unit: unit.to_string(),
             }
         })
         .collect();

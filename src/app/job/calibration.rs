@@ -79,6 +79,11 @@ impl Job for CalibrationJob {
                     session.nominal = *analysis;
                 }
             }
+            RunEvent::Geometric(analysis) => {
+                if let Some(session) = app.scene_mut() {
+                    session.geometric = analysis.map(|a| *a);
+                }
+            }
             RunEvent::AutoExcluded(summary) => {
                 if let Some(session) = &mut app.session {
                     session.auto_exclusion = Some(summary);
@@ -103,6 +108,12 @@ impl WorkbenchApp {
         // Dropping a running task cancels it.
         self.jobs.stop(CalibrationJob::lane());
         self.discard_live();
+        // A calibration beyond geometry reports its geometric reference again; any other run has none.
+        if self.session.as_ref().is_some_and(|s| s.geometric.is_some())
+            && let Some(session) = self.scene_mut()
+        {
+            session.geometric = None;
+        }
         let name = match kind {
             RunKind::Calibration => "calibration",
             RunKind::Adopt => "adopt",

@@ -8,6 +8,7 @@ use crate::app::compare::method_used;
 use crate::app::session::{RobotMeshes, Session};
 use crate::app::viewport::ViewportState;
 use crate::dataset::Split;
+use crate::kinematics::ErrorTerms;
 use crate::side::Side;
 use crate::solver::{BaseMethod, CalibrationSettings, Method, QpMethod, Reflector};
 use eframe::egui::{self, Color32, RichText};
@@ -524,7 +525,69 @@ fn arm_details_ui(ui: &mut egui::Ui, session: &Session, side: Side) {
         if let Some(u) = &c.uncertainty[side] {
             uncertainty_ui(ui, side, u);
         }
+        errors_ui(
+            ui,
+            side,
+            c.result.calibrated.arm(side),
+            c.uncertainty[side].as_ref(),
+        );
     }
+}
+
+/// The calibrated model's errors beyond geometry (`Model` other than geometric): each identified
+/// compliance and harmonic amplitude with its 1σ; the held lumped masses are not listed.
+fn errors_ui(
+    ui: &mut egui::Ui,
+    side: Side,
+    arm: &crate::kinematics::ArmModel,
+    u: Option<&crate::solver::uncertainty::ArmUncertainty>,
+) {
+    let Some(model) = &arm.errors.model else {
+        return;
+    };
+    let off = arm.error_offset();
+    egui::CollapsingHeader::new(
+        RichText::new(format!(
+            "beyond geometry: the `{}` model's compliances and harmonics",
+            model.terms.name()
+        ))
+        .small(),
+    )
+    .id_salt(("beyond geometry", side))
+    .show(ui, |ui| {
+        ui.label(
+            RichText::new(
+                "Compliances in mrad/(N·m) of the held lumped masses (1 kg at each next joint; only \
+                 compliance × mass shows in the data); harmonics in rad. Held ones (the data do not \
+                 see them) show no σ.",
+            )
+            .small()
+            .color(Color32::GRAY),
+        );
+        egui::Grid::new(("errors grid", side))
+            .num_columns(2)
+            .show(ui, |ui| {
+                for (i, value) in arm.errors.values.iter().enumerate() {
+                    if model.param_is_mass(i) {
+                        continue;
+                    }
+                    let name = arm.param_name(off + i);
+                    let unit = model.param_unit(i);
+                    let sigma = u
+                        .and_then(|u| u.parameters.iter().find(|p| p.name == name))
+                        .map(|p| p.sigma);
+                    let text = match (unit, sigma) {
+                        ("rad", Some(s)) => format!("{:.4} ± {s:.4} mrad", value * 1000.0),
+                        ("rad", None) => format!("{:.4} mrad (held)", value * 1000.0),
+                        (unit, Some(s)) => format!("{value:.4} ± {s:.4} {unit}"),
+                        (unit, None) => format!("{value:.4} {unit} (held)"),
+                    };
+                    ui.label(RichText::new(name).small().monospace());
+                    ui.label(RichText::new(text).small());
+                    ui.end_row();
+                }
+            });
+    });
 }
 
 /// The identified parameters' 1σ, the strongly correlated pairs and the condition number.
@@ -594,6 +657,14 @@ fn calibration_settings_ui(
             "Step 1, each arm's geometry: what the fit minimises (hover over a choice for what it \
              minimises and what it cannot see)",
             |ui| method_choice_ui(ui, settings),
+        );
+        grid_row_ui(
+            ui,
+            "Model",
+            "What is identified with the geometry: joints giving under gravity (elastic), gear \
+             harmonics of each joint angle, or both (full); hover over a choice. The calibrated URDF \
+             keeps the geometry only; the parameter file has the whole model.",
+            |ui| model_choice_ui(ui, &mut settings.model),
         );
         if settings.method.spec().takes_reflector {
             grid_row_ui(
@@ -711,6 +782,26 @@ fn method_choice_ui(ui: &mut egui::Ui, settings: &mut CalibrationSettings) -> eg
         })
         .response
         .on_hover_text(method_help(settings.method).1)
+}
+
+/// The model combo: the named models of [`ErrorTerms::NAMED`], each described on hover.
+fn model_choice_ui(ui: &mut egui::Ui, terms: &mut ErrorTerms) -> egui::Response {
+    let help = |t: &ErrorTerms| {
+        ErrorTerms::NAMED
+            .iter()
+            .find(|(_, n, _)| n == t)
+            .map_or("", |(_, _, h)| *h)
+    };
+    egui::ComboBox::from_id_salt("model")
+        .selected_text(format!("{} model", terms.name()))
+        .show_ui(ui, |ui| {
+            for (name, t, h) in ErrorTerms::NAMED {
+                ui.selectable_value(terms, t, format!("{name} model"))
+                    .on_hover_text(h);
+            }
+        })
+        .response
+        .on_hover_text(help(terms))
 }
 
 /// The step-2 method combo.

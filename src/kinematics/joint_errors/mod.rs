@@ -4,7 +4,7 @@
 //! Jacobians stay exact.
 //!
 //! **Joint elasticity.** A revolute joint `j` deflects about its axis by `δ = κ·τ`, `τ` the gravity
-//! torque about that axis of everything beyond the joint and `κ` its compliance (µrad/(N·m)); with
+//! torque about that axis of everything beyond the joint and `κ` its compliance (mrad/(N·m)); with
 //! [`ErrorTerms::bending`] it also deflects about the two axes across it (a chain joint's aligned `x`,
 //! `y`; a DH row's α axis `x_j`, as DLR's model of Agile Justin bends) with compliances of their own.
 //! The deflection about the axis is added to the joint's zero offset (`rz`, DH `θ`), the bending to
@@ -210,6 +210,32 @@ pub struct JointErrorModel {
     hinges: Vec<Hinge>,
     /// Links carrying a lumped mass: one per movable joint (0 without elasticity).
     links: usize,
+    /// Each hinge's torque row `∂τ/∂(masses)` per configuration: it depends on the configuration and
+    /// the reference geometry only, so a fit computes it once per configuration.
+    torque_rows: TorqueCache,
+}
+
+/// `∂τ/∂(mass parameters)` of every hinge at one configuration.
+type TorqueRows = Arc<[Vec<(usize, f64)>]>;
+
+/// The configurations' torque rows, by the bits of the joint values (bounded: cleared when full).
+#[derive(Default)]
+struct TorqueCache(std::sync::RwLock<std::collections::HashMap<Vec<u64>, TorqueRows>>);
+
+/// Configurations whose torque rows are kept (a few hundred kilobytes each at most).
+const TORQUE_CACHE_CONFIGS: usize = 20_000;
+
+impl std::fmt::Debug for TorqueCache {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("TorqueCache")
+    }
+}
+
+impl PartialEq for TorqueCache {
+    /// A cache of values that follow from the rest of the model: never a difference.
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
 }
 
 /// One geometric parameter's increment: its index, the increment, and `(error parameter,
@@ -313,6 +339,7 @@ impl JointErrorModel {
             harmonic_joints,
             hinges,
             links,
+            torque_rows: TorqueCache::default(),
         }
     }
 
@@ -371,7 +398,7 @@ impl JointErrorModel {
         if i < self.harmonics_count() {
             "rad"
         } else if i < self.mass_offset() {
-            "µrad/(N·m)"
+            "mrad/(N·m)"
         } else if (i - self.mass_offset()).is_multiple_of(4) {
             "kg"
         } else {
@@ -423,14 +450,8 @@ impl JointErrorModel {
         }
     }
 
-    /// The gravity torque of hinge `h` at the reference frames, N·m, and its derivatives with respect to
-    /// the masses (error parameter index, ∂τ/∂it).
-    fn torque(
-        &self,
-        h: &Hinge,
-        frames: &[Isometry3<f64>],
-        values: &[f64],
-    ) -> (f64, Vec<(usize, f64)>) {
+    /// Hinge `h`'s torque row at the reference frames: `(mass parameter, ∂τ/∂it)`, τ in N·m.
+    fn torque_row(&self, h: &Hinge, frames: &[Isometry3<f64>]) -> Vec<(usize, f64)> {
         let (pivot, axis) = match h.axis {
             HingeAxis::Axis => (frames[h.joint], Vector3::z()),
             HingeAxis::CrossX => (frames[h.joint], Vector3::x()),
@@ -441,48 +462,75 @@ impl JointErrorModel {
         let e = pivot.rotation * axis;
         let gxe = self.gravity_in_base.cross(&e) * (STANDARD_GRAVITY_M_S2 / 1000.0);
         let off = self.mass_offset();
-        let mut tau = 0.0;
         let mut row = Vec::with_capacity(4 * (self.links - h.joint));
         for k in h.joint..self.links {
             let f = &frames[k + 1];
-            let dm = (f.translation.vector - p).dot(&gxe);
-            let ds = f.rotation.inverse_transform_vector(&gxe);
             let i = off + 4 * k;
-            tau +=
-                values[i] * dm + values[i + 1] * ds.x + values[i + 2] * ds.y + values[i + 3] * ds.z;
-            row.push((i, dm));
+            row.push((i, (f.translation.vector - p).dot(&gxe)));
+            let ds = f.rotation.inverse_transform_vector(&gxe);
             row.extend((0..3).map(|c| (i + 1 + c, ds[c])));
         }
-        (tau, row)
+        row
     }
 
-    /// The geometric parameters' increments at `q` and their derivatives with respect to `values`.
-    pub fn increments(&self, values: &[f64], q: &[f64]) -> Increments {
+    /// Every hinge's torque row at `q`, computed once per configuration.
+    fn torque_rows(&self, q: &[f64]) -> TorqueRows {
+        let key: Vec<u64> = q.iter().map(|v| v.to_bits()).collect();
+        if let Ok(cache) = self.torque_rows.0.read()
+            && let Some(rows) = cache.get(&key)
+        {
+            return Arc::clone(rows);
+        }
+        let frames = self.reference_frames(q);
+        let rows: TorqueRows = self
+            .hinges
+            .iter()
+            .map(|h| self.torque_row(h, &frames))
+            .collect();
+        if let Ok(mut cache) = self.torque_rows.0.write() {
+            if cache.len() >= TORQUE_CACHE_CONFIGS {
+                cache.clear();
+            }
+            cache.insert(key, Arc::clone(&rows));
+        }
+        rows
+    }
+
+    /// The geometric parameters' increments at `q` and their derivatives with respect to `values`
+    /// (`derivatives`: false leaves the rows empty, for the forward kinematics alone).
+    pub fn increments(&self, values: &[f64], q: &[f64], derivatives: bool) -> Increments {
         let mut out = Increments::default();
         let per = 2 * self.terms.harmonics as usize;
         for (n, &j) in self.harmonic_joints.iter().enumerate() {
             let theta = self.joint_value(j, q);
             let first = per * n;
-            let (mut value, mut row) = (0.0, Vec::with_capacity(per));
+            let (mut value, mut row) = (0.0, Vec::with_capacity(if derivatives { per } else { 0 }));
             for order in 0..self.terms.harmonics as usize {
                 let (s, c) = ((order + 1) as f64 * theta).sin_cos();
                 let i = first + 2 * order;
                 value += values[i] * c + values[i + 1] * s;
-                row.push((i, c));
-                row.push((i + 1, s));
+                if derivatives {
+                    row.push((i, c));
+                    row.push((i + 1, s));
+                }
             }
             let slot = self.axis_slot(j);
             out.add(slot, value, row);
         }
         if !self.hinges.is_empty() {
-            let frames = self.reference_frames(q);
+            let rows = self.torque_rows(q);
             let c0 = self.compliance_offset();
-            for (n, h) in self.hinges.iter().enumerate() {
-                let (tau, dtau) = self.torque(h, &frames, values);
-                let kappa = values[c0 + n] * 1e-6;
-                let mut row: Vec<(usize, f64)> =
-                    dtau.into_iter().map(|(i, d)| (i, kappa * d)).collect();
-                row.push((c0 + n, tau * 1e-6));
+            for (n, (h, dtau)) in self.hinges.iter().zip(rows.iter()).enumerate() {
+                let tau: f64 = dtau.iter().map(|&(i, d)| values[i] * d).sum();
+                let kappa = values[c0 + n] * 1e-3;
+                let row = if derivatives {
+                    let mut row: Vec<(usize, f64)> =
+                        dtau.iter().map(|&(i, d)| (i, kappa * d)).collect();
+                    row.push((c0 + n, tau * 1e-3));
+                    row
+                } else {
+                    Vec::new()
+                };
                 out.add(h.slot, kappa * tau, row);
             }
         }
@@ -546,9 +594,20 @@ impl JointErrors {
             .map_or(ErrorTerms::GEOMETRIC, |m| m.terms)
     }
 
-    /// The geometric parameters' increments at `q` (none for the geometric model).
+    /// The geometric parameters' increments at `q` and their derivatives (none for the geometric
+    /// model).
     pub fn increments(&self, q: &[f64]) -> Option<Increments> {
-        self.model.as_ref().map(|m| m.increments(&self.values, q))
+        self.model
+            .as_ref()
+            .map(|m| m.increments(&self.values, q, true))
+    }
+
+    /// The geometric parameters' increments at `q` without their derivatives (the forward
+    /// kinematics).
+    pub fn increment_values(&self, q: &[f64]) -> Option<Increments> {
+        self.model
+            .as_ref()
+            .map(|m| m.increments(&self.values, q, false))
     }
 }
 

@@ -16,7 +16,7 @@ const FULL: ErrorTerms = ErrorTerms {
     harmonics: 2,
 };
 
-/// `model` with random error values of a realistic size: compliances 5–80 µrad/(N·m), masses 0.5–4 kg,
+/// `model` with random error values of a realistic size: compliances 0.005–0.08 mrad/(N·m), masses 0.5–4 kg,
 /// moments within ±400 kg·mm, harmonics within ±1 mrad.
 fn with_random_errors(model: ArmModel, rng: &mut ChaCha8Rng) -> ArmModel {
     let model = model.with_error_terms(FULL, Vector3::new(0.1, -0.2, -1.0));
@@ -25,7 +25,7 @@ fn with_random_errors(model: ArmModel, rng: &mut ChaCha8Rng) -> ArmModel {
     let mut v = model.to_vector();
     for i in 0..m.param_count() {
         v[off + i] = if m.param_is_compliance(i) {
-            rng.random_range(5.0..80.0)
+            rng.random_range(0.005..0.08)
         } else if m.param_unit(i) == "kg" {
             rng.random_range(0.5..4.0)
         } else if m.param_is_mass(i) {
@@ -93,7 +93,7 @@ fn start_model_is_the_geometric_model() {
 #[test]
 fn an_axis_deflection_is_the_gravity_torque_times_the_compliance() {
     // One joint's arm: a 2 kg mass 500 mm out along x of the tip, the joint axis horizontal (y):
-    // τ = 2 kg · 9.80665 m/s² · 0.5 m about the axis; with 100 µrad/(N·m) the joint gives 0.98 mrad.
+    // τ = 2 kg · 9.80665 m/s² · 0.5 m about the axis; with 0.1 mrad/(N·m) the joint gives 0.98 mrad.
     let urdf = r#"<robot name="one"><link name="base"/><link name="tip"/>
         <joint name="j" type="revolute"><parent link="base"/><child link="tip"/>
         <origin xyz="0 0 0" rpy="0 0 0"/><axis xyz="0 1 0"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
@@ -107,12 +107,12 @@ fn an_axis_deflection_is_the_gravity_torque_times_the_compliance() {
     let off = model.error_offset();
     let name = |k: usize| model.param_name(k);
     let find = |n: &str| (off..model.param_count()).find(|&k| name(k) == n).unwrap();
-    v[find("j.k_axis")] = 100.0;
+    v[find("j.k_axis")] = 0.1;
     v[find("after_j.mass")] = 2.0;
     v[find("after_j.moment_x")] = 2.0 * 500.0;
     let model = model.with_vector(&v);
     let inc = model.errors.increments(&[0.0]).unwrap();
-    let expected = 100e-6 * 2.0 * STANDARD_GRAVITY_M_S2 * 0.5;
+    let expected = 0.1e-3 * 2.0 * STANDARD_GRAVITY_M_S2 * 0.5;
     assert_eq!(inc.slots.len(), 1);
     let (_, value, _) = &inc.slots[0];
     // The mass on +x under −z gravity turns the arm about +y positively (x → −z).
