@@ -48,7 +48,8 @@ pub(super) fn run(a: &EvaluateArgs) -> Result<()> {
             let file = ParamsFile::read(p)?;
             let model = file
                 .to_model_for(&robot)
-                .map_err(|e| anyhow::anyhow!("{}: {e}", p.display()))?;
+                .map_err(|e| anyhow::anyhow!("{}: {e}", p.display()))?
+                .with_torso_instants(&ds.instants());
             let frames = file
                 .tracker_from_base()
                 .map_err(|e| anyhow::anyhow!("{}: {e}", p.display()))?;

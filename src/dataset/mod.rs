@@ -244,6 +244,32 @@ impl Dataset {
         self.arms.values().all(ArmData::is_measured)
     }
 
+    /// Measured together: each instant's (left, right) joint values, the rows of one id in both arms'
+    /// files (every split); none otherwise. What the error models of a shared torso take
+    /// ([`crate::kinematics::DualArmModel::with_torso_instants`]).
+    pub fn instants(&self) -> Vec<(Vec<f64>, Vec<f64>)> {
+        if !self.measured_together {
+            return Vec::new();
+        }
+        let right: std::collections::HashMap<&str, &Measurement> = self
+            .arms
+            .right
+            .measurements
+            .iter()
+            .map(|m| (m.id.as_str(), m))
+            .collect();
+        self.arms
+            .left
+            .measurements
+            .iter()
+            .filter_map(|l| {
+                right
+                    .get(l.id.as_str())
+                    .map(|r| (l.q_rad.clone(), r.q_rad.clone()))
+            })
+            .collect()
+    }
+
     /// The arms the dataset has measurements of, left first: both, or one alone.
     pub fn measured_sides(&self) -> Vec<Side> {
         Side::BOTH

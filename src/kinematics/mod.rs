@@ -568,6 +568,41 @@ impl DualArmModel {
         }
     }
 
+    /// On a torso both arms share, with errors beyond geometry, measured together: each arm's error
+    /// model carries the other arm at the same instants (`instants`: each instant's left and right
+    /// joint values), so the other arm's lumped masses load the torso hinges too. Unchanged without
+    /// shared joints, without error models or without instants.
+    pub fn with_torso_instants(mut self, instants: &[(Vec<f64>, Vec<f64>)]) -> Self {
+        let shared = self.shared_joints();
+        if shared.is_empty() || instants.is_empty() {
+            return self;
+        }
+        for side in Side::BOTH {
+            let Some(model) = self.arms[side].errors.model.clone() else {
+                continue;
+            };
+            let other = &self.arms[side.other()];
+            let reference = other
+                .errors
+                .model
+                .as_ref()
+                .map_or(&other.kinematics, |m| m.reference());
+            let (pairs, instants): (Vec<(usize, usize)>, Vec<(Vec<f64>, Vec<f64>)>) = match side {
+                Side::Left => (shared.joints.clone(), instants.to_vec()),
+                Side::Right => (
+                    shared.joints.iter().map(|&(l, r)| (r, l)).collect(),
+                    instants
+                        .iter()
+                        .map(|(l, r)| (r.clone(), l.clone()))
+                        .collect(),
+                ),
+            };
+            let other = joint_errors::OtherArm::new(reference, &pairs, instants);
+            self.arms[side].errors.model = Some(Arc::new(model.with_other_arm(other)));
+        }
+        self
+    }
+
     /// The error terms of the model (the left arm's; both arms carry the same terms).
     pub fn error_terms(&self) -> ErrorTerms {
         self.arms.left.errors.terms()

@@ -213,7 +213,8 @@ impl CalibrationRun {
                 arms: nominal.arms.as_ref().map(|_, a| a.geometric()),
                 left_base_from_right_base: nominal.left_base_from_right_base,
             }
-            .with_error_terms(settings.model, gravity);
+            .with_error_terms(settings.model, gravity)
+            .with_torso_instants(&dataset.instants());
             &with_terms
         } else {
             nominal

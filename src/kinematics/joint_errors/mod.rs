@@ -213,10 +213,72 @@ pub struct JointErrorModel {
     /// Each hinge's torque row `∂τ/∂(masses)` per configuration: it depends on the configuration and
     /// the reference geometry only, so a fit computes it once per configuration.
     torque_rows: TorqueCache,
+    /// On a torso both arms share, measured together: the other arm at the same instants, whose
+    /// lumped masses load the shared joints too.
+    other: Option<OtherArm>,
 }
 
-/// `∂τ/∂(mass parameters)` of every hinge at one configuration.
-type TorqueRows = Arc<[Vec<(usize, f64)>]>;
+/// The other arm of a torso, at the instants this arm was measured (its configurations by this
+/// arm's joint values): its held lumped masses beyond the torso load this arm's torso hinges.
+#[derive(Debug, PartialEq)]
+pub struct OtherArm {
+    reference: ArmKinematics,
+    /// Its links beyond the torso (after its own joints).
+    links: Vec<usize>,
+    /// This arm's shared (torso) joints.
+    shared: Vec<usize>,
+    /// This arm's joint values (bits) → the other arm's joint values at that instant.
+    configs: std::collections::HashMap<Vec<u64>, Vec<f64>>,
+}
+
+impl OtherArm {
+    /// `reference`: the other arm's geometry; `shared`: (this joint, other joint) of the torso;
+    /// `instants`: (this arm's joint values, the other's) of each instant.
+    pub fn new(
+        reference: &ArmKinematics,
+        shared: &[(usize, usize)],
+        instants: impl IntoIterator<Item = (Vec<f64>, Vec<f64>)>,
+    ) -> Self {
+        let n = match reference {
+            ArmKinematics::Dh(_) => N_JOINTS,
+            ArmKinematics::Chain { chain, .. } => chain.joint_count(),
+        };
+        Self {
+            reference: reference.clone(),
+            links: (0..n)
+                .filter(|k| !shared.iter().any(|s| s.1 == *k))
+                .collect(),
+            shared: shared.iter().map(|s| s.0).collect(),
+            configs: instants
+                .into_iter()
+                .map(|(q, other)| (q.iter().map(|v| v.to_bits()).collect(), other))
+                .collect(),
+        }
+    }
+
+    /// The other arm's contribution to hinge `h`'s torque (N·m) at this arm's `q`, if it is an
+    /// instant of the data and `h` a torso hinge.
+    fn torque(&self, h: &Hinge, pivot: &Vector3<f64>, gxe: &Vector3<f64>, key: &[u64]) -> f64 {
+        if !self.shared.contains(&h.joint) {
+            return 0.0;
+        }
+        let Some(q) = self.configs.get(key) else {
+            return 0.0;
+        };
+        let frames = match &self.reference {
+            ArmKinematics::Dh(dh) => dh::frames(dh, q).to_vec(),
+            ArmKinematics::Chain { chain, corrections } => chain.joint_frames(corrections, q),
+        };
+        self.links
+            .iter()
+            .map(|&k| START_MASS_KG * (frames[k + 1].translation.vector - pivot).dot(gxe))
+            .sum()
+    }
+}
+
+/// `∂τ/∂(mass parameters)` of every hinge at one configuration, and the torque no parameter of this
+/// arm sets (the other arm's, on a shared torso).
+type TorqueRows = Arc<[(Vec<(usize, f64)>, f64)]>;
 
 /// The configurations' torque rows, by the bits of the joint values (bounded: cleared when full).
 #[derive(Default)]
@@ -340,7 +402,25 @@ impl JointErrorModel {
             hinges,
             links,
             torque_rows: TorqueCache::default(),
+            other: None,
         }
+    }
+
+    /// The same model with the other arm of a shared torso (see [`OtherArm`]).
+    pub fn with_other_arm(&self, other: OtherArm) -> Self {
+        let mut out = Self::new(&self.reference, self.terms, self.gravity_in_base);
+        out.other = Some(other);
+        out
+    }
+
+    /// The geometry the torques are computed on.
+    pub fn reference(&self) -> &ArmKinematics {
+        &self.reference
+    }
+
+    /// Does the model carry the other arm of a shared torso?
+    pub fn has_other_arm(&self) -> bool {
+        self.other.is_some()
     }
 
     fn harmonics_count(&self) -> usize {
@@ -451,7 +531,12 @@ impl JointErrorModel {
     }
 
     /// Hinge `h`'s torque row at the reference frames: `(mass parameter, ∂τ/∂it)`, τ in N·m.
-    fn torque_row(&self, h: &Hinge, frames: &[Isometry3<f64>]) -> Vec<(usize, f64)> {
+    fn torque_row(
+        &self,
+        h: &Hinge,
+        frames: &[Isometry3<f64>],
+        key: &[u64],
+    ) -> (Vec<(usize, f64)>, f64) {
         let (pivot, axis) = match h.axis {
             HingeAxis::Axis => (frames[h.joint], Vector3::z()),
             HingeAxis::CrossX => (frames[h.joint], Vector3::x()),
@@ -470,7 +555,11 @@ impl JointErrorModel {
             let ds = f.rotation.inverse_transform_vector(&gxe);
             row.extend((0..3).map(|c| (i + 1 + c, ds[c])));
         }
-        row
+        let other = self
+            .other
+            .as_ref()
+            .map_or(0.0, |o| o.torque(h, &p, &gxe, key));
+        (row, other)
     }
 
     /// Every hinge's torque row at `q`, computed once per configuration.
@@ -485,7 +574,7 @@ impl JointErrorModel {
         let rows: TorqueRows = self
             .hinges
             .iter()
-            .map(|h| self.torque_row(h, &frames))
+            .map(|h| self.torque_row(h, &frames, &key))
             .collect();
         if let Ok(mut cache) = self.torque_rows.0.write() {
             if cache.len() >= TORQUE_CACHE_CONFIGS {
@@ -520,8 +609,8 @@ impl JointErrorModel {
         if !self.hinges.is_empty() {
             let rows = self.torque_rows(q);
             let c0 = self.compliance_offset();
-            for (n, (h, dtau)) in self.hinges.iter().zip(rows.iter()).enumerate() {
-                let tau: f64 = dtau.iter().map(|&(i, d)| values[i] * d).sum();
+            for (n, (h, (dtau, other))) in self.hinges.iter().zip(rows.iter()).enumerate() {
+                let tau: f64 = other + dtau.iter().map(|&(i, d)| values[i] * d).sum::<f64>();
                 let kappa = values[c0 + n] * 1e-3;
                 let row = if derivatives {
                     let mut row: Vec<(usize, f64)> =
