@@ -58,7 +58,7 @@ fn true_full_model(sim: &SimOutput, gravity_in_left_base: Vector3<f64>) -> DualA
             } else if name.ends_with(".h2_sin") {
                 j.periodic_amplitude_mrad * 1e-3 * phase(&name).cos()
             } else {
-                v[k] // the held masses (1 kg at the next joint), no bending, no first harmonic
+                v[k] // no bending, no first harmonic (the masses are the model's: 1 kg per link)
             };
         }
         *model.arm_mut(side) = arm.with_vector(&v);
@@ -151,6 +151,16 @@ fn the_full_model_survives_the_parameter_file_and_leaves_the_urdf_geometric() {
             result.calibrated.arm(side).to_vector(),
             "{side}"
         );
+        let masses = |m: &DualArmModel| {
+            m.arm(side)
+                .errors
+                .model
+                .as_ref()
+                .unwrap()
+                .link_masses()
+                .to_vec()
+        };
+        assert_eq!(masses(&back), masses(&result.calibrated), "{side}");
     }
     let a = evaluate(&sim.dataset, &back, Split::Ver).unwrap();
     let b = evaluate(&sim.dataset, &result.calibrated, Split::Ver).unwrap();

@@ -486,11 +486,8 @@ impl ArmModel {
 
     /// Why parameter `k` cannot be identified from distances, when physics says so.
     pub fn unidentifiable_reason(&self, k: usize) -> Option<String> {
-        let eoff = self.error_offset();
-        if let Some(m) = &self.errors.model
-            && k >= eoff
-        {
-            return m.physical_reason(k - eoff);
+        if k >= self.error_offset() {
+            return None;
         }
         match &self.kinematics {
             ArmKinematics::Dh(_) => dh::physical_reason(k).map(str::to_string),
@@ -587,6 +584,12 @@ impl DualArmModel {
                 .model
                 .as_ref()
                 .map_or(&other.kinematics, |m| m.reference());
+            let masses = other
+                .errors
+                .model
+                .as_ref()
+                .map(|m| m.link_masses().to_vec())
+                .filter(|m| !m.is_empty());
             let (pairs, instants): (Vec<(usize, usize)>, Vec<(Vec<f64>, Vec<f64>)>) = match side {
                 Side::Left => (shared.joints.clone(), instants.to_vec()),
                 Side::Right => (
@@ -597,7 +600,7 @@ impl DualArmModel {
                         .collect(),
                 ),
             };
-            let other = joint_errors::OtherArm::new(reference, &pairs, instants);
+            let other = joint_errors::OtherArm::new(reference, &pairs, instants, masses);
             self.arms[side].errors.model = Some(Arc::new(model.with_other_arm(other)));
         }
         self

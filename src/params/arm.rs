@@ -137,8 +137,8 @@ impl<'de> Deserialize<'de> for NamedValues {
 
 /// What the parameter file says of the units of [`ErrorsEntry::parameters`].
 pub const ERROR_UNITS_NOTE: &str = "fixed units whatever the file's: harmonics rad, compliances \
-     mrad/(N·m), lumped masses kg, their first moments kg·mm; the compliances are those of the masses' \
-     scale (only compliance × mass is identifiable)";
+     mrad/(N·m), lumped masses kg, their first moments kg·mm; the compliances are those of the held \
+     masses (only compliance × mass is identifiable)";
 
 /// An arm's errors beyond geometry ([`crate::kinematics::joint_errors`]): the terms, gravity, and
 /// every parameter by name.
@@ -151,10 +151,31 @@ pub struct ErrorsEntry {
     pub terms: ErrorTerms,
     /// Unit vector of gravity in the arm's model base frame.
     pub gravity_in_base: [f64; 3],
-    /// The units of `parameters`.
+    /// The units of `parameters` and `masses`.
     #[serde(default)]
     pub units: String,
     pub parameters: NamedValues,
+    /// The held lumped masses of the elastic terms, by link: `after_<joint>.mass` (kg),
+    /// `.moment_x`, `.moment_y`, `.moment_z` (kg·mm, in the next joint frame); a link not given has
+    /// 1 kg at the next joint's origin.
+    #[serde(default, skip_serializing_if = "NamedValues::is_empty")]
+    pub masses: NamedValues,
+}
+
+impl NamedValues {
+    pub fn is_empty(&self) -> bool {
+        self.0.is_empty()
+    }
+}
+
+/// The names of one link's lumped mass and first moment in the file.
+fn mass_names(link: &str) -> [String; 4] {
+    [
+        format!("{link}.mass"),
+        format!("{link}.moment_x"),
+        format!("{link}.moment_y"),
+        format!("{link}.moment_z"),
+    ]
 }
 
 /// One arm: either 7 DH rows in chain order (`dh`) or a chain's corrections (`chain`), the
@@ -232,6 +253,17 @@ pub(super) fn arm_params(arm: &ArmModel) -> ArmParams {
                     .map(|(i, v)| (arm.param_name(off + i), *v))
                     .collect(),
             ),
+            masses: NamedValues(
+                m.link_masses()
+                    .iter()
+                    .enumerate()
+                    .flat_map(|(k, (mass, moment))| {
+                        mass_names(&m.link_name(k))
+                            .into_iter()
+                            .zip([*mass, moment.x, moment.y, moment.z])
+                    })
+                    .collect(),
+            ),
         }
     });
     match &arm.kinematics {
@@ -303,6 +335,34 @@ fn with_errors(
         ));
     }
     let mut errors = JointErrors::new(reference, e.terms, g);
+    if let Some(m) = errors.model.clone() {
+        let mut masses = m.link_masses().to_vec();
+        let links: Vec<[String; 4]> = (0..masses.len())
+            .map(|k| mass_names(&m.link_name(k)))
+            .collect();
+        for (name, value) in &e.masses.0 {
+            let field = format!("{field}.masses.{name}");
+            let Some((k, c)) = links
+                .iter()
+                .enumerate()
+                .find_map(|(k, names)| names.iter().position(|n| n == name).map(|c| (k, c)))
+            else {
+                return Err(invalid(
+                    field,
+                    "not a link of this arm's elastic model (`after_<joint>.mass`, `.moment_x` …)",
+                ));
+            };
+            finite(&field, &[*value])?;
+            if c == 0 {
+                masses[k].0 = *value;
+            } else {
+                masses[k].1[c - 1] = *value;
+            }
+        }
+        if let Some(with) = m.with_masses(masses) {
+            errors.model = Some(Arc::new(with));
+        }
+    }
     let off = model.error_offset();
     let probe = ArmModel {
         errors: errors.clone(),

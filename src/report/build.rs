@@ -62,7 +62,8 @@ impl Report {
             .map_err(|source| ReportError::Model {
                 path: params_path.to_path_buf(),
                 source,
-            })?;
+            })?
+            .with_torso_instants(&ds.instants());
         let method = method_summary(params);
         let excluded = excluded_configs(ds, params, method.record.as_ref().ok());
         let kept = ds.excluding(&excluded);

@@ -216,6 +216,10 @@ impl CalibrationRun {
             .with_error_terms(settings.model, gravity)
             .with_torso_instants(&dataset.instants());
             &with_terms
+        } else if !settings.model.is_geometric() {
+            // Already the model asked for: its torso hinges take this dataset's instants.
+            with_terms = nominal.clone().with_torso_instants(&dataset.instants());
+            &with_terms
         } else {
             nominal
         };

@@ -100,10 +100,10 @@ done
 # The table: the marker (TCP) position error in the camera frame on the 100 verification rows.
 row() { # label, csv
     awk -F, -v label="$1" 'NR > 1 { e = $4; s += e; q += e * e; if (e > m) m = e; n++ }
-        END { printf "%-44s %8.2f %8.2f %8.2f %6d\n", label, s / n, sqrt(q / n), m, n }' "$2"
+        END { printf "%-52s %8.2f %8.2f %8.2f %6d\n", label, s / n, sqrt(q / n), m, n }' "$2"
 }
 echo "DLR Agile Justin, last 100 rows (verification), marker position error in the camera frame, mm"
-printf "%-44s %8s %8s %8s %6s\n" "model" "mean" "RMS" "max" "points"
+printf "%-52s %8s %8s %8s %6s\n" "model" "mean" "RMS" "max" "points"
 row "nominal (camera frame and markers fitted)" "$out/absolute-ver-nominal.csv"
 row "geometric calibration (--method position)" "$out/absolute-ver-geometric.csv"
 if [ "$model" != geometric ]; then

@@ -535,7 +535,7 @@ fn arm_details_ui(ui: &mut egui::Ui, session: &Session, side: Side) {
 }
 
 /// The calibrated model's errors beyond geometry (`Model` other than geometric): each identified
-/// compliance and harmonic amplitude with its 1σ; the held lumped masses are not listed.
+/// compliance and harmonic amplitude with its 1σ.
 fn errors_ui(
     ui: &mut egui::Ui,
     side: Side,
@@ -568,9 +568,6 @@ fn errors_ui(
             .num_columns(2)
             .show(ui, |ui| {
                 for (i, value) in arm.errors.values.iter().enumerate() {
-                    if model.param_is_mass(i) {
-                        continue;
-                    }
                     let name = arm.param_name(off + i);
                     let unit = model.param_unit(i);
                     let sigma = u

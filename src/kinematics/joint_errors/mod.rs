@@ -208,8 +208,9 @@ pub struct JointErrorModel {
     /// The revolute joints with harmonics.
     harmonic_joints: Vec<usize>,
     hinges: Vec<Hinge>,
-    /// Links carrying a lumped mass: one per movable joint (0 without elasticity).
-    links: usize,
+    /// Each link's lumped mass (kg) and first moment (kg·mm, in the next joint frame): one per movable
+    /// joint, none without elasticity. Held: part of the model, not of its parameters.
+    masses: Vec<(f64, Vector3<f64>)>,
     /// Each hinge's torque row `∂τ/∂(masses)` per configuration: it depends on the configuration and
     /// the reference geometry only, so a fit computes it once per configuration.
     torque_rows: TorqueCache,
@@ -220,11 +221,12 @@ pub struct JointErrorModel {
 
 /// The other arm of a torso, at the instants this arm was measured (its configurations by this
 /// arm's joint values): its held lumped masses beyond the torso load this arm's torso hinges.
-#[derive(Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct OtherArm {
     reference: ArmKinematics,
-    /// Its links beyond the torso (after its own joints).
-    links: Vec<usize>,
+    /// Its links beyond the torso (after its own joints) and their lumped masses (kg) and first
+    /// moments (kg·mm, in the next joint frame).
+    links: Vec<(usize, f64, Vector3<f64>)>,
     /// This arm's shared (torso) joints.
     shared: Vec<usize>,
     /// This arm's joint values (bits) → the other arm's joint values at that instant.
@@ -233,20 +235,33 @@ pub struct OtherArm {
 
 impl OtherArm {
     /// `reference`: the other arm's geometry; `shared`: (this joint, other joint) of the torso;
-    /// `instants`: (this arm's joint values, the other's) of each instant.
+    /// `instants`: (this arm's joint values, the other's) of each instant; `masses`: the other arm's
+    /// lumped mass and first moment of each link ([`JointErrorModel::link_masses`]; 1 kg at the next
+    /// joint where it has no error model).
     pub fn new(
         reference: &ArmKinematics,
         shared: &[(usize, usize)],
         instants: impl IntoIterator<Item = (Vec<f64>, Vec<f64>)>,
+        masses: Option<Vec<(f64, Vector3<f64>)>>,
     ) -> Self {
         let n = match reference {
             ArmKinematics::Dh(_) => N_JOINTS,
             ArmKinematics::Chain { chain, .. } => chain.joint_count(),
         };
+        let mass = |k: usize| {
+            masses
+                .as_ref()
+                .and_then(|m| m.get(k).copied())
+                .unwrap_or((START_MASS_KG, Vector3::zeros()))
+        };
         Self {
             reference: reference.clone(),
             links: (0..n)
                 .filter(|k| !shared.iter().any(|s| s.1 == *k))
+                .map(|k| {
+                    let (m, s) = mass(k);
+                    (k, m, s)
+                })
                 .collect(),
             shared: shared.iter().map(|s| s.0).collect(),
             configs: instants
@@ -271,14 +286,18 @@ impl OtherArm {
         };
         self.links
             .iter()
-            .map(|&k| START_MASS_KG * (frames[k + 1].translation.vector - pivot).dot(gxe))
+            .map(|&(k, m, s)| {
+                let f = &frames[k + 1];
+                m * (f.translation.vector - pivot).dot(gxe)
+                    + s.dot(&f.rotation.inverse_transform_vector(gxe))
+            })
             .sum()
     }
 }
 
-/// `∂τ/∂(mass parameters)` of every hinge at one configuration, and the torque no parameter of this
-/// arm sets (the other arm's, on a shared torso).
-type TorqueRows = Arc<[(Vec<(usize, f64)>, f64)]>;
+/// Every hinge's gravity torque at one configuration, N·m (the other arm's included, on a shared
+/// torso measured together).
+type TorqueRows = Arc<[f64]>;
 
 /// The configurations' torque rows, by the bits of the joint values (bounded: cleared when full).
 #[derive(Default)]
@@ -392,7 +411,11 @@ impl JointErrorModel {
                 }
             }
         }
-        let links = if hinges.is_empty() { 0 } else { joints.len() };
+        let masses = if hinges.is_empty() {
+            Vec::new()
+        } else {
+            vec![(START_MASS_KG, Vector3::zeros()); joints.len()]
+        };
         Self {
             terms,
             gravity_in_base: g,
@@ -400,7 +423,7 @@ impl JointErrorModel {
             joint_names: joints.into_iter().map(|j| j.0).collect(),
             harmonic_joints,
             hinges,
-            links,
+            masses,
             torque_rows: TorqueCache::default(),
             other: None,
         }
@@ -409,8 +432,31 @@ impl JointErrorModel {
     /// The same model with the other arm of a shared torso (see [`OtherArm`]).
     pub fn with_other_arm(&self, other: OtherArm) -> Self {
         let mut out = Self::new(&self.reference, self.terms, self.gravity_in_base);
+        out.masses = self.masses.clone();
         out.other = Some(other);
         out
+    }
+
+    /// The same model with these lumped masses (kg) and first moments (kg·mm, in the next joint
+    /// frame), one per link (a robot's own; the file's). Refused unless one per link.
+    pub fn with_masses(&self, masses: Vec<(f64, Vector3<f64>)>) -> Option<Self> {
+        if masses.len() != self.masses.len() {
+            return None;
+        }
+        let mut out = Self::new(&self.reference, self.terms, self.gravity_in_base);
+        out.masses = masses;
+        out.other = self.other.clone();
+        Some(out)
+    }
+
+    /// Each link's lumped mass (kg) and first moment (kg·mm); empty without elasticity.
+    pub fn link_masses(&self) -> &[(f64, Vector3<f64>)] {
+        &self.masses
+    }
+
+    /// The name of link `k` (after movable joint `k`): `after_<joint>`.
+    pub fn link_name(&self, k: usize) -> String {
+        format!("after_{}", self.joint_names[k])
     }
 
     /// The geometry the torques are computed on.
@@ -431,27 +477,19 @@ impl JointErrorModel {
         self.harmonics_count()
     }
 
-    fn mass_offset(&self) -> usize {
+    /// Number of error parameters: the harmonics, then the compliances.
+    pub fn param_count(&self) -> usize {
         self.compliance_offset() + self.hinges.len()
     }
 
-    /// Number of error parameters.
-    pub fn param_count(&self) -> usize {
-        self.mass_offset() + 4 * self.links
-    }
-
-    /// The start values: no harmonics, zero compliances, 1 kg per link at the next joint's origin
-    /// (held): the start model is the geometric one exactly.
+    /// The start values: no harmonics, zero compliances: the start model is the geometric one
+    /// exactly.
     pub fn start_values(&self) -> Vec<f64> {
-        let mut v = vec![0.0; self.param_count()];
-        for k in 0..self.links {
-            v[self.mass_offset() + 4 * k] = START_MASS_KG;
-        }
-        v
+        vec![0.0; self.param_count()]
     }
 
-    /// Name of error parameter `i`: `<joint>.h1_cos` …, `<joint>.k_axis` …, `<link>.mass`,
-    /// `<link>.moment_x` … (a link named by the joint before it: `after_<joint>`).
+    /// Name of error parameter `i`: `<joint>.h1_cos` … `<joint>.h2_sin`, `<joint>.k_axis`,
+    /// `.k_x`, `.k_y` (`.k_alpha` for a DH row).
     pub fn param_name(&self, i: usize) -> String {
         let h = self.harmonics_count();
         if i < h {
@@ -461,28 +499,16 @@ impl JointErrorModel {
             let kind = if r.is_multiple_of(2) { "cos" } else { "sin" };
             return format!("{joint}.h{}_{kind}", r / 2 + 1);
         }
-        if i < self.mass_offset() {
-            let hinge = self.hinges[i - h];
-            return format!("{}.{}", self.joint_names[hinge.joint], hinge.axis.suffix());
-        }
-        let m = i - self.mass_offset();
-        let link = format!("after_{}", self.joint_names[m / 4]);
-        match m % 4 {
-            0 => format!("{link}.mass"),
-            c => format!("{link}.moment_{}", ["x", "y", "z"][c - 1]),
-        }
+        let hinge = self.hinges[i - h];
+        format!("{}.{}", self.joint_names[hinge.joint], hinge.axis.suffix())
     }
 
     /// Unit of error parameter `i`.
     pub fn param_unit(&self, i: usize) -> &'static str {
         if i < self.harmonics_count() {
             "rad"
-        } else if i < self.mass_offset() {
-            "mrad/(N·m)"
-        } else if (i - self.mass_offset()).is_multiple_of(4) {
-            "kg"
         } else {
-            "kg·mm"
+            "mrad/(N·m)"
         }
     }
 
@@ -491,26 +517,15 @@ impl JointErrorModel {
         i < self.harmonics_count()
     }
 
-    /// Is error parameter `i` a lumped mass or moment (known only up to the common mass scale)?
-    pub fn param_is_mass(&self, i: usize) -> bool {
-        i >= self.mass_offset() && i < self.param_count()
-    }
-
     /// Is error parameter `i` a compliance?
     pub fn param_is_compliance(&self, i: usize) -> bool {
-        i >= self.compliance_offset() && i < self.mass_offset()
+        i >= self.compliance_offset() && i < self.param_count()
     }
 
     /// The identifiability analysis' order of the error parameters: harmonics, then compliances (from
-    /// the base). The lumped masses are held (not identified; see the module documentation).
+    /// the base).
     pub fn preference_order(&self) -> Vec<usize> {
-        (0..self.mass_offset()).collect()
-    }
-
-    /// Why error parameter `i` may be held.
-    pub fn physical_reason(&self, i: usize) -> Option<String> {
-        self.param_is_mass(i)
-            .then(|| "the lumped masses are held (only compliance × mass shows in the data)".into())
+        (0..self.param_count()).collect()
     }
 
     /// Joint `j`'s value at `q`.
@@ -530,13 +545,9 @@ impl JointErrorModel {
         }
     }
 
-    /// Hinge `h`'s torque row at the reference frames: `(mass parameter, ∂τ/∂it)`, τ in N·m.
-    fn torque_row(
-        &self,
-        h: &Hinge,
-        frames: &[Isometry3<f64>],
-        key: &[u64],
-    ) -> (Vec<(usize, f64)>, f64) {
+    /// Hinge `h`'s gravity torque at the reference frames, N·m: this arm's lumped masses beyond it,
+    /// and the other arm's on a shared torso at an instant of the data (`key`: the joint values' bits).
+    fn torque(&self, h: &Hinge, frames: &[Isometry3<f64>], key: &[u64]) -> f64 {
         let (pivot, axis) = match h.axis {
             HingeAxis::Axis => (frames[h.joint], Vector3::z()),
             HingeAxis::CrossX => (frames[h.joint], Vector3::x()),
@@ -546,23 +557,22 @@ impl JointErrorModel {
         let p = pivot.translation.vector;
         let e = pivot.rotation * axis;
         let gxe = self.gravity_in_base.cross(&e) * (STANDARD_GRAVITY_M_S2 / 1000.0);
-        let off = self.mass_offset();
-        let mut row = Vec::with_capacity(4 * (self.links - h.joint));
-        for k in h.joint..self.links {
-            let f = &frames[k + 1];
-            let i = off + 4 * k;
-            row.push((i, (f.translation.vector - p).dot(&gxe)));
-            let ds = f.rotation.inverse_transform_vector(&gxe);
-            row.extend((0..3).map(|c| (i + 1 + c, ds[c])));
-        }
+        let own: f64 = (h.joint..self.masses.len())
+            .map(|k| {
+                let (m, s) = &self.masses[k];
+                let f = &frames[k + 1];
+                m * (f.translation.vector - p).dot(&gxe)
+                    + s.dot(&f.rotation.inverse_transform_vector(&gxe))
+            })
+            .sum();
         let other = self
             .other
             .as_ref()
             .map_or(0.0, |o| o.torque(h, &p, &gxe, key));
-        (row, other)
+        own + other
     }
 
-    /// Every hinge's torque row at `q`, computed once per configuration.
+    /// Every hinge's torque at `q`, computed once per configuration.
     fn torque_rows(&self, q: &[f64]) -> TorqueRows {
         let key: Vec<u64> = q.iter().map(|v| v.to_bits()).collect();
         if let Ok(cache) = self.torque_rows.0.read()
@@ -574,7 +584,7 @@ impl JointErrorModel {
         let rows: TorqueRows = self
             .hinges
             .iter()
-            .map(|h| self.torque_row(h, &frames, &key))
+            .map(|h| self.torque(h, &frames, &key))
             .collect();
         if let Ok(mut cache) = self.torque_rows.0.write() {
             if cache.len() >= TORQUE_CACHE_CONFIGS {
@@ -607,16 +617,12 @@ impl JointErrorModel {
             out.add(slot, value, row);
         }
         if !self.hinges.is_empty() {
-            let rows = self.torque_rows(q);
+            let torques = self.torque_rows(q);
             let c0 = self.compliance_offset();
-            for (n, (h, (dtau, other))) in self.hinges.iter().zip(rows.iter()).enumerate() {
-                let tau: f64 = other + dtau.iter().map(|&(i, d)| values[i] * d).sum::<f64>();
+            for (n, (h, &tau)) in self.hinges.iter().zip(torques.iter()).enumerate() {
                 let kappa = values[c0 + n] * 1e-3;
                 let row = if derivatives {
-                    let mut row: Vec<(usize, f64)> =
-                        dtau.iter().map(|&(i, d)| (i, kappa * d)).collect();
-                    row.push((c0 + n, tau * 1e-3));
-                    row
+                    vec![(c0 + n, tau * 1e-3)]
                 } else {
                     Vec::new()
                 };

@@ -16,20 +16,25 @@ const FULL: ErrorTerms = ErrorTerms {
     harmonics: 2,
 };
 
-/// `model` with random error values of a realistic size: compliances 0.005–0.08 mrad/(N·m), masses 0.5–4 kg,
-/// moments within ±400 kg·mm, harmonics within ±1 mrad.
+/// `model` with random error values of a realistic size: compliances 0.005–0.08 mrad/(N·m),
+/// harmonics within ±1 mrad, and held masses of 0.5–4 kg with moments within ±400 kg·mm.
 fn with_random_errors(model: ArmModel, rng: &mut ChaCha8Rng) -> ArmModel {
-    let model = model.with_error_terms(FULL, Vector3::new(0.1, -0.2, -1.0));
+    let mut model = model.with_error_terms(FULL, Vector3::new(0.1, -0.2, -1.0));
     let off = model.error_offset();
     let m = model.errors.model.clone().unwrap();
+    let masses = (0..m.link_masses().len())
+        .map(|_| {
+            (
+                rng.random_range(0.5..4.0),
+                Vector3::from_fn(|_, _| rng.random_range(-400.0..400.0)),
+            )
+        })
+        .collect();
+    model.errors.model = Some(Arc::new(m.with_masses(masses).unwrap()));
     let mut v = model.to_vector();
     for i in 0..m.param_count() {
         v[off + i] = if m.param_is_compliance(i) {
             rng.random_range(0.005..0.08)
-        } else if m.param_unit(i) == "kg" {
-            rng.random_range(0.5..4.0)
-        } else if m.param_is_mass(i) {
-            rng.random_range(-400.0..400.0)
         } else {
             rng.random_range(-1e-3..1e-3)
         };
@@ -42,7 +47,8 @@ fn dh_error_columns_match_central_differences() {
     let mut rng = ChaCha8Rng::seed_from_u64(21);
     for _ in 0..5 {
         let model = with_random_errors(crate::kinematics::tests::perturbed(&mut rng), &mut rng);
-        assert_eq!(model.param_count(), 28 + 9 + 7 * 4 + 14 + 4 * 7);
+        // 28 DH, 9 reflector, 4 harmonics and 2 compliances (axis, α) per joint.
+        assert_eq!(model.param_count(), 28 + 9 + 7 * 4 + 14);
         let q = crate::kinematics::tests::random_q(&mut rng);
         if let Err(e) = check_arm_jacobian(&model, &q, &stacked_jacobian(&model, &q)) {
             panic!("q {q:?}: {e}");
@@ -108,9 +114,10 @@ fn an_axis_deflection_is_the_gravity_torque_times_the_compliance() {
     let name = |k: usize| model.param_name(k);
     let find = |n: &str| (off..model.param_count()).find(|&k| name(k) == n).unwrap();
     v[find("j.k_axis")] = 0.1;
-    v[find("after_j.mass")] = 2.0;
-    v[find("after_j.moment_x")] = 2.0 * 500.0;
-    let model = model.with_vector(&v);
+    let mut model = model.with_vector(&v);
+    let m = model.errors.model.clone().unwrap();
+    let masses = vec![(2.0, Vector3::new(2.0 * 500.0, 0.0, 0.0))];
+    model.errors.model = Some(Arc::new(m.with_masses(masses).unwrap()));
     let inc = model.errors.increments(&[0.0]).unwrap();
     let expected = 0.1e-3 * 2.0 * STANDARD_GRAVITY_M_S2 * 0.5;
     assert_eq!(inc.slots.len(), 1);
@@ -132,4 +139,94 @@ fn model_names_parse() {
         assert_eq!(terms.name(), name);
     }
     assert!(ErrorTerms::from_name("elastics").is_err());
+}
+
+/// A torso both arms share, measured together: the other arm's masses load the torso's hinges. The
+/// left arm's points move when only the right arm moves, and the Jacobian stays exact.
+#[test]
+fn the_other_arm_loads_the_shared_torso() {
+    use crate::kinematics::DualArmModel;
+    use crate::side::PerSide;
+    use crate::test_robots::{SHARED_TORSO_ARMS, shared_torso_urdf};
+    let mut rng = ChaCha8Rng::seed_from_u64(24);
+    let robot = urdf_rs::read_from_string(&shared_torso_urdf(true)).unwrap();
+    let chains = PerSide::from_fn(|side| {
+        let (base, tip) = SHARED_TORSO_ARMS[usize::from(side == crate::side::Side::Right)];
+        Arc::new(SerialChain::from_urdf(&robot, base, tip).unwrap())
+    });
+    let geometric = DualArmModel {
+        arms: chains
+            .as_ref()
+            .map(|_, c| random_arm(c, &mut rng, 0.5, 0.005)),
+        left_base_from_right_base: Isometry3::identity(),
+    };
+    let shared = geometric.shared_joints();
+    assert!(!shared.is_empty());
+    let elastic = ErrorTerms::from_name("elastic").unwrap();
+    let mut model = geometric.with_error_terms(elastic, -Vector3::z());
+    for side in crate::side::Side::BOTH {
+        let arm = model.arm(side);
+        let mut v = arm.to_vector();
+        for k in arm.error_offset()..arm.param_count() {
+            if arm
+                .errors
+                .model
+                .as_ref()
+                .unwrap()
+                .param_is_compliance(k - arm.error_offset())
+            {
+                v[k] = rng.random_range(0.01..0.1);
+            }
+        }
+        *model.arm_mut(side) = arm.with_vector(&v);
+    }
+    // Two instants with the same left configuration (torso included) and different right arms.
+    let q_left = random_q(&chains.left, &mut rng);
+    let mut q_right = random_q(&chains.right, &mut rng);
+    for &(l, r) in &shared.variables {
+        q_right[r] = q_left[l];
+    }
+    let mut q_right_2 = random_q(&chains.right, &mut rng);
+    for &(l, r) in &shared.variables {
+        q_right_2[r] = q_left[l];
+    }
+    let a = model
+        .clone()
+        .with_torso_instants(&[(q_left.clone(), q_right.clone())]);
+    let b = model
+        .clone()
+        .with_torso_instants(&[(q_left.clone(), q_right_2.clone())]);
+    let (pa, pb, p0) = (
+        a.arm(crate::side::Side::Left)
+            .reflector_fk(&q_left)
+            .points_mm[0],
+        b.arm(crate::side::Side::Left)
+            .reflector_fk(&q_left)
+            .points_mm[0],
+        model
+            .arm(crate::side::Side::Left)
+            .reflector_fk(&q_left)
+            .points_mm[0],
+    );
+    assert!((pa - pb).norm() > 1e-3, "{pa:?} vs {pb:?}");
+    assert!((pa - p0).norm() > 1e-3, "{pa:?} vs {p0:?}");
+    // A configuration that is no instant of the data: the arm's own masses only.
+    let other_q = random_q(&chains.left, &mut rng);
+    assert_eq!(
+        a.arm(crate::side::Side::Left)
+            .reflector_fk(&other_q)
+            .points_mm,
+        model
+            .arm(crate::side::Side::Left)
+            .reflector_fk(&other_q)
+            .points_mm
+    );
+    for (arm, q) in [
+        (a.arm(crate::side::Side::Left), &q_left),
+        (a.arm(crate::side::Side::Right), &q_right),
+    ] {
+        if let Err(e) = check_arm_jacobian(arm, q, &stacked_jacobian(arm, q)) {
+            panic!("{e}");
+        }
+    }
 }
