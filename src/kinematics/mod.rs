@@ -590,16 +590,20 @@ impl DualArmModel {
                 .as_ref()
                 .map(|m| m.link_masses().to_vec())
                 .filter(|m| !m.is_empty());
-            let (pairs, instants): (Vec<(usize, usize)>, Vec<(Vec<f64>, Vec<f64>)>) = match side {
-                Side::Left => (shared.joints.clone(), instants.to_vec()),
-                Side::Right => (
-                    shared.joints.iter().map(|&(l, r)| (r, l)).collect(),
-                    instants
-                        .iter()
-                        .map(|(l, r)| (r.clone(), l.clone()))
-                        .collect(),
-                ),
-            };
+            // (this arm's, the other's): joints of the torso, and joint values of each instant.
+            let flip = side == Side::Right;
+            let pairs: Vec<(usize, usize)> = shared
+                .joints
+                .iter()
+                .map(|&(l, r)| if flip { (r, l) } else { (l, r) })
+                .collect();
+            let instants = instants.iter().map(|(l, r)| {
+                if flip {
+                    (r.clone(), l.clone())
+                } else {
+                    (l.clone(), r.clone())
+                }
+            });
             let other = joint_errors::OtherArm::new(reference, &pairs, instants, masses);
             self.arms[side].errors.model = Some(Arc::new(model.with_other_arm(other)));
         }
