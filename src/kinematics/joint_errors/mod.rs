@@ -21,16 +21,20 @@
 //!
 //! (`o_{k+1}`, `R_{k+1}` the frame after link k: the next joint's, or the tip). This is a
 //! **mass-free** form: a robot given only as a DH table (DLR's Justin) has no masses, and only the
-//! products `κ·m`, `κ·s` reach the data. The masses are **held** at 1 kg per link at the next joint's
-//! origin (`s = 0`) and each hinge's compliance is identified: a linear parameter, identifiable from
-//! the first configuration on, zero at the start (the start model is the geometric one exactly). The
-//! compliances are therefore those *of this mass distribution*: compare them between joints of one
-//! calibration, not with a datasheet. Identifying the masses too (`κ` and `m, s` bilinear; the mass
-//! scale is a gauge) was tried on DLR's Agile Justin and left alone: from compliances near zero the
-//! masses' columns vanish, and Levenberg–Marquardt walked a joint origin 100 mm off while the cost
-//! fell (docs/real-data.md); a different held distribution (mass ∝ link length, at the link's middle)
-//! changed the verification mean by 0.02 mm there. The masses stay parameters of the file, so a
-//! robot's own (URDF inertials) can be given later.
+//! products `κ·m`, `κ·s` reach the data. The masses are **held** — part of the model, not of its
+//! parameters: 1 kg per link at the next joint's origin (`s = 0`), or a robot's own given in the
+//! parameter file ([`JointErrorModel::with_masses`]) — and each hinge's compliance is identified: a
+//! linear parameter, zero at the start (the start model is the geometric one exactly). The compliances
+//! are therefore those *of this mass distribution*: compare them between joints of one calibration,
+//! not with a datasheet. Identifying the masses too (`κ` and `m, s` bilinear; the mass scale a gauge)
+//! was tried on DLR's Agile Justin and left alone: from compliances near zero the masses' columns
+//! vanish, and Levenberg–Marquardt walked a joint origin 100 mm off while the cost fell
+//! (docs/real-data.md).
+//!
+//! **A torso both arms share**, measured together: the torso joints carry both arms, so each arm's
+//! model adds the other arm's lumped masses at the same instant to its torso hinges' torques
+//! ([`OtherArm`], attached by `DualArmModel::with_torso_instants` from the dataset's rows of one id).
+//! A configuration that is no instant of the data gets this arm's masses only.
 //!
 //! The torques are computed on the **reference geometry** (the nominal kinematics the error model was
 //! attached to), not on the calibrated one: the two differ by millimetres, which changes a torque by
@@ -45,6 +49,8 @@
 //! gear ratio) are not modelled.
 //!
 //! Prismatic joints carry neither (their links carry masses for the joints before them).
+//! Compliances are in mrad/(N·m): in µrad a wrist joint's column (a torque of 1 N·m) fell below the
+//! identifiability analysis' negligible-column threshold.
 
 use super::chain::PARAMS_PER_JOINT;
 #[cfg(test)]
