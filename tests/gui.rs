@@ -2025,3 +2025,50 @@ fn the_model_picker_calibrates_beyond_geometry_beside_the_geometric_fit() {
             .is_geometric()
     );
 }
+
+/// Not a test: the workbench after a calibration beyond geometry — the Accuracy tab with nominal, the
+/// geometric calibration and the full model side by side, the robot section's compliances. Writes a
+/// PNG (`DUALCAL_SCREENSHOT_OUT`, default `target/workbench-full-model.png`; 1280 × 800):
+/// `cargo test --release --test gui beyond_geometry_screenshot -- --ignored --nocapture`.
+#[test]
+#[ignore = "writes a screenshot; run by hand"]
+fn beyond_geometry_screenshot() {
+    let robot = dualcal::robot::RobotDescription::builtin_irb14000();
+    let opts = dualcal::simulate::SimOptions {
+        joint_error: Some(dualcal::simulate::unmodelled_joint_errors()),
+        ..dualcal::simulate::paper_options(5, 220, 120)
+    };
+    let sim = dualcal::simulate::simulate_with_robot(&opts, &robot).expect("simulation");
+    let dir = tempfile::tempdir().unwrap();
+    dualcal::dataset::save(&sim.dataset, dir.path(), dualcal::dataset::Units::MM_DEG).unwrap();
+    let out = std::env::var_os("DUALCAL_SCREENSHOT_OUT").map_or_else(
+        || "target/workbench-full-model.png".into(),
+        std::path::PathBuf::from,
+    );
+    let mut harness = Harness::builder()
+        .with_size(eframe::egui::Vec2::new(1280.0, 800.0))
+        .wgpu()
+        .build_eframe(|cc| {
+            WorkbenchApp::new(
+                cc,
+                AppLaunch {
+                    dataset: Some(dir.path().to_path_buf()),
+                    urdf: None,
+                },
+            )
+        });
+    loaded(&mut harness);
+    harness.state_mut().settings_mut().model =
+        dualcal::kinematics::ErrorTerms::from_name("full").unwrap();
+    calibrate(&mut harness);
+    assert!(
+        harness.state().errors().is_empty(),
+        "{:?}",
+        harness.state().errors()
+    );
+    harness.get_by_label("Accuracy").click();
+    harness.run_steps(4);
+    let image = harness.render().expect("render");
+    image.save(&out).expect("write the PNG");
+    println!("wrote {}", out.display());
+}

@@ -211,7 +211,13 @@ pub fn accuracy_ui(ui: &mut egui::Ui, session: &Session, indicator: Indicator, s
         colors.push(GEOMETRIC_COLOR);
     }
     analyses.push(after.map(|a| a.analysis()));
-    names.push(after.map_or_else(|| "calibrated".into(), After::short_name));
+    // Beside the geometric fit, the finished calibration is named by its model ("full model").
+    names.push(match (geometric, after) {
+        (Some(_), Some(After::Calibrated(c))) => {
+            format!("{} model", c.result.settings.model.name())
+        }
+        _ => after.map_or_else(|| "calibrated".into(), After::short_name),
+    });
     colors.push(if matches!(after, Some(After::Live(_))) {
         LIVE_COLOR
     } else {
