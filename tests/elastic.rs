@@ -10,6 +10,8 @@
 //! `A sin(2q + φ) = A sin φ cos 2q + A cos φ sin 2q`). The test prints every figure.
 
 mod common;
+#[path = "fixtures/robots.rs"]
+mod robots;
 
 use dualcal::dataset::Split;
 use dualcal::kinematics::{DualArmModel, ErrorTerms, joint_errors::STANDARD_GRAVITY_M_S2};
@@ -177,10 +179,66 @@ fn the_full_model_survives_the_parameter_file_and_leaves_the_urdf_geometric() {
         .unwrap_err()
         .to_string();
     assert!(err.contains("j9.k_axis"), "{err}");
+    // The overlay carries them for the software that compensates: both arms, every parameter.
+    let overlay = dualcal::urdf_export::calibrated_overlay(&robot, &result.calibrated).unwrap();
+    assert_eq!(overlay.beyond_geometry.len(), 2);
+    let left = result.calibrated.arm(Side::Left);
+    let k = (left.error_offset()..left.param_count())
+        .find(|&k| left.param_name(k) == "j2.k_axis")
+        .unwrap();
+    assert!(
+        overlay.beyond_geometry[0]
+            .parameters
+            .contains(&("j2.k_axis".to_string(), left.to_vector()[k]))
+    );
+    let yaml = overlay.to_yaml();
+    assert!(
+        yaml.contains("beyond_geometry:\n  - arm: \"left\"\n    model: \"elastic\""),
+        "{yaml}"
+    );
+    assert!(yaml.contains(&format!("\"j2.k_axis\": {:?}", left.to_vector()[k])));
     // The URDF holds the geometry and says so.
     let urdf = dualcal::urdf_export::calibrated_urdf(&robot, &result.calibrated).unwrap();
     assert!(urdf.contains("a URDF cannot hold them"), "{}", &urdf[..400]);
     let geometric =
         dualcal::urdf_export::calibrated_urdf(&robot, &result.calibrated.geometric()).unwrap();
     assert!(!geometric.contains("a URDF cannot hold them"));
+}
+
+/// What the data cannot separate is held and named: a waist turning about the vertical carries no
+/// gravity torque about its axis, so its axis compliance is unidentifiable (its bending across the axis
+/// is not); the torso's compliances are identified once per arm model and the calibration converges.
+#[test]
+fn a_vertical_waist_has_no_axis_compliance_to_identify() {
+    use dualcal::robot::{ArmLinks, LoadOptions};
+    use dualcal::side::PerSide;
+    let dir = tempfile::tempdir().unwrap();
+    let urdf = dir.path().join("torso.urdf");
+    std::fs::write(&urdf, robots::shared_torso_urdf(false)).unwrap();
+    let [(lb, lt), (rb, rt)] = robots::SHARED_TORSO_ARMS;
+    let options = LoadOptions {
+        arms: PerSide::new(Some(ArmLinks::new(lb, lt)), Some(ArmLinks::new(rb, rt))),
+        ..Default::default()
+    };
+    let robot = RobotDescription::load(&urdf, &options).unwrap();
+    let sim = simulate_with_robot(&paper_options(8, 220, 120), &robot).unwrap();
+    let settings = CalibrationSettings {
+        model: ErrorTerms::from_name("elastic").unwrap(),
+        gravity_in_left_base: Some(robot.gravity_in_left_base(None)),
+        ..Default::default()
+    };
+    let result = common::calibrate(&sim.dataset, &sim.nominal, &settings);
+    assert!(result.is_converged(), "{:?}", result.stages);
+    let report = result.identifiability.left.as_ref().unwrap();
+    let waist = "yumi_base_link_to_body";
+    let axis = report
+        .fixed
+        .iter()
+        .find(|f| f.name == format!("{waist}.k_axis"))
+        .unwrap_or_else(|| panic!("{waist}.k_axis is not held: {:?}", report.fixed));
+    eprintln!("{}: {}", axis.name, axis.reason);
+    assert!(axis.reason.contains("do not depend on it"), "{}", axis.reason);
+    let left = result.calibrated.arm(Side::Left);
+    let free: Vec<String> = report.free.iter().map(|&k| left.param_name(k)).collect();
+    assert!(free.contains(&format!("{waist}.k_x")), "{free:?}");
 }

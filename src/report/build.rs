@@ -261,7 +261,8 @@ fn arm_summary(
     let (uncertainty, uncertainty_source) =
         arm_uncertainty(side, calibrated, params, method, kept, &fixed);
     let (x0, x1) = (nominal.to_vector(), calibrated.to_vector());
-    let parameters = (0..x1.len().min(x0.len()))
+    // The errors beyond geometry (after the geometric ones) have no nominal value: it is 0 (the start).
+    let parameters = (0..x1.len())
         .map(|k| {
             let name = calibrated.param_name(k);
             ParamRow {
@@ -274,7 +275,8 @@ fn arm_summary(
                     .find(|f| f.name == name)
                     .map(|f| f.reason.clone()),
                 angle: calibrated.param_is_angle(k),
-                nominal: x0[k],
+                unit: calibrated.param_unit(k),
+                nominal: x0.get(k).copied().unwrap_or(0.0),
                 calibrated: x1[k],
                 name,
             }

@@ -181,6 +181,8 @@ pub struct ParamRow {
     pub name: String,
     /// An angle (rad; changes and σ in mrad) or a length (mm).
     pub angle: bool,
+    /// Its unit when neither (an error parameter beyond geometry: `mrad/(N·m)`).
+    pub unit: &'static str,
     pub nominal: f64,
     pub calibrated: f64,
     /// One standard deviation, mm or mrad (`None` for a fixed parameter or without uncertainty).

@@ -50,6 +50,20 @@ pub struct ReflectorOverlay {
     pub xyz: [f64; 3],
 }
 
+/// One arm's errors beyond geometry (`dualcal calibrate --model`): what a URDF cannot hold, for the
+/// software that compensates with the full model.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ErrorsOverlay {
+    pub arm: String,
+    pub model: String,
+    /// Gravity's direction in the arm's model base frame.
+    pub gravity_in_base: [f64; 3],
+    /// Harmonics (rad) and compliances (mrad/(N·m)), by name, in the model's order.
+    pub parameters: Vec<(String, f64)>,
+    /// The held lumped masses: per link (`after_<joint>`) kg and first moment kg·mm.
+    pub masses: Vec<(String, f64, [f64; 3])>,
+}
+
 /// The whole overlay.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct CalibrationOverlay {
@@ -58,6 +72,44 @@ pub struct CalibrationOverlay {
     pub robot: String,
     pub joints: Vec<JointOverlay>,
     pub reflectors: Vec<ReflectorOverlay>,
+    /// The errors beyond geometry of each arm that has them (none for the geometric model).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub beyond_geometry: Vec<ErrorsOverlay>,
+}
+
+/// Each arm's errors beyond geometry, for the overlay (one arm once for a single robot).
+fn errors_overlay(model: &DualArmModel) -> Vec<ErrorsOverlay> {
+    let sides: &[crate::side::Side] = if model.is_one_arm() {
+        &[crate::side::Side::Left]
+    } else {
+        &crate::side::Side::BOTH
+    };
+    sides
+        .iter()
+        .filter_map(|&side| {
+            let arm = model.arm(side);
+            let m = arm.errors.model.as_ref()?;
+            let off = arm.error_offset();
+            Some(ErrorsOverlay {
+                arm: side.name().to_string(),
+                model: m.terms.name(),
+                gravity_in_base: m.gravity_in_base.into(),
+                parameters: arm
+                    .errors
+                    .values
+                    .iter()
+                    .enumerate()
+                    .map(|(i, v)| (arm.param_name(off + i), *v))
+                    .collect(),
+                masses: m
+                    .link_masses()
+                    .iter()
+                    .enumerate()
+                    .map(|(k, (mass, s))| (m.link_name(k), *mass, [s.x, s.y, s.z]))
+                    .collect(),
+            })
+        })
+        .collect()
 }
 
 /// The overlay of `model` on `robot`: the joints whose origins differ between `robot` and its
@@ -104,6 +156,7 @@ pub fn calibrated_overlay(
         robot: robot.name(),
         joints,
         reflectors,
+        beyond_geometry: errors_overlay(model),
     })
 }
 
@@ -162,6 +215,31 @@ impl CalibrationOverlay {
                 quoted(&r.parent),
                 list(&r.xyz)
             );
+        }
+        if !self.beyond_geometry.is_empty() {
+            s += "# Errors beyond geometry (no URDF form): joint compliances in mrad/(N·m) under the held\n\
+                  # lumped masses (kg, first moments kg·mm in the next joint frame), harmonics of the joint\n\
+                  # angles in rad. Software that compensates applies them with the geometry above.\n\
+                  beyond_geometry:\n";
+        }
+        for e in &self.beyond_geometry {
+            s += &format!(
+                "  - arm: {}\n    model: {}\n    gravity_in_base: {}\n    parameters:\n",
+                quoted(&e.arm),
+                quoted(&e.model),
+                list(&e.gravity_in_base)
+            );
+            for (name, v) in &e.parameters {
+                s += &format!("      {}: {v:?}\n", quoted(name));
+            }
+            s += "    masses:\n";
+            for (link, m, moment) in &e.masses {
+                s += &format!(
+                    "      {}: {{mass: {m:?}, moment: {}}}\n",
+                    quoted(link),
+                    list(moment)
+                );
+            }
         }
         s
     }

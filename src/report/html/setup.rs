@@ -293,7 +293,7 @@ fn arm_parameters(side: Side, arm: &ArmSummary) -> String {
         .iter()
         .map(|p| {
             let digits = if p.angle { 6 } else { 4 };
-            let unit = if p.angle { "rad / mrad" } else { "mm" };
+            let unit = if p.angle { "rad / mrad" } else { p.unit };
             let sigma = p.sigma.map_or("—".into(), |s| format!("{s:.4}"));
             let ratio = p
                 .sigma
