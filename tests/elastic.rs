@@ -237,8 +237,68 @@ fn a_vertical_waist_has_no_axis_compliance_to_identify() {
         .find(|f| f.name == format!("{waist}.k_axis"))
         .unwrap_or_else(|| panic!("{waist}.k_axis is not held: {:?}", report.fixed));
     eprintln!("{}: {}", axis.name, axis.reason);
-    assert!(axis.reason.contains("do not depend on it"), "{}", axis.reason);
+    assert!(
+        axis.reason.contains("do not depend on it"),
+        "{}",
+        axis.reason
+    );
     let left = result.calibrated.arm(Side::Left);
     let free: Vec<String> = report.free.iter().map(|&k| left.param_name(k)).collect();
     assert!(free.contains(&format!("{waist}.k_x")), "{free:?}");
+}
+
+/// Where the URDF has inertials, the held masses are its links': each movable joint carries its child
+/// link and everything fixed to it, lumped in the next joint's frame, and the torque follows.
+#[test]
+fn urdf_inertials_are_the_held_masses() {
+    use dualcal::robot::{ArmLinks, LoadOptions};
+    use dualcal::side::PerSide;
+    // One revolute joint about y; the upper link 2 kg at 0.5 m, a tool fixed at its end 1 kg 0.1 m
+    // further: 1.6 kg·m of lever in all.
+    let urdf = r#"<robot name="one">
+      <link name="base"/>
+      <link name="upper"><inertial><origin xyz="0.5 0 0"/><mass value="2"/>
+        <inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/></inertial></link>
+      <link name="tool"><inertial><origin xyz="0.1 0 0"/><mass value="1"/>
+        <inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/></inertial></link>
+      <joint name="j" type="revolute"><parent link="base"/><child link="upper"/>
+        <origin xyz="0 0 0"/><axis xyz="0 1 0"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+      <joint name="fix" type="fixed"><parent link="upper"/><child link="tool"/><origin xyz="0.5 0 0"/></joint>
+    </robot>"#;
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("one.urdf");
+    std::fs::write(&path, urdf).unwrap();
+    let arm = Some(ArmLinks::new("base", "tool"));
+    let options = LoadOptions {
+        arms: PerSide::new(arm.clone(), arm),
+        ..Default::default()
+    };
+    let robot = RobotDescription::load(&path, &options).unwrap();
+    let masses = robot
+        .lumped_masses(Side::Left)
+        .expect("the URDF's inertials");
+    assert_eq!(masses.len(), 1);
+    let (m, s) = masses[0];
+    assert!((m - 3.0).abs() < 1e-12, "{m}");
+    // In the tip (tool) frame: the upper link's centre at its origin, the tool's 100 mm out.
+    assert!((nalgebra::Vector3::from(s) - nalgebra::Vector3::new(100.0, 0.0, 0.0)).norm() < 1e-9);
+    // The joint's deflection under 0.1 mrad/(N·m): 1.6 kg·m · g.
+    let nominal = robot.nominal_model([nalgebra::Vector3::zeros()]);
+    let model = nominal
+        .with_error_terms(
+            ErrorTerms::from_name("elastic-axis").unwrap(),
+            -Vector3::z(),
+        )
+        .with_held_masses(&PerSide::new(Some(masses.clone()), Some(masses)));
+    let arm = model.arm(Side::Left);
+    let mut v = arm.to_vector();
+    v[arm.error_offset()] = 0.1;
+    let arm = arm.with_vector(&v);
+    let inc = arm.errors.increments(&[0.0]).unwrap();
+    let expected = 0.1e-3 * 1.6 * STANDARD_GRAVITY_M_S2;
+    assert!(
+        (inc.slots[0].1.abs() - expected).abs() < 1e-12,
+        "{:?}",
+        inc.slots
+    );
 }

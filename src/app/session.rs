@@ -289,12 +289,19 @@ impl Session {
             .collect()
     }
 
-    /// `settings` with gravity's direction for the elastic models: the robot's (−z of its root link
-    /// in the left arm's base) unless the settings name one.
+    /// `settings` with what the elastic models take from the robot: gravity's direction (−z of its
+    /// root link in the left arm's base) unless the settings name one, and the lumped masses of its
+    /// inertials where it has them.
     pub fn with_gravity(&self, mut settings: CalibrationSettings) -> CalibrationSettings {
         settings
             .gravity_in_left_base
             .get_or_insert_with(|| self.robot.gravity_in_left_base(None));
+        if !settings.model.is_geometric()
+            && settings.held_masses.left.is_none()
+            && settings.held_masses.right.is_none()
+        {
+            settings.held_masses = crate::side::PerSide::from_fn(|s| self.robot.lumped_masses(s));
+        }
         settings
     }
 

@@ -681,6 +681,9 @@ fn calibrate_cmd(a: &CalibrateArgs) -> Result<()> {
     let mut settings = settings_from(a, &ws.dataset)?;
     settings.model = a.model;
     settings.gravity_in_left_base = Some(ws.robot.gravity_in_left_base(a.gravity));
+    if !settings.model.is_geometric() {
+        settings.held_masses = crate::side::PerSide::from_fn(|s| ws.robot.lumped_masses(s));
+    }
     if a.method.is_none()
         && let Some(why) = crate::solver::default_method_reason(&ws.dataset)
     {

@@ -565,6 +565,22 @@ impl DualArmModel {
         }
     }
 
+    /// Each arm's elastic terms with these held lumped masses (per movable joint kg and first moment
+    /// kg·mm in the next joint frame; `None`, or a list of another length: unchanged).
+    pub fn with_held_masses(mut self, masses: &PerSide<Option<joint_errors::LinkMasses>>) -> Self {
+        for side in Side::BOTH {
+            let (Some(model), Some(m)) = (self.arms[side].errors.model.clone(), &masses[side])
+            else {
+                continue;
+            };
+            let list = m.iter().map(|(kg, s)| (*kg, Vector3::from(*s))).collect();
+            if let Some(with) = model.with_masses(list) {
+                self.arms[side].errors.model = Some(Arc::new(with));
+            }
+        }
+        self
+    }
+
     /// On a torso both arms share, with errors beyond geometry, measured together: each arm's error
     /// model carries the other arm at the same instants (`instants`: each instant's left and right
     /// joint values), so the other arm's lumped masses load the torso hinges too. Unchanged without

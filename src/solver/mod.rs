@@ -45,7 +45,7 @@ pub mod uncertainty;
 
 use crate::dataset::Split;
 use crate::kinematics::ErrorTerms;
-use crate::side::{ConfigId, Side};
+use crate::side::{ConfigId, PerSide, Side};
 pub use methods::{BaseMethod, BaseMethodSpec, Method, MethodSpec, Observes, SolverKind};
 pub use result::{CalibrationResult, STAGES};
 pub use run::{
@@ -145,6 +145,15 @@ pub struct CalibrationSettings {
     /// frame; the command line and the workbench give the robot's: −z of its root link).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub gravity_in_left_base: Option<[f64; 3]>,
+    /// The elastic terms' held lumped masses per arm — per movable joint kg and first moment kg·mm in
+    /// the next joint frame — from the robot description's inertials
+    /// ([`crate::robot::RobotDescription::lumped_masses`]); `None`: 1 kg at each next joint.
+    #[serde(default, skip_serializing_if = "no_masses")]
+    pub held_masses: PerSide<Option<crate::kinematics::joint_errors::LinkMasses>>,
+}
+
+fn no_masses(m: &PerSide<Option<crate::kinematics::joint_errors::LinkMasses>>) -> bool {
+    m.left.is_none() && m.right.is_none()
 }
 
 fn default_progress_tolerance() -> f64 {
@@ -167,6 +176,7 @@ impl Default for CalibrationSettings {
             hold_kinematics: false,
             model: ErrorTerms::GEOMETRIC,
             gravity_in_left_base: None,
+            held_masses: PerSide::default(),
         }
     }
 }

@@ -61,6 +61,10 @@ use nalgebra::{Isometry3, Vector3};
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
 
+/// Held lumped masses of an arm, one per movable joint: mass (kg) and first moment (kg·mm) in the
+/// next joint's frame, as files and settings carry them.
+pub type LinkMasses = Vec<(f64, [f64; 3])>;
+
 /// Standard gravity, m/s².
 pub const STANDARD_GRAVITY_M_S2: f64 = 9.80665;
 /// The lumped mass of each link, kg, at the next joint's origin (its first moment 0): held.
