@@ -22,8 +22,9 @@
 //! (`o_{k+1}`, `R_{k+1}` the frame after link k: the next joint's, or the tip). This is a
 //! **mass-free** form: a robot given only as a DH table (DLR's Justin) has no masses, and only the
 //! products `κ·m`, `κ·s` reach the data. The masses are **held** — part of the model, not of its
-//! parameters: 1 kg per link at the next joint's origin (`s = 0`), or a robot's own given in the
-//! parameter file ([`JointErrorModel::with_masses`]) — and each hinge's compliance is identified: a
+//! parameters: the URDF's inertials where it has them (`RobotDescription::lumped_masses`), else 1 kg
+//! per link at the next joint's origin (`s = 0`); [`JointErrorModel::with_masses`] — and each hinge's
+//! compliance is identified: a
 //! linear parameter, zero at the start (the start model is the geometric one exactly). The compliances
 //! are therefore those *of this mass distribution*: compare them between joints of one calibration,
 //! not with a datasheet. Identifying the masses too (`κ` and `m, s` bilinear; the mass scale a gauge)
