@@ -59,9 +59,9 @@ impl Report {
         let ds = ws.dataset;
         let calibrated = params
             .to_model_for(ws.robot)
-            .map_err(|source| ReportError::Model {
+            .map_err(|error| ReportError::Model {
                 path: params_path.to_path_buf(),
-                source,
+                error,
             })?
             .with_torso_instants(&ds.instants());
         let method = method_summary(params);
@@ -74,7 +74,7 @@ impl Report {
             Analysis::compute_excluding(ds, model, &body, &excluded).map_err(|source| {
                 ReportError::Analysis {
                     path: ds.dir.clone(),
-                    source,
+                    error: source,
                 }
             })
         };
@@ -186,9 +186,9 @@ fn accuracy(
             continue;
         }
         let evaluate = |model| {
-            metrics::evaluate(kept, model, split).map_err(|source| ReportError::Metrics {
+            metrics::evaluate(kept, model, split).map_err(|error| ReportError::Metrics {
                 path: kept.dir.clone(),
-                source,
+                error,
             })
         };
         out.push(SplitAccuracy {

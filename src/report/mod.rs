@@ -41,17 +41,15 @@ pub enum ReportError {
     #[error(transparent)]
     Params(#[from] ParamsError),
     /// The parameter file reads but does not fit the dataset's robot.
-    #[error("{}: {source}", path.display())]
-    Model { path: PathBuf, source: ParamsError },
+    // (The cause is in the message, not a `source`: a chain printed with `{:#}` would say it twice.)
+    #[error("{}: {error}", path.display())]
+    Model { path: PathBuf, error: ParamsError },
     /// The accuracy figures cannot be computed on the dataset.
-    #[error("{}: the accuracy figures cannot be computed: {source}", path.display())]
-    Metrics { path: PathBuf, source: MetricsError },
+    #[error("{}: the accuracy figures cannot be computed: {error}", path.display())]
+    Metrics { path: PathBuf, error: MetricsError },
     /// The figures of a model cannot be computed on the dataset.
-    #[error("{}: the figures cannot be computed: {source}", path.display())]
-    Analysis {
-        path: PathBuf,
-        source: AnalysisError,
-    },
+    #[error("{}: the figures cannot be computed: {error}", path.display())]
+    Analysis { path: PathBuf, error: AnalysisError },
 }
 
 /// What a report is made on: a loaded dataset, its robot and the robot's nominal model (a
