@@ -1931,13 +1931,10 @@ fn the_method_follows_the_data_until_picked() {
     assert_eq!(harness.state().settings().method, Method::Minimax);
 }
 
-/// Issue 21 in the workbench: the Model picker calibrates beyond geometry; the Accuracy tab shows the
-/// geometric calibration of the same data between nominal and the full model; the identified
-/// compliances and harmonics are listed with their σ; the exported parameter file carries them.
-#[test]
-fn the_model_picker_calibrates_beyond_geometry_beside_the_geometric_fit() {
-    use dualcal::dataset::Split;
-    use dualcal::kinematics::ErrorTerms;
+/// A paper-size simulated dataset of the built-in robot with the robustness study's joint errors (gear
+/// harmonics and compliance: what only a model beyond geometry explains), written to a temporary
+/// directory.
+fn joint_error_dataset() -> tempfile::TempDir {
     let robot = dualcal::robot::RobotDescription::builtin_irb14000();
     let opts = dualcal::simulate::SimOptions {
         joint_error: Some(dualcal::simulate::unmodelled_joint_errors()),
@@ -1946,6 +1943,17 @@ fn the_model_picker_calibrates_beyond_geometry_beside_the_geometric_fit() {
     let sim = dualcal::simulate::simulate_with_robot(&opts, &robot).expect("simulation");
     let dir = tempfile::tempdir().unwrap();
     dualcal::dataset::save(&sim.dataset, dir.path(), dualcal::dataset::Units::MM_DEG).unwrap();
+    dir
+}
+
+/// Issue 21 in the workbench: the Model picker calibrates beyond geometry; the Accuracy tab shows the
+/// geometric calibration of the same data between nominal and the full model; the identified
+/// compliances and harmonics are listed with their σ; the exported parameter file carries them.
+#[test]
+fn the_model_picker_calibrates_beyond_geometry_beside_the_geometric_fit() {
+    use dualcal::dataset::Split;
+    use dualcal::kinematics::ErrorTerms;
+    let dir = joint_error_dataset();
     let mut harness = open_at(dir.path());
     pick_in_combo(&mut harness, "Model", "full model");
     assert_eq!(
@@ -2033,14 +2041,7 @@ fn the_model_picker_calibrates_beyond_geometry_beside_the_geometric_fit() {
 #[test]
 #[ignore = "writes a screenshot; run by hand"]
 fn beyond_geometry_screenshot() {
-    let robot = dualcal::robot::RobotDescription::builtin_irb14000();
-    let opts = dualcal::simulate::SimOptions {
-        joint_error: Some(dualcal::simulate::unmodelled_joint_errors()),
-        ..dualcal::simulate::paper_options(5, 220, 120)
-    };
-    let sim = dualcal::simulate::simulate_with_robot(&opts, &robot).expect("simulation");
-    let dir = tempfile::tempdir().unwrap();
-    dualcal::dataset::save(&sim.dataset, dir.path(), dualcal::dataset::Units::MM_DEG).unwrap();
+    let dir = joint_error_dataset();
     let out = std::env::var_os("DUALCAL_SCREENSHOT_OUT").map_or_else(
         || "target/workbench-full-model.png".into(),
         std::path::PathBuf::from,

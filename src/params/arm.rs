@@ -54,41 +54,73 @@ pub struct ReflectorsEntry(pub Vec<(String, [f64; 3])>);
 
 impl Serialize for ReflectorsEntry {
     fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
-        use serde::ser::SerializeMap;
-        let mut map = serializer.serialize_map(Some(self.0.len()))?;
-        for (name, v) in &self.0 {
-            map.serialize_entry(name, v)?;
-        }
-        map.end()
+        serialize_in_order(&self.0, serializer)
     }
 }
 
 impl<'de> Deserialize<'de> for ReflectorsEntry {
     fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
-        struct InOrder;
-        impl<'de> serde::de::Visitor<'de> for InOrder {
-            type Value = ReflectorsEntry;
-            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-                f.write_str("an object of reflectors, each name with [x, y, z]")
-            }
-            fn visit_map<A: serde::de::MapAccess<'de>>(
-                self,
-                mut map: A,
-            ) -> Result<Self::Value, A::Error> {
-                let mut out: Vec<(String, [f64; 3])> = Vec::new();
-                while let Some((name, v)) = map.next_entry::<String, [f64; 3]>()? {
-                    if out.iter().any(|(n, _)| *n == name) {
-                        return Err(serde::de::Error::custom(format!(
-                            "reflector `{name}` given twice"
-                        )));
-                    }
-                    out.push((name, v));
-                }
-                Ok(ReflectorsEntry(out))
-            }
-        }
-        deserializer.deserialize_map(InOrder)
+        deserialize_in_order(
+            deserializer,
+            "reflector",
+            "an object of reflectors, each name with [x, y, z]",
+        )
+        .map(ReflectorsEntry)
     }
+}
+
+/// Name-value pairs as a JSON object, in their order (not sorted).
+fn serialize_in_order<S: serde::Serializer, V: Serialize>(
+    pairs: &[(String, V)],
+    serializer: S,
+) -> Result<S::Ok, S::Error> {
+    use serde::ser::SerializeMap;
+    let mut map = serializer.serialize_map(Some(pairs.len()))?;
+    for (name, v) in pairs {
+        map.serialize_entry(name, v)?;
+    }
+    map.end()
+}
+
+/// A JSON object's entries in the file's order; a name given twice is refused (`what`: what a name
+/// names, for the message; `expecting`: what the object is).
+fn deserialize_in_order<'de, D: serde::Deserializer<'de>, V: Deserialize<'de>>(
+    deserializer: D,
+    what: &'static str,
+    expecting: &'static str,
+) -> Result<Vec<(String, V)>, D::Error> {
+    struct InOrder<V> {
+        what: &'static str,
+        expecting: &'static str,
+        value: std::marker::PhantomData<V>,
+    }
+    impl<'de, V: Deserialize<'de>> serde::de::Visitor<'de> for InOrder<V> {
+        type Value = Vec<(String, V)>;
+        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+            f.write_str(self.expecting)
+        }
+        fn visit_map<A: serde::de::MapAccess<'de>>(
+            self,
+            mut map: A,
+        ) -> Result<Self::Value, A::Error> {
+            let mut out: Vec<(String, V)> = Vec::new();
+            while let Some((name, v)) = map.next_entry::<String, V>()? {
+                if out.iter().any(|(n, _)| *n == name) {
+                    return Err(serde::de::Error::custom(format!(
+                        "{} `{name}` given twice",
+                        self.what
+                    )));
+                }
+                out.push((name, v));
+            }
+            Ok(out)
+        }
+    }
+    deserializer.deserialize_map(InOrder {
+        what,
+        expecting,
+        value: std::marker::PhantomData,
+    })
 }
 
 /// Named numbers in the model's order: a JSON object `{"name": value, …}` written and read in that
@@ -98,40 +130,18 @@ pub struct NamedValues(pub Vec<(String, f64)>);
 
 impl Serialize for NamedValues {
     fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
-        use serde::ser::SerializeMap;
-        let mut map = serializer.serialize_map(Some(self.0.len()))?;
-        for (name, v) in &self.0 {
-            map.serialize_entry(name, v)?;
-        }
-        map.end()
+        serialize_in_order(&self.0, serializer)
     }
 }
 
 impl<'de> Deserialize<'de> for NamedValues {
     fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
-        struct InOrder;
-        impl<'de> serde::de::Visitor<'de> for InOrder {
-            type Value = NamedValues;
-            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-                f.write_str("an object of parameters, each name with a number")
-            }
-            fn visit_map<A: serde::de::MapAccess<'de>>(
-                self,
-                mut map: A,
-            ) -> Result<Self::Value, A::Error> {
-                let mut out: Vec<(String, f64)> = Vec::new();
-                while let Some((name, v)) = map.next_entry::<String, f64>()? {
-                    if out.iter().any(|(n, _)| *n == name) {
-                        return Err(serde::de::Error::custom(format!(
-                            "parameter `{name}` given twice"
-                        )));
-                    }
-                    out.push((name, v));
-                }
-                Ok(NamedValues(out))
-            }
-        }
-        deserializer.deserialize_map(InOrder)
+        deserialize_in_order(
+            deserializer,
+            "parameter",
+            "an object of parameters, each name with a number",
+        )
+        .map(NamedValues)
     }
 }
 
