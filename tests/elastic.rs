@@ -207,7 +207,7 @@ fn the_full_model_survives_the_parameter_file_and_leaves_the_urdf_geometric() {
 
 /// What the data cannot separate is held and named: a waist turning about the vertical carries no
 /// gravity torque about its axis, so its axis compliance is unidentifiable (its bending across the axis
-/// is not); the torso's compliances are identified once per arm model and the calibration converges.
+/// is not); the torso's compliances are identified once, for both arms, and the calibration converges.
 #[test]
 fn a_vertical_waist_has_no_axis_compliance_to_identify() {
     use dualcal::robot::{ArmLinks, LoadOptions};
@@ -245,6 +245,33 @@ fn a_vertical_waist_has_no_axis_compliance_to_identify() {
     let left = result.calibrated.arm(Side::Left);
     let free: Vec<String> = report.free.iter().map(|&k| left.param_name(k)).collect();
     assert!(free.contains(&format!("{waist}.k_x")), "{free:?}");
+    // One torso: its compliances are the robot's, identified once from both arms' data and carried
+    // by both arms' models alike; the arms' own are theirs.
+    let right = result.calibrated.arm(Side::Right);
+    let shared = result.calibrated.shared_joints();
+    let value = |arm: &dualcal::kinematics::ArmModel, name: &str| {
+        (arm.error_offset()..arm.param_count())
+            .find(|&k| arm.param_name(k) == name)
+            .map(|k| arm.to_vector()[k])
+            .unwrap_or_else(|| panic!("no {name}"))
+    };
+    let k_x = format!("{waist}.k_x");
+    assert!(value(left, &k_x) != 0.0);
+    assert_eq!(value(left, &k_x), value(right, &k_x));
+    let error_pairs: Vec<String> = shared
+        .params
+        .iter()
+        .filter(|&&(a, _)| a >= left.error_offset())
+        .map(|&(a, b)| {
+            assert_eq!(left.param_name(a), right.param_name(b));
+            left.param_name(a)
+        })
+        .collect();
+    assert!(error_pairs.contains(&k_x), "{error_pairs:?}");
+    assert!(
+        error_pairs.iter().all(|n| n.starts_with(waist)),
+        "only the torso's error parameters are shared: {error_pairs:?}"
+    );
 }
 
 /// Where the URDF has inertials, the held masses are its links': each movable joint carries its child

@@ -23,6 +23,31 @@ pub struct SharedJoints {
     pub params: Vec<(usize, usize)>,
 }
 
+/// The error parameters of the shared joints (their compliances and harmonics, by name): one joint
+/// of the robot gives under the load of both arms once, so both arms' models carry one value.
+fn shared_error_params(
+    left: &ArmModel,
+    right: &ArmModel,
+    names: &[String],
+) -> Vec<(usize, usize)> {
+    let range = |arm: &ArmModel| arm.error_offset()..arm.param_count();
+    let on_shared = |name: &str| {
+        name.rsplit_once('.')
+            .is_some_and(|(joint, _)| names.iter().any(|n| n == joint))
+    };
+    range(left)
+        .filter_map(|a| {
+            let name = left.param_name(a);
+            if !on_shared(&name) {
+                return None;
+            }
+            range(right)
+                .find(|&b| right.param_name(b) == name)
+                .map(|b| (a, b))
+        })
+        .collect()
+}
+
 impl SharedJoints {
     /// The movable joints of `left`'s chain that `right`'s chain holds too (same name); none unless
     /// both arms are chains.
@@ -46,6 +71,7 @@ impl SharedJoints {
                 (0..PARAMS_PER_JOINT).map(|i| (PARAMS_PER_JOINT * a + i, PARAMS_PER_JOINT * b + i)),
             );
         }
+        out.params.extend(shared_error_params(left, right, &out.names));
         out
     }
 
