@@ -35,7 +35,9 @@
 //! **A torso both arms share**, measured together: the torso joints carry both arms, so each arm's
 //! model adds the other arm's lumped masses at the same instant to its torso hinges' torques
 //! ([`OtherArm`], attached by `DualArmModel::with_torso_instants` from the dataset's rows of one id).
-//! A configuration that is no instant of the data gets this arm's masses only.
+//! A configuration that is no instant of the data gets this arm's masses only. The torso's error
+//! parameters are the robot's: `SharedJoints` pairs them between the arms by name, so a tree fit
+//! identifies them once and both arms' models carry the same values.
 //!
 //! The torques are computed on the **reference geometry** (the nominal kinematics the error model was
 //! attached to), not on the calibrated one: the two differ by millimetres, which changes a torque by
