@@ -450,3 +450,66 @@ fn reflector_names_in_progress_tables_and_parameters() {
         "{err}"
     );
 }
+
+/// `--gear-ratio JOINT=RATIO` adds the motor's harmonics to a harmonic model: the command says which,
+/// the parameter file carries the ratios and the terms, and `evaluate` reads the model back. A joint
+/// the arms do not have, a ratio that is not a number, and a model without harmonics are refused
+/// with a non-zero exit naming the option.
+#[test]
+fn gear_ratios_add_the_motors_harmonics() {
+    let example = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/datasets/example");
+    let dir = tempfile::tempdir().unwrap();
+    let params = dir.path().join("params.json");
+    let out = ok(&[
+        "calibrate",
+        s(&example),
+        "--model",
+        "harmonic",
+        "--gear-ratio",
+        "j1=100,j2=-80",
+        "--gear-ratio",
+        "j4=1",
+        "--quiet",
+        "--out",
+        s(&params),
+    ]);
+    assert!(
+        out.contains(
+            "motor-side harmonics (gear ratio, motor turns per joint turn): j1 100, j2 -80\n"
+        ),
+        "{out}"
+    );
+    let file = json(&std::fs::read_to_string(&params).unwrap());
+    for side in ["left", "right"] {
+        let errors = &file["arms"][side]["errors"];
+        assert_eq!(errors["gear_ratios"]["j1"], 100.0);
+        assert_eq!(errors["gear_ratios"]["j4"], 1.0);
+        let names: Vec<&String> = errors["parameters"].as_object().unwrap().keys().collect();
+        assert!(names.iter().any(|n| *n == "j2.m2_sin"), "{names:?}");
+        assert!(!names.iter().any(|n| n.starts_with("j4.m")), "{names:?}");
+    }
+    ok(&["evaluate", s(&example), "--params", s(&params)]);
+    for (args, expected) in [
+        (
+            vec!["--model", "harmonic", "--gear-ratio", "j9=100"],
+            "`j9` is not a movable joint of either arm",
+        ),
+        (
+            vec!["--model", "harmonic", "--gear-ratio", "j1=fast"],
+            "expected a number",
+        ),
+        (
+            vec!["--gear-ratio", "j1=100"],
+            "the `geometric` model has no harmonics",
+        ),
+    ] {
+        let refused = dir.path().join("refused.json");
+        let mut all = vec!["calibrate", s(&example), "--out", s(&refused)];
+        all.extend(args);
+        let run = dualcal(&all);
+        let stderr = String::from_utf8_lossy(&run.stderr);
+        assert!(!run.status.success(), "{all:?}");
+        assert!(stderr.contains(expected), "{all:?}: {stderr}");
+        assert!(!refused.exists(), "{all:?} wrote its output");
+    }
+}

@@ -290,8 +290,9 @@ impl Session {
     }
 
     /// `settings` with what the elastic models take from the robot: gravity's direction (−z of its
-    /// root link in the left arm's base) unless the settings name one, and the lumped masses of its
-    /// inertials where it has them.
+    /// root link in the left arm's base) unless the settings name one, the lumped masses of its
+    /// inertials where it has them, and — for the harmonic models — the gear ratios of its
+    /// `<transmission>` elements (motor-side harmonics) unless the settings give some.
     pub fn with_gravity(&self, mut settings: CalibrationSettings) -> CalibrationSettings {
         settings
             .gravity_in_left_base
@@ -301,6 +302,9 @@ impl Session {
             && settings.held_masses.right.is_none()
         {
             settings.held_masses = crate::side::PerSide::from_fn(|s| self.robot.lumped_masses(s));
+        }
+        if settings.model.harmonics > 0 && settings.gear_ratios.is_empty() {
+            settings.gear_ratios = self.robot.gear_ratios();
         }
         settings
     }

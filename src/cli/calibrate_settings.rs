@@ -155,3 +155,64 @@ pub fn print_uncertainty(u: &PerSide<Option<crate::solver::uncertainty::ArmUncer
         }
     }
 }
+
+/// `JOINT=RATIO` of `--gear-ratio`.
+pub(super) fn parse_gear_ratio(text: &str) -> Result<(String, f64), String> {
+    let (joint, ratio) = text
+        .split_once('=')
+        .ok_or_else(|| format!("`{text}`: expected JOINT=RATIO, e.g. `joint_1=100`"))?;
+    let ratio: f64 = ratio
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{ratio}`: expected a number (motor turns per joint turn)"))?;
+    if !ratio.is_finite() || ratio == 0.0 {
+        return Err(format!(
+            "`{text}`: expected a finite, non-zero ratio (motor turns per joint turn)"
+        ));
+    }
+    Ok((joint.trim().to_string(), ratio))
+}
+
+/// The gear ratios of a calibration: the URDF's transmissions, `--gear-ratio` over them; a joint
+/// the arms' models do not have is refused (the built-in robot's joints are `j1` … `j7`, the names
+/// of its error parameters).
+pub(super) fn gear_ratios(
+    ws: &crate::workspace::Workspace,
+    given: &[(String, f64)],
+) -> Result<Vec<(String, f64)>> {
+    let mut out = ws.robot.gear_ratios();
+    let mut joints: Vec<String> = Vec::new();
+    for side in crate::side::Side::BOTH {
+        for name in joint_names(ws.nominal.arm(side)) {
+            if !joints.contains(&name) {
+                joints.push(name);
+            }
+        }
+    }
+    for (joint, ratio) in given {
+        if !joints.contains(joint) {
+            anyhow::bail!(
+                "--gear-ratio {joint}={ratio}: `{joint}` is not a movable joint of either arm \
+                 (they are {})",
+                joints.join(", ")
+            );
+        }
+        match out.iter_mut().find(|(j, _)| j == joint) {
+            Some(entry) => entry.1 = *ratio,
+            None => out.push((joint.clone(), *ratio)),
+        }
+    }
+    Ok(out)
+}
+
+/// The names the error models give an arm's movable joints: its chain's, `j1` … `j7` for a DH arm.
+fn joint_names(arm: &crate::kinematics::ArmModel) -> Vec<String> {
+    match &arm.kinematics {
+        crate::kinematics::ArmKinematics::Dh(_) => (1..=crate::kinematics::dh::N_JOINTS)
+            .map(|j| format!("j{j}"))
+            .collect(),
+        crate::kinematics::ArmKinematics::Chain { chain, .. } => {
+            chain.joints.iter().map(|j| j.name.clone()).collect()
+        }
+    }
+}

@@ -201,6 +201,11 @@ pub struct CalibrateArgs {
     /// the robot standing upright).
     #[arg(long, value_name = "X,Y,Z", value_parser = plan::parse_xyz)]
     pub gravity: Option<nalgebra::Vector3<f64>>,
+    /// A joint's gear ratio (motor turns per joint turn), for the harmonic models: the motor's first
+    /// and second harmonics (of ratio × joint angle) are identified too. Repeat or separate by commas;
+    /// overrides the URDF's `<transmission>` reduction of that joint. A ratio of ±1 adds nothing.
+    #[arg(long = "gear-ratio", value_name = "JOINT=RATIO", value_delimiter = ',', value_parser = calibrate_settings::parse_gear_ratio)]
+    pub gear_ratios: Vec<(String, f64)>,
     /// Only the summary, no per-iteration lines.
     #[arg(long, short)]
     pub quiet: bool,
@@ -683,6 +688,27 @@ fn calibrate_cmd(a: &CalibrateArgs) -> Result<()> {
     settings.gravity_in_left_base = Some(ws.robot.gravity_in_left_base(a.gravity));
     if !settings.model.is_geometric() {
         settings.held_masses = crate::side::PerSide::from_fn(|s| ws.robot.lumped_masses(s));
+    }
+    if settings.model.harmonics > 0 {
+        settings.gear_ratios = calibrate_settings::gear_ratios(&ws, &a.gear_ratios)?;
+        let motors: Vec<String> = settings
+            .gear_ratios
+            .iter()
+            .filter(|(_, r)| (r.abs() - 1.0).abs() > 1e-9)
+            .map(|(j, r)| format!("{j} {r}"))
+            .collect();
+        if !motors.is_empty() {
+            outln!(
+                "motor-side harmonics (gear ratio, motor turns per joint turn): {}",
+                motors.join(", ")
+            );
+        }
+    } else if !a.gear_ratios.is_empty() {
+        bail!(
+            "--gear-ratio: the `{}` model has no harmonics; the motor's harmonics come with \
+             `--model harmonic` or `--model full`",
+            settings.model.name()
+        );
     }
     if a.method.is_none()
         && let Some(why) = crate::solver::default_method_reason(&ws.dataset)

@@ -233,6 +233,23 @@ impl ArmModel {
         self
     }
 
+    /// The same model with these gear ratios (motor turns per joint turn, by joint name) in its error
+    /// model: motor-side harmonics for the joints whose ratio is not ±1 when the terms have
+    /// harmonics. The error values restart (the layout changes): call it before a fit, not after.
+    /// Unchanged without an error model or without ratios.
+    pub fn with_gear_ratios(mut self, ratios: &[(String, f64)]) -> Self {
+        if let Some(m) = &self.errors.model
+            && !ratios.is_empty()
+        {
+            let with = m.with_gear_ratios(ratios);
+            self.errors = JointErrors {
+                values: with.start_values(),
+                model: Some(Arc::new(with)),
+            };
+        }
+        self
+    }
+
     /// The geometric part of the model (its errors dropped).
     pub fn geometric(&self) -> Self {
         Self {
@@ -563,6 +580,17 @@ impl DualArmModel {
             arms: self.arms.as_ref().map(|_, a| a.geometric()),
             left_base_from_right_base: self.left_base_from_right_base,
         }
+    }
+
+    /// Both arms' error models with these gear ratios (by joint name; a torso's apply to both arms):
+    /// [`ArmModel::with_gear_ratios`].
+    pub fn with_gear_ratios(mut self, ratios: &[(String, f64)]) -> Self {
+        let PerSide { left, right } = self.arms;
+        self.arms = PerSide::new(
+            left.with_gear_ratios(ratios),
+            right.with_gear_ratios(ratios),
+        );
+        self
     }
 
     /// Each arm's elastic terms with these held lumped masses (per movable joint kg and first moment

@@ -25,11 +25,7 @@ pub struct SharedJoints {
 
 /// The error parameters of the shared joints (their compliances and harmonics, by name): one joint
 /// of the robot gives under the load of both arms once, so both arms' models carry one value.
-fn shared_error_params(
-    left: &ArmModel,
-    right: &ArmModel,
-    names: &[String],
-) -> Vec<(usize, usize)> {
+fn shared_error_params(left: &ArmModel, right: &ArmModel, names: &[String]) -> Vec<(usize, usize)> {
     let range = |arm: &ArmModel| arm.error_offset()..arm.param_count();
     let on_shared = |name: &str| {
         name.rsplit_once('.')
@@ -71,7 +67,8 @@ impl SharedJoints {
                 (0..PARAMS_PER_JOINT).map(|i| (PARAMS_PER_JOINT * a + i, PARAMS_PER_JOINT * b + i)),
             );
         }
-        out.params.extend(shared_error_params(left, right, &out.names));
+        out.params
+            .extend(shared_error_params(left, right, &out.names));
         out
     }
 

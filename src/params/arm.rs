@@ -170,6 +170,10 @@ pub struct ErrorsEntry {
     /// 1 kg at the next joint's origin.
     #[serde(default, skip_serializing_if = "NamedValues::is_empty")]
     pub masses: NamedValues,
+    /// Gear ratios (motor turns per joint turn) by joint name: the joints whose motor's harmonics
+    /// the model has (`<joint>.m1_cos` …) where the ratio is not ±1.
+    #[serde(default, skip_serializing_if = "NamedValues::is_empty")]
+    pub gear_ratios: NamedValues,
 }
 
 impl NamedValues {
@@ -274,6 +278,7 @@ pub(super) fn arm_params(arm: &ArmModel) -> ArmParams {
                     })
                     .collect(),
             ),
+            gear_ratios: NamedValues(m.gear_ratios()),
         }
     });
     match &arm.kinematics {
@@ -345,6 +350,25 @@ fn with_errors(
         ));
     }
     let mut errors = JointErrors::new(reference, e.terms, g);
+    if let Some(m) = errors.model.clone()
+        && !e.gear_ratios.is_empty()
+    {
+        for (name, ratio) in &e.gear_ratios.0 {
+            let field = format!("{field}.gear_ratios.{name}");
+            if !m.joint_names().iter().any(|n| n == name) {
+                return Err(invalid(field, "not a movable joint of this arm"));
+            }
+            finite(&field, &[*ratio])?;
+            if *ratio == 0.0 {
+                return Err(invalid(field, "0; expected motor turns per joint turn"));
+            }
+        }
+        let with = m.with_gear_ratios(&e.gear_ratios.0);
+        errors = JointErrors {
+            values: with.start_values(),
+            model: Some(Arc::new(with)),
+        };
+    }
     if let Some(m) = errors.model.clone() {
         let mut masses = m.link_masses().to_vec();
         let links: Vec<[String; 4]> = (0..masses.len())

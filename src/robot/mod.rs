@@ -28,6 +28,7 @@ mod geometry;
 mod inertials;
 #[cfg(test)]
 mod tests;
+mod transmissions;
 mod tree;
 
 pub(crate) use crate::kinematics::chain::finite_pose;

@@ -150,6 +150,11 @@ pub struct CalibrationSettings {
     /// ([`crate::robot::RobotDescription::lumped_masses`]); `None`: 1 kg at each next joint.
     #[serde(default, skip_serializing_if = "no_masses")]
     pub held_masses: PerSide<Option<crate::kinematics::joint_errors::LinkMasses>>,
+    /// Gear ratios (motor turns per joint turn) by joint name: with harmonics in the model, the
+    /// motor's harmonics are identified too for each joint whose ratio is not ±1 (the command line
+    /// and the workbench give the URDF's `<transmission>` reductions, `--gear-ratio` overrides).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub gear_ratios: Vec<(String, f64)>,
 }
 
 fn no_masses(m: &PerSide<Option<crate::kinematics::joint_errors::LinkMasses>>) -> bool {
@@ -177,6 +182,7 @@ impl Default for CalibrationSettings {
             model: ErrorTerms::GEOMETRIC,
             gravity_in_left_base: None,
             held_masses: PerSide::default(),
+            gear_ratios: Vec::new(),
         }
     }
 }

@@ -214,6 +214,7 @@ impl CalibrationRun {
                 left_base_from_right_base: nominal.left_base_from_right_base,
             }
             .with_error_terms(settings.model, gravity)
+            .with_gear_ratios(&settings.gear_ratios)
             .with_held_masses(&settings.held_masses)
             .with_torso_instants(&dataset.instants());
             &with_terms

@@ -62,6 +62,9 @@ pub struct ErrorsOverlay {
     pub parameters: Vec<(String, f64)>,
     /// The held lumped masses: per link (`after_<joint>`) kg and first moment kg·mm.
     pub masses: Vec<(String, f64, [f64; 3])>,
+    /// The gear ratios given (motor turns per joint turn), by joint: the motor harmonics' ratios.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub gear_ratios: Vec<(String, f64)>,
 }
 
 /// The whole overlay.
@@ -107,6 +110,7 @@ fn errors_overlay(model: &DualArmModel) -> Vec<ErrorsOverlay> {
                     .enumerate()
                     .map(|(k, (mass, s))| (m.link_name(k), *mass, [s.x, s.y, s.z]))
                     .collect(),
+                gear_ratios: m.gear_ratios(),
             })
         })
         .collect()
@@ -219,7 +223,8 @@ impl CalibrationOverlay {
         if !self.beyond_geometry.is_empty() {
             s += "# Errors beyond geometry (no URDF form): joint compliances in mrad/(N·m) under the held\n\
                   # lumped masses (kg, first moments kg·mm in the next joint frame), harmonics of the joint\n\
-                  # angles in rad. Software that compensates applies them with the geometry above.\n\
+                  # angles (and of the motor angles, gear ratio × joint angle: `.m1_cos` …) in rad.\n\
+                  # Software that compensates applies them with the geometry above.\n\
                   beyond_geometry:\n";
         }
         for e in &self.beyond_geometry {
@@ -239,6 +244,12 @@ impl CalibrationOverlay {
                     quoted(link),
                     list(moment)
                 );
+            }
+            if !e.gear_ratios.is_empty() {
+                s += "    gear_ratios:\n";
+                for (joint, r) in &e.gear_ratios {
+                    s += &format!("      {}: {r:?}\n", quoted(joint));
+                }
             }
         }
         s

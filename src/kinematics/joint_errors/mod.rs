@@ -48,8 +48,12 @@
 //!
 //! **Transmission errors.** With [`ErrorTerms::harmonics`] = 1 or 2, each revolute joint's angle is off
 //! by `c₁ cos θ + s₁ sin θ (+ c₂ cos 2θ + s₂ sin 2θ)` (rad), `θ` the joint's value (a mimic joint's
-//! own). A constant offset is the geometry's `rz`/`θ` and is not repeated. Motor-side harmonics (with a
-//! gear ratio) are not modelled.
+//! own). A constant offset is the geometry's `rz`/`θ` and is not repeated. Where a joint's **gear
+//! ratio** `r` is given (a URDF `<transmission>`'s `mechanicalReduction`, `calibrate --gear-ratio`), the
+//! motor's harmonics are added too: `m₁ cos rθ + n₁ sin rθ (+ m₂ cos 2rθ + n₂ sin 2rθ)` — the error a
+//! motor-side encoder or an eccentric motor gear makes once (twice) per motor turn, seen at the joint
+//! through the reduction. A ratio of ±1 (what many descriptions write) adds nothing: those are the
+//! joint's own harmonics.
 //!
 //! Prismatic joints carry neither (their links carry masses for the joints before them).
 //! Compliances are in mrad/(N·m): in µrad a wrist joint's column (a torque of 1 N·m) fell below the
@@ -220,6 +224,10 @@ pub struct JointErrorModel {
     joint_names: Vec<String>,
     /// The revolute joints with harmonics.
     harmonic_joints: Vec<usize>,
+    /// Each movable joint's gear ratio (motor turns per joint turn), where given.
+    gear_ratios: Vec<Option<f64>>,
+    /// The revolute joints with motor-side harmonics (a gear ratio other than ±1) and their ratios.
+    motor_joints: Vec<(usize, f64)>,
     hinges: Vec<Hinge>,
     /// Each link's lumped mass (kg) and first moment (kg·mm, in the next joint frame): one per movable
     /// joint, none without elasticity. Held: part of the model, not of its parameters.
@@ -364,6 +372,17 @@ impl JointErrorModel {
         terms: ErrorTerms,
         gravity_in_base: Vector3<f64>,
     ) -> Self {
+        Self::build(reference, terms, gravity_in_base, Vec::new())
+    }
+
+    /// [`JointErrorModel::new`] with each movable joint's gear ratio (`None`: not given; a shorter
+    /// list: the rest not given).
+    fn build(
+        reference: &ArmKinematics,
+        terms: ErrorTerms,
+        gravity_in_base: Vector3<f64>,
+        mut gear_ratios: Vec<Option<f64>>,
+    ) -> Self {
         let g = gravity_in_base
             .try_normalize(1e-12)
             .filter(|g| g.iter().all(|v| v.is_finite()))
@@ -392,6 +411,15 @@ impl JointErrorModel {
         } else {
             Vec::new()
         };
+        gear_ratios.resize(joints.len(), None);
+        let motor_joints = harmonic_joints
+            .iter()
+            .filter_map(|&j| {
+                gear_ratios[j]
+                    .filter(|r| r.is_finite() && (r.abs() - 1.0).abs() > 1e-9 && *r != 0.0)
+                    .map(|r| (j, r))
+            })
+            .collect();
         let dh_form = matches!(reference, ArmKinematics::Dh(_));
         let mut hinges = Vec::new();
         for &j in &revolute {
@@ -435,6 +463,8 @@ impl JointErrorModel {
             reference: reference.clone(),
             joint_names: joints.into_iter().map(|j| j.0).collect(),
             harmonic_joints,
+            gear_ratios,
+            motor_joints,
             hinges,
             masses,
             torque_rows: TorqueCache::default(),
@@ -444,7 +474,7 @@ impl JointErrorModel {
 
     /// The same model with the other arm of a shared torso (see [`OtherArm`]).
     pub fn with_other_arm(&self, other: OtherArm) -> Self {
-        let mut out = Self::new(&self.reference, self.terms, self.gravity_in_base);
+        let mut out = self.rebuilt(&self.reference);
         out.masses = self.masses.clone();
         out.other = Some(other);
         out
@@ -456,7 +486,7 @@ impl JointErrorModel {
         if masses.len() != self.masses.len() {
             return None;
         }
-        let mut out = Self::new(&self.reference, self.terms, self.gravity_in_base);
+        let mut out = self.rebuilt(&self.reference);
         out.masses = masses;
         out.other = self.other.clone();
         Some(out)
@@ -486,11 +516,15 @@ impl JointErrorModel {
         2 * self.terms.harmonics as usize * self.harmonic_joints.len()
     }
 
-    fn compliance_offset(&self) -> usize {
-        self.harmonics_count()
+    fn motor_harmonics_count(&self) -> usize {
+        2 * self.terms.harmonics as usize * self.motor_joints.len()
     }
 
-    /// Number of error parameters: the harmonics, then the compliances.
+    fn compliance_offset(&self) -> usize {
+        self.harmonics_count() + self.motor_harmonics_count()
+    }
+
+    /// Number of error parameters: the joints' harmonics, the motors', then the compliances.
     pub fn param_count(&self) -> usize {
         self.compliance_offset() + self.hinges.len()
     }
@@ -501,33 +535,38 @@ impl JointErrorModel {
         vec![0.0; self.param_count()]
     }
 
-    /// Name of error parameter `i`: `<joint>.h1_cos` … `<joint>.h2_sin`, `<joint>.k_axis`,
+    /// Name of error parameter `i`: `<joint>.h1_cos` … `<joint>.h2_sin` (the joint's harmonics),
+    /// `<joint>.m1_cos` … `<joint>.m2_sin` (the motor's, with a gear ratio), `<joint>.k_axis`,
     /// `.k_x`, `.k_y` (`.k_alpha` for a DH row).
     pub fn param_name(&self, i: usize) -> String {
-        let h = self.harmonics_count();
-        if i < h {
-            let per = 2 * self.terms.harmonics as usize;
-            let joint = &self.joint_names[self.harmonic_joints[i / per]];
-            let r = i % per;
+        let (h, c0) = (self.harmonics_count(), self.compliance_offset());
+        let per = 2 * self.terms.harmonics as usize;
+        let harmonic = |joint: usize, r: usize, prefix: &str| {
             let kind = if r.is_multiple_of(2) { "cos" } else { "sin" };
-            return format!("{joint}.h{}_{kind}", r / 2 + 1);
+            format!("{}.{prefix}{}_{kind}", self.joint_names[joint], r / 2 + 1)
+        };
+        if i < h {
+            return harmonic(self.harmonic_joints[i / per], i % per, "h");
         }
-        let hinge = self.hinges[i - h];
+        if i < c0 {
+            return harmonic(self.motor_joints[(i - h) / per].0, (i - h) % per, "m");
+        }
+        let hinge = self.hinges[i - c0];
         format!("{}.{}", self.joint_names[hinge.joint], hinge.axis.suffix())
     }
 
     /// Unit of error parameter `i`.
     pub fn param_unit(&self, i: usize) -> &'static str {
-        if i < self.harmonics_count() {
+        if i < self.compliance_offset() {
             "rad"
         } else {
             "mrad/(N·m)"
         }
     }
 
-    /// Is error parameter `i` an angle (a harmonic amplitude)?
+    /// Is error parameter `i` an angle (a harmonic amplitude, the joint's or the motor's)?
     pub fn param_is_angle(&self, i: usize) -> bool {
-        i < self.harmonics_count()
+        i < self.compliance_offset()
     }
 
     /// Is error parameter `i` a compliance?
@@ -629,6 +668,22 @@ impl JointErrorModel {
             let slot = self.axis_slot(j);
             out.add(slot, value, row);
         }
+        let h = self.harmonics_count();
+        for (n, &(j, ratio)) in self.motor_joints.iter().enumerate() {
+            let motor = ratio * self.joint_value(j, q);
+            let first = h + per * n;
+            let (mut value, mut row) = (0.0, Vec::with_capacity(if derivatives { per } else { 0 }));
+            for order in 0..self.terms.harmonics as usize {
+                let (s, c) = ((order + 1) as f64 * motor).sin_cos();
+                let i = first + 2 * order;
+                value += values[i] * c + values[i + 1] * s;
+                if derivatives {
+                    row.push((i, c));
+                    row.push((i + 1, s));
+                }
+            }
+            out.add(self.axis_slot(j), value, row);
+        }
         if !self.hinges.is_empty() {
             let torques = self.torque_rows(q);
             let c0 = self.compliance_offset();
@@ -654,7 +709,49 @@ impl JointErrorModel {
 
     /// The model with another reference geometry of the same form (a parameter file read for a robot).
     pub fn with_reference(&self, reference: &ArmKinematics) -> Self {
-        Self::new(reference, self.terms, self.gravity_in_base)
+        self.rebuilt(reference)
+    }
+
+    /// The model's structure (terms, gravity, gear ratios) on `reference`, the held masses and the
+    /// other arm not carried over.
+    fn rebuilt(&self, reference: &ArmKinematics) -> Self {
+        Self::build(
+            reference,
+            self.terms,
+            self.gravity_in_base,
+            self.gear_ratios.clone(),
+        )
+    }
+
+    /// The same model with these gear ratios (motor turns per joint turn) by joint name; joints not
+    /// named keep theirs. Motor-side harmonics are added for the revolute joints whose ratio is not
+    /// ±1 (with harmonics in the terms): the parameter layout changes, so this belongs before any
+    /// values are set. Names of no joint of this arm are ignored (the other arm's).
+    pub fn with_gear_ratios(&self, ratios: &[(String, f64)]) -> Self {
+        let mut gear_ratios = self.gear_ratios.clone();
+        for (name, r) in ratios {
+            if let Some(j) = self.joint_names.iter().position(|n| n == name) {
+                gear_ratios[j] = Some(*r);
+            }
+        }
+        let mut out = Self::build(
+            &self.reference,
+            self.terms,
+            self.gravity_in_base,
+            gear_ratios,
+        );
+        out.masses = self.masses.clone();
+        out.other = self.other.clone();
+        out
+    }
+
+    /// The gear ratios given, by joint name (motor turns per joint turn).
+    pub fn gear_ratios(&self) -> Vec<(String, f64)> {
+        self.gear_ratios
+            .iter()
+            .zip(&self.joint_names)
+            .filter_map(|(r, n)| r.map(|r| (n.clone(), r)))
+            .collect()
     }
 
     /// The names of the movable joints the model was built for.

@@ -20,6 +20,15 @@ const FULL: ErrorTerms = ErrorTerms {
 /// harmonics within ±1 mrad, and held masses of 0.5–4 kg with moments within ±400 kg·mm.
 fn with_random_errors(model: ArmModel, rng: &mut ChaCha8Rng) -> ArmModel {
     let mut model = model.with_error_terms(FULL, Vector3::new(0.1, -0.2, -1.0));
+    // Gear ratios on every other joint (motor-side harmonics), one of them 1 (no motor term).
+    let names = model.errors.model.as_ref().unwrap().joint_names().to_vec();
+    let ratios: Vec<(String, f64)> = names
+        .iter()
+        .step_by(2)
+        .zip([100.0, -50.5, 1.0, 160.0, 80.0])
+        .map(|(n, r)| (n.clone(), r))
+        .collect();
+    model = model.with_gear_ratios(&ratios);
     let off = model.error_offset();
     let m = model.errors.model.clone().unwrap();
     let masses = (0..m.link_masses().len())
@@ -47,8 +56,14 @@ fn dh_error_columns_match_central_differences() {
     let mut rng = ChaCha8Rng::seed_from_u64(21);
     for _ in 0..5 {
         let model = with_random_errors(crate::kinematics::tests::perturbed(&mut rng), &mut rng);
-        // 28 DH, 9 reflector, 4 harmonics and 2 compliances (axis, α) per joint.
-        assert_eq!(model.param_count(), 28 + 9 + 7 * 4 + 14);
+        // 28 DH, 9 reflector, 4 harmonics and 2 compliances (axis, α) per joint, 4 motor harmonics
+        // on each of j1, j3, j7 (j5's ratio is 1).
+        assert_eq!(model.param_count(), 28 + 9 + 7 * 4 + 14 + 3 * 4);
+        let names: Vec<String> = (0..model.param_count())
+            .map(|k| model.param_name(k))
+            .collect();
+        assert!(names.contains(&"j7.m2_sin".to_string()), "{names:?}");
+        assert!(!names.iter().any(|n| n.starts_with("j5.m")), "{names:?}");
         let q = crate::kinematics::tests::random_q(&mut rng);
         if let Err(e) = check_arm_jacobian(&model, &q, &stacked_jacobian(&model, &q)) {
             panic!("q {q:?}: {e}");
