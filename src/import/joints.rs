@@ -89,6 +89,303 @@ fn is_time_name(n: &str) -> bool {
     )
 }
 
+/// A joint log's header: the columns' names and units, and which are the id, time, split and joint
+/// columns.
+struct Header {
+    names: Vec<String>,
+    units: Vec<Option<String>>,
+    id_col: Option<usize>,
+    time_col: Option<usize>,
+    split_col: Option<usize>,
+    /// The joint columns, in the file's order.
+    file_joints: Vec<usize>,
+    /// The first row's line; the header's (0 without a header line).
+    first_line: usize,
+    header_line: usize,
+    named: bool,
+}
+
+impl Header {
+    /// The header of a log whose first row is `first` (line `first_line`): a header line when any
+    /// field after the first is no number and no time stamp, else `id,q1,…` made up.
+    fn of(
+        path: &Path,
+        first_line: usize,
+        first: &str,
+        delimiter: Delimiter,
+        dc: bool,
+    ) -> Result<Self, ImportError> {
+        let first_fields = text::split(first, delimiter);
+        let named = first_fields.len() < 2
+            || first_fields[1..]
+                .iter()
+                .any(|f| text::number(f, dc).is_none() && text::time_s(f).is_none());
+        let (names, units): (Vec<String>, Vec<Option<String>>) = if named {
+            first_fields.iter().map(|f| text::name_and_unit(f)).unzip()
+        } else {
+            let n = first_fields.len();
+            let mut names = vec!["id".to_string()];
+            names.extend((1..n).map(|k| format!("q{k}")));
+            (names, vec![None; n])
+        };
+        let id_col = names
+            .iter()
+            .position(|n| is_id_name(n))
+            .or((!is_time_name(&names[0]) && names[0] != "split").then_some(0));
+        let time_col = names.iter().position(|n| is_time_name(n));
+        let split_col = names.iter().position(|n| n.eq_ignore_ascii_case("split"));
+        let file_joints: Vec<usize> = (0..names.len())
+            .filter(|&k| Some(k) != id_col && Some(k) != time_col && Some(k) != split_col)
+            .filter(|&k| !names[k].is_empty())
+            .collect();
+        if file_joints.is_empty() {
+            return Err(ImportError::Header {
+                path: path.to_path_buf(),
+                line: first_line,
+                field: "q1".to_string(),
+                message: "no joint columns: expected `id,q1,…,qN`".to_string(),
+            });
+        }
+        Ok(Self {
+            names,
+            units,
+            id_col,
+            time_col,
+            split_col,
+            file_joints,
+            first_line,
+            header_line: if named { first_line } else { 0 },
+            named,
+        })
+    }
+
+    fn header_error(&self, path: &Path, line: usize, field: usize, message: String) -> ImportError {
+        ImportError::Header {
+            path: path.to_path_buf(),
+            line,
+            field: self.names[field].clone(),
+            message,
+        }
+    }
+
+    /// The columns of the chain's joints, in chain order, and how they were found: the mapping, the
+    /// header's joint names, or the file's order. The arm's joint count is checked.
+    fn chain_columns(
+        &self,
+        path: &Path,
+        o: &JointLogOptions,
+    ) -> Result<(Vec<usize>, String), ImportError> {
+        let (names, file_joints) = (&self.names, &self.file_joints);
+        let n = file_joints.len();
+        let found = if let Some(order) = o.joint_order {
+            if order.len() != n {
+                return Err(self.header_error(
+                    path,
+                    self.first_line,
+                    file_joints[0],
+                    format!(
+                        "{n} joint columns, the joint-order mapping has {} entries",
+                        order.len()
+                    ),
+                ));
+            }
+            let cols = order.iter().map(|&k| file_joints[k - 1]).collect();
+            let list: Vec<String> = order.iter().map(usize::to_string).collect();
+            (
+                cols,
+                format!("the log's joint columns {} in chain order", list.join(", ")),
+            )
+        } else if let Some(joints) = o.joint_names.filter(|j| {
+            self.named
+                && j.len() == n
+                && j.iter()
+                    .all(|name| file_joints.iter().any(|&k| &names[k] == name))
+        }) {
+            let cols = joints
+                .iter()
+                .map(|name| {
+                    file_joints
+                        .iter()
+                        .copied()
+                        .find(|&k| &names[k] == name)
+                        .unwrap_or(0)
+                })
+                .collect();
+            (cols, "by the header's joint names".to_string())
+        } else {
+            (
+                file_joints.clone(),
+                "the file's order (chain order)".to_string(),
+            )
+        };
+        if let Some(joints) = o.joint_names
+            && joints.len() != n
+        {
+            return Err(self.header_error(
+                path,
+                self.first_line,
+                file_joints[joints.len().min(n - 1)],
+                format!(
+                    "{n} joint columns, the arm has {} joints ({})",
+                    joints.len(),
+                    joints.join(", ")
+                ),
+            ));
+        }
+        Ok(found)
+    }
+
+    /// The unit of the joint values: the option, else the joint columns' brackets, else degrees (with
+    /// a note).
+    fn angle_unit(
+        &self,
+        path: &Path,
+        o: &JointLogOptions,
+        notes: &mut Vec<String>,
+    ) -> Result<AngleUnit, ImportError> {
+        if let Some(u) = o.angle_unit {
+            return Ok(u);
+        }
+        let header_units: Vec<AngleUnit> = self
+            .file_joints
+            .iter()
+            .filter_map(|&k| self.units[k].as_deref())
+            .filter_map(|u| match u.to_lowercase().as_str() {
+                "deg" | "°" | "degree" | "degrees" => Some(AngleUnit::Deg),
+                "rad" | "radian" | "radians" => Some(AngleUnit::Rad),
+                _ => None,
+            })
+            .collect();
+        match header_units.first() {
+            Some(&u) if header_units.iter().all(|&v| v == u) => Ok(u),
+            Some(_) => Err(self.header_error(
+                path,
+                self.header_line,
+                self.file_joints[0],
+                "joint columns in different units".to_string(),
+            )),
+            None => {
+                notes.push("no angle unit given or in the header: read as degrees".to_string());
+                Ok(AngleUnit::Deg)
+            }
+        }
+    }
+
+    /// The number of fields a row needs: up to the last column read.
+    fn needed_fields(&self, cols: &[usize]) -> usize {
+        self.names.len().min(
+            [self.id_col, self.time_col, self.split_col]
+                .into_iter()
+                .flatten()
+                .chain(cols.iter().copied())
+                .max()
+                .unwrap_or(0)
+                + 1,
+        )
+    }
+}
+
+/// What reading a row needs besides the header.
+struct RowFormat<'a> {
+    path: &'a Path,
+    header: &'a Header,
+    /// The chain's joint columns, in chain order.
+    cols: &'a [usize],
+    angle_unit: AngleUnit,
+    delimiter: Delimiter,
+    dc: bool,
+    needed: usize,
+    id_prefix: &'a str,
+}
+
+impl RowFormat<'_> {
+    /// Row `t` (line `line`; `index` rows before it; `seen`: the ids so far and their lines).
+    fn row(
+        &self,
+        line: usize,
+        t: &str,
+        index: usize,
+        seen: &mut std::collections::HashMap<String, usize>,
+    ) -> Result<JointRow, ImportError> {
+        let (path, h) = (self.path, self.header);
+        let field_error = |k: usize, expected: String, found: &str| ImportError::Field {
+            path: path.to_path_buf(),
+            line,
+            field: h.names[k].clone(),
+            expected,
+            found: crate::textfile::excerpt(found),
+        };
+        let fields = text::split(t, self.delimiter);
+        if fields.len() < self.needed {
+            return Err(ImportError::FieldCount {
+                path: path.to_path_buf(),
+                line,
+                expected: self.needed,
+                found: fields.len(),
+            });
+        }
+        let id = match h.id_col {
+            Some(k) => fields[k].clone(),
+            None => format!("{}{:03}", self.id_prefix, index + 1),
+        };
+        if id.is_empty() {
+            return Err(field_error(
+                h.id_col.unwrap_or(0),
+                "a configuration id".to_string(),
+                "",
+            ));
+        }
+        if let Some(first_line) = seen.insert(id.clone(), line) {
+            return Err(ImportError::DuplicateId {
+                path: path.to_path_buf(),
+                line,
+                id,
+                first_line,
+            });
+        }
+        let q_rad = self
+            .cols
+            .iter()
+            .map(|&k| {
+                text::number(&fields[k], self.dc)
+                    .map(|v| self.angle_unit.to_rad(v))
+                    .ok_or_else(|| {
+                        field_error(
+                            k,
+                            format!("a joint value in {}", self.angle_unit.name()),
+                            &fields[k],
+                        )
+                    })
+            })
+            .collect::<Result<Vec<f64>, ImportError>>()?;
+        let time_s = match h.time_col {
+            Some(k) if !fields[k].is_empty() => {
+                Some(text::time_s(&fields[k]).ok_or_else(|| {
+                    field_error(
+                        k,
+                        "a time stamp (`11.10.2022 15:06:48.043`, `2022-10-11T15:06:48.043` or \
+                     seconds)"
+                            .to_string(),
+                        &fields[k],
+                    )
+                })?)
+            }
+            _ => None,
+        };
+        let split = match h.split_col {
+            Some(k) if !fields[k].is_empty() => Some(parse_split(path, line, &fields[k])?),
+            _ => None,
+        };
+        Ok(JointRow {
+            id,
+            q_rad,
+            time_s,
+            split,
+            line,
+        })
+    }
+}
+
 /// Read a joint log's text.
 pub fn read(path: &Path, text: &str, o: &JointLogOptions) -> Result<JointLog, ImportError> {
     let mut it = text
@@ -105,206 +402,27 @@ pub fn read(path: &Path, text: &str, o: &JointLogOptions) -> Result<JointLog, Im
     };
     let delimiter = Delimiter::of_line(first, o.decimal_comma);
     let dc = o.decimal_comma || delimiter.allows_decimal_comma();
-    let first_fields = text::split(first, delimiter);
-    let header = first_fields.len() < 2
-        || first_fields[1..]
-            .iter()
-            .any(|f| text::number(f, dc).is_none() && text::time_s(f).is_none());
-    let mut notes = Vec::new();
-    let (names, units): (Vec<String>, Vec<Option<String>>) = if header {
+    let header = Header::of(path, first_line, first, delimiter, dc)?;
+    if header.named {
         it.next();
-        first_fields.iter().map(|f| text::name_and_unit(f)).unzip()
-    } else {
-        let n = first_fields.len();
-        let mut names = vec!["id".to_string()];
-        names.extend((1..n).map(|k| format!("q{k}")));
-        (names, vec![None; n])
-    };
-    let id_col = names
-        .iter()
-        .position(|n| is_id_name(n))
-        .or((!is_time_name(&names[0]) && names[0] != "split").then_some(0));
-    let time_col = names.iter().position(|n| is_time_name(n));
-    let split_col = names.iter().position(|n| n.eq_ignore_ascii_case("split"));
-    let file_joints: Vec<usize> = (0..names.len())
-        .filter(|&k| Some(k) != id_col && Some(k) != time_col && Some(k) != split_col)
-        .filter(|&k| !names[k].is_empty())
-        .collect();
-    let header_line = if header { first_line } else { 0 };
-    if file_joints.is_empty() {
-        return Err(ImportError::Header {
-            path: path.to_path_buf(),
-            line: first_line,
-            field: "q1".to_string(),
-            message: "no joint columns: expected `id,q1,…,qN`".to_string(),
-        });
     }
-    // Chain order.
-    let n = file_joints.len();
-    let (cols, order): (Vec<usize>, String) = if let Some(order) = o.joint_order {
-        if order.len() != n {
-            return Err(ImportError::Header {
-                path: path.to_path_buf(),
-                line: first_line,
-                field: names[file_joints[0]].clone(),
-                message: format!(
-                    "{n} joint columns, the joint-order mapping has {} entries",
-                    order.len()
-                ),
-            });
-        }
-        let cols = order.iter().map(|&k| file_joints[k - 1]).collect();
-        let list: Vec<String> = order.iter().map(usize::to_string).collect();
-        (
-            cols,
-            format!("the log's joint columns {} in chain order", list.join(", ")),
-        )
-    } else if let Some(joints) = o.joint_names.filter(|j| {
-        header
-            && j.len() == n
-            && j.iter()
-                .all(|name| file_joints.iter().any(|&k| &names[k] == name))
-    }) {
-        let cols = joints
-            .iter()
-            .map(|name| {
-                file_joints
-                    .iter()
-                    .copied()
-                    .find(|&k| &names[k] == name)
-                    .unwrap_or(0)
-            })
-            .collect();
-        (cols, "by the header's joint names".to_string())
-    } else {
-        (
-            file_joints.clone(),
-            "the file's order (chain order)".to_string(),
-        )
+    let mut notes = Vec::new();
+    let (cols, order) = header.chain_columns(path, o)?;
+    let angle_unit = header.angle_unit(path, o, &mut notes)?;
+    let format = RowFormat {
+        path,
+        header: &header,
+        cols: &cols,
+        angle_unit,
+        delimiter,
+        dc,
+        needed: header.needed_fields(&cols),
+        id_prefix: o.id_prefix,
     };
-    if let Some(joints) = o.joint_names
-        && joints.len() != n
-    {
-        let field = names[file_joints[joints.len().min(n - 1)]].clone();
-        return Err(ImportError::Header {
-            path: path.to_path_buf(),
-            line: first_line,
-            field,
-            message: format!(
-                "{n} joint columns, the arm has {} joints ({})",
-                joints.len(),
-                joints.join(", ")
-            ),
-        });
-    }
-    // The unit: the option, else the joint columns' brackets, else degrees.
-    let header_units: Vec<AngleUnit> = file_joints
-        .iter()
-        .filter_map(|&k| units[k].as_deref())
-        .filter_map(|u| match u.to_lowercase().as_str() {
-            "deg" | "°" | "degree" | "degrees" => Some(AngleUnit::Deg),
-            "rad" | "radian" | "radians" => Some(AngleUnit::Rad),
-            _ => None,
-        })
-        .collect();
-    let angle_unit = match o.angle_unit {
-        Some(u) => u,
-        None => match header_units.first() {
-            Some(&u) if header_units.iter().all(|&v| v == u) => u,
-            Some(_) => {
-                return Err(ImportError::Header {
-                    path: path.to_path_buf(),
-                    line: header_line,
-                    field: names[file_joints[0]].clone(),
-                    message: "joint columns in different units".to_string(),
-                });
-            }
-            None => {
-                notes.push("no angle unit given or in the header: read as degrees".to_string());
-                AngleUnit::Deg
-            }
-        },
-    };
-    let needed = names.len().min(
-        [id_col, time_col, split_col]
-            .into_iter()
-            .flatten()
-            .chain(cols.iter().copied())
-            .max()
-            .unwrap_or(0)
-            + 1,
-    );
     let mut rows: Vec<JointRow> = Vec::new();
     let mut seen = std::collections::HashMap::new();
     for (line, t) in it {
-        let fields = text::split(t, delimiter);
-        if fields.len() < needed {
-            return Err(ImportError::FieldCount {
-                path: path.to_path_buf(),
-                line,
-                expected: needed,
-                found: fields.len(),
-            });
-        }
-        let id = match id_col {
-            Some(k) => fields[k].clone(),
-            None => format!("{}{:03}", o.id_prefix, rows.len() + 1),
-        };
-        if id.is_empty() {
-            return Err(ImportError::Field {
-                path: path.to_path_buf(),
-                line,
-                field: names[id_col.unwrap_or(0)].clone(),
-                expected: "a configuration id".to_string(),
-                found: String::new(),
-            });
-        }
-        if let Some(first_line) = seen.insert(id.clone(), line) {
-            return Err(ImportError::DuplicateId {
-                path: path.to_path_buf(),
-                line,
-                id,
-                first_line,
-            });
-        }
-        let mut q_rad = Vec::with_capacity(n);
-        for &k in &cols {
-            let v = text::number(&fields[k], dc).ok_or_else(|| ImportError::Field {
-                path: path.to_path_buf(),
-                line,
-                field: names[k].clone(),
-                expected: format!("a joint value in {}", angle_unit.name()),
-                found: crate::textfile::excerpt(&fields[k]),
-            })?;
-            q_rad.push(angle_unit.to_rad(v));
-        }
-        let time_s = match time_col {
-            Some(k) if !fields[k].is_empty() => {
-                Some(text::time_s(&fields[k]).ok_or_else(|| {
-                    ImportError::Field {
-                        path: path.to_path_buf(),
-                        line,
-                        field: names[k].clone(),
-                        expected: "a time stamp (`11.10.2022 15:06:48.043`, \
-                               `2022-10-11T15:06:48.043` or seconds)"
-                            .to_string(),
-                        found: crate::textfile::excerpt(&fields[k]),
-                    }
-                })?)
-            }
-            _ => None,
-        };
-        let split = match split_col {
-            Some(k) if !fields[k].is_empty() => Some(parse_split(path, line, &fields[k])?),
-            _ => None,
-        };
-        rows.push(JointRow {
-            id,
-            q_rad,
-            time_s,
-            split,
-            line,
-        });
+        rows.push(format.row(line, t, rows.len(), &mut seen)?);
     }
     Ok(JointLog {
         rows,
