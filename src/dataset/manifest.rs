@@ -509,54 +509,13 @@ fn parse_arms(
         let station = match arm.station {
             None => None,
             Some(s) => {
-                let text = s.get_ref().trim();
-                if text.is_empty() || text.len() > 255 || text.chars().any(char::is_control) {
-                    return Err(cx.err(
-                        Some(cx.line_of(s.span())),
-                        "arms.station",
-                        "expected the name of the tracker station (1 to 255 characters, one line)",
-                    ));
-                }
                 station_lines[side] = cx.line_of(s.span());
-                Some(text.to_string())
+                Some(parse_station(cx, &s)?)
             }
         };
         let reflectors_mm = match arm.reflectors {
             None => None,
-            Some(r) => {
-                let line = Some(cx.line_of(r.span()));
-                let (own, coords) = parse_reflectors(cx, Some(r), length)?;
-                // The dataset's reflectors, in its order (the CSV's columns), at this arm's positions.
-                let mut ordered = Vec::with_capacity(names.len());
-                for name in names {
-                    let Some(k) = own.iter().position(|n| n == name) else {
-                        return Err(cx.err(
-                            line,
-                            "arms.reflectors",
-                            format!(
-                                "the {side} arm's reflectors name {} but [reflectors] names {}: an \
-                                 arm's own coordinates are for the dataset's reflectors (the same \
-                                 names; the CSV columns are theirs)",
-                                own.join(", "),
-                                names.join(", ")
-                            ),
-                        ));
-                    };
-                    ordered.push(coords[k]);
-                }
-                if own.len() != names.len() {
-                    return Err(cx.err(
-                        line,
-                        "arms.reflectors",
-                        format!(
-                            "the {side} arm's reflectors name {} but [reflectors] names {}",
-                            own.join(", "),
-                            names.join(", ")
-                        ),
-                    ));
-                }
-                Some(ordered)
-            }
+            Some(r) => Some(parse_arm_reflectors(cx, side, r, names, length)?),
         };
         files[side] = Some(ManifestArm {
             file: path,
@@ -574,8 +533,72 @@ fn parse_arms(
              (both arms, or the one arm measured)",
         ));
     }
-    // Stations: on both arms or on neither (one station, as files without the key). An arm measured
-    // alone may name its station.
+    check_stations(cx, &files, &station_lines)?;
+    Ok(files)
+}
+
+/// `[[arms]] station`: the name of the tracker station (1 to 255 characters, one line).
+fn parse_station(cx: &ManifestCtx, s: &Spanned<String>) -> Result<String, DatasetError> {
+    let text = s.get_ref().trim();
+    if text.is_empty() || text.len() > 255 || text.chars().any(char::is_control) {
+        return Err(cx.err(
+            Some(cx.line_of(s.span())),
+            "arms.station",
+            "expected the name of the tracker station (1 to 255 characters, one line)",
+        ));
+    }
+    Ok(text.to_string())
+}
+
+/// `[[arms]] reflectors`: an arm's own coordinates of the dataset's reflectors (the same names), in
+/// the dataset's order (the CSV's columns).
+fn parse_arm_reflectors(
+    cx: &ManifestCtx,
+    side: Side,
+    r: Spanned<RawReflectors>,
+    names: &[String],
+    length: LengthUnit,
+) -> Result<Vec<Vector3<f64>>, DatasetError> {
+    let line = Some(cx.line_of(r.span()));
+    let (own, coords) = parse_reflectors(cx, Some(r), length)?;
+    let mut ordered = Vec::with_capacity(names.len());
+    for name in names {
+        let Some(k) = own.iter().position(|n| n == name) else {
+            return Err(cx.err(
+                line,
+                "arms.reflectors",
+                format!(
+                    "the {side} arm's reflectors name {} but [reflectors] names {}: an arm's own \
+                     coordinates are for the dataset's reflectors (the same names; the CSV columns \
+                     are theirs)",
+                    own.join(", "),
+                    names.join(", ")
+                ),
+            ));
+        };
+        ordered.push(coords[k]);
+    }
+    if own.len() != names.len() {
+        return Err(cx.err(
+            line,
+            "arms.reflectors",
+            format!(
+                "the {side} arm's reflectors name {} but [reflectors] names {}",
+                own.join(", "),
+                names.join(", ")
+            ),
+        ));
+    }
+    Ok(ordered)
+}
+
+/// Stations: on both arms or on neither (one station, as files without the key). An arm measured
+/// alone may name its station.
+fn check_stations(
+    cx: &ManifestCtx,
+    files: &PerSide<Option<ManifestArm>>,
+    station_lines: &PerSide<usize>,
+) -> Result<(), DatasetError> {
     for side in Side::BOTH {
         let other = side.other();
         if let (Some(a), Some(b)) = (&files[side], &files[other])
@@ -592,6 +615,5 @@ fn parse_arms(
             ));
         }
     }
-    let arms = files;
-    Ok(arms)
+    Ok(())
 }
