@@ -44,15 +44,9 @@ dataset="$out/dataset"
     exit 2
 }
 here=$(cd "$(dirname "$0")" && pwd)
-if [ -n "${DUALCAL:-}" ]; then
-    dualcal=$DUALCAL
-elif command -v dualcal >/dev/null 2>&1; then
-    dualcal=dualcal
-else
-    root=$(cd "$here/../.." && pwd)
-    (cd "$root" && cargo build --release --quiet --bin dualcal)
-    dualcal="$root/target/release/dualcal"
-fi
+# shellcheck source=dualcal-binary.sh
+. "$here/dualcal-binary.sh"
+dualcal=$(dualcal_binary "$here")
 
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT

@@ -50,15 +50,9 @@ done
 [ -f "$raw" ] || { echo "$raw: no such file" >&2; exit 2; }
 [ -f "$robot" ] || { echo "$robot: no such file" >&2; exit 2; }
 
-if [ -n "${DUALCAL:-}" ]; then
-    dualcal=$DUALCAL
-elif command -v dualcal >/dev/null 2>&1; then
-    dualcal=dualcal
-else
-    root=$(cd "$here/../.." && pwd)
-    (cd "$root" && cargo build --release --quiet --bin dualcal)
-    dualcal="$root/target/release/dualcal"
-fi
+# shellcheck source=dualcal-binary.sh
+. "$here/dualcal-binary.sh"
+dualcal=$(dualcal_binary "$here")
 
 mkdir -p "$out"
 # Row 0 of the markers matrix is the right hand, row 1 the left (tools/real-data/README.md); the

@@ -652,29 +652,15 @@ impl JointErrorModel {
     pub fn increments(&self, values: &[f64], q: &[f64], derivatives: bool) -> Increments {
         let mut out = Increments::default();
         let per = 2 * self.terms.harmonics as usize;
-        for (n, &j) in self.harmonic_joints.iter().enumerate() {
-            let theta = self.joint_value(j, q);
+        // The joint's harmonics of its angle, then the motor's of ratio × angle.
+        let joint = self.harmonic_joints.iter().map(|&j| (j, 1.0));
+        let motor = self.motor_joints.iter().copied();
+        for (n, (j, ratio)) in joint.chain(motor).enumerate() {
+            let angle = ratio * self.joint_value(j, q);
             let first = per * n;
             let (mut value, mut row) = (0.0, Vec::with_capacity(if derivatives { per } else { 0 }));
             for order in 0..self.terms.harmonics as usize {
-                let (s, c) = ((order + 1) as f64 * theta).sin_cos();
-                let i = first + 2 * order;
-                value += values[i] * c + values[i + 1] * s;
-                if derivatives {
-                    row.push((i, c));
-                    row.push((i + 1, s));
-                }
-            }
-            let slot = self.axis_slot(j);
-            out.add(slot, value, row);
-        }
-        let h = self.harmonics_count();
-        for (n, &(j, ratio)) in self.motor_joints.iter().enumerate() {
-            let motor = ratio * self.joint_value(j, q);
-            let first = h + per * n;
-            let (mut value, mut row) = (0.0, Vec::with_capacity(if derivatives { per } else { 0 }));
-            for order in 0..self.terms.harmonics as usize {
-                let (s, c) = ((order + 1) as f64 * motor).sin_cos();
+                let (s, c) = ((order + 1) as f64 * angle).sin_cos();
                 let i = first + 2 * order;
                 value += values[i] * c + values[i + 1] * s;
                 if derivatives {
