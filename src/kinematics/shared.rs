@@ -31,15 +31,17 @@ fn shared_error_params(left: &ArmModel, right: &ArmModel, names: &[String]) -> V
         name.rsplit_once('.')
             .is_some_and(|(joint, _)| names.iter().any(|n| n == joint))
     };
+    let right_names: Vec<(usize, String)> = range(right)
+        .map(|b| (b, right.param_name(b)))
+        .filter(|(_, name)| on_shared(name))
+        .collect();
     range(left)
         .filter_map(|a| {
             let name = left.param_name(a);
-            if !on_shared(&name) {
-                return None;
-            }
-            range(right)
-                .find(|&b| right.param_name(b) == name)
-                .map(|b| (a, b))
+            right_names
+                .iter()
+                .find(|(_, n)| *n == name)
+                .map(|&(b, _)| (a, b))
         })
         .collect()
 }
