@@ -83,14 +83,23 @@ fn ratio_to_truth(sim: &SimOutput, configs: &PerSide<Vec<Vec<f64>>>, seed: u64) 
     rms(&result.calibrated) / rms(&sim.truth)
 }
 
-/// Plan `n` per arm for the simulation of `seed`; the planned and the first `n` random calibration
-/// configurations' ratios to the truth, the plans, and the verification ratio the plan predicts
-/// (least squares, mean of the arms).
-fn planned_and_random(
-    robot: &RobotDescription,
-    seed: u64,
-    n: usize,
-) -> (f64, f64, PerSide<dualcal::plan::ArmPlan>, PlanOptions, f64) {
+/// What one simulation gives at one N: the planned and the first `n` random calibration
+/// configurations' ratios to the truth, the plans, and what the plans predict per arm: the
+/// verification ratio (least squares), the bound on any design of `n` of the candidates, and the
+/// chosen design's ratio with an efficient fit of its distances.
+struct Outcome {
+    planned: f64,
+    random: f64,
+    plans: PerSide<dualcal::plan::ArmPlan>,
+    options: PlanOptions,
+    predicted: PerSide<f64>,
+    bound: PerSide<f64>,
+    efficient: PerSide<f64>,
+}
+
+/// Plan `n` per arm for the simulation of `seed` and calibrate on the plan and on random
+/// configurations ([`Outcome`]).
+fn planned_and_random(robot: &RobotDescription, seed: u64, n: usize) -> Outcome {
     let sim = simulate_with_robot(&paper_options(seed, 220, 120), robot).unwrap();
     let tracker_in_body = robot.body_from_arm_base(Side::Left)
         * sim
@@ -111,24 +120,29 @@ fn planned_and_random(
     let planned = plan(robot, &default_reflectors_for(robot), &options).unwrap();
     let planned_configs = planned.as_ref().map(|_, p| p.configs.clone());
     let nominal = robot.nominal_model(default_reflectors_for(robot).to_vec());
-    let predicted = Side::BOTH
-        .iter()
-        .map(|&side| {
-            dualcal::solver::uncertainty::predicted_for_tracker(
-                robot,
-                nominal.arm(side),
-                side,
-                &planned[side].configs,
-                &planned[side].sample,
-                &sim.dataset.tracker,
-                &options.tracker_in_body_mm,
-            )
-            .and_then(|d| d.verification_ratio)
-            .unwrap()
-        })
-        .sum::<f64>()
-        / 2.0;
-    eprintln!("seed {seed}, N {n}: predicted verification ratio {predicted:.3} (least squares)");
+    let predicted = PerSide::from_fn(|side| {
+        dualcal::solver::uncertainty::predicted_for_tracker(
+            robot,
+            nominal.arm(side),
+            side,
+            &planned[side].configs,
+            &planned[side].sample,
+            &sim.dataset.tracker,
+            &options.tracker_in_body_mm,
+        )
+        .and_then(|d| d.verification_ratio)
+        .unwrap()
+    });
+    let bound = PerSide::from_fn(|side| planned[side].bound.as_ref().unwrap().ratio());
+    let efficient = PerSide::from_fn(|side| planned[side].bound.as_ref().unwrap().design_ratio());
+    let mean = |v: &PerSide<f64>| 0.5 * (v.left + v.right);
+    eprintln!(
+        "seed {seed}, N {n}: predicted verification ratio {:.3} (least squares), {:.3} with an \
+         efficient fit; bound on any design {:.3}",
+        mean(&predicted),
+        mean(&efficient),
+        mean(&bound)
+    );
     let random = PerSide::from_fn(|side| {
         sim.dataset
             .arm(side)
@@ -138,35 +152,56 @@ fn planned_and_random(
             .map(|m| m.q_rad.clone())
             .collect::<Vec<_>>()
     });
-    (
-        ratio_to_truth(&sim, &planned_configs, 100 * seed),
-        ratio_to_truth(&sim, &random, 100 * seed),
-        planned,
+    Outcome {
+        planned: ratio_to_truth(&sim, &planned_configs, 100 * seed),
+        random: ratio_to_truth(&sim, &random, 100 * seed),
+        plans: planned,
         options,
         predicted,
-    )
+        bound,
+        efficient,
+    }
 }
 
 /// 20 planned configurations per arm against 20 random ones on four simulations (the IRB 14000, the
 /// paper's errors and tracker; each verified on the same 100 random configurations): every planned
-/// configuration is free of collisions, its design better than the random one's, and the planned
-/// sets calibrate better on average and far more evenly. The issue's target — within 1.10× of the
-/// true parameters' accuracy with 20 — is not reached: ~1.16 (docs/planning.md).
+/// configuration is free of collisions, its design better than the random one's and the exchange's
+/// no worse than the greedy pass's, the bound below the design's prediction, and the planned sets
+/// calibrate better on every seed and far more evenly. The issue's target — within 1.10× of the
+/// true parameters' accuracy with 20 — is reached on one seed of four: 1.114 on average
+/// (docs/planning.md).
 #[test]
 fn twenty_planned_configurations_calibrate_better_than_twenty_random_ones() {
     let robot = RobotDescription::builtin_irb14000();
     let world = CollisionWorld::new(&robot);
     let mut ratios = Vec::new();
     for seed in [1, 2, 3, 4] {
-        let (rp, rr, planned, options, predicted) = planned_and_random(&robot, seed, 20);
-        // The prediction is a least-squares one from the candidates' spread: below the minimax
-        // fit's measured ratio, and not far (docs/planning.md: 1.116 against 1.177 on average).
+        let o = planned_and_random(&robot, seed, 20);
+        let (rp, rr, planned, options) = (o.planned, o.random, &o.plans, &o.options);
+        let predicted = 0.5 * (o.predicted.left + o.predicted.right);
+        // The prediction is a least-squares one from the candidates' spread, linearised: within
+        // 5 % of the minimax fit's measured ratio, on either side (one noise draw and one random
+        // verification set; docs/planning.md).
         assert!(
-            predicted > 1.0 && predicted < rp && rp / predicted < 1.15,
+            predicted > 1.0 && (rp / predicted - 1.0).abs() < 0.05,
             "seed {seed}: predicted {predicted:.3}, measured {rp:.3}"
         );
         for side in Side::BOTH {
+            // The bound holds the design's least-squares prediction (Gauss–Markov: an efficient fit
+            // of the same distances does at least as well, and no design of 20 of the candidates
+            // does better than the relaxation).
+            assert!(
+                1.0 < o.bound[side]
+                    && o.bound[side] <= o.efficient[side] * (1.0 + 1e-9)
+                    && o.efficient[side] <= o.predicted[side] * (1.0 + 1e-9),
+                "seed {seed}, {side}: bound {:.4}, efficient {:.4}, least squares {:.4}",
+                o.bound[side],
+                o.efficient[side],
+                o.predicted[side]
+            );
             let p = &planned[side];
+            // The exchange never worsens the greedy design.
+            assert!(p.criterion <= p.criterion_greedy, "{side}");
             assert_eq!(p.configs.len(), 20);
             assert!(
                 p.log_det > p.log_det_random,
@@ -186,6 +221,7 @@ fn twenty_planned_configurations_calibrate_better_than_twenty_random_ones() {
         eprintln!(
             "seed {seed}: verification RMS over the truth's — planned {rp:.3}, random {rr:.3}"
         );
+        assert!(rp < rr, "seed {seed}: planned {rp:.3}, random {rr:.3}");
         ratios.push((rp, rr));
     }
     let mean = |f: fn(&(f64, f64)) -> f64| ratios.iter().map(f).sum::<f64>() / ratios.len() as f64;
@@ -201,7 +237,7 @@ fn twenty_planned_configurations_calibrate_better_than_twenty_random_ones() {
         spread(|r| r.1)
     );
     assert!(planned < random, "{planned} vs {random}");
-    assert!(planned < 1.20, "{planned}");
+    assert!(planned < 1.14, "{planned}");
     assert!(spread(|r| r.0) < spread(|r| r.1));
 }
 
@@ -219,13 +255,18 @@ fn accuracy_against_the_number_of_configurations() {
     );
     eprintln!("N   planned (mean, min–max)   random (mean, min–max)");
     for n in ns {
-        let r: Vec<(f64, f64)> = [1, 2, 3, 4]
+        let outcomes: Vec<Outcome> = [1, 2, 3, 4]
             .iter()
-            .map(|&seed| {
-                let (p, q, _, _, _) = planned_and_random(&robot, seed, n);
-                (p, q)
-            })
+            .map(|&seed| planned_and_random(&robot, seed, n))
             .collect();
+        let r: Vec<(f64, f64)> = outcomes.iter().map(|o| (o.planned, o.random)).collect();
+        let arms = |f: fn(&Outcome) -> &PerSide<f64>| {
+            outcomes
+                .iter()
+                .map(|o| 0.5 * (f(o).left + f(o).right))
+                .sum::<f64>()
+                / outcomes.len() as f64
+        };
         let stats = |f: fn(&(f64, f64)) -> f64| {
             let v: Vec<f64> = r.iter().map(f).collect();
             (
@@ -236,8 +277,19 @@ fn accuracy_against_the_number_of_configurations() {
         };
         let (p, q) = (stats(|x| x.0), stats(|x| x.1));
         eprintln!(
-            "{n:<3} {:.3} ({:.3}–{:.3})       {:.3} ({:.3}–{:.3})",
-            p.0, p.1, p.2, q.0, q.1, q.2
+            "{n:<3} {:.3} ({:.3}–{:.3})       {:.3} ({:.3}–{:.3})   planned better on {} of {} \
+             seeds; predicted {:.3}, efficient {:.3}, bound {:.3}",
+            p.0,
+            p.1,
+            p.2,
+            q.0,
+            q.1,
+            q.2,
+            r.iter().filter(|x| x.0 < x.1).count(),
+            r.len(),
+            arms(|o| &o.predicted),
+            arms(|o| &o.efficient),
+            arms(|o| &o.bound)
         );
     }
 }
