@@ -97,9 +97,13 @@ struct Outcome {
     efficient: PerSide<f64>,
 }
 
-/// Plan `n` per arm for the simulation of `seed` and calibrate on the plan and on random
-/// configurations ([`Outcome`]).
-fn planned_and_random(robot: &RobotDescription, seed: u64, n: usize) -> Outcome {
+/// The simulation of `seed` and the options planning `n` per arm for it (the tracker where the
+/// simulation put it).
+fn simulation_and_options(
+    robot: &RobotDescription,
+    seed: u64,
+    n: usize,
+) -> (SimOutput, PlanOptions) {
     let sim = simulate_with_robot(&paper_options(seed, 220, 120), robot).unwrap();
     let tracker_in_body = robot.body_from_arm_base(Side::Left)
         * sim
@@ -117,6 +121,23 @@ fn planned_and_random(robot: &RobotDescription, seed: u64, n: usize) -> Outcome 
         tracker_in_body_mm: tracker_in_body.coords,
         ..PlanOptions::default()
     };
+    (sim, options)
+}
+
+/// The measurement's noise draw of the simulation of `seed` (`DUALCAL_PLAN_NOISE=k` draws it
+/// otherwise; 0 by default).
+fn noise_seed(seed: u64) -> u64 {
+    100 * seed
+        + std::env::var("DUALCAL_PLAN_NOISE")
+            .ok()
+            .and_then(|v| v.parse::<u64>().ok())
+            .unwrap_or(0)
+}
+
+/// Plan `n` per arm for the simulation of `seed` and calibrate on the plan and on random
+/// configurations ([`Outcome`]).
+fn planned_and_random(robot: &RobotDescription, seed: u64, n: usize) -> Outcome {
+    let (sim, options) = simulation_and_options(robot, seed, n);
     let planned = plan(robot, &default_reflectors_for(robot), &options).unwrap();
     let planned_configs = planned.as_ref().map(|_, p| p.configs.clone());
     let nominal = robot.nominal_model(default_reflectors_for(robot).to_vec());
@@ -176,12 +197,7 @@ fn planned_and_random(robot: &RobotDescription, seed: u64, n: usize) -> Outcome 
             .map(|m| m.q_rad.clone())
             .collect::<Vec<_>>()
     });
-    // `DUALCAL_PLAN_NOISE=k` draws the measurement's noise otherwise (0 by default).
-    let noise = 100 * seed
-        + std::env::var("DUALCAL_PLAN_NOISE")
-            .ok()
-            .and_then(|v| v.parse::<u64>().ok())
-            .unwrap_or(0);
+    let noise = noise_seed(seed);
     Outcome {
         planned: ratio_to_truth(&sim, &planned_configs, noise),
         random: ratio_to_truth(&sim, &random, noise),
@@ -328,6 +344,76 @@ fn accuracy_against_the_number_of_configurations() {
             arms(|o| &o.predicted),
             arms(|o| &o.efficient),
             arms(|o| &o.bound)
+        );
+    }
+}
+
+/// The relaxation rounded — the candidates of its N largest weights — against the exchanged design,
+/// at N = 20 (`DUALCAL_PLAN_N`) on the curve's simulations: both designs' least-squares predictions
+/// on the plan's sample and their measured ratios (`cargo test --release --test plan -- --ignored
+/// --nocapture the_relaxation_rounded`).
+#[test]
+#[ignore]
+fn the_relaxation_rounded_against_the_exchanged_design() {
+    let robot = RobotDescription::builtin_irb14000();
+    let world = CollisionWorld::new(&robot);
+    let reflectors = default_reflectors_for(&robot);
+    let nominal = robot.nominal_model(reflectors.to_vec());
+    let n: usize = std::env::var("DUALCAL_PLAN_N")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(20);
+    let seeds: Vec<u64> = std::env::var("DUALCAL_PLAN_SEEDS").map_or_else(
+        |_| vec![1, 2, 3, 4],
+        |v| v.split(',').filter_map(|n| n.trim().parse().ok()).collect(),
+    );
+    for seed in seeds {
+        let (sim, options) = simulation_and_options(&robot, seed, n);
+        let planned = plan(&robot, &reflectors, &options).unwrap();
+        let mut rounded = PerSide::new(Vec::new(), Vec::new());
+        let mut predicted = PerSide::new((0.0, 0.0), (0.0, 0.0));
+        for side in Side::BOTH {
+            let arm = nominal.arm(side);
+            let (pool, _) = dualcal::plan::candidates(&robot, arm, side, &world, &options).unwrap();
+            let jac = dualcal::plan::scaled_jacobians(arm, &pool);
+            let points: Vec<_> = pool.iter().map(|q| arm.reflector_fk(q).points_mm).collect();
+            let index = |q: &Vec<f64>| pool.iter().position(|c| c == q).unwrap();
+            let p = &planned[side];
+            let design: Vec<usize> = p.configs.iter().map(index).collect();
+            let ver: Vec<usize> = p.sample.iter().map(index).collect();
+            let bound = dualcal::plan::bound::relaxed_bound(
+                &points,
+                &jac,
+                pool.len(),
+                &[],
+                n,
+                &design,
+                &ver,
+            )
+            .unwrap();
+            rounded[side] = bound.largest.iter().map(|&i| pool[i].clone()).collect();
+            let free: Vec<usize> = (0..arm.param_count())
+                .filter(|&k| arm.unidentifiable_reason(k).is_none())
+                .collect();
+            let ratio = |design: &[Vec<f64>]| {
+                dualcal::solver::uncertainty::predicted_verification_ratio(
+                    arm, design, &p.sample, &free, 0.01,
+                )
+                .unwrap()
+            };
+            predicted[side] = (ratio(&p.configs), ratio(&rounded[side]));
+        }
+        let planned_configs = planned.as_ref().map(|_, p| p.configs.clone());
+        let noise = noise_seed(seed);
+        let (mp, mr) = (
+            ratio_to_truth(&sim, &planned_configs, noise),
+            ratio_to_truth(&sim, &rounded, noise),
+        );
+        eprintln!(
+            "seed {seed}, N {n}: predicted (least squares) exchanged {:.3}, rounded {:.3}; \
+             measured exchanged {mp:.3}, rounded {mr:.3}",
+            0.5 * (predicted.left.0 + predicted.right.0),
+            0.5 * (predicted.left.1 + predicted.right.1)
         );
     }
 }

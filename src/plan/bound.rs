@@ -51,6 +51,9 @@ pub struct DesignBound {
     pub iterations: usize,
     /// Candidates with a weight above 0.01 in the best relaxed design.
     pub support: usize,
+    /// The candidates of the `per_arm` largest weights in the best relaxed design, largest first:
+    /// the relaxation rounded to a design.
+    pub largest: Vec<usize>,
 }
 
 /// `sqrt(1 + criterion / 2)`: the verification accuracy over the noise floor.
@@ -308,6 +311,12 @@ pub fn relaxed_bound(
         criterion_design,
         iterations,
         support: best_w.iter().filter(|&&v| v > 0.01).count(),
+        largest: {
+            let mut order: Vec<usize> = (0..best_w.len()).collect();
+            order.sort_by(|&a, &b| best_w[b].total_cmp(&best_w[a]));
+            order.truncate(per_arm);
+            order
+        },
     })
 }
 
