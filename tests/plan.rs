@@ -83,14 +83,27 @@ fn ratio_to_truth(sim: &SimOutput, configs: &PerSide<Vec<Vec<f64>>>, seed: u64) 
     rms(&result.calibrated) / rms(&sim.truth)
 }
 
-/// Plan `n` per arm for the simulation of `seed`; the planned and the first `n` random calibration
-/// configurations' ratios to the truth, the plans, and the verification ratio the plan predicts
-/// (least squares, mean of the arms).
-fn planned_and_random(
+/// What one simulation gives at one N: the planned and the first `n` random calibration
+/// configurations' ratios to the truth, the plans, and what the plans predict per arm: the
+/// verification ratio (least squares), the bound on any design of `n` of the candidates, and the
+/// chosen design's ratio with an efficient fit of its distances.
+struct Outcome {
+    planned: f64,
+    random: f64,
+    plans: PerSide<dualcal::plan::ArmPlan>,
+    options: PlanOptions,
+    predicted: PerSide<f64>,
+    bound: PerSide<f64>,
+    efficient: PerSide<f64>,
+}
+
+/// The simulation of `seed` and the options planning `n` per arm for it (the tracker where the
+/// simulation put it).
+fn simulation_and_options(
     robot: &RobotDescription,
     seed: u64,
     n: usize,
-) -> (f64, f64, PerSide<dualcal::plan::ArmPlan>, PlanOptions, f64) {
+) -> (SimOutput, PlanOptions) {
     let sim = simulate_with_robot(&paper_options(seed, 220, 120), robot).unwrap();
     let tracker_in_body = robot.body_from_arm_base(Side::Left)
         * sim
@@ -108,27 +121,73 @@ fn planned_and_random(
         tracker_in_body_mm: tracker_in_body.coords,
         ..PlanOptions::default()
     };
+    (sim, options)
+}
+
+/// The measurement's noise draw of the simulation of `seed` (`DUALCAL_PLAN_NOISE=k` draws it
+/// otherwise; 0 by default).
+fn noise_seed(seed: u64) -> u64 {
+    100 * seed
+        + std::env::var("DUALCAL_PLAN_NOISE")
+            .ok()
+            .and_then(|v| v.parse::<u64>().ok())
+            .unwrap_or(0)
+}
+
+/// Plan `n` per arm for the simulation of `seed` and calibrate on the plan and on random
+/// configurations ([`Outcome`]).
+fn planned_and_random(robot: &RobotDescription, seed: u64, n: usize) -> Outcome {
+    let (sim, options) = simulation_and_options(robot, seed, n);
     let planned = plan(robot, &default_reflectors_for(robot), &options).unwrap();
     let planned_configs = planned.as_ref().map(|_, p| p.configs.clone());
     let nominal = robot.nominal_model(default_reflectors_for(robot).to_vec());
-    let predicted = Side::BOTH
-        .iter()
-        .map(|&side| {
-            dualcal::solver::uncertainty::predicted_for_tracker(
-                robot,
-                nominal.arm(side),
-                side,
-                &planned[side].configs,
-                &planned[side].sample,
-                &sim.dataset.tracker,
-                &options.tracker_in_body_mm,
-            )
-            .and_then(|d| d.verification_ratio)
-            .unwrap()
-        })
-        .sum::<f64>()
-        / 2.0;
-    eprintln!("seed {seed}, N {n}: predicted verification ratio {predicted:.3} (least squares)");
+    let predicted = PerSide::from_fn(|side| {
+        dualcal::solver::uncertainty::predicted_for_tracker(
+            robot,
+            nominal.arm(side),
+            side,
+            &planned[side].configs,
+            &planned[side].sample,
+            &sim.dataset.tracker,
+            &options.tracker_in_body_mm,
+        )
+        .and_then(|d| d.verification_ratio)
+        .unwrap()
+    });
+    // The same prediction on the simulator's own verification configurations (where the ratio is
+    // measured) rather than on the unchosen candidates.
+    let on_ver = PerSide::from_fn(|side| {
+        let arm = nominal.arm(side);
+        let free: Vec<usize> = (0..arm.param_count())
+            .filter(|&k| arm.unidentifiable_reason(k).is_none())
+            .collect();
+        let ver: Vec<Vec<f64>> = sim
+            .dataset
+            .arm(side)
+            .select(Split::Ver)
+            .iter()
+            .map(|m| m.q_rad.clone())
+            .collect();
+        dualcal::solver::uncertainty::predicted_verification_ratio(
+            arm,
+            &planned[side].configs,
+            &ver,
+            &free,
+            0.01,
+        )
+        .unwrap()
+    });
+    let bound = PerSide::from_fn(|side| planned[side].bound.as_ref().unwrap().ratio());
+    let efficient = PerSide::from_fn(|side| planned[side].bound.as_ref().unwrap().design_ratio());
+    let mean = |v: &PerSide<f64>| 0.5 * (v.left + v.right);
+    eprintln!(
+        "seed {seed}, N {n}: predicted verification ratio {:.3} (least squares; {:.3} on the \
+         verification configurations), {:.3} with an efficient fit; bound on any design {:.3}",
+        mean(&predicted),
+        mean(&on_ver),
+        mean(&efficient),
+        mean(&bound)
+    );
     let random = PerSide::from_fn(|side| {
         sim.dataset
             .arm(side)
@@ -138,35 +197,57 @@ fn planned_and_random(
             .map(|m| m.q_rad.clone())
             .collect::<Vec<_>>()
     });
-    (
-        ratio_to_truth(&sim, &planned_configs, 100 * seed),
-        ratio_to_truth(&sim, &random, 100 * seed),
-        planned,
+    let noise = noise_seed(seed);
+    Outcome {
+        planned: ratio_to_truth(&sim, &planned_configs, noise),
+        random: ratio_to_truth(&sim, &random, noise),
+        plans: planned,
         options,
         predicted,
-    )
+        bound,
+        efficient,
+    }
 }
 
 /// 20 planned configurations per arm against 20 random ones on four simulations (the IRB 14000, the
 /// paper's errors and tracker; each verified on the same 100 random configurations): every planned
-/// configuration is free of collisions, its design better than the random one's, and the planned
-/// sets calibrate better on average and far more evenly. The issue's target — within 1.10× of the
-/// true parameters' accuracy with 20 — is not reached: ~1.16 (docs/planning.md).
+/// configuration is free of collisions, its design better than the random one's and the exchange's
+/// no worse than the greedy pass's, the bound below the design's prediction, and the planned sets
+/// calibrate better on every seed and far more evenly. The issue's target — within 1.10× of the
+/// true parameters' accuracy with 20 — is reached on one seed of four: 1.114 on average
+/// (docs/planning.md).
 #[test]
 fn twenty_planned_configurations_calibrate_better_than_twenty_random_ones() {
     let robot = RobotDescription::builtin_irb14000();
     let world = CollisionWorld::new(&robot);
     let mut ratios = Vec::new();
     for seed in [1, 2, 3, 4] {
-        let (rp, rr, planned, options, predicted) = planned_and_random(&robot, seed, 20);
-        // The prediction is a least-squares one from the candidates' spread: below the minimax
-        // fit's measured ratio, and not far (docs/planning.md: 1.116 against 1.177 on average).
+        let o = planned_and_random(&robot, seed, 20);
+        let (rp, rr, planned, options) = (o.planned, o.random, &o.plans, &o.options);
+        let predicted = 0.5 * (o.predicted.left + o.predicted.right);
+        // The prediction is a least-squares one from the candidates' spread, linearised: within
+        // 5 % of the minimax fit's measured ratio, on either side (one noise draw and one random
+        // verification set; docs/planning.md).
         assert!(
-            predicted > 1.0 && predicted < rp && rp / predicted < 1.15,
+            predicted > 1.0 && (rp / predicted - 1.0).abs() < 0.05,
             "seed {seed}: predicted {predicted:.3}, measured {rp:.3}"
         );
         for side in Side::BOTH {
+            // The bound holds the design's least-squares prediction (Gauss–Markov: an efficient fit
+            // of the same distances does at least as well, and no design of 20 of the candidates
+            // does better than the relaxation).
+            assert!(
+                1.0 < o.bound[side]
+                    && o.bound[side] <= o.efficient[side] * (1.0 + 1e-9)
+                    && o.efficient[side] <= o.predicted[side] * (1.0 + 1e-9),
+                "seed {seed}, {side}: bound {:.4}, efficient {:.4}, least squares {:.4}",
+                o.bound[side],
+                o.efficient[side],
+                o.predicted[side]
+            );
             let p = &planned[side];
+            // The exchange never worsens the greedy design.
+            assert!(p.criterion <= p.criterion_greedy, "{side}");
             assert_eq!(p.configs.len(), 20);
             assert!(
                 p.log_det > p.log_det_random,
@@ -186,6 +267,7 @@ fn twenty_planned_configurations_calibrate_better_than_twenty_random_ones() {
         eprintln!(
             "seed {seed}: verification RMS over the truth's — planned {rp:.3}, random {rr:.3}"
         );
+        assert!(rp < rr, "seed {seed}: planned {rp:.3}, random {rr:.3}");
         ratios.push((rp, rr));
     }
     let mean = |f: fn(&(f64, f64)) -> f64| ratios.iter().map(f).sum::<f64>() / ratios.len() as f64;
@@ -201,14 +283,15 @@ fn twenty_planned_configurations_calibrate_better_than_twenty_random_ones() {
         spread(|r| r.1)
     );
     assert!(planned < random, "{planned} vs {random}");
-    assert!(planned < 1.20, "{planned}");
+    assert!(planned < 1.14, "{planned}");
     assert!(spread(|r| r.0) < spread(|r| r.1));
 }
 
 /// The curve of docs/planning.md: verification RMS over the truth's against N, planned and random,
-/// four simulations each (`cargo test --release --test plan -- --ignored --nocapture`;
+/// four simulations each by default (`cargo test --release --test plan -- --ignored --nocapture`;
 /// `DUALCAL_PLAN_N=20` for one N, `DUALCAL_PLAN_CANDIDATES=3000` for another pool,
-/// `DUALCAL_PLAN_METHOD=lsq` to calibrate by least squares).
+/// `DUALCAL_PLAN_METHOD=lsq` to calibrate by least squares, `DUALCAL_PLAN_SEEDS=1,2,3,4,5,6,7,8`
+/// for other simulations, `DUALCAL_PLAN_NOISE=1` for another draw of the measurement's noise).
 #[test]
 #[ignore]
 fn accuracy_against_the_number_of_configurations() {
@@ -217,15 +300,27 @@ fn accuracy_against_the_number_of_configurations() {
         |_| vec![10, 15, 20, 30, 40],
         |v| v.split(',').filter_map(|n| n.trim().parse().ok()).collect(),
     );
+    let seeds: Vec<u64> = std::env::var("DUALCAL_PLAN_SEEDS").map_or_else(
+        |_| vec![1, 2, 3, 4],
+        |v| v.split(',').filter_map(|n| n.trim().parse().ok()).collect(),
+    );
     eprintln!("N   planned (mean, min–max)   random (mean, min–max)");
     for n in ns {
-        let r: Vec<(f64, f64)> = [1, 2, 3, 4]
+        let outcomes: Vec<Outcome> = seeds
             .iter()
-            .map(|&seed| {
-                let (p, q, _, _, _) = planned_and_random(&robot, seed, n);
-                (p, q)
-            })
+            .map(|&seed| planned_and_random(&robot, seed, n))
             .collect();
+        let r: Vec<(f64, f64)> = outcomes.iter().map(|o| (o.planned, o.random)).collect();
+        for (seed, (p, q)) in seeds.iter().zip(&r) {
+            eprintln!("seed {seed}, N {n}: planned {p:.3}, random {q:.3}");
+        }
+        let arms = |f: fn(&Outcome) -> &PerSide<f64>| {
+            outcomes
+                .iter()
+                .map(|o| 0.5 * (f(o).left + f(o).right))
+                .sum::<f64>()
+                / outcomes.len() as f64
+        };
         let stats = |f: fn(&(f64, f64)) -> f64| {
             let v: Vec<f64> = r.iter().map(f).collect();
             (
@@ -236,8 +331,89 @@ fn accuracy_against_the_number_of_configurations() {
         };
         let (p, q) = (stats(|x| x.0), stats(|x| x.1));
         eprintln!(
-            "{n:<3} {:.3} ({:.3}–{:.3})       {:.3} ({:.3}–{:.3})",
-            p.0, p.1, p.2, q.0, q.1, q.2
+            "{n:<3} {:.3} ({:.3}–{:.3})       {:.3} ({:.3}–{:.3})   planned better on {} of {} \
+             seeds; predicted {:.3}, efficient {:.3}, bound {:.3}",
+            p.0,
+            p.1,
+            p.2,
+            q.0,
+            q.1,
+            q.2,
+            r.iter().filter(|x| x.0 < x.1).count(),
+            r.len(),
+            arms(|o| &o.predicted),
+            arms(|o| &o.efficient),
+            arms(|o| &o.bound)
+        );
+    }
+}
+
+/// The relaxation rounded — the candidates of its N largest weights — against the exchanged design,
+/// at N = 20 (`DUALCAL_PLAN_N`) on the curve's simulations: both designs' least-squares predictions
+/// on the plan's sample and their measured ratios (`cargo test --release --test plan -- --ignored
+/// --nocapture the_relaxation_rounded`).
+#[test]
+#[ignore]
+fn the_relaxation_rounded_against_the_exchanged_design() {
+    let robot = RobotDescription::builtin_irb14000();
+    let world = CollisionWorld::new(&robot);
+    let reflectors = default_reflectors_for(&robot);
+    let nominal = robot.nominal_model(reflectors.to_vec());
+    let n: usize = std::env::var("DUALCAL_PLAN_N")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(20);
+    let seeds: Vec<u64> = std::env::var("DUALCAL_PLAN_SEEDS").map_or_else(
+        |_| vec![1, 2, 3, 4],
+        |v| v.split(',').filter_map(|n| n.trim().parse().ok()).collect(),
+    );
+    for seed in seeds {
+        let (sim, options) = simulation_and_options(&robot, seed, n);
+        let planned = plan(&robot, &reflectors, &options).unwrap();
+        let mut rounded = PerSide::new(Vec::new(), Vec::new());
+        let mut predicted = PerSide::new((0.0, 0.0), (0.0, 0.0));
+        for side in Side::BOTH {
+            let arm = nominal.arm(side);
+            let (pool, _) = dualcal::plan::candidates(&robot, arm, side, &world, &options).unwrap();
+            let jac = dualcal::plan::scaled_jacobians(arm, &pool);
+            let points: Vec<_> = pool.iter().map(|q| arm.reflector_fk(q).points_mm).collect();
+            let index = |q: &Vec<f64>| pool.iter().position(|c| c == q).unwrap();
+            let p = &planned[side];
+            let design: Vec<usize> = p.configs.iter().map(index).collect();
+            let ver: Vec<usize> = p.sample.iter().map(index).collect();
+            let bound = dualcal::plan::bound::relaxed_bound(
+                &points,
+                &jac,
+                pool.len(),
+                &[],
+                n,
+                &design,
+                &ver,
+            )
+            .unwrap();
+            rounded[side] = bound.largest.iter().map(|&i| pool[i].clone()).collect();
+            let free: Vec<usize> = (0..arm.param_count())
+                .filter(|&k| arm.unidentifiable_reason(k).is_none())
+                .collect();
+            let ratio = |design: &[Vec<f64>]| {
+                dualcal::solver::uncertainty::predicted_verification_ratio(
+                    arm, design, &p.sample, &free, 0.01,
+                )
+                .unwrap()
+            };
+            predicted[side] = (ratio(&p.configs), ratio(&rounded[side]));
+        }
+        let planned_configs = planned.as_ref().map(|_, p| p.configs.clone());
+        let noise = noise_seed(seed);
+        let (mp, mr) = (
+            ratio_to_truth(&sim, &planned_configs, noise),
+            ratio_to_truth(&sim, &rounded, noise),
+        );
+        eprintln!(
+            "seed {seed}, N {n}: predicted (least squares) exchanged {:.3}, rounded {:.3}; \
+             measured exchanged {mp:.3}, rounded {mr:.3}",
+            0.5 * (predicted.left.0 + predicted.right.0),
+            0.5 * (predicted.left.1 + predicted.right.1)
         );
     }
 }

@@ -5,7 +5,9 @@ use super::describe_robot;
 use crate::dataset::TrackerSpec;
 use crate::kinematics::ArmLinks;
 use crate::output::{Overwrite, write_atomic};
-use crate::plan::{ArmPlan, PlanOptions, PlanOutput, is_yumi, plan, plan_files, summary_line};
+use crate::plan::{
+    ArmPlan, PlanOptions, PlanOutput, bound_line, is_yumi, plan, plan_files, summary_line,
+};
 use crate::robot::{LoadOptions, RobotDescription};
 use crate::side::{PerSide, Side};
 use crate::simulate;
@@ -228,5 +230,8 @@ fn print_arm(
                 p.sample.len()
             );
         }
+    }
+    if let Some(line) = bound_line(p) {
+        outln!("  {line}");
     }
 }

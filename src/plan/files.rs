@@ -81,20 +81,41 @@ pub fn is_yumi(robot: &RobotDescription) -> bool {
 }
 
 /// The line `dualcal plan` prints for an arm: how many configurations from how many candidates, the
-/// design's information against a random set's, the path, its via points and any leg still colliding.
+/// design's information against a random set's, its I-criterion after exchange against the greedy
+/// pass's, the path, its via points and any leg still colliding.
 pub fn summary_line(side: Side, p: &ArmPlan) -> String {
     format!(
         "{side} arm: {} configurations chosen from {} candidates ({} draws); log det of the design \
-         {:.1} (the first {} candidates drawn: {:.1}); path {:.2} (joint space){}",
+         {:.1} (the first {} candidates drawn: {:.1}); I-criterion {:.4} after {} exchange swap(s) \
+         (greedy {:.4}); path {:.2} (joint space){}",
         p.configs.len(),
         p.candidates,
         p.attempts,
         p.log_det,
         p.configs.len(),
         p.log_det_random,
+        p.criterion,
+        p.swaps,
+        p.criterion_greedy,
         p.path_length,
         via_summary(p)
     )
+}
+
+/// What [`ArmPlan::bound`] says, for `dualcal plan` and the planning window: no design of as many of
+/// these candidates predicts a better verification accuracy than the bound; the relaxed design's and
+/// this design's with an efficient fit of the distances beside it.
+pub fn bound_line(p: &ArmPlan) -> Option<String> {
+    let b = p.bound.as_ref()?;
+    Some(format!(
+        "bound: no {} of these candidates predict better than {:.3}× (relaxed design {:.3}× on {} \
+         candidates); this design {:.3}× with an efficient fit of its distances",
+        b.per_arm,
+        b.ratio(),
+        b.relaxed_ratio(),
+        b.support,
+        b.design_ratio()
+    ))
 }
 
 /// The via points and the legs still colliding, for the summary line.

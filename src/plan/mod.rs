@@ -14,14 +14,18 @@
 //!    ([`select_by_distances`]) each next configuration the one that lowers most `trace(M⁻¹ P)` — the
 //!    predicted variance of a verification pair's distance error (I-optimality), with `M` the
 //!    information of the distances between the chosen configurations and `P` the mean information of a
-//!    pair of candidates — by the Woodbury identity.
+//!    pair of candidates — by the Woodbury identity. Then an exchange ([`exchange::exchange`], a
+//!    modified Fedorov exchange) swaps chosen configurations for candidates while that lowers the
+//!    same criterion.
 //! 3. **Order** ([`order`]): a short visiting sequence — nearest neighbour from the first pick, then
 //!    2-opt on the joint-space path length (rad; mm for a prismatic joint) — and each leg checked for
 //!    collisions at 2° steps; a leg that collides is re-routed through a via point ([`reroute`]: the
 //!    home pose or a collision-free candidate, the shortest detour whose two legs are clear).
 //!
 //! The predicted standard deviations of the parameters for the chosen set are those of
-//! [`crate::solver::uncertainty`] with the tracker's noise (`plan` in `dualcal plan` prints them).
+//! [`crate::solver::uncertainty`] with the tracker's noise (`plan` in `dualcal plan` prints them);
+//! [`bound::relaxed_bound`] bounds the verification accuracy any design of as many of the candidates
+//! could predict (a convex relaxation on the reflector positions' information).
 
 use crate::collision::{CollisionWorld, KeepOutBox};
 use crate::kinematics::ArmModel;
@@ -29,8 +33,11 @@ use crate::robot::RobotDescription;
 use crate::side::{PerSide, Side};
 use nalgebra::{DMatrix, Point3, Vector3};
 
+pub mod bound;
+pub mod exchange;
 mod files;
-pub use files::{PlanOutput, id_prefix, is_yumi, plan_files, summary_line};
+pub use bound::DesignBound;
+pub use files::{PlanOutput, bound_line, id_prefix, is_yumi, plan_files, summary_line};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -124,6 +131,14 @@ pub struct ArmPlan {
     /// Candidates the design did not choose (up to [`SAMPLE`], evenly spread over the pool): where
     /// the robot goes, for the predicted verification accuracy.
     pub sample: Vec<Vec<f64>>,
+    /// The I-criterion `trace(M⁻¹ P)` of the greedy pass's design, and of the design after
+    /// exchange ([`exchange::exchange`]) with the swaps it made.
+    pub criterion_greedy: f64,
+    pub criterion: f64,
+    pub swaps: usize,
+    /// What no design of as many of these candidates predicts better than, judged on
+    /// [`Self::sample`] ([`bound::relaxed_bound`]; `None` where its information is singular).
+    pub bound: Option<DesignBound>,
 }
 
 /// How many unchosen candidates [`ArmPlan::sample`] keeps.
@@ -385,13 +400,90 @@ pub fn select(jac: &[DMatrix<f64>], n: usize) -> Vec<usize> {
     chosen
 }
 
+/// The rows `u_cj,kᵀ (J_c,k − J_j,k)` of the distances between candidate `c` and each of `others`,
+/// one per reflector k (`others` in order, reflectors within): what measuring `c` beside `others`
+/// adds to the distance information. A zero row where two reflector positions coincide.
+pub fn pair_rows(
+    points: &[Vec<Vector3<f64>>],
+    jac: &[DMatrix<f64>],
+    c: usize,
+    others: &[usize],
+) -> DMatrix<f64> {
+    let p = jac[c].ncols();
+    let reflectors = jac[c].nrows() / 3;
+    let mut g = DMatrix::<f64>::zeros(others.len() * reflectors, p);
+    for (r, (j, k)) in others
+        .iter()
+        .flat_map(|&j| (0..reflectors).map(move |k| (j, k)))
+        .enumerate()
+    {
+        let v = points[c][k] - points[j][k];
+        let Some(u) = v.try_normalize(1e-12) else {
+            continue;
+        };
+        for col in 0..p {
+            let mut acc = 0.0;
+            for t in 0..3 {
+                acc += u[t] * (jac[c][(3 * k + t, col)] - jac[j][(3 * k + t, col)]);
+            }
+            g[(r, col)] = acc;
+        }
+    }
+    g
+}
+
+/// `P`, the information of the pairs a verification would measure: the mean of `GᵀG` over pairs of
+/// candidates (every k-th pair, at most ~4000), `G` their [`pair_rows`].
+pub fn pair_information(points: &[Vec<Vector3<f64>>], jac: &[DMatrix<f64>]) -> DMatrix<f64> {
+    let p = jac.first().map_or(0, |j| j.ncols());
+    let count = jac.len();
+    let total = count * count.saturating_sub(1) / 2;
+    let stride = total.div_ceil(4000).max(1);
+    let mut info = DMatrix::<f64>::zeros(p, p);
+    let mut sampled = 0usize;
+    let mut pair = 0usize;
+    for i in 0..count {
+        for j in i + 1..count {
+            if pair.is_multiple_of(stride) {
+                let g = pair_rows(points, jac, i, &[j]);
+                info += g.transpose() * &g;
+                sampled += 1;
+            }
+            pair += 1;
+        }
+    }
+    info / sampled.max(1) as f64
+}
+
+/// The I-criterion of the design `chosen`: `trace(M⁻¹ P)` with `M` the information of the distances
+/// between its configurations (plus `1e-9 I`) and `P` = `pool_info` ([`pair_information`]); infinite
+/// where `M` is singular. What [`select_by_distances`] and [`exchange::exchange`] lower.
+pub fn i_criterion(
+    points: &[Vec<Vector3<f64>>],
+    jac: &[DMatrix<f64>],
+    pool_info: &DMatrix<f64>,
+    chosen: &[usize],
+) -> f64 {
+    let p = pool_info.nrows();
+    let mut info = DMatrix::<f64>::identity(p, p) * 1e-9;
+    for (k, &c) in chosen.iter().enumerate() {
+        let g = pair_rows(points, jac, c, &chosen[..k]);
+        info += g.transpose() * &g;
+    }
+    info.cholesky()
+        .map_or(f64::INFINITY, |c| (c.inverse() * pool_info).trace())
+}
+
 /// Greedy I-optimal choice on the exact distance information (module documentation, step 2): the
-/// rows `u_ij,kᵀ (J_i,k − J_j,k)` a candidate adds with every configuration chosen so far lower
-/// `trace(M⁻¹ P)` by `trace((I + G M⁻¹ Gᵀ)⁻¹ G M⁻¹ P M⁻¹ Gᵀ)`. `points[c]` are candidate c's model reflector positions, `jac[c]` its
-/// scaled Jacobian rows (3 per reflector). Starts from `start` (the isotropic design's first picks).
+/// rows `u_ij,kᵀ (J_i,k − J_j,k)` ([`pair_rows`]) a candidate adds with every configuration chosen
+/// so far lower `trace(M⁻¹ P)` by `trace((I + G M⁻¹ Gᵀ)⁻¹ G M⁻¹ P M⁻¹ Gᵀ)`. `points[c]` are
+/// candidate c's model reflector positions, `jac[c]` its scaled Jacobian rows (3 per reflector),
+/// `pool_info` is `P` ([`pair_information`]). Starts from `start` (the isotropic design's first
+/// picks, or the configurations already measured).
 pub fn select_by_distances(
     points: &[Vec<Vector3<f64>>],
     jac: &[DMatrix<f64>],
+    pool_info: &DMatrix<f64>,
     n: usize,
     start: &[usize],
 ) -> Vec<usize> {
@@ -399,47 +491,7 @@ pub fn select_by_distances(
         return Vec::new();
     };
     let p = first.ncols();
-    let reflectors = first.nrows() / 3;
-    let rows_with = |c: usize, chosen: &[usize]| -> DMatrix<f64> {
-        let mut g = DMatrix::<f64>::zeros(chosen.len() * reflectors, p);
-        for (r, (j, k)) in chosen
-            .iter()
-            .flat_map(|&j| (0..reflectors).map(move |k| (j, k)))
-            .enumerate()
-        {
-            let v = points[c][k] - points[j][k];
-            let Some(u) = v.try_normalize(1e-12) else {
-                continue;
-            };
-            for col in 0..p {
-                let mut acc = 0.0;
-                for t in 0..3 {
-                    acc += u[t] * (jac[c][(3 * k + t, col)] - jac[j][(3 * k + t, col)]);
-                }
-                g[(r, col)] = acc;
-            }
-        }
-        g
-    };
-    // The information of the pairs a verification would measure: the mean over pairs of candidates
-    // (every k-th pair, at most ~4000).
-    let count = jac.len();
-    let total = count * count.saturating_sub(1) / 2;
-    let stride = total.div_ceil(4000).max(1);
-    let mut pool_info = DMatrix::<f64>::zeros(p, p);
-    let mut sampled = 0usize;
-    let mut pair = 0usize;
-    for i in 0..count {
-        for j in i + 1..count {
-            if pair.is_multiple_of(stride) {
-                let g = rows_with(i, &[j]);
-                pool_info += g.transpose() * &g;
-                sampled += 1;
-            }
-            pair += 1;
-        }
-    }
-    pool_info /= sampled.max(1) as f64;
+    let rows_with = |c: usize, chosen: &[usize]| pair_rows(points, jac, c, chosen);
     let mut chosen: Vec<usize> = start.iter().copied().take(n).collect();
     let mut taken = vec![false; jac.len()];
     let mut info = DMatrix::<f64>::identity(p, p) * 1e-9;
@@ -456,7 +508,7 @@ pub fn select_by_distances(
         // I-optimality: the candidate that lowers trace(M⁻¹ P) most — the predicted variance of a
         // verification pair's distance error — by the Woodbury identity:
         // Δ = trace((I + G M⁻¹ Gᵀ)⁻¹ G M⁻¹ P M⁻¹ Gᵀ).
-        let b = &inverse * &pool_info * &inverse;
+        let b = &inverse * pool_info * &inverse;
         let best = (0..jac.len())
             .filter(|&c| !taken[c])
             .map(|c| {
@@ -682,14 +734,19 @@ fn plan_arm_with(
     } else {
         (drawn..pool.len()).collect()
     };
-    let chosen: Vec<usize> = if existing.is_empty() {
-        select_by_distances(&points, &jac, options.per_arm, &start)
-    } else {
-        select_by_distances(&points, &jac, existing.len() + options.per_arm, &start)
-            .into_iter()
-            .filter(|&i| i < drawn)
-            .collect()
-    };
+    let pool_info = pair_information(&points, &jac);
+    let greedy = select_by_distances(
+        &points,
+        &jac,
+        &pool_info,
+        existing.len() + options.per_arm,
+        &start,
+    );
+    // The configurations already measured stay (they lead the design); the others are exchanged.
+    let fixed = if existing.is_empty() { 0 } else { start.len() };
+    let exchanged = exchange::exchange(&points, &jac, &pool_info, &greedy, fixed, drawn);
+    let design = exchanged.chosen.clone();
+    let chosen: Vec<usize> = design.iter().copied().filter(|&i| i < drawn).collect();
     let random: Vec<usize> = (0..options.per_arm).collect();
     let configs: Vec<Vec<f64>> = chosen.iter().map(|&i| pool[i].clone()).collect();
     let path = order(&configs);
@@ -707,13 +764,23 @@ fn plan_arm_with(
     );
     let unchosen: Vec<usize> = (0..drawn).filter(|i| !chosen.contains(i)).collect();
     let stride = unchosen.len().div_ceil(SAMPLE).max(1);
-    let sample = unchosen
-        .iter()
-        .step_by(stride)
-        .map(|&i| pool[i].clone())
-        .collect();
+    let sample_indices: Vec<usize> = unchosen.iter().copied().step_by(stride).collect();
+    let sample = sample_indices.iter().map(|&i| pool[i].clone()).collect();
+    let bound = bound::relaxed_bound(
+        &points,
+        &jac,
+        drawn,
+        &start[..fixed],
+        options.per_arm,
+        &design,
+        &sample_indices,
+    );
     Ok(ArmPlan {
         sample,
+        criterion_greedy: exchanged.before,
+        criterion: exchanged.after,
+        swaps: exchanged.swaps,
+        bound,
         configs,
         candidates: drawn,
         attempts,
@@ -723,4 +790,27 @@ fn plan_arm_with(
         vias,
         colliding_legs,
     })
+}
+
+/// A made-up pool for the selection's tests: `count` candidates of `reflectors` positions (mm,
+/// within a 1 m cube) and `params` columns of Jacobian rows drawn at random.
+#[cfg(test)]
+pub(crate) fn synthetic_pool(
+    count: usize,
+    reflectors: usize,
+    params: usize,
+    seed: u64,
+) -> (Vec<Vec<Vector3<f64>>>, Vec<DMatrix<f64>>) {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let points = (0..count)
+        .map(|_| {
+            (0..reflectors)
+                .map(|_| Vector3::from_fn(|_, _| rng.random_range(-500.0..500.0)))
+                .collect()
+        })
+        .collect();
+    let jac = (0..count)
+        .map(|_| DMatrix::from_fn(3 * reflectors, params, |_, _| rng.random_range(-1.0..1.0)))
+        .collect();
+    (points, jac)
 }

@@ -182,13 +182,16 @@ fn arm_ui(
     let p = &arm.plan;
     ui.label(RichText::new(format!("{side} arm")).strong());
     ui.label(format!(
-        "{} configurations from {} candidates ({} draws); log det {:.1} (a random set {:.1}); path \
-         {:.2} rad",
+        "{} configurations from {} candidates ({} draws); log det {:.1} (a random set {:.1}); \
+         I-criterion {:.4} after {} exchange swap(s) (greedy {:.4}); path {:.2} rad",
         p.configs.len(),
         p.candidates,
         p.attempts,
         p.log_det,
         p.log_det_random,
+        p.criterion,
+        p.swaps,
+        p.criterion_greedy,
         p.path_length
     ));
     if !p.vias.is_empty() {
@@ -231,6 +234,9 @@ fn arm_ui(
                  the true parameters give 1.000×)"
             ));
         }
+    }
+    if let Some(line) = crate::plan::bound_line(p) {
+        ui.label(line);
     }
     ui.horizontal_wrapped(|ui| {
         ui.label("show:");
