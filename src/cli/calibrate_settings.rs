@@ -216,3 +216,40 @@ fn joint_names(arm: &crate::kinematics::ArmModel) -> Vec<String> {
         }
     }
 }
+
+/// The model beyond geometry and what it takes from the robot: gravity (−z of the root link unless
+/// `--gravity`), the URDF's lumped masses, and for the harmonic models the gear ratios (the URDF's
+/// transmissions, `--gear-ratio` over them; the motor terms printed).
+pub(super) fn model_settings(
+    a: &CalibrateArgs,
+    ws: &crate::workspace::Workspace,
+    settings: &mut CalibrationSettings,
+) -> Result<()> {
+    settings.model = a.model;
+    settings.gravity_in_left_base = Some(ws.robot.gravity_in_left_base(a.gravity));
+    if !settings.model.is_geometric() {
+        settings.held_masses = crate::side::PerSide::from_fn(|s| ws.robot.lumped_masses(s));
+    }
+    if settings.model.harmonics > 0 {
+        settings.gear_ratios = gear_ratios(ws, &a.gear_ratios)?;
+        let motors: Vec<String> = settings
+            .gear_ratios
+            .iter()
+            .filter(|(_, r)| (r.abs() - 1.0).abs() > 1e-9)
+            .map(|(j, r)| format!("{j} {r}"))
+            .collect();
+        if !motors.is_empty() {
+            outln!(
+                "motor-side harmonics (gear ratio, motor turns per joint turn): {}",
+                motors.join(", ")
+            );
+        }
+    } else if !a.gear_ratios.is_empty() {
+        anyhow::bail!(
+            "--gear-ratio: the `{}` model has no harmonics; the motor's harmonics come with \
+             `--model harmonic` or `--model full`",
+            settings.model.name()
+        );
+    }
+    Ok(())
+}

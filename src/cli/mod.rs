@@ -684,32 +684,7 @@ fn calibrate_cmd(a: &CalibrateArgs) -> Result<()> {
         eprintln!("{}", describe_robot(&ws.robot));
     }
     let mut settings = settings_from(a, &ws.dataset)?;
-    settings.model = a.model;
-    settings.gravity_in_left_base = Some(ws.robot.gravity_in_left_base(a.gravity));
-    if !settings.model.is_geometric() {
-        settings.held_masses = crate::side::PerSide::from_fn(|s| ws.robot.lumped_masses(s));
-    }
-    if settings.model.harmonics > 0 {
-        settings.gear_ratios = calibrate_settings::gear_ratios(&ws, &a.gear_ratios)?;
-        let motors: Vec<String> = settings
-            .gear_ratios
-            .iter()
-            .filter(|(_, r)| (r.abs() - 1.0).abs() > 1e-9)
-            .map(|(j, r)| format!("{j} {r}"))
-            .collect();
-        if !motors.is_empty() {
-            outln!(
-                "motor-side harmonics (gear ratio, motor turns per joint turn): {}",
-                motors.join(", ")
-            );
-        }
-    } else if !a.gear_ratios.is_empty() {
-        bail!(
-            "--gear-ratio: the `{}` model has no harmonics; the motor's harmonics come with \
-             `--model harmonic` or `--model full`",
-            settings.model.name()
-        );
-    }
+    calibrate_settings::model_settings(a, &ws, &mut settings)?;
     if a.method.is_none()
         && let Some(why) = crate::solver::default_method_reason(&ws.dataset)
     {
