@@ -147,6 +147,50 @@ fn criterion_of(a: &[f64], n: usize, work: &mut [f64]) -> f64 {
     }
 }
 
+/// The candidate (of `0..candidates`, not in the design) whose swap for design member `a` lowers the
+/// criterion of `m` (the design's information; `partial`: each candidate's `H_x`) most below
+/// `current` by more than rounding; none where no swap does (or every trial is singular).
+fn best_swap(
+    rows: &Rows,
+    m: &[f64],
+    partial: &[Vec<f64>],
+    a: usize,
+    in_design: &[bool],
+    candidates: usize,
+    current: f64,
+) -> Option<usize> {
+    let (p, reflectors) = (rows.p, rows.reflectors);
+    // M − H_a: the design without a.
+    let mut without = m.to_vec();
+    for (x, h) in without.iter_mut().zip(&partial[a]) {
+        *x -= h;
+    }
+    let trials: Vec<(usize, f64)> = (0..candidates)
+        .into_par_iter()
+        .filter(|&c| !in_design[c])
+        .map_init(
+            || (vec![0.0; p * p], vec![0.0; reflectors * p], vec![0.0; p]),
+            |(trial, scratch, column), c| {
+                for ((t, w), h) in trial.iter_mut().zip(&without).zip(&partial[c]) {
+                    *t = w + h;
+                }
+                rows.add_pair(trial, c, a, -1.0, scratch);
+                let value = if cholesky_in_place(trial, p) {
+                    trace_inverse(trial, p, column)
+                } else {
+                    f64::INFINITY
+                };
+                (c, value)
+            },
+        )
+        .collect();
+    trials
+        .into_iter()
+        .min_by(|x, y| x.1.total_cmp(&y.1))
+        .filter(|&(_, value)| value < current * (1.0 - 1e-9))
+        .map(|(c, _)| c)
+}
+
 /// Exchange (module documentation) of the design `chosen` (indices into the pool of `points`/`jac`,
 /// scaled Jacobians as for [`super::select_by_distances`]; `pool_info` is `P`): its first `fixed`
 /// configurations stay (those already measured), the others may be swapped for any of the
@@ -240,34 +284,7 @@ pub fn exchange(
         let mut swapped = false;
         for position in fixed..design.len() {
             let a = design[position];
-            // M − H_a: the design without a.
-            let mut without = m.clone();
-            for (x, h) in without.iter_mut().zip(&partial[a]) {
-                *x -= h;
-            }
-            let trials: Vec<(usize, f64)> = (0..candidates)
-                .into_par_iter()
-                .filter(|&c| !in_design[c])
-                .map_init(
-                    || (vec![0.0; p * p], vec![0.0; reflectors * p], vec![0.0; p]),
-                    |(trial, scratch, column), c| {
-                        for ((t, w), h) in trial.iter_mut().zip(&without).zip(&partial[c]) {
-                            *t = w + h;
-                        }
-                        rows.add_pair(trial, c, a, -1.0, scratch);
-                        let value = if cholesky_in_place(trial, p) {
-                            trace_inverse(trial, p, column)
-                        } else {
-                            f64::INFINITY
-                        };
-                        (c, value)
-                    },
-                )
-                .collect();
-            let best = trials.into_iter().min_by(|x, y| x.1.total_cmp(&y.1));
-            // A swap that lowers the criterion by more than rounding (none where every trial is
-            // singular: their value is infinite).
-            let Some((c, _)) = best.filter(|&(_, value)| value < current * (1.0 - 1e-9)) else {
+            let Some(c) = best_swap(&rows, &m, &partial, a, &in_design, candidates, current) else {
                 continue;
             };
             // Swap a → c: every H_x loses the pair (x, a) and gains (x, c).
