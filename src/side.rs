@@ -79,6 +79,23 @@ impl<T> PerSide<T> {
         })
     }
 
+    /// [`PerSide::try_map`] with the two sides run side by side on the work pool; when both fail, the
+    /// left arm's error, as [`PerSide::try_map`] gives it.
+    pub fn par_try_map<U: Send, E: Send>(
+        self,
+        f: impl Fn(Side, T) -> Result<U, E> + Sync,
+    ) -> Result<PerSide<U>, E>
+    where
+        T: Send,
+    {
+        let Self { left, right } = self;
+        let (left, right) = rayon::join(|| f(Side::Left, left), || f(Side::Right, right));
+        Ok(PerSide {
+            left: left?,
+            right: right?,
+        })
+    }
+
     pub fn as_ref(&self) -> PerSide<&T> {
         PerSide {
             left: &self.left,

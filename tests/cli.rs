@@ -256,7 +256,7 @@ fn calibrate_timings_name_every_phase_and_change_nothing_else() {
     let err = String::from_utf8_lossy(&b.stderr);
     let phases = [
         "load, checks, nominal model, screening",
-        "calibration and the screening of its result",
+        "calibration, the screening of its result, its uncertainty",
         "of which the calibration",
         "accuracy tables",
         "writing",

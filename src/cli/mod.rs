@@ -576,7 +576,7 @@ fn fit_and_screen(
     nominal: &crate::kinematics::DualArmModel,
     settings: CalibrationSettings,
     before: &quality::Screening,
-) -> Result<(CalibrationResult, quality::Screening)> {
+) -> Result<(CalibrationResult, quality::Screening, Uncertainties)> {
     let screen_settings = quality::ScreenSettings::default();
     Ok(if a.auto_exclude {
         if !a.quiet {
@@ -598,7 +598,8 @@ fn fit_and_screen(
         if let Some(why) = &auto.stopped {
             eprintln!("warning: --auto-exclude stopped: {why}");
         }
-        (auto.result, auto.screening)
+        let uncertainty = crate::solver::uncertainty::for_result(ds, &auto.result);
+        (auto.result, auto.screening, uncertainty)
     } else {
         print_flags(
             "Suspect configurations before fitting (nominal model)",
@@ -614,10 +615,17 @@ fn fit_and_screen(
             .settings(settings)
             .observer(&mut progress)
             .run()?;
-        let after = crate::exclusion::screen_result(ds, &result, &screen_settings);
-        (result, after)
+        // The screening of the result and its uncertainty need nothing of each other: side by side.
+        let (after, uncertainty) = rayon::join(
+            || crate::exclusion::screen_result(ds, &result, &screen_settings),
+            || crate::solver::uncertainty::for_result(ds, &result),
+        );
+        (result, after, uncertainty)
     })
 }
+
+/// Each arm's uncertainty of its step-1 parameters (`None`: not covered for its method).
+type Uncertainties = crate::side::PerSide<Option<crate::solver::uncertainty::ArmUncertainty>>;
 
 /// Warn about suspect configurations the calibration kept, and about whole-file findings.
 fn warn_suspects_kept(after: &quality::Screening, excluded: &[ConfigId]) {
@@ -710,16 +718,14 @@ fn calibrate_cmd(a: &CalibrateArgs) -> Result<()> {
         nominal,
         screening: before,
     } = ws;
-    let (result, after) = fit_and_screen(a, &ds, &nominal, settings, &before)?;
-    phases.end("calibration and the screening of its result");
+    let (result, after, uncertainty) = fit_and_screen(a, &ds, &nominal, settings, &before)?;
+    phases.end("calibration, the screening of its result, its uncertainty");
     phases.done.push((
         "  of which the calibration (two steps, re-checks)",
         std::time::Duration::from_secs_f64(result.elapsed_secs),
     ));
     print_identifiability(&result);
-    let uncertainty = crate::solver::uncertainty::for_result(&ds, &result);
     print_uncertainty(&uncertainty);
-    phases.end("uncertainty of the identified parameters");
     let excluded = &result.settings.exclude;
     let mut file = ParamsFile::from_calibration(&result, &ds);
     file.record_uncertainty(&uncertainty);

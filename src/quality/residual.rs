@@ -113,16 +113,25 @@ impl ArmResiduals {
         let n = ms.len();
         let reflectors = arm.reflector_count();
         let floor = mpe_mm(dataset, side);
-        let mut dd = Vec::new();
-        let sigma_mm = PerReflector::from_fn(reflectors, |k| {
-            dd.clear();
-            super::sampled_pairs(n, n, true, SCALE_PAIRS, |i, j| {
-                dd.push(
-                    (measured[i][k] - measured[j][k]).norm() - (model[i][k] - model[j][k]).norm(),
-                );
-            });
-            mad_sigma_in_place(&mut dd).max(floor)
-        });
+        // The reflectors' scales side by side, each from every configuration's points as columns
+        // (`|m_i − m_j| − |p_i − p_j|` in nalgebra's order: the same numbers, in the same order).
+        let scales: Vec<f64> = (0..reflectors)
+            .into_par_iter()
+            .map(|k| {
+                let all = PointColumns::new(&measured, &model, k, 1);
+                let ([mx, my, mz], [px, py, pz]) = (&all.measured, &all.model);
+                let norm = |x: f64, y: f64, z: f64| (x * x + y * y + z * z).sqrt();
+                let mut dd = Vec::with_capacity(SCALE_PAIRS.min(n * n.saturating_sub(1) / 2));
+                super::sampled_pairs(n, n, true, SCALE_PAIRS, |i, j| {
+                    dd.push(
+                        norm(mx[i] - mx[j], my[i] - my[j], mz[i] - mz[j])
+                            - norm(px[i] - px[j], py[i] - py[j], pz[i] - pz[j]),
+                    );
+                });
+                mad_sigma_in_place(&mut dd).max(floor)
+            })
+            .collect();
+        let sigma_mm = PerReflector::from_slice(&scales);
         let stride = n.div_ceil(MAX_PARTNERS).max(1);
         let columns = (0..reflectors)
             .map(|k| PointColumns::new(&measured, &model, k, stride))

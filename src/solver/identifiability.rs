@@ -63,8 +63,14 @@ pub fn gram_by_product(columns: &DMatrix<f64>) -> DMatrix<f64> {
 pub fn gram_by_qr(columns: &DMatrix<f64>) -> DMatrix<f64> {
     let (p, count) = columns.shape();
     let rows = count.max(p);
-    let mut m = DMatrix::<f64>::zeros(rows, p);
-    m.rows_mut(0, count).copy_from(&columns.transpose());
+    // Mᵀ, padded with zero rows up to p.
+    let mut m = DMatrix::<f64>::from_fn(
+        rows,
+        p,
+        |r, c| {
+            if r < count { columns[(c, r)] } else { 0.0 }
+        },
+    );
     let diag = householder_in_place(&mut m);
     // `QR::r()`: the upper triangle of the first min(rows, p) rows, |diagonal| on the diagonal.
     let k = rows.min(p);
@@ -80,7 +86,7 @@ pub fn gram_by_qr(columns: &DMatrix<f64>) -> DMatrix<f64> {
 /// the trailing columns of each step reflected in parallel; returns the signed diagonal.
 fn householder_in_place(m: &mut DMatrix<f64>) -> Vec<f64> {
     use nalgebra::linalg::householder::reflection_axis_mut;
-    use nalgebra::{DVectorViewMut, Reflection, Unit};
+    use nalgebra::{DVectorView, DVectorViewMut, Reflection, Unit};
     use rayon::prelude::*;
     let (rows, p) = m.shape();
     let mut diag = Vec::with_capacity(rows.min(p));
@@ -92,7 +98,9 @@ fn householder_in_place(m: &mut DMatrix<f64>) -> Vec<f64> {
         if !not_zero {
             continue;
         }
-        let refl = Reflection::new(Unit::new_unchecked(axis.clone_owned()), 0.0);
+        // The axis read where it lies (nalgebra's `QR::new` reflects with a copy of it: the same numbers).
+        let axis = DVectorView::from_slice(&head[i * rows + i..], rows - i);
+        let refl = Reflection::new(Unit::new_unchecked(axis), 0.0);
         let sign = norm.signum();
         // At least 4 columns per task: a column of a few thousand rows is microseconds of work.
         tail.par_chunks_mut(rows)

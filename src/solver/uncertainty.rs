@@ -358,7 +358,7 @@ fn pair_sums(
                 .collect()
         })
         .collect();
-    (0..n)
+    let mut sums = (0..n)
         .into_par_iter()
         .map(|i| {
             let mut s = zero();
@@ -396,8 +396,16 @@ fn pair_sums(
                 for c in 0..3 {
                     s.meat.ger(1.0, &a.column(c), &a.column(c), 1.0);
                 }
+                // `jtj.gemm_tr(1.0, &upper, &upper, 1.0)` on the upper triangle: that adds the dot of
+                // columns c1, c2 to (c1, c2) and the same dot, operand for operand, to (c2, c1) — the
+                // lower triangle is the upper's mirror to the bit, filled in once at the end.
                 let upper = r.rows(0, n - 1 - i);
-                s.jtj.gemm_tr(1.0, &upper, &upper, 1.0);
+                for c2 in 0..p {
+                    let column = upper.column(c2);
+                    for c1 in 0..=c2 {
+                        s.jtj[(c1, c2)] += upper.column(c1).dot(&column);
+                    }
+                }
             }
             s
         })
@@ -410,7 +418,9 @@ fn pair_sums(
             a.cost += b.cost;
             a.rows += b.rows;
             a
-        })
+        });
+    sums.jtj.fill_lower_triangle_with_upper_triangle();
+    sums
 }
 
 /// Condition number of `JᵀJ` with unit-scaled columns, as of J: √(λ_max / λ_min).
