@@ -55,6 +55,15 @@ impl<T> PerSide<T> {
         Self { left, right }
     }
 
+    /// [`PerSide::from_fn`] with the two sides run side by side on the work pool.
+    pub fn par_from_fn(f: impl Fn(Side) -> T + Sync) -> Self
+    where
+        T: Send,
+    {
+        let (left, right) = rayon::join(|| f(Side::Left), || f(Side::Right));
+        Self { left, right }
+    }
+
     /// [`PerSide::from_fn`] for a fallible function; stops at the first error (left arm first).
     pub fn try_from_fn<E>(mut f: impl FnMut(Side) -> Result<T, E>) -> Result<Self, E> {
         let left = f(Side::Left)?;

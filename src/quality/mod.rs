@@ -37,6 +37,7 @@ pub mod triangle;
 use crate::dataset::{Dataset, Split};
 use crate::kinematics::DualArmModel;
 use crate::side::{ConfigId, Side};
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
@@ -277,25 +278,31 @@ pub(crate) fn mpe_mm(dataset: &Dataset, side: Side) -> f64 {
 pub fn screen(dataset: &Dataset, nominal: &DualArmModel, settings: &ScreenSettings) -> Screening {
     let mut out = Screening::default();
     let fits = residual::fits(dataset, nominal);
-    for side in dataset.measured_sides() {
-        out.flags.extend(triangle::flags(dataset, side, settings));
-        out.flags.extend(residual::flags_with(
-            dataset, nominal, &fits, side, settings,
-        ));
-    }
-    out.findings
-        .extend(frames::nominal_findings(dataset, nominal));
-    for side in dataset.measured_sides() {
-        let suspects = out.suspect_rows(side);
-        out.findings.extend(frames::tracker_moved_with(
-            dataset,
-            &fits[side],
-            &suspects,
-            settings,
-        ));
-    }
+    let (flags, nominal_findings) = rayon::join(
+        || {
+            per_measured_side(dataset, |side| {
+                let mut flags = triangle::flags(dataset, side, settings);
+                flags.extend(residual::flags_with(
+                    dataset, nominal, &fits, side, settings,
+                ));
+                flags
+            })
+        },
+        || frames::nominal_findings(dataset, nominal),
+    );
+    out.flags.extend(flags.into_iter().flatten());
+    out.findings.extend(nominal_findings);
+    let moved = per_measured_side(dataset, |side| {
+        frames::tracker_moved_with(dataset, &fits[side], &out.suspect_rows(side), settings)
+    });
+    out.findings.extend(moved.into_iter().flatten());
     out.sort();
     out
+}
+
+/// `f` of each measured side, the sides side by side on the work pool, in side order.
+fn per_measured_side<T: Send>(dataset: &Dataset, f: impl Fn(Side) -> T + Sync + Send) -> Vec<T> {
+    dataset.measured_sides().into_par_iter().map(f).collect()
 }
 
 /// Screen a dataset with a fitted `model` (and the `nominal` one it started from): triangle and
@@ -310,17 +317,26 @@ pub fn screen_model(
 ) -> Screening {
     let mut out = Screening::default();
     let fits = residual::fits(dataset, model);
-    for side in dataset.measured_sides() {
-        out.flags.extend(triangle::flags(dataset, side, settings));
-        out.flags
+    let per_side = per_measured_side(dataset, |side| {
+        let mut side_out = Screening::default();
+        side_out
+            .flags
+            .extend(triangle::flags(dataset, side, settings));
+        side_out
+            .flags
             .extend(residual::flags_with(dataset, model, &fits, side, settings));
-        let suspects = out.suspect_rows(side);
-        out.findings.extend(frames::tracker_moved_with(
+        let suspects = side_out.suspect_rows(side);
+        side_out.findings.extend(frames::tracker_moved_with(
             dataset,
             &fits[side],
             &suspects,
             settings,
         ));
+        side_out
+    });
+    for side_out in per_side {
+        out.flags.extend(side_out.flags);
+        out.findings.extend(side_out.findings);
     }
     if dataset.one_tracker_frame() {
         out.findings.extend(frames::base_deviation(nominal, model));

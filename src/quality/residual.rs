@@ -383,7 +383,7 @@ fn largest(e: &[Vector3<f64>]) -> (f64, usize) {
 /// Both arms' points under `model` and the scale of their distance errors: what the residual flags
 /// and the moved-tracker check of one screening share (computed once per arm and model).
 pub fn fits(dataset: &Dataset, model: &DualArmModel) -> PerSide<ArmResiduals> {
-    PerSide::from_fn(|side| ArmResiduals::new(dataset, model.arm(side), side))
+    PerSide::par_from_fn(|side| ArmResiduals::new(dataset, model.arm(side), side))
 }
 
 /// Every configuration's displacement estimate.
