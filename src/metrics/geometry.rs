@@ -284,17 +284,16 @@ pub(super) fn residuals_against(
     let ma = &a.measured_from_model_rot;
     let mut chunks = others.chunks_exact(PAIR_LANES);
     for chunk in &mut chunks {
-        let mut dd = [[0.0; MAX_REFLECTORS]; PAIR_LANES];
-        for k in 0..n_refl {
+        // Per reflector, per lane.
+        let mut dd = [[0.0; PAIR_LANES]; MAX_REFLECTORS];
+        for (k, dd_k) in dd.iter_mut().enumerate().take(n_refl) {
             let (am, ao) = (&a.measured_mm[k], &a.model_mm[k]);
-            let mut measured = [0.0; PAIR_LANES];
-            let mut model = [0.0; PAIR_LANES];
-            for l in 0..PAIR_LANES {
-                measured[l] = distance(am, &chunk[l].measured_mm[k]);
-                model[l] = distance(ao, &chunk[l].model_mm[k]);
-            }
-            for l in 0..PAIR_LANES {
-                dd[l][k] = measured[l] - model[l];
+            let measured: [f64; PAIR_LANES] =
+                std::array::from_fn(|l| distance(am, &chunk[l].measured_mm[k]));
+            let model: [f64; PAIR_LANES] =
+                std::array::from_fn(|l| distance(ao, &chunk[l].model_mm[k]));
+            for (d, (m, p)) in dd_k.iter_mut().zip(measured.iter().zip(&model)) {
+                *d = m - p;
             }
         }
         let mut cos = [0.0; PAIR_LANES];
@@ -322,7 +321,8 @@ pub(super) fn residuals_against(
             } else {
                 angle_rad(sin[l], cos[l])
             };
-            visit(&dd[l][..n_refl], ori);
+            let lane: [f64; MAX_REFLECTORS] = std::array::from_fn(|k| dd[k][l]);
+            visit(&lane[..n_refl], ori);
         }
     }
     for b in chunks.remainder() {
