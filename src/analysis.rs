@@ -363,78 +363,14 @@ impl Analysis {
         };
 
         // Model points in the left base, and the registration of the tracker onto them.
-        let mut model_left: Vec<Vec<Vector3<f64>>> = Vec::new();
-        for side in Side::BOTH {
-            let arm = model.arm(side);
-            let left_base_from_base = model.left_base_from(side);
-            let points: Vec<Vec<Vector3<f64>>> = dataset
-                .arm(side)
-                .measurements
-                .par_iter()
-                .map(|m| {
-                    arm.reflector_fk(&m.q_rad)
-                        .points_mm
-                        .iter()
-                        .map(|p| (left_base_from_base * Point3::from(*p)).coords)
-                        .collect()
-                })
-                .collect();
-            model_left.extend(points);
-        }
+        let model_left = model_points_in_left_base(dataset, model);
+        let (left_base_from_station, registration_rms_mm) =
+            register_stations(dataset, &model_left, exclude)?;
+        let one_frame = dataset.one_tracker_frame();
         let measured = || {
             Side::BOTH
                 .into_iter()
                 .flat_map(|side| &dataset.arm(side).measurements)
-        };
-        // The registration uses the configurations kept (an outlier would pull every drawn point).
-        let kept = |side: Side, i: usize| !exclude.contains(&ConfigId::new(side, i));
-        let kept_flags: Vec<bool> = Side::BOTH
-            .into_iter()
-            .flat_map(|side| (0..dataset.arm(side).measurements.len()).map(move |i| kept(side, i)))
-            .collect();
-        // One registration of every kept point, or one per arm where the arms were measured from two
-        // stations (their coordinates lie in unrelated frames).
-        let n_left = dataset.arms.left.measurements.len();
-        let side_of = |row: usize| {
-            if row < n_left {
-                Side::Left
-            } else {
-                Side::Right
-            }
-        };
-        let one_frame = dataset.one_tracker_frame();
-        let register = |only: Option<Side>| -> Result<(Isometry3<f64>, f64, usize), AnalysisError> {
-            let take = |row: usize| kept_flags[row] && only.is_none_or(|s| side_of(row) == s);
-            let from: Vec<Vector3<f64>> = measured()
-                .enumerate()
-                .filter(|(row, _)| take(*row))
-                .flat_map(|(_, m)| m.tracker_points_mm.iter().copied())
-                .collect();
-            let to: Vec<Vector3<f64>> = model_left
-                .iter()
-                .enumerate()
-                .filter(|(row, _)| take(*row))
-                .flat_map(|(_, p)| p.iter().copied())
-                .collect();
-            let fit = best_fit_rigid(&from, &to).ok_or(AnalysisError::Registration)?;
-            let sum_sq: f64 = from
-                .iter()
-                .zip(&to)
-                .map(|(p, q)| ((fit * Point3::from(*p)).coords - q).norm_squared())
-                .sum();
-            Ok((fit, sum_sq, from.len()))
-        };
-        let (left_base_from_station, registration_rms_mm) = if one_frame || !dataset.both_measured()
-        {
-            // One frame, or one arm alone: one registration of every point.
-            let (fit, sum_sq, n) = register(None)?;
-            (PerSide::new(fit, fit), (sum_sq / n.max(1) as f64).sqrt())
-        } else {
-            let (l, r) = (register(Some(Side::Left))?, register(Some(Side::Right))?);
-            (
-                PerSide::new(l.0, r.0),
-                ((l.1 + r.1) / (l.2 + r.2).max(1) as f64).sqrt(),
-            )
         };
         let left_base_from_tracker = left_base_from_station.left;
 
@@ -484,6 +420,91 @@ impl Analysis {
             registration_rms_mm,
             excluded: exclude.to_vec(),
         })
+    }
+}
+
+/// Every configuration's model reflector points in the left-arm base frame, the left arm's rows first.
+fn model_points_in_left_base(dataset: &Dataset, model: &DualArmModel) -> Vec<Vec<Vector3<f64>>> {
+    let mut model_left: Vec<Vec<Vector3<f64>>> = Vec::new();
+    for side in Side::BOTH {
+        let arm = model.arm(side);
+        let left_base_from_base = model.left_base_from(side);
+        let points: Vec<Vec<Vector3<f64>>> = dataset
+            .arm(side)
+            .measurements
+            .par_iter()
+            .map(|m| {
+                arm.reflector_fk(&m.q_rad)
+                    .points_mm
+                    .iter()
+                    .map(|p| (left_base_from_base * Point3::from(*p)).coords)
+                    .collect()
+            })
+            .collect();
+        model_left.extend(points);
+    }
+    model_left
+}
+
+/// The registration of the tracker's points onto the model's (`model_left`, the rows of
+/// [`model_points_in_left_base`]) over the configurations kept: `left_base_from_station` per arm — one
+/// registration of every kept point, or one per arm where the arms were measured from two stations
+/// (their coordinates lie in unrelated frames) — and its RMS residual, mm.
+fn register_stations(
+    dataset: &Dataset,
+    model_left: &[Vec<Vector3<f64>>],
+    exclude: &[ConfigId],
+) -> Result<(PerSide<Isometry3<f64>>, f64), AnalysisError> {
+    let measured = || {
+        Side::BOTH
+            .into_iter()
+            .flat_map(|side| &dataset.arm(side).measurements)
+    };
+    // The registration uses the configurations kept (an outlier would pull every drawn point).
+    let kept = |side: Side, i: usize| !exclude.contains(&ConfigId::new(side, i));
+    let kept_flags: Vec<bool> = Side::BOTH
+        .into_iter()
+        .flat_map(|side| (0..dataset.arm(side).measurements.len()).map(move |i| kept(side, i)))
+        .collect();
+    let n_left = dataset.arms.left.measurements.len();
+    let side_of = |row: usize| {
+        if row < n_left {
+            Side::Left
+        } else {
+            Side::Right
+        }
+    };
+    let register = |only: Option<Side>| -> Result<(Isometry3<f64>, f64, usize), AnalysisError> {
+        let take = |row: usize| kept_flags[row] && only.is_none_or(|s| side_of(row) == s);
+        let from: Vec<Vector3<f64>> = measured()
+            .enumerate()
+            .filter(|(row, _)| take(*row))
+            .flat_map(|(_, m)| m.tracker_points_mm.iter().copied())
+            .collect();
+        let to: Vec<Vector3<f64>> = model_left
+            .iter()
+            .enumerate()
+            .filter(|(row, _)| take(*row))
+            .flat_map(|(_, p)| p.iter().copied())
+            .collect();
+        let fit = best_fit_rigid(&from, &to).ok_or(AnalysisError::Registration)?;
+        let sum_sq: f64 = from
+            .iter()
+            .zip(&to)
+            .map(|(p, q)| ((fit * Point3::from(*p)).coords - q).norm_squared())
+            .sum();
+        Ok((fit, sum_sq, from.len()))
+    };
+    if dataset.one_tracker_frame() || !dataset.both_measured() {
+        // One frame, or one arm alone: one registration of every point.
+        let (fit, sum_sq, n) = register(None)?;
+        Ok((PerSide::new(fit, fit), (sum_sq / n.max(1) as f64).sqrt()))
+    } else {
+        let (l, r) = (register(Some(Side::Left))?, register(Some(Side::Right))?);
+        Ok((
+            PerSide::new(l.0, r.0),
+            ((l.1 + r.1) / (l.2 + r.2).max(1) as f64).sqrt(),
+        ))
     }
 }
 
