@@ -90,6 +90,8 @@ fn ratio_to_truth(sim: &SimOutput, configs: &PerSide<Vec<Vec<f64>>>, seed: u64) 
 struct Outcome {
     planned: f64,
     random: f64,
+    /// Both ratios for each of the noise draws ([`noise_seeds`]; the first is `planned`, `random`).
+    draws: Vec<(f64, f64)>,
     plans: PerSide<dualcal::plan::ArmPlan>,
     options: PlanOptions,
     predicted: PerSide<f64>,
@@ -124,14 +126,19 @@ fn simulation_and_options(
     (sim, options)
 }
 
-/// The measurement's noise draw of the simulation of `seed` (`DUALCAL_PLAN_NOISE=k` draws it
-/// otherwise; 0 by default).
+/// The measurement's noise draws of the simulation of `seed` (`DUALCAL_PLAN_NOISE=k` draws it
+/// otherwise, `DUALCAL_PLAN_NOISE=0,1,2,3` several times over the same plans; 0 by default).
+fn noise_seeds(seed: u64) -> Vec<u64> {
+    let draws: Vec<u64> = std::env::var("DUALCAL_PLAN_NOISE").map_or_else(
+        |_| vec![0],
+        |v| v.split(',').filter_map(|n| n.trim().parse().ok()).collect(),
+    );
+    draws.into_iter().map(|k| 100 * seed + k).collect()
+}
+
+/// The first of [`noise_seeds`].
 fn noise_seed(seed: u64) -> u64 {
-    100 * seed
-        + std::env::var("DUALCAL_PLAN_NOISE")
-            .ok()
-            .and_then(|v| v.parse::<u64>().ok())
-            .unwrap_or(0)
+    noise_seeds(seed)[0]
 }
 
 /// Plan `n` per arm for the simulation of `seed` and calibrate on the plan and on random
@@ -197,10 +204,19 @@ fn planned_and_random(robot: &RobotDescription, seed: u64, n: usize) -> Outcome 
             .map(|m| m.q_rad.clone())
             .collect::<Vec<_>>()
     });
-    let noise = noise_seed(seed);
+    let draws: Vec<(f64, f64)> = noise_seeds(seed)
+        .into_iter()
+        .map(|noise| {
+            (
+                ratio_to_truth(&sim, &planned_configs, noise),
+                ratio_to_truth(&sim, &random, noise),
+            )
+        })
+        .collect();
     Outcome {
-        planned: ratio_to_truth(&sim, &planned_configs, noise),
-        random: ratio_to_truth(&sim, &random, noise),
+        planned: draws[0].0,
+        random: draws[0].1,
+        draws,
         plans: planned,
         options,
         predicted,
@@ -291,7 +307,9 @@ fn twenty_planned_configurations_calibrate_better_than_twenty_random_ones() {
 /// four simulations each by default (`cargo test --release --test plan -- --ignored --nocapture`;
 /// `DUALCAL_PLAN_N=20` for one N, `DUALCAL_PLAN_CANDIDATES=3000` for another pool,
 /// `DUALCAL_PLAN_METHOD=lsq` to calibrate by least squares, `DUALCAL_PLAN_SEEDS=1,2,3,4,5,6,7,8`
-/// for other simulations, `DUALCAL_PLAN_NOISE=1` for another draw of the measurement's noise).
+/// for other simulations, `DUALCAL_PLAN_NOISE=1` for another draw of the measurement's noise,
+/// `DUALCAL_PLAN_NOISE=0,1,2,3` for several over the same plans: every seed and draw is one
+/// simulation of the figures).
 #[test]
 #[ignore]
 fn accuracy_against_the_number_of_configurations() {
@@ -310,10 +328,16 @@ fn accuracy_against_the_number_of_configurations() {
             .iter()
             .map(|&seed| planned_and_random(&robot, seed, n))
             .collect();
-        let r: Vec<(f64, f64)> = outcomes.iter().map(|o| (o.planned, o.random)).collect();
-        for (seed, (p, q)) in seeds.iter().zip(&r) {
-            eprintln!("seed {seed}, N {n}: planned {p:.3}, random {q:.3}");
+        for (seed, o) in seeds.iter().zip(&outcomes) {
+            let each: Vec<String> = o
+                .draws
+                .iter()
+                .map(|(p, q)| format!("planned {p:.3}, random {q:.3}"))
+                .collect();
+            eprintln!("seed {seed}, N {n}: {}", each.join("; "));
         }
+        // Every simulation: each seed with each noise draw.
+        let r: Vec<(f64, f64)> = outcomes.iter().flat_map(|o| o.draws.clone()).collect();
         let arms = |f: fn(&Outcome) -> &PerSide<f64>| {
             outcomes
                 .iter()
@@ -332,7 +356,7 @@ fn accuracy_against_the_number_of_configurations() {
         let (p, q) = (stats(|x| x.0), stats(|x| x.1));
         eprintln!(
             "{n:<3} {:.3} ({:.3}–{:.3})       {:.3} ({:.3}–{:.3})   planned better on {} of {} \
-             seeds; predicted {:.3}, efficient {:.3}, bound {:.3}",
+             simulations; predicted {:.3}, efficient {:.3}, bound {:.3}",
             p.0,
             p.1,
             p.2,
