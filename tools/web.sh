@@ -83,9 +83,10 @@ build() {
     npm_ci
     local opt_started=$SECONDS
     # The features rustc's wasm32 target enables by default (reference types: wasm-bindgen's
-    # externref table), so that wasm-opt keeps them as they are.
+    # externref table) and SIMD (.cargo/config.toml), so that wasm-opt keeps them as they are.
     web/tests/node_modules/.bin/wasm-opt -Oz --enable-bulk-memory --enable-nontrapping-float-to-int \
       --enable-sign-ext --enable-mutable-globals --enable-reference-types --enable-multivalue \
+      --enable-simd \
       "$tmp/dualcal_bg.wasm" -o "$tmp/dualcal_bg.opt.wasm"
     mv "$tmp/dualcal_bg.opt.wasm" "$tmp/dualcal_bg.wasm"
     opt_secs=$((SECONDS - opt_started))
