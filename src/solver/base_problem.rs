@@ -19,6 +19,9 @@ use nalgebra::{
 };
 use rayon::prelude::*;
 
+/// A pair's residual Δd, mm, and its row ∂Δd/∂y.
+type PairRow = (f64, SVector<f64, 6>);
+
 pub struct BaseProblem {
     /// Model reflector points of the left arm in the left base frame.
     left_mm: Vec<Vec<Vector3<f64>>>,
@@ -39,6 +42,12 @@ pub struct BaseProblem {
     /// Scales of (ω, δp).
     scale: SVector<f64, 6>,
     plan: Plan,
+    /// At the start (y = 0) and for the sequential passes: per reflector, each pair's residual and
+    /// unscaled row, in the passes' order (a pair at zero distance left out). The set-up's two
+    /// Gauss–Newton matrices (the column scales', then H₀ in the scaled variables) and the SQP's first
+    /// evaluation read them instead of recomputing the pairs; a scaled row is the unscaled one times
+    /// the scale, the number [`Self::for_each_row`] computes, so the sums are the same to the bit.
+    start_rows: Option<Vec<Vec<PairRow>>>,
 }
 
 impl BaseProblem {
@@ -74,7 +83,22 @@ impl BaseProblem {
             start,
             scale: SVector::from_element(1.0),
             plan,
+            start_rows: None,
         };
+        if plan == Plan::Sequential {
+            // The rows at the start with unit scales: each reflector's on the work pool.
+            let zero = DVector::zeros(6);
+            p.start_rows = Some(
+                (0..reflectors)
+                    .into_par_iter()
+                    .map(|k| {
+                        let mut rows = Vec::with_capacity(p.n_pairs());
+                        p.for_each_row(&zero, k, |r, row| rows.push((r, *row)));
+                        rows
+                    })
+                    .collect(),
+            );
+        }
         // Column scaling from the Gauss–Newton diagonal at the start.
         let h = p.gauss_newton(&DVector::zeros(6));
         p.scale = SVector::from_fn(|i, _| {
@@ -88,13 +112,33 @@ impl BaseProblem {
     /// the column scaling).
     pub fn gauss_newton(&self, y: &DVector<f64>) -> DMatrix<f64> {
         let mut h = nalgebra::SMatrix::<f64, 6, 6>::zeros();
-        match self.plan {
-            Plan::Sequential => {
+        match (self.plan, self.rows_at(y)) {
+            (Plan::Sequential, Some(rows)) => {
+                // Σ row rowᵀ on the upper triangle, mirrored: each entry the same sum of the same
+                // products (row_i row_j = row_j row_i) as the full outer products'.
+                for row in rows
+                    .iter()
+                    .flatten()
+                    .map(|(_, row)| row.component_mul(&self.scale))
+                {
+                    for j in 0..6 {
+                        for i in 0..=j {
+                            h[(i, j)] += row[i] * row[j];
+                        }
+                    }
+                }
+                for j in 0..6 {
+                    for i in 0..j {
+                        h[(j, i)] = h[(i, j)];
+                    }
+                }
+            }
+            (Plan::Sequential, None) => {
                 for k in 0..self.reflectors {
                     self.for_each_row(y, k, |_, row| h += row * row.transpose());
                 }
             }
-            Plan::Blocked => h = self.gauss_newton_regrouped(y),
+            (Plan::Blocked, _) => h = self.gauss_newton_regrouped(y),
         }
         let h = h * (2.0 / (self.reflectors as f64 * self.n_pairs().max(1) as f64));
         DMatrix::from_column_slice(6, 6, h.as_slice())
@@ -109,6 +153,13 @@ impl BaseProblem {
             Translation3::from(self.start.translation.vector + dp),
             UnitQuaternion::from_rotation_matrix(&r),
         )
+    }
+
+    /// The kept rows of the start, when `y` is the start.
+    fn rows_at(&self, y: &DVector<f64>) -> Option<&[Vec<PairRow>]> {
+        self.start_rows
+            .as_deref()
+            .filter(|_| y.iter().all(|&v| v == 0.0))
     }
 
     fn n_pairs(&self) -> usize {
@@ -276,15 +327,22 @@ impl MinimaxProblem for BaseProblem {
                 cons_grad: Vec::new(),
             };
         }
+        let start = self.rows_at(y);
         let parts: Vec<(f64, DVector<f64>)> = (0..self.reflectors)
             .into_par_iter()
             .map(|k| {
                 let mut f = 0.0;
                 let mut g = SVector::<f64, 6>::zeros();
-                self.for_each_row(y, k, |r, row| {
+                let mut add = |r: f64, row: &SVector<f64, 6>| {
                     f += r * r;
                     g += row * (2.0 * r);
-                });
+                };
+                match start {
+                    Some(rows) => rows[k]
+                        .iter()
+                        .for_each(|(r, row)| add(*r, &row.component_mul(&self.scale))),
+                    None => self.for_each_row(y, k, add),
+                }
                 (f * norm, DVector::from_column_slice((g * norm).as_slice()))
             })
             .collect();
@@ -365,6 +423,31 @@ mod tests {
         }
         let (ha, hb) = (seq.gauss_newton(&y), blocked.gauss_newton(&y));
         assert!((&ha - &hb).amax() <= 1e-11 * ha.amax(), "{ha} {hb}");
+    }
+
+    /// The kept rows of the start (the set-up's Gauss–Newton matrices, the first evaluation) give
+    /// the numbers the passes over the pairs give, to the bit: the column scales, H₀, F_k and ∇F_k.
+    #[test]
+    fn the_kept_start_rows_give_the_passes_numbers_to_the_bit() {
+        let kept = problem(23, 19);
+        let mut recomputed = problem(23, 19);
+        recomputed.start_rows = None;
+        let zero = DVector::zeros(6);
+        // The column scales as the passes alone find them (unit scales, then the diagonal).
+        let scale = recomputed.scale;
+        recomputed.scale = SVector::from_element(1.0);
+        let h = recomputed.gauss_newton(&zero);
+        let rescaled = SVector::<f64, 6>::from_fn(|i, _| 1.0 / (h[(i, i)] * 0.5).sqrt());
+        recomputed.scale = scale;
+        assert_eq!(kept.scale, rescaled);
+        assert_eq!(kept.gauss_newton(&zero), recomputed.gauss_newton(&zero));
+        let (a, b) = (kept.evaluate(&zero), recomputed.evaluate(&zero));
+        assert_eq!(a.f, b.f);
+        assert_eq!(a.grad, b.grad);
+        // Away from the start the kept rows are not used.
+        let y = DVector::from_fn(6, |i, _| 0.01 * i as f64);
+        assert!(kept.rows_at(&y).is_none());
+        assert_eq!(kept.evaluate(&y).f, recomputed.evaluate(&y).f);
     }
 
     /// Left and right model points, measurements of a true base, a start near it.
