@@ -104,12 +104,16 @@ pub fn summary_line(side: Side, p: &ArmPlan) -> String {
 
 /// What [`ArmPlan::bound`] says, for `dualcal plan` and the planning window: no design of as many of
 /// these candidates predicts a better verification accuracy than the bound; the relaxed design's and
-/// this design's with an efficient fit of the distances beside it.
+/// this design's with an efficient fit of the distances beside it, and the method that fits them so:
+/// the absolute positions with the tracker's pose (`position`, ref. [18]) measures within a few
+/// thousandths of that prediction in simulation, where the distance methods (least squares, the
+/// paper's minimax) measure above the least-squares one (docs/planning.md).
 pub fn bound_line(p: &ArmPlan) -> Option<String> {
     let b = p.bound.as_ref()?;
     Some(format!(
         "bound: no {} of these candidates predict better than {:.3}× (relaxed design {:.3}× on {} \
-         candidates); this design {:.3}× with an efficient fit of its distances",
+         candidates); this design {:.3}× with an efficient fit of its distances (calibrating with \
+         `--method position` fits them so: docs/planning.md)",
         b.per_arm,
         b.ratio(),
         b.relaxed_ratio(),
