@@ -30,6 +30,21 @@ pub fn calibrate(
         .settings(settings.clone())
         .run()
         .expect("calibration");
+    // `DUALCAL_DUMP_FAILED=DIR` keeps the dataset of a calibration that ran out of iterations in DIR
+    // (a `dualcal-dataset/1` directory; add the robot's `robot = "…"` for a URDF robot) to rerun it
+    // with `dualcal calibrate DIR`.
+    if let Ok(dir) = std::env::var("DUALCAL_DUMP_FAILED")
+        && result
+            .stages
+            .iter()
+            .any(|s| s.termination == Termination::MaxIterations)
+    {
+        let _ = dualcal::dataset::save(
+            dataset,
+            std::path::Path::new(&dir),
+            dualcal::dataset::Units::default(),
+        );
+    }
     for stage in &result.stages {
         assert_ne!(
             stage.termination,
