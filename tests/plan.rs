@@ -82,12 +82,8 @@ fn ratio_to_truth_by(
         ms.extend(ver);
         ds.arms[side].measurements = ms;
     }
-    // As `dualcal calibrate` does: its iteration limit (200; the library's default is 100), which a
-    // minimax stage at a three-way tie of the F_k with a vanishing multiplier can need
-    // (docs/planning.md, *The estimator*).
     let settings = CalibrationSettings {
         method: method.unwrap_or(CalibrationSettings::default().method),
-        max_iterations: 200,
         ..CalibrationSettings::default()
     };
     let result = common::calibrate(&ds, &sim.nominal, &settings);

@@ -178,7 +178,7 @@ pub struct CalibrateArgs {
     #[arg(long)]
     pub overlay: Option<PathBuf>,
     /// Outer iterations per stage.
-    #[arg(long, default_value_t = 200)]
+    #[arg(long, default_value_t = crate::solver::CalibrationSettings::default().max_iterations)]
     pub max_iterations: usize,
     /// Stop when the scaled parameter step is below this.
     #[arg(long, default_value_t = 1e-8)]

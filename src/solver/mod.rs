@@ -173,7 +173,11 @@ impl Default for CalibrationSettings {
             base_method: BaseMethod::Minimax,
             reflector: None,
             qp: QpMethod::Exact,
-            max_iterations: 100,
+            // The command line's `--max-iterations` default too, so that the workbench and the
+            // library end a stage where `dualcal calibrate` does: a minimax stage at a three-way tie
+            // with a vanishing multiplier can crawl for more than 100 iterations before "ψ
+            // stationary" (docs/planning.md, *The estimator*: 175 on a public-YuMi simulation).
+            max_iterations: 200,
             step_tolerance: 1e-8,
             progress_tolerance: default_progress_tolerance(),
             max_qp_iterations: 2000,
