@@ -115,7 +115,7 @@ impl ArmResiduals {
         let floor = mpe_mm(dataset, side);
         // The reflectors' scales side by side, each from every configuration's points as columns
         // (`|m_i − m_j| − |p_i − p_j|` in nalgebra's order: the same numbers, in the same order).
-        let (scales, all): (Vec<f64>, Vec<PointColumns>) = (0..reflectors)
+        let scales: Vec<f64> = (0..reflectors)
             .into_par_iter()
             .map(|k| {
                 let all = PointColumns::new(&measured, &model, k, 1);
@@ -128,19 +128,14 @@ impl ArmResiduals {
                             - norm(px[i] - px[j], py[i] - py[j], pz[i] - pz[j]),
                     );
                 });
-                (mad_sigma_in_place(&mut dd).max(floor), all)
+                mad_sigma_in_place(&mut dd).max(floor)
             })
-            .unzip();
+            .collect();
         let sigma_mm = PerReflector::from_slice(&scales);
         let stride = n.div_ceil(MAX_PARTNERS).max(1);
-        // Every configuration is a partner up to MAX_PARTNERS: the columns just built.
-        let columns = if stride == 1 {
-            all
-        } else {
-            (0..reflectors)
-                .map(|k| PointColumns::new(&measured, &model, k, stride))
-                .collect()
-        };
+        let columns = (0..reflectors)
+            .map(|k| PointColumns::new(&measured, &model, k, stride))
+            .collect();
         Self {
             side,
             measured,
