@@ -200,6 +200,17 @@ impl ArmProblem {
         pair_jacobian_columns(&self.jac_all(&model), max_pairs, &self.reflectors)
     }
 
+    /// The transpose of [`Self::sample_pair_jacobian`], padded ([`pair_jacobian_transposed`]), and its
+    /// number of rows before the padding.
+    pub fn sample_pair_jacobian_transposed(
+        &self,
+        y: &DVector<f64>,
+        max_pairs: usize,
+    ) -> (DMatrix<f64>, usize) {
+        let model = self.model_at(y);
+        pair_jacobian_transposed(&self.jac_all(&model), max_pairs, &self.reflectors)
+    }
+
     /// F_k of the start model on this problem's data, mm² (sums of squared distance errors), one per
     /// reflector.
     pub fn start_objectives_mm2(&self) -> Vec<f64> {
@@ -255,21 +266,23 @@ fn pair_row(
     }
 }
 
-/// Rows −u_ijᵀ(J_i,k − J_j,k) of the pair Jacobian (all parameters, unscaled) for an evenly strided
-/// subset of at most `max_pairs` pairs per reflector (of the reflectors in `reflectors`), as the columns
-/// of a matrix (parameters × rows), so that `M Mᵀ` is the Gram matrix.
-pub fn pair_jacobian_columns(
-    jac: &[ArmJacobians],
-    max_pairs: usize,
-    reflectors: &[bool],
-) -> DMatrix<f64> {
+/// One row of the sampled pair Jacobian: configurations `i < j`, reflector `k`, and the unit vector
+/// from j's model point to i's.
+struct SampledRow {
+    i: usize,
+    j: usize,
+    k: usize,
+    u: Vector3<f64>,
+}
+
+/// The rows of the sampled pair Jacobian in their order: every `stride`-th pair `(i, j)`, `i < j`, of
+/// the `n(n−1)/2`, so that at most `max_pairs` pairs per reflector are kept; per pair each reflector of
+/// `reflectors` whose two model points differ.
+fn sampled_rows(jac: &[ArmJacobians], max_pairs: usize, reflectors: &[bool]) -> Vec<SampledRow> {
     let n = jac.len();
     let n_pairs = n * n.saturating_sub(1) / 2;
     let stride = n_pairs.div_ceil(max_pairs.max(1)).max(1);
-    let p = jac.first().map_or(0, |j| j.jacobians[0].ncols());
-    let mut data: Vec<f64> = Vec::with_capacity(3 * n_pairs.div_ceil(stride) * p);
-    let mut row = vec![0.0; p];
-    let mut count = 0;
+    let mut rows = Vec::with_capacity(reflectors.len() * n_pairs.div_ceil(stride));
     let mut idx = 0usize;
     for i in 0..n {
         for j in i + 1..n {
@@ -278,23 +291,102 @@ pub fn pair_jacobian_columns(
                     let v = jac[i].fk.points_mm[k] - jac[j].fk.points_mm[k];
                     let dist = v.norm();
                     if dist > 0.0 {
-                        let u = v / dist;
-                        pair_row(
-                            &jac[i].jacobians[k],
-                            &jac[j].jacobians[k],
-                            &u,
-                            0..p,
-                            &mut row,
-                        );
-                        data.extend_from_slice(&row);
-                        count += 1;
+                        rows.push(SampledRow {
+                            i,
+                            j,
+                            k,
+                            u: v / dist,
+                        });
                     }
                 }
             }
             idx += 1;
         }
     }
-    DMatrix::from_vec(p, count, data)
+    rows
+}
+
+/// Rows −u_ijᵀ(J_i,k − J_j,k) of the pair Jacobian (all parameters, unscaled) for an evenly strided
+/// subset of at most `max_pairs` pairs per reflector (of the reflectors in `reflectors`), as the columns
+/// of a matrix (parameters × rows), so that `M Mᵀ` is the Gram matrix.
+pub fn pair_jacobian_columns(
+    jac: &[ArmJacobians],
+    max_pairs: usize,
+    reflectors: &[bool],
+) -> DMatrix<f64> {
+    let rows = sampled_rows(jac, max_pairs, reflectors);
+    let p = jac.first().map_or(0, |j| j.jacobians[0].ncols());
+    let mut m = DMatrix::zeros(p, rows.len());
+    for (r, mut column) in rows.iter().zip(m.column_iter_mut()) {
+        pair_row(
+            &jac[r.i].jacobians[r.k],
+            &jac[r.j].jacobians[r.k],
+            &r.u,
+            0..p,
+            column.as_mut_slice(),
+        );
+    }
+    m
+}
+
+/// `Mᵀ` of [`pair_jacobian_columns`] — one row per sampled pair and reflector, each parameter's column
+/// contiguous — with zero rows appended up to the number of parameters (the layout a Householder QR
+/// of `Mᵀ` works on, written once instead of transposed from `M`), and the number of rows of `M`.
+/// The same numbers as `M`'s, to the bit.
+pub fn pair_jacobian_transposed(
+    jac: &[ArmJacobians],
+    max_pairs: usize,
+    reflectors: &[bool],
+) -> (DMatrix<f64>, usize) {
+    let rows = sampled_rows(jac, max_pairs, reflectors);
+    let p = jac.first().map_or(0, |j| j.jacobians[0].ncols());
+    let height = rows.len().max(p);
+    let mut m = DMatrix::zeros(height, p);
+    let data = m.as_mut_slice();
+    let mut row = vec![0.0; p];
+    for (at, r) in rows.iter().enumerate() {
+        pair_row(
+            &jac[r.i].jacobians[r.k],
+            &jac[r.j].jacobians[r.k],
+            &r.u,
+            0..p,
+            &mut row,
+        );
+        // Row `at` of the column-major `Mᵀ`: one number per column, `height` apart.
+        for (c, &x) in row.iter().enumerate() {
+            data[c * height + at] = x;
+        }
+    }
+    (m, rows.len())
+}
+
+/// The mean Gram matrix `MMᵀ / rows` of [`pair_jacobian_columns`]' `M`, summed over blocks of rows so
+/// that `M` is never held whole (a few hundred kilobytes to a few megabytes of fresh memory per call
+/// otherwise). Equal to `gram_by_product` of `M` up to the order of the sums' rounding.
+pub fn pair_jacobian_gram(
+    jac: &[ArmJacobians],
+    max_pairs: usize,
+    reflectors: &[bool],
+) -> DMatrix<f64> {
+    const BLOCK: usize = 1024;
+    let rows = sampled_rows(jac, max_pairs, reflectors);
+    let p = jac.first().map_or(0, |j| j.jacobians[0].ncols());
+    let mut gram = DMatrix::zeros(p, p);
+    let mut block = DMatrix::zeros(p, BLOCK);
+    for chunk in rows.chunks(BLOCK) {
+        for (r, mut column) in chunk.iter().zip(block.column_iter_mut()) {
+            pair_row(
+                &jac[r.i].jacobians[r.k],
+                &jac[r.j].jacobians[r.k],
+                &r.u,
+                0..p,
+                column.as_mut_slice(),
+            );
+        }
+        let b = block.columns(0, chunk.len());
+        gram.gemm(1.0, &b, &b.transpose(), 1.0);
+    }
+    gram / rows.len().max(1) as f64
 }
 
 impl MinimaxProblem for ArmProblem {

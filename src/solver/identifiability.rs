@@ -64,13 +64,21 @@ pub fn gram_by_qr(columns: &DMatrix<f64>) -> DMatrix<f64> {
     let (p, count) = columns.shape();
     let rows = count.max(p);
     // Mᵀ, padded with zero rows up to p.
-    let mut m = DMatrix::<f64>::from_fn(
+    let m = DMatrix::<f64>::from_fn(
         rows,
         p,
         |r, c| {
             if r < count { columns[(c, r)] } else { 0.0 }
         },
     );
+    gram_by_qr_of_transposed(m, count)
+}
+
+/// [`gram_by_qr`] of `M` given as `Mᵀ` with zero rows appended up to at least `M`'s row count
+/// (`arm_problem::pair_jacobian_transposed`), `count` the number of `M`'s columns: the same numbers.
+pub fn gram_by_qr_of_transposed(mut m: DMatrix<f64>, count: usize) -> DMatrix<f64> {
+    let (rows, p) = m.shape();
+    debug_assert!(rows >= count.max(p));
     let diag = householder_in_place(&mut m);
     // `QR::r()`: the upper triangle of the first min(rows, p) rows, |diagonal| on the diagonal.
     let k = rows.min(p);

@@ -1,20 +1,21 @@
 //! The identifiability analysis repeated at a step-1 solution: the distance Jacobian of the calibrated
 //! arm on the start's sample of pairs (the same evenly strided pairs), with the parameters the start
-//! left free as the only allowed ones. Its Gram matrix is one product ([`gram_by_product`]) whatever the
-//! robot: only its verdicts are used (a parameter no longer identifiable, a grown condition number),
-//! and they are those of the QR the start uses for the built-in robot (a test holds them on the test
-//! robots and the distance methods).
+//! left free as the only allowed ones. Its Gram matrix is the product `MMᵀ` summed over blocks of
+//! rows without holding `M` (`arm_problem::pair_jacobian_gram`) whatever the robot: only its verdicts
+//! are used (a parameter no longer identifiable, a grown condition number), and they are those of the
+//! QR the start uses for the built-in robot (a test holds them on the test robots and the distance
+//! methods).
 
-use super::{IdentifiabilityReport, ParameterInfo, analyse, gram_by_product, gram_by_qr};
+use super::{IdentifiabilityReport, ParameterInfo, analyse, gram_by_qr};
 use crate::kinematics::{ArmJacobians, ArmModel};
-use crate::solver::arm_problem::pair_jacobian_columns;
+use crate::solver::arm_problem::{pair_jacobian_columns, pair_jacobian_gram};
 use nalgebra::DMatrix;
 use rayon::prelude::*;
 
 /// How the re-check forms the Gram matrix of the sampled pair Jacobian.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum GramMethod {
-    /// One matrix product `MMᵀ / count` (what the re-check uses).
+    /// The product `MMᵀ / count`, summed over blocks of rows (what the re-check uses).
     Product,
     /// `RᵀR / count` of a QR of `Mᵀ` (the start's analysis of the built-in robot; for comparison).
     Qr,
@@ -30,10 +31,10 @@ pub fn at_solution(
     method: GramMethod,
 ) -> IdentifiabilityReport {
     let jac: Vec<ArmJacobians> = qs.par_iter().map(|q| arm.reflector_jacobians(q)).collect();
-    let columns = pair_jacobian_columns(&jac, max_pairs, &vec![true; arm.reflector_count()]);
+    let reflectors = vec![true; arm.reflector_count()];
     let gram: DMatrix<f64> = match method {
-        GramMethod::Product => gram_by_product(&columns),
-        GramMethod::Qr => gram_by_qr(&columns),
+        GramMethod::Product => pair_jacobian_gram(&jac, max_pairs, &reflectors),
+        GramMethod::Qr => gram_by_qr(&pair_jacobian_columns(&jac, max_pairs, &reflectors)),
     };
     let n_params = arm.param_count();
     let mut allowed = vec![false; n_params];

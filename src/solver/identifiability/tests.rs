@@ -145,6 +145,67 @@ fn gram_by_qr_and_by_product_keep_the_same_parameters() {
     }
 }
 
+/// The start's transposed sample (written once, each parameter's column contiguous) holds `M`'s numbers
+/// to the bit with the QR's zero padding, so the start's Gram by QR is unchanged to the bit; the
+/// re-check's Gram summed over blocks of rows is the one product's up to rounding — on the DH arm and
+/// a URDF chain, with fewer sampled rows than parameters, and with several blocks.
+#[test]
+fn the_transposed_and_the_blocked_samples_give_the_full_samples_numbers() {
+    use crate::solver::arm_problem::{pair_jacobian_gram, pair_jacobian_transposed};
+    let mut rng = ChaCha8Rng::seed_from_u64(21);
+    let yumi = chain(&yumi_like_urdf(), "yumi_body", "yumi_link_7_l");
+    for arm in [
+        ArmModel::nominal_irb14000(reflectors()),
+        ArmModel::nominal_chain(yumi, reflectors()),
+    ] {
+        let limits = arm.joint_limits_rad();
+        for (n, max_pairs, reflectors) in [
+            (120, 3000, [true; 3]),
+            (40, 3000, [true, false, true]),
+            (5, 3000, [true; 3]),
+            (3, 1, [false, true, false]),
+        ] {
+            let jacs: Vec<_> = (0..n)
+                .map(|_| {
+                    let q: Vec<f64> = limits
+                        .iter()
+                        .map(|&(lo, hi)| rng.random_range(lo..hi))
+                        .collect();
+                    arm.reflector_jacobians(&q)
+                })
+                .collect();
+            let m = pair_jacobian_columns(&jacs, max_pairs, &reflectors);
+            let (p, count) = m.shape();
+            let (t, rows) = pair_jacobian_transposed(&jacs, max_pairs, &reflectors);
+            assert_eq!((rows, t.shape()), (count, (count.max(p), p)), "n {n}");
+            for r in 0..t.nrows() {
+                for c in 0..p {
+                    let want = if r < count { m[(c, r)] } else { 0.0 };
+                    assert_eq!(t[(r, c)].to_bits(), want.to_bits(), "n {n}: ({r}, {c})");
+                }
+            }
+            let (a, b) = (gram_by_qr_of_transposed(t, rows), gram_by_qr(&m));
+            assert!(
+                a.iter()
+                    .zip(b.iter())
+                    .all(|(x, y)| x.to_bits() == y.to_bits())
+            );
+            let (blocked, product) = (
+                pair_jacobian_gram(&jacs, max_pairs, &reflectors),
+                gram_by_product(&m),
+            );
+            assert!(
+                (&blocked - &product).amax() <= 1e-12 * product.amax(),
+                "n {n}: {:e}",
+                (&blocked - &product).amax() / product.amax()
+            );
+            if count > 0 {
+                assert!(product.amax() > 0.0);
+            }
+        }
+    }
+}
+
 #[test]
 fn negligible_columns_are_unidentifiable_outright() {
     // Three parameters: two independent, and one whose sensitivity is 1e-9 of the others' — as a

@@ -153,10 +153,16 @@ pub fn distance_identifiability(
     analysis: &DistanceAnalysis,
 ) -> (DMatrix<f64>, IdentifiabilityReport) {
     let n_params = arm.param_count();
-    let columns = probe.sample_pair_jacobian(&DVector::zeros(n_params), IDENTIFIABILITY_PAIRS);
+    let start = DVector::zeros(n_params);
     let gram = match (analysis.gram, &arm.kinematics) {
-        (GramForm::OfModel, ArmKinematics::Dh(_)) => identifiability::gram_by_qr(&columns),
-        _ => identifiability::gram_by_product(&columns),
+        (GramForm::OfModel, ArmKinematics::Dh(_)) => {
+            let (transposed, count) =
+                probe.sample_pair_jacobian_transposed(&start, IDENTIFIABILITY_PAIRS);
+            identifiability::gram_by_qr_of_transposed(transposed, count)
+        }
+        _ => identifiability::gram_by_product(
+            &probe.sample_pair_jacobian(&start, IDENTIFIABILITY_PAIRS),
+        ),
     };
     let order = arm.identifiability_order();
     let report = identifiability::analyse(
