@@ -25,9 +25,10 @@ const LAYERS: &[&[&str]] = &[
         "controller",
     ],
     // The screening, the solver, the simulator, the figures of a model.
-    &["quality", "solver", "simulate", "analysis", "plan"],
-    // What combines them: the load pipeline, exclusion and re-fit, the comparison, the parameter file.
-    &["workspace", "exclusion", "comparison", "params"],
+    &["quality", "solver", "simulate", "analysis"],
+    // What combines them: the load pipeline, exclusion and re-fit, the comparison, the parameter file,
+    // the measurement's plan (designed for the parameters the solver's analysis frees).
+    &["workspace", "exclusion", "comparison", "params", "plan"],
     // What reports on a calibration: the HTML report (parameter file, figures, screening).
     &["report"],
     // The command line, then the workbench.

@@ -7,8 +7,8 @@
 //!    keep-out boxes by the clearance — the simulator's checks (parry3d), on the robot's own meshes —
 //!    and no link of the robot lies on a reflector's line to the tracker.
 //! 2. **Selection**: greedy, over the identifiable parameters (columns scaled to unit RMS over the
-//!    candidates; the parameters distances can never identify,
-//!    [`crate::kinematics::ArmModel::unidentifiable_reason`], left out). The first two picks by
+//!    candidates; the parameters distances between the candidates cannot identify — the calibration's
+//!    own analysis, [`crate::solver::identifiability::identifiable_at`] — left out). The first two picks by
 //!    D-optimality of the reflector positions' scatter ([`select`]: distances taken as isotropic, the
 //!    information is that of the positions with the tracker's translation unknown); then
 //!    ([`select_by_distances`]) each next configuration the one that lowers most `trace(M⁻¹ P)` — the
@@ -285,12 +285,11 @@ pub fn facing_axis(arm: &ArmModel) -> Vector3<f64> {
     }
 }
 
-/// The reflector Jacobians of every candidate, the identifiable columns scaled to unit RMS scatter
-/// over the candidates: one `3·reflectors × p` matrix per candidate.
+/// The reflector Jacobians of every candidate, the columns distances between the candidates identify
+/// ([`crate::solver::identifiability::identifiable_at`], the calibration's analysis) scaled to unit
+/// RMS scatter over the candidates: one `3·reflectors × p` matrix per candidate.
 pub fn scaled_jacobians(arm: &ArmModel, configs: &[Vec<f64>]) -> Vec<DMatrix<f64>> {
-    let free: Vec<usize> = (0..arm.param_count())
-        .filter(|&k| arm.unidentifiable_reason(k).is_none())
-        .collect();
+    let free = crate::solver::identifiability::identifiable_at(arm, configs);
     let rows = 3 * arm.reflector_count();
     let jac: Vec<DMatrix<f64>> = configs
         .iter()

@@ -267,7 +267,7 @@ pub fn analyse(gram: &DMatrix<f64>, info: &ParameterInfo) -> IdentifiabilityRepo
 }
 
 mod recheck;
-pub use recheck::{GramMethod, at_solution};
+pub use recheck::{GramMethod, at_solution, identifiable_at};
 
 #[cfg(test)]
 mod tests;

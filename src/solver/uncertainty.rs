@@ -123,7 +123,8 @@ pub struct PredictedDesign {
 }
 
 /// [`predicted`] for a planned measurement of `side` of `robot`: the tracker's noise at its distance
-/// to the arm's base (half the MPE, per axis), over the parameters distances can identify; and the
+/// to the arm's base (half the MPE, per axis), over the parameters distances between `qs` identify
+/// (the calibration's analysis, [`crate::solver::identifiability::identifiable_at`]); and the
 /// verification accuracy predicted on `ver` (configurations where the robot goes). `None` where the
 /// information is singular.
 pub fn predicted_for_tracker(
@@ -135,9 +136,8 @@ pub fn predicted_for_tracker(
     tracker: &crate::dataset::TrackerSpec,
     tracker_in_body_mm: &Vector3<f64>,
 ) -> Option<PredictedDesign> {
-    let free: Vec<usize> = (0..arm.param_count())
-        .filter(|&k| arm.unidentifiable_reason(k).is_none())
-        .collect();
+    // The parameters a calibration on `qs` frees (its own analysis).
+    let free = crate::solver::identifiability::identifiable_at(arm, qs);
     let base = robot.body_from_arm_base(side).translation.vector;
     let sigma_mm =
         0.5e-3 * (tracker.mpe_um + tracker.mpe_um_per_m * (tracker_in_body_mm - base).norm() / 1e3);

@@ -673,11 +673,48 @@ impl SerialChain {
                  (the tilt, Hayati's β, is identified instead)",
                 self.joints[joint - 1].name
             )),
-            0 | 1 | 3 | 4 => Some(format!(
+            0 | 1 | 3 | 4 if self.axis_line_absorbed(joint, c) => Some(format!(
                 "moves `{name}`'s axis as `{}`'s offset or shift along its own axis does",
                 self.joints[joint - 1].name
             )),
             _ => None,
+        }
+    }
+
+    /// Whether correction `c` (`tx`, `ty`, `rx` or `ry`) of joint `k` is what joint k − 1's offset
+    /// and shift along its axis already do to joint k's axis line. With `a` the previous axis in joint
+    /// k's aligned frame, a shift along it is `a.x·tx + a.y·ty + a.z·tz` and a turn about it
+    /// `a.x·rx + a.y·ry + a.z·rz` and a shift. The analysis keeps joint k's offset and shift first, then
+    /// `tx` before `ty` and `rx` before `ry` ([`Self::preference_order`]), so of each pair it is the
+    /// later one with a share of `a` that is absorbed: `ty` and `ry` where `a.y ≠ 0`, else `tx` and
+    /// `rx`. (For the joint after the first the two motions are rigid ones of the whole arm, which the
+    /// tracker frame absorbs: the same pair.) For an axis parallel to the previous one the shift is
+    /// `tz` (Hayati's case) and a turn about the previous axis — through its origin `o` in joint k's
+    /// frame — is joint k's offset and the shift `(o.y, −o.x)`: `ty` is absorbed where `o.x ≠ 0`, else
+    /// `tx`; the tilts stay. Coincident axes and joints after a prismatic one are left to the analysis'
+    /// numbers: physics names only what it is sure of.
+    fn axis_line_absorbed(&self, k: usize, c: usize) -> bool {
+        if k == 0 || self.joints[k - 1].kind.is_linear() {
+            return false;
+        }
+        let previous_from_this = &self.prev_aligned_from_aligned[k];
+        if self.parallel_to_previous(k) {
+            let o =
+                -(previous_from_this.rotation.inverse() * previous_from_this.translation.vector);
+            return if o.x.abs() > 1e-6 {
+                c == 1
+            } else if o.y.abs() > 1e-6 {
+                c == 0
+            } else {
+                false
+            };
+        }
+        let previous_axis = previous_from_this.rotation.inverse() * Vector3::z();
+        let has_y = previous_axis.y.abs() > 1e-6;
+        match c {
+            1 | 4 => has_y,
+            0 | 3 => !has_y,
+            _ => false,
         }
     }
 

@@ -54,3 +54,20 @@ pub fn at_solution(
         },
     )
 }
+
+/// The parameters of `arm` that distances measured at the configurations `qs` identify: the
+/// calibration's own analysis (every parameter allowed, the start's sample of at most
+/// `set_up::IDENTIFIABILITY_PAIRS` pairs per reflector, its tolerances), at `arm` as it is. What a
+/// plan is designed and predicted for — which of a URDF joint's axis-line corrections the previous
+/// joint's offset and shift absorb depends on the axes' directions, and only the numbers tell.
+pub fn identifiable_at(arm: &ArmModel, qs: &[Vec<f64>]) -> Vec<usize> {
+    let all: Vec<usize> = (0..arm.param_count()).collect();
+    at_solution(
+        arm,
+        qs,
+        &all,
+        crate::solver::methods::set_up::IDENTIFIABILITY_PAIRS,
+        GramMethod::Product,
+    )
+    .free
+}
