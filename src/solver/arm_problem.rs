@@ -275,6 +275,17 @@ struct SampledRow {
     u: Vector3<f64>,
 }
 
+impl SampledRow {
+    /// The row's numbers, one per parameter ([`pair_row`]), into `out`.
+    fn write(&self, jac: &[ArmJacobians], out: &mut [f64]) {
+        let (ji, jj) = (
+            &jac[self.i].jacobians[self.k],
+            &jac[self.j].jacobians[self.k],
+        );
+        pair_row(ji, jj, &self.u, 0..out.len(), out);
+    }
+}
+
 /// The rows of the sampled pair Jacobian in their order: every `stride`-th pair `(i, j)`, `i < j`, of
 /// the `n(n−1)/2`, so that at most `max_pairs` pairs per reflector are kept; per pair each reflector of
 /// `reflectors` whose two model points differ.
@@ -318,13 +329,7 @@ pub fn pair_jacobian_columns(
     let p = jac.first().map_or(0, |j| j.jacobians[0].ncols());
     let mut m = DMatrix::zeros(p, rows.len());
     for (r, mut column) in rows.iter().zip(m.column_iter_mut()) {
-        pair_row(
-            &jac[r.i].jacobians[r.k],
-            &jac[r.j].jacobians[r.k],
-            &r.u,
-            0..p,
-            column.as_mut_slice(),
-        );
+        r.write(jac, column.as_mut_slice());
     }
     m
 }
@@ -345,13 +350,7 @@ pub fn pair_jacobian_transposed(
     let data = m.as_mut_slice();
     let mut row = vec![0.0; p];
     for (at, r) in rows.iter().enumerate() {
-        pair_row(
-            &jac[r.i].jacobians[r.k],
-            &jac[r.j].jacobians[r.k],
-            &r.u,
-            0..p,
-            &mut row,
-        );
+        r.write(jac, &mut row);
         // Row `at` of the column-major `Mᵀ`: one number per column, `height` apart.
         for (c, &x) in row.iter().enumerate() {
             data[c * height + at] = x;
@@ -375,13 +374,7 @@ pub fn pair_jacobian_gram(
     let mut block = DMatrix::zeros(p, BLOCK);
     for chunk in rows.chunks(BLOCK) {
         for (r, mut column) in chunk.iter().zip(block.column_iter_mut()) {
-            pair_row(
-                &jac[r.i].jacobians[r.k],
-                &jac[r.j].jacobians[r.k],
-                &r.u,
-                0..p,
-                column.as_mut_slice(),
-            );
+            r.write(jac, column.as_mut_slice());
         }
         let b = block.columns(0, chunk.len());
         gram.gemm(1.0, &b, &b.transpose(), 1.0);

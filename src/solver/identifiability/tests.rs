@@ -68,10 +68,10 @@ fn the_dh_arm_fixes_exactly_the_six_parameters_physics_predicts() {
     assert!(rep.condition_after < 30.0, "{}", rep.condition_after);
 }
 
-#[test]
-fn chains_keep_the_minimal_count_base_first() {
-    let mut rng = ChaCha8Rng::seed_from_u64(5);
-    for (text, base, tip, n) in [
+/// The URDF chains of these tests — a YuMi-like arm, a UR-like arm (parallel axes), the built-in URDF
+/// read as a chain — as (text, base link, tip link, joints).
+fn test_chains() -> Vec<(String, &'static str, &'static str, usize)> {
+    vec![
         (yumi_like_urdf(), "yumi_body", "yumi_link_7_l", 7),
         (dual_ur_like_urdf(), "left_base_link", "left_ee_link", 6),
         (
@@ -80,7 +80,13 @@ fn chains_keep_the_minimal_count_base_first() {
             "yumi_flange_l",
             7,
         ),
-    ] {
+    ]
+}
+
+#[test]
+fn chains_keep_the_minimal_count_base_first() {
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    for (text, base, tip, n) in test_chains() {
         let chain = chain(&text, base, tip);
         let arm = ArmModel::nominal_chain(chain.clone(), reflectors());
         let rep = report(&arm, &gram_by_product(&columns(&arm, 60, &mut rng)));
@@ -152,17 +158,9 @@ fn gram_by_qr_and_by_product_keep_the_same_parameters() {
 #[test]
 fn the_chains_physical_reasons_name_what_the_analysis_fixes() {
     let mut rng = ChaCha8Rng::seed_from_u64(17);
-    for (text, base, tip, n) in [
-        (yumi_like_urdf(), "yumi_body", "yumi_link_7_l", 7),
-        (yumi_like_urdf(), "yumi_body", "yumi_link_7_r", 7),
-        (dual_ur_like_urdf(), "left_base_link", "left_ee_link", 6),
-        (
-            crate::robot::BUILTIN_IRB14000_URDF.to_string(),
-            "yumi_body",
-            "yumi_flange_l",
-            7,
-        ),
-    ] {
+    let mut chains = test_chains();
+    chains.push((yumi_like_urdf(), "yumi_body", "yumi_link_7_r", 7));
+    for (text, base, tip, n) in chains {
         let chain = chain(&text, base, tip);
         let arm = ArmModel::nominal_chain(chain.clone(), reflectors());
         let rep = report(&arm, &gram_by_product(&columns(&arm, 60, &mut rng)));
