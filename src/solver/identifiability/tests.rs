@@ -22,10 +22,14 @@ fn chain(text: &str, base: &str, tip: &str) -> Arc<SerialChain> {
     Arc::new(SerialChain::from_urdf(&urdf, base, tip).unwrap())
 }
 
-/// The pair-Jacobian columns of `n` random configurations of `arm`.
-fn columns(arm: &ArmModel, n: usize, rng: &mut ChaCha8Rng) -> DMatrix<f64> {
+/// The reflector Jacobians of `n` random configurations of `arm`.
+fn random_jacobians(
+    arm: &ArmModel,
+    n: usize,
+    rng: &mut ChaCha8Rng,
+) -> Vec<crate::kinematics::ArmJacobians> {
     let limits = arm.joint_limits_rad();
-    let jacs: Vec<_> = (0..n)
+    (0..n)
         .map(|_| {
             let q: Vec<f64> = limits
                 .iter()
@@ -33,8 +37,12 @@ fn columns(arm: &ArmModel, n: usize, rng: &mut ChaCha8Rng) -> DMatrix<f64> {
                 .collect();
             arm.reflector_jacobians(&q)
         })
-        .collect();
-    pair_jacobian_columns(&jacs, 3000, &[true; 3])
+        .collect()
+}
+
+/// The pair-Jacobian columns of `n` random configurations of `arm`.
+fn columns(arm: &ArmModel, n: usize, rng: &mut ChaCha8Rng) -> DMatrix<f64> {
+    pair_jacobian_columns(&random_jacobians(arm, n, rng), 3000, &[true; 3])
 }
 
 fn report(arm: &ArmModel, gram: &DMatrix<f64>) -> IdentifiabilityReport {
@@ -198,22 +206,13 @@ fn the_transposed_and_the_blocked_samples_give_the_full_samples_numbers() {
         ArmModel::nominal_irb14000(reflectors()),
         ArmModel::nominal_chain(yumi, reflectors()),
     ] {
-        let limits = arm.joint_limits_rad();
         for (n, max_pairs, reflectors) in [
             (120, 3000, [true; 3]),
             (40, 3000, [true, false, true]),
             (5, 3000, [true; 3]),
             (3, 1, [false, true, false]),
         ] {
-            let jacs: Vec<_> = (0..n)
-                .map(|_| {
-                    let q: Vec<f64> = limits
-                        .iter()
-                        .map(|&(lo, hi)| rng.random_range(lo..hi))
-                        .collect();
-                    arm.reflector_jacobians(&q)
-                })
-                .collect();
+            let jacs = random_jacobians(&arm, n, &mut rng);
             let m = pair_jacobian_columns(&jacs, max_pairs, &reflectors);
             let (p, count) = m.shape();
             let (t, rows) = pair_jacobian_transposed(&jacs, max_pairs, &reflectors);
