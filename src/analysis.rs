@@ -14,9 +14,9 @@ use crate::kinematics::DualArmModel;
 use crate::metrics::{
     self, AccuracyReport, MetricsError, PairKind, PairSamples, SplitSweep, Sweep,
 };
+use crate::par::prelude::*;
 use crate::side::{ConfigId, PerSide, Side};
 use nalgebra::{Isometry3, Point3, Vector3};
-use rayon::prelude::*;
 
 /// Why a model's figures cannot be computed.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]

@@ -20,6 +20,7 @@ pub mod kinematics;
 pub mod meshes;
 pub mod metrics;
 pub mod output;
+pub mod par;
 pub mod params;
 pub mod plan;
 pub mod quality;

@@ -60,7 +60,7 @@ impl<T> PerSide<T> {
     where
         T: Send,
     {
-        let (left, right) = rayon::join(|| f(Side::Left), || f(Side::Right));
+        let (left, right) = crate::par::join(|| f(Side::Left), || f(Side::Right));
         Self { left, right }
     }
 
@@ -98,7 +98,7 @@ impl<T> PerSide<T> {
         T: Send,
     {
         let Self { left, right } = self;
-        let (left, right) = rayon::join(|| f(Side::Left, left), || f(Side::Right, right));
+        let (left, right) = crate::par::join(|| f(Side::Left, left), || f(Side::Right, right));
         Ok(PerSide {
             left: left?,
             right: right?,

@@ -71,8 +71,16 @@ build() {
     rustup target add wasm32-unknown-unknown
   fi
   install_wasm_bindgen
-  # Optimised for size (Cargo.toml's wasm-release profile).
-  cargo build --profile wasm-release --target wasm32-unknown-unknown --bin dualcal
+  # Optimised for size (Cargo.toml's wasm-release profile), with egui's fonts subset (feature `web`).
+  # The source paths in panic messages without the machine's cargo registry and checkout (shorter,
+  # and nothing of this machine's in the module). RUSTFLAGS replaces .cargo/config.toml's flags: SIMD
+  # is named again.
+  local flags="-C target-feature=+simd128 --remap-path-prefix=$PWD/=" registry
+  for registry in "${CARGO_HOME:-$HOME/.cargo}"/registry/src/*/; do
+    flags="$flags --remap-path-prefix=$registry="
+  done
+  RUSTFLAGS=$flags cargo build --profile wasm-release --target wasm32-unknown-unknown --bin dualcal \
+    --features web
   local tmp=$out.tmp
   rm -rf "$tmp"
   mkdir -p "$tmp"

@@ -73,13 +73,16 @@ pub fn encode_png(image: &egui::ColorImage) -> anyhow::Result<Vec<u8>> {
     for c in &image.pixels {
         rgba.extend_from_slice(&c.to_array());
     }
-    let buffer = image::RgbaImage::from_raw(w as u32, h as u32, rgba)
-        .context("screenshot has an inconsistent size")?;
+    let (width, height) = (u32::try_from(w)?, u32::try_from(h)?);
     let mut bytes = Vec::new();
-    buffer.write_to(
-        &mut std::io::Cursor::new(&mut bytes),
-        image::ImageFormat::Png,
-    )?;
+    let mut encoder = png::Encoder::new(&mut bytes, width, height);
+    encoder.set_color(png::ColorType::Rgba);
+    encoder.set_depth(png::BitDepth::Eight);
+    let mut writer = encoder.write_header()?;
+    writer
+        .write_image_data(&rgba)
+        .context("screenshot has an inconsistent size")?;
+    writer.finish()?;
     Ok(bytes)
 }
 

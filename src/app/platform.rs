@@ -54,11 +54,15 @@ pub fn publish_status(json: &str) {
     let _ = json;
 }
 
-/// Set-up of the egui context the platform needs: in a browser, the accessibility tree mirrored into
-/// the page (eframe's web runner has no AccessKit adapter).
+/// Set-up of the egui context the platform needs: in a browser, egui's fonts subset at build time
+/// ([`super::web::fonts`]) and the accessibility tree mirrored into the page (eframe's web runner has
+/// no AccessKit adapter).
 pub fn init_context(ctx: &egui::Context) {
     #[cfg(target_arch = "wasm32")]
-    super::web::mirror_accessibility_tree(ctx);
+    {
+        ctx.set_fonts(super::web::fonts());
+        super::web::mirror_accessibility_tree(ctx);
+    }
     #[cfg(not(target_arch = "wasm32"))]
     let _ = ctx;
 }

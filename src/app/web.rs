@@ -21,6 +21,13 @@ use std::sync::Arc;
 use wasm_bindgen::{JsCast as _, JsValue, closure::Closure};
 
 use super::example::IN_MEMORY_EXAMPLE_DIR;
+
+#[cfg(not(feature = "web"))]
+compile_error!(
+    "the browser's workbench needs the `web` feature (`tools/web.sh build`): its fonts are egui's, \
+     subset by build.rs"
+);
+
 const CANVAS_ID: &str = "dualcal-canvas";
 const STATUS_ID: &str = "dualcal-status";
 const A11Y_ID: &str = "dualcal-a11y";
@@ -243,6 +250,44 @@ fn download(file_name: &str, bytes: &[u8]) -> Result<(), JsValue> {
     anchor.set_download(file_name);
     anchor.click();
     web_sys::Url::revoke_object_url(&url)
+}
+
+/// egui's default fonts and families as epaint's `default_fonts` sets them, from the subsets build.rs
+/// writes (the feature `web`: Latin, Greek, Cyrillic, punctuation, arrows, mathematical symbols).
+pub fn fonts() -> egui::FontDefinitions {
+    use egui::{FontData, FontFamily, FontTweak};
+    macro_rules! subset {
+        ($file:literal) => {
+            include_bytes!(concat!(env!("OUT_DIR"), "/web-fonts/", $file))
+        };
+    }
+    let mut fonts = egui::FontDefinitions::empty();
+    for (name, data) in [
+        ("Hack", FontData::from_static(subset!("Hack-Regular.ttf"))),
+        (
+            "Ubuntu-Light",
+            FontData::from_static(subset!("Ubuntu-Light.ttf")),
+        ),
+        (
+            "egui-icons",
+            FontData::from_static(subset!("egui-icons.ttf")).tweak(FontTweak {
+                scale: 0.90,
+                ..Default::default()
+            }),
+        ),
+    ] {
+        fonts.font_data.insert(name.to_owned(), Arc::new(data));
+    }
+    let family = |names: &[&str]| names.iter().map(|n| (*n).to_owned()).collect::<Vec<_>>();
+    fonts.families.insert(
+        FontFamily::Monospace,
+        family(&["Hack", "Ubuntu-Light", "egui-icons"]),
+    );
+    fonts.families.insert(
+        FontFamily::Proportional,
+        family(&["Ubuntu-Light", "egui-icons"]),
+    );
+    fonts
 }
 
 /// Turn on egui's accessibility tree and mirror it into `#dualcal-a11y` after every frame.

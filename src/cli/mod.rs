@@ -310,6 +310,7 @@ impl ReproduceArgs {
 /// their work with the pool's other threads directly. Called from a thread outside a pool, every loop
 /// hands its work over and sleeps until it is done — at the paper's size that costs more than the loops
 /// save. `RAYON_NUM_THREADS` sets the pool's size as usual.
+#[cfg(not(target_arch = "wasm32"))]
 pub fn run(command: Command) -> Result<()> {
     match rayon::ThreadPoolBuilder::new()
         .thread_name(|i| format!("dualcal-work-{i}"))
@@ -320,6 +321,12 @@ pub fn run(command: Command) -> Result<()> {
         Ok(pool) => pool.install(|| run_command(command)),
         Err(_) => run_command(command),
     }
+}
+
+/// In a browser (no command line, one thread): the command on the page's thread.
+#[cfg(target_arch = "wasm32")]
+pub fn run(command: Command) -> Result<()> {
+    run_command(command)
 }
 
 fn run_command(command: Command) -> Result<()> {
@@ -616,7 +623,7 @@ fn fit_and_screen(
             .observer(&mut progress)
             .run()?;
         // The screening of the result and its uncertainty need nothing of each other: side by side.
-        let (after, uncertainty) = rayon::join(
+        let (after, uncertainty) = crate::par::join(
             || crate::exclusion::screen_result(ds, &result, &screen_settings),
             || crate::solver::uncertainty::for_result(ds, &result),
         );

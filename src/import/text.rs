@@ -29,12 +29,28 @@ pub fn decode(path: &Path, bytes: &[u8]) -> Result<String, ImportError> {
     let bytes = bytes.strip_prefix(&[0xEF, 0xBB, 0xBF]).unwrap_or(bytes);
     match std::str::from_utf8(bytes) {
         Ok(s) => Ok(s.to_string()),
-        // The WHATWG decoder: the five bytes the code page leaves undefined read as the C1 control
-        // of the same value; it never fails.
-        Err(_) => Ok(encoding_rs::WINDOWS_1252
-            .decode_without_bom_handling(bytes)
-            .0
-            .into_owned()),
+        Err(_) => Ok(bytes.iter().map(|&b| windows_1252_char(b)).collect()),
+    }
+}
+
+/// One Windows-1252 byte as the WHATWG Encoding Standard decodes it (`index-windows-1252`): bytes
+/// 0x80–0x9F by the table, the five the code page leaves undefined as the C1 control of the same
+/// value, every other byte as the code point of its value (ISO 8859-1). Never fails.
+///
+/// Not encoding_rs: its decoder dispatches over every encoding it knows, which links its CJK tables
+/// into the browser's module (~130 KB gzipped) for these 32 entries. A test checks all 256 bytes
+/// against encoding_rs.
+fn windows_1252_char(byte: u8) -> char {
+    const HIGH: [char; 32] = [
+        '\u{20AC}', '\u{0081}', '\u{201A}', '\u{0192}', '\u{201E}', '\u{2026}', '\u{2020}',
+        '\u{2021}', '\u{02C6}', '\u{2030}', '\u{0160}', '\u{2039}', '\u{0152}', '\u{008D}',
+        '\u{017D}', '\u{008F}', '\u{0090}', '\u{2018}', '\u{2019}', '\u{201C}', '\u{201D}',
+        '\u{2022}', '\u{2013}', '\u{2014}', '\u{02DC}', '\u{2122}', '\u{0161}', '\u{203A}',
+        '\u{0153}', '\u{009D}', '\u{017E}', '\u{0178}',
+    ];
+    match byte {
+        0x80..=0x9F => HIGH[usize::from(byte - 0x80)],
+        _ => char::from(byte),
     }
 }
 
@@ -351,6 +367,23 @@ pub fn time_s(field: &str) -> Option<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn every_windows_1252_byte_decodes_as_encoding_rs_decodes_it() {
+        for byte in 0..=255u8 {
+            let bytes = [byte];
+            let (reference, _) = encoding_rs::WINDOWS_1252.decode_without_bom_handling(&bytes);
+            assert_eq!(
+                windows_1252_char(byte).to_string(),
+                reference,
+                "byte {byte:#04x}"
+            );
+        }
+        // A mixed line, through `decode` (invalid UTF-8, hence Windows-1252).
+        let bytes: Vec<u8> = (0x20..=0xFFu8).collect();
+        let (reference, _) = encoding_rs::WINDOWS_1252.decode_without_bom_handling(&bytes);
+        assert_eq!(decode(Path::new("x"), &bytes).unwrap(), reference);
+    }
 
     #[test]
     fn windows_1252_bytes_decode() {

@@ -18,9 +18,9 @@
 
 pub mod lod;
 
+use crate::par::prelude::*;
 use crate::source::{FileKind, FileSource, Files, MeshFormat};
 use nalgebra::Vector3;
-use rayon::prelude::*;
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;

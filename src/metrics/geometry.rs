@@ -6,9 +6,9 @@ use super::{
 };
 use crate::dataset::{ArmData, Dataset, Measurement, Split};
 use crate::kinematics::{ArmModel, DualArmModel, MAX_REFLECTORS, PerReflector, reflector_pairs};
+use crate::par::prelude::*;
 use crate::side::Side;
 use nalgebra::{Isometry3, Vector3};
-use rayon::prelude::*;
 
 /// Everything the pair loops need about one configuration, as plain arrays: the pair loops run tens of
 /// thousands of times per evaluation and plain arithmetic stays fast in unoptimised (test) builds too.

@@ -32,6 +32,7 @@ mod tests;
 
 use crate::dataset::{ArmData, Dataset, Split};
 use crate::kinematics::{ArmModel, DualArmModel, PerReflector};
+use crate::par::prelude::*;
 use crate::side::{ConfigId, Side};
 pub use absolute::{AbsoluteError, AbsoluteStats, absolute_errors, absolute_stats};
 pub use geometry::orientation_measurable;
@@ -41,7 +42,6 @@ use geometry::{
 };
 pub use kabsch::{KabschFit, kabsch_fit, kabsch_fit_points, kabsch_rotation};
 use nalgebra::{Isometry3, Vector3};
-use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 pub use sweep::{PairSamples, SplitSweep, Sweep, sweep};
 pub use tables::{

@@ -16,9 +16,9 @@ use super::geometry::{
 use super::{AccuracyReport, ConfigResiduals, MIN_METRIC_CONFIGS, MetricsError, PairKind};
 use crate::dataset::{Dataset, Split};
 use crate::kinematics::DualArmModel;
+use crate::par::prelude::*;
 use crate::side::{ConfigId, PerSide, Side};
 use nalgebra::Vector3;
-use rayon::prelude::*;
 
 /// The residuals of one set of pairs as histogram samples.
 #[derive(Clone, Debug, Default, PartialEq)]

@@ -28,8 +28,8 @@
 //! measured) — not on a measured ratio, which is higher (the prediction is optimistic), nor on
 //! designs from other candidates.
 
+use crate::par::prelude::*;
 use nalgebra::{DMatrix, Vector3};
-use rayon::prelude::*;
 
 /// Iterations of the relaxation at most.
 pub const MAX_ITERATIONS: usize = 400;

@@ -12,8 +12,8 @@
 //! The rows are whitened by `P` (`J L⁻ᵀ`, `P = L Lᵀ`), so that the criterion is `trace(M'⁻¹)` =
 //! `‖L'⁻¹‖²_F`, read off the factor.
 
+use crate::par::prelude::*;
 use nalgebra::{DMatrix, Vector3};
-use rayon::prelude::*;
 
 /// Sweeps over the design at most.
 pub const MAX_SWEEPS: usize = 30;

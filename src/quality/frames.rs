@@ -5,10 +5,10 @@ use super::residual::ArmResiduals;
 use super::{Finding, ScreenSettings, Severity, mpe_mm};
 use crate::dataset::Dataset;
 use crate::kinematics::{ArmModel, DualArmModel, rotation_angle_rad};
+use crate::par::prelude::*;
 use crate::side::Side;
 use crate::stats::{median, median_in_place};
 use nalgebra::{Point3, Vector3};
-use rayon::prelude::*;
 
 /// The nominal model of a robot that matches its description is within a few millimetres of the
 /// measured distances (the paper's IRB 14000: 2.5 and 5.6 mm RMS); when the typical pair error (the

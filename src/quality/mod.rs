@@ -36,8 +36,8 @@ pub mod triangle;
 
 use crate::dataset::{Dataset, Split};
 use crate::kinematics::DualArmModel;
+use crate::par::prelude::*;
 use crate::side::{ConfigId, Side};
-use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
@@ -278,7 +278,7 @@ pub(crate) fn mpe_mm(dataset: &Dataset, side: Side) -> f64 {
 pub fn screen(dataset: &Dataset, nominal: &DualArmModel, settings: &ScreenSettings) -> Screening {
     let mut out = Screening::default();
     let fits = residual::fits(dataset, nominal);
-    let (flags, nominal_findings) = rayon::join(
+    let (flags, nominal_findings) = crate::par::join(
         || {
             per_measured_side(dataset, |side| {
                 let mut flags = triangle::flags(dataset, side, settings);

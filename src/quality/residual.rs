@@ -20,10 +20,10 @@ use super::triangle::RELABELLINGS;
 use super::{Flag, FlagKind, ScreenSettings, mpe_mm};
 use crate::dataset::{Dataset, Measurement};
 use crate::kinematics::{ArmModel, DualArmModel, PerReflector};
+use crate::par::prelude::*;
 use crate::side::{ConfigId, PerSide, Side};
 use crate::stats::{mad_sigma_in_place, median_in_place};
 use nalgebra::{Matrix3, Vector3};
-use rayon::prelude::*;
 use std::cell::RefCell;
 
 /// Fewer configurations than this give no reliable residual screening.

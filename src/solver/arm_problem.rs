@@ -10,9 +10,9 @@
 
 use super::problem::{Eval, LeastSquaresSystem, MinimaxProblem, StageParams};
 use crate::kinematics::{ArmJacobians, ArmModel, ReflectorFk, reflector_pairs};
+use crate::par::prelude::*;
 use nalgebra::{DMatrix, DVector, Vector3};
 use pairs::{Plan, Points};
-use rayon::prelude::*;
 
 pub(super) mod pairs;
 

@@ -13,11 +13,11 @@
 
 use super::arm_problem::pairs::{self, Plan, Points};
 use super::problem::{Eval, LeastSquaresSystem, MinimaxProblem, StageParams};
+use crate::par::prelude::*;
 use nalgebra::{
     DMatrix, DVector, Isometry3, Matrix3, Rotation3, SMatrix, SVector, Translation3,
     UnitQuaternion, Vector3,
 };
-use rayon::prelude::*;
 
 /// A pair's residual Δd, mm, and its row ∂Δd/∂y.
 type PairRow = (f64, SVector<f64, 6>);

@@ -93,9 +93,9 @@ pub fn gram_by_qr_of_transposed(mut m: DMatrix<f64>, count: usize) -> DMatrix<f6
 /// nalgebra's `QR::new` on `m` in place (`householder::clear_column_unchecked` for every column),
 /// the trailing columns of each step reflected in parallel; returns the signed diagonal.
 fn householder_in_place(m: &mut DMatrix<f64>) -> Vec<f64> {
+    use crate::par::prelude::*;
     use nalgebra::linalg::householder::reflection_axis_mut;
     use nalgebra::{DVectorView, DVectorViewMut, Reflection, Unit};
-    use rayon::prelude::*;
     let (rows, p) = m.shape();
     let mut diag = Vec::with_capacity(rows.min(p));
     for i in 0..rows.min(p) {

@@ -109,8 +109,8 @@ impl<'a> Calibrator<'a> {
         // work over and sleep on a latch until it is done (at the paper's size that costs more than
         // the loop saves): the run moves onto a pool thread, whose loops share their work with the
         // other threads directly, and this thread waits for it once.
-        if !cfg!(target_arch = "wasm32") && rayon::current_thread_index().is_none() {
-            return rayon::scope(|_| self.run_here());
+        if !cfg!(target_arch = "wasm32") && crate::par::current_thread_index().is_none() {
+            return crate::par::scope(|_| self.run_here());
         }
         self.run_here()
     }

@@ -25,8 +25,8 @@
 //! correlations say which).
 
 use crate::kinematics::{ArmJacobians, ArmModel};
+use crate::par::prelude::*;
 use nalgebra::{DMatrix, Matrix3xX, Vector3};
-use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 /// At most this many configurations per arm enter the sums (every k-th beyond; the pair sums grow as

@@ -12,8 +12,8 @@
 //! n alone, summed in [`LANES`] partial sums each and run in parallel; the blocks are reduced in order,
 //! so the results do not depend on the number of threads.
 
+use crate::par::prelude::*;
 use nalgebra::Vector3;
-use rayon::prelude::*;
 use std::ops::Range;
 
 /// Pairs per reflector up to which a pass is one sequential sum in the order of earlier releases.

@@ -8,9 +8,9 @@
 
 use super::{IdentifiabilityReport, ParameterInfo, analyse, gram_by_qr};
 use crate::kinematics::{ArmJacobians, ArmModel};
+use crate::par::prelude::*;
 use crate::solver::arm_problem::{pair_jacobian_columns, pair_jacobian_gram};
 use nalgebra::DMatrix;
-use rayon::prelude::*;
 
 /// How the re-check forms the Gram matrix of the sampled pair Jacobian.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

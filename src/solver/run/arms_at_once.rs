@@ -58,7 +58,7 @@ impl CalibrationRun {
     /// second core for the other one?
     fn arms_can_run_at_once(&self) -> bool {
         !cfg!(target_arch = "wasm32")
-            && rayon::current_num_threads() > 1
+            && crate::par::current_num_threads() > 1
             && self.active.is_none()
             && self.stages.is_empty()
             && self.plan.iter().take(2).eq([LEFT, RIGHT].iter())
@@ -82,7 +82,7 @@ impl CalibrationRun {
         let mut recorder = Recorder::default();
         // The right arm's stage is a job of the work pool (taken by an idle thread); the left arm's
         // runs on this thread. The scope ends when both have (a panic in the job is raised here).
-        let left_outcome = rayon::in_place_scope(|scope| {
+        let left_outcome = crate::par::in_place_scope(|scope| {
             scope.spawn(|_| right_outcome = right.run_stage(RIGHT, &mut [&mut recorder]));
             self.run_stage(LEFT, observers)
         });
