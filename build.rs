@@ -1,4 +1,4 @@
-//! Build script. With the `web` feature (the browser's module, `tools/web.sh`): egui's two default
+//! Build script. With the `web-fonts` feature (the browser's modules, `tools/web.sh`): egui's two default
 //! fonts, Hack and Ubuntu Light (from the `epaint_default_fonts` crate, never copied into this
 //! repository), subset to the characters a calibration shows, written to `$OUT_DIR/web-fonts/` for
 //! `app::web::fonts` to compile in. The full fonts are 671 KB (319 KB gzipped) of the module; the
@@ -9,11 +9,11 @@
 
 fn main() {
     println!("cargo::rerun-if-changed=build.rs");
-    #[cfg(feature = "web")]
+    #[cfg(feature = "web-fonts")]
     web_fonts::write();
 }
 
-#[cfg(feature = "web")]
+#[cfg(feature = "web-fonts")]
 mod web_fonts {
     use read_fonts::{FontRef, collections::IntSet, types::NameId};
     use skera::{DEFAULT_DROP_TABLES, DEFAULT_LAYOUT_FEATURES, Plan, SubsetFlags, subset_font};

@@ -3,6 +3,8 @@
 # headless Chromium, or measure it.
 #
 #   tools/web.sh build         → target/web/ (index.html, dualcal.js, dualcal_bg.wasm): host it anywhere
+#   tools/web.sh build-webgpu  → target/web-webgpu/: the experimental WebGPU-only module (smaller; needs a
+#                                browser with a WebGPU adapter; not the default, docs/performance.md)
 #   tools/web.sh serve [PORT]  → build, then serve target/web on http://127.0.0.1:PORT (default 8080)
 #   tools/web.sh test          → build, then the browser test (web/tests/browser-test.mjs: Debian's
 #                                Chromium headless, driven by playwright-core from npm), comparing the
@@ -65,13 +67,16 @@ npm_ci() {
   fi
 }
 
+# build [FEATURES [OUT [BUILD_JSON]]]: the site with the module of Cargo features FEATURES (default
+# `web`, WebGL2) in OUT (default target/web), its sizes in BUILD_JSON (default target/web-test/build.json).
 build() {
+  local features=${1:-web} out=${2:-$out} build_json=${3:-$test_out/build.json}
   local started=$SECONDS
   if ! rustup target list --installed | grep -qx wasm32-unknown-unknown; then
     rustup target add wasm32-unknown-unknown
   fi
   install_wasm_bindgen
-  # Optimised for size (Cargo.toml's wasm-release profile), with egui's fonts subset (feature `web`).
+  # Optimised for size (Cargo.toml's wasm-release profile), with egui's fonts subset (`web-fonts`).
   # The source paths in panic messages without the machine's cargo registry and checkout (shorter,
   # and nothing of this machine's in the module). RUSTFLAGS replaces .cargo/config.toml's flags: SIMD
   # is named again.
@@ -80,7 +85,7 @@ build() {
     flags="$flags --remap-path-prefix=$registry="
   done
   RUSTFLAGS=$flags cargo build --profile wasm-release --target wasm32-unknown-unknown --bin dualcal \
-    --features web
+    --features "$features"
   local tmp=$out.tmp
   rm -rf "$tmp"
   mkdir -p "$tmp"
@@ -105,9 +110,9 @@ build() {
   local raw gz
   raw=$(stat -c %s "$out/dualcal_bg.wasm")
   gz=$(gzip -9 -c "$out/dualcal_bg.wasm" | wc -c)
-  mkdir -p "$test_out"
-  printf '{"wasm_bytes": %s, "wasm_gzip_bytes": %s, "wasm_bindgen_bytes": %s, "wasm_opt_secs": %s, "build_secs": %s}\n' \
-    "$raw" "$gz" "$bindgen_bytes" "$opt_secs" "$((SECONDS - started))" >"$test_out/build.json"
+  mkdir -p "$(dirname "$build_json")"
+  printf '{"features": "%s", "wasm_bytes": %s, "wasm_gzip_bytes": %s, "wasm_bindgen_bytes": %s, "wasm_opt_secs": %s, "build_secs": %s}\n' \
+    "$features" "$raw" "$gz" "$bindgen_bytes" "$opt_secs" "$((SECONDS - started))" >"$build_json"
   say "built $out in $((SECONDS - started)) s (wasm-opt $opt_secs s): dualcal_bg.wasm $((raw / 1024)) KiB ($((gz / 1024)) KiB gzip -9; $((bindgen_bytes / 1024)) KiB before wasm-opt)"
 }
 
@@ -142,6 +147,12 @@ case "${1:-}" in
   build)
     build
     ;;
+  build-webgpu)
+    # Experimental: the module on wgpu's WebGPU backend alone (feature `web-webgpu`), in
+    # target/web-webgpu/ (sizes in target/web-test/build-webgpu.json); it starts only in a browser
+    # with a WebGPU adapter. Not the default: docs/performance.md, "Size, fourteenth session".
+    build web-webgpu "$target_dir/web-webgpu" "$test_out/build-webgpu.json"
+    ;;
   serve)
     build
     port=${2:-8080}
@@ -172,7 +183,7 @@ case "${1:-}" in
     node web/tests/report.mjs
     ;;
   *)
-    say "usage: tools/web.sh build | serve [PORT] | test | measure"
+    say "usage: tools/web.sh build | build-webgpu | serve [PORT] | test | measure"
     exit 2
     ;;
 esac

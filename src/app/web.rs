@@ -22,10 +22,10 @@ use wasm_bindgen::{JsCast as _, JsValue, closure::Closure};
 
 use super::example::IN_MEMORY_EXAMPLE_DIR;
 
-#[cfg(not(feature = "web"))]
+#[cfg(not(feature = "web-fonts"))]
 compile_error!(
-    "the browser's workbench needs the `web` feature (`tools/web.sh build`): its fonts are egui's, \
-     subset by build.rs"
+    "the browser's workbench is built with the feature `web` (`tools/web.sh build`; or `web-webgpu`): \
+     its fonts are egui's, subset by build.rs, and it needs one wgpu backend"
 );
 
 const CANVAS_ID: &str = "dualcal-canvas";
@@ -253,7 +253,7 @@ fn download(file_name: &str, bytes: &[u8]) -> Result<(), JsValue> {
 }
 
 /// egui's default fonts and families as epaint's `default_fonts` sets them, from the subsets build.rs
-/// writes (the feature `web`: Latin, Greek, Cyrillic, punctuation, arrows, mathematical symbols).
+/// writes (the feature `web-fonts`: Latin, Greek, Cyrillic, punctuation, arrows, mathematical symbols).
 pub fn fonts() -> egui::FontDefinitions {
     use egui::{FontData, FontFamily, FontTweak};
     macro_rules! subset {

@@ -70,6 +70,8 @@ impl DynBuffer {
         let needed = bytes.len() as u64;
         if needed > self.capacity_bytes {
             self.capacity_bytes = needed.next_power_of_two();
+            // Freed now: on the web, wgpu leaves a dropped buffer to JavaScript's garbage collector.
+            self.buffer.destroy();
             self.buffer = device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(self.label),
                 size: self.capacity_bytes,
@@ -477,6 +479,12 @@ impl ViewportGpu {
         if let Some(pack) = &scene.meshes
             && self.robot_meshes.as_ref().map(|m| m.pack_id) != Some(pack.id)
         {
+            // The previous pack's buffers freed now: on the web, wgpu leaves a dropped buffer to
+            // JavaScript's garbage collector (a new robot or mesh detail uploads megabytes).
+            if let Some(old) = self.robot_meshes.take() {
+                old.vertices.destroy();
+                old.indices.destroy();
+            }
             self.robot_meshes = Some(RobotMeshesGpu::new(device, pack));
         }
         let mut sorted: Vec<&MeshInstance> = scene.instances.iter().collect();
