@@ -61,7 +61,7 @@ const server = http.createServer((req, res) => {
 await new Promise((resolve) => server.listen(0, "127.0.0.1", resolve));
 const base = `http://127.0.0.1:${server.address().port}/`;
 
-// ---- Chromium: headless, software WebGL2 (SwiftShader; it has no WebGPU adapter), off the network -
+// ---- Chromium: headless, software WebGL2 (SwiftShader; its WebGPU, behind flags, presents no canvas), off the network -
 const profile = fs.mkdtempSync(path.join(os.tmpdir(), "dualcal-chromium-"));
 const context = await chromium.launchPersistentContext(profile, {
   executablePath: chromiumPath,
