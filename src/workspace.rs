@@ -75,7 +75,14 @@ pub struct Workspace {
 impl Workspace {
     /// Load the dataset at `dataset_path` (its directory or its `dataset.toml`) and its robot.
     pub fn load(dataset_path: &Path, options: &WorkspaceOptions) -> Result<Self, LoadError> {
-        let (mut dataset, units) = dataset::load_from(&*options.files, dataset_path)?;
+        // The built-in robot's description (parsed once per process) parsed while the measurements
+        // are read, when the dataset names no robot of its own.
+        let (mut dataset, units, ()) =
+            dataset::load_from_with(&*options.files, dataset_path, |robot| {
+                if options.robot.is_none() && robot.is_none() {
+                    RobotDescription::builtin_irb14000();
+                }
+            })?;
         let robot = RobotDescription::load(
             RobotSource::Dataset {
                 dataset: &dataset,

@@ -1,7 +1,6 @@
 //! The `dualcal` command line: simulate, evaluate, calibrate, reproduce (and `gui` in the binary).
 
 use crate::dataset::{self, Dataset, Split};
-use crate::metrics;
 use crate::output::Overwrite;
 use crate::params::{ParamsFile, Provenance, StatisticsRecord};
 use crate::quality;
@@ -48,6 +47,7 @@ mod timings;
 use calibrate_settings::{print_event, print_uncertainty, settings_from};
 pub use controller::TargetsRefused;
 pub use evaluate::EvaluateArgs;
+pub use evaluate::comparison_table;
 
 /// Two-step minimax kinematic calibration of dual-arm robots from laser-tracker data.
 #[derive(Parser, Debug)]
@@ -857,37 +857,4 @@ fn print_identifiability(result: &CalibrationResult) {
         eprintln!("warning: {warning}");
     }
     outln!("total time {:.3} s", result.elapsed_secs);
-}
-
-/// Nominal vs calibrated, on the calibration and verification splits of `ds`; the calibrated
-/// model's figures taken from `recorded` (the parameter file's record of them on `ds`) where it has
-/// them.
-pub fn comparison_table(
-    ds: &Dataset,
-    result: &CalibrationResult,
-    recorded: Option<&StatisticsRecord>,
-) -> Result<String> {
-    let mut out = String::new();
-    for (split, name) in [(Split::Cal, "calibration"), (Split::Ver, "verification")] {
-        if !metrics::has_split(ds, split) {
-            continue;
-        }
-        let before = metrics::evaluate(ds, &result.nominal, split)?;
-        let record = recorded.and_then(|r| if split == Split::Cal { r.cal } else { r.ver });
-        let after = match record {
-            Some(report) => report,
-            None => metrics::evaluate(ds, &result.calibrated, split)?,
-        };
-        out.push_str(&format!(
-            "Accuracy on the {name} configurations (nominal → calibrated)\n"
-        ));
-        out.push_str(&metrics::format_comparison_named(
-            &before,
-            &after,
-            ["nominal", "calibrated"],
-            &ds.reflector_names,
-        ));
-        out.push('\n');
-    }
-    Ok(out)
 }

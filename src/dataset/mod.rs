@@ -419,32 +419,49 @@ pub fn load_with_units(path: &Path) -> Result<(Dataset, Units), DatasetError> {
 /// Like [`load_with_units`], reading the files through `files` (the file system, or files in memory:
 /// a browser's uploads).
 pub fn load_from(files: &dyn FileSource, path: &Path) -> Result<(Dataset, Units), DatasetError> {
+    load_from_with(files, path, |_| ()).map(|(dataset, units, ())| (dataset, units))
+}
+
+/// [`load_from`], running `beside` on the work pool while the arms' files are read, given the
+/// manifest's `robot` entry (the loader of a workspace parses the robot description meanwhile).
+pub fn load_from_with<R: Send>(
+    files: &dyn FileSource,
+    path: &Path,
+    beside: impl FnOnce(Option<&Path>) -> R + Send,
+) -> Result<(Dataset, Units, R), DatasetError> {
     let (dir, manifest_path) = resolve(files, path);
     let text = read_text(files, &manifest_path)?;
-    let m = manifest::parse(files, &manifest_path, &dir, &text)?;
+    let mut m = manifest::parse(files, &manifest_path, &dir, &text)?;
+    let arms = std::mem::replace(&mut m.arms, PerSide::new(None, None));
     // The two arms' files side by side (each a few milliseconds at the paper's size).
-    let arms = m.arms.par_try_map(|side, arm| {
-        let Some(arm) = arm else {
-            return Ok(ArmData::not_measured(side));
-        };
-        let measurements = csv::read_arm(
-            files,
-            &arm.file,
-            side,
-            m.units,
-            arm.reflectors_mm.as_ref().unwrap_or(&m.reflectors_mm),
-            &m.reflector_names,
-        )?;
-        Ok::<_, DatasetError>(ArmData {
-            side,
-            file: arm.file,
-            links: arm.links,
-            station: arm.station,
-            linear_joints: Vec::new(),
-            nominal_reflectors_mm: arm.reflectors_mm,
-            measurements,
-        })
-    })?;
+    let (arms, beside) = crate::par::join(
+        || {
+            arms.par_try_map(|side, arm| {
+                let Some(arm) = arm else {
+                    return Ok(ArmData::not_measured(side));
+                };
+                let measurements = csv::read_arm(
+                    files,
+                    &arm.file,
+                    side,
+                    m.units,
+                    arm.reflectors_mm.as_ref().unwrap_or(&m.reflectors_mm),
+                    &m.reflector_names,
+                )?;
+                Ok::<_, DatasetError>(ArmData {
+                    side,
+                    file: arm.file,
+                    links: arm.links,
+                    station: arm.station,
+                    linear_joints: Vec::new(),
+                    nominal_reflectors_mm: arm.reflectors_mm,
+                    measurements,
+                })
+            })
+        },
+        || beside(m.robot.as_deref()),
+    );
+    let arms = arms?;
     validate::check_both(&arms)?;
     Ok((
         Dataset {
@@ -457,6 +474,7 @@ pub fn load_from(files: &dyn FileSource, path: &Path) -> Result<(Dataset, Units)
             measured_together: m.measured_together,
         },
         m.units,
+        beside,
     ))
 }
 

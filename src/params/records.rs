@@ -346,9 +346,11 @@ impl ParamsFile {
         // The figures leave the excluded configurations out, as the solver did.
         let kept = dataset.excluding(&settings.exclude);
         let accuracy = |split| crate::metrics::evaluate(&kept, &result.calibrated, split).ok();
+        // The two splits side by side (each figure is computed as alone: the same numbers).
+        let (cal, ver) = crate::par::join(|| accuracy(Split::Cal), || accuracy(Split::Ver));
         file.statistics = record(&StatisticsRecord {
-            cal: accuracy(Split::Cal),
-            ver: accuracy(Split::Ver),
+            cal,
+            ver,
             identifiability: result.identifiability.as_ref().map(|_, rep| {
                 rep.as_ref().map(|rep| ConditioningRecord {
                     identified: rep.free.len(),

@@ -57,9 +57,11 @@ pub fn gram_by_product(columns: &DMatrix<f64>) -> DMatrix<f64> {
 /// The same matrix as [`gram_by_product`] up to rounding; the built-in robot's calibrations use it so
 /// that they stay bit-identical to earlier releases.
 ///
-/// The Householder QR is nalgebra's (`QR::new`, its own reflection axis and reflection per column), with
-/// the reflection of the trailing columns applied in parallel: each column's arithmetic is the same
-/// whatever the thread, so `R` is bit-identical to `DMatrix::qr().r()` (a unit test holds it).
+/// The Householder QR is nalgebra's (`QR::new`: its reflection axes, and each reflection computed
+/// operation for operation as nalgebra computes it), with the columns taken in blocks, the
+/// reflections applied on the work pool and compiled for the processor's widest vector instructions:
+/// each column's arithmetic is the same whatever the thread and the processor, so `R` is
+/// bit-identical to `DMatrix::qr().r()` (a unit test holds it).
 pub fn gram_by_qr(columns: &DMatrix<f64>) -> DMatrix<f64> {
     let (p, count) = columns.shape();
     let rows = count.max(p);
@@ -90,35 +92,206 @@ pub fn gram_by_qr_of_transposed(mut m: DMatrix<f64>, count: usize) -> DMatrix<f6
     r.transpose() * &r / count.max(1) as f64
 }
 
-/// nalgebra's `QR::new` on `m` in place (`householder::clear_column_unchecked` for every column),
-/// the trailing columns of each step reflected in parallel; returns the signed diagonal.
+/// Columns reflected together ([`householder_in_place`]): each reflection axis is read once per
+/// block instead of once per column, while the block's columns stay in the core's cache.
+const QR_BLOCK_COLUMNS: usize = 16;
+/// Columns of a block per task on the work pool.
+const QR_TASK_COLUMNS: usize = 4;
+
+/// nalgebra's `QR::new` on `m` in place (`householder::clear_column_unchecked` for every column);
+/// returns the signed diagonal.
+///
+/// Column `j` of nalgebra's QR is reflected by the axes `0, 1, …, j − 1` in turn and then gives axis
+/// `j`. Here the columns are taken in blocks of [`QR_BLOCK_COLUMNS`]: a block first receives the
+/// reflections of every column before it (each axis applied to the block's columns, on the work
+/// pool), then is factorised column by column. Every column sees the same reflections in the same
+/// order, each computed as nalgebra computes it ([`reflect`]), so `R` is nalgebra's to the bit (unit
+/// test `the_parallel_qr_is_nalgebras_to_the_bit`).
 fn householder_in_place(m: &mut DMatrix<f64>) -> Vec<f64> {
     use crate::par::prelude::*;
+    use nalgebra::DVectorViewMut;
     use nalgebra::linalg::householder::reflection_axis_mut;
-    use nalgebra::{DVectorView, DVectorViewMut, Reflection, Unit};
     let (rows, p) = m.shape();
-    let mut diag = Vec::with_capacity(rows.min(p));
-    for i in 0..rows.min(p) {
-        let (head, tail) = m.as_mut_slice().split_at_mut((i + 1) * rows);
-        let mut axis = DVectorViewMut::from_slice(&mut head[i * rows + i..], rows - i);
-        let (norm, not_zero) = reflection_axis_mut(&mut axis);
-        diag.push(norm);
-        if !not_zero {
-            continue;
-        }
-        // The axis read where it lies (nalgebra's `QR::new` reflects with a copy of it: the same numbers).
-        let axis = DVectorView::from_slice(&head[i * rows + i..], rows - i);
-        let refl = Reflection::new(Unit::new_unchecked(axis), 0.0);
-        let sign = norm.signum();
-        // At least 4 columns per task: a column of a few thousand rows is microseconds of work.
-        tail.par_chunks_mut(rows)
-            .with_min_len(4)
-            .for_each(|column| {
-                let mut below = DVectorViewMut::from_slice(&mut column[i..], rows - i);
-                refl.reflect_with_sign(&mut below, sign);
+    let k = rows.min(p);
+    // The signed diagonal, and whether each step reflects at all (a zero column does not).
+    let mut diag: Vec<f64> = Vec::with_capacity(k);
+    let mut reflects: Vec<bool> = Vec::with_capacity(k);
+    let data = m.as_mut_slice();
+    for j0 in (0..p).step_by(QR_BLOCK_COLUMNS) {
+        let j1 = (j0 + QR_BLOCK_COLUMNS).min(p);
+        let (done, rest) = data.split_at_mut(j0 * rows);
+        let block = &mut rest[..(j1 - j0) * rows];
+        // The reflections of the columns before the block, in order.
+        block
+            .par_chunks_mut(QR_TASK_COLUMNS * rows)
+            .for_each(|columns: &mut [f64]| {
+                widest_simd(Reflections {
+                    axes: done,
+                    first: 0,
+                    rows,
+                    steps: (0..j0.min(k))
+                        .filter(|&i| reflects[i])
+                        .map(|i| (i, diag[i].signum())),
+                    columns,
+                })
             });
+        // The block itself, column by column.
+        for i in j0..j1.min(k) {
+            let (head, tail) = block.split_at_mut((i - j0 + 1) * rows);
+            let mut axis = DVectorViewMut::from_slice(&mut head[(i - j0) * rows + i..], rows - i);
+            let (norm, not_zero) = reflection_axis_mut(&mut axis);
+            diag.push(norm);
+            reflects.push(not_zero);
+            if not_zero {
+                let axes = &head[(i - j0) * rows..];
+                // Four columns per task: a column of a few thousand rows is microseconds of work.
+                tail.par_chunks_mut(QR_TASK_COLUMNS * rows)
+                    .for_each(|columns| {
+                        widest_simd(Reflections {
+                            axes,
+                            first: i,
+                            rows,
+                            steps: std::iter::once((i, norm.signum())),
+                            columns,
+                        })
+                    });
+            }
+        }
     }
     diag
+}
+
+/// The QR's reflections `steps` (step, sign) applied in turn to each of `columns` (whole columns of
+/// `rows` numbers, one after the other), the axis of step `i` below the diagonal of column `i` of the
+/// matrix, held in `axes` (its columns from `first` on). Natively a `pulp::WithSimd`, so that the
+/// loops are compiled for the widest vector instructions the processor has (AVX2 on most x86-64
+/// machines; the build's baseline is SSE2): a wider vector computes each element as a narrower one
+/// does, and Rust never fuses a multiply and an add, so the numbers do not depend on the processor.
+struct Reflections<'a, I> {
+    axes: &'a [f64],
+    first: usize,
+    rows: usize,
+    steps: I,
+    columns: &'a mut [f64],
+}
+
+impl<I: Iterator<Item = (usize, f64)>> Reflections<'_, I> {
+    #[inline(always)]
+    fn run(self) {
+        let rows = self.rows;
+        for (i, sign) in self.steps {
+            let c = i - self.first;
+            let axis = &self.axes[c * rows + i..(c + 1) * rows];
+            let mut groups = self.columns.chunks_exact_mut(4 * rows);
+            for group in groups.by_ref() {
+                let (a, rest) = group.split_at_mut(rows);
+                let (b, rest) = rest.split_at_mut(rows);
+                let (c3, d) = rest.split_at_mut(rows);
+                reflect4(
+                    axis,
+                    sign,
+                    [&mut a[i..], &mut b[i..], &mut c3[i..], &mut d[i..]],
+                );
+            }
+            for column in groups.into_remainder().chunks_mut(rows) {
+                reflect(axis, sign, &mut column[i..]);
+            }
+        }
+    }
+}
+
+#[cfg(not(target_arch = "wasm32"))]
+impl<I: Iterator<Item = (usize, f64)>> pulp::WithSimd for Reflections<'_, I> {
+    type Output = ();
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _simd: S) {
+        self.run()
+    }
+}
+
+/// The reflections compiled for the processor's widest vector instructions (pulp's dispatch at run
+/// time), natively.
+#[cfg(not(target_arch = "wasm32"))]
+fn widest_simd<I: Iterator<Item = (usize, f64)>>(reflections: Reflections<'_, I>) {
+    pulp::Arch::new().dispatch(reflections)
+}
+
+/// In a browser the module is compiled with WebAssembly's SIMD throughout (`.cargo/config.toml`).
+#[cfg(target_arch = "wasm32")]
+fn widest_simd<I: Iterator<Item = (usize, f64)>>(reflections: Reflections<'_, I>) {
+    reflections.run()
+}
+
+/// nalgebra's `dotc` of two vectors, operation for operation: eight partial sums over the whole
+/// groups of eight, combined as nalgebra combines them, then the remainder.
+#[inline(always)]
+fn combine(acc: &[f64; 8], axis_rest: &[f64], y_rest: &[f64]) -> f64 {
+    let mut dot = 0.0;
+    dot += acc[0] + acc[4];
+    dot += acc[1] + acc[5];
+    dot += acc[2] + acc[6];
+    dot += acc[3] + acc[7];
+    for (a, b) in axis_rest.iter().zip(y_rest) {
+        dot += a * b;
+    }
+    dot
+}
+
+/// `axpy`'s `y ← factor · x + sign · y` with nalgebra's reflection factor `dot · (sign · −2)`
+/// (`Reflection::reflect_with_sign`, bias 0).
+#[inline(always)]
+fn apply(axis: &[f64], sign: f64, dot: f64, y: &mut [f64]) {
+    let factor = (dot - 0.0) * (sign * -2.0);
+    for (y, &x) in y.iter_mut().zip(axis) {
+        *y = factor * x + sign * *y;
+    }
+}
+
+/// `y` reflected by the Householder `axis` as nalgebra's `Reflection::reflect_with_sign` (bias 0)
+/// does it, operation for operation ([`combine`], [`apply`]).
+#[inline(always)]
+fn reflect(axis: &[f64], sign: f64, y: &mut [f64]) {
+    let n = axis.len().min(y.len());
+    let (axis, y) = (&axis[..n], &mut y[..n]);
+    let whole = n - n % 8;
+    let mut acc = [0.0f64; 8];
+    for (a, b) in axis[..whole]
+        .chunks_exact(8)
+        .zip(y[..whole].chunks_exact(8))
+    {
+        for t in 0..8 {
+            acc[t] += a[t] * b[t];
+        }
+    }
+    let dot = combine(&acc, &axis[whole..], &y[whole..]);
+    apply(axis, sign, dot, y);
+}
+
+/// [`reflect`] of four vectors by one axis, their dot products' partial sums side by side: each
+/// vector's sums are [`reflect`]'s (the same numbers), and the four chains of additions keep the
+/// processor's adders busy where one chain waits on its own latency.
+#[inline(always)]
+fn reflect4(axis: &[f64], sign: f64, ys: [&mut [f64]; 4]) {
+    let n = ys.iter().map(|y| y.len()).fold(axis.len(), usize::min);
+    let axis = &axis[..n];
+    let [y0, y1, y2, y3] = ys;
+    let ys = [&mut y0[..n], &mut y1[..n], &mut y2[..n], &mut y3[..n]];
+    let whole = n - n % 8;
+    let mut acc = [[0.0f64; 8]; 4];
+    for start in (0..whole).step_by(8) {
+        let a: &[f64; 8] = axis[start..start + 8].try_into().expect("eight");
+        for (acc, y) in acc.iter_mut().zip(&ys) {
+            let b: &[f64; 8] = y[start..start + 8].try_into().expect("eight");
+            for t in 0..8 {
+                acc[t] += a[t] * b[t];
+            }
+        }
+    }
+    for (acc, y) in acc.iter().zip(ys) {
+        let dot = combine(acc, &axis[whole..], &y[whole..]);
+        apply(axis, sign, dot, y);
+    }
 }
 
 /// What the analysis needs to know about the parameters.
