@@ -80,7 +80,7 @@ impl Workspace {
         let (mut dataset, units, ()) =
             dataset::load_from_with(&*options.files, dataset_path, |robot| {
                 if options.robot.is_none() && robot.is_none() {
-                    RobotDescription::builtin_irb14000();
+                    RobotDescription::builtin_parsed();
                 }
             })?;
         let robot = RobotDescription::load(

@@ -330,21 +330,25 @@ impl<'a> From<&'a PathBuf> for RobotSource<'a> {
 impl RobotDescription {
     /// The built-in IRB 14000 description (`assets/irb14000.urdf`): arms `yumi_body → yumi_flange_x`,
     /// nominal model Table 3. ([`RobotDescription::load`] of [`RobotSource::Builtin`] with the default
-    /// options, which cannot fail.) Parsed once per process (~1.5 ms), then copied.
+    /// options, which cannot fail.) Parsed once per process ([`Self::builtin_parsed`]), then copied.
     pub fn builtin_irb14000() -> Self {
+        Self::builtin_parsed().clone()
+    }
+
+    /// The built-in IRB 14000 description, parsed on the first call (~1.5 ms) and kept for the
+    /// process (the workspace loader parses it while the measurements are read).
+    pub(crate) fn builtin_parsed() -> &'static RobotDescription {
         static BUILTIN: std::sync::OnceLock<RobotDescription> = std::sync::OnceLock::new();
-        BUILTIN
-            .get_or_init(|| {
-                Self::parse(
-                    BUILTIN_IRB14000_URDF,
-                    None,
-                    "<built-in>",
-                    &LoadOptions::default(),
-                    ModelForm::Dh,
-                )
-                .expect("the built-in IRB 14000 URDF is valid (checked by tests)")
-            })
-            .clone()
+        BUILTIN.get_or_init(|| {
+            Self::parse(
+                BUILTIN_IRB14000_URDF,
+                None,
+                "<built-in>",
+                &LoadOptions::default(),
+                ModelForm::Dh,
+            )
+            .expect("the built-in IRB 14000 URDF is valid (checked by tests)")
+        })
     }
 
     /// Load a robot description: the one entry for every source ([`RobotSource`]: the built-in robot,
