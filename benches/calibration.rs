@@ -127,14 +127,12 @@ fn bench(c: &mut Criterion) {
 }
 
 /// The identifiability analysis of one arm (the built-in robot's left arm, the calibration split):
-/// the start's Gram matrix by QR (the parallel Householder, bit-identical to nalgebra's `QR`, against
-/// nalgebra's own; with the sample written as `M` or as `Mᵀ`), and the whole re-check at a solution by
-/// the Gram product summed over blocks of rows (what a run does) and by QR (what it did before).
+/// the start's Gram matrix from the Jacobians by the product summed over blocks of rows (what the
+/// start does) and by nalgebra's QR of the sample (what the built-in robot's start did until the
+/// sixteenth session), and the whole re-check at a solution by each.
 fn identifiability(c: &mut Criterion) {
-    use dualcal::solver::arm_problem::{pair_jacobian_columns, pair_jacobian_transposed};
-    use dualcal::solver::identifiability::{
-        GramMethod, at_solution, gram_by_qr, gram_by_qr_of_transposed,
-    };
+    use dualcal::solver::arm_problem::{pair_jacobian_columns, pair_jacobian_gram};
+    use dualcal::solver::identifiability::{GramMethod, at_solution, gram_by_qr};
     let robot = RobotDescription::builtin_irb14000();
     let mut group = c.benchmark_group("identifiability");
     group.sample_size(20);
@@ -151,31 +149,13 @@ fn identifiability(c: &mut Criterion) {
             .map(|m| m.q_rad.clone())
             .collect();
         let jac: Vec<_> = qs.iter().map(|q| arm.reflector_jacobians(q)).collect();
-        let columns = pair_jacobian_columns(&jac, 3000, &[true; 3]);
-        group.bench_function(format!("start_gram_by_qr_{cal}"), |b| {
-            b.iter(|| black_box(gram_by_qr(black_box(&columns))))
+        group.bench_function(format!("start_sample_and_gram_{cal}"), |b| {
+            b.iter(|| black_box(pair_jacobian_gram(black_box(&jac), 3000, &[true; 3])))
         });
-        // The start's whole Gram by QR from the Jacobians: the sample written as `M` and transposed
-        // (before), or written once as `Mᵀ` (what the start does).
-        group.bench_function(format!("start_sample_and_qr_via_columns_{cal}"), |b| {
+        group.bench_function(format!("start_sample_and_qr_{cal}"), |b| {
             b.iter(|| {
                 let m = pair_jacobian_columns(black_box(&jac), 3000, &[true; 3]);
                 black_box(gram_by_qr(&m))
-            })
-        });
-        group.bench_function(format!("start_sample_and_qr_transposed_{cal}"), |b| {
-            b.iter(|| {
-                let (t, rows) = pair_jacobian_transposed(black_box(&jac), 3000, &[true; 3]);
-                black_box(gram_by_qr_of_transposed(t, rows))
-            })
-        });
-        group.bench_function(format!("start_gram_by_nalgebra_qr_{cal}"), |b| {
-            b.iter(|| {
-                let (p, count) = columns.shape();
-                let mut m = nalgebra::DMatrix::<f64>::zeros(count.max(p), p);
-                m.rows_mut(0, count).copy_from(&columns.transpose());
-                let r = m.qr().r();
-                black_box(r.transpose() * &r / count as f64)
             })
         });
         let free: Vec<usize> = (0..arm.param_count()).collect();

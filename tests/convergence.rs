@@ -74,9 +74,11 @@ fn a_kink_with_a_vanishing_multiplier_converges_within_the_default_budget() {
 ///
 /// How each stage ends is pinned: since the cold-start retries, the paper QP ends within 3e-4 of the
 /// exact QP's ψ on all of them, so a gap alone cannot tell a stage that stopped short from one that
-/// converged; the two `Stalled` stages (about 1e-4 above, where the exact QP still finds a descent) are
-/// what a classifier that never reports a stall gets wrong. A solver change that moves a case must
-/// update the table — keeping at least one stage of each kind.
+/// converged; the `Stalled` stage (about 1e-4 above, where the exact QP still finds a descent) is what
+/// a classifier that never reports a stall gets wrong. A solver change that moves a case must update
+/// the table — keeping at least one stage of each kind. (The retries that polish the last iterations,
+/// sixteenth session, moved seed 6's compliance-2 right arm from `Stalled` 1e-4 above the optimum to
+/// converged 9e-7 above it.)
 #[test]
 fn the_paper_qp_reports_convergence_only_at_the_optimum() {
     #[derive(Clone, Copy, PartialEq)]
@@ -91,7 +93,7 @@ fn the_paper_qp_reports_convergence_only_at_the_optimum() {
     let cases = [
         ((4, 0.0, 0.5), [AtOptimum, AtOptimum]),
         ((6, 3.0, 0.0), [Stalled, AtOptimum]),
-        ((6, 0.0, 2.0), [AtOptimum, Stalled]),
+        ((6, 0.0, 2.0), [AtOptimum, AtOptimum]),
         ((6, 1.0, 0.5), [AtOptimum, AtOptimum]),
     ];
     let all: Vec<Ends> = cases.iter().flat_map(|(_, e)| *e).collect();

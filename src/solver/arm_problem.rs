@@ -200,15 +200,10 @@ impl ArmProblem {
         pair_jacobian_columns(&self.jac_all(&model), max_pairs, &self.reflectors)
     }
 
-    /// The transpose of [`Self::sample_pair_jacobian`], padded ([`pair_jacobian_transposed`]), and its
-    /// number of rows before the padding.
-    pub fn sample_pair_jacobian_transposed(
-        &self,
-        y: &DVector<f64>,
-        max_pairs: usize,
-    ) -> (DMatrix<f64>, usize) {
+    /// [`pair_jacobian_gram`] of the sampled pair Jacobian at `y`.
+    pub fn sample_pair_jacobian_gram(&self, y: &DVector<f64>, max_pairs: usize) -> DMatrix<f64> {
         let model = self.model_at(y);
-        pair_jacobian_transposed(&self.jac_all(&model), max_pairs, &self.reflectors)
+        pair_jacobian_gram(&self.jac_all(&model), max_pairs, &self.reflectors)
     }
 
     /// F_k of the start model on this problem's data, mm² (sums of squared distance errors), one per
@@ -332,31 +327,6 @@ pub fn pair_jacobian_columns(
         r.write(jac, column.as_mut_slice());
     }
     m
-}
-
-/// `Mᵀ` of [`pair_jacobian_columns`] — one row per sampled pair and reflector, each parameter's column
-/// contiguous — with zero rows appended up to the number of parameters (the layout a Householder QR
-/// of `Mᵀ` works on, written once instead of transposed from `M`), and the number of rows of `M`.
-/// The same numbers as `M`'s, to the bit.
-pub fn pair_jacobian_transposed(
-    jac: &[ArmJacobians],
-    max_pairs: usize,
-    reflectors: &[bool],
-) -> (DMatrix<f64>, usize) {
-    let rows = sampled_rows(jac, max_pairs, reflectors);
-    let p = jac.first().map_or(0, |j| j.jacobians[0].ncols());
-    let height = rows.len().max(p);
-    let mut m = DMatrix::zeros(height, p);
-    let data = m.as_mut_slice();
-    let mut row = vec![0.0; p];
-    for (at, r) in rows.iter().enumerate() {
-        r.write(jac, &mut row);
-        // Row `at` of the column-major `Mᵀ`: one number per column, `height` apart.
-        for (c, &x) in row.iter().enumerate() {
-            data[c * height + at] = x;
-        }
-    }
-    (m, rows.len())
 }
 
 /// The mean Gram matrix `MMᵀ / rows` of [`pair_jacobian_columns`]' `M`, summed over blocks of rows so

@@ -202,34 +202,40 @@ pub fn solve_paper(qp: &Qp, settings: SubgradientSettings, stop: &dyn Fn() -> bo
     QpSolution::new(qp, s, nu, iterations)
 }
 
-/// The iteration z ← z − γ_p T/‖T‖ on a QP; returns (s, ν, iterations).
+/// The iteration z ← z − γ_p T/‖T‖ on a QP whose Hessian is the identity (the preconditioned form
+/// [`solve_paper`] builds: `H s = s`, `H⁻¹ d = d`); returns (s, ν, iterations). Each iteration is two
+/// products with `A` and `Aᵀ` and a pass over the rows, with no fresh memory: the polishing retries of
+/// the SQP's last iterations run it for 10⁵ iterations and more.
 fn subgradient(
     qp: &Qp,
     settings: &SubgradientSettings,
     stop: &dyn Fn() -> bool,
 ) -> (DVector<f64>, DVector<f64>, usize) {
     let p = qp.b.len();
-    let m = qp.h.nrows();
+    let m = qp.a.ncols();
+    let n_obj = qp.n_obj;
+    let at = qp.a.transpose();
+    let warm = settings.warm_nu.as_ref().filter(|w| w.len() == p);
     // γ₀, the scale of s: the length of the Newton step of the Lagrangian at the start multipliers
     // (with λ⁰ = 0, of the worst objective). It vanishes at a KKT point.
-    let worst = (0..qp.n_obj)
+    let worst = (0..n_obj)
         .max_by(|&i, &j| qp.b[i].total_cmp(&qp.b[j]))
         .unwrap_or(0);
-    let direction = match &settings.warm_nu {
-        Some(w) if w.len() == p => qp.a.transpose() * w,
-        _ => qp.a.row(worst).transpose(),
+    let direction = match warm {
+        Some(w) => &at * w,
+        None => qp.a.row(worst).transpose(),
     };
-    let newton = qp.h_chol.solve(&direction);
-    let gamma0 = newton.norm().max(1e-12);
+    let gamma0 = direction.norm().max(1e-12);
     let p0 = 50.0;
     let mut s = DVector::zeros(m);
-    let mut nu = match &settings.warm_nu {
-        Some(w) if w.len() == p => w.clone(),
-        _ => DVector::zeros(p),
-    };
+    let mut nu = warm.cloned().unwrap_or_else(|| DVector::zeros(p));
     let mut tau = qp.tau_for(&s);
     let mut best = (f64::INFINITY, s.clone(), nu.clone());
     let mut iterations = 0;
+    // A s, Aᵀν, and T = [s + Aᵀν ; 1 − eᵀν ; projected −(b + A s − e τ)].
+    let mut a_s = DVector::zeros(p);
+    let mut ts = DVector::zeros(m);
+    let mut tnu = DVector::zeros(p);
     // Ergodic average of the multipliers over the second half of the run (primal recovery below).
     let mut nu_sum = DVector::zeros(p);
     let mut nu_count = 0usize;
@@ -238,32 +244,47 @@ fn subgradient(
             break;
         }
         iterations = it + 1;
-        // T = [H s + Aᵀν ; 1 − eᵀν ; −(b + A s − e τ)]
-        let ts = qp.h * &s + qp.a.transpose() * &nu;
-        let sum_e: f64 = (0..qp.n_obj).map(|j| nu[j]).sum();
+        a_s.gemv(1.0, qp.a, &s, 0.0);
+        ts.gemv(1.0, &at, &nu, 0.0);
+        ts += &s;
+        let sum_e: f64 = nu.rows(0, n_obj).iter().sum();
         let ttau = 1.0 - sum_e;
-        let g = qp.b + qp.a * &s - DVector::from_fn(p, |j, _| qp.e(j) * tau);
-        // Projected dual part: a multiplier at zero with a satisfied constraint does not move.
-        let tnu = DVector::from_fn(p, |j, _| {
-            if nu[j] <= 0.0 && g[j] < 0.0 {
-                0.0
-            } else {
-                -g[j]
-            }
-        });
+        // τ that makes the objective rows feasible for this s: the KKT residual's.
+        let tau_s = (0..n_obj)
+            .map(|j| qp.b[j] + a_s[j])
+            .fold(f64::NEG_INFINITY, f64::max);
+        // The KKT residual of (s, τ(s), ν) (as `Qp::kkt_residual`) and the projected dual part of
+        // T: a multiplier at zero with a satisfied constraint does not move.
+        let (mut primal, mut comp, mut dual_neg) = (0.0f64, 0.0f64, 0.0f64);
+        for j in 0..p {
+            let e = qp.e(j);
+            let g = qp.b[j] + a_s[j] - e * tau;
+            tnu[j] = if nu[j] <= 0.0 && g < 0.0 { 0.0 } else { -g };
+            let g_s = qp.b[j] + a_s[j] - e * tau_s;
+            primal = primal.max(g_s);
+            comp = comp.max((nu[j] * g_s).abs());
+            dual_neg = dual_neg.max(-nu[j]);
+        }
         let norm = (ts.norm_squared() + ttau * ttau + tnu.norm_squared()).sqrt();
-        let res = qp.kkt_residual(&s, qp.tau_for(&s), &nu);
+        let res = ts
+            .amax()
+            .max(ttau.abs())
+            .max(primal)
+            .max(comp)
+            .max(dual_neg);
         if res < best.0 {
-            best = (res, s.clone(), nu.clone());
+            best.0 = res;
+            best.1.copy_from(&s);
+            best.2.copy_from(&nu);
         }
         if norm < settings.tolerance {
             break;
         }
         let gamma = gamma0 * p0 / (p0 + it as f64);
         let alpha = gamma / norm;
-        s -= &ts * alpha;
+        s.axpy(-alpha, &ts, 1.0);
         tau -= ttau * alpha;
-        nu -= &tnu * alpha;
+        nu.axpy(-alpha, &tnu, 1.0);
         nu.apply(|v| *v = v.max(0.0));
         if 2 * it >= settings.max_iterations {
             nu_sum += &nu;
@@ -274,12 +295,12 @@ fn subgradient(
     // (normalised so that the objective multipliers sum to one), if its KKT residual is smaller.
     if nu_count > 0 {
         let mut nu_avg = nu_sum / nu_count as f64;
-        let sum: f64 = (0..qp.n_obj).map(|j| nu_avg[j]).sum();
+        let sum: f64 = (0..n_obj).map(|j| nu_avg[j]).sum();
         if sum > 0.0 {
-            for j in 0..qp.n_obj {
+            for j in 0..n_obj {
                 nu_avg[j] /= sum;
             }
-            let s_avg = -qp.h_chol.solve(&(qp.a.transpose() * &nu_avg));
+            let s_avg = -(&at * &nu_avg);
             let res = qp.kkt_residual(&s_avg, qp.tau_for(&s_avg), &nu_avg);
             if res < best.0 {
                 best = (res, s_avg, nu_avg);

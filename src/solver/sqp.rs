@@ -66,6 +66,9 @@ pub const PROGRESS_RTOL: f64 = 1e-8;
 /// A stage that stops counts as converged if the exact QP at its final iterate predicts a decrease of
 /// the merit function below this (relative); otherwise it has stalled above the optimum.
 pub const STATIONARY_RTOL: f64 = 1e-4;
+/// The paper's QP solver is asked again (with a larger budget, [`MAX_RETRY_FACTOR`]) while the exact
+/// QP predicts a decrease of the merit function above this (relative).
+pub const PAPER_RETRY_RTOL: f64 = 1e-8;
 /// ... or below this absolute amount (the merit is a mean over pairs in mm²: 1e-12 mm² is a nanometre
 /// RMS), which matters on noise-free data where ψ itself is at the rounding level.
 pub const STATIONARY_ABS_MM2: f64 = 1e-12;
@@ -215,6 +218,11 @@ impl<P: MinimaxProblem> SqpState<P> {
     /// function below [`STATIONARY_RTOL`] (relative) or [`STATIONARY_ABS_MM2`]: a first-order
     /// stationary point to working precision.
     fn is_stationary(&self) -> bool {
+        self.is_stationary_within(STATIONARY_RTOL)
+    }
+
+    /// [`Self::is_stationary`] with `rtol` in place of [`STATIONARY_RTOL`].
+    fn is_stationary_within(&self, rtol: f64) -> bool {
         let Some(chol) = self.h.clone().cholesky() else {
             return false;
         };
@@ -227,7 +235,7 @@ impl<P: MinimaxProblem> SqpState<P> {
             n_obj: self.eval.f.len(),
         });
         let phi = self.merit(&self.eval.f, &self.eval.cons);
-        self.predicted_change(&exact) > -(STATIONARY_RTOL * phi.abs() + STATIONARY_ABS_MM2)
+        self.predicted_change(&exact) > -(rtol * phi.abs() + STATIONARY_ABS_MM2)
     }
 
     /// A stopped iteration: the iterate unchanged, `term` as its termination.
@@ -274,7 +282,11 @@ impl<P: MinimaxProblem> SqpState<P> {
         self.eval = eval_new;
         self.merit_history
             .push((self.eval.psi(), self.eval.violation()));
-        let termination = if step_norm < self.settings.step_tolerance {
+        // The paper's QP is inexact: a short step there ends the stage only where the exact QP
+        // finds no decrease above `PAPER_RETRY_RTOL` (else the next iteration's QP is retried).
+        let short_step_ends = step_norm < self.settings.step_tolerance
+            && (self.settings.qp != QpMethod::Paper || self.is_stationary_within(PAPER_RETRY_RTOL));
+        let termination = if short_step_ends {
             Some(Termination::Converged)
         } else if self.no_progress() {
             Some(Termination::NoProgress)
@@ -293,9 +305,10 @@ impl<P: MinimaxProblem> SqpState<P> {
     }
 
     /// This iterate's QP. The subgradient method is inexact: an answer that is no descent direction
-    /// says little about the iterate, so it is solved again from the paper's cold start with 4, then
-    /// 16, then 64 times the budget, as long as no descent is found and the exact QP says one exists
-    /// (it only decides whether to keep going; the step is the subgradient method's).
+    /// (or a step shorter than the stopping rule's) says little about the iterate, so it is solved
+    /// again from the paper's cold start with 4, then 16, then 64 times the budget, as long as no
+    /// descent is found and the exact QP predicts a decrease above [`PAPER_RETRY_RTOL`] (it only
+    /// decides whether to keep going; the step is the subgradient method's).
     fn solve_qp_with_retries(
         &self,
         stop: &dyn Fn() -> bool,
@@ -305,7 +318,12 @@ impl<P: MinimaxProblem> SqpState<P> {
             return Err((Termination::Cancelled, Some(sol)));
         }
         let phi0 = self.merit(&self.eval.f, &self.eval.cons);
-        if !negligible(self.predicted_change(&sol), phi0) || self.settings.qp != QpMethod::Paper {
+        // No descent, or a step the stopping rule would take for convergence.
+        let short = |sol: &QpSolution| {
+            negligible(self.predicted_change(sol), phi0)
+                || sol.s.norm() < self.settings.step_tolerance
+        };
+        if self.settings.qp != QpMethod::Paper || !short(&sol) {
             return Ok(sol);
         }
         let mut used = sol.iterations;
@@ -320,9 +338,9 @@ impl<P: MinimaxProblem> SqpState<P> {
             if stop() {
                 return Err((Termination::Cancelled, Some(sol)));
             }
-            if !negligible(self.predicted_change(&sol), phi0)
+            if !short(&sol)
                 || factor >= MAX_RETRY_FACTOR
-                || self.is_stationary()
+                || self.is_stationary_within(PAPER_RETRY_RTOL)
             {
                 break;
             }

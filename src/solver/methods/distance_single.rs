@@ -3,7 +3,7 @@
 //! two reflectors' coordinates are not identified and stay nominal.
 
 use super::set_up::{
-    ArmSetUp, ArmStage, DistanceAnalysis, GramForm, column_scales, distance_identifiability,
+    ArmSetUp, ArmStage, DistanceAnalysis, column_scales, distance_identifiability,
     least_squares_solver, require_kinematics, worst_reflector,
 };
 use super::{MethodSpec, Observes, SolverKind};
@@ -66,7 +66,6 @@ fn set_up(s: &ArmSetUp) -> Result<ArmStage, CalibrationError> {
             allowed: &allowed,
             data: "one reflector's distances",
             not_allowed: &not_allowed,
-            gram: GramForm::Product,
         },
     );
     require_kinematics(s.stage(), start, &report)?;

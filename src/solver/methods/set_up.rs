@@ -14,7 +14,7 @@ use super::super::problem::MinimaxProblem;
 use super::super::sqp::{SqpSettings, SqpState};
 use super::super::tree_problem::{TreeLayout, TreeProblem};
 use super::super::{CalibrationError, CalibrationSettings, Reflector, Stage, StageSolver};
-use crate::kinematics::{ArmKinematics, ArmModel, DualArmModel, SharedJoints};
+use crate::kinematics::{ArmModel, DualArmModel, SharedJoints};
 use crate::side::{PerSide, Side};
 use nalgebra::{DMatrix, DVector, Isometry3, Vector3};
 
@@ -109,16 +109,6 @@ impl ArmData {
     }
 }
 
-/// How the mean Gram matrix of the sampled pair Jacobian is formed.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum GramForm {
-    /// By a QR decomposition for the built-in robot (its calibrations stay bit-identical to earlier
-    /// releases), as one product for a URDF chain.
-    OfModel,
-    /// As one product for either model (the single-reflector set-up has always formed it so).
-    Product,
-}
-
 /// What the distance identifiability analysis is told.
 pub struct DistanceAnalysis<'a> {
     /// Parameters that may be free at all.
@@ -127,7 +117,6 @@ pub struct DistanceAnalysis<'a> {
     pub data: &'a str,
     /// Why a parameter that is not allowed is fixed.
     pub not_allowed: &'a str,
-    pub gram: GramForm,
 }
 
 impl DistanceAnalysis<'_> {
@@ -137,7 +126,6 @@ impl DistanceAnalysis<'_> {
             allowed,
             data: ParameterInfo::DISTANCES,
             not_allowed: ParameterInfo::FIXED_BY_USER,
-            gram: GramForm::OfModel,
         }
     }
 }
@@ -154,16 +142,7 @@ pub fn distance_identifiability(
 ) -> (DMatrix<f64>, IdentifiabilityReport) {
     let n_params = arm.param_count();
     let start = DVector::zeros(n_params);
-    let gram = match (analysis.gram, &arm.kinematics) {
-        (GramForm::OfModel, ArmKinematics::Dh(_)) => {
-            let (transposed, count) =
-                probe.sample_pair_jacobian_transposed(&start, IDENTIFIABILITY_PAIRS);
-            identifiability::gram_by_qr_of_transposed(transposed, count)
-        }
-        _ => identifiability::gram_by_product(
-            &probe.sample_pair_jacobian(&start, IDENTIFIABILITY_PAIRS),
-        ),
-    };
+    let gram = probe.sample_pair_jacobian_gram(&start, IDENTIFIABILITY_PAIRS);
     let order = arm.identifiability_order();
     let report = identifiability::analyse(
         &gram,
