@@ -72,33 +72,18 @@ fn a_kink_with_a_vanishing_multiplier_converges_within_the_default_budget() {
 /// then it must say so (`Stalled`), never `Converged`. Datasets where it stopped 0.01–2% above the
 /// exact QP's optimum before the classification existed (one of them at 63%, reported as converged).
 ///
-/// How each stage ends is pinned: since the cold-start retries, the paper QP ends within 3e-4 of the
-/// exact QP's ψ on all of them, so a gap alone cannot tell a stage that stopped short from one that
-/// converged; the `Stalled` stage (about 1e-4 above, where the exact QP still finds a descent) is what
-/// a classifier that never reports a stall gets wrong. A solver change that moves a case must update
-/// the table — keeping at least one stage of each kind. (The retries that polish the last iterations,
-/// sixteenth session, moved seed 6's compliance-2 right arm from `Stalled` 1e-4 above the optimum to
-/// converged 9e-7 above it.)
+/// How each stage ends is pinned. Since the cold-start retries the paper QP ended within 3e-4 of the
+/// exact QP's ψ on all of them, and two stages (about 1e-4 above, where the exact QP still found a
+/// descent) ended `Stalled`; since the retries polish the last iterations (sixteenth session, until
+/// the exact QP predicts less than `sqp::PAPER_RETRY_RTOL`) every stage here converges, the largest gap
+/// 6.7e-5 (seed 6, gear 3, left). The `Stalled` path is held by `a_starved_paper_qp_stalls_and_says_so`.
+/// A solver change that moves a case must update the table.
 #[test]
 fn the_paper_qp_reports_convergence_only_at_the_optimum() {
-    #[derive(Clone, Copy, PartialEq)]
-    enum Ends {
-        /// `Converged` or `NoProgress`, within 1e-3 of the exact QP's ψ.
-        AtOptimum,
-        /// `Stalled`, above the exact QP's ψ.
-        Stalled,
-    }
-    use Ends::{AtOptimum, Stalled};
-    // (seed, gear error mrad, compliance mrad/m) → how the left and right arm stages end.
-    let cases = [
-        ((4, 0.0, 0.5), [AtOptimum, AtOptimum]),
-        ((6, 3.0, 0.0), [Stalled, AtOptimum]),
-        ((6, 0.0, 2.0), [AtOptimum, AtOptimum]),
-        ((6, 1.0, 0.5), [AtOptimum, AtOptimum]),
-    ];
-    let all: Vec<Ends> = cases.iter().flat_map(|(_, e)| *e).collect();
-    assert!(all.contains(&AtOptimum) && all.contains(&Stalled));
-    for ((seed, gear, compliance), expected) in cases {
+    // (seed, gear error mrad, compliance mrad/m): both arm stages converge, within 1e-4 of the exact
+    // QP's ψ (the stopping classification's `STATIONARY_RTOL`; 1e-3 while two of them stalled).
+    let cases = [(4, 0.0, 0.5), (6, 3.0, 0.0), (6, 0.0, 2.0), (6, 1.0, 0.5)];
+    for (seed, gear, compliance) in cases {
         let sim = simulate(seed, gear, compliance);
         let exact = run(&sim, CalibrationSettings::default());
         let paper = run(
@@ -108,41 +93,29 @@ fn the_paper_qp_reports_convergence_only_at_the_optimum() {
                 ..Default::default()
             },
         );
-        for (side, expected) in Side::BOTH.into_iter().zip(expected) {
+        for side in Side::BOTH {
             let (e, p) = (stage(&exact, side), stage(&paper, side));
             let case = format!("seed {seed} gear {gear} compliance {compliance} {side}");
             assert!(e.termination.is_converged(), "{case}: exact QP {e:?}");
+            assert!(
+                p.termination.is_converged(),
+                "{case}: expected the paper QP to converge, got {p:?}"
+            );
             let gap = p.psi_mm2 / e.psi_mm2 - 1.0;
-            match expected {
-                AtOptimum => {
-                    assert!(
-                        p.termination.is_converged(),
-                        "{case}: expected the paper QP to converge, got {p:?}"
-                    );
-                    assert!(
-                        gap < 1e-3,
-                        "{case}: paper QP says {} at ψ {} but the optimum is {}",
-                        p.termination,
-                        p.psi_mm2,
-                        e.psi_mm2
-                    );
-                }
-                Stalled => {
-                    assert_eq!(
-                        p.termination,
-                        Termination::Stalled,
-                        "{case}: the paper QP stopped {gap:e} above the exact QP's ψ: {p:?}"
-                    );
-                    assert!(gap > 0.0, "{case}: stalled below the optimum? {p:?} {e:?}");
-                }
-            }
+            assert!(
+                gap < 1e-4,
+                "{case}: paper QP says {} at ψ {} but the optimum is {}",
+                p.termination,
+                p.psi_mm2,
+                e.psi_mm2
+            );
         }
     }
 }
 
-/// A paper QP starved of iterations (two per outer iteration) cannot reach the optimum: both arm
-/// stages end `Stalled`, far above the exact QP's optimum, and the run is not converged. This exercises
-/// the `Stalled` path deterministically.
+/// A paper QP starved of iterations (one per outer iteration, at most 64 in its retries) cannot reach
+/// the optimum: both arm stages end `Stalled`, above the exact QP's optimum, and the run is not
+/// converged. This exercises the `Stalled` path deterministically.
 #[test]
 fn a_starved_paper_qp_stalls_and_says_so() {
     let sim = simulate(1, 1.0, 0.5);
@@ -151,7 +124,7 @@ fn a_starved_paper_qp_stalls_and_says_so() {
         &sim,
         CalibrationSettings {
             qp: QpMethod::Paper,
-            max_qp_iterations: 2,
+            max_qp_iterations: 1,
             ..Default::default()
         },
     );
@@ -159,8 +132,10 @@ fn a_starved_paper_qp_stalls_and_says_so() {
     for side in Side::BOTH {
         let (p, e) = (stage(&starved, side), stage(&exact, side));
         assert_eq!(p.termination, Termination::Stalled, "{side}: {p:?}");
+        // Above the optimum by more than the classification's `STATIONARY_RTOL` (1e-4); it was
+        // more than 1e-3 before the retries polished the last iterations (7e-4 and 8e-4 now).
         assert!(
-            p.psi_mm2 > e.psi_mm2 * (1.0 + 1e-3),
+            p.psi_mm2 > e.psi_mm2 * (1.0 + 1e-4),
             "{side}: {p:?} vs {e:?}"
         );
     }

@@ -332,6 +332,13 @@ pub fn pair_jacobian_columns(
 /// The mean Gram matrix `MMᵀ / rows` of [`pair_jacobian_columns`]' `M`, summed over blocks of rows so
 /// that `M` is never held whole (a few hundred kilobytes to a few megabytes of fresh memory per call
 /// otherwise). Equal to `gram_by_product` of `M` up to the order of the sums' rounding.
+///
+/// The sums are written out (four rows at a time, in their order) rather than left to a matrix
+/// product: a library product picks its kernel by the processor (natively with fused multiply-adds,
+/// in the browser without) and its order of sums by its tiling, so the start of a calibration — its
+/// column scales and start Hessian come from this matrix — would differ in the last bits between the
+/// desktop and the browser, and the two would end their runs an iteration apart. These sums are the
+/// same arithmetic everywhere.
 pub fn pair_jacobian_gram(
     jac: &[ArmJacobians],
     max_pairs: usize,
@@ -340,14 +347,54 @@ pub fn pair_jacobian_gram(
     const BLOCK: usize = 1024;
     let rows = sampled_rows(jac, max_pairs, reflectors);
     let p = jac.first().map_or(0, |j| j.jacobians[0].ncols());
-    let mut gram = DMatrix::zeros(p, p);
-    let mut block = DMatrix::zeros(p, BLOCK);
+    // Column-major; the lower triangle (i ≥ j) is summed, then mirrored. Each block's rows are
+    // summed on their own and the block's sum added to the total (two levels of sums: the rounding
+    // of a few hundred terms, not of thousands, in each).
+    let mut gram = vec![0.0; p * p];
+    let mut local = vec![0.0; p * p];
+    let mut block = vec![0.0; p * BLOCK];
     for chunk in rows.chunks(BLOCK) {
-        for (r, mut column) in chunk.iter().zip(block.column_iter_mut()) {
-            r.write(jac, column.as_mut_slice());
+        local.fill(0.0);
+        for (r, row) in chunk.iter().zip(block.chunks_exact_mut(p.max(1))) {
+            r.write(jac, row);
         }
-        let b = block.columns(0, chunk.len());
-        gram.gemm(1.0, &b, &b.transpose(), 1.0);
+        let filled = &block[..chunk.len() * p];
+        let mut quads = filled.chunks_exact((4 * p).max(1));
+        for quad in &mut quads {
+            let (a, rest) = quad.split_at(p);
+            let (b, rest) = rest.split_at(p);
+            let (c, d) = rest.split_at(p);
+            for j in 0..p {
+                let (aj, bj, cj, dj) = (a[j], b[j], c[j], d[j]);
+                let column = &mut local[j * p + j..(j + 1) * p];
+                for ((((g, ai), bi), ci), di) in column
+                    .iter_mut()
+                    .zip(&a[j..])
+                    .zip(&b[j..])
+                    .zip(&c[j..])
+                    .zip(&d[j..])
+                {
+                    *g += ai * aj + bi * bj + ci * cj + di * dj;
+                }
+            }
+        }
+        for a in quads.remainder().chunks_exact(p.max(1)) {
+            for j in 0..p {
+                let aj = a[j];
+                for (g, ai) in local[j * p + j..(j + 1) * p].iter_mut().zip(&a[j..]) {
+                    *g += ai * aj;
+                }
+            }
+        }
+        for (g, l) in gram.iter_mut().zip(&local) {
+            *g += l;
+        }
+    }
+    let mut gram = DMatrix::from_vec(p, p, gram);
+    for j in 0..p {
+        for i in j + 1..p {
+            gram[(j, i)] = gram[(i, j)];
+        }
     }
     gram / rows.len().max(1) as f64
 }
