@@ -10,7 +10,9 @@
 //! browser test checks the browser's calibration against the native one.
 
 #[cfg(not(target_arch = "wasm32"))]
-pub use rayon::{current_num_threads, current_thread_index, in_place_scope, join, prelude, scope};
+pub use rayon::{
+    Scope, current_num_threads, current_thread_index, in_place_scope, join, prelude, scope,
+};
 
 #[cfg(target_arch = "wasm32")]
 pub use sequential::*;

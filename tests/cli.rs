@@ -256,9 +256,9 @@ fn calibrate_timings_name_every_phase_and_change_nothing_else() {
     let err = String::from_utf8_lossy(&b.stderr);
     let phases = [
         "load, checks, nominal model, screening",
-        "calibration, the screening of its result, its uncertainty",
+        "calibration, the screening of its result, its uncertainty, the accuracy tables",
         "of which the calibration",
-        "accuracy tables",
+        "the parameter file's quality record",
         "writing",
         "total",
     ];

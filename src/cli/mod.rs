@@ -577,13 +577,14 @@ fn refuse_overwrites(a: &CalibrateArgs, ds: &Dataset) -> Result<()> {
 }
 
 /// Calibrate, with `--auto-exclude` or with progress lines; the result and its screening.
-fn fit_and_screen(
+fn fit_and_screen<T: Send>(
     a: &CalibrateArgs,
     ds: &Dataset,
     nominal: &crate::kinematics::DualArmModel,
     settings: CalibrationSettings,
     before: &quality::Screening,
-) -> Result<(CalibrationResult, quality::Screening, Uncertainties)> {
+    tables: impl FnOnce(&CalibrationResult) -> T + Send,
+) -> Result<(CalibrationResult, quality::Screening, Uncertainties, T)> {
     let screen_settings = quality::ScreenSettings::default();
     Ok(if a.auto_exclude {
         if !a.quiet {
@@ -605,8 +606,11 @@ fn fit_and_screen(
         if let Some(why) = &auto.stopped {
             eprintln!("warning: --auto-exclude stopped: {why}");
         }
-        let uncertainty = crate::solver::uncertainty::for_result(ds, &auto.result);
-        (auto.result, auto.screening, uncertainty)
+        let (uncertainty, tables) = crate::par::join(
+            || crate::solver::uncertainty::for_result(ds, &auto.result),
+            || tables(&auto.result),
+        );
+        (auto.result, auto.screening, uncertainty, tables)
     } else {
         print_flags(
             "Suspect configurations before fitting (nominal model)",
@@ -618,17 +622,75 @@ fn fit_and_screen(
                 print_event(e, &ds.reflector_names)
             }
         };
-        let result = Calibrator::new(ds, nominal)
-            .settings(settings)
-            .observer(&mut progress)
-            .run()?;
-        // The screening of the result and its uncertainty need nothing of each other: side by side.
-        let (after, uncertainty) = crate::par::join(
-            || crate::exclusion::screen_result(ds, &result, &screen_settings),
-            || crate::solver::uncertainty::for_result(ds, &result),
+        // Each arm's uncertainty is computed beside step 2 (which runs on one thread and does not
+        // change the arms), taken below where the result's arms are those it was computed for.
+        let early = std::sync::Mutex::new(PerSide::default());
+        let result = crate::par::scope(|scope| {
+            let mut beside = UncertaintyBesideStep2 {
+                dataset: ds,
+                settings: settings.clone(),
+                scope,
+                early: &early,
+            };
+            Calibrator::new(ds, nominal)
+                .settings(settings)
+                .observer(&mut progress)
+                .observer(&mut beside)
+                .run()
+        })?;
+        let early = early.into_inner().unwrap_or_default();
+        // The screening of the result, its uncertainty (mostly done beside step 2) and the tables
+        // need nothing of each other: side by side.
+        let ((after, uncertainty), tables) = crate::par::join(
+            || {
+                (
+                    crate::exclusion::screen_result(ds, &result, &screen_settings),
+                    crate::solver::uncertainty::for_result_reusing(ds, &result, early),
+                )
+            },
+            || tables(&result),
         );
-        (result, after, uncertainty)
+        (result, after, uncertainty, tables)
     })
+}
+
+/// Starts each arm's uncertainty on the work pool when step 1 has ended (the right arm's stage is
+/// step 1's last), so that it runs beside step 2.
+struct UncertaintyBesideStep2<'s, 'd> {
+    dataset: &'d Dataset,
+    settings: CalibrationSettings,
+    scope: &'s crate::par::Scope<'d>,
+    early: &'d std::sync::Mutex<PerSide<Option<crate::solver::uncertainty::EarlyArmUncertainty>>>,
+}
+
+impl crate::solver::Observer for UncertaintyBesideStep2<'_, '_> {
+    fn stage_finished(
+        &mut self,
+        summary: &crate::solver::StageSummary,
+        run: &crate::solver::CalibrationRun,
+    ) {
+        if summary.stage != crate::solver::Stage::Arm(Side::Right)
+            || summary.termination == crate::solver::Termination::Cancelled
+        {
+            return;
+        }
+        let model = run.current_model();
+        for side in Side::BOTH {
+            let Some(report) = run.identifiability(side) else {
+                continue;
+            };
+            let (dataset, settings, early) = (self.dataset, self.settings.clone(), self.early);
+            let (arm, free) = (model.arm(side).clone(), report.free.clone());
+            self.scope.spawn(move |_| {
+                let value = crate::solver::uncertainty::EarlyArmUncertainty::new(
+                    dataset, &settings, side, arm, free,
+                );
+                if let Ok(mut early) = early.lock() {
+                    early[side] = Some(value);
+                }
+            });
+        }
+    }
 }
 
 /// Each arm's uncertainty of its step-1 parameters (`None`: not covered for its method).
@@ -725,8 +787,24 @@ fn calibrate_cmd(a: &CalibrateArgs) -> Result<()> {
         nominal,
         screening: before,
     } = ws;
-    let (result, after, uncertainty) = fit_and_screen(a, &ds, &nominal, settings, &before)?;
-    phases.end("calibration, the screening of its result, its uncertainty");
+    // The parameter file's figures and the accuracy tables (the calibrated model's figures are the
+    // ones the file records: computed once), beside the screening of the result.
+    let tables = |result: &CalibrationResult| {
+        let file = ParamsFile::from_calibration(result, &ds);
+        let recorded: Option<StatisticsRecord> = file
+            .statistics
+            .clone()
+            .and_then(|v| serde_json::from_value(v).ok());
+        let table = comparison_table(
+            &ds.excluding(&result.settings.exclude),
+            result,
+            recorded.as_ref(),
+        );
+        (file, table)
+    };
+    let (result, after, uncertainty, (mut file, table)) =
+        fit_and_screen(a, &ds, &nominal, settings, &before, tables)?;
+    phases.end("calibration, the screening of its result, its uncertainty, the accuracy tables");
     phases.done.push((
         "  of which the calibration (two steps, re-checks)",
         std::time::Duration::from_secs_f64(result.elapsed_secs),
@@ -734,17 +812,8 @@ fn calibrate_cmd(a: &CalibrateArgs) -> Result<()> {
     print_identifiability(&result);
     print_uncertainty(&uncertainty);
     let excluded = &result.settings.exclude;
-    let mut file = ParamsFile::from_calibration(&result, &ds);
     file.record_uncertainty(&uncertainty);
-    // The calibrated model's figures are the ones the parameter file records (computed once).
-    let recorded: Option<StatisticsRecord> = file
-        .statistics
-        .clone()
-        .and_then(|v| serde_json::from_value(v).ok());
-    outln!(
-        "\n{}",
-        comparison_table(&ds.excluding(excluded), &result, recorded.as_ref())?
-    );
+    outln!("\n{}", table?);
     print_flags(
         "Suspect configurations with the calibrated model",
         &after,
@@ -752,7 +821,7 @@ fn calibrate_cmd(a: &CalibrateArgs) -> Result<()> {
     );
     warn_suspects_kept(&after, excluded);
     file.quality = serde_json::to_value(quality::QualityRecord::new(&ds, &after, excluded)).ok();
-    phases.end("accuracy tables and the parameter file's figures");
+    phases.end("the parameter file's quality record");
     file.write(&a.out)?;
     outln!("parameters written to {}", a.out.display());
     write_robot_exports(a, &robot, &result)?;

@@ -298,6 +298,12 @@ impl CalibrationRun {
         self.active.as_ref().map(|a| a.stage)
     }
 
+    /// The identifiability analysis of `side`'s step-1 stage at its start (`None` before it, or for a
+    /// method without one).
+    pub fn identifiability(&self, side: Side) -> Option<&IdentifiabilityReport> {
+        self.identifiability[side].as_ref()
+    }
+
     /// Outer iterations done in the current stage.
     pub fn stage_iterations(&self) -> usize {
         self.active.as_ref().map_or(0, |a| a.iterations)

@@ -447,6 +447,14 @@ pub fn for_result(
     dataset: &crate::dataset::Dataset,
     result: &super::CalibrationResult,
 ) -> crate::side::PerSide<Option<ArmUncertainty>> {
+    with_early(dataset, result, Default::default())
+}
+
+fn with_early(
+    dataset: &crate::dataset::Dataset,
+    result: &super::CalibrationResult,
+    mut early: crate::side::PerSide<Option<EarlyArmUncertainty>>,
+) -> crate::side::PerSide<Option<ArmUncertainty>> {
     let settings = &result.settings;
     let kept = dataset.excluding(&settings.exclude);
     let shared = result.calibrated.shared_joints();
@@ -460,12 +468,64 @@ pub fn for_result(
             return None;
         }
         let report = result.identifiability[side].as_ref()?;
-        let ms = kept.arm(side).select(settings.split);
-        let qs: Vec<Vec<f64>> = ms.iter().map(|m| m.q_rad.clone()).collect();
-        let measured: Vec<Vec<Vector3<f64>>> =
-            ms.iter().map(|m| m.tracker_points_mm.clone()).collect();
-        arm_uncertainty(result.calibrated.arm(side), &qs, &measured, &report.free)
+        let arm = result.calibrated.arm(side);
+        if let Some(early) = early[side].take()
+            && early.arm == *arm
+            && early.free == report.free
+        {
+            return early.value;
+        }
+        arm_uncertainty_on(&kept, settings, side, arm, &report.free)
     })
+}
+
+/// [`arm_uncertainty`] of `side`'s fitted configurations of `kept` (the split `settings` fits).
+fn arm_uncertainty_on(
+    kept: &crate::dataset::Dataset,
+    settings: &super::CalibrationSettings,
+    side: crate::side::Side,
+    arm: &ArmModel,
+    free: &[usize],
+) -> Option<ArmUncertainty> {
+    let ms = kept.arm(side).select(settings.split);
+    let qs: Vec<Vec<f64>> = ms.iter().map(|m| m.q_rad.clone()).collect();
+    let measured: Vec<Vec<Vector3<f64>>> = ms.iter().map(|m| m.tracker_points_mm.clone()).collect();
+    arm_uncertainty(arm, &qs, &measured, free)
+}
+
+/// An arm's uncertainty computed as soon as its step-1 stage ended (beside step 2, which does not
+/// change the arm); [`for_result_reusing`] takes it where the result's arm and free parameters are
+/// the ones it was computed for, and computes it again otherwise.
+pub struct EarlyArmUncertainty {
+    arm: ArmModel,
+    free: Vec<usize>,
+    value: Option<ArmUncertainty>,
+}
+
+impl EarlyArmUncertainty {
+    /// The uncertainty of `arm` (its step-1 solution, `free` its free parameters) on `dataset` as
+    /// `settings` fit it.
+    pub fn new(
+        dataset: &crate::dataset::Dataset,
+        settings: &super::CalibrationSettings,
+        side: crate::side::Side,
+        arm: ArmModel,
+        free: Vec<usize>,
+    ) -> Self {
+        let kept = dataset.excluding(&settings.exclude);
+        let value = arm_uncertainty_on(&kept, settings, side, &arm, &free);
+        Self { arm, free, value }
+    }
+}
+
+/// [`for_result`], taking each arm's [`EarlyArmUncertainty`] where it applies (the same numbers: the
+/// same computation on the same arm).
+pub fn for_result_reusing(
+    dataset: &crate::dataset::Dataset,
+    result: &super::CalibrationResult,
+    early: crate::side::PerSide<Option<EarlyArmUncertainty>>,
+) -> crate::side::PerSide<Option<ArmUncertainty>> {
+    with_early(dataset, result, early)
 }
 
 /// [`for_result`] of arms that share joints (a torso), fitted at once: both arms' sums in the tree's
