@@ -7,10 +7,7 @@ use crate::quality;
 use crate::robot::{ArmLinks, LoadOptions, RobotDescription};
 use crate::side::{ConfigId, PerSide, Side};
 use crate::simulate;
-use crate::solver::{
-    BaseMethod, CalibrationEvent, CalibrationResult, CalibrationSettings, Calibrator, Method,
-    QpMethod,
-};
+use crate::solver::{BaseMethod, CalibrationResult, Method, QpMethod};
 use crate::workspace::{Workspace, WorkspaceOptions};
 use anyhow::{Context, Result, bail};
 use clap::{Args, Parser, Subcommand, ValueEnum};
@@ -36,6 +33,7 @@ mod calibrate_settings;
 mod controller;
 mod dh;
 mod evaluate;
+mod fit;
 mod import;
 mod outlier_study;
 mod paper_study;
@@ -44,10 +42,11 @@ mod report;
 mod reproduce;
 mod timings;
 
-use calibrate_settings::{print_event, print_uncertainty, settings_from};
+use calibrate_settings::{print_uncertainty, settings_from};
 pub use controller::TargetsRefused;
 pub use evaluate::EvaluateArgs;
 pub use evaluate::comparison_table;
+use fit::fit_and_screen;
 
 /// Two-step minimax kinematic calibration of dual-arm robots from laser-tracker data.
 #[derive(Parser, Debug)]
@@ -575,126 +574,6 @@ fn refuse_overwrites(a: &CalibrateArgs, ds: &Dataset) -> Result<()> {
     }
     Ok(())
 }
-
-/// Calibrate, with `--auto-exclude` or with progress lines; the result and its screening.
-fn fit_and_screen<T: Send>(
-    a: &CalibrateArgs,
-    ds: &Dataset,
-    nominal: &crate::kinematics::DualArmModel,
-    settings: CalibrationSettings,
-    before: &quality::Screening,
-    tables: impl FnOnce(&CalibrationResult) -> T + Send,
-) -> Result<(CalibrationResult, quality::Screening, Uncertainties, T)> {
-    let screen_settings = quality::ScreenSettings::default();
-    Ok(if a.auto_exclude {
-        if !a.quiet {
-            eprintln!(
-                "--auto-exclude: screening, fitting and screening again (progress not shown)"
-            );
-        }
-        let auto =
-            crate::exclusion::auto_exclude(ds, nominal, Some(before), &settings, &screen_settings)?;
-        outln!(
-            "--auto-exclude: {} configuration(s) left out after {} fit(s){}",
-            auto.excluded.len(),
-            auto.rounds,
-            if auto.excluded.is_empty() { "" } else { ":" }
-        );
-        for f in &auto.excluded {
-            outln!("  {f}");
-        }
-        if let Some(why) = &auto.stopped {
-            eprintln!("warning: --auto-exclude stopped: {why}");
-        }
-        let (uncertainty, tables) = crate::par::join(
-            || crate::solver::uncertainty::for_result(ds, &auto.result),
-            || tables(&auto.result),
-        );
-        (auto.result, auto.screening, uncertainty, tables)
-    } else {
-        print_flags(
-            "Suspect configurations before fitting (nominal model)",
-            before,
-            &settings.exclude,
-        );
-        let mut progress = |e: &CalibrationEvent| {
-            if !a.quiet {
-                print_event(e, &ds.reflector_names)
-            }
-        };
-        // Each arm's uncertainty is computed beside step 2 (which runs on one thread and does not
-        // change the arms), taken below where the result's arms are those it was computed for.
-        let early = std::sync::Mutex::new(PerSide::default());
-        let result = crate::par::scope(|scope| {
-            let mut beside = UncertaintyBesideStep2 {
-                dataset: ds,
-                settings: settings.clone(),
-                scope,
-                early: &early,
-            };
-            Calibrator::new(ds, nominal)
-                .settings(settings)
-                .observer(&mut progress)
-                .observer(&mut beside)
-                .run()
-        })?;
-        let early = early.into_inner().unwrap_or_default();
-        // The screening of the result, its uncertainty (mostly done beside step 2) and the tables
-        // need nothing of each other: side by side.
-        let ((after, uncertainty), tables) = crate::par::join(
-            || {
-                (
-                    crate::exclusion::screen_result(ds, &result, &screen_settings),
-                    crate::solver::uncertainty::for_result_reusing(ds, &result, early),
-                )
-            },
-            || tables(&result),
-        );
-        (result, after, uncertainty, tables)
-    })
-}
-
-/// Starts each arm's uncertainty on the work pool when step 1 has ended (the right arm's stage is
-/// step 1's last), so that it runs beside step 2.
-struct UncertaintyBesideStep2<'s, 'd> {
-    dataset: &'d Dataset,
-    settings: CalibrationSettings,
-    scope: &'s crate::par::Scope<'d>,
-    early: &'d std::sync::Mutex<PerSide<Option<crate::solver::uncertainty::EarlyArmUncertainty>>>,
-}
-
-impl crate::solver::Observer for UncertaintyBesideStep2<'_, '_> {
-    fn stage_finished(
-        &mut self,
-        summary: &crate::solver::StageSummary,
-        run: &crate::solver::CalibrationRun,
-    ) {
-        if summary.stage != crate::solver::Stage::Arm(Side::Right)
-            || summary.termination == crate::solver::Termination::Cancelled
-        {
-            return;
-        }
-        let model = run.current_model();
-        for side in Side::BOTH {
-            let Some(report) = run.identifiability(side) else {
-                continue;
-            };
-            let (dataset, settings, early) = (self.dataset, self.settings.clone(), self.early);
-            let (arm, free) = (model.arm(side).clone(), report.free.clone());
-            self.scope.spawn(move |_| {
-                let value = crate::solver::uncertainty::EarlyArmUncertainty::new(
-                    dataset, &settings, side, arm, free,
-                );
-                if let Ok(mut early) = early.lock() {
-                    early[side] = Some(value);
-                }
-            });
-        }
-    }
-}
-
-/// Each arm's uncertainty of its step-1 parameters (`None`: not covered for its method).
-type Uncertainties = crate::side::PerSide<Option<crate::solver::uncertainty::ArmUncertainty>>;
 
 /// Warn about suspect configurations the calibration kept, and about whole-file findings.
 fn warn_suspects_kept(after: &quality::Screening, excluded: &[ConfigId]) {
