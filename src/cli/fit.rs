@@ -10,7 +10,8 @@ use crate::side::{PerSide, Side};
 use crate::solver::{CalibrationEvent, CalibrationResult, CalibrationSettings, Calibrator};
 use anyhow::Result;
 
-/// Calibrate, with `--auto-exclude` or with progress lines; the result and its screening.
+/// Calibrate, with `--auto-exclude` or with progress lines: the result, its screening, its uncertainty
+/// and what `tables` makes of it (computed beside the screening).
 pub(super) fn fit_and_screen<T: Send>(
     a: &CalibrateArgs,
     ds: &Dataset,
