@@ -447,10 +447,12 @@ pub fn for_result(
     dataset: &crate::dataset::Dataset,
     result: &super::CalibrationResult,
 ) -> crate::side::PerSide<Option<ArmUncertainty>> {
-    with_early(dataset, result, Default::default())
+    for_result_reusing(dataset, result, Default::default())
 }
 
-fn with_early(
+/// [`for_result`], taking each arm's [`EarlyArmUncertainty`] where it applies (the same numbers: the
+/// same computation on the same arm).
+pub fn for_result_reusing(
     dataset: &crate::dataset::Dataset,
     result: &super::CalibrationResult,
     mut early: crate::side::PerSide<Option<EarlyArmUncertainty>>,
@@ -516,16 +518,6 @@ impl EarlyArmUncertainty {
         let value = arm_uncertainty_on(&kept, settings, side, &arm, &free);
         Self { arm, free, value }
     }
-}
-
-/// [`for_result`], taking each arm's [`EarlyArmUncertainty`] where it applies (the same numbers: the
-/// same computation on the same arm).
-pub fn for_result_reusing(
-    dataset: &crate::dataset::Dataset,
-    result: &super::CalibrationResult,
-    early: crate::side::PerSide<Option<EarlyArmUncertainty>>,
-) -> crate::side::PerSide<Option<ArmUncertainty>> {
-    with_early(dataset, result, early)
 }
 
 /// [`for_result`] of arms that share joints (a torso), fitted at once: both arms' sums in the tree's
