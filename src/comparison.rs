@@ -361,7 +361,7 @@ impl BoxStats {
         if v.is_empty() {
             return None;
         }
-        v.sort_by(f64::total_cmp);
+        crate::sort::sort_f64(&mut v);
         let q = |p: f64| {
             let x = p * (v.len() - 1) as f64;
             let (i, f) = (x.floor() as usize, x.fract());

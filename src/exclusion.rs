@@ -75,7 +75,7 @@ pub fn auto_exclude(
             stopped = round(&screening, &mut settings);
         }
         if settings.exclude.len() == before {
-            excluded.sort_by_key(|f| f.config);
+            crate::sort::sort_by_key(&mut excluded, |f| f.config);
             return Ok(AutoExclusion {
                 excluded,
                 result,

@@ -198,7 +198,7 @@ pub fn check_jacobian(
         return Ok(());
     }
     let badness = |e: &Mismatch| (e.analytic - e.finite_difference).abs() / e.allowed;
-    entries.sort_by(|a, b| badness(b).total_cmp(&badness(a)));
+    crate::sort::sort_by(&mut entries, |a, b| badness(b).total_cmp(&badness(a)));
     Err(JacobianMismatch {
         entries,
         rows: analytic.nrows(),

@@ -29,6 +29,7 @@ pub mod robot;
 pub mod side;
 pub mod simulate;
 pub mod solver;
+pub mod sort;
 pub mod source;
 pub mod stats;
 pub mod textfile;

@@ -69,7 +69,7 @@ mod tests {
         if v.is_empty() {
             return f64::NAN;
         }
-        v.sort_by(f64::total_cmp);
+        crate::sort::sort_f64(&mut v);
         let n = v.len();
         if n % 2 == 1 {
             v[n / 2]

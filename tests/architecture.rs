@@ -8,8 +8,8 @@ use std::path::{Path, PathBuf};
 
 /// Bottom first. A module may use the modules of the layers before its own.
 const LAYERS: &[&[&str]] = &[
-    // The parallel loops (rayon, or in order in a browser).
-    &["par"],
+    // The parallel loops (rayon, or in order in a browser); the sorts (one compiled sort in a browser).
+    &["par", "sort"],
     // Leaves: values, statistics, where files come from and what they are, atomic writes.
     &["side", "stats", "source", "output", "finite_difference"],
     // Text files, the arm models (DH and URDF chains), meshes.

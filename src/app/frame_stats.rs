@@ -47,7 +47,7 @@ impl FrameStats {
 
     fn print(&mut self, busy: bool) {
         let mut s = std::mem::take(&mut self.samples_ms);
-        s.sort_by(f64::total_cmp);
+        crate::sort::sort_f64(&mut s);
         let mean = s.iter().sum::<f64>() / s.len() as f64;
         let p95 = s[(s.len() * 95 / 100).min(s.len() - 1)];
         let ui = std::mem::take(&mut self.ui_ms);

@@ -156,7 +156,7 @@ fn compare(a: &ConfigRow, b: &ConfigRow, column: Column, flags: &Flags) -> std::
 /// Row order for the current sort.
 pub fn sorted_rows(analysis: &Analysis, flags: &Flags, state: TableState) -> Vec<usize> {
     let mut order: Vec<usize> = (0..analysis.configs.len()).collect();
-    order.sort_by(|&i, &j| {
+    crate::sort::sort_by(&mut order, |&i, &j| {
         let o = compare(
             &analysis.configs[i],
             &analysis.configs[j],

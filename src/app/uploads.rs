@@ -74,7 +74,7 @@ pub fn mount(
     // The one rule for what a file is (`source::FileKind`); the shallowest of a kind wins.
     let shallowest = |is: fn(FileKind) -> bool, rank: fn(&Path) -> u8| {
         let mut found: Vec<&PathBuf> = mounted.iter().filter(|p| is(FileKind::of(p))).collect();
-        found.sort_by_key(|p| {
+        crate::sort::sort_by_key(&mut found, |p| {
             (
                 rank(p),
                 p.components().count(),

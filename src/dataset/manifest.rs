@@ -345,7 +345,7 @@ fn parse_reflectors(
     let refl_line = Some(cx.line_of(refl.span()));
     let mut entries: Vec<(Spanned<String>, Spanned<toml::Value>)> =
         refl.into_inner().into_iter().collect();
-    entries.sort_by_key(|(k, _)| k.span().start);
+    crate::sort::sort_by_key(&mut entries, |(k, _)| k.span().start);
     if entries.is_empty() {
         return Err(cx.err(
             refl_line,

@@ -129,7 +129,7 @@ pub(super) fn match_points(
         let loose = std::mem::take(&mut unnamed[c]);
         out.extend(measurement(row, per, loose, &files, o, report));
     }
-    report.unmatched_points.sort_by_key(|u| u.line);
+    crate::sort::sort_by_key(&mut report.unmatched_points, |u| u.line);
     Ok(out)
 }
 

@@ -408,7 +408,7 @@ fn per_config_residuals(
         let data = dataset.arm(side);
         let model_sides = triangle_sides(&model.arm(side).reflectors_mm);
         let mut by_index: Vec<usize> = (0..a.len()).collect();
-        by_index.sort_by_key(|&p| a.indices[p]);
+        crate::sort::sort_by_key(&mut by_index, |&p| a.indices[p]);
         for p in by_index {
             let c = &totals.configs[offset[side] + p];
             let g = &a.geom[p];

@@ -273,7 +273,7 @@ pub fn relaxed_bound(
     let fixed_info = positions.information(fixed);
     let top_sum = |d: &[f64]| -> f64 {
         let mut sorted = d.to_vec();
-        sorted.sort_by(|a, b| b.total_cmp(a));
+        crate::sort::sort_by(&mut sorted, |a, b| b.total_cmp(a));
         sorted.iter().take(per_arm).sum()
     };
     let (criterion_design, _) = positions.solve(positions.information(design))?;
@@ -313,7 +313,7 @@ pub fn relaxed_bound(
         support: best_w.iter().filter(|&&v| v > 0.01).count(),
         largest: {
             let mut order: Vec<usize> = (0..best_w.len()).collect();
-            order.sort_by(|&a, &b| best_w[b].total_cmp(&best_w[a]));
+            crate::sort::sort_by(&mut order, |&a, &b| best_w[b].total_cmp(&best_w[a]));
             order.truncate(per_arm);
             order
         },
@@ -326,7 +326,7 @@ pub fn relaxed_bound(
 /// others are zero.
 fn capped(v: &[f64], total: f64) -> Vec<f64> {
     let mut order: Vec<usize> = (0..v.len()).collect();
-    order.sort_by(|&a, &b| v[b].total_cmp(&v[a]));
+    crate::sort::sort_by(&mut order, |&a, &b| v[b].total_cmp(&v[a]));
     let mut rest: f64 = v.iter().sum();
     for (k, &i) in order.iter().enumerate() {
         let c = (total - k as f64) / rest;

@@ -648,7 +648,7 @@ pub fn reroute(
             .chain(pool)
             .map(|v| (leg(a, v) + leg(v, b), v))
             .collect();
-        tries.sort_by(|x, y| x.0.total_cmp(&y.0));
+        crate::sort::sort_by(&mut tries, |x, y| x.0.total_cmp(&y.0));
         let found = tries.iter().take(VIA_CANDIDATES).find(|(_, v)| {
             !leg_collides(side, a, v, rest, world, options)
                 && !leg_collides(side, v, b, rest, world, options)

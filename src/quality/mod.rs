@@ -178,7 +178,7 @@ impl Screening {
     /// The suspect configurations, each once, in order.
     pub fn suspects(&self) -> Vec<ConfigId> {
         let mut v: Vec<ConfigId> = self.flags.iter().map(|f| f.config).collect();
-        v.sort();
+        crate::sort::sort(&mut v);
         v.dedup();
         v
     }
@@ -190,7 +190,7 @@ impl Screening {
             map.entry(f.config).or_default().push(f);
         }
         for flags in map.values_mut() {
-            flags.sort_by(|a, b| b.severity().total_cmp(&a.severity()));
+            crate::sort::sort_by(flags, |a, b| b.severity().total_cmp(&a.severity()));
         }
         map
     }
@@ -223,7 +223,7 @@ impl Screening {
     }
 
     fn sort(&mut self) {
-        self.flags.sort_by_key(|f| (f.config, f.kind as u8));
+        crate::sort::sort_by_key(&mut self.flags, |f| (f.config, f.kind as u8));
     }
 }
 
@@ -375,7 +375,7 @@ pub fn exclusion_round(
             .into_iter()
             .filter(|f| f.config.side == side && !exclude.contains(&f.config))
             .collect();
-        new.sort_by(|a, b| b.severity().total_cmp(&a.severity()));
+        crate::sort::sort_by(&mut new, |a, b| b.severity().total_cmp(&a.severity()));
         let already = auto_excluded
             .iter()
             .filter(|f| f.config.side == side)

@@ -391,7 +391,9 @@ fn screening(
             None => kept_suspects.push(f.clone()),
         }
     }
-    kept_suspects.sort_by(|a, b| b.severity().total_cmp(&a.severity()));
+    crate::sort::sort_by(&mut kept_suspects, |a, b| {
+        b.severity().total_cmp(&a.severity())
+    });
     ScreeningSummary {
         recorded,
         record,
@@ -447,7 +449,7 @@ fn worst_rows(
                 .map(|f| f.kind.label()),
         })
         .collect();
-    rows.sort_by(|a, b| b.worst_pos_mm.total_cmp(&a.worst_pos_mm));
+    crate::sort::sort_by(&mut rows, |a, b| b.worst_pos_mm.total_cmp(&a.worst_pos_mm));
     rows.truncate(WORST_ROWS);
     rows
 }

@@ -107,7 +107,7 @@ pub fn of(report: &Report) -> Vec<Warning> {
             report.dataset.dir.display()
         )));
     }
-    out.sort_by_key(|w| w.level == WarningLevel::Note);
+    crate::sort::sort_by_key(&mut out, |w| w.level == WarningLevel::Note);
     out
 }
 

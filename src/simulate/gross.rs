@@ -126,6 +126,6 @@ pub(super) fn inject(
             }
         }
     }
-    out.sort_by_key(|r| r.config);
+    crate::sort::sort_by_key(&mut out, |r| r.config);
     out
 }

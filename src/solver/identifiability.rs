@@ -116,7 +116,7 @@ fn leaning_on(scaled: &DMatrix<f64>, kept: &[usize], k: usize, info: &ParameterI
         .copied()
         .zip(coef.iter().map(|c| c.abs()))
         .collect();
-    lean.sort_by(|x, y| y.1.total_cmp(&x.1));
+    crate::sort::sort_by(&mut lean, |x, y| y.1.total_cmp(&x.1));
     let names: Vec<String> = lean.iter().take(3).map(|(j, _)| (info.name)(*j)).collect();
     names.join(", ")
 }
@@ -200,7 +200,7 @@ pub fn analyse(gram: &DMatrix<f64>, info: &ParameterInfo) -> IdentifiabilityRepo
         });
     }
     kept.sort_unstable();
-    fixed.sort_by_key(|f| f.index);
+    crate::sort::sort_by_key(&mut fixed, |f| f.index);
     let condition_after = condition(&scaled, &kept);
     IdentifiabilityReport {
         free: kept,

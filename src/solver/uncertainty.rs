@@ -321,7 +321,9 @@ fn summarise(
             }
         }
     }
-    correlations.sort_by(|x, y| y.correlation.abs().total_cmp(&x.correlation.abs()));
+    crate::sort::sort_by(&mut correlations, |x, y| {
+        y.correlation.abs().total_cmp(&x.correlation.abs())
+    });
     ArmUncertainty {
         point_sigma_mm: point_var.sqrt(),
         configurations: n_all,

@@ -170,7 +170,7 @@ fn reflector_edits(
 
 /// Apply `edits` (non-overlapping byte ranges) to `text`.
 fn apply(text: &str, mut edits: Vec<(Range<usize>, String)>) -> String {
-    edits.sort_by_key(|(r, _)| std::cmp::Reverse(r.start));
+    crate::sort::sort_by_key(&mut edits, |(r, _)| std::cmp::Reverse(r.start));
     let mut out = text.to_string();
     for (range, replacement) in edits {
         out.replace_range(range, &replacement);

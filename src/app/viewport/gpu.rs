@@ -488,7 +488,7 @@ impl ViewportGpu {
             self.robot_meshes = Some(RobotMeshesGpu::new(device, pack));
         }
         let mut sorted: Vec<&MeshInstance> = scene.instances.iter().collect();
-        sorted.sort_by_key(|i| i.geometry);
+        crate::sort::sort_by_key(&mut sorted, |i| i.geometry);
         self.draws.clear();
         for (k, instance) in sorted.iter().enumerate() {
             let k = k as u32;

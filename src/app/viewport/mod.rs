@@ -182,7 +182,7 @@ impl ViewportState {
         if errors.is_empty() {
             return;
         }
-        errors.sort_by(f64::total_cmp);
+        crate::sort::sort_f64(&mut errors);
         let p95 = errors[(errors.len() * 95 / 100).min(errors.len() - 1)];
         if p95 > 0.0 {
             self.options.exaggeration = nice_round(60.0 / p95).clamp(1.0, 5000.0) as f32;

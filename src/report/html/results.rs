@@ -228,7 +228,7 @@ pub(super) fn screening(r: &Report) -> String {
         s.record.flags.len(),
         {
             let mut c: Vec<_> = s.record.flags.iter().map(|f| f.config).collect();
-            c.sort();
+            crate::sort::sort(&mut c);
             c.dedup();
             c.len()
         },
