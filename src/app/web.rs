@@ -24,7 +24,7 @@ use super::example::IN_MEMORY_EXAMPLE_DIR;
 
 #[cfg(not(feature = "web-fonts"))]
 compile_error!(
-    "the browser's workbench is built with the feature `web` (`tools/web.sh build`; or `web-webgpu`): \
+    "the browser's workbench is built with the feature `web` or `web-webgpu` (`tools/web.sh build`): \
      its fonts are egui's, subset by build.rs, and it needs one wgpu backend"
 );
 
@@ -253,7 +253,9 @@ fn download(file_name: &str, bytes: &[u8]) -> Result<(), JsValue> {
 }
 
 /// egui's default fonts and families as epaint's `default_fonts` sets them, from the subsets build.rs
-/// writes (the feature `web-fonts`: Latin, Greek, Cyrillic, punctuation, arrows, mathematical symbols).
+/// writes (the feature `web-fonts`: Latin, Greek, Cyrillic, punctuation, arrows, mathematical symbols
+/// in Ubuntu Light; Hack, the monospace font, narrower — its missing characters come from Ubuntu Light,
+/// the next font of the monospace family).
 pub fn fonts() -> egui::FontDefinitions {
     use egui::{FontData, FontFamily, FontTweak};
     macro_rules! subset {

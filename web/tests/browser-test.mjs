@@ -1,7 +1,14 @@
 // The workbench in a real browser: Debian's Chromium, headless, driven by playwright-core, against the
 // static build (tools/web.sh build → target/web) served on 127.0.0.1 by a small server of our own.
 //
-//   node web/tests/browser-test.mjs [--native-params p.json]      (tools/web.sh test runs it)
+//   node web/tests/browser-test.mjs [--backend webgl2|webgpu] [--native-params p.json]
+//                                                                 (tools/web.sh test runs it, once per backend)
+//
+// The site has two modules (web/index.html picks one): wgpu on WebGL2 (the default here; Chromium's
+// SwiftShader through ANGLE) and wgpu on WebGPU (`--backend webgpu`: Dawn on Chromium's SwiftShader
+// Vulkan, with the flags below, which present a WebGPU canvas headless — SwiftShader's GL does not
+// share its images with Dawn, so the WebGL2 run's flags give WebGPU no canvas). The page is loaded
+// with `?backend=…`, and the app's renderer must be that backend.
 //
 // Widgets are found by role and name in the app's mirror of egui's accessibility tree (#dualcal-a11y:
 // eframe's web runner has no AccessKit adapter) and clicked on the canvas at their bounds; figures are
@@ -25,7 +32,13 @@ const site = process.env.DUALCAL_WEB_SITE ?? path.join(root, "target/web");
 const out = process.env.DUALCAL_WEB_TEST_OUT ?? path.join(root, "target/web-test");
 const chromiumPath = process.env.CHROMIUM ?? "/usr/bin/chromium";
 const args = process.argv.slice(2);
-const nativeParams = args.includes("--native-params") ? args[args.indexOf("--native-params") + 1] : null;
+const option = (name) => (args.includes(name) ? args[args.indexOf(name) + 1] : null);
+const nativeParams = option("--native-params");
+const backend = option("--backend") ?? "webgl2";
+if (!["webgl2", "webgpu"].includes(backend)) {
+  console.error(`browser-test: --backend ${backend}: expected webgl2 or webgpu`);
+  process.exit(2);
+}
 const REL_TOL = 1e-9;
 const WIDTH = 1400;
 const HEIGHT = 900;
@@ -59,9 +72,19 @@ const server = http.createServer((req, res) => {
   res.end(body);
 });
 await new Promise((resolve) => server.listen(0, "127.0.0.1", resolve));
-const base = `http://127.0.0.1:${server.address().port}/`;
+const origin = `http://127.0.0.1:${server.address().port}/`;
+// The page's address with the backend asked for, and more query parameters after it.
+const base = `${origin}?backend=${backend}`;
 
-// ---- Chromium: headless, software WebGL2 (SwiftShader; its WebGPU, behind flags, presents no canvas), off the network -
+// ---- Chromium: headless, on software renderers (SwiftShader), off the network ------------------
+// WebGL2: ANGLE on SwiftShader's GL. WebGPU: Dawn on SwiftShader's Vulkan, with Skia and ANGLE on
+// Vulkan too, so that the compositor shares the WebGPU canvas's images (under the WebGL2 flags the
+// page gets an adapter but its canvas is never presented: "Could not find SharedImageBackingFactory
+// … WebGPUSwapBufferProvider" in the GPU process's log).
+const rendererArgs = {
+  webgl2: ["--use-gl=angle", "--use-angle=swiftshader", "--enable-unsafe-swiftshader"],
+  webgpu: ["--enable-unsafe-webgpu", "--enable-features=Vulkan", "--use-vulkan=swiftshader", "--use-angle=vulkan"],
+}[backend];
 const profile = fs.mkdtempSync(path.join(os.tmpdir(), "dualcal-chromium-"));
 const context = await chromium.launchPersistentContext(profile, {
   executablePath: chromiumPath,
@@ -70,9 +93,7 @@ const context = await chromium.launchPersistentContext(profile, {
   acceptDownloads: true,
   args: [
     "--no-sandbox",
-    "--use-gl=angle",
-    "--use-angle=swiftshader",
-    "--enable-unsafe-swiftshader",
+    ...rendererArgs,
     "--disable-gpu-sandbox",
     "--disable-background-networking",
     "--disable-component-update",
@@ -170,8 +191,13 @@ try {
   metrics.first_frame_ms = Number(await page.locator("#dualcal-status").getAttribute("data-first-frame-ms"));
   metrics.load_bytes = servedBytes;
   metrics.renderer = s.renderer;
+  metrics.backend = backend;
+  metrics.module = await page.evaluate(() => document.documentElement.dataset.module ?? null);
   check(s.errors.length === 0 && s.session.dataset === "/example",
     `the page opens the compiled-in example without errors (${s.status}; renderer ${s.renderer})`);
+  const rendererPattern = { webgl2: /\bGl\b|WebGL/i, webgpu: /\bBrowserWebGpu\b|WebGPU/i }[backend];
+  check(rendererPattern.test(s.renderer ?? "") && metrics.module === backend,
+    `the page loaded the ${backend} module (${metrics.module}) and the app renders on it (${s.renderer})`);
 
   // ---- the 3D view draws the robot: the "robot" checkbox changes the picture ---------------------
   await frames(3);
@@ -307,7 +333,7 @@ try {
     `"Import…" previews the picked tracker files and opens them: ${s.session.dataset}, ${s.status}`);
 
   // ---- compute alone: with an unlimited budget the run is computed in as few frames as it can ---
-  await page.goto(`${base}?budget_ms=60000`, { waitUntil: "load" });
+  await page.goto(`${base}&budget_ms=60000`, { waitUntil: "load" });
   s = await waitFor("reopening the example", idleWith((s) => s.session), 120_000);
   await clickWidget("button", "Calibrate");
   s = await waitFor("the unlimited-budget run", idleWith((s) => s.calibrated), 120_000);
@@ -315,7 +341,7 @@ try {
   fs.writeFileSync(path.join(out, "params-browser-unlimited.json"), JSON.stringify(s.calibrated.params, null, 2));
 
   // ---- live curves and Cancel: one outer iteration per frame (?budget_ms=0) ----------------------
-  await page.goto(`${base}?budget_ms=0`, { waitUntil: "load" });
+  await page.goto(`${base}&budget_ms=0`, { waitUntil: "load" });
   s = await waitFor("reopening the example", idleWith((s) => s.session), 120_000);
   await clickWidget("button", "Calibrate");
   s = await waitFor("the run iterating", (s) => s.phase === "calibrating" && s.iterations >= 2, 60_000);
@@ -325,6 +351,25 @@ try {
   await clickWidget("button", "Cancel");
   s = await waitFor("cancelling", idleWith(() => true), 60_000);
   check(/cancelled/.test(s.status) && s.calibrated === null, `Cancel stops the run: ${s.status}`);
+
+  // ---- the page's own choice: WebGPU on a hardware adapter, else WebGL2 where there is WebGL2 ----------
+  // On the WebGL2 run this browser has no WebGPU adapter; on the WebGPU run its adapter is
+  // SwiftShader's, a fallback adapter, and it has no WebGL2 (ANGLE on Vulkan gives none here).
+  await page.goto(origin, { waitUntil: "load" });
+  s = await waitFor("the page's own choice", idleWith((s) => s.session), 120_000);
+  const chosen = await page.evaluate(() => document.documentElement.dataset.module ?? null);
+  const { adapter, webgl2 } = await page.evaluate(async () => {
+    const a = navigator.gpu && (await navigator.gpu.requestAdapter());
+    const gl = document.createElement("canvas").getContext("webgl2");
+    gl?.getExtension("WEBGL_lose_context")?.loseContext();
+    return {
+      adapter: a ? (a.info?.isFallbackAdapter ?? a.isFallbackAdapter ? "fallback" : "hardware") : "none",
+      webgl2: Boolean(gl),
+    };
+  });
+  const expected = adapter === "hardware" || (!webgl2 && adapter === "fallback") ? "webgpu" : "webgl2";
+  check(chosen === expected && s.errors.length === 0,
+    `without ?backend= the page chooses the ${chosen} module (WebGPU adapter: ${adapter}; WebGL2: ${webgl2 ? "yes" : "no"})`);
 
   // ---- the same parameters as the native command line --------------------------------------------
   if (nativeParams) {
