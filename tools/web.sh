@@ -13,6 +13,9 @@
 #                                module, comparing the browser's calibrated parameters with the native
 #                                command line's; then the calibration report of the same parameters
 #                                (web/tests/report-test.mjs: every section, no console error)
+#   tools/web.sh first-frame [N] → the time to the first frame over N fresh page loads per module
+#                                (default 7; web/tests/first-frame.mjs): median, range, where it goes;
+#                                on the site as last built
 #   tools/web.sh measure       → test, plus the native release command line's time for the same
 #                                calibration, and the README's screenshot (docs/screenshot-web.png);
 #                                prints the figures of docs/performance.md
@@ -202,6 +205,11 @@ case "${1:-}" in
     report_test
     size_budget
     ;;
+  first-frame)
+    [ -f "$out/index.html" ] || build
+    npm_ci
+    node web/tests/first-frame.mjs --loads "${2:-7}"
+    ;;
   measure)
     build
     browser_test webgl2
@@ -222,7 +230,7 @@ case "${1:-}" in
     node web/tests/report.mjs
     ;;
   *)
-    say "usage: tools/web.sh build | serve [PORT] | test | measure"
+    say "usage: tools/web.sh build | serve [PORT] | test | first-frame [N] | measure"
     exit 2
     ;;
 esac

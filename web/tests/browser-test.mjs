@@ -20,17 +20,15 @@
 // file; a run stepped one iteration per frame advances live and Cancel stops it; no console errors.
 // With --native-params, the browser's parameters must equal the native command line's within 1e-9
 // relative. Writes target/web-test/{workbench.png,status.json,params-browser.json,metrics.json,…}.
-import { chromium } from "playwright-core";
-import http from "node:http";
 import fs from "node:fs";
 import os from "node:os";
 import path from "node:path";
+import { launchChromium, serveSite } from "./harness.mjs";
 import { fileURLToPath } from "node:url";
 
 const root = path.resolve(path.dirname(fileURLToPath(import.meta.url)), "../..");
 const site = process.env.DUALCAL_WEB_SITE ?? path.join(root, "target/web");
 const out = process.env.DUALCAL_WEB_TEST_OUT ?? path.join(root, "target/web-test");
-const chromiumPath = process.env.CHROMIUM ?? "/usr/bin/chromium";
 const args = process.argv.slice(2);
 const option = (name) => (args.includes(name) ? args[args.indexOf(name) + 1] : null);
 const nativeParams = option("--native-params");
@@ -52,62 +50,13 @@ const check = (ok, what) => {
   else failures.push(what);
 };
 
-// ---- a static server that counts the bytes it sends (the page's load size) ----------------------
-const types = { ".html": "text/html", ".js": "text/javascript", ".wasm": "application/wasm" };
-let servedBytes = 0;
-const server = http.createServer((req, res) => {
-  const url = new URL(req.url, "http://127.0.0.1");
-  const rel = url.pathname === "/" ? "index.html" : decodeURIComponent(url.pathname).replace(/^\/+/, "");
-  const file = path.join(site, rel);
-  if (!file.startsWith(site) || !fs.existsSync(file) || !fs.statSync(file).isFile()) {
-    res.writeHead(404).end();
-    return;
-  }
-  const body = fs.readFileSync(file);
-  servedBytes += body.length;
-  res.writeHead(200, {
-    "content-type": types[path.extname(file)] ?? "application/octet-stream",
-    "cache-control": "no-store",
-  });
-  res.end(body);
-});
-await new Promise((resolve) => server.listen(0, "127.0.0.1", resolve));
-const origin = `http://127.0.0.1:${server.address().port}/`;
+// ---- the site on 127.0.0.1, and Chromium headless on the backend's software renderer -------------
+const server = await serveSite(site);
+const origin = server.origin;
 // The page's address with the backend asked for, and more query parameters after it.
 const base = `${origin}?backend=${backend}`;
-
-// ---- Chromium: headless, on software renderers (SwiftShader), off the network ------------------
-// WebGL2: ANGLE on SwiftShader's GL. WebGPU: Dawn on SwiftShader's Vulkan, with Skia and ANGLE on
-// Vulkan too, so that the compositor shares the WebGPU canvas's images (under the WebGL2 flags the
-// page gets an adapter but its canvas is never presented: "Could not find SharedImageBackingFactory
-// … WebGPUSwapBufferProvider" in the GPU process's log).
-const rendererArgs = {
-  webgl2: ["--use-gl=angle", "--use-angle=swiftshader", "--enable-unsafe-swiftshader"],
-  webgpu: ["--enable-unsafe-webgpu", "--enable-features=Vulkan", "--use-vulkan=swiftshader", "--use-angle=vulkan"],
-}[backend];
-const profile = fs.mkdtempSync(path.join(os.tmpdir(), "dualcal-chromium-"));
-const context = await chromium.launchPersistentContext(profile, {
-  executablePath: chromiumPath,
-  headless: true,
-  viewport: { width: WIDTH, height: HEIGHT },
-  acceptDownloads: true,
-  args: [
-    "--no-sandbox",
-    ...rendererArgs,
-    "--disable-gpu-sandbox",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-default-apps",
-    "--disable-domain-reliability",
-    "--disable-sync",
-    "--no-first-run",
-    "--no-default-browser-check",
-    "--disable-quic",
-    "--proxy-server=127.0.0.1:9",
-    "--proxy-bypass-list=127.0.0.1",
-  ],
-});
-const page = context.pages()[0] ?? (await context.newPage());
+const browser = await launchChromium(backend, { width: WIDTH, height: HEIGHT, acceptDownloads: true });
+const { page } = browser;
 const consoleErrors = [];
 page.on("console", (m) => {
   if (m.type() === "error") consoleErrors.push(m.text());
@@ -189,7 +138,7 @@ try {
   let s = await waitFor("opening the example", idleWith((s) => s.session), 120_000);
   metrics.page_ready_ms = Date.now() - t0;
   metrics.first_frame_ms = Number(await page.locator("#dualcal-status").getAttribute("data-first-frame-ms"));
-  metrics.load_bytes = servedBytes;
+  metrics.load_bytes = server.served();
   metrics.renderer = s.renderer;
   metrics.backend = backend;
   metrics.module = await page.evaluate(() => document.documentElement.dataset.module ?? null);
@@ -404,9 +353,8 @@ try {
   metrics.console_errors = consoleErrors;
   check(consoleErrors.length === 0, `no console errors${consoleErrors.length ? `: ${consoleErrors.join(" | ")}` : ""}`);
   fs.writeFileSync(path.join(out, "metrics.json"), JSON.stringify(metrics, null, 2));
-  await context.close();
+  await browser.close();
   server.close();
-  fs.rmSync(profile, { recursive: true, force: true });
 }
 console.log(`browser test: ${passed} passed, ${failures.length} failed`);
 process.exit(failures.length ? 1 : 0);
