@@ -520,8 +520,15 @@ impl WorkbenchApp {
 }
 
 impl eframe::App for WorkbenchApp {
-    fn logic(&mut self, _ctx: &egui::Context, _frame: &mut eframe::Frame) {
-        self.step_tasks_in_frame();
+    fn logic(&mut self, ctx: &egui::Context, _frame: &mut eframe::Frame) {
+        // The first frame draws before any task stepped in frames runs: in a browser the workbench
+        // shows at once, and the example's load (one step, ~0.25 s) runs in the next frame instead of
+        // holding the first one back (docs/performance.md, issue 18). Natively tasks run on threads.
+        if ctx.cumulative_frame_nr() == 0 {
+            ctx.request_repaint();
+        } else {
+            self.step_tasks_in_frame();
+        }
         self.poll_events();
         self.refresh_import(false);
         if platform::PUBLISHES_STATUS {

@@ -56,9 +56,22 @@ async fn runner_start(runner: &eframe::WebRunner) -> Result<(), JsValue> {
         .start(
             canvas,
             eframe::WebOptions::default(),
-            Box::new(|cc| Ok(Box::new(WorkbenchApp::new(cc, AppLaunch::default())))),
+            Box::new(|cc| {
+                // wgpu's adapter, device and egui's painter are ready; then the app's creation.
+                mark("dualcal:renderer-ready");
+                let app = WorkbenchApp::new(cc, AppLaunch::default());
+                mark("dualcal:app-created");
+                Ok(Box::new(app))
+            }),
         )
         .await
+}
+
+/// A `performance.mark` for `web/tests/first-frame.mjs` (where the time to the first frame goes).
+fn mark(name: &str) {
+    if let Some(performance) = web_sys::window().and_then(|w| w.performance()) {
+        let _ = performance.mark(name);
+    }
 }
 
 /// A number from the page's query string (`?name=N`).

@@ -1,7 +1,8 @@
 // The time to the workbench's first frame, over several page loads (each in a fresh browser profile,
 // so nothing is cached): its median and range per module, and where it goes — the page's own
-// performance marks (web/index.html): the module's response, its JavaScript glue loaded, the module
-// compiled, instantiated and started; then the app's first frame (`data-first-frame-ms`).
+// performance marks (web/index.html: the module's response, its JavaScript glue loaded, the module
+// compiled, instantiated and started; src/app/web.rs: wgpu's adapter and device and egui's painter
+// ready, the app created) and the app's first frame (`data-first-frame-ms`).
 //
 //   node web/tests/first-frame.mjs [--loads N] [--backend webgl2|webgpu|both]   (tools/web.sh first-frame)
 //
@@ -39,19 +40,23 @@ for (const backend of backends) {
           response: mark("dualcal:module-response"),
           glue: mark("dualcal:glue-loaded"),
           started: mark("dualcal:module-started"),
+          renderer: mark("dualcal:renderer-ready"),
+          app: mark("dualcal:app-created"),
           first_frame: Number(document.getElementById("dualcal-status").getAttribute("data-first-frame-ms")),
         };
       });
       rows.push(row);
       console.log(`${backend} load ${i + 1}: module response ${row.response.toFixed(0)} ms, glue ${row.glue.toFixed(0)} ms, ` +
-        `module compiled and started ${row.started.toFixed(0)} ms, first frame ${row.first_frame} ms`);
+        `module compiled and started ${row.started.toFixed(0)} ms, renderer ready ${row.renderer.toFixed(0)} ms, ` +
+        `app created ${row.app.toFixed(0)} ms, first frame ${row.first_frame} ms`);
     } finally {
       await browser.close();
     }
   }
   const ff = rows.map((r) => r.first_frame);
   summary.push(`${backend}: first frame median ${median(ff)} ms (${Math.min(...ff)}–${Math.max(...ff)}, ${loads} loads); ` +
-    `module compiled and started at median ${median(rows.map((r) => r.started)).toFixed(0)} ms`);
+    `medians: module compiled and started ${median(rows.map((r) => r.started)).toFixed(0)} ms, ` +
+    `renderer ready ${median(rows.map((r) => r.renderer)).toFixed(0)} ms, app created ${median(rows.map((r) => r.app)).toFixed(0)} ms`);
 }
 server.close();
 for (const line of summary) console.log(line);
