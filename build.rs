@@ -49,7 +49,7 @@ mod web_fonts {
     /// super- and subscripts, arrows and mathematical operators. egui takes any other character of
     /// monospace text from the next font of the family, Ubuntu Light (`app::web::fonts`), which has
     /// all of `BLOCKS`: a user's Greek or Cyrillic link name still draws, in proportional glyphs.
-    /// 122 KB → 66 KB (62 → 34 KB gzipped).
+    /// Its subset: 114 284 → 57 988 bytes (32 KB gzipped).
     const MONOSPACE_BLOCKS: &[(u32, u32)] = &[
         (0x0020, 0x007E), // Basic Latin
         (0x00A0, 0x00FF), // Latin-1 Supplement
