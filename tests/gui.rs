@@ -1,8 +1,12 @@
 //! The workbench driven headlessly with egui_kittest on wgpu (Mesa lavapipe, no window, no GPU):
 //! start on the bundled example, calibrate, cancel, open a broken dataset, snapshot the viewport;
-//! the quality flags, excluding a configuration by a click or a key (re-solved at once), Auto-exclude,
-//! a panicking worker; a robot description of the user's own dropped on the window (its arms, joints,
+//! the quality flags, excluding a configuration by a click or a key (re-solved at once), Auto-exclude;
+//! a robot description of the user's own dropped on the window (its arms, joints,
 //! meshes and warnings in the Robot section).
+//! The tests drive the workbench as a user does (clicks and keys by label) or through its
+//! [`Command`]s, and read its state. (A panicking worker is tested inside the crate, `src/app/tests.rs`:
+//! its fault injection is compiled into tests only. The screenshot makers and the frame-time study are
+//! `examples/workbench_pictures.rs`.)
 //! (Set `XDG_RUNTIME_DIR` to a mode-700 directory to silence a harmless warning; `.ci/run` does.)
 #![cfg(feature = "gui")]
 
@@ -53,6 +57,38 @@ fn loaded(harness: &mut Harness<'_, WorkbenchApp>) {
         "example not loaded: {:?}",
         harness.state().errors()
     );
+}
+
+/// Change the calibration settings as the settings panel would.
+fn edit_settings(
+    harness: &mut Harness<'_, WorkbenchApp>,
+    edit: impl FnOnce(&mut dualcal::solver::CalibrationSettings),
+) {
+    let mut settings = harness.state().settings().clone();
+    edit(&mut settings);
+    harness
+        .state_mut()
+        .apply(Command::SetSettings(Box::new(settings)));
+}
+
+/// Change the 3D view's display options as its View section would.
+fn edit_view_options(
+    harness: &mut Harness<'_, WorkbenchApp>,
+    edit: impl FnOnce(&mut dualcal::app::viewport::scene::SceneOptions),
+) {
+    let mut options = harness.state().viewport().options.clone();
+    edit(&mut options);
+    harness
+        .state_mut()
+        .apply(Command::SetViewOptions(Box::new(options)));
+}
+
+/// Pick exactly these methods in the comparison view.
+fn pick_methods(harness: &mut Harness<'_, WorkbenchApp>, keys: &[&str]) {
+    let keys = keys.iter().map(|k| k.to_string()).collect();
+    harness
+        .state_mut()
+        .apply(Command::PickComparedMethods(keys));
 }
 
 #[test]
@@ -161,11 +197,10 @@ fn cancel_stops_the_run_and_keeps_the_previous_state() {
     let mut harness = harness([1400.0, 900.0], AppLaunch::default());
     loaded(&mut harness);
     // The paper's subgradient QP with a huge iteration budget: a run far longer than the test.
-    {
-        let settings = harness.state_mut().settings_mut();
+    edit_settings(&mut harness, |settings| {
         settings.qp = dualcal::solver::QpMethod::Paper;
         settings.max_qp_iterations = 100_000_000;
-    }
+    });
     // Let the settings panel lay out the new row before clicking by position.
     harness.run_steps(2);
     harness.get_by_label("Calibrate").click();
@@ -245,15 +280,16 @@ fn viewport_snapshot() {
     {
         let app = harness.state_mut();
         app.set_panels_visible(false);
-        let view = app.viewport_mut();
-        view.camera = dualcal::app::viewport::camera::OrbitCamera::default();
-        view.auto_scale = false;
-        // One arm's calibration configurations keep the picture readable.
-        view.options.show_arm = PerSide::new(true, false);
-        view.options.show_ver = false;
-        view.options.exaggeration = 5.0;
-        view.options.color_max_mm = 10.0;
+        app.apply(Command::SetCamera(Box::default()));
+        app.apply(Command::SetAutoScale(false));
     }
+    edit_view_options(&mut harness, |options| {
+        // One arm's calibration configurations keep the picture readable.
+        options.show_arm = PerSide::new(true, false);
+        options.show_ver = false;
+        options.exaggeration = 5.0;
+        options.color_max_mm = 10.0;
+    });
     harness.run_steps(3);
     harness.snapshot("viewport");
 }
@@ -369,95 +405,6 @@ fn click_at(harness: &mut Harness<'_, WorkbenchApp>, pos: eframe::egui::Pos2) {
     });
     harness.step();
     harness.step();
-}
-
-/// Not a benchmark with a threshold: prints the time to build and render (lavapipe, no window) a
-/// 1400×900 frame with all 2 × 220 configurations' triangles and error vectors, the camera orbiting
-/// so the viewport re-renders every frame. Run with
-/// `cargo test --release --test gui frame_time -- --ignored --nocapture`; with
-/// `DUALCAL_FRAME_TIME_DATASET=DIR` on another dataset (e.g. one of the public YuMi, with its meshes).
-#[test]
-#[ignore]
-fn frame_time() {
-    let dataset = std::env::var_os("DUALCAL_FRAME_TIME_DATASET").map(std::path::PathBuf::from);
-    let mut harness = harness(
-        [1400.0, 900.0],
-        AppLaunch {
-            dataset,
-            urdf: None,
-        },
-    );
-    loaded(&mut harness);
-    step_until(&mut harness, MAX_LOAD_FRAMES, "loading the meshes", |app| {
-        !app.is_loading_meshes()
-    });
-    if let Some(dualcal::app::session::RobotMeshes::Loaded(m)) =
-        harness.state().session().map(|s| &s.meshes)
-    {
-        println!(
-            "robot meshes: {} files, {} triangles as loaded; packed {} meshes, {} vertices, {} triangles, in {:.3} s (simplified copy included)",
-            m.visual_files,
-            m.visual_triangles,
-            m.packed.mesh_count(),
-            m.packed.vertices.len(),
-            m.packed.indices.len() / 3,
-            m.elapsed_secs
-        );
-        if let Some(s) = &m.simplified {
-            println!(
-                "simplified copy: {} vertices, {} triangles",
-                s.vertices.len(),
-                s.indices.len() / 3
-            );
-        }
-        println!(
-            "meshes drawn: {} (DUALCAL_MESH_DETAIL={:?})",
-            if harness.state().viewport().draws_simplified_meshes() {
-                "simplified"
-            } else {
-                "full"
-            },
-            std::env::var("DUALCAL_MESH_DETAIL").ok()
-        );
-    }
-    type Setup = fn(&mut dualcal::app::viewport::scene::SceneOptions);
-    let variants: [(&str, bool, Setup); 4] = [
-        ("whole window", true, |_| {}),
-        ("viewport only", false, |_| {}),
-        ("viewport only, robot only", false, |o| {
-            o.show_measured = false;
-            o.show_model = false;
-            o.show_vectors = false;
-        }),
-        ("viewport only, nothing drawn", false, |o| {
-            o.show_robot = false;
-            o.show_grid = false;
-            o.show_measured = false;
-            o.show_model = false;
-            o.show_vectors = false;
-        }),
-    ];
-    for (label, panels, setup) in variants {
-        harness.state_mut().set_panels_visible(panels);
-        setup(&mut harness.state_mut().viewport_mut().options);
-        harness.run_steps(2);
-        let _ = harness.render();
-        let mut samples = Vec::new();
-        for _ in 0..40 {
-            harness.state_mut().viewport_mut().camera.orbit(5.0, 0.0);
-            let t = std::time::Instant::now();
-            harness.step();
-            harness.render().expect("render");
-            samples.push(t.elapsed().as_secs_f64() * 1e3);
-        }
-        samples.sort_by(f64::total_cmp);
-        let mean = samples.iter().sum::<f64>() / samples.len() as f64;
-        println!(
-            "{label}: mean {mean:.1} ms, median {:.1} ms, max {:.1} ms per frame (build + render + readback)",
-            samples[samples.len() / 2],
-            samples[samples.len() - 1]
-        );
-    }
 }
 
 /// A file dropped on the window, as the windowing layer would hand it over.
@@ -828,7 +775,7 @@ fn excluding_a_flagged_configuration_resolves_at_once_and_changes_the_figures() 
         (n, scene.lines.len())
     };
     let (n_flagged, lines_with) = flag_lines(harness.state());
-    harness.state_mut().viewport_mut().options.show_flags = false;
+    edit_view_options(&mut harness, |options| options.show_flags = false);
     harness.run_steps(2);
     let (_, lines_without) = flag_lines(harness.state());
     assert_eq!(
@@ -836,7 +783,7 @@ fn excluding_a_flagged_configuration_resolves_at_once_and_changes_the_figures() 
         6 * n_flagged,
         "an outline per flagged triangle"
     );
-    harness.state_mut().viewport_mut().options.show_flags = true;
+    edit_view_options(&mut harness, |options| options.show_flags = true);
     harness.run_steps(2);
 
     harness.get_by_label("Calibrate").click();
@@ -946,46 +893,6 @@ fn auto_exclude_removes_the_misreads_and_lists_them() {
     for f in &auto.excluded {
         harness.get_by_label_contains(&format!("{} {}:", f.config.side.name(), f.id));
     }
-}
-
-/// A panic inside the calibration worker is caught and shown; the window stays usable and the next
-/// calibration runs. `execution`: on a thread, or stepped in frames (a browser).
-fn a_panicking_worker_is_shown(execution: dualcal::app::task::Execution) {
-    let mut harness = harness([1400.0, 900.0], AppLaunch::default());
-    loaded(&mut harness);
-    harness.state_mut().set_execution(execution);
-    harness.state_mut().inject_panic_in_next_calibration();
-    harness.get_by_label("Calibrate").click();
-    harness.step();
-    step_until(&mut harness, MAX_RUN_FRAMES, "the worker's end", |app| {
-        !app.is_calibrating()
-    });
-    let errors = harness.state().errors().to_vec();
-    assert_eq!(errors.len(), 1, "{errors:?}");
-    assert!(
-        errors[0].contains("stopped unexpectedly")
-            && errors[0].contains("fault injected into the calibration worker"),
-        "{errors:?}"
-    );
-    harness.get_by_label_contains("calibration worker stopped unexpectedly");
-    harness.get_by_label_contains("Calibration failed; the nominal model is shown again");
-    // Still usable: the next calibration runs to its result.
-    harness.get_by_label("Calibrate").click();
-    harness.step();
-    step_until(&mut harness, MAX_RUN_FRAMES, "calibration", |app| {
-        !app.is_calibrating()
-    });
-    assert!(harness.state().session().unwrap().calibrated.is_some());
-}
-
-#[test]
-fn a_panic_in_the_calibration_thread_is_shown() {
-    a_panicking_worker_is_shown(dualcal::app::task::Execution::Thread);
-}
-
-#[test]
-fn a_panic_in_calibration_work_stepped_in_frames_is_shown() {
-    a_panicking_worker_is_shown(dualcal::app::task::Execution::InFrames);
 }
 
 /// A URDF dropped on the window (the path a file dialog's choice takes too: `Command::OpenUrdf`)
@@ -1121,136 +1028,6 @@ fn meshes_warnings(session: &dualcal::app::session::Session) -> usize {
     }
 }
 
-/// Not a test: the README's screenshot of the workbench on a dataset of your own (e.g. one simulated
-/// with the public YuMi description, see docs/performance.md), after Auto-exclude, the most severe
-/// flagged configuration selected (its row struck through in the table, its flag beside it). Writes a PNG (window size `DUALCAL_SCREENSHOT_SIZE`, default
-/// 1280x800). Run with
-/// `DUALCAL_SCREENSHOT_DATASET=DIR DUALCAL_SCREENSHOT_OUT=docs/workbench-yumi.png cargo test --release --test gui workbench_screenshot -- --ignored --nocapture`.
-#[test]
-#[ignore]
-fn workbench_screenshot() {
-    let dataset = std::env::var_os("DUALCAL_SCREENSHOT_DATASET")
-        .map(std::path::PathBuf::from)
-        .expect("set DUALCAL_SCREENSHOT_DATASET to a dataset directory");
-    let out = std::env::var_os("DUALCAL_SCREENSHOT_OUT")
-        .map_or_else(|| "target/workbench.png".into(), std::path::PathBuf::from);
-    let size = std::env::var("DUALCAL_SCREENSHOT_SIZE").unwrap_or_else(|_| "1280x800".into());
-    let (w, h) = size
-        .split_once('x')
-        .and_then(|(w, h)| Some((w.parse::<f32>().ok()?, h.parse::<f32>().ok()?)))
-        .expect("DUALCAL_SCREENSHOT_SIZE as WxH");
-    let mut harness = Harness::builder()
-        .with_size(eframe::egui::Vec2::new(w, h))
-        .wgpu()
-        .build_eframe(move |cc| {
-            WorkbenchApp::new(
-                cc,
-                AppLaunch {
-                    dataset: Some(dataset),
-                    urdf: None,
-                },
-            )
-        });
-    loaded(&mut harness);
-    step_until(&mut harness, MAX_LOAD_FRAMES, "loading the meshes", |app| {
-        !app.is_loading_meshes()
-    });
-    harness.get_by_label("Auto-exclude").click();
-    harness.step();
-    step_until(&mut harness, MAX_RUN_FRAMES, "auto-exclude", |app| {
-        !app.is_calibrating()
-    });
-    assert!(
-        harness.state().errors().is_empty(),
-        "{:?}",
-        harness.state().errors()
-    );
-    let worst = harness
-        .state()
-        .session()
-        .unwrap()
-        .screening
-        .worst_per_config()
-        .into_iter()
-        .max_by(|a, b| a.severity().total_cmp(&b.severity()))
-        .map(|f| f.config);
-    harness.state_mut().apply(Command::Select {
-        config: worst,
-        reveal_in_table: true,
-    });
-    {
-        // Closer to the robot, the verification configurations hidden: the robot and the flagged
-        // triangles stay readable at 1280 × 800.
-        let view = harness.state_mut().viewport_mut();
-        view.camera.distance_mm *= 0.7;
-        view.options.show_ver = false;
-    }
-    harness.run_steps(4);
-    let image = harness.render().expect("render");
-    image.save(&out).expect("write the PNG");
-    println!(
-        "wrote {} ({}x{})",
-        out.display(),
-        image.width(),
-        image.height()
-    );
-}
-
-/// Not a test: a picture of the robot's meshes as the viewport draws them, the viewport alone (no
-/// panels), only the robot and the grid, with the mesh detail `DUALCAL_MESH_DETAIL` chooses (see
-/// docs/performance.md). Run with `DUALCAL_SCREENSHOT_DATASET=DIR DUALCAL_MESH_DETAIL=simplified
-/// DUALCAL_SCREENSHOT_OUT=docs/yumi-simplified.png cargo test --test gui meshes_screenshot -- --ignored
-/// --nocapture` (size `DUALCAL_SCREENSHOT_SIZE`, default 640x480).
-#[test]
-#[ignore]
-fn meshes_screenshot() {
-    let dataset = std::env::var_os("DUALCAL_SCREENSHOT_DATASET")
-        .map(std::path::PathBuf::from)
-        .expect("set DUALCAL_SCREENSHOT_DATASET to a dataset directory");
-    let out = std::env::var_os("DUALCAL_SCREENSHOT_OUT")
-        .map_or_else(|| "target/meshes.png".into(), std::path::PathBuf::from);
-    let size = std::env::var("DUALCAL_SCREENSHOT_SIZE").unwrap_or_else(|_| "640x480".into());
-    let (w, h) = size
-        .split_once('x')
-        .and_then(|(w, h)| Some((w.parse::<f32>().ok()?, h.parse::<f32>().ok()?)))
-        .expect("DUALCAL_SCREENSHOT_SIZE as WxH");
-    let mut harness = harness(
-        [w, h],
-        AppLaunch {
-            dataset: Some(dataset),
-            urdf: None,
-        },
-    );
-    loaded(&mut harness);
-    step_until(&mut harness, MAX_LOAD_FRAMES, "loading the meshes", |app| {
-        !app.is_loading_meshes()
-    });
-    harness.state_mut().set_panels_visible(false);
-    {
-        let view = harness.state_mut().viewport_mut();
-        view.poses = dualcal::side::PerSide::new(None, None);
-        view.options.show_measured = false;
-        view.options.show_model = false;
-        view.options.show_vectors = false;
-        view.options.show_grid = false;
-        view.camera.distance_mm *= 0.4;
-    }
-    harness.run_steps(4);
-    let image = harness.render().expect("render");
-    image.save(&out).expect("write the PNG");
-    println!(
-        "wrote {} ({}x{}), meshes drawn: {}",
-        out.display(),
-        image.width(),
-        image.height(),
-        if harness.state().viewport().draws_simplified_meshes() {
-            "simplified"
-        } else {
-            "full"
-        }
-    );
-}
-
 /// Some label contains `text` (the status line and the settings panel may both say it).
 fn shown(harness: &Harness<'_, WorkbenchApp>, text: &str) {
     assert!(
@@ -1351,10 +1128,7 @@ fn the_method_picker_changes_the_method_used() {
     assert!(harness.query_by_label("Reflector").is_none());
     pick_in_combo(&mut harness, "Method", "distance, one reflector [26]");
     pick_in_combo(&mut harness, "Reflector", "b");
-    assert_eq!(
-        harness.state_mut().settings_mut().reflector,
-        Some(Reflector::B)
-    );
+    assert_eq!(harness.state().settings().reflector, Some(Reflector::B));
     calibrate(&mut harness);
     let app = harness.state();
     // The method ran: the result and the status say which reflector it used.
@@ -1368,7 +1142,7 @@ fn the_method_picker_changes_the_method_used() {
         "method distance-single (reflector left b, right b)",
     );
     pick_in_combo(&mut harness, "Method", "minimax (paper, Algorithm I)");
-    assert_eq!(harness.state_mut().settings_mut().reflector, None);
+    assert_eq!(harness.state().settings().reflector, None);
     assert!(harness.query_by_label("Reflector").is_none());
 }
 
@@ -1385,7 +1159,7 @@ fn the_comparison_lists_each_method_and_adopting_one_changes_the_export() {
     harness.get_by_label("Compare methods…").click();
     harness.run_steps(2);
     harness.get_by_label("Pick methods and press Run comparison.");
-    harness.state_mut().compare_view_mut().pick(&["minimax"]);
+    pick_methods(&mut harness, &["minimax"]);
     harness.run_steps(2);
     // The picker adds least squares.
     harness.get_by_label("least squares").click();
@@ -1465,8 +1239,8 @@ fn a_comparison_stepped_in_frames_shows_terminations_and_cancels() {
     harness
         .state_mut()
         .set_execution(dualcal::app::task::Execution::InFrames);
-    harness.state_mut().settings_mut().max_iterations = 1;
-    harness.state_mut().compare_view_mut().pick(&["minimax"]);
+    edit_settings(&mut harness, |s| s.max_iterations = 1);
+    pick_methods(&mut harness, &["minimax"]);
     harness.state_mut().apply(Command::StartComparison);
     step_until(&mut harness, MAX_RUN_FRAMES, "comparison", |app| {
         !app.is_comparing()
@@ -1477,15 +1251,15 @@ fn a_comparison_stepped_in_frames_shows_terminations_and_cancels() {
 
     // The paper's subgradient QP with a huge budget: far longer than the test, until cancelled (on a
     // thread: stepped in frames, one outer iteration of it would hold the frame).
-    {
-        let app = harness.state_mut();
-        app.set_execution(dualcal::app::task::Execution::Thread);
-        let s = app.settings_mut();
+    harness
+        .state_mut()
+        .set_execution(dualcal::app::task::Execution::Thread);
+    edit_settings(&mut harness, |s| {
         s.max_iterations = 100;
         s.qp = dualcal::solver::QpMethod::Paper;
         s.max_qp_iterations = 100_000_000;
-        app.compare_view_mut().pick(&["minimax", "lsq"]);
-    }
+    });
+    pick_methods(&mut harness, &["minimax", "lsq"]);
     harness.state_mut().apply(Command::StartComparison);
     step_until(&mut harness, MAX_RUN_FRAMES, "the first method", |app| {
         app.compare_view().progress.is_some()
@@ -1501,41 +1275,6 @@ fn a_comparison_stepped_in_frames_shows_terminations_and_cancels() {
     assert_eq!(comparison.methods.len(), 1, "the rest is skipped");
     shown(&harness, "Comparison cancelled");
     shown(&harness, "(left arm): cancelled");
-}
-
-/// docs/compare-methods.png: the comparison view at 1280 × 800 on the bundled example, every method of
-/// the comparison table run. `DUALCAL_SCREENSHOT_OUT=docs/compare-methods.png cargo test --test gui
-/// compare_screenshot -- --ignored`.
-#[test]
-#[ignore]
-fn compare_screenshot() {
-    let out = std::env::var_os("DUALCAL_SCREENSHOT_OUT").map_or_else(
-        || "target/compare-methods.png".into(),
-        std::path::PathBuf::from,
-    );
-    let mut harness = Harness::builder()
-        .with_size(eframe::egui::Vec2::new(1280.0, 800.0))
-        .wgpu()
-        .build_eframe(|cc| WorkbenchApp::new(cc, AppLaunch::default()));
-    loaded(&mut harness);
-    harness.get_by_label("Compare methods…").click();
-    harness.run_steps(2);
-    harness.get_by_label("all").click();
-    harness.run_steps(2);
-    harness.get_by_label("Run comparison").click();
-    harness.step();
-    step_until(&mut harness, MAX_RUN_FRAMES, "comparison", |app| {
-        !app.is_comparing()
-    });
-    assert!(
-        harness.state().errors().is_empty(),
-        "{:?}",
-        harness.state().errors()
-    );
-    harness.run_steps(4);
-    let image = harness.render().expect("render");
-    image.save(&out).expect("write the PNG");
-    println!("wrote {}", out.display());
 }
 
 /// At 1280 × 800 with a URDF robot (its Robot section lists arms, meshes and joints), the left panel's
@@ -1659,16 +1398,19 @@ fn the_import_window_previews_the_files_then_writes_and_opens_the_dataset() {
     harness.run_steps(2);
     assert!(harness.state().import_view().open);
     harness.get_by_label("Choose both arms' point files.");
-    {
-        let view = harness.state_mut().import_view_mut();
-        for side in dualcal::side::Side::BOTH {
-            view.inputs.points[side] = files[side].0.display().to_string();
-            view.inputs.joints[side] = files[side].1.display().to_string();
-        }
-        // A joint order that does not parse: named in the preview, nothing to write.
-        view.inputs.joint_order = "1,2,9".into();
-        view.out_dir = dir.path().join("imported").display().to_string();
+    let mut inputs = harness.state().import_view().inputs.clone();
+    for side in dualcal::side::Side::BOTH {
+        inputs.points[side] = files[side].0.display().to_string();
+        inputs.joints[side] = files[side].1.display().to_string();
     }
+    // A joint order that does not parse: named in the preview, nothing to write.
+    inputs.joint_order = "1,2,9".into();
+    harness
+        .state_mut()
+        .apply(Command::SetImportInputs(Box::new(inputs.clone())));
+    harness
+        .state_mut()
+        .apply(Command::SetImportFolder(dir.path().join("imported")));
     harness.run_steps(3);
     let err = harness
         .state()
@@ -1682,12 +1424,10 @@ fn the_import_window_previews_the_files_then_writes_and_opens_the_dataset() {
         .expect("the joint order is refused");
     assert!(err.contains("joint order"), "{err}");
     harness.get_by_label(&err);
+    inputs.joint_order.clear();
     harness
         .state_mut()
-        .import_view_mut()
-        .inputs
-        .joint_order
-        .clear();
+        .apply(Command::SetImportInputs(Box::new(inputs)));
     harness.run_steps(3);
     // The preview: every configuration of both arms matched, nothing left over.
     for side in ["left", "right"] {
@@ -1732,8 +1472,7 @@ fn the_import_window_previews_the_files_then_writes_and_opens_the_dataset() {
         }
     }
     // Written once: a second import into the same folder is refused, the view says why.
-    let view = harness.state_mut().import_view_mut();
-    view.open = true;
+    harness.state_mut().apply(Command::ShowImport(true));
     harness.run_steps(3);
     harness.get_by_label("Write dataset and open").click();
     harness.run_steps(2);
@@ -1752,11 +1491,12 @@ fn the_planning_window_plans_and_draws_the_plan_with_the_tracker() {
     harness.get_by_label("Plan measurements…").click();
     harness.run_steps(2);
     assert!(harness.state().plan_view().open);
-    {
-        let inputs = &mut harness.state_mut().plan_view_mut().inputs;
-        inputs.per_arm = 8;
-        inputs.candidates = 60;
-    }
+    let mut inputs = harness.state().plan_view().inputs.clone();
+    inputs.per_arm = 8;
+    inputs.candidates = 60;
+    harness
+        .state_mut()
+        .apply(Command::SetPlanInputs(Box::new(inputs)));
     harness.get_by_label("Plan").click();
     harness.run_steps(2);
     step_until(&mut harness, MAX_RUN_FRAMES, "planning", |app| {
@@ -1866,10 +1606,7 @@ fn one_arm_alone_calibrates_compares_and_exports() {
     // The comparison view: each method on the one arm.
     harness.get_by_label("Compare methods…").click();
     harness.run_steps(2);
-    harness
-        .state_mut()
-        .compare_view_mut()
-        .pick(&["minimax", "lsq"]);
+    pick_methods(&mut harness, &["minimax", "lsq"]);
     harness.run_steps(2);
     run_comparison(&mut harness);
     let app = harness.state();
@@ -1957,7 +1694,7 @@ fn the_model_picker_calibrates_beyond_geometry_beside_the_geometric_fit() {
     let mut harness = open_at(dir.path());
     pick_in_combo(&mut harness, "Model", "full model");
     assert_eq!(
-        harness.state_mut().settings_mut().model,
+        harness.state().settings().model,
         ErrorTerms::from_name("full").unwrap()
     );
     calibrate(&mut harness);
@@ -2018,7 +1755,7 @@ fn the_model_picker_calibrates_beyond_geometry_beside_the_geometric_fit() {
     // Back to the geometric model: no reference column, no errors in the result.
     harness.get_by_label("left joints and parameters").click();
     harness.run_steps(2);
-    harness.state_mut().settings_mut().model = ErrorTerms::GEOMETRIC;
+    edit_settings(&mut harness, |s| s.model = ErrorTerms::GEOMETRIC);
     calibrate(&mut harness);
     let session = harness.state().session().unwrap();
     assert!(session.geometric.is_none());
@@ -2032,44 +1769,4 @@ fn the_model_picker_calibrates_beyond_geometry_beside_the_geometric_fit() {
             .error_terms()
             .is_geometric()
     );
-}
-
-/// Not a test: the workbench after a calibration beyond geometry — the Accuracy tab with nominal, the
-/// geometric calibration and the full model side by side, the robot section's compliances. Writes a
-/// PNG (`DUALCAL_SCREENSHOT_OUT`, default `target/workbench-full-model.png`; 1280 × 800):
-/// `cargo test --release --test gui beyond_geometry_screenshot -- --ignored --nocapture`.
-#[test]
-#[ignore = "writes a screenshot; run by hand"]
-fn beyond_geometry_screenshot() {
-    let dir = joint_error_dataset();
-    let out = std::env::var_os("DUALCAL_SCREENSHOT_OUT").map_or_else(
-        || "target/workbench-full-model.png".into(),
-        std::path::PathBuf::from,
-    );
-    let mut harness = Harness::builder()
-        .with_size(eframe::egui::Vec2::new(1280.0, 800.0))
-        .wgpu()
-        .build_eframe(|cc| {
-            WorkbenchApp::new(
-                cc,
-                AppLaunch {
-                    dataset: Some(dir.path().to_path_buf()),
-                    urdf: None,
-                },
-            )
-        });
-    loaded(&mut harness);
-    harness.state_mut().settings_mut().model =
-        dualcal::kinematics::ErrorTerms::from_name("full").unwrap();
-    calibrate(&mut harness);
-    assert!(
-        harness.state().errors().is_empty(),
-        "{:?}",
-        harness.state().errors()
-    );
-    harness.get_by_label("Accuracy").click();
-    harness.run_steps(4);
-    let image = harness.render().expect("render");
-    image.save(&out).expect("write the PNG");
-    println!("wrote {}", out.display());
 }

@@ -7,11 +7,13 @@ use super::command::{Command, Export, OpenKind};
 use super::compare;
 use super::events::AppEvent;
 use super::files::{self, FileReply, PathPrompt, PromptAction, SaveRequest};
-use super::job::calibration::{CalibrationJob, RunKind};
-use super::job::comparison::ComparisonJob;
+use super::job::calibration::{
+    self, AdoptWork, AutoExcludeWork, CalibrationJob, CalibrationWork, RunKind,
+};
+use super::job::comparison::{ComparisonJob, ComparisonWork};
+use super::job::{load, plan};
 use super::session::Session;
-use super::status::Status;
-use super::work::{AutoExcludeWork, CalibrationWork, LiveRate};
+use super::work::LiveRate;
 use super::{WorkbenchApp, table};
 use crate::side::ConfigId;
 use eframe::egui;
@@ -22,12 +24,12 @@ impl WorkbenchApp {
     pub fn apply(&mut self, command: Command) {
         match command {
             Command::OpenDataset(path) => self.start_load(path, self.urdf_override.clone()),
-            Command::OpenUrdf(path) => match &self.session {
+            Command::OpenUrdf(path) => match self.scene.get() {
                 Some(session) => self.start_load(session.dataset.dir.clone(), Some(path)),
                 // Nothing to reload: the robot is used for the next dataset.
                 None => self.urdf_override = Some(path),
             },
-            Command::UseDatasetRobot => match &self.session {
+            Command::UseDatasetRobot => match self.scene.get() {
                 Some(session) => self.start_load(session.dataset.dir.clone(), None),
                 None => self.urdf_override = None,
             },
@@ -38,7 +40,7 @@ impl WorkbenchApp {
                 }
             }
             Command::ToggleExclude(config) => {
-                let Some(session) = self.scene_mut() else {
+                let Some(session) = self.scene.edit() else {
                     return;
                 };
                 match session.exclude.iter().position(|c| *c == config) {
@@ -51,10 +53,10 @@ impl WorkbenchApp {
                 self.start_calibration();
             }
             Command::ClearExclusions => {
-                if self.session.as_ref().is_none_or(|s| s.exclude.is_empty()) {
+                if self.scene.get().is_none_or(|s| s.exclude.is_empty()) {
                     return;
                 }
-                if let Some(session) = self.scene_mut() {
+                if let Some(session) = self.scene.edit() {
                     session.exclude.clear();
                     session.auto_exclusion = None;
                 }
@@ -67,7 +69,7 @@ impl WorkbenchApp {
                 reveal_in_table,
             } => self.select(config, reveal_in_table),
             Command::SelectWorst => {
-                if let Some(session) = &self.session {
+                if let Some(session) = self.scene.get() {
                     let worst = table::worst(session.current());
                     self.select(worst, true);
                 }
@@ -76,11 +78,7 @@ impl WorkbenchApp {
             Command::Export(what) => self.export(what),
             Command::ConfirmPrompt(path) => self.confirm_prompt(path),
             Command::ClosePrompt => self.prompt = None,
-            Command::DismissError(k) => {
-                if k < self.errors.len() {
-                    self.errors.remove(k);
-                }
-            }
+            Command::DismissError(k) => self.errors.dismiss(k),
             Command::ShowComparison(open) => self.compare.open = open,
             Command::StartComparison => self.start_comparison(),
             Command::CancelComparison => self.jobs.cancel(ComparisonJob::lane()),
@@ -96,7 +94,7 @@ impl WorkbenchApp {
             Command::ShowPlan(open) => self.plan_view.open = open,
             Command::StartPlan => {
                 let target = self.plan_target();
-                self.start_plan(target);
+                plan::start(&mut self.job_context(), target);
             }
             Command::SavePlan => match self.plan_view.zip() {
                 Ok(bytes) => self.save(SaveRequest {
@@ -109,15 +107,46 @@ impl WorkbenchApp {
                 Err(e) => self.plan_view.error = Some(e),
             },
             Command::ShowPlannedPose(side, pose) => self.plan_view.shown[side] = pose,
+            command => self.set_state(command),
         }
+    }
+
+    /// The `Set…` commands: what the views' widgets edit in place, in one go.
+    fn set_state(&mut self, command: Command) {
+        match command {
+            Command::SetSettings(settings) => {
+                if settings.method != self.settings.method {
+                    self.method_picked = true;
+                }
+                self.settings = *settings;
+            }
+            Command::PickComparedMethods(keys) => {
+                let keys: Vec<&str> = keys.iter().map(String::as_str).collect();
+                self.compare.pick(&keys);
+            }
+            Command::SetViewOptions(options) => self.viewport.options = *options,
+            Command::SetCamera(camera) => self.viewport.camera = *camera,
+            Command::SetAutoScale(on) => self.viewport.auto_scale = on,
+            Command::SetImportInputs(inputs) => self.import.inputs = *inputs,
+            Command::SetPlanInputs(inputs) => self.plan_view.inputs = *inputs,
+            // Carried out by `apply`.
+            _ => {}
+        }
+    }
+
+    /// Load on a background task, from the app's files; on failure the error is shown and the current
+    /// session stays.
+    fn start_load(&mut self, dataset: PathBuf, urdf: Option<PathBuf>) {
+        let files = self.input_files.clone();
+        load::start(&mut self.job_context(), dataset, urdf, files);
     }
 
     /// Run the picked methods on the session (with the current settings' split, limits and
     /// tolerances and the session's exclusions); the last comparison is replaced as the new one's
     /// rows arrive. Not while a calibration runs (the two would share the two cores).
     fn start_comparison(&mut self) {
-        let Some(session) = &self.session else {
-            self.errors.push("Open a dataset first.".into());
+        let Some(session) = self.scene.get() else {
+            self.errors.push("Open a dataset first.");
             return;
         };
         if self.is_calibrating() || self.is_comparing() {
@@ -129,18 +158,20 @@ impl WorkbenchApp {
         }
         let entries = self.compare.picked_entries();
         if entries.is_empty() {
-            self.errors
-                .push("Pick at least one method to compare.".into());
+            self.errors.push("Pick at least one method to compare.");
             return;
         }
         let common = compare::common_settings(&session.run_settings(&self.settings));
-        let work = compare::ComparisonWork::new(session, entries, common);
-        match self.start_job("comparison", ComparisonJob, work) {
+        let work = ComparisonWork::new(session, entries, common);
+        match self
+            .job_context()
+            .start_job("comparison", ComparisonJob, work)
+        {
             Ok(()) => {
                 self.compare.open = true;
                 self.compare.adopted = None;
                 self.compare.progress = None;
-                self.status = Status::Idle("Comparing methods…".into());
+                self.status.idle("Comparing methods…");
             }
             Err(e) => self
                 .errors
@@ -151,7 +182,7 @@ impl WorkbenchApp {
     /// Take a compared method's result as the current calibration (its figures are computed in the
     /// background, then it is shown and exported like a calibration of its own).
     fn adopt_compared(&mut self, key: &'static str) {
-        let Some(session) = &self.session else {
+        let Some(session) = self.scene.get() else {
             return;
         };
         if self.is_calibrating() || self.is_comparing() {
@@ -166,9 +197,9 @@ impl WorkbenchApp {
         else {
             return;
         };
-        let work = compare::AdoptWork::new(session, run.result.clone());
+        let work = AdoptWork::new(session, run.result.clone());
         self.compare.adopted = Some(key);
-        self.start_run(RunKind::Adopt, work);
+        calibration::start_run(&mut self.job_context(), RunKind::Adopt, work);
     }
 
     /// Calibrate the session with the current settings and its exclusions; a running calibration is
@@ -177,14 +208,18 @@ impl WorkbenchApp {
         if !self.calibration_allowed() {
             return;
         }
-        let Some(session) = &self.session else {
+        let Some(session) = self.scene.get() else {
             return;
         };
         let settings = session.run_settings(&self.settings);
+        #[cfg_attr(not(test), expect(unused_mut))]
         let mut work =
             CalibrationWork::new(session, settings, LiveRate::for_execution(self.execution));
-        work.panic_at_start = std::mem::take(&mut self.panic_in_next_calibration);
-        self.start_run(RunKind::Calibration, work);
+        #[cfg(test)]
+        {
+            work.panic_at_start = std::mem::take(&mut self.panic_in_next_calibration);
+        }
+        calibration::start_run(&mut self.job_context(), RunKind::Calibration, work);
     }
 
     /// Auto-exclude: the rule's calibration replaces the current one.
@@ -192,11 +227,11 @@ impl WorkbenchApp {
         if !self.calibration_allowed() {
             return;
         }
-        let Some(session) = &self.session else {
+        let Some(session) = self.scene.get() else {
             return;
         };
         let work = AutoExcludeWork::new(session, session.run_settings(&self.settings));
-        self.start_run(RunKind::Calibration, work);
+        calibration::start_run(&mut self.job_context(), RunKind::Calibration, work);
     }
 
     /// Select a configuration and pose its arm in it.
@@ -213,7 +248,7 @@ impl WorkbenchApp {
             self.files.open(kind, self.events.sender().clone());
             return;
         }
-        let suggested = match (kind, &self.session) {
+        let suggested = match (kind, self.scene.get()) {
             (OpenKind::Dataset, Some(s)) => s.dataset.dir.join(crate::dataset::MANIFEST_FILE),
             (OpenKind::Urdf, Some(s)) => s.dataset.dir.join("robot.urdf"),
             (OpenKind::ImportFile(_) | OpenKind::ImportFolder, _) | (_, None) => {
@@ -236,7 +271,7 @@ impl WorkbenchApp {
     }
 
     fn export(&mut self, what: Export) {
-        let Some(session) = &self.session else {
+        let Some(session) = self.scene.get() else {
             return;
         };
         match what.contents(session) {
@@ -249,7 +284,7 @@ impl WorkbenchApp {
     /// "Export plots as PNG": the screenshot is taken when the next frame is painted and arrives as
     /// an event.
     fn request_screenshot(&mut self) {
-        if self.session.is_none() {
+        if self.scene.get().is_none() {
             return;
         }
         self.screenshot_pending = true;
@@ -281,7 +316,7 @@ impl WorkbenchApp {
 
     /// Whether there is a session the screening does not refuse; if not, the reason is shown.
     fn calibration_allowed(&mut self) -> bool {
-        let reason = match &self.session {
+        let reason = match self.scene.get() {
             None => "Open a dataset first.".to_string(),
             Some(session) => match refusal(session) {
                 None => return true,
@@ -313,7 +348,7 @@ impl WorkbenchApp {
         if !self.import.open {
             return;
         }
-        let (robot, robot_path, names, positions) = match &self.session {
+        let (robot, robot_path, names, positions) = match self.scene.get() {
             Some(s) => (
                 s.robot.clone(),
                 s.robot_source.clone(),
@@ -342,7 +377,7 @@ impl WorkbenchApp {
         self.import.write_error = None;
         let written = match &self.memory_files {
             Some(memory) => {
-                let dir = PathBuf::from(format!("/imports/{}", self.generation + 1));
+                let dir = PathBuf::from(format!("/imports/{}", self.scene.revision() + 1));
                 match self.import.preview().and_then(|p| p.importable()) {
                     Some(imported) => crate::import::files_of(imported, &dir)
                         .map(|files| {
@@ -379,7 +414,7 @@ impl WorkbenchApp {
     /// What a plan is made for: the session's robot, reflectors, tracker and configurations (the
     /// built-in IRB 14000 with the paper's reflectors before any).
     fn plan_target(&mut self) -> super::plan_view::PlanTarget {
-        match &self.session {
+        match self.scene.get() {
             Some(s) => super::plan_view::PlanTarget {
                 robot: s.robot.clone(),
                 robot_path: s.robot_source.clone(),

@@ -1,8 +1,19 @@
 //! What the user can ask for: the [`Command`]s the panels, the viewport and the prompt return, and
-//! the kinds they name. This file imports nothing of the app (the handler, [`super::apply`], does),
-//! so every module below the app can name a command without an import circle.
+//! the kinds they name. This file imports only plain state types of the app (a view's inputs and
+//! options, which import no command) and not the handler ([`super::apply`]), so every module below
+//! the app can name a command without an import circle.
+//!
+//! The `Set…` commands put what a view's widgets edit in place (the settings, the display options,
+//! the camera, the import's and the plan's inputs) in one go: how a script or a test drives the
+//! workbench ([`super::WorkbenchApp::apply`]) without reaching into its state.
 
+use super::import::ImportInputs;
+pub use super::import::ImportSlot;
+use super::plan_view::PlanInputs;
+use super::viewport::camera::OrbitCamera;
+use super::viewport::scene::SceneOptions;
 use crate::side::{ConfigId, Side};
+use crate::solver::CalibrationSettings;
 use std::path::PathBuf;
 
 /// What the user wants to open.
@@ -16,13 +27,6 @@ pub enum OpenKind {
     ImportFile(ImportSlot),
     /// The folder the import view writes its dataset to.
     ImportFolder,
-}
-
-/// A file of the import view: an arm's point file or its joint log.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct ImportSlot {
-    pub side: Side,
-    pub joints: bool,
 }
 
 /// What to export.
@@ -98,6 +102,21 @@ pub enum Command {
     SavePlan,
     /// Draw an arm in one of its planned configurations (`None`: home).
     ShowPlannedPose(Side, Option<usize>),
+    /// The calibration settings, as the settings panel edits them (a changed step-1 method counts
+    /// as picked: a new dataset no longer sets its default).
+    SetSettings(Box<CalibrationSettings>),
+    /// Pick exactly the comparison's methods with these keys (unknown keys are ignored).
+    PickComparedMethods(Vec<String>),
+    /// The 3D view's display options, as its View section edits them.
+    SetViewOptions(Box<SceneOptions>),
+    /// Put the 3D view's camera (as dragging and scrolling in it do).
+    SetCamera(Box<OrbitCamera>),
+    /// Choose the exaggeration and colour range from the errors when a model arrives (or not).
+    SetAutoScale(bool),
+    /// The import view's inputs, as its fields edit them.
+    SetImportInputs(Box<ImportInputs>),
+    /// The planning view's inputs, as its fields edit them.
+    SetPlanInputs(Box<PlanInputs>),
 }
 
 impl Command {

@@ -14,7 +14,12 @@ use crate::source::FileSource;
 use nalgebra::Vector3;
 use std::path::{Path, PathBuf};
 
-pub use super::command::ImportSlot;
+/// A file of the import view: an arm's point file or its joint log.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ImportSlot {
+    pub side: Side,
+    pub joints: bool,
+}
 
 /// The robot and reflectors an import is made for: the workbench's current ones (or the built-in
 /// IRB 14000 with the paper's reflectors).

@@ -24,10 +24,13 @@ mod panels;
 pub mod plan_view;
 pub mod platform;
 pub mod plots;
+pub mod scene;
 pub mod session;
 mod status;
 pub mod table;
 pub mod task;
+#[cfg(test)]
+mod tests;
 pub mod uploads;
 pub mod viewport;
 #[cfg(target_arch = "wasm32")]
@@ -44,14 +47,15 @@ use eframe::egui;
 use events::{AppEvent, EventChannel};
 use files::{FileAccess, FileReply, PathPrompt};
 use frame_stats::FrameStats;
-use job::Jobs;
 use job::calibration::CalibrationJob;
 use job::comparison::ComparisonJob;
 use job::load::LoadJob;
 use job::meshes::MeshJob;
+use job::{JobContext, Jobs};
 use panels::PlotsView;
+use scene::Scene;
 use session::Session;
-use status::{RunTiming, Status, StatusReport};
+use status::{Errors, RunTiming, StatusLine, StatusReport};
 use std::path::PathBuf;
 use task::{Execution, FrameBudget};
 use viewport::ViewportState;
@@ -88,10 +92,9 @@ pub fn run_native(opts: AppLaunch) -> anyhow::Result<()> {
 /// The workbench application.
 pub struct WorkbenchApp {
     ctx: egui::Context,
-    session: Option<Session>,
-    /// The scene's revision: bumped by [`Self::scene_mut`], the one way to change the session (the
-    /// viewport rebuilds its scene when it changes).
-    generation: u64,
+    /// The session, changed only through its one mutator ([`Scene::edit`], [`Scene::replace`]: the
+    /// viewport rebuilds its scene when the revision they bump changes).
+    scene: Scene,
     settings: CalibrationSettings,
     /// The robot description used instead of the dataset's (set by a successful "Open URDF").
     urdf_override: Option<PathBuf>,
@@ -101,10 +104,10 @@ pub struct WorkbenchApp {
     jobs: Jobs,
     /// The comparison view.
     compare: compare::CompareView,
-    status: Status,
+    status: StatusLine,
     /// Has the user picked the step-1 method (else it follows each dataset's default)?
     method_picked: bool,
-    errors: Vec<String>,
+    errors: Errors,
     selection: Option<ConfigId>,
     scroll_table_to_selection: bool,
     viewport: ViewportState,
@@ -133,6 +136,7 @@ pub struct WorkbenchApp {
     panels_visible: bool,
     frame_stats: Option<FrameStats>,
     /// Fault injection for tests: the next calibration worker panics.
+    #[cfg(test)]
     panic_in_next_calibration: bool,
 }
 
@@ -176,17 +180,16 @@ impl WorkbenchApp {
         }
         let mut app = Self {
             ctx: cc.egui_ctx.clone(),
-            session: None,
-            generation: 0,
+            scene: Scene::default(),
             settings: CalibrationSettings::default(),
             urdf_override: launch.urdf,
             events: EventChannel::new(Some(cc.egui_ctx.clone())),
             execution: Execution::default(),
             jobs: Jobs::default(),
             compare: compare::CompareView::default(),
-            status: Status::Idle("Ready.".into()),
+            status: StatusLine::new("Ready."),
             method_picked: false,
-            errors: Vec::new(),
+            errors: Errors::default(),
             selection: None,
             scroll_table_to_selection: false,
             viewport,
@@ -206,6 +209,7 @@ impl WorkbenchApp {
             screenshot_pending: false,
             panels_visible: true,
             frame_stats: FrameStats::from_env(),
+            #[cfg(test)]
             panic_in_next_calibration: false,
         };
         let dataset = launch.dataset.unwrap_or_else(platform::example_dataset);
@@ -216,7 +220,7 @@ impl WorkbenchApp {
     // ---- state access (tests, embedding) -------------------------------------------------------
 
     pub fn session(&self) -> Option<&Session> {
-        self.session.as_ref()
+        self.scene.get()
     }
 
     /// Whether a dataset is being loaded.
@@ -238,25 +242,27 @@ impl WorkbenchApp {
         self.jobs.is_running(ComparisonJob::lane())
     }
 
-    // ---- the scene -------------------------------------------------------------------------------
+    // ---- the jobs' view of the app ---------------------------------------------------------------
 
-    /// The session, to change it: the one way to do so, so the scene's revision follows every change.
-    fn scene_mut(&mut self) -> Option<&mut Session> {
-        if self.session.is_some() {
-            self.generation += 1;
+    /// What a job may change ([`JobContext`]), lent for one of its events or to start one.
+    fn job_context(&mut self) -> JobContext<'_> {
+        JobContext {
+            status: &mut self.status,
+            errors: &mut self.errors,
+            scene: &mut self.scene,
+            settings: &mut self.settings,
+            method_picked: self.method_picked,
+            viewport: &mut self.viewport,
+            plot_stage: &mut self.plots.stage,
+            compare: &mut self.compare,
+            plan_view: &mut self.plan_view,
+            selection: &mut self.selection,
+            urdf_override: &mut self.urdf_override,
+            last_run: &mut self.last_run,
+            jobs: &mut self.jobs,
+            events: self.events.sender(),
+            execution: self.execution,
         }
-        self.session.as_mut()
-    }
-
-    /// A new session replaces the current one. Until the user picks a step-1 method, it follows the
-    /// data as the command line's default does (`solver::default_method`: the absolute positions for
-    /// one marker per hand measured together in one frame, else minimax).
-    fn set_session(&mut self, session: Session) {
-        self.generation += 1;
-        if !self.method_picked {
-            self.settings.method = crate::solver::default_method(&session.dataset);
-        }
-        self.session = Some(session);
     }
 
     /// The comparison view: the methods picked, the last comparison.
@@ -264,17 +270,9 @@ impl WorkbenchApp {
         &self.compare
     }
 
-    pub fn compare_view_mut(&mut self) -> &mut compare::CompareView {
-        &mut self.compare
-    }
-
     /// The planning view: its inputs, the plan, the pose shown.
     pub fn plan_view(&self) -> &plan_view::PlanView {
         &self.plan_view
-    }
-
-    pub fn plan_view_mut(&mut self) -> &mut plan_view::PlanView {
-        &mut self.plan_view
     }
 
     /// The import view: its inputs and preview.
@@ -282,13 +280,9 @@ impl WorkbenchApp {
         &self.import
     }
 
-    pub fn import_view_mut(&mut self) -> &mut import::ImportView {
-        &mut self.import
-    }
-
     /// Error messages currently shown.
     pub fn errors(&self) -> &[String] {
-        &self.errors
+        self.errors.list()
     }
 
     pub fn selection(&self) -> Option<ConfigId> {
@@ -298,7 +292,7 @@ impl WorkbenchApp {
     /// The convergence history shown: the running calibration's iterations so far, else the
     /// session's calibration's ([`job::calibration::history`]).
     pub fn history(&self) -> &[IterationRecord] {
-        job::calibration::history(&self.jobs, self.session.as_ref())
+        job::calibration::history(&self.jobs, self.scene.get())
     }
 
     /// The state as JSON, as a browser page publishes it ([`status`]).
@@ -306,11 +300,11 @@ impl WorkbenchApp {
         StatusReport {
             loading: self.is_loading(),
             calibrating: self.is_calibrating(),
-            status: &self.status,
-            errors: &self.errors,
+            status: self.status.get(),
+            errors: self.errors.list(),
             renderer: &self.renderer,
             iterations: self.history().len(),
-            session: self.session.as_ref(),
+            session: self.scene.get(),
             last_run: self.last_run,
         }
         .json()
@@ -330,13 +324,6 @@ impl WorkbenchApp {
         self.execution = execution;
     }
 
-    /// The calibration settings, to change them (the step-1 method then counts as picked: a new
-    /// dataset no longer sets its default).
-    pub fn settings_mut(&mut self) -> &mut CalibrationSettings {
-        self.method_picked = true;
-        &mut self.settings
-    }
-
     pub fn settings(&self) -> &CalibrationSettings {
         &self.settings
     }
@@ -348,11 +335,6 @@ impl WorkbenchApp {
     /// The measurement index the `side` arm is drawn in (`None`: home pose).
     pub fn viewport_pose(&self, side: Side) -> Option<usize> {
         self.viewport.poses[side]
-    }
-
-    /// The viewport's camera and display options.
-    pub fn viewport_mut(&mut self) -> &mut ViewportState {
-        &mut self.viewport
     }
 
     /// Show or hide everything but the viewport (for snapshots and presentations).
@@ -367,8 +349,8 @@ impl WorkbenchApp {
 
     /// Fault injection for tests: the next calibration's worker panics in its first step (a bug in
     /// the engine, as the workbench would meet it).
-    #[doc(hidden)]
-    pub fn inject_panic_in_next_calibration(&mut self) {
+    #[cfg(test)]
+    fn inject_panic_in_next_calibration(&mut self) {
         self.panic_in_next_calibration = true;
     }
 
@@ -379,7 +361,9 @@ impl WorkbenchApp {
     fn poll_events(&mut self) {
         for event in self.events.drain() {
             match event {
-                AppEvent::Task(id, report) => self.on_task_report(id, report),
+                AppEvent::Task(id, report) => {
+                    job::on_task_report(&mut self.job_context(), id, report)
+                }
                 AppEvent::File(reply) => self.on_file_reply(reply),
                 AppEvent::Screenshot(image) => self.on_screenshot(&image),
             }
@@ -413,9 +397,7 @@ impl WorkbenchApp {
     fn on_file_reply(&mut self, reply: FileReply) {
         match reply {
             FileReply::Open(kind, path) => self.apply(Command::open(kind, path)),
-            FileReply::Saved(path) => {
-                self.status = Status::Idle(format!("Saved {}.", path.display()));
-            }
+            FileReply::Saved(path) => self.status.idle(format!("Saved {}.", path.display())),
             FileReply::Failed(e) => self.errors.push(format!("save failed: {e}")),
             FileReply::Cancelled => {}
         }
@@ -445,11 +427,11 @@ impl WorkbenchApp {
         let window = ui.available_size();
         let loading = self.is_loading();
         let calibrating = self.is_calibrating();
-        let session = self.session.as_ref();
+        let session = self.scene.get();
         egui::Panel::bottom("status bar").show(ui, |ui| {
             panels::StatusBar {
-                errors: &self.errors,
-                status: &self.status,
+                errors: self.errors.list(),
+                status: self.status.get(),
                 loading,
                 calibration: self.jobs.task(CalibrationJob::lane()),
                 session,
@@ -558,10 +540,10 @@ impl eframe::App for WorkbenchApp {
         if self.panels_visible && self.plan_view.open {
             let state = panels::PlanContext {
                 planning: self.jobs.is_running(job::plan::PlanJob::lane()),
-                has_dataset: self.session.is_some(),
+                has_dataset: self.scene.get().is_some(),
                 robot: self
-                    .session
-                    .as_ref()
+                    .scene
+                    .get()
                     .map_or_else(|| "the built-in IRB 14000".to_string(), |s| s.robot.name()),
             };
             panels::plan_ui(ui.ctx(), &mut self.plan_view, state, &mut commands);
@@ -589,7 +571,7 @@ impl eframe::App for WorkbenchApp {
         }
         if self.panels_visible && self.compare.open {
             let state = panels::CompareState {
-                has_session: self.session.is_some(),
+                has_session: self.scene.get().is_some(),
                 comparing: self.is_comparing(),
                 calibrating: self.is_calibrating(),
             };
@@ -600,10 +582,10 @@ impl eframe::App for WorkbenchApp {
             egui::CentralPanel::default()
                 .frame(egui::Frame::NONE)
                 .show(ui, |ui| {
-                    let session = self.session.as_ref();
+                    let session = self.scene.get();
                     let clicked =
                         self.viewport
-                            .ui(ui, frame, session, self.generation, self.selection);
+                            .ui(ui, frame, session, self.scene.revision(), self.selection);
                     commands.extend(clicked);
                 });
         }

@@ -1,4 +1,5 @@
-//! What the workbench is doing: the status line ([`Status`]), the last run's timing ([`RunTiming`]),
+//! What the workbench is doing: the status line ([`Status`], written only through its owner
+//! [`StatusLine`]), the error messages shown ([`Errors`], their one writer), the last run's timing ([`RunTiming`]),
 //! and the state as JSON ([`StatusReport`]) for a page that embeds the workbench and for the browser
 //! test (published to `#dualcal-status` by [`super::platform::publish_status`] whenever it changes):
 //! what it is doing, the status line and errors, the renderer, the last run's timing and, after a
@@ -18,6 +19,53 @@ pub enum Status {
         stage: Option<Stage>,
         iteration: usize,
     },
+}
+
+/// The status line's owner, its one writer: whatever says what the workbench is doing calls it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StatusLine(Status);
+
+impl StatusLine {
+    pub fn new(text: impl Into<String>) -> Self {
+        Self(Status::Idle(text.into()))
+    }
+
+    /// What it says.
+    pub fn get(&self) -> &Status {
+        &self.0
+    }
+
+    /// Idle, saying `text`.
+    pub fn idle(&mut self, text: impl Into<String>) {
+        self.0 = Status::Idle(text.into());
+    }
+
+    /// A calibration runs, at `iteration` of `stage` (`None`: setting up).
+    pub fn running(&mut self, stage: Option<Stage>, iteration: usize) {
+        self.0 = Status::Running { stage, iteration };
+    }
+}
+
+/// The error messages shown (oldest first), their one writer: whatever reports an error pushes it
+/// here; the user dismisses them one by one.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Errors(Vec<String>);
+
+impl Errors {
+    pub fn push(&mut self, message: impl Into<String>) {
+        self.0.push(message.into());
+    }
+
+    /// Remove the message at `k` (nothing if there is none).
+    pub fn dismiss(&mut self, k: usize) {
+        if k < self.0.len() {
+            self.0.remove(k);
+        }
+    }
+
+    pub fn list(&self) -> &[String] {
+        &self.0
+    }
 }
 
 /// How the last calibration went in time: the wall time, and (stepped in frames) the frames' work.

@@ -1,22 +1,25 @@
 //! The workbench's background jobs, held in one collection ([`Jobs`]).
 //!
 //! A job is a [`Work`] (what runs off the frame, reporting events of its own type) and a [`Job`]
-//! (what the app does with those events), started with [`WorkbenchApp::start_job`]. The collection
+//! (what the app does with those events), started with [`JobContext::start_job`]. A job handles its
+//! events with a [`JobContext`], what it may change of the workbench, never the whole app. The collection
 //! routes each task's events to its job, steps the tasks that run in frames, and drops the jobs of a
 //! dataset when another one loads. One job runs per [`Lane`]; starting one replaces the job running in
 //! its lane (dropping a task cancels it).
 //!
-//! A new background job is one file here: its event type, its `Work` and its `Job` impl, and the
-//! command (or event) that starts it calls `start_job`.
+//! A new background job is one file here: its event type, its `Work` and its `Job` impl, and a
+//! function that starts it (given the [`JobContext`]), which the command (or event) that starts it calls.
 
 pub mod calibration;
 pub mod comparison;
+pub mod context;
 pub mod load;
 pub mod meshes;
 pub mod plan;
 
-use super::WorkbenchApp;
-use super::task::{BackgroundTask, TaskId, TaskReport, Work};
+use super::events::EventSender;
+use super::task::{BackgroundTask, Execution, TaskId, TaskReport, Work};
+pub use context::JobContext;
 use std::any::{Any, TypeId};
 use std::time::Duration;
 
@@ -56,13 +59,13 @@ pub trait Job: Sized + 'static {
     /// One of its work's events; [`Flow::Ended`] after its last.
     fn on_event(
         &mut self,
-        app: &mut WorkbenchApp,
+        cx: &mut JobContext<'_>,
         task: &BackgroundTask,
         event: Self::Event,
     ) -> Flow;
 
     /// The work stopped without reporting its end (a panic); the job has ended.
-    fn on_failed(&mut self, app: &mut WorkbenchApp, task: &BackgroundTask, message: String);
+    fn on_failed(&mut self, cx: &mut JobContext<'_>, task: &BackgroundTask, message: String);
 }
 
 /// A job with its event type hidden.
@@ -72,7 +75,7 @@ trait AnyJob {
 
     fn on_report(
         &mut self,
-        app: &mut WorkbenchApp,
+        cx: &mut JobContext<'_>,
         task: &BackgroundTask,
         report: TaskReport,
     ) -> Flow;
@@ -85,18 +88,18 @@ impl<J: Job> AnyJob for J {
 
     fn on_report(
         &mut self,
-        app: &mut WorkbenchApp,
+        cx: &mut JobContext<'_>,
         task: &BackgroundTask,
         report: TaskReport,
     ) -> Flow {
         match report {
             TaskReport::Event(event) => match event.downcast::<J::Event>() {
-                Ok(event) => self.on_event(app, task, *event),
+                Ok(event) => self.on_event(cx, task, *event),
                 // Not its work's (cannot happen: a task reports its work's type).
                 Err(_) => Flow::Running,
             },
             TaskReport::Failed(message) => {
-                self.on_failed(app, task, message);
+                self.on_failed(cx, task, message);
                 Flow::Ended
             }
         }
@@ -166,19 +169,21 @@ impl Jobs {
     }
 }
 
-impl WorkbenchApp {
-    /// Start `work` on a background task, its events handled by `job`; the job running in the same
-    /// lane is replaced.
-    pub(super) fn start_job<J: Job, W: Work<Event = J::Event>>(
+impl Jobs {
+    /// Start `work` on a background task reporting to `events`, its events handled by `job`; the job
+    /// running in the same lane is replaced.
+    pub fn start<J: Job, W: Work<Event = J::Event>>(
         &mut self,
         name: &str,
         job: J,
         work: W,
+        events: &EventSender,
+        execution: Execution,
     ) -> std::io::Result<()> {
         let lane = job.lane();
-        self.jobs.stop(lane);
-        let task = BackgroundTask::start(name, work, self.events.sender(), self.execution)?;
-        self.jobs.running.push(Running {
+        self.stop(lane);
+        let task = BackgroundTask::start(name, work, events, execution)?;
+        self.running.push(Running {
             lane,
             survives_load: job.survives_load(),
             task,
@@ -186,19 +191,19 @@ impl WorkbenchApp {
         });
         Ok(())
     }
+}
 
-    /// Hand a task's report to its job; reports of a task that was replaced or dropped are ignored.
-    /// The job is out of the collection while it handles the report (and stays out once it ended).
-    pub(super) fn on_task_report(&mut self, id: TaskId, report: TaskReport) {
-        let Some(at) = self.jobs.running.iter().position(|r| r.task.id() == id) else {
-            return;
-        };
-        let mut running = self.jobs.running.remove(at);
-        let flow = running.job.on_report(self, &running.task, report);
-        // Unless it ended, or a job was started in its lane meanwhile.
-        if flow == Flow::Running && !self.jobs.is_running(running.lane) {
-            let at = at.min(self.jobs.running.len());
-            self.jobs.running.insert(at, running);
-        }
+/// Hand a task's report to its job; reports of a task that was replaced or dropped are ignored.
+/// The job is out of the collection while it handles the report (and stays out once it ended).
+pub fn on_task_report(cx: &mut JobContext<'_>, id: TaskId, report: TaskReport) {
+    let Some(at) = cx.jobs.running.iter().position(|r| r.task.id() == id) else {
+        return;
+    };
+    let mut running = cx.jobs.running.remove(at);
+    let flow = running.job.on_report(cx, &running.task, report);
+    // Unless it ended, or a job was started in its lane meanwhile.
+    if flow == Flow::Running && !cx.jobs.is_running(running.lane) {
+        let at = at.min(cx.jobs.running.len());
+        cx.jobs.running.insert(at, running);
     }
 }

@@ -2,12 +2,9 @@
 //! predicted σ), so that in a browser the page draws between the arms. Each arm's plan goes into the
 //! planning view as it arrives; an error ends the plan with its reason.
 
-use super::super::WorkbenchApp;
-use super::super::plan_view::{ArmOutcome, PlanTarget};
-use super::super::status::Status;
-use super::super::task::{Step, TaskContext, Work};
-use super::{Flow, Job, Lane};
-use crate::app::task::BackgroundTask;
+use super::{Flow, Job, JobContext, Lane};
+use crate::app::plan_view::{ArmOutcome, PlanTarget};
+use crate::app::task::{BackgroundTask, Step, TaskContext, Work};
 use crate::plan::{PlanOptions, plan_arm};
 use crate::side::Side;
 
@@ -65,9 +62,9 @@ impl PlanJob {
 impl Job for PlanJob {
     type Event = PlanEvent;
 
-    fn on_event(&mut self, app: &mut WorkbenchApp, _: &BackgroundTask, event: PlanEvent) -> Flow {
+    fn on_event(&mut self, cx: &mut JobContext<'_>, _: &BackgroundTask, event: PlanEvent) -> Flow {
         let (side, outcome) = event;
-        let view = &mut app.plan_view;
+        let view = &mut *cx.plan_view;
         match outcome {
             Ok(arm) => {
                 if let Some(result) = &mut view.result {
@@ -77,7 +74,7 @@ impl Job for PlanJob {
                     .result
                     .as_ref()
                     .is_some_and(|r| r.arms.left.is_some() && r.arms.right.is_some());
-                app.status = Status::Idle(if done {
+                cx.status.idle(if done {
                     "Plan made.".into()
                 } else {
                     format!("Planning: the {side} arm is planned…")
@@ -86,39 +83,37 @@ impl Job for PlanJob {
             }
             Err(e) => {
                 view.error = Some(e);
-                app.status = Status::Idle("Planning failed (see the planning view).".into());
+                cx.status.idle("Planning failed (see the planning view).");
                 Flow::Ended
             }
         }
     }
 
-    fn on_failed(&mut self, app: &mut WorkbenchApp, _: &BackgroundTask, message: String) {
-        app.plan_view.error = Some(message);
-        app.status = Status::Idle("Planning failed (see the planning view).".into());
+    fn on_failed(&mut self, cx: &mut JobContext<'_>, _: &BackgroundTask, message: String) {
+        cx.plan_view.error = Some(message);
+        cx.status.idle("Planning failed (see the planning view).");
     }
 }
 
-impl WorkbenchApp {
-    /// Plan both arms on a background task with the planning view's inputs, for the workbench's
-    /// robot and reflectors.
-    pub(in crate::app) fn start_plan(&mut self, target: PlanTarget) {
-        let options = match self.plan_view.options(&target) {
-            Ok(o) => o,
-            Err(e) => {
-                self.plan_view.error = Some(e);
-                return;
-            }
-        };
-        self.plan_view.started(target.clone(), options.clone());
-        let work = PlanWork {
-            target,
-            options,
-            // Popped from the end: the left arm first.
-            todo: vec![Side::Right, Side::Left],
-        };
-        match self.start_job("plan", PlanJob, work) {
-            Ok(()) => self.status = Status::Idle("Planning the left arm…".into()),
-            Err(e) => self.plan_view.error = Some(format!("cannot start planning: {e}")),
+/// Plan both arms on a background task with the planning view's inputs, for the workbench's robot
+/// and reflectors.
+pub fn start(cx: &mut JobContext<'_>, target: PlanTarget) {
+    let options = match cx.plan_view.options(&target) {
+        Ok(o) => o,
+        Err(e) => {
+            cx.plan_view.error = Some(e);
+            return;
         }
+    };
+    cx.plan_view.started(target.clone(), options.clone());
+    let work = PlanWork {
+        target,
+        options,
+        // Popped from the end: the left arm first.
+        todo: vec![Side::Right, Side::Left],
+    };
+    match cx.start_job("plan", PlanJob, work) {
+        Ok(()) => cx.status.idle("Planning the left arm…"),
+        Err(e) => cx.plan_view.error = Some(format!("cannot start planning: {e}")),
     }
 }
