@@ -191,12 +191,15 @@ fn meshes() -> anyhow::Result<()> {
     loaded(&mut harness)?;
     // Both arms at home, as the View section's "home" buttons put them.
     for k in 0..2 {
+        let Some(home) = harness.get_all_by_label("home").nth(k) else {
+            break;
+        };
+        home.scroll_to_me();
+        harness.run_steps(2);
         if let Some(home) = harness.get_all_by_label("home").nth(k) {
-            home.scroll_to_me();
-            harness.run_steps(2);
-            harness.get_all_by_label("home").nth(k).map(|n| n.click());
-            harness.run_steps(2);
+            home.click();
         }
+        harness.run_steps(2);
     }
     harness.state_mut().set_panels_visible(false);
     edit_view(&mut harness, |options, camera| {
@@ -250,8 +253,8 @@ fn beyond_geometry() -> anyhow::Result<()> {
     let mut harness = harness([1280.0, 800.0], Some(dir.path().to_path_buf()), true);
     loaded(&mut harness)?;
     let mut settings = harness.state().settings().clone();
-    settings.model = dualcal::kinematics::ErrorTerms::from_name("full")
-        .ok_or_else(|| anyhow::anyhow!("no full model"))?;
+    settings.model =
+        dualcal::kinematics::ErrorTerms::from_name("full").map_err(anyhow::Error::msg)?;
     harness
         .state_mut()
         .apply(Command::SetSettings(Box::new(settings)));
