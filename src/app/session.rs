@@ -96,7 +96,7 @@ impl<'a> After<'a> {
     }
 }
 
-/// The robot's meshes, loaded and packed off the UI thread after the robot ([`super::work::MeshWork`]).
+/// The robot's meshes, loaded and packed off the UI thread after the robot ([`super::job::meshes::MeshWork`]).
 #[derive(Clone, Debug, Default)]
 pub enum RobotMeshes {
     /// The description has no mesh geometry.

@@ -1,6 +1,6 @@
 //! Work done off the frame: loading a dataset and calibrating are [`BackgroundTask`]s.
 //!
-//! A task's [`Work`] advances in steps ([`super::work`]: a load is one step, a calibration one outer
+//! A task's [`Work`] advances in steps (each job's own, [`super::job`]: a load is one step, a calibration one outer
 //! iteration per step) and reports events of its own type ([`Work::Event`]) on the app's event
 //! channel. A native build runs
 //! each task on its own thread; where there are no threads (a browser build) the same work is stepped
