@@ -444,120 +444,144 @@ pub fn check_joint_limits(
         let Some((row, j)) = first_violation(arm, limits) else {
             continue;
         };
-        let m = &arm.measurements[row];
-        let linear = &arm.linear_joints;
-        let bad_values = arm
-            .measurements
-            .iter()
-            .map(|m| {
-                m.q_rad
-                    .iter()
-                    .zip(limits)
-                    .enumerate()
-                    .filter(|(i, (v, l))| !within(&[**v], &[**l], &[arm.is_linear_joint(*i)]))
-                    .count()
-            })
-            .sum::<usize>();
-        let mut hints = Vec::new();
-        if bad_values > 1 {
-            hints.push(format!(
-                "{} more value(s) of this file are outside their limits",
-                bad_values - 1
-            ));
-        }
-        let n = m.q_rad.len().min(limits.len());
-        let rows_within = |f: &dyn Fn(&[f64]) -> Vec<f64>| {
-            arm.measurements
+        let hints = joint_limit_hints(arm, limits, row);
+        return Err(joint_limit_error(arm, limits, row, j, &hints));
+    }
+    Ok(())
+}
+
+/// What [`check_joint_limits`] adds to the refusal of `arm`'s first value outside its limits (in row
+/// `row`): how many others are outside theirs, and a likely cause.
+fn joint_limit_hints(arm: &ArmData, limits: &[(f64, f64)], row: usize) -> Vec<String> {
+    let bad_values = arm
+        .measurements
+        .iter()
+        .map(|m| {
+            m.q_rad
                 .iter()
-                .all(|m| within(&f(&m.q_rad), limits, linear))
-        };
-        // The angles only: a prismatic joint's travel is mm whatever `units.angle` says.
-        let max_abs = arm
-            .measurements
+                .zip(limits)
+                .enumerate()
+                .filter(|(i, (v, l))| !within(&[**v], &[**l], &[arm.is_linear_joint(*i)]))
+                .count()
+        })
+        .sum::<usize>();
+    let mut hints = Vec::new();
+    if bad_values > 1 {
+        hints.push(format!(
+            "{} more value(s) of this file are outside their limits",
+            bad_values - 1
+        ));
+    }
+    hints.extend(joint_limit_cause(arm, limits, &arm.measurements[row]));
+    hints
+}
+
+/// The likely cause of joint values outside their limits, where one fits: degrees in a file declared
+/// in radians, the columns in ABB axis order, or two columns swapped in the row `m`.
+fn joint_limit_cause(arm: &ArmData, limits: &[(f64, f64)], m: &Measurement) -> Option<String> {
+    let linear = &arm.linear_joints;
+    let n = m.q_rad.len().min(limits.len());
+    let rows_within = |f: &dyn Fn(&[f64]) -> Vec<f64>| {
+        arm.measurements
             .iter()
-            .flat_map(|m| m.q_rad.iter().enumerate())
-            .filter(|(i, _)| !arm.is_linear_joint(*i))
-            .fold(0.0f64, |a, (_, v)| a.max(v.abs()));
-        if max_abs > std::f64::consts::TAU
-            && rows_within(&|q| {
-                q.iter()
-                    .enumerate()
-                    .map(|(i, v)| {
-                        if arm.is_linear_joint(i) {
-                            *v
-                        } else {
-                            v.to_radians()
-                        }
-                    })
-                    .collect()
-            })
-        {
-            hints.push(
-                "every value of the file would be within the limits in degrees: does `units.angle` \
-                 in dataset.toml say rad for a file in degrees?"
-                    .into(),
-            );
-        } else if n == crate::kinematics::ABB_AXIS_OF_CHAIN.len()
-            && linear.is_empty()
-            && rows_within(&|q| {
-                crate::kinematics::ABB_AXIS_OF_CHAIN
-                    .iter()
-                    .map(|&axis| q[axis - 1])
-                    .collect()
-            })
-        {
-            hints.push(
-                "the columns look like ABB axis order 1–7; q1..q7 are in chain order (ABB axes 1, 2, \
-                 7, 3, 4, 5, 6)"
-                    .into(),
-            );
-        } else {
-            let swaps: Vec<String> = (0..n)
-                .flat_map(|a| (a + 1..n).map(move |b| (a, b)))
-                .filter(|&(a, b)| {
-                    let mut q = m.q_rad.to_vec();
-                    q.swap(a, b);
-                    within(&q, limits, linear)
+            .all(|m| within(&f(&m.q_rad), limits, linear))
+    };
+    // The angles only: a prismatic joint's travel is mm whatever `units.angle` says.
+    let max_abs = arm
+        .measurements
+        .iter()
+        .flat_map(|m| m.q_rad.iter().enumerate())
+        .filter(|(i, _)| !arm.is_linear_joint(*i))
+        .fold(0.0f64, |a, (_, v)| a.max(v.abs()));
+    if max_abs > std::f64::consts::TAU
+        && rows_within(&|q| {
+            q.iter()
+                .enumerate()
+                .map(|(i, v)| {
+                    if arm.is_linear_joint(i) {
+                        *v
+                    } else {
+                        v.to_radians()
+                    }
                 })
-                .map(|(a, b)| format!("q{} and q{}", a + 1, b + 1))
-                .take(3)
-                .collect();
-            if let Some((first, others)) = swaps.split_first() {
-                let others = if others.is_empty() {
-                    String::new()
-                } else {
-                    format!(" (or {})", others.join(", or "))
-                };
-                hints.push(format!(
-                    "swapping {first}{others} would put this row within the limits: a joint logged \
-                     in the wrong column?"
-                ));
-            }
-        }
-        let (lo, hi) = limits[j];
-        let hint: String = hints.iter().map(|h| format!("; {h}")).collect();
-        if arm.is_linear_joint(j) {
-            return Err(DatasetError::JointTravel {
-                path: arm.file.clone(),
-                line: m.line,
-                field: format!("q{}", j + 1),
-                value_mm: m.q_rad[j],
-                lower_mm: lo,
-                upper_mm: hi,
-                hint,
-            });
-        }
-        return Err(DatasetError::JointLimit {
+                .collect()
+        })
+    {
+        Some(
+            "every value of the file would be within the limits in degrees: does `units.angle` \
+             in dataset.toml say rad for a file in degrees?"
+                .into(),
+        )
+    } else if n == crate::kinematics::ABB_AXIS_OF_CHAIN.len()
+        && linear.is_empty()
+        && rows_within(&|q| {
+            crate::kinematics::ABB_AXIS_OF_CHAIN
+                .iter()
+                .map(|&axis| q[axis - 1])
+                .collect()
+        })
+    {
+        Some(
+            "the columns look like ABB axis order 1–7; q1..q7 are in chain order (ABB axes 1, 2, \
+             7, 3, 4, 5, 6)"
+                .into(),
+        )
+    } else {
+        let swaps: Vec<String> = (0..n)
+            .flat_map(|a| (a + 1..n).map(move |b| (a, b)))
+            .filter(|&(a, b)| {
+                let mut q = m.q_rad.to_vec();
+                q.swap(a, b);
+                within(&q, limits, linear)
+            })
+            .map(|(a, b)| format!("q{} and q{}", a + 1, b + 1))
+            .take(3)
+            .collect();
+        let (first, others) = swaps.split_first()?;
+        let others = if others.is_empty() {
+            String::new()
+        } else {
+            format!(" (or {})", others.join(", or "))
+        };
+        Some(format!(
+            "swapping {first}{others} would put this row within the limits: a joint logged \
+             in the wrong column?"
+        ))
+    }
+}
+
+/// The refusal of joint `j`'s value in row `row` of `arm`, outside its limits: a travel (mm) for a
+/// prismatic joint, an angle otherwise.
+fn joint_limit_error(
+    arm: &ArmData,
+    limits: &[(f64, f64)],
+    row: usize,
+    j: usize,
+    hints: &[String],
+) -> DatasetError {
+    let m = &arm.measurements[row];
+    let (lo, hi) = limits[j];
+    let hint: String = hints.iter().map(|h| format!("; {h}")).collect();
+    if arm.is_linear_joint(j) {
+        return DatasetError::JointTravel {
             path: arm.file.clone(),
             line: m.line,
             field: format!("q{}", j + 1),
-            value_rad: m.q_rad[j],
-            lower_rad: lo,
-            upper_rad: hi,
+            value_mm: m.q_rad[j],
+            lower_mm: lo,
+            upper_mm: hi,
             hint,
-        });
+        };
     }
-    Ok(())
+    DatasetError::JointLimit {
+        path: arm.file.clone(),
+        line: m.line,
+        field: format!("q{}", j + 1),
+        value_rad: m.q_rad[j],
+        lower_rad: lo,
+        upper_rad: hi,
+        hint,
+    }
 }
 
 /// Rows measured together (the manifest's `measured_together = true`): a left row and a right row with
