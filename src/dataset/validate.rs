@@ -7,7 +7,7 @@
 use super::error::DatasetError;
 use super::units::LengthUnit;
 use super::{ArmData, Dataset, Measurement};
-use crate::kinematics::reflector_pairs;
+use crate::kinematics::{reflector_pairs, reflector_sides};
 use crate::side::PerSide;
 use crate::textfile::excerpt;
 use nalgebra::Vector3;
@@ -116,21 +116,13 @@ pub(super) fn data_file_in(dir: &Path, file: &str) -> Result<PathBuf, String> {
     Ok(path)
 }
 
-/// Distances between the reflectors, in the order of [`reflector_pairs`]: |ab|, |bc|, |ca| for three.
-pub(crate) fn sides(p: &[Vector3<f64>]) -> Vec<f64> {
-    reflector_pairs(p.len())
-        .into_iter()
-        .map(|(i, j)| (p[i] - p[j]).norm())
-        .collect()
-}
-
 /// Smallest height of a triangle (twice its area over its longest side), mm; 0 when degenerate; for
 /// other than three points, infinite (no triangle to be flat).
 pub(crate) fn min_height(p: &[Vector3<f64>]) -> f64 {
     if p.len() != 3 {
         return f64::INFINITY;
     }
-    let longest = sides(p).into_iter().fold(0.0, f64::max);
+    let longest = reflector_sides(p).into_iter().fold(0.0, f64::max);
     if longest > 0.0 {
         (p[1] - p[0]).cross(&(p[2] - p[0])).norm() / longest
     } else {
@@ -155,7 +147,7 @@ fn fmt_len(x_mm: f64) -> String {
 /// least [`MIN_NOMINAL_SIDE_MM`], reflectors within [`MAX_NOMINAL_REFLECTOR_MM`] of the flange, not
 /// collinear.
 pub(super) fn nominal_triangle(t: &[Vector3<f64>], unit: LengthUnit) -> Result<(), String> {
-    let s = sides(t);
+    let s = reflector_sides(t);
     let shortest = s.iter().copied().fold(f64::INFINITY, f64::min);
     let farthest = t.iter().map(|p| p.norm()).fold(0.0, f64::max);
     if !s.is_empty() && shortest < MIN_NOMINAL_SIDE_MM {
@@ -279,7 +271,7 @@ pub(super) fn check_arm(
     nominal_mm: &[Vector3<f64>],
     names: &[String],
 ) -> Result<(), DatasetError> {
-    let nominal_sides = sides(nominal_mm);
+    let nominal_sides = reflector_sides(nominal_mm);
     let pairs = reflector_pairs(nominal_mm.len());
     let mean = |s: &[f64]| s.iter().sum::<f64>() / s.len() as f64;
     // With one reflector there is no distance on the flange to check the unit by.
@@ -290,7 +282,7 @@ pub(super) fn check_arm(
         crate::stats::median(
             &rows
                 .iter()
-                .map(|m| mean(&sides(&m.tracker_points_mm)))
+                .map(|m| mean(&reflector_sides(&m.tracker_points_mm)))
                 .collect::<Vec<_>>(),
         )
     };
@@ -329,7 +321,7 @@ pub(super) fn check_arm(
     let mut seen: HashMap<Vec<u64>, &Measurement> = HashMap::new();
     for m in rows {
         let p = &m.tracker_points_mm;
-        let s = sides(p);
+        let s = reflector_sides(p);
         let (k, shortest) = s
             .iter()
             .copied()
