@@ -21,7 +21,7 @@ use crate::dataset::{
     TrackerSpec, Units,
 };
 use crate::kinematics::SharedJoints;
-use crate::output::{OutputError, Overwrite, refuse_overwrite_input, write_atomic};
+use crate::output::{FileError, OutputError, Overwrite, refuse_overwrite_input, write_atomic};
 use crate::robot::RobotDescription;
 use crate::side::{PerSide, Side};
 use crate::source::FileSource;
@@ -552,7 +552,7 @@ pub fn write(
     dataset::save_with(&ds, out, Units::MM_RAD, Overwrite::Allow)?;
     let path = out.join(REPORT_FILE);
     write_atomic(&path, imported.report.to_string().as_bytes())
-        .map_err(|error| ImportError::Write { path, error })?;
+        .map_err(|error| FileError::write(&path, error))?;
     Ok(())
 }
 
