@@ -29,6 +29,50 @@ pub enum OutputError {
     Exists { path: PathBuf },
 }
 
+/// A file that could not be read or written, with the system's reason: what the dataset, import and
+/// parameter-file errors say of it. (The message includes `error`'s, so it is not also the error's
+/// `source`, which `{:#}` would print a second time.)
+#[derive(Debug, thiserror::Error)]
+pub enum FileError {
+    /// A file is missing or unreadable.
+    #[error("{path}: cannot read: {error}")]
+    Read {
+        path: PathBuf,
+        error: std::io::Error,
+    },
+    /// A file could not be written.
+    #[error("{path}: cannot write: {error}")]
+    Write {
+        path: PathBuf,
+        error: std::io::Error,
+    },
+}
+
+impl FileError {
+    /// `path` could not be read.
+    pub fn read(path: &Path, error: std::io::Error) -> Self {
+        FileError::Read {
+            path: path.to_path_buf(),
+            error,
+        }
+    }
+
+    /// `path` could not be written.
+    pub fn write(path: &Path, error: std::io::Error) -> Self {
+        FileError::Write {
+            path: path.to_path_buf(),
+            error,
+        }
+    }
+
+    /// The file the error is about.
+    pub fn path(&self) -> &Path {
+        match self {
+            FileError::Read { path, .. } | FileError::Write { path, .. } => path,
+        }
+    }
+}
+
 /// Write `bytes` to `path` atomically: a temporary file in the same directory is written, flushed to
 /// disk and renamed over `path`. The parent directory must exist. On any error (a full disk, no
 /// permission, `path` is a directory) the temporary file is removed, an existing `path` is left as it

@@ -2,6 +2,7 @@
 //! nothing panics on any input.
 
 use dualcal::dataset::{self, Dataset, DatasetError, MIN_CONFIGS, Split};
+use dualcal::output::FileError;
 use dualcal::side::Side;
 use nalgebra::{UnitQuaternion, Vector3};
 use rand::{Rng, SeedableRng};
@@ -253,7 +254,9 @@ fn split_column_is_optional_and_defaults_to_cal() {
 fn missing_manifest() {
     let dir = tempfile::tempdir().unwrap();
     let err = dataset::load(dir.path()).unwrap_err();
-    assert!(matches!(err, DatasetError::Io { ref path, .. } if path.ends_with("dataset.toml")));
+    assert!(
+        matches!(err, DatasetError::File(FileError::Read { ref path, .. }) if path.ends_with("dataset.toml"))
+    );
     assert_names(&err, &["dataset.toml", "cannot read"]);
 }
 
@@ -262,7 +265,9 @@ fn missing_csv_file() {
     let f = Fixture::valid();
     std::fs::remove_file(f.file("right.csv")).unwrap();
     let err = f.load().unwrap_err();
-    assert!(matches!(err, DatasetError::Io { ref path, .. } if path.ends_with("right.csv")));
+    assert!(
+        matches!(err, DatasetError::File(FileError::Read { ref path, .. }) if path.ends_with("right.csv"))
+    );
     assert_names(&err, &["right.csv"]);
 }
 

@@ -324,23 +324,7 @@ pub(super) fn read_arm(
     let mut records = reader.records();
     let end_line = text.lines().count() + 1;
     let header = match records.next() {
-        None => {
-            return Err(DatasetError::Header {
-                path: path.to_path_buf(),
-                line: end_line,
-                field: "id".into(),
-                message: format!(
-                    "missing header{}; expected id,q1,…,qN,{},[{SPLIT_COLUMN}] after any `#` comment \
-                     lines",
-                    if text.trim().is_empty() {
-                        " (the file is empty)"
-                    } else {
-                        ""
-                    },
-                    point_columns(reflector_names).join(",")
-                ),
-            });
-        }
+        None => return Err(missing_header(path, end_line, &text, reflector_names)),
         Some(Ok(r)) => r,
         Some(Err(e)) => {
             let line = line_at(e.position(), 1);
@@ -365,30 +349,7 @@ pub(super) fn read_arm(
         let line = line_at(rec.position(), last_line + 1);
         last_line = line;
         let id = rec.get(0).unwrap_or("");
-        if id.is_empty() {
-            return Err(DatasetError::Field {
-                path: path.to_path_buf(),
-                line,
-                field: "id".into(),
-                message: "empty id; every row needs a unique id".into(),
-            });
-        }
-        if let Err(message) = validate::usable_id(id) {
-            return Err(DatasetError::Field {
-                path: path.to_path_buf(),
-                line,
-                field: "id".into(),
-                message,
-            });
-        }
-        if let Some(&first_line) = first_line_of_id.get(id) {
-            return Err(DatasetError::DuplicateId {
-                path: path.to_path_buf(),
-                line,
-                id: excerpt(id),
-                first_line,
-            });
-        }
+        check_id(path, line, id, &first_line_of_id)?;
         first_line_of_id.insert(id.to_string(), line);
         out.push(parse_row(
             path,
@@ -419,6 +380,65 @@ pub(super) fn read_arm(
         reflector_names,
     )?;
     Ok(out)
+}
+
+/// The refusal of a CSV without a header line (`line`: where the header was expected).
+fn missing_header(
+    path: &Path,
+    line: usize,
+    text: &str,
+    reflector_names: &[String],
+) -> DatasetError {
+    DatasetError::Header {
+        path: path.to_path_buf(),
+        line,
+        field: "id".into(),
+        message: format!(
+            "missing header{}; expected id,q1,…,qN,{},[{SPLIT_COLUMN}] after any `#` comment \
+             lines",
+            if text.trim().is_empty() {
+                " (the file is empty)"
+            } else {
+                ""
+            },
+            point_columns(reflector_names).join(",")
+        ),
+    }
+}
+
+/// A row's id: not empty, usable, and not that of an earlier row (`first_line_of_id`: the line of
+/// each id so far).
+fn check_id(
+    path: &Path,
+    line: usize,
+    id: &str,
+    first_line_of_id: &std::collections::HashMap<String, usize>,
+) -> Result<(), DatasetError> {
+    if id.is_empty() {
+        return Err(DatasetError::Field {
+            path: path.to_path_buf(),
+            line,
+            field: "id".into(),
+            message: "empty id; every row needs a unique id".into(),
+        });
+    }
+    if let Err(message) = validate::usable_id(id) {
+        return Err(DatasetError::Field {
+            path: path.to_path_buf(),
+            line,
+            field: "id".into(),
+            message,
+        });
+    }
+    if let Some(&first_line) = first_line_of_id.get(id) {
+        return Err(DatasetError::DuplicateId {
+            path: path.to_path_buf(),
+            line,
+            id: excerpt(id),
+            first_line,
+        });
+    }
+    Ok(())
 }
 
 #[cfg(test)]

@@ -1,6 +1,6 @@
 //! Typed loading and saving errors, and reading a text file.
 
-use crate::output::OutputError;
+use crate::output::{FileError, OutputError};
 use crate::side::Side;
 use std::path::{Path, PathBuf};
 
@@ -21,19 +21,9 @@ fn at(path: &Path, line: &Option<usize>) -> String {
 /// (1-based) and, where there is one, the field (CSV column or TOML key).
 #[derive(Debug, thiserror::Error)]
 pub enum DatasetError {
-    /// A file is missing or unreadable. (The message includes `error`'s, so it is not also the
-    /// error's `source`, which `{:#}` would print a second time.)
-    #[error("{path}: cannot read: {error}")]
-    Io {
-        path: PathBuf,
-        error: std::io::Error,
-    },
-    /// A file could not be written.
-    #[error("{path}: cannot write: {error}")]
-    Write {
-        path: PathBuf,
-        error: std::io::Error,
-    },
+    /// A file is missing or unreadable, or could not be written.
+    #[error(transparent)]
+    File(#[from] FileError),
     /// A file is not valid UTF-8 text.
     #[error("{path}:{line}: not valid UTF-8 text (byte {byte} of the file); save it as UTF-8")]
     Encoding {
@@ -200,10 +190,7 @@ pub(super) fn read_text(
 ) -> Result<String, DatasetError> {
     use crate::textfile::{ReadError, TextProblem};
     crate::textfile::read_from(files, path).map_err(|e| match e {
-        ReadError::Io(error) => DatasetError::Io {
-            path: path.to_path_buf(),
-            error,
-        },
+        ReadError::Io(error) => FileError::read(path, error).into(),
         ReadError::Text(TextProblem::InvalidUtf8 { line, byte }) => DatasetError::Encoding {
             path: path.to_path_buf(),
             line,

@@ -5,7 +5,7 @@ use super::units::Units;
 use super::{
     ArmData, DATASET_FORMAT, Dataset, MANIFEST_FILE, MIN_CONFIGS, SPLIT_COLUMN, Split, csv_columns,
 };
-use crate::output::{Overwrite, refuse_existing, write_atomic};
+use crate::output::{FileError, Overwrite, refuse_existing, write_atomic};
 use crate::side::PerSide;
 use std::path::{Path, PathBuf};
 
@@ -125,10 +125,7 @@ fn arm_csv(
             w.write_record(&row)
                 .map_err(|e| content_err(e.to_string()))?;
         }
-        w.flush().map_err(|error| DatasetError::Write {
-            path: path.to_path_buf(),
-            error,
-        })?;
+        w.flush().map_err(|error| FileError::write(path, error))?;
     }
     Ok(bytes)
 }
@@ -243,15 +240,9 @@ pub fn save_with(
     )?;
     // Build everything before touching the disk.
     let files = dataset_files(dataset, dir, units)?;
-    std::fs::create_dir_all(dir).map_err(|error| DatasetError::Write {
-        path: dir.to_path_buf(),
-        error,
-    })?;
+    std::fs::create_dir_all(dir).map_err(|error| FileError::write(dir, error))?;
     for (path, bytes) in &files {
-        write_atomic(path, bytes).map_err(|error| DatasetError::Write {
-            path: path.clone(),
-            error,
-        })?;
+        write_atomic(path, bytes).map_err(|error| FileError::write(path, error))?;
     }
     Ok(())
 }

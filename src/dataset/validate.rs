@@ -7,7 +7,7 @@
 use super::error::DatasetError;
 use super::units::LengthUnit;
 use super::{ArmData, Dataset, Measurement};
-use crate::kinematics::reflector_pairs;
+use crate::kinematics::{reflector_pairs, reflector_sides};
 use crate::side::PerSide;
 use crate::textfile::excerpt;
 use nalgebra::Vector3;
@@ -116,21 +116,13 @@ pub(super) fn data_file_in(dir: &Path, file: &str) -> Result<PathBuf, String> {
     Ok(path)
 }
 
-/// Distances between the reflectors, in the order of [`reflector_pairs`]: |ab|, |bc|, |ca| for three.
-pub(crate) fn sides(p: &[Vector3<f64>]) -> Vec<f64> {
-    reflector_pairs(p.len())
-        .into_iter()
-        .map(|(i, j)| (p[i] - p[j]).norm())
-        .collect()
-}
-
 /// Smallest height of a triangle (twice its area over its longest side), mm; 0 when degenerate; for
 /// other than three points, infinite (no triangle to be flat).
 pub(crate) fn min_height(p: &[Vector3<f64>]) -> f64 {
     if p.len() != 3 {
         return f64::INFINITY;
     }
-    let longest = sides(p).into_iter().fold(0.0, f64::max);
+    let longest = reflector_sides(p).into_iter().fold(0.0, f64::max);
     if longest > 0.0 {
         (p[1] - p[0]).cross(&(p[2] - p[0])).norm() / longest
     } else {
@@ -155,7 +147,7 @@ fn fmt_len(x_mm: f64) -> String {
 /// least [`MIN_NOMINAL_SIDE_MM`], reflectors within [`MAX_NOMINAL_REFLECTOR_MM`] of the flange, not
 /// collinear.
 pub(super) fn nominal_triangle(t: &[Vector3<f64>], unit: LengthUnit) -> Result<(), String> {
-    let s = sides(t);
+    let s = reflector_sides(t);
     let shortest = s.iter().copied().fold(f64::INFINITY, f64::min);
     let farthest = t.iter().map(|p| p.norm()).fold(0.0, f64::max);
     if !s.is_empty() && shortest < MIN_NOMINAL_SIDE_MM {
@@ -279,7 +271,7 @@ pub(super) fn check_arm(
     nominal_mm: &[Vector3<f64>],
     names: &[String],
 ) -> Result<(), DatasetError> {
-    let nominal_sides = sides(nominal_mm);
+    let nominal_sides = reflector_sides(nominal_mm);
     let pairs = reflector_pairs(nominal_mm.len());
     let mean = |s: &[f64]| s.iter().sum::<f64>() / s.len() as f64;
     // With one reflector there is no distance on the flange to check the unit by.
@@ -290,7 +282,7 @@ pub(super) fn check_arm(
         crate::stats::median(
             &rows
                 .iter()
-                .map(|m| mean(&sides(&m.tracker_points_mm)))
+                .map(|m| mean(&reflector_sides(&m.tracker_points_mm)))
                 .collect::<Vec<_>>(),
         )
     };
@@ -329,7 +321,7 @@ pub(super) fn check_arm(
     let mut seen: HashMap<Vec<u64>, &Measurement> = HashMap::new();
     for m in rows {
         let p = &m.tracker_points_mm;
-        let s = sides(p);
+        let s = reflector_sides(p);
         let (k, shortest) = s
             .iter()
             .copied()
@@ -444,120 +436,144 @@ pub fn check_joint_limits(
         let Some((row, j)) = first_violation(arm, limits) else {
             continue;
         };
-        let m = &arm.measurements[row];
-        let linear = &arm.linear_joints;
-        let bad_values = arm
-            .measurements
-            .iter()
-            .map(|m| {
-                m.q_rad
-                    .iter()
-                    .zip(limits)
-                    .enumerate()
-                    .filter(|(i, (v, l))| !within(&[**v], &[**l], &[arm.is_linear_joint(*i)]))
-                    .count()
-            })
-            .sum::<usize>();
-        let mut hints = Vec::new();
-        if bad_values > 1 {
-            hints.push(format!(
-                "{} more value(s) of this file are outside their limits",
-                bad_values - 1
-            ));
-        }
-        let n = m.q_rad.len().min(limits.len());
-        let rows_within = |f: &dyn Fn(&[f64]) -> Vec<f64>| {
-            arm.measurements
+        let hints = joint_limit_hints(arm, limits, row);
+        return Err(joint_limit_error(arm, limits, row, j, &hints));
+    }
+    Ok(())
+}
+
+/// What [`check_joint_limits`] adds to the refusal of `arm`'s first value outside its limits (in row
+/// `row`): how many others are outside theirs, and a likely cause.
+fn joint_limit_hints(arm: &ArmData, limits: &[(f64, f64)], row: usize) -> Vec<String> {
+    let bad_values = arm
+        .measurements
+        .iter()
+        .map(|m| {
+            m.q_rad
                 .iter()
-                .all(|m| within(&f(&m.q_rad), limits, linear))
-        };
-        // The angles only: a prismatic joint's travel is mm whatever `units.angle` says.
-        let max_abs = arm
-            .measurements
+                .zip(limits)
+                .enumerate()
+                .filter(|(i, (v, l))| !within(&[**v], &[**l], &[arm.is_linear_joint(*i)]))
+                .count()
+        })
+        .sum::<usize>();
+    let mut hints = Vec::new();
+    if bad_values > 1 {
+        hints.push(format!(
+            "{} more value(s) of this file are outside their limits",
+            bad_values - 1
+        ));
+    }
+    hints.extend(joint_limit_cause(arm, limits, &arm.measurements[row]));
+    hints
+}
+
+/// The likely cause of joint values outside their limits, where one fits: degrees in a file declared
+/// in radians, the columns in ABB axis order, or two columns swapped in the row `m`.
+fn joint_limit_cause(arm: &ArmData, limits: &[(f64, f64)], m: &Measurement) -> Option<String> {
+    let linear = &arm.linear_joints;
+    let n = m.q_rad.len().min(limits.len());
+    let rows_within = |f: &dyn Fn(&[f64]) -> Vec<f64>| {
+        arm.measurements
             .iter()
-            .flat_map(|m| m.q_rad.iter().enumerate())
-            .filter(|(i, _)| !arm.is_linear_joint(*i))
-            .fold(0.0f64, |a, (_, v)| a.max(v.abs()));
-        if max_abs > std::f64::consts::TAU
-            && rows_within(&|q| {
-                q.iter()
-                    .enumerate()
-                    .map(|(i, v)| {
-                        if arm.is_linear_joint(i) {
-                            *v
-                        } else {
-                            v.to_radians()
-                        }
-                    })
-                    .collect()
-            })
-        {
-            hints.push(
-                "every value of the file would be within the limits in degrees: does `units.angle` \
-                 in dataset.toml say rad for a file in degrees?"
-                    .into(),
-            );
-        } else if n == crate::kinematics::ABB_AXIS_OF_CHAIN.len()
-            && linear.is_empty()
-            && rows_within(&|q| {
-                crate::kinematics::ABB_AXIS_OF_CHAIN
-                    .iter()
-                    .map(|&axis| q[axis - 1])
-                    .collect()
-            })
-        {
-            hints.push(
-                "the columns look like ABB axis order 1–7; q1..q7 are in chain order (ABB axes 1, 2, \
-                 7, 3, 4, 5, 6)"
-                    .into(),
-            );
-        } else {
-            let swaps: Vec<String> = (0..n)
-                .flat_map(|a| (a + 1..n).map(move |b| (a, b)))
-                .filter(|&(a, b)| {
-                    let mut q = m.q_rad.to_vec();
-                    q.swap(a, b);
-                    within(&q, limits, linear)
+            .all(|m| within(&f(&m.q_rad), limits, linear))
+    };
+    // The angles only: a prismatic joint's travel is mm whatever `units.angle` says.
+    let max_abs = arm
+        .measurements
+        .iter()
+        .flat_map(|m| m.q_rad.iter().enumerate())
+        .filter(|(i, _)| !arm.is_linear_joint(*i))
+        .fold(0.0f64, |a, (_, v)| a.max(v.abs()));
+    if max_abs > std::f64::consts::TAU
+        && rows_within(&|q| {
+            q.iter()
+                .enumerate()
+                .map(|(i, v)| {
+                    if arm.is_linear_joint(i) {
+                        *v
+                    } else {
+                        v.to_radians()
+                    }
                 })
-                .map(|(a, b)| format!("q{} and q{}", a + 1, b + 1))
-                .take(3)
-                .collect();
-            if let Some((first, others)) = swaps.split_first() {
-                let others = if others.is_empty() {
-                    String::new()
-                } else {
-                    format!(" (or {})", others.join(", or "))
-                };
-                hints.push(format!(
-                    "swapping {first}{others} would put this row within the limits: a joint logged \
-                     in the wrong column?"
-                ));
-            }
-        }
-        let (lo, hi) = limits[j];
-        let hint: String = hints.iter().map(|h| format!("; {h}")).collect();
-        if arm.is_linear_joint(j) {
-            return Err(DatasetError::JointTravel {
-                path: arm.file.clone(),
-                line: m.line,
-                field: format!("q{}", j + 1),
-                value_mm: m.q_rad[j],
-                lower_mm: lo,
-                upper_mm: hi,
-                hint,
-            });
-        }
-        return Err(DatasetError::JointLimit {
+                .collect()
+        })
+    {
+        Some(
+            "every value of the file would be within the limits in degrees: does `units.angle` \
+             in dataset.toml say rad for a file in degrees?"
+                .into(),
+        )
+    } else if n == crate::kinematics::ABB_AXIS_OF_CHAIN.len()
+        && linear.is_empty()
+        && rows_within(&|q| {
+            crate::kinematics::ABB_AXIS_OF_CHAIN
+                .iter()
+                .map(|&axis| q[axis - 1])
+                .collect()
+        })
+    {
+        Some(
+            "the columns look like ABB axis order 1–7; q1..q7 are in chain order (ABB axes 1, 2, \
+             7, 3, 4, 5, 6)"
+                .into(),
+        )
+    } else {
+        let swaps: Vec<String> = (0..n)
+            .flat_map(|a| (a + 1..n).map(move |b| (a, b)))
+            .filter(|&(a, b)| {
+                let mut q = m.q_rad.to_vec();
+                q.swap(a, b);
+                within(&q, limits, linear)
+            })
+            .map(|(a, b)| format!("q{} and q{}", a + 1, b + 1))
+            .take(3)
+            .collect();
+        let (first, others) = swaps.split_first()?;
+        let others = if others.is_empty() {
+            String::new()
+        } else {
+            format!(" (or {})", others.join(", or "))
+        };
+        Some(format!(
+            "swapping {first}{others} would put this row within the limits: a joint logged \
+             in the wrong column?"
+        ))
+    }
+}
+
+/// The refusal of joint `j`'s value in row `row` of `arm`, outside its limits: a travel (mm) for a
+/// prismatic joint, an angle otherwise.
+fn joint_limit_error(
+    arm: &ArmData,
+    limits: &[(f64, f64)],
+    row: usize,
+    j: usize,
+    hints: &[String],
+) -> DatasetError {
+    let m = &arm.measurements[row];
+    let (lo, hi) = limits[j];
+    let hint: String = hints.iter().map(|h| format!("; {h}")).collect();
+    if arm.is_linear_joint(j) {
+        return DatasetError::JointTravel {
             path: arm.file.clone(),
             line: m.line,
             field: format!("q{}", j + 1),
-            value_rad: m.q_rad[j],
-            lower_rad: lo,
-            upper_rad: hi,
+            value_mm: m.q_rad[j],
+            lower_mm: lo,
+            upper_mm: hi,
             hint,
-        });
+        };
     }
-    Ok(())
+    DatasetError::JointLimit {
+        path: arm.file.clone(),
+        line: m.line,
+        field: format!("q{}", j + 1),
+        value_rad: m.q_rad[j],
+        lower_rad: lo,
+        upper_rad: hi,
+        hint,
+    }
 }
 
 /// Rows measured together (the manifest's `measured_together = true`): a left row and a right row with

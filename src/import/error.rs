@@ -2,18 +2,15 @@
 //! field (column), and says what was expected — as the dataset readers do.
 
 use crate::dataset::DatasetError;
-use crate::output::OutputError;
+use crate::output::{FileError, OutputError};
 use std::path::PathBuf;
 
 /// Why an import was refused.
 #[derive(Debug, thiserror::Error)]
 pub enum ImportError {
-    /// A file is missing or unreadable.
-    #[error("{path}: cannot read: {error}")]
-    Io {
-        path: PathBuf,
-        error: std::io::Error,
-    },
+    /// A file is missing or unreadable, or writing one failed.
+    #[error(transparent)]
+    File(#[from] FileError),
     /// A file is not text we can read (UTF-16, binary data).
     #[error("{path}: {message}")]
     Encoding { path: PathBuf, message: String },
@@ -76,12 +73,6 @@ pub enum ImportError {
     /// Writing the dataset failed, or the result is not a valid dataset.
     #[error(transparent)]
     Dataset(#[from] DatasetError),
-    /// Writing a file failed.
-    #[error("{path}: cannot write: {error}")]
-    Write {
-        path: PathBuf,
-        error: std::io::Error,
-    },
 }
 
 impl ImportError {
@@ -111,16 +102,15 @@ impl ImportError {
     /// The file the error is about, where it is about one.
     pub fn path(&self) -> Option<&std::path::Path> {
         match self {
-            ImportError::Io { path, .. }
-            | ImportError::Encoding { path, .. }
+            ImportError::File(e) => Some(e.path()),
+            ImportError::Encoding { path, .. }
             | ImportError::Format { path, .. }
             | ImportError::Header { path, .. }
             | ImportError::Field { path, .. }
             | ImportError::Cell { path, .. }
             | ImportError::FieldCount { path, .. }
             | ImportError::DuplicateId { path, .. }
-            | ImportError::Content { path, .. }
-            | ImportError::Write { path, .. } => Some(path),
+            | ImportError::Content { path, .. } => Some(path),
             _ => None,
         }
     }

@@ -21,7 +21,7 @@ use crate::dataset::{
     TrackerSpec, Units,
 };
 use crate::kinematics::SharedJoints;
-use crate::output::{OutputError, Overwrite, refuse_overwrite_input, write_atomic};
+use crate::output::{FileError, OutputError, Overwrite, refuse_overwrite_input, write_atomic};
 use crate::robot::RobotDescription;
 use crate::side::{PerSide, Side};
 use crate::source::FileSource;
@@ -354,20 +354,7 @@ fn import_arm(
     let pf = points::read(&input.points, &text, &read_options)?;
     let prefix = id_prefix(side, o.measured_together);
     let log = match &input.joints {
-        Some(path) => {
-            let text = text::read(files, path)?;
-            Some(joints::read(
-                path,
-                &text,
-                &JointLogOptions {
-                    angle_unit: o.angle_unit,
-                    joint_order: o.joint_order.as_deref(),
-                    joint_names,
-                    decimal_comma: o.decimal_comma,
-                    id_prefix: prefix,
-                },
-            )?)
-        }
+        Some(path) => Some(read_joint_log(files, path, o, joint_names, prefix)?),
         None => None,
     };
     let mut report = ArmReport {
@@ -439,21 +426,50 @@ fn import_arm(
     };
     // The readers convert every joint value with the angle unit; a prismatic joint's value is a
     // length, converted again here with the units the joint values were written in.
-    let figaroh = pf.format == PointsFormat::Figaroh;
-    let units = Units {
+    let units = joint_value_units(pf.format, log.as_ref(), o);
+    arm.set_linear_joints(&o.linear_joints[side], units)?;
+    Ok((arm, report))
+}
+
+/// An arm's joint log, read with the import's options.
+fn read_joint_log(
+    files: &dyn FileSource,
+    path: &Path,
+    o: &ImportOptions,
+    joint_names: Option<&[String]>,
+    id_prefix: &'static str,
+) -> Result<JointLog, ImportError> {
+    let text = text::read(files, path)?;
+    joints::read(
+        path,
+        &text,
+        &JointLogOptions {
+            angle_unit: o.angle_unit,
+            joint_order: o.joint_order.as_deref(),
+            joint_names,
+            decimal_comma: o.decimal_comma,
+            id_prefix,
+        },
+    )
+}
+
+/// The units an arm's joint values were written in: angles in the joint log's unit, else radians in
+/// a FIGAROH file, else the options' (degrees unless given); lengths as the options say, else metres
+/// in a FIGAROH file and millimetres otherwise.
+fn joint_value_units(format: PointsFormat, log: Option<&JointLog>, o: &ImportOptions) -> Units {
+    let figaroh = format == PointsFormat::Figaroh;
+    Units {
         length: o.joint_length_unit.unwrap_or(if figaroh {
             LengthUnit::M
         } else {
             LengthUnit::Mm
         }),
-        angle: match &log {
+        angle: match log {
             Some(log) => log.angle_unit,
             None if figaroh => AngleUnit::Rad,
             None => o.angle_unit.unwrap_or(AngleUnit::Deg),
         },
-    };
-    arm.set_linear_joints(&o.linear_joints[side], units)?;
-    Ok((arm, report))
+    }
 }
 
 /// The prefix of ids made up for rows without one (`L001`, `R001`): the same on both arms (`C001`)
@@ -536,7 +552,7 @@ pub fn write(
     dataset::save_with(&ds, out, Units::MM_RAD, Overwrite::Allow)?;
     let path = out.join(REPORT_FILE);
     write_atomic(&path, imported.report.to_string().as_bytes())
-        .map_err(|error| ImportError::Write { path, error })?;
+        .map_err(|error| FileError::write(&path, error))?;
     Ok(())
 }
 

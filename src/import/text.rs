@@ -2,6 +2,7 @@
 //! decimal point or comma, length units by their names, time stamps.
 
 use super::error::ImportError;
+use crate::output::FileError;
 use crate::source::FileSource;
 use std::path::Path;
 
@@ -58,10 +59,7 @@ fn windows_1252_char(byte: u8) -> char {
 pub fn read(files: &dyn FileSource, path: &Path) -> Result<String, ImportError> {
     let bytes = files
         .read_limited(path, MAX_FILE_BYTES)
-        .map_err(|error| ImportError::Io {
-            path: path.to_path_buf(),
-            error,
-        })?;
+        .map_err(|error| FileError::read(path, error))?;
     decode(path, &bytes)
 }
 

@@ -57,6 +57,26 @@ pub fn reflector_pairs(n: usize) -> Vec<(usize, usize)> {
     }
 }
 
+/// Distances between the reflectors, in the order of [`reflector_pairs`] (|ab|, |bc|, |ca| for
+/// three), mm; none for one reflector.
+pub fn reflector_sides(p: &[Vector3<f64>]) -> Vec<f64> {
+    reflector_pairs(p.len())
+        .into_iter()
+        .map(|(i, j)| (p[i] - p[j]).norm())
+        .collect()
+}
+
+/// The sides of the reflectors `p` minus `reference` (a model's sides, or an arm's median triangle),
+/// mm, with the largest |difference| first (0 for one reflector).
+pub fn side_deviations(p: &[Vector3<f64>], reference: &[f64]) -> (f64, Vec<f64>) {
+    let d: Vec<f64> = reflector_sides(p)
+        .iter()
+        .zip(reference)
+        .map(|(s, r)| s - r)
+        .collect();
+    (d.iter().fold(0.0, |m, x| m.max(x.abs())), d)
+}
+
 /// The default names of `n` reflectors: `a`, `b`, `c`, … (`r27`, … beyond the alphabet).
 pub fn default_reflector_names(n: usize) -> Arc<[String]> {
     (0..n)

@@ -5,7 +5,7 @@ use super::{
     AccuracyStats, MIN_METRIC_CONFIGS, MetricsError, ORI_THRESHOLDS_RAD, POS_THRESHOLDS_MM,
 };
 use crate::dataset::{ArmData, Dataset, Measurement, Split};
-use crate::kinematics::{ArmModel, DualArmModel, MAX_REFLECTORS, PerReflector, reflector_pairs};
+use crate::kinematics::{ArmModel, DualArmModel, MAX_REFLECTORS, PerReflector};
 use crate::par::prelude::*;
 use crate::side::Side;
 use nalgebra::{Isometry3, Vector3};
@@ -541,14 +541,6 @@ pub(super) fn against(
         });
     }
     (pos_max, (ori_sum_sq / n.max(1) as f64).sqrt(), ori_max)
-}
-
-/// Distances between the reflectors, in the order of [`reflector_pairs`] (|ab|, |bc|, |ca| for three).
-pub(super) fn triangle_sides(p: &[Vector3<f64>]) -> Vec<f64> {
-    reflector_pairs(p.len())
-        .into_iter()
-        .map(|(i, j)| (p[i] - p[j]).norm())
-        .collect()
 }
 
 #[cfg(test)]

@@ -31,14 +31,14 @@ mod tables;
 mod tests;
 
 use crate::dataset::{ArmData, Dataset, Split};
-use crate::kinematics::{ArmModel, DualArmModel, PerReflector};
+use crate::kinematics::{ArmModel, DualArmModel, PerReflector, reflector_sides, side_deviations};
 use crate::par::prelude::*;
 use crate::side::{ConfigId, Side};
 pub use absolute::{AbsoluteError, AbsoluteStats, absolute_errors, absolute_stats};
 pub use geometry::orientation_measurable;
 use geometry::{
     ArmGeom, against, arm_geometry, both_arms, collaborative_accumulate, pair_residual,
-    relative_accumulate, triangle_sides, worst,
+    relative_accumulate, worst,
 };
 pub use kabsch::{KabschFit, kabsch_fit, kabsch_fit_points, kabsch_rotation};
 use nalgebra::{Isometry3, Vector3};
@@ -450,7 +450,7 @@ pub fn per_config(
     let mut out = Vec::with_capacity(left.geom.len() + right.geom.len());
     for (own, other) in [(&left, &right), (&right, &left)] {
         let data = dataset.arm(own.side);
-        let model_sides = triangle_sides(&model.arm(own.side).reflectors_mm);
+        let model_sides = reflector_sides(&model.arm(own.side).reflectors_mm);
         let rows: Vec<ConfigResiduals> = (0..own.geom.len())
             .into_par_iter()
             .map(|i| {
@@ -459,12 +459,7 @@ pub fn per_config(
                 let (col_pos, col_ori_rms, col_ori_max) = against(g, &other.geom, None);
                 let measured: Vec<Vector3<f64>> =
                     g.measured_mm.iter().map(|p| Vector3::from(*p)).collect();
-                let measured_sides = triangle_sides(&measured);
-                let side_errors: Vec<f64> = measured_sides
-                    .iter()
-                    .zip(&model_sides)
-                    .map(|(m, o)| m - o)
-                    .collect();
+                let (rigidity_mm, side_errors) = side_deviations(&measured, &model_sides);
                 let one_frame = dataset.one_tracker_frame();
                 let (rel, col) = (
                     own.orientation,
@@ -480,7 +475,7 @@ pub fn per_config(
                     collaborative_pos_max_mm: one_frame.then_some(col_pos),
                     collaborative_ori_rms_rad: col.then_some(col_ori_rms),
                     collaborative_ori_max_rad: col.then_some(col_ori_max),
-                    rigidity_mm: side_errors.iter().fold(0.0, |m, e| m.max(e.abs())),
+                    rigidity_mm,
                     triangle_side_errors_mm: side_errors,
                     fit_rms_mm: own.orientation.then_some(g.fit_rms_mm),
                 }

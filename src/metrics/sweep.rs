@@ -10,12 +10,11 @@
 //! histograms. Each arm's configurations are visited calibration first, so a row's same-split partners
 //! are contiguous and its samples go to a slice of their own, written in parallel without locks.
 
-use super::geometry::{
-    Accumulator, ArmGeom, ConfigGeom, SUM_BLOCKS, both_arms, pair_residual, triangle_sides,
-};
+use super::geometry::{Accumulator, ArmGeom, ConfigGeom, SUM_BLOCKS, both_arms, pair_residual};
 use super::{AccuracyReport, ConfigResiduals, MIN_METRIC_CONFIGS, MetricsError, PairKind};
 use crate::dataset::{Dataset, Split};
 use crate::kinematics::DualArmModel;
+use crate::kinematics::{reflector_sides, side_deviations};
 use crate::par::prelude::*;
 use crate::side::{ConfigId, PerSide, Side};
 use nalgebra::Vector3;
@@ -406,7 +405,7 @@ fn per_config_residuals(
     for (side, n_other) in [(Side::Left, n_right), (Side::Right, n_left)] {
         let a = &arms[side];
         let data = dataset.arm(side);
-        let model_sides = triangle_sides(&model.arm(side).reflectors_mm);
+        let model_sides = reflector_sides(&model.arm(side).reflectors_mm);
         let mut by_index: Vec<usize> = (0..a.len()).collect();
         crate::sort::sort_by_key(&mut by_index, |&p| a.indices[p]);
         for p in by_index {
@@ -414,12 +413,7 @@ fn per_config_residuals(
             let g = &a.geom[p];
             let measured: Vec<Vector3<f64>> =
                 g.measured_mm.iter().map(|p| Vector3::from(*p)).collect();
-            let measured_sides = triangle_sides(&measured);
-            let side_errors: Vec<f64> = measured_sides
-                .iter()
-                .zip(&model_sides)
-                .map(|(m, o)| m - o)
-                .collect();
+            let (rigidity_mm, side_errors) = side_deviations(&measured, &model_sides);
             let index = a.indices[p];
             let rms = |sum_sq: f64, n: usize| (sum_sq / n.max(1) as f64).sqrt();
             let rel = a.orientation;
@@ -434,7 +428,7 @@ fn per_config_residuals(
                 collaborative_pos_max_mm: one_frame.then_some(c.col_pos_max),
                 collaborative_ori_rms_rad: col.then(|| rms(c.col_ori_sum_sq, n_other)),
                 collaborative_ori_max_rad: col.then_some(c.col_ori_max),
-                rigidity_mm: side_errors.iter().fold(0.0, |m, e| m.max(e.abs())),
+                rigidity_mm,
                 triangle_side_errors_mm: side_errors,
                 fit_rms_mm: a.orientation.then_some(g.fit_rms_mm),
             });

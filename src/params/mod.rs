@@ -11,7 +11,7 @@ mod arm;
 mod records;
 
 use crate::kinematics::{DualArmModel, PARAMS_PER_JOINT, nearest_rotation, param_name};
-use crate::output::write_atomic;
+use crate::output::{FileError, write_atomic};
 use crate::robot::RobotDescription;
 use crate::side::{PerSide, Side};
 pub use arm::{ArmParams, ChainParams, DhEntry, JointCorrection, ReflectorsEntry};
@@ -40,18 +40,9 @@ fn prefix(path: &Option<PathBuf>) -> String {
 
 #[derive(Debug, thiserror::Error)]
 pub enum ParamsError {
-    // The I/O error is in the message and not a `source`: `{:#}` (the command line's error chain)
-    // would print it twice.
-    #[error("{path}: cannot read: {error}")]
-    Io {
-        path: PathBuf,
-        error: std::io::Error,
-    },
-    #[error("{path}: cannot write: {error}")]
-    Write {
-        path: PathBuf,
-        error: std::io::Error,
-    },
+    /// A file is missing or unreadable, or could not be written.
+    #[error(transparent)]
+    File(#[from] FileError),
     /// Not UTF-8 text (UTF-16, binary data, bad bytes) or too large.
     #[error("{path}: {problem}")]
     Text {
@@ -447,10 +438,7 @@ impl ParamsFile {
     pub fn read(path: &Path) -> Result<ParamsFile, ParamsError> {
         use crate::textfile::ReadError;
         let text = crate::textfile::read(path).map_err(|e| match e {
-            ReadError::Io(error) => ParamsError::Io {
-                path: path.to_path_buf(),
-                error,
-            },
+            ReadError::Io(error) => FileError::read(path, error).into(),
             ReadError::Text(problem) => ParamsError::Text {
                 path: path.to_path_buf(),
                 problem,
@@ -511,15 +499,10 @@ impl ParamsFile {
     /// so a file that could not be read back is never written.
     pub fn write(&self, path: &Path) -> Result<(), ParamsError> {
         self.validate().map_err(|e| e.in_file(path))?;
-        let mut bytes = serde_json::to_vec_pretty(self).map_err(|e| ParamsError::Write {
-            path: path.to_path_buf(),
-            error: std::io::Error::other(e),
-        })?;
+        let mut bytes = serde_json::to_vec_pretty(self)
+            .map_err(|e| FileError::write(path, std::io::Error::other(e)))?;
         bytes.push(b'\n');
-        write_atomic(path, &bytes).map_err(|error| ParamsError::Write {
-            path: path.to_path_buf(),
-            error,
-        })
+        write_atomic(path, &bytes).map_err(|error| FileError::write(path, error).into())
     }
 }
 

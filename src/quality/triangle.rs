@@ -3,25 +3,15 @@
 
 use super::{Flag, FlagKind, ScreenSettings, mpe_mm};
 use crate::dataset::Dataset;
-use crate::kinematics::reflector_pairs;
+use crate::kinematics::{reflector_pairs, reflector_sides, side_deviations};
 use crate::side::{ConfigId, Side};
 use crate::stats::{mad_sigma, median};
-use nalgebra::Vector3;
 
 /// Fewer configurations than this give no reliable reference triangle.
 pub const MIN_CONFIGS: usize = 5;
 
-/// Side names in the order of [`sides`] for three reflectors a, b, c.
+/// Side names in the order of [`reflector_sides`] for three reflectors a, b, c.
 pub const SIDE_NAMES: [&str; 3] = ["ab", "bc", "ca"];
-
-/// Distances between the reflectors in the order of [`reflector_pairs`] (|ab|, |bc|, |ca| for three),
-/// mm; none for one reflector.
-pub fn sides(p: &[Vector3<f64>]) -> Vec<f64> {
-    reflector_pairs(p.len())
-        .into_iter()
-        .map(|(i, j)| (p[i] - p[j]).norm())
-        .collect()
-}
 
 /// The name of the pair of reflectors `(i, j)`: `ab` for single-letter names, `front–back` otherwise.
 pub fn side_name(names: &[String], (i, j): (usize, usize)) -> String {
@@ -55,7 +45,10 @@ pub fn reference(
     if ms.len() < MIN_CONFIGS || n_sides == 0 {
         return None;
     }
-    let all: Vec<Vec<f64>> = ms.iter().map(|m| sides(&m.tracker_points_mm)).collect();
+    let all: Vec<Vec<f64>> = ms
+        .iter()
+        .map(|m| reflector_sides(&m.tracker_points_mm))
+        .collect();
     let reference: Vec<f64> = (0..n_sides)
         .map(|k| median(&all.iter().map(|s| s[k]).collect::<Vec<_>>()))
         .collect();
@@ -72,13 +65,6 @@ pub fn reference(
     let sigma = mad_sigma(&deviations).max(mpe / std::f64::consts::SQRT_2);
     let threshold = (settings.triangle_k * sigma).max(settings.mpe_floor * mpe);
     Some((reference, threshold))
-}
-
-/// Largest |deviation| of a triangle's sides from the reference, and the deviations.
-fn deviation(p: &[Vector3<f64>], reference: &[f64]) -> (f64, Vec<f64>) {
-    let s = sides(p);
-    let d: Vec<f64> = s.iter().zip(reference).map(|(s, r)| s - r).collect();
-    (d.iter().fold(0.0, |m, x| m.max(x.abs())), d)
 }
 
 /// The triangle flags of one arm.
@@ -99,7 +85,7 @@ pub fn flags(dataset: &Dataset, side: Side, settings: &ScreenSettings) -> Vec<Fl
     let mut out = Vec::new();
     for (index, m) in dataset.arm(side).measurements.iter().enumerate() {
         let p = &m.tracker_points_mm;
-        let (size, d) = deviation(p, &reference);
+        let (size, d) = side_deviations(p, &reference);
         if size.is_nan() || size <= threshold {
             continue;
         }
@@ -119,7 +105,7 @@ pub fn flags(dataset: &Dataset, side: Side, settings: &ScreenSettings) -> Vec<Fl
         let relabelled = RELABELLINGS
             .iter()
             .filter(|_| three)
-            .map(|(perm, name)| (deviation(&perm.map(|k| p[k]), &reference).0, *name))
+            .map(|(perm, name)| (side_deviations(&perm.map(|k| p[k]), &reference).0, *name))
             .min_by(|a, b| a.0.total_cmp(&b.0));
         if let Some((best, name)) = relabelled
             && best <= threshold
@@ -135,7 +121,7 @@ pub fn flags(dataset: &Dataset, side: Side, settings: &ScreenSettings) -> Vec<Fl
             continue;
         }
         if let Some((other_ref, other_threshold)) = &other {
-            let (fit, _) = deviation(p, other_ref);
+            let (fit, _) = side_deviations(p, other_ref);
             if fit <= *other_threshold {
                 out.push(flag(
                     FlagKind::OtherArm,

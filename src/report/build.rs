@@ -10,7 +10,7 @@ use crate::comparison::BoxStats;
 use crate::dataset::{Dataset, Split};
 use crate::kinematics::{ArmModel, DualArmModel};
 use crate::metrics;
-use crate::params::{MethodRecord, ParamsFile, Provenance, StatisticsRecord, utc_timestamp};
+use crate::params::{MethodRecord, ParamsFile, StatisticsRecord, utc_timestamp};
 use crate::quality::{self, Flag, QualityRecord};
 use crate::robot::RobotDescription;
 use crate::side::{ConfigId, PerSide, Side};
@@ -452,14 +452,4 @@ fn worst_rows(
     crate::sort::sort_by(&mut rows, |a, b| b.worst_pos_mm.total_cmp(&a.worst_pos_mm));
     rows.truncate(WORST_ROWS);
     rows
-}
-
-/// Whether the parameter file says it was identified from another dataset than `dir`.
-pub(super) fn other_dataset(provenance: Option<&Provenance>, dir: &Path) -> Option<String> {
-    let recorded = provenance?.dataset.as_ref()?;
-    let same = match (Path::new(recorded).canonicalize(), dir.canonicalize()) {
-        (Ok(a), Ok(b)) => a == b,
-        _ => Path::new(recorded) == dir,
-    };
-    (!same).then(|| recorded.clone())
 }

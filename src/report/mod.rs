@@ -14,7 +14,7 @@
 
 mod build;
 mod html;
-mod svg;
+pub mod svg;
 mod warnings;
 
 pub use html::{escape, render};

@@ -2,10 +2,11 @@
 //! tracker's noise, unidentifiable or poorly determined parameters, a run that did not converge,
 //! suspect configurations kept, and the like.
 
-use super::build::other_dataset;
 use super::{Report, SplitAccuracy, UncertaintySource};
 use crate::dataset::Split;
+use crate::params::Provenance;
 use crate::side::{PerSide, Side};
+use std::path::Path;
 
 /// A calibrated residual above this many times the tracker's noise is reported: the geometric model
 /// does not explain the data.
@@ -230,4 +231,14 @@ fn screening_warnings(report: &Report, out: &mut Vec<Warning>) {
     for f in &report.screening.record.findings {
         out.push(warning(f.message.clone()));
     }
+}
+
+/// Whether the parameter file says it was identified from another dataset than `dir`.
+fn other_dataset(provenance: Option<&Provenance>, dir: &Path) -> Option<String> {
+    let recorded = provenance?.dataset.as_ref()?;
+    let same = match (Path::new(recorded).canonicalize(), dir.canonicalize()) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => Path::new(recorded) == dir,
+    };
+    (!same).then(|| recorded.clone())
 }

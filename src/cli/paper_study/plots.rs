@@ -14,6 +14,7 @@ use crate::analysis::{HISTOGRAM_BINS, Indicator};
 use crate::comparison::{self, BoxStats, MethodEntry};
 use crate::dataset::Split;
 use crate::metrics::{ORI_THRESHOLDS_RAD, POS_THRESHOLDS_MM};
+use crate::report::svg::{BoxLayout, BoxSeries, box_chart};
 use crate::side::Side;
 use anyhow::{Result, anyhow};
 use plotters::coord::Shift;
@@ -403,56 +404,24 @@ fn box_panel(
     indicator: Indicator,
     boxes: &[(String, RGBColor, Option<BoxStats>)],
 ) -> Result<()> {
-    let (lo, hi) =
-        BoxStats::padded_range(boxes.iter().filter_map(|b| b.2.as_ref())).unwrap_or((0.0, 1.0));
-    let n = boxes.len();
-    let names: Vec<String> = (1..=n).map(|k| k.to_string()).collect();
-    let mut chart = ChartBuilder::on(area)
-        .caption("box plots (1 … n: legend)", (FONT, 13))
-        .margin(6)
-        .x_label_area_size(40)
-        .y_label_area_size(56)
-        .build_cartesian_2d(-0.5..(n as f64 - 0.5), lo..hi)
-        .map_err(err)?;
-    chart
-        .configure_mesh()
-        .disable_mesh()
-        .x_labels(n.max(1))
-        .x_label_formatter(&|x| {
-            let k = x.round();
-            if (x - k).abs() < 1e-6 && k >= 0.0 && (k as usize) < n {
-                names[k as usize].clone()
-            } else {
-                String::new()
-            }
+    let series: Vec<BoxSeries> = boxes
+        .iter()
+        .enumerate()
+        .map(|(k, (name, c, b))| BoxSeries {
+            name: (k + 1).to_string(),
+            colour: *c,
+            stats: b.as_ref(),
+            legend: Some(format!("{} {name}", k + 1)),
         })
-        .y_labels(6)
-        .y_desc(unit(indicator))
-        .label_style((FONT, 10))
-        .axis_desc_style((FONT, 11))
-        .draw()
-        .map_err(err)?;
-    for (k, (name, c, b)) in boxes.iter().enumerate() {
-        let Some(b) = b else { continue };
-        let x = k as f64;
-        let style = c.stroke_width(2);
-        chart
-            .draw_series([Rectangle::new(
-                [(x - 0.3, b.q1), (x + 0.3, b.q3)],
-                c.mix(0.3).filled(),
-            )])
-            .map_err(err)?
-            .label(format!("{} {name}", k + 1))
-            .legend(move |(px, py)| Rectangle::new([(px, py - 4), (px + 10, py + 4)], c.filled()));
-        for path in b.strokes(x) {
-            chart
-                .draw_series(LineSeries::new(path, style))
-                .map_err(err)?;
-        }
-        chart
-            .draw_series([b.min, b.max].map(|y| Circle::new((x, y), 2, c.filled())))
-            .map_err(err)?;
-    }
+        .collect();
+    let layout = BoxLayout {
+        caption: "box plots (1 … n: legend)",
+        y_desc: unit(indicator),
+        x_label_area: 40,
+        y_label_area: 56,
+        empty_range: (0.0, 1.0),
+    };
+    let mut chart = box_chart(area, &layout, &series).map_err(anyhow::Error::msg)?;
     chart
         .configure_series_labels()
         .position(SeriesLabelPosition::UpperRight)
