@@ -6,7 +6,7 @@
 //! (Set `XDG_RUNTIME_DIR` to a mode-700 directory to silence a harmless warning; `.ci/run` does.)
 #![cfg(feature = "gui")]
 
-use dualcal::app::{AppLaunch, Command, WorkbenchApp};
+use dualcal::app::{AppLaunch, Command, LaunchOptions, WorkbenchApp};
 use dualcal::side::{ConfigId, PerSide};
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
@@ -22,7 +22,23 @@ fn harness(size: [f32; 2], launch: AppLaunch) -> Harness<'static, WorkbenchApp> 
     Harness::builder()
         .with_size(eframe::egui::Vec2::new(size[0], size[1]))
         .wgpu()
-        .build_eframe(move |cc| WorkbenchApp::with_msaa(cc, launch, false))
+        .build_eframe(move |cc| WorkbenchApp::with_options(cc, launch, test_options()))
+}
+
+/// The launch options `dualcal gui` reads from this environment (the tools below take
+/// `DUALCAL_MESH_DETAIL`), one sample (no MSAA) unless `DUALCAL_MSAA` forces a count: pixel-stable
+/// snapshots.
+fn test_options() -> LaunchOptions {
+    let env = env_options();
+    LaunchOptions {
+        msaa_samples: env.msaa_samples.or(Some(1)),
+        ..env
+    }
+}
+
+/// The launch options `dualcal gui` reads from this environment.
+fn env_options() -> LaunchOptions {
+    LaunchOptions::from_vars(|name| std::env::var_os(name))
 }
 
 /// Step frames until `done` holds (or the cap is hit, which fails the test).
@@ -1143,12 +1159,13 @@ fn workbench_screenshot() {
         .with_size(eframe::egui::Vec2::new(w, h))
         .wgpu()
         .build_eframe(move |cc| {
-            WorkbenchApp::new(
+            WorkbenchApp::with_options(
                 cc,
                 AppLaunch {
                     dataset: Some(dataset),
                     urdf: None,
                 },
+                env_options(),
             )
         });
     loaded(&mut harness);
@@ -1516,7 +1533,7 @@ fn compare_screenshot() {
     let mut harness = Harness::builder()
         .with_size(eframe::egui::Vec2::new(1280.0, 800.0))
         .wgpu()
-        .build_eframe(|cc| WorkbenchApp::new(cc, AppLaunch::default()));
+        .build_eframe(|cc| WorkbenchApp::with_options(cc, AppLaunch::default(), env_options()));
     loaded(&mut harness);
     harness.get_by_label("Compare methods…").click();
     harness.run_steps(2);

@@ -131,7 +131,8 @@ pub struct SceneOptions {
 /// Which copy of the robot's meshes the viewport draws: the full meshes, or the simplified copy
 /// ([`crate::meshes::lod`]; collision checks and exports always use the full ones). `Auto`: the
 /// simplified copy on a software renderer (lavapipe, llvmpipe, SwiftShader), the full meshes on a
-/// GPU. `DUALCAL_MESH_DETAIL=auto|full|simplified` sets the choice the workbench starts with.
+/// GPU. The launch options set the choice the workbench starts with (`DUALCAL_MESH_DETAIL`,
+/// [`crate::app::LaunchOptions`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum MeshDetail {
     #[default]
@@ -156,13 +157,6 @@ impl MeshDetail {
         Self::ALL
             .into_iter()
             .find(|d| d.label().eq_ignore_ascii_case(text.trim()))
-    }
-
-    /// The choice `DUALCAL_MESH_DETAIL` names, if it is set to one.
-    pub fn from_env() -> Option<Self> {
-        std::env::var("DUALCAL_MESH_DETAIL")
-            .ok()
-            .and_then(|v| Self::parse(&v))
     }
 
     /// Whether to draw the simplified copy, on a software renderer or not.
