@@ -69,7 +69,7 @@ pub struct AppLaunch {
 
 /// Open the workbench window (blocks until it is closed).
 #[cfg(not(target_arch = "wasm32"))]
-pub fn run_native(opts: AppLaunch, options: LaunchOptions) -> anyhow::Result<()> {
+pub fn run_native(opts: AppLaunch, launch_options: LaunchOptions) -> anyhow::Result<()> {
     let options = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default()
             .with_title("dualcal workbench")
@@ -82,7 +82,13 @@ pub fn run_native(opts: AppLaunch, options: LaunchOptions) -> anyhow::Result<()>
     eframe::run_native(
         "dualcal workbench",
         options,
-        Box::new(move |cc| Ok(Box::new(WorkbenchApp::with_options(cc, opts, options)))),
+        Box::new(move |cc| {
+            Ok(Box::new(WorkbenchApp::with_options(
+                cc,
+                opts,
+                launch_options,
+            )))
+        }),
     )
     .map_err(|e| anyhow::anyhow!("cannot open the workbench window: {e}"))
 }
