@@ -2067,12 +2067,13 @@ fn beyond_geometry_screenshot() {
         .with_size(eframe::egui::Vec2::new(1280.0, 800.0))
         .wgpu()
         .build_eframe(|cc| {
-            WorkbenchApp::new(
+            WorkbenchApp::with_options(
                 cc,
                 AppLaunch {
                     dataset: Some(dir.path().to_path_buf()),
                     urdf: None,
                 },
+                env_options(),
             )
         });
     loaded(&mut harness);
@@ -2089,4 +2090,34 @@ fn beyond_geometry_screenshot() {
     let image = harness.render().expect("render");
     image.save(&out).expect("write the PNG");
     println!("wrote {}", out.display());
+}
+
+/// At 1280 × 800 no control moves when a calibration ends: the left panel's line naming the current
+/// calibration is there before one too, one line high, so Calibrate, Cancel, the exports and the view
+/// options below it stay where they were.
+#[test]
+fn a_finished_run_moves_no_control() {
+    let mut harness = harness([1280.0, 800.0], AppLaunch::default());
+    loaded(&mut harness);
+    let controls = ["Calibrate", "Cancel", "Parameters (JSON)…", "Reset view"];
+    let rects = |harness: &Harness<'_, WorkbenchApp>| {
+        controls.map(|label| harness.get_by_label(label).rect())
+    };
+    let before = rects(&harness);
+    harness.get_by_label("Calibrate").click();
+    harness.step();
+    step_until(&mut harness, MAX_RUN_FRAMES, "calibration result", |app| {
+        !app.is_calibrating()
+    });
+    harness.run_steps(2);
+    assert!(
+        harness.state().session().unwrap().calibrated.is_some(),
+        "{:?}",
+        harness.state().errors()
+    );
+    shown(&harness, "current: method");
+    let after = rects(&harness);
+    for ((label, b), a) in controls.iter().zip(before).zip(after) {
+        assert_eq!(b, a, "{label} moved when the run ended");
+    }
 }
