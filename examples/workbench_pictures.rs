@@ -30,7 +30,7 @@
 //! The pictures are written to `DUALCAL_SCREENSHOT_OUT` (default `target/<name>.png`). Set
 //! `XDG_RUNTIME_DIR` to a mode-700 directory to silence a harmless warning.
 
-use dualcal::app::{AppLaunch, Command, WorkbenchApp};
+use dualcal::app::{AppLaunch, Command, LaunchOptions, WorkbenchApp};
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
 use std::path::PathBuf;
@@ -60,10 +60,16 @@ fn harness(size: [f32; 2], dataset: Option<PathBuf>, msaa: bool) -> Harness<'sta
         dataset,
         urdf: None,
     };
+    // The options `dualcal gui` reads from this environment (DUALCAL_MESH_DETAIL, DUALCAL_MSAA, …);
+    // without `msaa`, one sample unless DUALCAL_MSAA forces a count (as the tests' snapshots).
+    let mut options = LaunchOptions::from_vars(|name| std::env::var_os(name));
+    if !msaa {
+        options.msaa_samples = options.msaa_samples.or(Some(1));
+    }
     Harness::builder()
         .with_size(eframe::egui::Vec2::new(size[0], size[1]))
         .wgpu()
-        .build_eframe(move |cc| WorkbenchApp::with_msaa(cc, launch, msaa))
+        .build_eframe(move |cc| WorkbenchApp::with_options(cc, launch, options))
 }
 
 /// Step frames until `done` holds (or the cap is hit).

@@ -30,7 +30,9 @@ fn run_gui(
     dataset: Option<std::path::PathBuf>,
     urdf: Option<std::path::PathBuf>,
 ) -> anyhow::Result<()> {
-    dualcal::app::run_native(dualcal::app::AppLaunch { dataset, urdf })
+    // The environment's knobs, read here once (docs/environment.md); the app gets plain values.
+    let options = dualcal::app::LaunchOptions::from_vars(|name| std::env::var_os(name));
+    dualcal::app::run_native(dualcal::app::AppLaunch { dataset, urdf }, options)
 }
 
 #[cfg(all(not(feature = "gui"), not(target_arch = "wasm32")))]

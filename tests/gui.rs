@@ -10,7 +10,7 @@
 //! (Set `XDG_RUNTIME_DIR` to a mode-700 directory to silence a harmless warning; `.ci/run` does.)
 #![cfg(feature = "gui")]
 
-use dualcal::app::{AppLaunch, Command, WorkbenchApp};
+use dualcal::app::{AppLaunch, Command, LaunchOptions, WorkbenchApp};
 use dualcal::side::{ConfigId, PerSide};
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
@@ -26,7 +26,23 @@ fn harness(size: [f32; 2], launch: AppLaunch) -> Harness<'static, WorkbenchApp> 
     Harness::builder()
         .with_size(eframe::egui::Vec2::new(size[0], size[1]))
         .wgpu()
-        .build_eframe(move |cc| WorkbenchApp::with_msaa(cc, launch, false))
+        .build_eframe(move |cc| WorkbenchApp::with_options(cc, launch, test_options()))
+}
+
+/// The launch options `dualcal gui` reads from this environment (the tools below take
+/// `DUALCAL_MESH_DETAIL`), one sample (no MSAA) unless `DUALCAL_MSAA` forces a count: pixel-stable
+/// snapshots.
+fn test_options() -> LaunchOptions {
+    let env = env_options();
+    LaunchOptions {
+        msaa_samples: env.msaa_samples.or(Some(1)),
+        ..env
+    }
+}
+
+/// The launch options `dualcal gui` reads from this environment.
+fn env_options() -> LaunchOptions {
+    LaunchOptions::from_vars(|name| std::env::var_os(name))
 }
 
 /// Step frames until `done` holds (or the cap is hit, which fails the test).
@@ -1769,4 +1785,34 @@ fn the_model_picker_calibrates_beyond_geometry_beside_the_geometric_fit() {
             .error_terms()
             .is_geometric()
     );
+}
+
+/// At 1280 × 800 no control moves when a calibration ends: the left panel's line naming the current
+/// calibration is there before one too, one line high, so Calibrate, Cancel, the exports and the view
+/// options below it stay where they were.
+#[test]
+fn a_finished_run_moves_no_control() {
+    let mut harness = harness([1280.0, 800.0], AppLaunch::default());
+    loaded(&mut harness);
+    let controls = ["Calibrate", "Cancel", "Parameters (JSON)…", "Reset view"];
+    let rects = |harness: &Harness<'_, WorkbenchApp>| {
+        controls.map(|label| harness.get_by_label(label).rect())
+    };
+    let before = rects(&harness);
+    harness.get_by_label("Calibrate").click();
+    harness.step();
+    step_until(&mut harness, MAX_RUN_FRAMES, "calibration result", |app| {
+        !app.is_calibrating()
+    });
+    harness.run_steps(2);
+    assert!(
+        harness.state().session().unwrap().calibrated.is_some(),
+        "{:?}",
+        harness.state().errors()
+    );
+    shown(&harness, "current: method");
+    let after = rects(&harness);
+    for ((label, b), a) in controls.iter().zip(before).zip(after) {
+        assert_eq!(b, a, "{label} moved when the run ended");
+    }
 }

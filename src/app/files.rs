@@ -51,14 +51,18 @@ pub trait FileAccess {
 
 /// Native dialogs (rfd) run on a helper thread; writes are atomic.
 #[cfg(not(target_arch = "wasm32"))]
-pub struct NativeFiles;
+pub struct NativeFiles {
+    /// Never show a dialog: the app asks for paths itself (the launch options' `path_prompt`,
+    /// `DUALCAL_PATH_PROMPT`).
+    pub path_prompt: bool,
+}
 
 #[cfg(not(target_arch = "wasm32"))]
 impl FileAccess for NativeFiles {
     /// On Linux, rfd needs the desktop portal (on the session D-Bus) or `zenity`; a bare X server
-    /// (e.g. Xvfb) has neither. `DUALCAL_PATH_PROMPT=1` forces the in-app path prompt.
+    /// (e.g. Xvfb) has neither. `path_prompt` forces the in-app path prompt.
     fn dialogs_available(&self) -> bool {
-        if std::env::var_os("DUALCAL_PATH_PROMPT").is_some() {
+        if self.path_prompt {
             return false;
         }
         if cfg!(target_os = "linux") {

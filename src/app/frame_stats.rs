@@ -1,5 +1,5 @@
-//! Frame statistics printed to stderr when `DUALCAL_FRAME_STATS` is set (see docs/performance.md); the
-//! app then repaints continuously.
+//! Frame statistics printed to stderr when the launch options ask for them (`DUALCAL_FRAME_STATS`,
+//! see docs/performance.md); the app then repaints continuously.
 
 // std's `Instant::now` panics in a browser (wasm32-unknown-unknown); web-time is std's on native targets.
 use web_time::Instant;
@@ -7,6 +7,8 @@ use web_time::Instant;
 /// How many frames one printed line covers.
 const FRAME_STATS_WINDOW: usize = 30;
 
+/// No frame measured yet by default.
+#[derive(Default)]
 pub struct FrameStats {
     /// The frame being measured (egui may build a frame's UI in more than one pass).
     frame_nr: Option<u64>,
@@ -18,16 +20,6 @@ pub struct FrameStats {
 }
 
 impl FrameStats {
-    /// Statistics when `DUALCAL_FRAME_STATS` is set.
-    pub fn from_env() -> Option<Self> {
-        std::env::var_os("DUALCAL_FRAME_STATS").map(|_| Self {
-            frame_nr: None,
-            last: None,
-            samples_ms: Vec::new(),
-            ui_ms: Vec::new(),
-        })
-    }
-
     /// Frame `frame_nr` begins (again, when egui builds it in another pass); every
     /// [`FRAME_STATS_WINDOW`] frames a line is printed (`busy` marks it "[calibrating]").
     pub fn frame_started(&mut self, frame_nr: u64, busy: bool) {

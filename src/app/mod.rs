@@ -20,6 +20,7 @@ pub mod files;
 mod frame_stats;
 pub mod import;
 pub mod job;
+mod launch;
 mod panels;
 pub mod plan_view;
 pub mod platform;
@@ -39,6 +40,7 @@ pub mod work;
 
 pub use command::Command;
 pub use example::{bundled_example_path, unpack_example};
+pub use launch::LaunchOptions;
 
 use crate::side::{ConfigId, Side};
 use crate::solver::{CalibrationSettings, IterationRecord};
@@ -71,7 +73,7 @@ pub struct AppLaunch {
 
 /// Open the workbench window (blocks until it is closed).
 #[cfg(not(target_arch = "wasm32"))]
-pub fn run_native(opts: AppLaunch) -> anyhow::Result<()> {
+pub fn run_native(opts: AppLaunch, launch_options: LaunchOptions) -> anyhow::Result<()> {
     let options = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default()
             .with_title("dualcal workbench")
@@ -84,7 +86,13 @@ pub fn run_native(opts: AppLaunch) -> anyhow::Result<()> {
     eframe::run_native(
         "dualcal workbench",
         options,
-        Box::new(move |cc| Ok(Box::new(WorkbenchApp::new(cc, opts)))),
+        Box::new(move |cc| {
+            Ok(Box::new(WorkbenchApp::with_options(
+                cc,
+                opts,
+                launch_options,
+            )))
+        }),
     )
     .map_err(|e| anyhow::anyhow!("cannot open the workbench window: {e}"))
 }
@@ -141,16 +149,21 @@ pub struct WorkbenchApp {
 }
 
 impl WorkbenchApp {
-    /// The app as `dualcal gui` opens it (4× MSAA in the viewport).
+    /// The app as `dualcal gui` opens it with the default launch options (4× MSAA in the viewport).
     pub fn new(cc: &eframe::CreationContext<'_>, launch: AppLaunch) -> Self {
-        Self::with_msaa(cc, launch, true)
+        Self::with_options(cc, launch, LaunchOptions::default())
     }
 
-    /// Like [`new`](Self::new); `msaa = false` gives pixel-stable snapshots in tests.
-    pub fn with_msaa(cc: &eframe::CreationContext<'_>, launch: AppLaunch, msaa: bool) -> Self {
+    /// The app with the launch `options` (`src/main.rs` reads them from the environment; tests force
+    /// one sample, no MSAA, for pixel-stable snapshots).
+    pub fn with_options(
+        cc: &eframe::CreationContext<'_>,
+        launch: AppLaunch,
+        options: LaunchOptions,
+    ) -> Self {
         cc.egui_ctx.set_theme(egui::Theme::Dark);
         // 4× MSAA, except on a software renderer (lavapipe, llvmpipe) where it costs more than it
-        // gives; `DUALCAL_MSAA=1` / `=4` override.
+        // gives; the launch options may force a count.
         let adapter = cc
             .wgpu_render_state
             .as_ref()
@@ -165,17 +178,11 @@ impl WorkbenchApp {
             |a| format!("{:?}: {}", a.backend, a.name),
         );
         platform::init_context(&cc.egui_ctx);
-        let io = platform::io(&cc.egui_ctx);
-        let samples = match std::env::var("DUALCAL_MSAA").ok().as_deref() {
-            Some("1") => 1,
-            Some("4") => 4,
-            _ if msaa && !software => 4,
-            _ => 1,
-        };
-        viewport::install_gpu(cc.wgpu_render_state.as_ref(), samples);
+        let io = platform::io(&cc.egui_ctx, &options);
+        viewport::install_gpu(cc.wgpu_render_state.as_ref(), options.samples(software));
         let mut viewport = ViewportState::default();
         viewport.software_renderer = software;
-        if let Some(detail) = viewport::scene::MeshDetail::from_env() {
+        if let Some(detail) = options.mesh_detail {
             viewport.options.mesh_detail = detail;
         }
         let mut app = Self {
@@ -208,7 +215,7 @@ impl WorkbenchApp {
             prompt: None,
             screenshot_pending: false,
             panels_visible: true,
-            frame_stats: FrameStats::from_env(),
+            frame_stats: options.frame_stats.then(FrameStats::default),
             #[cfg(test)]
             panic_in_next_calibration: false,
         };

@@ -4,6 +4,7 @@
 //! tests ([`publish_status`]). Threads or frames is [`super::task::Execution`]'s business. The rest of
 //! the app is the same code on both.
 
+use super::LaunchOptions;
 use super::files::Io;
 use super::task::FrameBudget;
 use eframe::egui;
@@ -11,10 +12,12 @@ use std::path::PathBuf;
 
 /// The desktop: the file system and native dialogs.
 #[cfg(not(target_arch = "wasm32"))]
-pub fn io(_ctx: &egui::Context) -> Io {
+pub fn io(_ctx: &egui::Context, options: &LaunchOptions) -> Io {
     Io {
         files: crate::source::Files::default(),
-        dialogs: Box::new(super::files::NativeFiles),
+        dialogs: Box::new(super::files::NativeFiles {
+            path_prompt: options.path_prompt,
+        }),
         memory: None,
     }
 }
@@ -22,7 +25,7 @@ pub fn io(_ctx: &egui::Context) -> Io {
 /// The browser: files in memory (the compiled-in example, then what the user picks or drops) and
 /// downloads.
 #[cfg(target_arch = "wasm32")]
-pub fn io(ctx: &egui::Context) -> Io {
+pub fn io(ctx: &egui::Context, _options: &LaunchOptions) -> Io {
     super::web::io(ctx)
 }
 

@@ -59,6 +59,45 @@ fn log_spacer(input: egui_plot::GridInput) -> Vec<egui_plot::GridMark> {
     marks
 }
 
+/// The finest grid spacing of every plot here, points (egui_plot's default, set explicitly:
+/// [`labels_inside`] reads the scale from it).
+pub const GRID_SPACING_MIN_PT: f32 = 8.0;
+/// How far a y axis's marks stay from the plot's top and bottom, points: half a tick label's height.
+pub const Y_LABEL_MARGIN_PT: f64 = 8.0;
+/// How far an x axis's marks stay from the plot's left and right ends, points: half a short tick
+/// label's width.
+pub const X_LABEL_MARGIN_PT: f64 = 12.0;
+
+/// `spacer`'s marks but those whose tick labels would reach out of the plot: a mark outside the
+/// bounds, or closer than `margin_pt` to either end (egui_plot centres a label on its mark and does
+/// not clip it to the plot, so a mark at the top edge puts half its label on what is above the
+/// plot). The plot's grid spacing must start at [`GRID_SPACING_MIN_PT`] ([`framed`]).
+pub fn labels_inside<'a>(
+    spacer: impl Fn(egui_plot::GridInput) -> Vec<egui_plot::GridMark> + 'a,
+    margin_pt: f64,
+) -> impl Fn(egui_plot::GridInput) -> Vec<egui_plot::GridMark> + 'a {
+    move |input| {
+        let (lo, hi) = input.bounds;
+        // `base_step_size` is the value of GRID_SPACING_MIN_PT points.
+        let margin = margin_pt * input.base_step_size / f64::from(GRID_SPACING_MIN_PT);
+        spacer(input)
+            .into_iter()
+            .filter(|m| m.value >= lo + margin && m.value <= hi - margin)
+            .collect()
+    }
+}
+
+/// A plot whose tick labels stay inside it: `spacers` (x, y) filtered by [`labels_inside`].
+pub fn framed<'a>(
+    plot: Plot<'a>,
+    x_spacer: impl Fn(egui_plot::GridInput) -> Vec<egui_plot::GridMark> + 'a,
+    y_spacer: impl Fn(egui_plot::GridInput) -> Vec<egui_plot::GridMark> + 'a,
+) -> Plot<'a> {
+    plot.grid_spacing(egui::Rangef::new(GRID_SPACING_MIN_PT, 300.0))
+        .x_grid_spacer(labels_inside(x_spacer, X_LABEL_MARGIN_PT))
+        .y_grid_spacer(labels_inside(y_spacer, Y_LABEL_MARGIN_PT))
+}
+
 /// Iteration axis: integer marks about a third of the range apart (1, 2, 5 × 10^k), so their
 /// labels have room.
 fn iteration_spacer(input: egui_plot::GridInput) -> Vec<egui_plot::GridMark> {
@@ -160,16 +199,15 @@ pub fn convergence_plot_ui(ui: &mut egui::Ui, history: &[IterationRecord], stage
 
 /// A plot over the iterations with a log10 y axis.
 fn iteration_plot<'a>(id: (&str, Stage), y_label: &str) -> Plot<'a> {
-    Plot::new((id.0, format!("{:?}", id.1)))
+    let plot = Plot::new((id.0, format!("{:?}", id.1)))
         .legend(Legend::default())
         .x_axis_label("iteration")
         .include_x(0.0)
         .x_axis_formatter(|m, _| format!("{:.0}", m.value))
-        .x_grid_spacer(iteration_spacer)
         .set_margin_fraction(egui::vec2(0.05, 0.12))
         .y_axis_label(y_label)
-        .y_axis_formatter(log_axis_label)
-        .y_grid_spacer(log_spacer)
+        .y_axis_formatter(log_axis_label);
+    framed(plot, iteration_spacer, log_spacer)
 }
 
 /// Width of the numbers beside the histograms.
@@ -395,7 +433,7 @@ fn histogram_plot_ui(
         "geometric" => "geometric",
         _ => "after",
     };
-    Plot::new(("histogram", indicator.label(), split, slot))
+    let plot = Plot::new(("histogram", indicator.label(), split, slot))
         .width(size.x.max(MIN_HISTOGRAM_WIDTH * 0.5))
         .height(size.y.max(MIN_HISTOGRAM_HEIGHT * 0.5))
         .legend(Legend::default())
@@ -404,24 +442,23 @@ fn histogram_plot_ui(
         } else {
             "Δo (rad)"
         })
-        .x_grid_spacer(histogram_spacer)
         .y_axis_label("% of samples")
-        .allow_scroll(false)
-        .show(ui, |plot| {
-            plot.bar_chart(BarChart::new(name, bars).color(color));
-            let t = if indicator.is_position() {
-                POS_THRESHOLDS_MM.to_vec()
-            } else {
-                ORI_THRESHOLDS_RAD.to_vec()
-            };
-            for (i, x) in t.into_iter().enumerate().filter(|(_, x)| *x <= extent) {
-                let c = Color32::from_gray(if i == 0 { 150 } else { 100 });
-                plot.vline(VLine::new(format!("±{x}"), x).color(c));
-                if indicator.is_position() {
-                    plot.vline(VLine::new(format!("±{x}"), -x).color(c));
-                }
+        .allow_scroll(false);
+    framed(plot, histogram_spacer, egui_plot::log_grid_spacer(10)).show(ui, |plot| {
+        plot.bar_chart(BarChart::new(name, bars).color(color));
+        let t = if indicator.is_position() {
+            POS_THRESHOLDS_MM.to_vec()
+        } else {
+            ORI_THRESHOLDS_RAD.to_vec()
+        };
+        for (i, x) in t.into_iter().enumerate().filter(|(_, x)| *x <= extent) {
+            let c = Color32::from_gray(if i == 0 { 150 } else { 100 });
+            plot.vline(VLine::new(format!("±{x}"), x).color(c));
+            if indicator.is_position() {
+                plot.vline(VLine::new(format!("±{x}"), -x).color(c));
             }
-        });
+        }
+    });
 }
 
 /// All figures of one split at a glance, nominal against the live iterate or the last calibration

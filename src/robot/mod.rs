@@ -684,6 +684,23 @@ impl RobotDescription {
             .collect()
     }
 
+    /// Every joint of the tree as (parent link's pose, child link's pose) in the body frame (mm) for
+    /// the given joint values: the robot as its frames and the links between them, to draw where it
+    /// has no geometry. Joints off the body's tree are left out.
+    pub fn skeleton(
+        &self,
+        q_left: &[f64],
+        q_right: &[f64],
+    ) -> Vec<(Isometry3<f64>, Isometry3<f64>)> {
+        let poses = self.kin.body_from_links(q_left, q_right);
+        self.kin
+            .joints
+            .iter()
+            .filter(|j| self.kin.reachable[j.parent] && self.kin.reachable[j.child])
+            .map(|j| (poses[j.parent], poses[j.child]))
+            .collect()
+    }
+
     /// All shapes of the given kind placed in the body frame (mm).
     pub fn shapes(&self, q_left: &[f64], q_right: &[f64], which: GeometryKind) -> Vec<PlacedShape> {
         let poses = self.kin.body_from_links(q_left, q_right);

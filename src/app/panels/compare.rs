@@ -7,13 +7,14 @@ use super::settings::{base_method_help, method_help};
 use crate::analysis::Indicator;
 use crate::app::command::Command;
 use crate::app::compare::{CompareView, paper_set};
+use crate::app::plots;
 use crate::comparison::{self, BoxStats, Comparison, METHODS, MethodEntry, MethodOutcome};
 use crate::dataset::Split;
 use crate::metrics::AccuracyStats;
 use crate::side::Side;
 use crate::solver::CalibrationSettings;
 use eframe::egui::{self, Color32, RichText};
-use egui_plot::{Bar, BarChart, BoxElem, BoxPlot, BoxSpread, Plot};
+use egui_plot::{Bar, BarChart, BoxElem, BoxPlot, BoxSpread, Plot, log_grid_spacer};
 
 /// Colour of the best figure of a column.
 const BEST_COLOR: Color32 = Color32::from_rgb(110, 210, 120);
@@ -391,17 +392,20 @@ fn distributions_ui(
                         .bars()
                         .map(|(x, f)| Bar::new(x, 100.0 * f).width(width))
                         .collect();
-                    Plot::new(("compare histogram", key.as_str(), split))
+                    let plot = Plot::new(("compare histogram", key.as_str(), split))
                         .width(cell_w)
                         .height(cell_h)
                         .allow_scroll(false)
                         .allow_drag(false)
                         .allow_zoom(false)
                         .show_axes([true, false])
-                        .x_axis_label(format!("{key} ({unit})"))
-                        .show(ui, |plot| {
+                        .x_axis_label(format!("{key} ({unit})"));
+                    plots::framed(plot, log_grid_spacer(10), log_grid_spacer(10)).show(
+                        ui,
+                        |plot| {
                             plot.bar_chart(BarChart::new(key.as_str(), bars).color(color(k)));
-                        });
+                        },
+                    );
                 }
             });
         }
@@ -412,7 +416,7 @@ fn distributions_ui(
             .filter_map(|(k, (key, s))| Some((k, key, BoxStats::of(s)?)))
             .collect();
         let names: Vec<String> = samples.iter().map(|(k, _)| k.clone()).collect();
-        Plot::new(("compare box plots", split))
+        let plot = Plot::new(("compare box plots", split))
             .height(height)
             .allow_scroll(false)
             .allow_drag(false)
@@ -425,21 +429,21 @@ fn distributions_ui(
                 } else {
                     String::new()
                 }
-            })
-            .show(ui, |plot| {
-                for (k, key, b) in boxes {
-                    let elem = BoxElem::new(
-                        k as f64,
-                        BoxSpread::new(b.whisker_lo, b.q1, b.median, b.q3, b.whisker_hi),
-                    )
-                    .name(key)
-                    .box_width(0.5)
-                    .whisker_width(0.3)
-                    .fill(color(k).gamma_multiply(0.3))
-                    .stroke(egui::Stroke::new(1.5, color(k)));
-                    plot.box_plot(BoxPlot::new(key.as_str(), vec![elem]));
-                }
             });
+        plots::framed(plot, log_grid_spacer(10), log_grid_spacer(10)).show(ui, |plot| {
+            for (k, key, b) in boxes {
+                let elem = BoxElem::new(
+                    k as f64,
+                    BoxSpread::new(b.whisker_lo, b.q1, b.median, b.q3, b.whisker_hi),
+                )
+                .name(key)
+                .box_width(0.5)
+                .whisker_width(0.3)
+                .fill(color(k).gamma_multiply(0.3))
+                .stroke(egui::Stroke::new(1.5, color(k)));
+                plot.box_plot(BoxPlot::new(key.as_str(), vec![elem]));
+            }
+        });
     });
 }
 

@@ -264,15 +264,15 @@ impl LeftPanel<'_> {
         }
     }
 
-    /// The method of the current calibration.
+    /// The method of the current calibration, "current: nominal" before one: the line is always
+    /// there, one line high (truncated; the whole on hover), so nothing below it moves when a run
+    /// ends.
     fn current_method_ui(&self, ui: &mut egui::Ui) {
-        if let Some(c) = self.session.and_then(|s| s.calibrated.as_ref()) {
-            ui.label(
-                RichText::new(format!("current: {}", method_used(&c.result)))
-                    .small()
-                    .color(Color32::GRAY),
-            );
-        }
+        let text = match self.session.and_then(|s| s.calibrated.as_ref()) {
+            Some(c) => format!("current: {}", method_used(&c.result)),
+            None => "current: nominal (not calibrated)".to_string(),
+        };
+        ui.add(egui::Label::new(RichText::new(text).small().color(Color32::GRAY)).truncate());
     }
 
     fn export_section_ui(&self, ui: &mut egui::Ui, commands: &mut Vec<Command>) {

@@ -131,7 +131,8 @@ pub struct SceneOptions {
 /// Which copy of the robot's meshes the viewport draws: the full meshes, or the simplified copy
 /// ([`crate::meshes::lod`]; collision checks and exports always use the full ones). `Auto`: the
 /// simplified copy on a software renderer (lavapipe, llvmpipe, SwiftShader), the full meshes on a
-/// GPU. `DUALCAL_MESH_DETAIL=auto|full|simplified` sets the choice the workbench starts with.
+/// GPU. The launch options set the choice the workbench starts with (`DUALCAL_MESH_DETAIL`,
+/// [`crate::app::LaunchOptions`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum MeshDetail {
     #[default]
@@ -156,13 +157,6 @@ impl MeshDetail {
         Self::ALL
             .into_iter()
             .find(|d| d.label().eq_ignore_ascii_case(text.trim()))
-    }
-
-    /// The choice `DUALCAL_MESH_DETAIL` names, if it is set to one.
-    pub fn from_env() -> Option<Self> {
-        std::env::var("DUALCAL_MESH_DETAIL")
-            .ok()
-            .and_then(|v| Self::parse(&v))
     }
 
     /// Whether to draw the simplified copy, on a software renderer or not.
@@ -437,6 +431,48 @@ fn grid(out: &mut Vec<ColorVertex>) {
     );
 }
 
+/// Length of the axes drawn at each link's frame of a robot without geometry, mm.
+const FRAME_AXIS_MM: f64 = 40.0;
+/// Colour of the links of a robot without geometry.
+const SKELETON_RGBA: [f32; 4] = [0.75, 0.77, 0.80, 1.0];
+
+/// A robot without geometry: a line from each joint's parent link's origin to its child's (the
+/// links), and at every link's frame its axes (x red, y green, z blue; one frame per origin).
+fn skeleton(joints: &[(Isometry3<f64>, Isometry3<f64>)], out: &mut Vec<ColorVertex>) {
+    let mut drawn: Vec<Vector3<f64>> = Vec::new();
+    for (parent, child) in joints {
+        let (from, to) = (parent.translation.vector, child.translation.vector);
+        if (to - from).norm() > 1e-6 {
+            line(out, from, to, SKELETON_RGBA);
+        }
+        for frame in [parent, child] {
+            let origin = frame.translation.vector;
+            if !drawn.iter().any(|p| (p - origin).norm() < 1e-6) {
+                drawn.push(origin);
+                frame_axes(frame, out);
+            }
+        }
+    }
+}
+
+/// A frame's axes, x red, y green, z blue.
+fn frame_axes(frame: &Isometry3<f64>, out: &mut Vec<ColorVertex>) {
+    let axes = [
+        (Vector3::x(), [0.9, 0.15, 0.1, 1.0]),
+        (Vector3::y(), [0.2, 0.8, 0.2, 1.0]),
+        (Vector3::z(), [0.25, 0.4, 1.0, 1.0]),
+    ];
+    let origin = frame.translation.vector;
+    for (axis, color) in axes {
+        line(
+            out,
+            origin,
+            origin + frame.rotation * axis * FRAME_AXIS_MM,
+            color,
+        );
+    }
+}
+
 /// The built-in IRB 14000, created once (drawn while no dataset is loaded).
 pub fn builtin_robot() -> &'static RobotDescription {
     static ROBOT: std::sync::OnceLock<RobotDescription> = std::sync::OnceLock::new();
@@ -458,6 +494,10 @@ fn robot_scene(
     };
     if options.show_robot {
         let shapes = robot.shapes(&q_rad.left, &q_rad.right, GeometryKind::Visual);
+        if shapes.is_empty() {
+            // No geometry to draw: the robot as its frames and links.
+            skeleton(&robot.skeleton(&q_rad.left, &q_rad.right), &mut scene.lines);
+        }
         let source = match meshes {
             Some(m) => MeshSource::Packed(m),
             None => MeshSource::Placeholders,
@@ -500,28 +540,15 @@ pub fn build_scene(
     software_renderer: bool,
     version: u64,
 ) -> SceneData {
-    let mut q_rad = poses.map(|side, pose| {
-        pose.and_then(|i| session.dataset.arm(side).measurements.get(i))
-            .map_or_else(|| session.robot.home_q_rad(side), |m| m.q_rad.clone())
-    });
-    // Joints both arms share (a torso) are posed by the left arm's values — by the right arm's when a
-    // right configuration is selected.
-    if selection.is_some_and(|c| c.side == Side::Right) {
-        let shared = session.nominal.model.shared_joints();
-        q_rad.left = shared.left_with_right_values(&q_rad.left, &q_rad.right);
-    }
     let mut scene = robot_scene(
         &session.robot,
         session
             .meshes
             .packed_for(options.mesh_detail.simplified(software_renderer)),
-        q_rad,
+        scene_q_rad(session, poses, selection),
         options,
         version,
     );
-    let max = options.color_max_mm.max(1e-6);
-    let model_color = [0.35, 0.37, 0.40, 0.8];
-    let excluded_color = [0.25, 0.25, 0.25, 0.5];
     let flags = options.screening(session).by_config();
     for row in options
         .analysis(session)
@@ -529,84 +556,20 @@ pub fn build_scene(
         .iter()
         .filter(|r| options.shows(r))
     {
-        let selected = selection == Some(row.config);
-        let errors = row.point_errors_mm();
-        let mean = errors.iter().sum::<f64>() / errors.len().max(1) as f64;
         // A flagged configuration in its flag's colour (severity), outlined; an excluded one grey.
         let flag = flags
             .get(&row.config)
             .filter(|_| options.show_flags && !row.excluded)
             .map(|f| colormap::flag_linear(f[0].severity()));
+        let selected = selection == Some(row.config);
         if options.show_measured {
-            let ([r, g, b], alpha) = match (row.excluded, flag) {
-                (true, _) => ([0.3; 3], if selected { 0.8 } else { 0.15 }),
-                (false, Some(c)) => (c, if selected { 0.95 } else { 0.6 }),
-                (false, None) => (
-                    colormap::linear(mean as f32 / max),
-                    if selected { 0.95 } else { 0.3 },
-                ),
-            };
-            let points = &row.measured_body_mm;
-            if points.len() == 3 {
-                // The paper's set-up: the measured reflector triangle, filled.
-                for p in points {
-                    scene.triangles.push(ColorVertex {
-                        position: p.cast::<f32>().into(),
-                        color: [r, g, b, alpha],
-                    });
-                }
-            } else {
-                // One, two or four reflectors: a marker per reflector.
-                for p in points {
-                    scene.instances.push(MeshInstance::new(
-                        Primitive::Sphere,
-                        &Isometry3::translation(p.x, p.y, p.z),
-                        Vector3::repeat(MARKER_MM),
-                        [r, g, b, alpha.max(0.6)],
-                    ));
-                }
-            }
-            if let Some([r, g, b]) = flag {
-                for (i, j) in outline(points.len()) {
-                    line(&mut scene.lines, points[i], points[j], [r, g, b, 1.0]);
-                }
-            }
+            measured_points(&mut scene, row, flag, selected, options);
         }
         if options.show_model {
-            let c = if selected {
-                [1.0, 1.0, 1.0, 1.0]
-            } else if row.excluded {
-                excluded_color
-            } else {
-                model_color
-            };
-            let points = &row.model_body_mm;
-            for (i, j) in outline(points.len()) {
-                line(&mut scene.lines, points[i], points[j], c);
-            }
-            if points.len() == 1 {
-                // A single model point: a small cross.
-                for axis in [Vector3::x(), Vector3::y(), Vector3::z()] {
-                    let d = axis * MARKER_MM;
-                    line(&mut scene.lines, points[0] - d, points[0] + d, c);
-                }
-            }
+            model_points(&mut scene.lines, row, selected);
         }
         if options.show_vectors {
-            for ((error, from), measured) in errors
-                .iter()
-                .zip(row.model_body_mm.iter().copied())
-                .zip(row.measured_body_mm.iter().copied())
-            {
-                let color = if row.excluded {
-                    excluded_color
-                } else {
-                    let [r, g, b] = colormap::linear(*error as f32 / max);
-                    [r, g, b, 1.0]
-                };
-                let to = from + (measured - from) * options.exaggeration as f64;
-                line(&mut scene.lines, from, to, color);
-            }
+            error_vectors(&mut scene.lines, row, options);
         }
         if selected {
             let c = srgb_linear([255, 255, 255], 1.0);
@@ -621,6 +584,117 @@ pub fn build_scene(
         }
     }
     scene
+}
+
+/// The joint values each arm is drawn in: the measurement `poses` names, else home. Joints both arms
+/// share (a torso) are posed by the left arm's values — by the right arm's when a right
+/// configuration is selected.
+fn scene_q_rad(
+    session: &Session,
+    poses: PerSide<Option<usize>>,
+    selection: Option<ConfigId>,
+) -> PerSide<Vec<f64>> {
+    let mut q_rad = poses.map(|side, pose| {
+        pose.and_then(|i| session.dataset.arm(side).measurements.get(i))
+            .map_or_else(|| session.robot.home_q_rad(side), |m| m.q_rad.clone())
+    });
+    if selection.is_some_and(|c| c.side == Side::Right) {
+        let shared = session.nominal.model.shared_joints();
+        q_rad.left = shared.left_with_right_values(&q_rad.left, &q_rad.right);
+    }
+    q_rad
+}
+
+/// A configuration's measured reflectors: the triangle filled for three, a marker per reflector
+/// otherwise; coloured by the mean error (or the `flag`'s severity, outlined), grey when excluded.
+fn measured_points(
+    scene: &mut SceneData,
+    row: &ConfigRow,
+    flag: Option<[f32; 3]>,
+    selected: bool,
+    options: &SceneOptions,
+) {
+    let errors = row.point_errors_mm();
+    let mean = errors.iter().sum::<f64>() / errors.len().max(1) as f64;
+    let ([r, g, b], alpha) = match (row.excluded, flag) {
+        (true, _) => ([0.3; 3], if selected { 0.8 } else { 0.15 }),
+        (false, Some(c)) => (c, if selected { 0.95 } else { 0.6 }),
+        (false, None) => (
+            colormap::linear(mean as f32 / options.color_max_mm.max(1e-6)),
+            if selected { 0.95 } else { 0.3 },
+        ),
+    };
+    let points = &row.measured_body_mm;
+    if points.len() == 3 {
+        // The paper's set-up: the measured reflector triangle, filled.
+        for p in points {
+            scene.triangles.push(ColorVertex {
+                position: p.cast::<f32>().into(),
+                color: [r, g, b, alpha],
+            });
+        }
+    } else {
+        // One, two or four reflectors: a marker per reflector.
+        for p in points {
+            scene.instances.push(MeshInstance::new(
+                Primitive::Sphere,
+                &Isometry3::translation(p.x, p.y, p.z),
+                Vector3::repeat(MARKER_MM),
+                [r, g, b, alpha.max(0.6)],
+            ));
+        }
+    }
+    if let Some([r, g, b]) = flag {
+        for (i, j) in outline(points.len()) {
+            line(&mut scene.lines, points[i], points[j], [r, g, b, 1.0]);
+        }
+    }
+}
+
+/// Colour of the model's reflector outlines.
+const MODEL_RGBA: [f32; 4] = [0.35, 0.37, 0.40, 0.8];
+/// Colour of an excluded configuration's model outline and error vectors.
+const EXCLUDED_RGBA: [f32; 4] = [0.25, 0.25, 0.25, 0.5];
+
+/// A configuration's model reflectors (forward kinematics) outlined; a single one as a small cross.
+fn model_points(lines: &mut Vec<ColorVertex>, row: &ConfigRow, selected: bool) {
+    let c = if selected {
+        [1.0, 1.0, 1.0, 1.0]
+    } else if row.excluded {
+        EXCLUDED_RGBA
+    } else {
+        MODEL_RGBA
+    };
+    let points = &row.model_body_mm;
+    for (i, j) in outline(points.len()) {
+        line(lines, points[i], points[j], c);
+    }
+    if points.len() == 1 {
+        for axis in [Vector3::x(), Vector3::y(), Vector3::z()] {
+            let d = axis * MARKER_MM;
+            line(lines, points[0] - d, points[0] + d, c);
+        }
+    }
+}
+
+/// From each model reflector towards its measured one, exaggerated, coloured by its error.
+fn error_vectors(lines: &mut Vec<ColorVertex>, row: &ConfigRow, options: &SceneOptions) {
+    let max = options.color_max_mm.max(1e-6);
+    for ((error, from), measured) in row
+        .point_errors_mm()
+        .iter()
+        .zip(row.model_body_mm.iter().copied())
+        .zip(row.measured_body_mm.iter().copied())
+    {
+        let color = if row.excluded {
+            EXCLUDED_RGBA
+        } else {
+            let [r, g, b] = colormap::linear(*error as f32 / max);
+            [r, g, b, 1.0]
+        };
+        let to = from + (measured - from) * options.exaggeration as f64;
+        line(lines, from, to, color);
+    }
 }
 
 /// A measurement plan, drawn instead of the dataset while the planning view is open: the arms in a
@@ -749,6 +823,64 @@ mod tests {
     }
 
     use super::*;
+
+    /// A robot whose URDF has no visual geometry is drawn as its frames and links: a line per
+    /// joint between link origins apart, axes at each frame, no instances; with geometry, none of it.
+    #[test]
+    fn a_robot_without_geometry_is_drawn_as_its_frames_and_links() {
+        let mut text = crate::test_robots::single_ur_like_urdf();
+        while let (Some(a), Some(b)) = (text.find("<visual>"), text.find("</visual>")) {
+            text.replace_range(a..b + "</visual>".len(), "");
+        }
+        let (base, tip) = crate::test_robots::SINGLE_UR_ARM;
+        let links = crate::robot::ArmLinks::new(base, tip);
+        let robot = RobotDescription::load(
+            crate::robot::RobotSource::Text {
+                text: &text,
+                path: None,
+            },
+            &crate::robot::LoadOptions {
+                arms: PerSide::new(Some(links.clone()), Some(links)),
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        let home = PerSide::from_fn(|side| robot.home_q_rad(side));
+        assert!(
+            robot
+                .shapes(&home.left, &home.right, GeometryKind::Visual)
+                .is_empty()
+        );
+        let options = SceneOptions {
+            show_grid: false,
+            ..SceneOptions::default()
+        };
+        let scene = build_robot_scene(&robot, &options, 1);
+        assert!(scene.instances.is_empty());
+        let joints = robot.skeleton(&home.left, &home.right);
+        let apart = joints
+            .iter()
+            .filter(|(p, c)| (c.translation.vector - p.translation.vector).norm() > 1e-6)
+            .count();
+        assert!(apart >= 6, "{apart} links apart");
+        let frames = scene.lines.len() / 2 - apart;
+        assert!(
+            frames.is_multiple_of(3) && frames / 3 > apart,
+            "{frames} axis lines for {apart} links"
+        );
+        // Every link line ends at a frame's origin, where its axes start.
+        for (_, child) in &joints {
+            let origin: Vector3<f32> = child.translation.vector.cast();
+            assert!(
+                scene
+                    .lines
+                    .iter()
+                    .any(|v| (Vector3::from(v.position) - origin).norm() < 1e-3)
+            );
+        }
+        let with_geometry = build_robot_scene(builtin_robot(), &options, 2);
+        assert!(with_geometry.lines.is_empty(), "no skeleton over geometry");
+    }
 
     #[test]
     fn instance_scales_then_places() {
