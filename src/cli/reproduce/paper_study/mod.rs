@@ -15,7 +15,8 @@ mod paper_values;
 mod plots;
 mod tables;
 
-use super::{ReproduceArgs, load_workspace};
+use super::args::ReproduceArgs;
+use crate::cli::common::load_workspace;
 use crate::comparison::{self, Comparison, MethodEntry};
 use crate::dataset::{Dataset, Split};
 use crate::metrics::AccuracyReport;
