@@ -8,7 +8,7 @@ fn main() -> std::process::ExitCode {
     let result = match cli.command {
         None => run_gui(None, None),
         Some(Command::Gui { dataset, urdf }) => run_gui(dataset, urdf),
-        Some(command) => dualcal::cli::run(command),
+        Some(command) => dualcal::cli::run(command, &dualcal::cli::Environment::from_process()),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

@@ -1,7 +1,7 @@
 //! `dualcal export` (the calibration in a controller's and a xacro's terms) and `dualcal compensate`
 //! (joint targets moved for what a controller cannot take); the engine's `controller` module.
 
-use super::{describe_robot, load_workspace};
+use super::common::{describe_robot, load_workspace};
 use crate::controller::abb::{self, BaseFrame};
 use crate::controller::compensate::{CompensationSettings, ControllerBase, Target, compensate_all};
 use crate::controller::{controller_base_frames, targets};

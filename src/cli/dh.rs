@@ -1,6 +1,6 @@
 //! `dualcal urdf-from-dh`: the URDF a DH robot file (`dualcal-dh/1`) is read as.
 
-use super::describe_robot;
+use super::common::describe_robot;
 use crate::robot::{LoadOptions, RobotDescription};
 use anyhow::{Context, Result};
 use clap::Args;

@@ -2,12 +2,11 @@
 //! a dataset, as a table or JSON, and — where the parameter file has the tracker frame — the absolute
 //! position errors (a summary, every marker's error as CSV).
 
-use super::{describe_robot, load_workspace};
-use crate::dataset::{Dataset, Split};
+use super::common::{describe_robot, load_workspace};
+use crate::dataset::Split;
 use crate::metrics;
-use crate::params::{ParamsFile, StatisticsRecord};
+use crate::params::ParamsFile;
 use crate::side::PerSide;
-use crate::solver::CalibrationResult;
 use crate::workspace::Workspace;
 use anyhow::{Context, Result};
 use clap::Args;
@@ -123,49 +122,4 @@ pub(super) fn run(a: &EvaluateArgs) -> Result<()> {
         }
     }
     Ok(())
-}
-
-/// Nominal vs calibrated, on the calibration and verification splits of `ds`; the calibrated
-/// model's figures taken from `recorded` (the parameter file's record of them on `ds`) where it has
-/// them.
-pub fn comparison_table(
-    ds: &Dataset,
-    result: &CalibrationResult,
-    recorded: Option<&StatisticsRecord>,
-) -> Result<String> {
-    use crate::par::prelude::*;
-    let splits = [(Split::Cal, "calibration"), (Split::Ver, "verification")];
-    // The splits' figures side by side (each computed as alone: the same numbers), printed in order.
-    let figures: Vec<Option<(metrics::AccuracyReport, metrics::AccuracyReport)>> = splits
-        .into_par_iter()
-        .map(|(split, _)| -> Result<_> {
-            if !metrics::has_split(ds, split) {
-                return Ok(None);
-            }
-            let before = metrics::evaluate(ds, &result.nominal, split)?;
-            let record = recorded.and_then(|r| if split == Split::Cal { r.cal } else { r.ver });
-            let after = match record {
-                Some(report) => report,
-                None => metrics::evaluate(ds, &result.calibrated, split)?,
-            };
-            Ok(Some((before, after)))
-        })
-        .collect::<Result<_>>()?;
-    let mut out = String::new();
-    for ((_, name), figures) in splits.into_iter().zip(figures) {
-        let Some((before, after)) = figures else {
-            continue;
-        };
-        out.push_str(&format!(
-            "Accuracy on the {name} configurations (nominal → calibrated)\n"
-        ));
-        out.push_str(&metrics::format_comparison_named(
-            &before,
-            &after,
-            ["nominal", "calibrated"],
-            &ds.reflector_names,
-        ));
-        out.push('\n');
-    }
-    Ok(out)
 }

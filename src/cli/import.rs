@@ -1,7 +1,7 @@
 //! `dualcal import`: a dataset from tracker exports and the controller's joint logs (the readers are
 //! the engine's `import` module; docs/formats.md).
 
-use super::describe_robot;
+use super::common::describe_robot;
 use crate::dataset;
 use crate::output::Overwrite;
 use crate::robot::{ArmLinks, LoadOptions, RobotDescription};

@@ -1,7 +1,7 @@
 //! `dualcal plan`: the configurations to measure (the engine's `plan` module), written as a dataset
 //! ready to be filled, and for the YuMi as RAPID modules.
 
-use super::describe_robot;
+use super::common::{describe_robot, parse_xyz};
 use crate::dataset::TrackerSpec;
 use crate::kinematics::ArmLinks;
 use crate::output::{Overwrite, write_atomic};
@@ -72,18 +72,6 @@ pub struct PlanArgs {
     pub mpe_um_per_m: f64,
 }
 
-pub(super) fn parse_xyz(s: &str) -> std::result::Result<Vector3<f64>, String> {
-    let v: Vec<f64> = s
-        .split(',')
-        .map(|x| x.trim().parse::<f64>())
-        .collect::<std::result::Result<_, _>>()
-        .map_err(|_| format!("`{s}`: expected X,Y,Z (mm)"))?;
-    match v.as_slice() {
-        [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok(Vector3::new(*x, *y, *z)),
-        _ => Err(format!("`{s}`: expected X,Y,Z, three numbers (mm)")),
-    }
-}
-
 /// `dualcal plan`.
 pub fn run(a: &PlanArgs) -> Result<()> {
     if !(a.max_incidence_deg > 0.0 && a.max_incidence_deg <= 90.0) {
@@ -121,7 +109,7 @@ pub fn run(a: &PlanArgs) -> Result<()> {
     let existing = match &a.extend {
         Some(dir) => {
             // Through the load pipeline: a prismatic joint's column read in its length unit.
-            let ds = super::load_workspace(dir)?.dataset;
+            let ds = super::common::load_workspace(dir)?.dataset;
             PerSide::from_fn(|side| {
                 ds.arm(side)
                     .measurements

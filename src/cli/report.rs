@@ -1,6 +1,6 @@
 //! `dualcal report`: the calibration report as one self-contained HTML file (the engine's `report`).
 
-use super::load_workspace;
+use super::common::load_workspace;
 use crate::output;
 use crate::params::ParamsFile;
 use crate::report::{self, Report, ReportError};
@@ -26,7 +26,9 @@ pub struct ReportArgs {
     pub pdf: Option<PathBuf>,
 }
 
-pub fn run(a: &ReportArgs) -> Result<()> {
+/// `dualcal report`; `pdf_browser` is `DUALCAL_PDF_BROWSER` (the browser `--pdf` prints with, else
+/// one found on PATH).
+pub fn run(a: &ReportArgs, pdf_browser: Option<&Path>) -> Result<()> {
     let ws = load_workspace(&a.dataset)?;
     let mut inputs: Vec<PathBuf> = ws.dataset.files().to_vec();
     inputs.extend(ws.dataset.robot.clone());
@@ -58,7 +60,7 @@ pub fn run(a: &ReportArgs) -> Result<()> {
         }
     }
     if let Some(pdf) = &a.pdf {
-        let browser = print_pdf(&a.out, pdf)?;
+        let browser = print_pdf(&a.out, pdf, pdf_browser)?;
         outln!(
             "PDF written to {} (printed by {})",
             pdf.display(),
@@ -77,10 +79,11 @@ const PDF_BROWSERS: [&str; 5] = [
     "microsoft-edge",
 ];
 
-/// The browser that prints the PDF: DUALCAL_PDF_BROWSER, else the first of [`PDF_BROWSERS`] on PATH.
-fn pdf_browser() -> Option<PathBuf> {
-    if let Some(named) = std::env::var_os("DUALCAL_PDF_BROWSER").filter(|v| !v.is_empty()) {
-        return Some(PathBuf::from(named));
+/// The browser that prints the PDF: `named` (DUALCAL_PDF_BROWSER), else the first of
+/// [`PDF_BROWSERS`] on PATH.
+fn pdf_browser(named: Option<&Path>) -> Option<PathBuf> {
+    if let Some(named) = named {
+        return Some(named.to_path_buf());
     }
     let path = std::env::var_os("PATH")?;
     PDF_BROWSERS.iter().find_map(|name| {
@@ -92,9 +95,9 @@ fn pdf_browser() -> Option<PathBuf> {
 
 /// Print the HTML report `html` to `pdf` with a headless browser: into a temporary file beside
 /// `pdf`, checked to be a PDF, then renamed (an existing `pdf` stays as it was on failure). The
-/// browser's name.
-fn print_pdf(html: &Path, pdf: &Path) -> Result<PathBuf> {
-    let Some(browser) = pdf_browser() else {
+/// browser's name. `named`: the browser DUALCAL_PDF_BROWSER names.
+fn print_pdf(html: &Path, pdf: &Path, named: Option<&Path>) -> Result<PathBuf> {
+    let Some(browser) = pdf_browser(named) else {
         anyhow::bail!(
             "{}: no browser to print the PDF with: install Chromium or Google Chrome, or name one \
              with DUALCAL_PDF_BROWSER (looked on PATH for {}); the HTML report {} was written",

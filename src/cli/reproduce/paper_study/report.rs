@@ -1,7 +1,7 @@
 //! The Markdown report of `reproduce paper`.
 
-use super::super::{Plan, SeedRun};
-use super::{
+use super::plan::{Plan, SeedRun};
+use super::tables::{
     Model, Pick, THREE, Tables, fmt_num, own_reflector_rms, ratio_summary, summary, ver_stat,
 };
 use crate::comparison::{MethodEntry, Observes};

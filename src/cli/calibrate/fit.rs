@@ -2,12 +2,13 @@
 //! runs beside it (each arm's uncertainty beside step 2; the screening of the result, its
 //! uncertainty and the caller's tables side by side).
 
-use super::calibrate_settings::print_event;
-use super::{CalibrateArgs, print_flags};
+use super::args::CalibrateArgs;
+use super::progress::ProgressLines;
+use super::summary::print_flags;
 use crate::dataset::Dataset;
 use crate::quality;
 use crate::side::{PerSide, Side};
-use crate::solver::{CalibrationEvent, CalibrationResult, CalibrationSettings, Calibrator};
+use crate::solver::{CalibrationResult, CalibrationSettings, Calibrator};
 use anyhow::Result;
 
 /// Calibrate, with `--auto-exclude` or with progress lines: the result, its screening, its uncertainty
@@ -52,10 +53,8 @@ pub(super) fn fit_and_screen<T: Send>(
             before,
             &settings.exclude,
         );
-        let mut progress = |e: &CalibrationEvent| {
-            if !a.quiet {
-                print_event(e, &ds.reflector_names)
-            }
+        let mut progress = ProgressLines {
+            reflectors: &ds.reflector_names,
         };
         // Each arm's uncertainty is computed beside step 2 (which runs on one thread and does not
         // change the arms), taken below where the result's arms are those it was computed for.
@@ -67,11 +66,13 @@ pub(super) fn fit_and_screen<T: Send>(
                 scope,
                 early: &early,
             };
-            Calibrator::new(ds, nominal)
-                .settings(settings)
-                .observer(&mut progress)
-                .observer(&mut beside)
-                .run()
+            let calibrator = Calibrator::new(ds, nominal).settings(settings);
+            let calibrator = if a.quiet {
+                calibrator
+            } else {
+                calibrator.observer(&mut progress)
+            };
+            calibrator.observer(&mut beside).run()
         })?;
         let early = early.into_inner().unwrap_or_default();
         // The screening of the result, its uncertainty (mostly done beside step 2) and the tables

@@ -2,16 +2,13 @@
 //! seeds), Fig. 4's numbers, the raw per-run figures, and the Markdown report.
 
 use super::paper_values::{self, NOMINAL};
-use super::{Plan, SeedRun};
+use super::plan::{Plan, SeedRun};
 use crate::comparison::{Comparison, MethodEntry, Observes};
 use crate::dataset::Split;
 use crate::metrics::{AccuracyReport, AccuracyStats};
 use crate::side::Side;
 use anyhow::Result;
 use std::fmt::Write as _;
-
-mod report;
-pub(crate) use report::report;
 
 pub(crate) const TABLE4_CSV: &str = "table4_relative_frequency.csv";
 pub(crate) const TABLE5_CSV: &str = "table5_relative_accuracy.csv";
@@ -63,7 +60,7 @@ impl Unit {
     }
 }
 
-type Pick = fn(&AccuracyStats) -> f64;
+pub(super) type Pick = fn(&AccuracyStats) -> f64;
 
 /// A row of the paper's tables: which pairs, which figure.
 struct RowSpec {
@@ -77,7 +74,7 @@ struct RowSpec {
 }
 
 #[derive(Clone, Copy)]
-enum Pairs {
+pub(super) enum Pairs {
     Relative(Side),
     Collaborative,
 }
@@ -171,7 +168,7 @@ pub(crate) struct Column {
 }
 
 #[derive(Clone, Copy)]
-enum Model {
+pub(super) enum Model {
     Nominal,
     Truth,
     Method(&'static str),
@@ -248,7 +245,7 @@ pub(crate) fn summary(values: &[f64]) -> (f64, f64, f64, f64, usize) {
     (mean, sd, min, max, n)
 }
 
-fn fmt_num(x: f64, digits: usize) -> String {
+pub(super) fn fmt_num(x: f64, digits: usize) -> String {
     if x.is_finite() {
         format!("{x:.digits$}")
     } else {
@@ -703,7 +700,7 @@ pub(crate) fn runs_csv(runs: &[SeedRun]) -> Result<String> {
 }
 
 /// The ratios `num / den` of the runs: `(mean, how many ≤ 1, how many)`.
-fn ratio_summary(
+pub(super) fn ratio_summary(
     runs: &[SeedRun],
     num: impl Fn(&SeedRun) -> Option<f64>,
     den: impl Fn(&SeedRun) -> Option<f64>,
@@ -724,7 +721,7 @@ fn ratio_summary(
     ))
 }
 
-const THREE: [(Pairs, &str); 3] = [
+pub(super) const THREE: [(Pairs, &str); 3] = [
     (Pairs::Relative(Side::Left), "L"),
     (Pairs::Relative(Side::Right), "R"),
     (Pairs::Collaborative, "collab"),
@@ -732,14 +729,14 @@ const THREE: [(Pairs, &str); 3] = [
 
 /// The verification RMS of `side`'s relative `Δd` of the reflector the method `key` used on that arm,
 /// under `model`.
-fn own_reflector_rms(r: &SeedRun, key: &str, side: Side, model: Model) -> Option<f64> {
+pub(super) fn own_reflector_rms(r: &SeedRun, key: &str, side: Side, model: Model) -> Option<f64> {
     let k = r.comparison.method(key)?.run()?.result.reflector_used[side]?.index();
     model
         .report(&r.comparison, Split::Ver)
         .map(|rep| rep.relative_or_nan(side).pos_rms_per_reflector_mm[k])
 }
 
-fn ver_stat(r: &SeedRun, model: Model, pairs: Pairs, pick: Pick) -> Option<f64> {
+pub(super) fn ver_stat(r: &SeedRun, model: Model, pairs: Pairs, pick: Pick) -> Option<f64> {
     model
         .report(&r.comparison, Split::Ver)
         .map(|rep| pick(&pairs.of(rep)))

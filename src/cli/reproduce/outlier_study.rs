@@ -2,7 +2,7 @@
 //! how many good configurations it flags, and what the exclusion does to the verification accuracy
 //! (docs/reliability.md).
 
-use super::ReproduceArgs;
+use super::args::ReproduceArgs;
 use crate::dataset::Split;
 use crate::metrics::{self, AccuracyReport};
 use crate::quality::{self, ScreenSettings};

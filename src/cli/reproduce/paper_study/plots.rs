@@ -8,8 +8,8 @@
 //! calibrated models share one. Box plots pool the samples of all seeds (Tukey whiskers; dots at the
 //! extremes).
 
+use super::plan::{Plan, SeedRun};
 use super::tables::summary;
-use super::{Plan, SeedRun};
 use crate::analysis::{HISTOGRAM_BINS, Indicator};
 use crate::comparison::{self, BoxStats, MethodEntry};
 use crate::dataset::Split;

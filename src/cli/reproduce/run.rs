@@ -1,7 +1,9 @@
-//! `dualcal reproduce`: the studies of the paper and of docs/solver.md on simulated data.
+//! `dualcal reproduce`: the studies of the paper and of docs/solver.md on simulated data (the
+//! outliers and paper studies in their own files).
 
+use super::args::{ReproduceArgs, Study};
 use super::paper_study::FIG4_SIZES;
-use super::{ReproduceArgs, Study, load_workspace};
+use crate::cli::common::load_workspace;
 use crate::dataset::{Dataset, Split};
 use crate::kinematics::DualArmModel;
 use crate::metrics;
@@ -47,6 +49,7 @@ fn study_options(a: &ReproduceArgs, seed: u64) -> SimOptions {
     }
 }
 
+/// `dualcal reproduce STUDY`.
 pub(crate) fn run(a: &ReproduceArgs) -> Result<()> {
     let robot = RobotDescription::builtin_irb14000();
     if a.study != Study::Paper {
@@ -62,126 +65,134 @@ pub(crate) fn run(a: &ReproduceArgs) -> Result<()> {
         }
     }
     match a.study {
-        Study::Fig4 => {
-            let (ds, nominal) = match &a.dataset {
-                Some(p) => {
-                    let ws = load_workspace(p)?;
-                    (ws.dataset, ws.nominal)
-                }
-                None => {
-                    let ds = simulate::simulate_with_robot(&study_options(a, a.seeds[0]), &robot)?
-                        .dataset;
-                    let nominal = robot.nominal_model_for(&ds);
-                    (ds, nominal)
-                }
-            };
-            outln!(
-                "Paper Fig. 4: relative accuracy against the number of calibration configurations (per arm)"
-            );
-            outln!(
-                "| configs | left pos RMS cal / ver (mm) | right pos RMS cal / ver (mm) | left ori RMS cal / ver (rad) | right ori RMS cal / ver (rad) |"
-            );
-            outln!("|---:|---:|---:|---:|---:|");
-            for &n in a.sizes.as_deref().unwrap_or(&FIG4_SIZES) {
-                let sub = ds.with_cal_subset(n);
-                let res = quiet_calibrate(&sub, &nominal, &CalibrationSettings::default())
-                    .with_context(|| format!("calibrating with {n} configurations"))?;
-                let cal = metrics::evaluate(&sub, &res.calibrated, Split::Cal)?;
-                let ver = metrics::evaluate(&sub, &res.calibrated, Split::Ver)?;
-                outln!(
-                    "| {n} | {:.4} / {:.4} | {:.4} / {:.4} | {:.5} / {:.5} | {:.5} / {:.5} |",
-                    cal.relative_or_nan(Side::Left).pos_rms_mm,
-                    ver.relative_or_nan(Side::Left).pos_rms_mm,
-                    cal.relative_or_nan(Side::Right).pos_rms_mm,
-                    ver.relative_or_nan(Side::Right).pos_rms_mm,
-                    cal.relative_or_nan(Side::Left)
-                        .ori_rms_rad
-                        .unwrap_or(f64::NAN),
-                    ver.relative_or_nan(Side::Left)
-                        .ori_rms_rad
-                        .unwrap_or(f64::NAN),
-                    cal.relative_or_nan(Side::Right)
-                        .ori_rms_rad
-                        .unwrap_or(f64::NAN),
-                    ver.relative_or_nan(Side::Right)
-                        .ori_rms_rad
-                        .unwrap_or(f64::NAN)
-                );
-            }
-        }
-        Study::Qp => {
-            outln!(
-                "Exact QP against the paper's subgradient QP (120 cal + 100 ver configurations per arm)"
-            );
-            outln!(
-                "| seed | QP | iterations (L/R/base) | stop (L/R/base) | time (s) | ψ left (mm²) | ψ right (mm²) | ψ base (mm²) | ver pos RMS L/R/collab (mm) | ver ori RMS L/R/collab (rad) |"
-            );
-            outln!("|---:|---|---|---|---:|---:|---:|---:|---|---|");
-            for &seed in &a.seeds {
-                let sim = simulate::simulate_with_robot(&study_options(a, seed), &robot)?;
-                let truth_ver = metrics::evaluate(&sim.dataset, &sim.truth, Split::Ver)?;
-                outln!(
-                    "| {seed} | truth | – | – | – | – | – | – | {:.4} / {:.4} / {:.4} | {:.5} / {:.5} / {:.5} |",
-                    truth_ver.relative_or_nan(Side::Left).pos_rms_mm,
-                    truth_ver.relative_or_nan(Side::Right).pos_rms_mm,
-                    truth_ver.collaborative_or_nan().pos_rms_mm,
-                    truth_ver
-                        .relative_or_nan(Side::Left)
-                        .ori_rms_rad
-                        .unwrap_or(f64::NAN),
-                    truth_ver
-                        .relative_or_nan(Side::Right)
-                        .ori_rms_rad
-                        .unwrap_or(f64::NAN),
-                    truth_ver
-                        .collaborative_or_nan()
-                        .ori_rms_rad
-                        .unwrap_or(f64::NAN)
-                );
-                for qp in [QpMethod::Exact, QpMethod::Paper] {
-                    let settings = CalibrationSettings {
-                        qp,
-                        max_iterations: 400,
-                        ..CalibrationSettings::default()
-                    };
-                    let res = quiet_calibrate(&sim.dataset, &sim.nominal, &settings)?;
-                    let ver = metrics::evaluate(&sim.dataset, &res.calibrated, Split::Ver)?;
-                    let it: Vec<String> = res
-                        .stages
-                        .iter()
-                        .map(|s| s.iterations.to_string())
-                        .collect();
-                    let psi: Vec<f64> = res.stages.iter().map(|s| s.psi_mm2).collect();
-                    let stops: Vec<String> = res
-                        .stages
-                        .iter()
-                        .map(|s| format!("{:?}", s.termination))
-                        .collect();
-                    outln!(
-                        "| {seed} | {qp:?} | {} | {} | {:.3} | {:.6} | {:.6} | {:.6} | {:.4} / {:.4} / {:.4} | {:.5} / {:.5} / {:.5} |",
-                        it.join(" / "),
-                        stops.join(" / "),
-                        res.elapsed_secs,
-                        psi[0],
-                        psi[1],
-                        psi[2],
-                        ver.relative_or_nan(Side::Left).pos_rms_mm,
-                        ver.relative_or_nan(Side::Right).pos_rms_mm,
-                        ver.collaborative_or_nan().pos_rms_mm,
-                        ver.relative_or_nan(Side::Left)
-                            .ori_rms_rad
-                            .unwrap_or(f64::NAN),
-                        ver.relative_or_nan(Side::Right)
-                            .ori_rms_rad
-                            .unwrap_or(f64::NAN),
-                        ver.collaborative_or_nan().ori_rms_rad.unwrap_or(f64::NAN)
-                    );
-                }
-            }
-        }
+        Study::Fig4 => fig4_study(a, &robot)?,
+        Study::Qp => qp_study(a, &robot)?,
         Study::Robustness => robustness_study(a, &robot)?,
         Study::Outliers => super::outlier_study::run(a, &robot)?,
         Study::Paper => super::paper_study::run(a, &robot)?,
+    }
+    Ok(())
+}
+
+/// Paper Fig. 4: the accuracy after calibrating with each number of calibration configurations, on
+/// `--dataset` or on a simulation of the first seed.
+fn fig4_study(a: &ReproduceArgs, robot: &RobotDescription) -> Result<()> {
+    let (ds, nominal) = match &a.dataset {
+        Some(p) => {
+            let ws = load_workspace(p)?;
+            (ws.dataset, ws.nominal)
+        }
+        None => {
+            let ds = simulate::simulate_with_robot(&study_options(a, a.seeds[0]), robot)?.dataset;
+            let nominal = robot.nominal_model_for(&ds);
+            (ds, nominal)
+        }
+    };
+    outln!(
+        "Paper Fig. 4: relative accuracy against the number of calibration configurations (per arm)"
+    );
+    outln!(
+        "| configs | left pos RMS cal / ver (mm) | right pos RMS cal / ver (mm) | left ori RMS cal / ver (rad) | right ori RMS cal / ver (rad) |"
+    );
+    outln!("|---:|---:|---:|---:|---:|");
+    for &n in a.sizes.as_deref().unwrap_or(&FIG4_SIZES) {
+        let sub = ds.with_cal_subset(n);
+        let res = quiet_calibrate(&sub, &nominal, &CalibrationSettings::default())
+            .with_context(|| format!("calibrating with {n} configurations"))?;
+        let cal = metrics::evaluate(&sub, &res.calibrated, Split::Cal)?;
+        let ver = metrics::evaluate(&sub, &res.calibrated, Split::Ver)?;
+        outln!(
+            "| {n} | {:.4} / {:.4} | {:.4} / {:.4} | {:.5} / {:.5} | {:.5} / {:.5} |",
+            cal.relative_or_nan(Side::Left).pos_rms_mm,
+            ver.relative_or_nan(Side::Left).pos_rms_mm,
+            cal.relative_or_nan(Side::Right).pos_rms_mm,
+            ver.relative_or_nan(Side::Right).pos_rms_mm,
+            cal.relative_or_nan(Side::Left)
+                .ori_rms_rad
+                .unwrap_or(f64::NAN),
+            ver.relative_or_nan(Side::Left)
+                .ori_rms_rad
+                .unwrap_or(f64::NAN),
+            cal.relative_or_nan(Side::Right)
+                .ori_rms_rad
+                .unwrap_or(f64::NAN),
+            ver.relative_or_nan(Side::Right)
+                .ori_rms_rad
+                .unwrap_or(f64::NAN)
+        );
+    }
+    Ok(())
+}
+
+/// The exact QP against the paper's subgradient QP, per seed, beside the simulation's truth.
+fn qp_study(a: &ReproduceArgs, robot: &RobotDescription) -> Result<()> {
+    outln!(
+        "Exact QP against the paper's subgradient QP (120 cal + 100 ver configurations per arm)"
+    );
+    outln!(
+        "| seed | QP | iterations (L/R/base) | stop (L/R/base) | time (s) | ψ left (mm²) | ψ right (mm²) | ψ base (mm²) | ver pos RMS L/R/collab (mm) | ver ori RMS L/R/collab (rad) |"
+    );
+    outln!("|---:|---|---|---|---:|---:|---:|---:|---|---|");
+    for &seed in &a.seeds {
+        let sim = simulate::simulate_with_robot(&study_options(a, seed), robot)?;
+        let truth_ver = metrics::evaluate(&sim.dataset, &sim.truth, Split::Ver)?;
+        outln!(
+            "| {seed} | truth | – | – | – | – | – | – | {:.4} / {:.4} / {:.4} | {:.5} / {:.5} / {:.5} |",
+            truth_ver.relative_or_nan(Side::Left).pos_rms_mm,
+            truth_ver.relative_or_nan(Side::Right).pos_rms_mm,
+            truth_ver.collaborative_or_nan().pos_rms_mm,
+            truth_ver
+                .relative_or_nan(Side::Left)
+                .ori_rms_rad
+                .unwrap_or(f64::NAN),
+            truth_ver
+                .relative_or_nan(Side::Right)
+                .ori_rms_rad
+                .unwrap_or(f64::NAN),
+            truth_ver
+                .collaborative_or_nan()
+                .ori_rms_rad
+                .unwrap_or(f64::NAN)
+        );
+        for qp in [QpMethod::Exact, QpMethod::Paper] {
+            let settings = CalibrationSettings {
+                qp,
+                max_iterations: 400,
+                ..CalibrationSettings::default()
+            };
+            let res = quiet_calibrate(&sim.dataset, &sim.nominal, &settings)?;
+            let ver = metrics::evaluate(&sim.dataset, &res.calibrated, Split::Ver)?;
+            let it: Vec<String> = res
+                .stages
+                .iter()
+                .map(|s| s.iterations.to_string())
+                .collect();
+            let psi: Vec<f64> = res.stages.iter().map(|s| s.psi_mm2).collect();
+            let stops: Vec<String> = res
+                .stages
+                .iter()
+                .map(|s| format!("{:?}", s.termination))
+                .collect();
+            outln!(
+                "| {seed} | {qp:?} | {} | {} | {:.3} | {:.6} | {:.6} | {:.6} | {:.4} / {:.4} / {:.4} | {:.5} / {:.5} / {:.5} |",
+                it.join(" / "),
+                stops.join(" / "),
+                res.elapsed_secs,
+                psi[0],
+                psi[1],
+                psi[2],
+                ver.relative_or_nan(Side::Left).pos_rms_mm,
+                ver.relative_or_nan(Side::Right).pos_rms_mm,
+                ver.collaborative_or_nan().pos_rms_mm,
+                ver.relative_or_nan(Side::Left)
+                    .ori_rms_rad
+                    .unwrap_or(f64::NAN),
+                ver.relative_or_nan(Side::Right)
+                    .ori_rms_rad
+                    .unwrap_or(f64::NAN),
+                ver.collaborative_or_nan().ori_rms_rad.unwrap_or(f64::NAN)
+            );
+        }
     }
     Ok(())
 }
