@@ -127,7 +127,8 @@ fn nominal_fk_matches_an_independent_composition() {
             let q = random_q(&chain, &mut rng);
             // The URDF's own values: metres for a prismatic joint.
             let map: HashMap<String, f64> = chain
-                .variable_joints()
+                .variables()
+                .iter()
                 .zip(q.iter().copied())
                 .map(|(j, v)| {
                     (
