@@ -10,7 +10,9 @@ in the chain's base link frame, in millimetres:
 
 CONFIGS.json is a list of joint-value lists in the chain order of the movable joints from BASE to TIP
 that have their own value (URDF units: radians, metres for a prismatic joint); a joint with a
-<mimic joint multiplier offset> gets multiplier * leader + offset instead. Each LINK is a link fixed below TIP (through fixed joints). Prints JSON:
+<mimic joint multiplier offset> gets multiplier * leader + offset instead, and a leader off the chain
+(a column's virtual joint on a side branch) takes a value of its own where its first follower stands.
+Each LINK is a link fixed below TIP (through fixed joints). Prints JSON:
 
     {"joints": [names...], "configs": [{"tip": [[4x4]], "links": {"name": [x, y, z]}}, ...]}
 """
@@ -97,8 +99,23 @@ def main(argv):
     chain = path(base, tip)
     moving = ("revolute", "continuous", "prismatic")
     by_name = {j.get("name"): j for j in robot.findall("joint")}
-    movable = [j for j in chain if j.get("type") in moving and j.find("mimic") is None]
-    out = {"joints": [j.get("name") for j in movable], "configs": []}
+    def root(name, depth=0):
+        m = by_name[name].find("mimic")
+        if m is None or depth > len(by_name):
+            return name
+        return root(m.get("joint"), depth + 1)
+
+    # The joints with their own value, in chain order; a leader off the chain that a chain joint
+    # mimics stands where its first follower stands.
+    on_chain = {j.get("name") for j in chain}
+    movable = []
+    for j in chain:
+        if j.get("type") not in moving:
+            continue
+        name = root(j.get("name"))
+        if (name == j.get("name") or name not in on_chain) and name not in movable:
+            movable.append(name)
+    out = {"joints": movable, "configs": []}
 
     def value(values, name, depth=0):
         if name in values:
@@ -110,7 +127,7 @@ def main(argv):
         return float(m.get("multiplier", "1")) * leader + float(m.get("offset", "0"))
 
     for q in configs:
-        values = dict(zip((j.get("name") for j in movable), q))
+        values = dict(zip(movable, q))
         t = np.eye(4)
         for j in chain:
             t = t @ origin_of(j)

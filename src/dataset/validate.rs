@@ -623,7 +623,7 @@ pub fn check_measured_together(
                          together (`measured_together = true`), so a shared joint has one value per \
                          id",
                         r.id,
-                        shared.names.get(k).map_or("?", |n| n.as_str()),
+                        shared.variable_names.get(k).map_or("?", |n| n.as_str()),
                         left.file.display(),
                         l.line,
                         a + 1

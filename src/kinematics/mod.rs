@@ -28,8 +28,9 @@ pub(crate) mod tests;
 
 use crate::side::{PerSide, Side};
 pub use chain::{
-    ArmLinks, CORRECTION_NAMES, ChainError, ChainJoint, JointDrive, MovableKind, PARAMS_PER_JOINT,
-    SerialChain, correction_transform, minimal_parameter_count, rpy_from_rotation,
+    ArmLinks, CORRECTION_NAMES, ChainError, ChainJoint, ChainVariable, JointDrive, MovableKind,
+    PARAMS_PER_JOINT, SerialChain, correction_transform, minimal_parameter_count,
+    rpy_from_rotation,
 };
 pub use dh::{
     ABB_AXIS_OF_CHAIN, DhRow, IRB14000_NOMINAL_DH, JOINT_LIMITS_DEG, N_DH, N_JOINTS, N_PARAMS,
@@ -219,7 +220,8 @@ impl ArmModel {
         match &self.kinematics {
             ArmKinematics::Dh(_) => vec![false; N_JOINTS],
             ArmKinematics::Chain { chain, .. } => chain
-                .variable_joints()
+                .variables()
+                .iter()
                 .map(|j| j.kind.is_linear())
                 .collect(),
         }

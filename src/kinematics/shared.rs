@@ -17,8 +17,11 @@ pub struct SharedJoints {
     /// (left joint, right joint): indices into each chain's movable joints.
     pub joints: Vec<(usize, usize)>,
     /// (left variable, right variable): the joint-value columns both arms' files carry (0-based `q`
-    /// indices); a shared joint driven by a `<mimic>` has none.
+    /// indices); a shared joint driven by a `<mimic>` has none, a leader off both chains that joints
+    /// of both follow (a column under both arms) has one.
     pub variables: Vec<(usize, usize)>,
+    /// The joints of `variables`, in its order.
+    pub variable_names: Vec<String>,
     /// (left parameter, right parameter): the correction parameters identified once.
     pub params: Vec<(usize, usize)>,
 }
@@ -64,10 +67,18 @@ impl SharedJoints {
             out.joints.push((a, b));
             if let (Some(va), Some(vb)) = (joint.drive.variable(), r.joints[b].drive.variable()) {
                 out.variables.push((va, vb));
+                out.variable_names.push(joint.name.clone());
             }
             out.params.extend(
                 (0..PARAMS_PER_JOINT).map(|i| (PARAMS_PER_JOINT * a + i, PARAMS_PER_JOINT * b + i)),
             );
+        }
+        for (va, v) in l.variables().iter().enumerate() {
+            let vb = r.variables().iter().position(|w| w.name == v.name);
+            if let (true, Some(vb)) = (v.is_off_chain(), vb) {
+                out.variables.push((va, vb));
+                out.variable_names.push(v.name.clone());
+            }
         }
         out.params
             .extend(shared_error_params(left, right, &out.names));

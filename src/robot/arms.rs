@@ -29,7 +29,8 @@ impl ArmSpec {
     /// Which joint values are lengths (prismatic joints, mm), in chain order.
     pub fn linear_joints(&self) -> Vec<bool> {
         self.chain
-            .variable_joints()
+            .variables()
+            .iter()
             .map(|j| j.kind.is_linear())
             .collect()
     }

@@ -643,7 +643,8 @@ impl RobotDescription {
         let unbounded = (f64::NEG_INFINITY, f64::INFINITY);
         self.arms[side]
             .chain
-            .variable_joints()
+            .variables()
+            .iter()
             .map(|j| j.limits.unwrap_or(unbounded))
             .collect()
     }

@@ -222,17 +222,32 @@ pub(crate) fn compile(
 ) -> Result<Kinematics, RobotError> {
     // Each arm's movable joints with their chain position. A joint on both chains (a shared torso)
     // keeps the left arm's: posing the whole robot, its value is the left arm's column.
+    // A leader off the chain (the virtual joint a column's stages mimic) is driven by its column,
+    // at its first follower's position.
     for (side, spec) in arms.iter() {
-        for (k, joint) in spec.chain.joints.iter().enumerate() {
-            let Some(ji) = tree.joint_names.iter().position(|n| *n == joint.name) else {
+        let chain = &spec.chain;
+        let leaders = chain.variables().iter().enumerate().filter_map(|(i, v)| {
+            let first = chain
+                .joints
+                .iter()
+                .position(|j| j.drive.leader() == Some(i))?;
+            v.is_off_chain()
+                .then_some((first, v.name.as_str(), JointDrive::Variable(i)))
+        });
+        let on_chain = chain.joints.iter().enumerate();
+        for (k, name, drive) in on_chain
+            .map(|(k, j)| (k, j.name.as_str(), j.drive))
+            .chain(leaders)
+        {
+            let Some(ji) = tree.joint_names.iter().position(|n| n == name) else {
                 continue;
             };
             if tree.joints[ji].arm.is_some() {
                 tree.joints[ji].shared = true;
-                tree.joints[ji].right_drive = Some(joint.drive);
+                tree.joints[ji].right_drive = Some(drive);
             } else {
                 tree.joints[ji].arm = Some((side, k));
-                tree.joints[ji].drive = Some(joint.drive);
+                tree.joints[ji].drive = Some(drive);
             }
         }
     }

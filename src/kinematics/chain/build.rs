@@ -1,6 +1,6 @@
 //! Building a [`SerialChain`] from a parsed URDF.
 
-use super::{ChainError, ChainJoint, JointDrive, MovableKind, SerialChain};
+use super::{ChainError, ChainJoint, ChainVariable, JointDrive, MovableKind, SerialChain};
 use nalgebra::{Isometry3, Translation3, Unit, UnitQuaternion, Vector3};
 use std::collections::HashMap;
 
@@ -183,8 +183,8 @@ impl SerialChain {
             });
             pending = Isometry3::identity();
         }
-        let variables = resolve_drives(robot, &mut joints)?;
-        if variables == 0 {
+        let variables = resolve_drives(robot, &mut joints, &mut warnings)?;
+        if variables.is_empty() {
             return Err(ChainError::NoMovableJoint {
                 base: base_link.into(),
                 tip: tip_link.into(),
@@ -222,79 +222,154 @@ fn si_to_internal(kind: MovableKind) -> f64 {
     if kind.is_linear() { 1000.0 } else { 1.0 }
 }
 
-/// Number the joints driven by their own value (the variables, in chain order) and resolve every
-/// `<mimic>` to a variable: a leader that mimics another joint is followed through the URDF's joints
-/// (composing the multipliers and offsets) until a chain joint with its own variable is reached. A
-/// leader off the chain, a loop and a non-finite or zero multiplier are refused.
-fn resolve_drives(robot: &urdf_rs::Robot, joints: &mut [ChainJoint]) -> Result<usize, ChainError> {
-    let by_name: HashMap<&str, &urdf_rs::Joint> =
-        robot.joints.iter().map(|j| (j.name.as_str(), j)).collect();
-    let mut variables = 0;
-    let mut variable_of: HashMap<String, (usize, MovableKind)> = HashMap::new();
-    for j in joints.iter_mut() {
-        if j.mimics.is_none() {
-            j.drive = JointDrive::Variable(variables);
-            variable_of.insert(j.name.clone(), (variables, j.kind));
-            variables += 1;
+/// Where a mimic joint's value comes from: the joint that mimics none at the end of its leaders
+/// (`root`), and `value = multiplier · root + offset` in URDF units (m, rad).
+struct Followed {
+    root: String,
+    multiplier: f64,
+    offset: f64,
+}
+
+/// Follow `joint`'s `<mimic>` leader by leader (composing the multipliers and offsets) to a joint
+/// that mimics none: a chain joint with its own value, or a leader off the chain. A leader the
+/// description lacks, a loop and a non-finite or zero multiplier are refused.
+fn follow(
+    by_name: &HashMap<&str, &urdf_rs::Joint>,
+    joint: &ChainJoint,
+    first: &str,
+) -> Result<Followed, ChainError> {
+    let (mut multiplier, mut offset) = (1.0, 0.0);
+    let mut path = vec![joint.name.clone()];
+    let mut current = joint.name.clone();
+    let mut leader = first.to_string();
+    loop {
+        let mimic = by_name
+            .get(current.as_str())
+            .and_then(|u| u.mimic.as_ref())
+            .ok_or_else(|| ChainError::MimicOutsideChain {
+                joint: joint.name.clone(),
+                mimicked: leader.clone(),
+            })?;
+        let (m, o) = (mimic.multiplier.unwrap_or(1.0), mimic.offset.unwrap_or(0.0));
+        if !(m.is_finite() && o.is_finite() && m != 0.0) {
+            return Err(ChainError::BadMimic { joint: current });
+        }
+        // value_current = m · value_leader + o.
+        offset += multiplier * o;
+        multiplier *= m;
+        if path.contains(&leader) {
+            path.push(leader);
+            return Err(ChainError::MimicLoop {
+                joint: joint.name.clone(),
+                cycle: path.join(" → "),
+            });
+        }
+        path.push(leader.clone());
+        let Some(next) = by_name.get(leader.as_str()) else {
+            return Err(ChainError::MimicOutsideChain {
+                joint: joint.name.clone(),
+                mimicked: leader,
+            });
+        };
+        // A joint that mimics none has its own value: on the chain, or a leader off it.
+        match &next.mimic {
+            Some(m) => current = std::mem::replace(&mut leader, m.joint.clone()),
+            None => break,
         }
     }
-    for j in joints.iter_mut() {
-        let Some(first) = j.mimics.clone() else {
-            continue;
-        };
-        // value_j = multiplier · value_leader + offset, in SI units (m, rad) along the way.
-        let (mut multiplier, mut offset) = (1.0, 0.0);
-        let mut path = vec![j.name.clone()];
-        let mut current = j.name.clone();
-        let mut leader = first;
-        loop {
-            let mimic = by_name
-                .get(current.as_str())
-                .and_then(|u| u.mimic.as_ref())
-                .ok_or_else(|| ChainError::MimicOutsideChain {
-                    joint: j.name.clone(),
-                    mimicked: leader.clone(),
-                })?;
-            let (m, o) = (mimic.multiplier.unwrap_or(1.0), mimic.offset.unwrap_or(0.0));
-            if !(m.is_finite() && o.is_finite() && m != 0.0) {
-                return Err(ChainError::BadMimic { joint: current });
-            }
-            // value_current = m · value_leader + o.
-            offset += multiplier * o;
-            multiplier *= m;
-            if path.contains(&leader) {
-                path.push(leader);
-                return Err(ChainError::MimicLoop {
-                    joint: j.name.clone(),
-                    cycle: path.join(" → "),
-                });
-            }
-            path.push(leader.clone());
-            if let Some(&(variable, kind)) = variable_of.get(&leader) {
-                let (to, from) = (si_to_internal(j.kind), si_to_internal(kind));
-                j.drive = JointDrive::Mimic {
-                    leader: variable,
-                    multiplier: multiplier * to / from,
-                    offset: offset * to,
-                };
-                break;
-            }
-            if !by_name.contains_key(leader.as_str()) {
-                return Err(ChainError::MimicOutsideChain {
-                    joint: j.name.clone(),
-                    mimicked: j.mimics.clone().unwrap_or_default(),
-                });
-            }
-            current = leader.clone();
-            leader = by_name[current.as_str()]
-                .mimic
-                .as_ref()
-                .map(|m| m.joint.clone())
-                .ok_or_else(|| ChainError::MimicOutsideChain {
-                    joint: j.name.clone(),
-                    mimicked: current.clone(),
-                })?;
+    Ok(Followed {
+        root: leader,
+        multiplier,
+        offset,
+    })
+}
+
+/// A leader off the chain as a variable: its kind and limits from the URDF (its origin and axis do
+/// not matter: it moves nothing on the chain).
+fn off_chain_variable(
+    leader: &urdf_rs::Joint,
+    follower: &str,
+    warnings: &mut Vec<String>,
+) -> Result<ChainVariable, ChainError> {
+    let kind = match leader.joint_type {
+        urdf_rs::JointType::Revolute => MovableKind::Revolute,
+        urdf_rs::JointType::Continuous => MovableKind::Continuous,
+        urdf_rs::JointType::Prismatic => MovableKind::Prismatic,
+        ref other => {
+            return Err(ChainError::LeaderNotMovable {
+                joint: follower.to_string(),
+                leader: leader.name.clone(),
+                kind: joint_kind_name(other),
+            });
         }
+    };
+    Ok(ChainVariable {
+        name: leader.name.clone(),
+        kind,
+        limits: joint_limits(leader, kind, warnings)?,
+        joint: None,
+    })
+}
+
+/// The variables in chain order and every joint's drive: a joint that mimics none is its own
+/// variable; a `<mimic>` is followed to the joint with its own value at the end of its leaders
+/// ([`follow`]); a leader off the chain becomes a variable where its first follower stands.
+fn resolve_drives(
+    robot: &urdf_rs::Robot,
+    joints: &mut [ChainJoint],
+    warnings: &mut Vec<String>,
+) -> Result<Vec<ChainVariable>, ChainError> {
+    let by_name: HashMap<&str, &urdf_rs::Joint> =
+        robot.joints.iter().map(|j| (j.name.as_str(), j)).collect();
+    let own: HashMap<String, usize> = joints
+        .iter()
+        .enumerate()
+        .filter(|(_, j)| j.mimics.is_none())
+        .map(|(k, j)| (j.name.clone(), k))
+        .collect();
+    let followed = joints
+        .iter()
+        .map(|j| {
+            j.mimics
+                .as_deref()
+                .map(|first| follow(&by_name, j, first))
+                .transpose()
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let mut variables: Vec<ChainVariable> = Vec::new();
+    let mut variable_of: HashMap<String, usize> = HashMap::new();
+    for (k, (j, f)) in joints.iter().zip(&followed).enumerate() {
+        let variable = match f {
+            None => ChainVariable {
+                name: j.name.clone(),
+                kind: j.kind,
+                limits: j.limits,
+                joint: Some(k),
+            },
+            Some(f) if !own.contains_key(&f.root) && !variable_of.contains_key(&f.root) => {
+                off_chain_variable(by_name[f.root.as_str()], &j.name, warnings)?
+            }
+            Some(_) => continue,
+        };
+        variable_of.insert(variable.name.clone(), variables.len());
+        variables.push(variable);
+    }
+    for (j, f) in joints.iter_mut().zip(followed) {
+        let index = variable_of[f.as_ref().map_or(&j.name, |f| &f.root)];
+        j.drive = match f {
+            None => JointDrive::Variable(index),
+            Some(f) => {
+                let (to, from) = (
+                    si_to_internal(j.kind),
+                    si_to_internal(variables[index].kind),
+                );
+                JointDrive::Mimic {
+                    leader: index,
+                    multiplier: f.multiplier * to / from,
+                    offset: f.offset * to,
+                }
+            }
+        };
     }
     Ok(variables)
 }

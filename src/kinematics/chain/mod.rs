@@ -7,10 +7,15 @@
 //! movable joint is driven ([`JointDrive`]) by its own *variable* (the CSV's `q1 … qN` count the
 //! variables, in chain order: rad for a revolute joint, mm for a prismatic one — the URDF joint's own
 //! variable in the program's units), or, with a URDF `<mimic joint multiplier offset>`, by another
-//! joint of the chain (`value = multiplier · leader + offset`; no CSV column). Floating, planar and
-//! spherical joints, a mimic joint whose leader is not on the chain, a mimic loop, a missing link and a
-//! tip that is not below the base are refused with a [`ChainError`] naming the link or joint. The
-//! joint origins are taken as they are: no DH form is needed. Lengths in mm, angles in rad.
+//! joint (`value = multiplier · leader + offset`, a leader that mimics another followed to the joint
+//! that mimics none; no CSV column). A leader *off the chain* (a lifting column's measured joint on a
+//! side branch, followed by the column's real stages on the chain) is a variable of its own
+//! ([`ChainVariable`]), standing where its first follower stands in chain order, with its own limits;
+//! it has no correction (its origin moves nothing on the chain), its followers have theirs. A leader
+//! off the chain that no joint of the chain follows is no variable. Floating, planar and spherical
+//! joints, a mimic of a joint the description lacks or of a fixed one, a mimic loop, a missing link
+//! and a tip that is not below the base are refused with a [`ChainError`] naming the link or joint.
+//! The joint origins are taken as they are: no DH form is needed. Lengths in mm, angles in rad.
 //!
 //! **The parametrisation.** Every movable joint k gets a small correction `Δ_k` of its origin,
 //! inserted between the URDF origin and the joint rotation and expressed in the joint's *aligned
@@ -72,10 +77,19 @@ pub enum ChainError {
         tip: String,
     },
     #[error(
-        "joint `{joint}` mimics `{mimicked}`, which is not a joint of this arm's chain (nor mimics one): \
-         its value cannot follow from the arm's joint columns"
+        "joint `{joint}` mimics `{mimicked}`, which is not a joint of the robot description: its \
+         value cannot follow from the arm's joint columns"
     )]
     MimicOutsideChain { joint: String, mimicked: String },
+    #[error(
+        "joint `{joint}` mimics `{leader}`, which is {kind}: a leader off the arm's chain must be a \
+         revolute, continuous or prismatic joint (its value is the arm's joint column)"
+    )]
+    LeaderNotMovable {
+        joint: String,
+        leader: String,
+        kind: &'static str,
+    },
     #[error("joint `{joint}`: its <mimic> leads back to itself ({cycle}): a mimic loop")]
     MimicLoop { joint: String, cycle: String },
     #[error(
@@ -106,6 +120,7 @@ impl ChainError {
             ChainError::NoMovableJoint { .. } => None,
             ChainError::UnsupportedJoint { joint, .. }
             | ChainError::MimicOutsideChain { joint, .. }
+            | ChainError::LeaderNotMovable { joint, .. }
             | ChainError::MimicLoop { joint, .. }
             | ChainError::BadMimic { joint }
             | ChainError::BadAxis { joint, .. }
@@ -204,6 +219,45 @@ impl JointDrive {
             JointDrive::Mimic { .. } => None,
         }
     }
+
+    /// The variable a mimic joint follows.
+    pub fn leader(&self) -> Option<usize> {
+        match *self {
+            JointDrive::Variable(_) => None,
+            JointDrive::Mimic { leader, .. } => Some(leader),
+        }
+    }
+}
+
+/// A joint value a configuration gives (a CSV column, `q[i]`), in chain order: a movable joint of the
+/// chain driven by its own value, or a *leader off the chain* — a joint on a side branch that joints
+/// of the chain follow by their `<mimic>` (a lifting column's measured joint, a virtual joint whose
+/// followers are the column's real stages). A leader off the chain stands where its first follower
+/// stands in chain order; its origin moves nothing on the chain, so it has no correction.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ChainVariable {
+    /// The URDF joint's name.
+    pub name: String,
+    pub kind: MovableKind,
+    /// `(lower, upper)` as the URDF gives them, in the joint's unit (rad; mm for a prismatic joint);
+    /// `None` for a continuous joint. A leader's limits are its column's.
+    pub limits: Option<(f64, f64)>,
+    /// The chain joint (index into [`SerialChain::joints`]) this is the own value of; `None` for a
+    /// leader off the chain.
+    pub joint: Option<usize>,
+}
+
+impl ChainVariable {
+    /// The range the value may take, in its unit: its limits, or ±π for a continuous joint.
+    pub fn range(&self) -> (f64, f64) {
+        self.limits
+            .unwrap_or((-std::f64::consts::PI, std::f64::consts::PI))
+    }
+
+    /// A leader off the chain (only followed by joints of the chain)?
+    pub fn is_off_chain(&self) -> bool {
+        self.joint.is_none()
+    }
 }
 
 /// One movable joint of a chain.
@@ -266,8 +320,9 @@ pub struct SerialChain {
     pub base_link: String,
     pub tip_link: String,
     pub joints: Vec<ChainJoint>,
-    /// Number of variables (the CSV's joint columns): the movable joints that mimic none.
-    variables: usize,
+    /// The variables (the CSV's joint columns), in chain order: the movable joints that mimic none,
+    /// and the leaders off the chain that joints of the chain mimic.
+    variables: Vec<ChainVariable>,
     /// The fixed joints after the last movable joint, folded: `last_child_from_tip`.
     pub last_from_tip: Isometry3<f64>,
     /// Things the user should know (a revolute joint without limits, …).
@@ -316,9 +371,9 @@ pub const fn minimal_parameter_count(revolute: usize) -> usize {
 
 impl SerialChain {
     /// Number of variables: the joint values a configuration gives (the CSV's `q1 … qN`), one per
-    /// movable joint that mimics none.
+    /// movable joint that mimics none and one per leader off the chain.
     pub fn dof(&self) -> usize {
-        self.variables
+        self.variables.len()
     }
 
     /// Number of movable joints (mimic joints included): the correction blocks.
@@ -326,26 +381,24 @@ impl SerialChain {
         self.joints.len()
     }
 
-    /// The movable joints driven by their own variable, in variable order.
-    pub fn variable_joints(&self) -> impl Iterator<Item = &ChainJoint> {
-        self.joints.iter().filter(|j| j.drive.variable().is_some())
+    /// The variables, in variable order (the CSV's `q1 … qN`).
+    pub fn variables(&self) -> &[ChainVariable] {
+        &self.variables
     }
 
     /// Names of the variables' joints (the CSV's `q1 … qN`).
     pub fn variable_names(&self) -> Vec<&str> {
-        self.variable_joints().map(|j| j.name.as_str()).collect()
+        self.variables.iter().map(|v| v.name.as_str()).collect()
     }
 
     /// `(lower, upper)` of every variable, in its unit (rad; mm for a prismatic joint).
     pub fn variable_ranges(&self) -> Vec<(f64, f64)> {
-        self.variable_joints().map(|j| j.range()).collect()
+        self.variables.iter().map(ChainVariable::range).collect()
     }
 
     /// Is variable `i` a length (a prismatic joint's, mm) rather than an angle (rad)?
     pub fn variable_is_linear(&self, i: usize) -> bool {
-        self.variable_joints()
-            .nth(i)
-            .is_some_and(|j| j.kind.is_linear())
+        self.variables.get(i).is_some_and(|v| v.kind.is_linear())
     }
 
     /// Every movable joint's value (rad or mm) at the variables `q`.

@@ -3,7 +3,10 @@
 
 use super::*;
 use crate::kinematics::ArmModel;
-use crate::test_robots::{DUAL_UR_ARMS, dual_ur_like_urdf, lift_mimic_urdf, yumi_like_urdf};
+use crate::test_robots::{
+    COLUMN_MIMIC_ARM, DUAL_UR_ARMS, column_mimic_urdf, dual_ur_like_urdf, lift_mimic_urdf,
+    yumi_like_urdf,
+};
 use nalgebra::DVector;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -120,6 +123,13 @@ fn nominal_fk_matches_an_independent_composition() {
         ),
         (lift_mimic_urdf(), "torso", "left_flange"),
         (yumi_like_urdf(), "yumi_body", "gripper_r_finger_r"),
+        (yumi_like_urdf(), "yumi_body", "gripper_r_finger_l"),
+        (column_mimic_urdf(), COLUMN_MIMIC_ARM.0, COLUMN_MIMIC_ARM.1),
+        (
+            column_mimic_urdf(),
+            COLUMN_MIMIC_ARM.0,
+            "gripper_finger_right",
+        ),
     ] {
         let robot = parse(&text);
         let chain = SerialChain::from_urdf(&robot, base, tip).unwrap();
@@ -127,7 +137,8 @@ fn nominal_fk_matches_an_independent_composition() {
             let q = random_q(&chain, &mut rng);
             // The URDF's own values: metres for a prismatic joint.
             let map: HashMap<String, f64> = chain
-                .variable_joints()
+                .variables()
+                .iter()
                 .zip(q.iter().copied())
                 .map(|(j, v)| {
                     (
@@ -179,16 +190,31 @@ fn refusals_name_the_link_or_joint() {
         err("yumi_link_3_l", "yumi_link_7_r"),
         ChainError::NoPath { .. }
     ));
-    // The gripper's finger: a prismatic joint ends the chain (its travel in mm); the other finger
-    // mimics a joint that is not on its chain.
+    // The gripper's finger: a prismatic joint ends the chain (its travel in mm).
     let finger = SerialChain::from_urdf(&robot, "yumi_body", "gripper_l_finger_r").unwrap();
     assert_eq!(finger.dof(), 8);
     assert!(finger.variable_is_linear(7) && !finger.variable_is_linear(6));
     assert_eq!(finger.joints[7].limits, Some((0.0, 25.0)));
-    let e = err("yumi_body", "gripper_l_finger_l");
+    // The other finger mimics a joint that is not on its chain (the first finger's): that leader is
+    // the chain's eighth column, with its limits; the mimicking finger has the correction block.
+    let other = SerialChain::from_urdf(&robot, "yumi_body", "gripper_l_finger_l").unwrap();
+    assert_eq!((other.dof(), other.joint_count()), (8, 8));
+    assert_eq!(other.variable_names()[7], "gripper_l_joint");
+    assert!(other.variables()[7].is_off_chain() && other.variable_is_linear(7));
+    assert_eq!(other.variable_ranges()[7], (0.0, 25.0));
+    assert_eq!(other.joint_names()[7], "gripper_l_joint_m");
+    assert_eq!(other.joints[7].drive.leader(), Some(7));
+    // A leader the description lacks is refused, naming both.
+    let missing = yumi_like_urdf().replace(
+        "<mimic joint=\"gripper_l_joint\"",
+        "<mimic joint=\"gripper_l_joint_x\"",
+    );
+    assert_ne!(missing, yumi_like_urdf());
+    let e =
+        SerialChain::from_urdf(&parse(&missing), "yumi_body", "gripper_l_finger_l").unwrap_err();
     assert!(
         matches!(e, ChainError::MimicOutsideChain { ref joint, ref mimicked }
-            if joint == "gripper_l_joint_m" && mimicked == "gripper_l_joint"),
+            if joint == "gripper_l_joint_m" && mimicked == "gripper_l_joint_x"),
         "{e}"
     );
     assert!(matches!(
@@ -276,6 +302,7 @@ fn analytic_jacobian_matches_central_differences() {
         (yumi_like_urdf(), "yumi_body", "gripper_l_base"),
         (dual_ur_like_urdf(), "table", DUAL_UR_ARMS[1].1),
         (lift_mimic_urdf(), "torso", "right_flange"),
+        (column_mimic_urdf(), COLUMN_MIMIC_ARM.0, COLUMN_MIMIC_ARM.1),
     ] {
         let chain = Arc::new(SerialChain::from_urdf(&parse(&text), base, tip).unwrap());
         for _ in 0..10 {
@@ -301,6 +328,7 @@ fn corrected_origins_reproduce_the_corrected_chain() {
     for (text, base, tip) in [
         (dual_ur_like_urdf(), "left_base_link", "left_ee_link"),
         (lift_mimic_urdf(), "left_base_link", "left_flange"),
+        (column_mimic_urdf(), COLUMN_MIMIC_ARM.0, COLUMN_MIMIC_ARM.1),
     ] {
         let mut robot = parse(&text);
         let chain = Arc::new(SerialChain::from_urdf(&robot, base, tip).unwrap());
@@ -421,6 +449,7 @@ fn flange_jacobian_matches_finite_differences() {
     for (text, base, tip) in [
         (yumi_like_urdf(), "yumi_body", "gripper_r_finger_r"),
         (lift_mimic_urdf(), "torso", "left_flange"),
+        (column_mimic_urdf(), COLUMN_MIMIC_ARM.0, COLUMN_MIMIC_ARM.1),
     ] {
         let chain = Arc::new(SerialChain::from_urdf(&parse(&text), base, tip).unwrap());
         models.push(random_arm(&chain, &mut rng, 2.0, 0.01));
@@ -457,4 +486,115 @@ fn flange_jacobian_matches_finite_differences() {
             }
         }
     }
+}
+
+/// A lifting column whose measured joint is a virtual leader on a side branch: the leader is the
+/// arm's first column (where its first follower stands), with its own limits and no correction; the
+/// column's two stages follow it (multiplier and offset in mm) and have theirs.
+#[test]
+fn a_leader_off_the_chain_is_a_column_of_the_arm() {
+    let robot = parse(&column_mimic_urdf());
+    let (base, tip) = COLUMN_MIMIC_ARM;
+    let chain = SerialChain::from_urdf(&robot, base, tip).unwrap();
+    assert_eq!(
+        chain.variable_names(),
+        [
+            "column_prismatic_joint",
+            "arm_shoulder_pan_joint",
+            "arm_shoulder_lift_joint",
+            "arm_elbow_joint",
+            "arm_wrist_1_joint",
+            "arm_wrist_2_joint",
+            "arm_wrist_3_joint"
+        ]
+    );
+    assert_eq!(chain.joint_count(), 8);
+    assert_eq!(
+        &chain.joint_names()[..2],
+        ["column_middle_joint", "column_top_joint"]
+    );
+    assert!(!chain.joint_names().contains(&"column_prismatic_joint"));
+    let leader = &chain.variables()[0];
+    assert!(leader.is_off_chain() && leader.kind == MovableKind::Prismatic);
+    let (lo, hi) = chain.variable_ranges()[0];
+    assert!((lo - 1412.0).abs() < 1e-9 && (hi - 2012.0).abs() < 1e-9);
+    assert!(chain.variable_is_linear(0) && !chain.variable_is_linear(1));
+    for (k, offset_mm) in [(0, -706.0), (1, -736.0)] {
+        match chain.joints[k].drive {
+            JointDrive::Mimic {
+                leader,
+                multiplier,
+                offset,
+            } => {
+                assert_eq!(leader, 0);
+                assert!((multiplier - 0.5).abs() < 1e-15 && (offset - offset_mm).abs() < 1e-9);
+            }
+            other => panic!("{other:?}"),
+        }
+    }
+    // The stages' values: 0.5 · q + offset, e.g. fully down (1412 mm) the middle stage at 0 mm.
+    let mut q = vec![0.0; 7];
+    q[0] = 1412.0;
+    let v = chain.joint_values(&q);
+    assert!(v[0].abs() < 1e-9 && (v[1] + 30.0).abs() < 1e-9, "{v:?}");
+    // The leader's column moves the flange along z, half a mm per stage per mm.
+    let (mut lo, mut hi) = (q.clone(), q);
+    hi[0] = 1612.0;
+    lo[0] = 1512.0;
+    let d = chain.nominal_base_from_tip(&hi).translation.vector
+        - chain.nominal_base_from_tip(&lo).translation.vector;
+    assert!((d - Vector3::new(0.0, 0.0, 100.0)).norm() < 1e-9, "{d}");
+    // Its parameters are the followers' and the arm's: none of the leader's.
+    assert_eq!(chain.param_count(1), 8 * 6 + 3);
+    assert!((0..chain.param_count(1)).all(|k| !chain.param_name(k).contains("column_prismatic")));
+}
+
+/// A leader off the chain that no joint of the chain follows is no column: the gripper's leader
+/// beside a chain ending at the flange, the column's leader beside a chain starting above the column.
+#[test]
+fn a_leader_off_the_chain_followed_by_nothing_on_it_is_no_column() {
+    let robot = parse(&column_mimic_urdf());
+    let flange = SerialChain::from_urdf(&robot, COLUMN_MIMIC_ARM.0, COLUMN_MIMIC_ARM.1).unwrap();
+    assert!(
+        !flange
+            .variable_names()
+            .contains(&"gripper_finger_left_joint")
+    );
+    let arm = SerialChain::from_urdf(&robot, "arm_base_link", "arm_ee_link").unwrap();
+    assert_eq!((arm.dof(), arm.joint_count()), (6, 6));
+    assert!(arm.variables().iter().all(|v| !v.is_off_chain()));
+    let yumi =
+        SerialChain::from_urdf(&parse(&yumi_like_urdf()), "yumi_body", "yumi_link_7_l").unwrap();
+    assert_eq!(yumi.dof(), 7);
+    assert!(!yumi.variable_names().contains(&"gripper_l_joint"));
+    // A chain through the mimicking finger makes the gripper's leader its last column.
+    let finger =
+        SerialChain::from_urdf(&robot, COLUMN_MIMIC_ARM.0, "gripper_finger_right").unwrap();
+    assert_eq!(finger.variable_names()[7], "gripper_finger_left_joint");
+    assert_eq!(finger.dof(), 8);
+    // Two chains that hold the same column: its leader is one value of both (a shared variable).
+    let a = ArmModel::nominal_chain(Arc::new(flange), vec![Vector3::zeros()]);
+    let b = ArmModel::nominal_chain(Arc::new(finger), vec![Vector3::zeros()]);
+    let shared = crate::kinematics::SharedJoints::of(&a, &b);
+    let mut pairs = shared.variables.clone();
+    pairs.sort_unstable();
+    assert_eq!(pairs, (0..7).map(|i| (i, i)).collect::<Vec<_>>());
+    assert_eq!(shared.variable_names.len(), 7);
+    assert!(
+        shared
+            .variable_names
+            .contains(&"column_prismatic_joint".to_string())
+    );
+    // A fixed joint is no leader.
+    let fixed = column_mimic_urdf().replace(
+        "<joint name=\"column_prismatic_joint\" type=\"prismatic\">",
+        "<joint name=\"column_prismatic_joint\" type=\"fixed\">",
+    );
+    let e =
+        SerialChain::from_urdf(&parse(&fixed), COLUMN_MIMIC_ARM.0, COLUMN_MIMIC_ARM.1).unwrap_err();
+    assert!(
+        matches!(e, ChainError::LeaderNotMovable { ref joint, kind: "fixed", .. }
+            if joint == "column_middle_joint"),
+        "{e}"
+    );
 }
