@@ -67,7 +67,7 @@ impl Default for ImportInputs {
             joint_length_unit: None,
             decimal_comma: false,
             joint_order: String::new(),
-            matching: MatchRule::Name,
+            matching: MatchRule::Auto,
             time_tolerance_s: 0.5,
             stations: PerSide::default(),
             arm_columns: PerSide::default(),

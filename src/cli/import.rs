@@ -86,8 +86,10 @@ pub struct ImportArgs {
     /// e.g. `1,2,7,3,4,5,6` (or `yumi-abb`) for the YuMi's ABB axes 1…7.
     #[arg(long, value_parser = crate::import::parse_joint_order)]
     pub joint_order: Option<JointOrder>,
-    /// How points find their configuration: target names `<id>_<reflector>`, file order, or time stamps.
-    #[arg(long = "match", value_enum, default_value_t = crate::import::MatchRule::Name)]
+    /// How points find their configuration: target names `<id>_<reflector>`, file order, or time
+    /// stamps [default: auto — by name where the names carry configuration ids, else by time where
+    /// both files have time stamps, else by order where the counts agree].
+    #[arg(long = "match", value_enum, default_value_t = crate::import::MatchRule::Auto)]
     pub matching: crate::import::MatchRule,
     /// With --match time: the largest time difference between a point and its configuration, s.
     #[arg(long, default_value_t = 0.5)]

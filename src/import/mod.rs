@@ -32,11 +32,16 @@ use std::path::{Path, PathBuf};
 /// How points are matched to the joint log's configurations.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum MatchRule {
-    /// Target names `<id>_<reflector>` (`L012_a`) against the joint log's ids.
+    /// By name where the target names carry the joint log's configuration ids, else by time where
+    /// both files have time stamps, else by order where the counts agree (the report says which and
+    /// why; counts that disagree are an error saying where the two sequences part).
     #[default]
+    Auto,
+    /// Target names `<id>_<reflector>` (`L012_a`) against the joint log's ids.
     Name,
     /// The points in file order, one group of every reflector (in the dataset's order) per
-    /// configuration of the joint log.
+    /// configuration of the joint log; consecutive shots within 1 mm of each other are one shot
+    /// repeated (averaged).
     Order,
     /// Each point to the configuration with the nearest time stamp within the tolerance; the reflector
     /// from a name's `_<reflector>` suffix, else by order within the configuration.
@@ -116,7 +121,7 @@ impl ImportOptions {
             angle_unit: None,
             decimal_comma: false,
             joint_order: None,
-            matching: MatchRule::Name,
+            matching: MatchRule::Auto,
             time_tolerance_s: 0.5,
             reflector_names,
             nominal_reflectors_mm,

@@ -195,13 +195,14 @@ fn options_ui(ui: &mut egui::Ui, inputs: &mut ImportInputs) {
                 "match",
                 &mut inputs.matching,
                 &[
+                    (MatchRule::Auto, "automatic (the report says which)"),
                     (MatchRule::Name, "target name <id>_<reflector>"),
                     (MatchRule::Order, "file order"),
                     (MatchRule::Time, "time stamp"),
                 ],
             );
             ui.end_row();
-            if inputs.matching == MatchRule::Time {
+            if matches!(inputs.matching, MatchRule::Time | MatchRule::Auto) {
                 ui.label("time tolerance");
                 ui.add(
                     egui::DragValue::new(&mut inputs.time_tolerance_s)
