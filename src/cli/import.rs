@@ -23,15 +23,16 @@ pub struct ImportArgs {
     /// With --robot: the right arm's chain, BASE:TIP (default: the YuMi joint names).
     #[arg(long, requires = "robot", value_parser = ArmLinks::parse)]
     pub right_links: Option<ArmLinks>,
-    /// The left arm's point file (tracker export).
+    /// The left arm's point file (tracker export); with only one arm's files, a dataset of that
+    /// arm alone.
     #[arg(long)]
-    pub left_points: PathBuf,
+    pub left_points: Option<PathBuf>,
     /// The left arm's joint log (`id,q1..qN`); not needed when the point file has the joints (figaroh).
     #[arg(long)]
     pub left_joints: Option<PathBuf>,
     /// The right arm's point file (tracker export).
     #[arg(long)]
-    pub right_points: PathBuf,
+    pub right_points: Option<PathBuf>,
     /// The right arm's joint log (`id,q1..qN`); not needed when the point file has the joints.
     #[arg(long)]
     pub right_joints: Option<PathBuf>,
@@ -251,17 +252,22 @@ pub fn run(a: &ImportArgs) -> Result<()> {
         LengthArg::Mm => dataset::LengthUnit::Mm,
         LengthArg::M => dataset::LengthUnit::M,
     });
-    let inputs = PerSide::new(
-        ArmFiles {
-            points: a.left_points.clone(),
-            joints: a.left_joints.clone(),
-        },
-        ArmFiles {
-            points: a.right_points.clone(),
-            joints: a.right_joints.clone(),
-        },
-    );
-    let imported = import::import(&crate::source::OsFiles, &inputs, &options)?;
+    let points = PerSide::new(&a.left_points, &a.right_points);
+    let joints = PerSide::new(&a.left_joints, &a.right_joints);
+    for side in crate::side::Side::BOTH {
+        if points[side].is_none() && joints[side].is_some() {
+            anyhow::bail!(
+                "--{side}-joints without --{side}-points: give the {side} arm's point file"
+            );
+        }
+    }
+    let inputs = PerSide::from_fn(|side| {
+        points[side].clone().map(|points| ArmFiles {
+            points,
+            joints: joints[side].clone(),
+        })
+    });
+    let imported = import::import_arms(&crate::source::OsFiles, &inputs, &options)?;
     outln!("{}", describe_robot(&robot));
     outln!("{}", imported.report);
     // Joint values outside the robot's limits are refused before anything is written.
@@ -272,12 +278,21 @@ pub fn run(a: &ImportArgs) -> Result<()> {
     } else {
         Overwrite::Refuse
     };
-    import::write(&imported, &inputs, &a.out, overwrite)?;
+    import::write_arms(&imported, &inputs, &a.out, overwrite)?;
+    let counts = match imported.dataset.measured_sides().as_slice() {
+        [side] => format!(
+            "{} configurations of the {side} arm alone",
+            imported.dataset.arms[*side].measurements.len()
+        ),
+        _ => format!(
+            "{} + {} configurations",
+            imported.dataset.arms.left.measurements.len(),
+            imported.dataset.arms.right.measurements.len()
+        ),
+    };
     outln!(
-        "wrote the dataset {} ({} + {} configurations; the report in {})",
+        "wrote the dataset {} ({counts}; the report in {})",
         a.out.display(),
-        imported.dataset.arms.left.measurements.len(),
-        imported.dataset.arms.right.measurements.len(),
         a.out.join(import::REPORT_FILE).display()
     );
     Ok(())

@@ -211,10 +211,17 @@ pub struct ArmReport {
     pub notes: Vec<String>,
 }
 
-/// What an import did, per arm.
+/// What an import did, per arm (`None`: the arm was not imported — a dataset of one arm).
 #[derive(Clone, Debug, PartialEq)]
 pub struct ImportReport {
-    pub arms: PerSide<ArmReport>,
+    pub arms: PerSide<Option<ArmReport>>,
+}
+
+impl ImportReport {
+    /// The reports of the arms imported, left first.
+    pub fn imported(&self) -> impl Iterator<Item = &ArmReport> {
+        self.arms.values().filter_map(Option::as_ref)
+    }
 }
 
 /// The result of an import: the dataset (its arms' `file` are the joint logs, or the point files, so
@@ -231,15 +238,58 @@ pub fn import(
     inputs: &PerSide<ArmFiles>,
     options: &ImportOptions,
 ) -> Result<Imported, ImportError> {
+    import_arms(files, &both(inputs), options)
+}
+
+/// Both arms' files as [`import_arms`] takes them.
+fn both(inputs: &PerSide<ArmFiles>) -> PerSide<Option<ArmFiles>> {
+    PerSide::from_fn(|side| Some(inputs[side].clone()))
+}
+
+/// Import the arms whose files are given (`None`: the arm was not measured): both, or one alone —
+/// the dataset's one-arm form (one `[[arms]]` entry).
+pub fn import_arms(
+    files: &dyn FileSource,
+    inputs: &PerSide<Option<ArmFiles>>,
+    options: &ImportOptions,
+) -> Result<Imported, ImportError> {
     check_options(options)?;
-    let arms = PerSide::try_from_fn(|side| import_arm(files, side, &inputs[side], options))?;
-    let (mut data, mut reports) = (
-        PerSide::new(arms.left.0.clone(), arms.right.0.clone()),
-        PerSide::new(arms.left.1.clone(), arms.right.1.clone()),
-    );
+    let given: Vec<Side> = Side::BOTH
+        .into_iter()
+        .filter(|&s| inputs[s].is_some())
+        .collect();
+    match given.as_slice() {
+        [] => {
+            return Err(ImportError::Options(
+                "no point file: give one arm's point file (a dataset of that arm alone) or both \
+                 arms'"
+                    .to_string(),
+            ));
+        }
+        [side] if options.measured_together => {
+            return Err(ImportError::Options(format!(
+                "both hands measured together, but only the {side} arm's files are given"
+            )));
+        }
+        _ => {}
+    }
+    let arms = PerSide::try_from_fn(|side| {
+        inputs[side]
+            .as_ref()
+            .map(|input| import_arm(files, side, input, options))
+            .transpose()
+    })?;
+    let mut data = PerSide::from_fn(|side| {
+        arms[side]
+            .as_ref()
+            .map_or_else(|| ArmData::not_measured(side), |a| a.0.clone())
+    });
+    let mut reports = PerSide::from_fn(|side| arms[side].as_ref().map(|a| a.1.clone()));
     if let Some(n) = options.verify_last {
         for side in Side::BOTH {
-            verify_last(&mut data[side], n, &mut reports[side])?;
+            if let Some(report) = &mut reports[side] {
+                verify_last(&mut data[side], n, report)?;
+            }
         }
     }
     let dataset = Dataset {
@@ -479,13 +529,17 @@ fn id_prefix(side: Side, measured_together: bool) -> &'static str {
 pub fn check(imported: &Imported) -> Result<(), ImportError> {
     let ds = &imported.dataset;
     for side in Side::BOTH {
-        dataset::check_arm_rows(
-            &ds.arms[side],
-            ds.nominal_reflectors(side),
-            &ds.reflector_names,
-        )?;
+        if imported.report.arms[side].is_some() {
+            dataset::check_arm_rows(
+                &ds.arms[side],
+                ds.nominal_reflectors(side),
+                &ds.reflector_names,
+            )?;
+        }
     }
-    dataset::check_arms_differ(&ds.arms)?;
+    if imported.report.arms.values().all(Option::is_some) {
+        dataset::check_arms_differ(&ds.arms)?;
+    }
     Ok(())
 }
 
@@ -515,6 +569,17 @@ pub fn write(
     out: &Path,
     overwrite: Overwrite,
 ) -> Result<(), ImportError> {
+    write_arms(imported, &both(inputs), out, overwrite)
+}
+
+/// [`write`] for an import of the arms whose files are given (one arm alone: a dataset of that arm,
+/// one `[[arms]]` entry).
+pub fn write_arms(
+    imported: &Imported,
+    inputs: &PerSide<Option<ArmFiles>>,
+    out: &Path,
+    overwrite: Overwrite,
+) -> Result<(), ImportError> {
     if out.exists() && !out.is_dir() {
         return Err(ImportError::Content {
             path: out.to_path_buf(),
@@ -529,8 +594,9 @@ pub fn write(
         .into());
     }
     let input_paths: Vec<&Path> = inputs
-        .iter()
-        .flat_map(|(_, f)| std::iter::once(f.points.as_path()).chain(f.joints.as_deref()))
+        .values()
+        .flatten()
+        .flat_map(|f| std::iter::once(f.points.as_path()).chain(f.joints.as_deref()))
         .collect();
     for name in [MANIFEST_FILE, "left.csv", "right.csv", REPORT_FILE] {
         refuse_overwrite_input(&out.join(name), &input_paths)?;
@@ -547,8 +613,20 @@ pub fn write(
 
 impl std::fmt::Display for ImportReport {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        for (_, arm) in self.arms.iter() {
+        for arm in self.imported() {
             write!(f, "{arm}")?;
+        }
+        if let [side] = Side::BOTH
+            .into_iter()
+            .filter(|&s| self.arms[s].is_none())
+            .collect::<Vec<_>>()
+            .as_slice()
+        {
+            writeln!(
+                f,
+                "{side} arm: not imported (a dataset of the {} arm alone)",
+                side.other()
+            )?;
         }
         Ok(())
     }

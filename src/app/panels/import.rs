@@ -289,7 +289,7 @@ fn preview_ui(ui: &mut egui::Ui, preview: Option<&Preview>, commands: &mut Vec<C
         }
     });
     let Some(preview) = preview else {
-        ui.label("Choose both arms' point files.");
+        ui.label("Choose a point file: one arm's for a dataset of that arm alone, or both arms'.");
         return;
     };
     ui.label(
@@ -302,8 +302,11 @@ fn preview_ui(ui: &mut egui::Ui, preview: Option<&Preview>, commands: &mut Vec<C
             ui.label(RichText::new(e).color(ERROR_COLOR));
         }
         Ok(imported) => {
-            for (_, arm) in imported.report.arms.iter() {
+            for arm in imported.report.imported() {
                 arm_line(ui, arm);
+            }
+            if let [side] = imported.dataset.measured_sides().as_slice() {
+                ui.label(format!("the {side} arm alone (a dataset of one arm)"));
             }
             if let Some(refused) = &preview.refused {
                 ui.label(RichText::new(refused).color(ERROR_COLOR));
