@@ -396,7 +396,7 @@ fn import_arm(
     o: &ImportOptions,
 ) -> Result<ArmOut, ImportError> {
     let joint_names = o.joint_names[side].as_deref();
-    let text = text::read(files, &input.points)?;
+    let (text, encoding) = text::read_noted(files, &input.points)?;
     let read_options = points::ReadOptions {
         format: o.points_format,
         unit: o.length_unit,
@@ -440,7 +440,10 @@ fn import_arm(
         unmatched_points: Vec::new(),
         unmatched_configurations: Vec::new(),
         repeated: Vec::new(),
-        notes: pf.notes.clone(),
+        notes: encoding
+            .into_iter()
+            .chain(pf.notes.iter().cloned())
+            .collect(),
     };
     if let Some(log) = &log {
         report.notes.extend(log.notes.iter().cloned());

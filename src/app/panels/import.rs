@@ -364,6 +364,15 @@ fn arm_line(ui: &mut egui::Ui, arm: &ArmReport) {
         ui.visuals().text_color()
     };
     ui.label(RichText::new(text).color(color));
+    // What the import guessed or decided (encoding, unit, separator, matching rule, sheet, rows
+    // deleted, U(95)), as the report writes it.
+    for note in &arm.notes {
+        ui.label(
+            RichText::new(format!("  {note}"))
+                .small()
+                .color(Color32::GRAY),
+        );
+    }
 }
 
 fn finish_ui(
