@@ -53,6 +53,8 @@ pub struct ImportInputs {
     pub measured_together: bool,
     /// `--verify-last N`: the last N configurations of each arm verify (empty: the file's split).
     pub verify_last: String,
+    /// `--sheet NAME`: the sheet of spreadsheet joint logs (empty: the first).
+    pub sheet: String,
 }
 
 impl Default for ImportInputs {
@@ -73,6 +75,7 @@ impl Default for ImportInputs {
             arm_columns: PerSide::default(),
             measured_together: false,
             verify_last: String::new(),
+            sheet: String::new(),
         }
     }
 }
@@ -213,6 +216,7 @@ pub fn options(inputs: &ImportInputs, target: &ImportTarget<'_>) -> Result<Impor
         }
     }
     o.measured_together = inputs.measured_together;
+    o.sheet = Some(inputs.sheet.trim().to_string()).filter(|s| !s.is_empty());
     let last = inputs.verify_last.trim();
     if !last.is_empty() {
         o.verify_last =

@@ -27,7 +27,7 @@ pub struct ImportArgs {
     /// arm alone.
     #[arg(long)]
     pub left_points: Option<PathBuf>,
-    /// The left arm's joint log (`id,q1..qN`); not needed when the point file has the joints (figaroh).
+    /// The left arm's joint log (`id,q1..qN`, CSV/TXT, or a spreadsheet: .xlsx, .xls, .ods); not needed when the point file has the joints (figaroh).
     #[arg(long)]
     pub left_joints: Option<PathBuf>,
     /// The right arm's point file (tracker export).
@@ -92,6 +92,9 @@ pub struct ImportArgs {
     /// both files have time stamps, else by order where the counts agree].
     #[arg(long = "match", value_enum, default_value_t = crate::import::MatchRule::Auto)]
     pub matching: crate::import::MatchRule,
+    /// The sheet of spreadsheet joint logs (.xlsx, .xls, .ods) [default: the first].
+    #[arg(long, value_name = "NAME")]
+    pub sheet: Option<String>,
     /// With --match time: the largest time difference between a point and its configuration, s.
     #[arg(long, default_value_t = 0.5)]
     pub time_tolerance_s: f64,
@@ -243,6 +246,7 @@ pub fn run(a: &ImportArgs) -> Result<()> {
     options.joint_order = a.joint_order.clone();
     options.matching = a.matching;
     options.time_tolerance_s = a.time_tolerance_s;
+    options.sheet = a.sheet.clone();
     options.tracker = dataset::TrackerSpec {
         mpe_um: a.mpe_um,
         mpe_um_per_m: a.mpe_um_per_m,

@@ -9,6 +9,7 @@ mod error;
 pub mod joints;
 mod matching;
 pub mod points;
+pub mod sheet;
 pub mod text;
 
 pub use error::ImportError;
@@ -109,6 +110,8 @@ pub struct ImportOptions {
     /// The last N configurations of each arm, in file order, are verification (`ver`), the others
     /// calibration (`cal`), whatever the files say. `None`: the files' splits, else `cal`.
     pub verify_last: Option<usize>,
+    /// The sheet of spreadsheet joint logs (`None`: the first).
+    pub sheet: Option<String>,
 }
 
 impl ImportOptions {
@@ -137,6 +140,7 @@ impl ImportOptions {
             measured_together: false,
             shared_joints: SharedJoints::default(),
             verify_last: None,
+            sheet: None,
         }
     }
 }
@@ -410,18 +414,18 @@ fn import_arm(
     let prefix = id_prefix(side, o.measured_together);
     let log = match &input.joints {
         Some(path) => {
-            let text = text::read(files, path)?;
-            Some(joints::read(
-                path,
-                &text,
-                &JointLogOptions {
-                    angle_unit: o.angle_unit,
-                    joint_order: o.joint_order.as_deref(),
-                    joint_names,
-                    decimal_comma: o.decimal_comma,
-                    id_prefix: prefix,
-                },
-            )?)
+            let log_options = JointLogOptions {
+                angle_unit: o.angle_unit,
+                joint_order: o.joint_order.as_deref(),
+                joint_names,
+                decimal_comma: o.decimal_comma,
+                id_prefix: prefix,
+            };
+            Some(if sheet::is_sheet(path) {
+                sheet::read(files, path, o.sheet.as_deref(), &log_options)?
+            } else {
+                joints::read(path, &text::read(files, path)?, &log_options)?
+            })
         }
         None => None,
     };

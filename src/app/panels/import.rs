@@ -62,8 +62,9 @@ fn files_ui(
     ui.label(
         RichText::new(
             "Each arm's point file (SpatialAnalyzer, Leica Tracker Pilot, figaroh, or any CSV with a \
-             column mapping) and its joint log (id,q1..qN; not needed when the point file has the \
-             joints). docs/formats.md describes each format.",
+             column mapping) and its joint log (id,q1..qN as CSV, or a spreadsheet; not needed when \
+             the point file has the joints); one arm's files alone make a dataset of that arm. \
+             docs/formats.md describes each format.",
         )
         .small()
         .color(Color32::GRAY),
@@ -183,6 +184,13 @@ fn options_ui(ui: &mut egui::Ui, inputs: &mut ImportInputs) {
             ui.add(
                 egui::TextEdit::singleline(&mut inputs.joint_order)
                     .hint_text("chain order; yumi-abb or 1,2,7,3,4,5,6")
+                    .desired_width(300.0),
+            );
+            ui.end_row();
+            ui.label("sheet");
+            ui.add(
+                egui::TextEdit::singleline(&mut inputs.sheet)
+                    .hint_text("spreadsheet joint logs: the first sheet")
                     .desired_width(300.0),
             );
             ui.end_row();
