@@ -606,7 +606,7 @@ fn parting(pts: &[Point], groups: &[Vec<usize>], log: &JointLog, r: usize) -> St
     "neither time stamps nor joint values show where they part".to_string()
 }
 
-/// The first step of a sequence more than twice the median step (and the step and the median), when
+/// The first step of a sequence more than 1.5 times the median step (and the step and the median), when
 /// every value is known and there are at least three steps.
 fn first_gap(values: &[Option<f64>]) -> Option<(usize, f64, f64)> {
     let v: Vec<f64> = values.iter().copied().collect::<Option<_>>()?;
@@ -620,6 +620,6 @@ fn first_gap(values: &[Option<f64>]) -> Option<(usize, f64, f64)> {
     if median <= 0.0 {
         return None;
     }
-    let k = steps.iter().position(|&s| s > 2.0 * median)?;
+    let k = steps.iter().position(|&s| s > 1.5 * median)?;
     Some((k + 1, steps[k], median))
 }

@@ -413,20 +413,7 @@ fn import_arm(
     let pf = points::read(&input.points, &text, &read_options)?;
     let prefix = id_prefix(side, o.measured_together);
     let log = match &input.joints {
-        Some(path) => {
-            let log_options = JointLogOptions {
-                angle_unit: o.angle_unit,
-                joint_order: o.joint_order.as_deref(),
-                joint_names,
-                decimal_comma: o.decimal_comma,
-                id_prefix: prefix,
-            };
-            Some(if sheet::is_sheet(path) {
-                sheet::read(files, path, o.sheet.as_deref(), &log_options)?
-            } else {
-                joints::read(path, &text::read(files, path)?, &log_options)?
-            })
-        }
+        Some(path) => Some(read_log(files, path, o, joint_names, prefix)?),
         None => None,
     };
     let mut report = ArmReport {
@@ -516,6 +503,28 @@ fn import_arm(
     };
     arm.set_linear_joints(&o.linear_joints[side], units)?;
     Ok((arm, report))
+}
+
+/// A joint log: a spreadsheet (by its extension) or CSV/TXT.
+fn read_log(
+    files: &dyn FileSource,
+    path: &Path,
+    o: &ImportOptions,
+    joint_names: Option<&[String]>,
+    prefix: &str,
+) -> Result<JointLog, ImportError> {
+    let log_options = JointLogOptions {
+        angle_unit: o.angle_unit,
+        joint_order: o.joint_order.as_deref(),
+        joint_names,
+        decimal_comma: o.decimal_comma,
+        id_prefix: prefix,
+    };
+    if sheet::is_sheet(path) {
+        sheet::read(files, path, o.sheet.as_deref(), &log_options)
+    } else {
+        joints::read(path, &text::read(files, path)?, &log_options)
+    }
 }
 
 /// The prefix of ids made up for rows without one (`L001`, `R001`): the same on both arms (`C001`)

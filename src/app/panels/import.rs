@@ -197,29 +197,7 @@ fn options_ui(ui: &mut egui::Ui, inputs: &mut ImportInputs) {
             ui.label("decimal comma");
             ui.checkbox(&mut inputs.decimal_comma, "1234,56");
             ui.end_row();
-            ui.label("match points by");
-            combo(
-                ui,
-                "match",
-                &mut inputs.matching,
-                &[
-                    (MatchRule::Auto, "automatic (the report says which)"),
-                    (MatchRule::Name, "target name <id>_<reflector>"),
-                    (MatchRule::Order, "file order"),
-                    (MatchRule::Time, "time stamp"),
-                ],
-            );
-            ui.end_row();
-            if matches!(inputs.matching, MatchRule::Time | MatchRule::Auto) {
-                ui.label("time tolerance");
-                ui.add(
-                    egui::DragValue::new(&mut inputs.time_tolerance_s)
-                        .range(0.001..=3600.0)
-                        .speed(0.05)
-                        .suffix(" s"),
-                );
-                ui.end_row();
-            }
+            matching_ui(ui, inputs);
             for side in Side::BOTH {
                 ui.label(format!("{side} station"));
                 ui.add(
@@ -230,6 +208,33 @@ fn options_ui(ui: &mut egui::Ui, inputs: &mut ImportInputs) {
                 ui.end_row();
             }
         });
+}
+
+/// The matching rule and, where time stamps may be used, the tolerance (rows of the options' grid).
+fn matching_ui(ui: &mut egui::Ui, inputs: &mut ImportInputs) {
+    ui.label("match points by");
+    combo(
+        ui,
+        "match",
+        &mut inputs.matching,
+        &[
+            (MatchRule::Auto, "automatic (the report says which)"),
+            (MatchRule::Name, "target name <id>_<reflector>"),
+            (MatchRule::Order, "file order"),
+            (MatchRule::Time, "time stamp"),
+        ],
+    );
+    ui.end_row();
+    if matches!(inputs.matching, MatchRule::Time | MatchRule::Auto) {
+        ui.label("time tolerance");
+        ui.add(
+            egui::DragValue::new(&mut inputs.time_tolerance_s)
+                .range(0.001..=3600.0)
+                .speed(0.05)
+                .suffix(" s"),
+        );
+        ui.end_row();
+    }
 }
 
 /// Both arms in one file (a motion-capture export): each arm's own mapping, measured together, the
