@@ -1658,7 +1658,9 @@ fn the_import_window_previews_the_files_then_writes_and_opens_the_dataset() {
     harness.get_by_label("Import…").click();
     harness.run_steps(2);
     assert!(harness.state().import_view().open);
-    harness.get_by_label("Choose both arms' point files.");
+    harness.get_by_label(
+        "Choose a point file: one arm's for a dataset of that arm alone, or both arms'.",
+    );
     {
         let view = harness.state_mut().import_view_mut();
         for side in dualcal::side::Side::BOTH {
