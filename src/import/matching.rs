@@ -130,7 +130,7 @@ pub(super) fn match_points(
                 Ok((c, Some(refl))) => shots[c][refl].push(p),
                 Ok((c, None)) => unnamed[c].push(p),
                 Err(reason) => report.unmatched_points.push(Unmatched {
-                    name: label(p, 0),
+                    name: label(p, k),
                     file: points_file.to_path_buf(),
                     line: p.line,
                     reason,
