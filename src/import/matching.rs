@@ -560,7 +560,7 @@ fn parting(pts: &[Point], groups: &[Vec<usize>], log: &JointLog, r: usize) -> St
     if let Some((k, dt, median)) = first_gap(&shot_times) {
         return format!(
             "the shots part at line {}: {dt:.1} s after the configuration before (line {}), where \
-             configurations are {median:.1} s apart — a configuration skipped, or measured again?",
+             configurations are {median:.1} s apart — a configuration skipped, or measured again",
             starts[k].line,
             starts[k - 1].line
         );
@@ -596,7 +596,7 @@ fn parting(pts: &[Point], groups: &[Vec<usize>], log: &JointLog, r: usize) -> St
         let row = &log.rows[k];
         return format!(
             "the joint log jumps at configuration `{}` (line {}): {:.1}° from the one before, \
-             where steps are {:.1}° — a configuration not measured?",
+             where steps are {:.1}° — a configuration not measured",
             row.id,
             row.line,
             step.to_degrees(),
