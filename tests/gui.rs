@@ -1413,7 +1413,9 @@ fn the_import_window_previews_the_files_then_writes_and_opens_the_dataset() {
     harness.get_by_label("Import…").click();
     harness.run_steps(2);
     assert!(harness.state().import_view().open);
-    harness.get_by_label("Choose both arms' point files.");
+    harness.get_by_label(
+        "Choose a point file: one arm's for a dataset of that arm alone, or both arms'.",
+    );
     let mut inputs = harness.state().import_view().inputs.clone();
     for side in dualcal::side::Side::BOTH {
         inputs.points[side] = files[side].0.display().to_string();

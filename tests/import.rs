@@ -259,7 +259,7 @@ fn spatial_analyzer_export_imports_into_the_native_calibration() {
         )),
     });
     let (imported, back) = import_and_load(dir.path(), &inputs, &options(&native));
-    let report = &imported.report.arms.left;
+    let report = imported.report.arms.left.as_ref().unwrap();
     assert_eq!(report.format, PointsFormat::SpatialAnalyzer);
     assert_eq!(report.frame.as_deref(), Some("World"));
     assert_eq!(report.points_read, 120);
@@ -292,8 +292,11 @@ fn leica_csv_in_windows_1252_imports_into_the_native_calibration() {
     let mut o = options(&native);
     o.joint_order = Some(YUMI_ABB_ORDER.to_vec());
     let (imported, back) = import_and_load(dir.path(), &inputs, &o);
-    assert_eq!(imported.report.arms.right.format, PointsFormat::Leica);
-    assert_eq!(imported.report.arms.right.matched, 40);
+    assert_eq!(
+        imported.report.arms.right.as_ref().unwrap().format,
+        PointsFormat::Leica
+    );
+    assert_eq!(imported.report.arms.right.as_ref().unwrap().matched, 40);
     assert_same_measurements(&native, &back, true, true);
     assert_same_calibration(&native, &back, Split::Cal);
     // The inputs are untouched.
@@ -322,7 +325,10 @@ fn figaroh_csv_imports_into_the_native_calibration() {
         joints: None,
     });
     let (imported, back) = import_and_load(dir.path(), &inputs, &options(&native));
-    assert_eq!(imported.report.arms.left.format, PointsFormat::Figaroh);
+    assert_eq!(
+        imported.report.arms.left.as_ref().unwrap().format,
+        PointsFormat::Figaroh
+    );
     // figaroh has no split: every configuration is a calibration configuration, so both datasets are
     // calibrated on all of theirs. Ids are made as the simulator makes them (L001, …).
     assert!(
@@ -382,7 +388,7 @@ fn leica_points_match_by_time_stamp_within_the_tolerance() {
     // A tolerance below the reflectors' delays leaves configurations without reflectors.
     o.time_tolerance_s = 1.5;
     let imported = import::import(&OsFiles, &inputs, &o).unwrap();
-    let left = &imported.report.arms.left;
+    let left = imported.report.arms.left.as_ref().unwrap();
     assert_eq!(left.matched, 0);
     assert_eq!(left.unmatched_configurations.len(), 40);
     // Reflector c (2 s after its configuration) is too late; a and b lack it.
@@ -624,7 +630,7 @@ fn unmatched_targets_are_reported_and_repeated_shots_averaged() {
         },
     );
     let imported = import::import(&OsFiles, &inputs, &options(ds)).unwrap();
-    let r = &imported.report.arms.left;
+    let r = imported.report.arms.left.as_ref().unwrap();
     assert_eq!(r.matched, 39);
     assert_eq!(r.unmatched_configurations.len(), 1);
     assert_eq!(r.unmatched_configurations[0].name, second.id);

@@ -58,6 +58,8 @@ pub struct ImportInputs {
     pub measured_together: bool,
     /// `--verify-last N`: the last N configurations of each arm verify (empty: the file's split).
     pub verify_last: String,
+    /// `--sheet NAME`: the sheet of spreadsheet joint logs (empty: the first).
+    pub sheet: String,
 }
 
 impl Default for ImportInputs {
@@ -72,12 +74,13 @@ impl Default for ImportInputs {
             joint_length_unit: None,
             decimal_comma: false,
             joint_order: String::new(),
-            matching: MatchRule::Name,
+            matching: MatchRule::Auto,
             time_tolerance_s: 0.5,
             stations: PerSide::default(),
             arm_columns: PerSide::default(),
             measured_together: false,
             verify_last: String::new(),
+            sheet: String::new(),
         }
     }
 }
@@ -135,7 +138,8 @@ impl ImportView {
         }
     }
 
-    /// The preview of the inputs as they are (`None` until both point files are given).
+    /// The preview of the inputs as they are (`None` until a point file is given: one arm's makes a
+    /// dataset of that arm alone).
     pub fn preview(&self) -> Option<&Preview> {
         self.preview.as_ref().map(|(_, _, p)| p)
     }
@@ -153,7 +157,7 @@ impl ImportView {
         }
         if Side::BOTH
             .iter()
-            .any(|&s| self.inputs.points[s].trim().is_empty())
+            .all(|&s| self.inputs.points[s].trim().is_empty())
         {
             self.preview = None;
             return;
@@ -162,18 +166,21 @@ impl ImportView {
         self.preview = Some((self.inputs.clone(), robot_key, preview));
     }
 
-    /// The arms' input files, as the engine takes them.
-    pub fn arm_files(&self) -> PerSide<ArmFiles> {
+    /// The arms' input files, as the engine takes them (`None`: no point file for that arm).
+    pub fn arm_files(&self) -> PerSide<Option<ArmFiles>> {
         arm_files(&self.inputs)
     }
 }
 
-fn arm_files(inputs: &ImportInputs) -> PerSide<ArmFiles> {
-    PerSide::from_fn(|s| ArmFiles {
-        points: PathBuf::from(inputs.points[s].trim()),
-        joints: Some(inputs.joints[s].trim())
-            .filter(|j| !j.is_empty())
-            .map(PathBuf::from),
+fn arm_files(inputs: &ImportInputs) -> PerSide<Option<ArmFiles>> {
+    PerSide::from_fn(|s| {
+        let points = inputs.points[s].trim();
+        (!points.is_empty()).then(|| ArmFiles {
+            points: PathBuf::from(points),
+            joints: Some(inputs.joints[s].trim())
+                .filter(|j| !j.is_empty())
+                .map(PathBuf::from),
+        })
     })
 }
 
@@ -214,6 +221,7 @@ pub fn options(inputs: &ImportInputs, target: &ImportTarget<'_>) -> Result<Impor
         }
     }
     o.measured_together = inputs.measured_together;
+    o.sheet = Some(inputs.sheet.trim().to_string()).filter(|s| !s.is_empty());
     let last = inputs.verify_last.trim();
     if !last.is_empty() {
         o.verify_last =
@@ -227,8 +235,9 @@ pub fn options(inputs: &ImportInputs, target: &ImportTarget<'_>) -> Result<Impor
 /// Import with these inputs and check the joint limits, as `dualcal import` does before writing.
 fn preview(files: &dyn FileSource, inputs: &ImportInputs, target: &ImportTarget<'_>) -> Preview {
     let robot = target.robot.name();
-    let result = options(inputs, target)
-        .and_then(|o| import::import(files, &arm_files(inputs), &o).map_err(|e| format!("{e:#}")));
+    let result = options(inputs, target).and_then(|o| {
+        import::import_arms(files, &arm_files(inputs), &o).map_err(|e| format!("{e:#}"))
+    });
     let refused = result.as_ref().ok().and_then(|imported| {
         let limits = PerSide::from_fn(|s| target.robot.joint_limits_checked_rad(s));
         import::check(imported)
@@ -252,7 +261,7 @@ pub fn write(view: &ImportView, out: &Path) -> Result<(), String> {
     let Some(imported) = view.preview().and_then(Preview::importable) else {
         return Err("nothing to write: the preview shows why".to_string());
     };
-    import::write(
+    import::write_arms(
         imported,
         &view.arm_files(),
         out,
@@ -416,7 +425,7 @@ mod tests {
         assert_eq!(imported.dataset.arms.left.measurements.len(), 6);
         assert_eq!(imported.dataset.arms.right.measurements.len(), 6);
         assert_eq!(
-            imported.report.arms.left.format,
+            imported.report.arms.left.as_ref().unwrap().format,
             PointsFormat::SpatialAnalyzer
         );
 
@@ -468,7 +477,7 @@ mod tests {
         view.refresh(&memory, &target, true);
         let preview = view.preview().unwrap();
         let imported = preview.result.as_ref().unwrap();
-        assert_eq!(imported.report.arms.left.matched, 2);
+        assert_eq!(imported.report.arms.left.as_ref().unwrap().matched, 2);
         assert!(
             preview
                 .refused
@@ -496,16 +505,39 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let out = dir.path().join("ds");
         let inputs = view.arm_files();
-        import::write(&imported, &inputs, &out, crate::output::Overwrite::Refuse).unwrap();
+        import::write_arms(&imported, &inputs, &out, crate::output::Overwrite::Refuse).unwrap();
         for (path, bytes) in import::files_of(&imported, &out).unwrap() {
             assert_eq!(std::fs::read(&path).unwrap(), bytes, "{}", path.display());
         }
         // Refused a second time: the folder is not empty.
-        let err = import::write(&imported, &inputs, &out, crate::output::Overwrite::Refuse)
+        let err = import::write_arms(&imported, &inputs, &out, crate::output::Overwrite::Refuse)
             .unwrap_err()
             .to_string();
         assert!(err.contains(&out.display().to_string()), "{err}");
         let back = crate::dataset::load(&out).unwrap();
         assert_eq!(back.arms.left.measurements.len(), 8);
+    }
+
+    #[test]
+    fn one_arms_files_preview_and_write_a_dataset_of_that_arm_alone() {
+        let memory = files(8);
+        let robot = RobotDescription::builtin_irb14000();
+        let target = target(&robot);
+        let mut view = ImportView::default();
+        view.refresh(&memory, &target, false);
+        assert!(view.preview().is_none());
+        view.inputs.points.right = "/in/right-points.txt".into();
+        view.inputs.joints.right = "/in/right-joints.csv".into();
+        view.refresh(&memory, &target, false);
+        let imported = view.preview().unwrap().importable().unwrap().clone();
+        assert!(imported.report.arms.left.is_none());
+        assert_eq!(imported.report.arms.right.as_ref().unwrap().matched, 8);
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("ds");
+        write(&view, &out).unwrap();
+        let back = crate::dataset::load(&out).unwrap();
+        assert_eq!(back.measured_sides(), vec![Side::Right]);
+        assert_eq!(back.arms.right.measurements.len(), 8);
+        assert!(!out.join("left.csv").exists());
     }
 }

@@ -23,15 +23,16 @@ pub struct ImportArgs {
     /// With --robot: the right arm's chain, BASE:TIP (default: the YuMi joint names).
     #[arg(long, requires = "robot", value_parser = ArmLinks::parse)]
     pub right_links: Option<ArmLinks>,
-    /// The left arm's point file (tracker export).
+    /// The left arm's point file (tracker export); with only one arm's files, a dataset of that
+    /// arm alone.
     #[arg(long)]
-    pub left_points: PathBuf,
-    /// The left arm's joint log (`id,q1..qN`); not needed when the point file has the joints (figaroh).
+    pub left_points: Option<PathBuf>,
+    /// The left arm's joint log (`id,q1..qN`, CSV/TXT, or a spreadsheet: .xlsx, .xls, .ods); not needed when the point file has the joints (figaroh).
     #[arg(long)]
     pub left_joints: Option<PathBuf>,
     /// The right arm's point file (tracker export).
     #[arg(long)]
-    pub right_points: PathBuf,
+    pub right_points: Option<PathBuf>,
     /// The right arm's joint log (`id,q1..qN`); not needed when the point file has the joints.
     #[arg(long)]
     pub right_joints: Option<PathBuf>,
@@ -86,9 +87,14 @@ pub struct ImportArgs {
     /// e.g. `1,2,7,3,4,5,6` (or `yumi-abb`) for the YuMi's ABB axes 1…7.
     #[arg(long, value_parser = crate::import::parse_joint_order)]
     pub joint_order: Option<JointOrder>,
-    /// How points find their configuration: target names `<id>_<reflector>`, file order, or time stamps.
-    #[arg(long = "match", value_enum, default_value_t = crate::import::MatchRule::Name)]
+    /// How points find their configuration: target names `<id>_<reflector>`, file order, or time
+    /// stamps [default: auto — by name where the names carry configuration ids, else by time where
+    /// both files have time stamps, else by order where the counts agree].
+    #[arg(long = "match", value_enum, default_value_t = crate::import::MatchRule::Auto)]
     pub matching: crate::import::MatchRule,
+    /// The sheet of spreadsheet joint logs (.xlsx, .xls, .ods) [default: the first].
+    #[arg(long, value_name = "NAME")]
+    pub sheet: Option<String>,
     /// With --match time: the largest time difference between a point and its configuration, s.
     #[arg(long, default_value_t = 0.5)]
     pub time_tolerance_s: f64,
@@ -240,6 +246,7 @@ pub fn run(a: &ImportArgs) -> Result<()> {
     options.joint_order = a.joint_order.clone();
     options.matching = a.matching;
     options.time_tolerance_s = a.time_tolerance_s;
+    options.sheet = a.sheet.clone();
     options.tracker = dataset::TrackerSpec {
         mpe_um: a.mpe_um,
         mpe_um_per_m: a.mpe_um_per_m,
@@ -249,17 +256,22 @@ pub fn run(a: &ImportArgs) -> Result<()> {
         LengthArg::Mm => dataset::LengthUnit::Mm,
         LengthArg::M => dataset::LengthUnit::M,
     });
-    let inputs = PerSide::new(
-        ArmFiles {
-            points: a.left_points.clone(),
-            joints: a.left_joints.clone(),
-        },
-        ArmFiles {
-            points: a.right_points.clone(),
-            joints: a.right_joints.clone(),
-        },
-    );
-    let imported = import::import(&crate::source::OsFiles, &inputs, &options)?;
+    let points = PerSide::new(&a.left_points, &a.right_points);
+    let joints = PerSide::new(&a.left_joints, &a.right_joints);
+    for side in crate::side::Side::BOTH {
+        if points[side].is_none() && joints[side].is_some() {
+            anyhow::bail!(
+                "--{side}-joints without --{side}-points: give the {side} arm's point file"
+            );
+        }
+    }
+    let inputs = PerSide::from_fn(|side| {
+        points[side].clone().map(|points| ArmFiles {
+            points,
+            joints: joints[side].clone(),
+        })
+    });
+    let imported = import::import_arms(&crate::source::OsFiles, &inputs, &options)?;
     outln!("{}", describe_robot(&robot));
     outln!("{}", imported.report);
     // Joint values outside the robot's limits are refused before anything is written.
@@ -270,12 +282,21 @@ pub fn run(a: &ImportArgs) -> Result<()> {
     } else {
         Overwrite::Refuse
     };
-    import::write(&imported, &inputs, &a.out, overwrite)?;
+    import::write_arms(&imported, &inputs, &a.out, overwrite)?;
+    let counts = match imported.dataset.measured_sides().as_slice() {
+        [side] => format!(
+            "{} configurations of the {side} arm alone",
+            imported.dataset.arms[*side].measurements.len()
+        ),
+        _ => format!(
+            "{} + {} configurations",
+            imported.dataset.arms.left.measurements.len(),
+            imported.dataset.arms.right.measurements.len()
+        ),
+    };
     outln!(
-        "wrote the dataset {} ({} + {} configurations; the report in {})",
+        "wrote the dataset {} ({counts}; the report in {})",
         a.out.display(),
-        imported.dataset.arms.left.measurements.len(),
-        imported.dataset.arms.right.measurements.len(),
         a.out.join(import::REPORT_FILE).display()
     );
     Ok(())

@@ -82,6 +82,21 @@ fn is_id_name(n: &str) -> bool {
     )
 }
 
+/// A joint column's name: `j1`, `q1`, `A1`, `axis 1`, `joint 1` (any case, a space or `_` before the
+/// number or not), or one of the arm's joint names.
+pub fn is_joint_name(n: &str, joint_names: Option<&[String]>) -> bool {
+    if joint_names.is_some_and(|j| j.iter().any(|name| name == n)) {
+        return true;
+    }
+    let lower = n.to_lowercase();
+    let digits = lower.trim_start_matches(|c: char| c.is_ascii_alphabetic());
+    let prefix = lower[..lower.len() - digits.len()].to_string();
+    let digits = digits.trim_start_matches([' ', '_']);
+    matches!(prefix.as_str(), "j" | "q" | "a" | "axis" | "joint")
+        && !digits.is_empty()
+        && digits.chars().all(|c| c.is_ascii_digit())
+}
+
 fn is_time_name(n: &str) -> bool {
     matches!(
         n.to_lowercase().as_str(),
@@ -111,11 +126,10 @@ impl Header {
     fn of(
         path: &Path,
         first_line: usize,
-        first: &str,
-        delimiter: Delimiter,
+        first_fields: &[String],
         dc: bool,
+        joint_names: Option<&[String]>,
     ) -> Result<Self, ImportError> {
-        let first_fields = text::split(first, delimiter);
         let named = first_fields.len() < 2
             || first_fields[1..]
                 .iter()
@@ -128,10 +142,14 @@ impl Header {
             names.extend((1..n).map(|k| format!("q{k}")));
             (names, vec![None; n])
         };
+        // The first column is the ids unless it is named as a time, split or joint column.
         let id_col = names
             .iter()
             .position(|n| is_id_name(n))
-            .or((!is_time_name(&names[0]) && names[0] != "split").then_some(0));
+            .or((!is_time_name(&names[0])
+                && names[0] != "split"
+                && !(named && is_joint_name(&names[0], joint_names)))
+            .then_some(0));
         let time_col = names.iter().position(|n| is_time_name(n));
         let split_col = names.iter().position(|n| n.eq_ignore_ascii_case("split"));
         let file_joints: Vec<usize> = (0..names.len())
@@ -292,18 +310,17 @@ struct RowFormat<'a> {
     /// The chain's joint columns, in chain order.
     cols: &'a [usize],
     angle_unit: AngleUnit,
-    delimiter: Delimiter,
     dc: bool,
     needed: usize,
     id_prefix: &'a str,
 }
 
 impl RowFormat<'_> {
-    /// Row `t` (line `line`; `index` rows before it; `seen`: the ids so far and their lines).
+    /// Row `fields` (line `line`; `index` rows before it; `seen`: the ids so far and their lines).
     fn row(
         &self,
         line: usize,
-        t: &str,
+        fields: &[String],
         index: usize,
         seen: &mut std::collections::HashMap<String, usize>,
     ) -> Result<JointRow, ImportError> {
@@ -315,7 +332,6 @@ impl RowFormat<'_> {
             expected,
             found: crate::textfile::excerpt(found),
         };
-        let fields = text::split(t, self.delimiter);
         if fields.len() < self.needed {
             return Err(ImportError::FieldCount {
                 path: path.to_path_buf(),
@@ -388,13 +404,13 @@ impl RowFormat<'_> {
 
 /// Read a joint log's text.
 pub fn read(path: &Path, text: &str, o: &JointLogOptions) -> Result<JointLog, ImportError> {
-    let mut it = text
+    let lines: Vec<(usize, &str)> = text
         .lines()
         .enumerate()
         .map(|(i, l)| (i + 1, l.trim()))
         .filter(|(_, l)| !l.is_empty() && !l.starts_with('#') && !l.starts_with("//"))
-        .peekable();
-    let Some(&(first_line, first)) = it.peek() else {
+        .collect();
+    let Some(&(_, first)) = lines.first() else {
         return Err(ImportError::Format {
             path: path.to_path_buf(),
             message: "no rows: expected `id,q1,…,qN`".to_string(),
@@ -402,10 +418,36 @@ pub fn read(path: &Path, text: &str, o: &JointLogOptions) -> Result<JointLog, Im
     };
     let delimiter = Delimiter::of_line(first, o.decimal_comma);
     let dc = o.decimal_comma || delimiter.allows_decimal_comma();
-    let header = Header::of(path, first_line, first, delimiter, dc)?;
-    if header.named {
-        it.next();
-    }
+    let rows = lines
+        .iter()
+        .map(|&(line, t)| (line, text::split(t, delimiter)))
+        .collect::<Vec<_>>();
+    let mut log = read_rows(path, &rows, dc, o)?;
+    log.notes.insert(
+        0,
+        format!(
+            "separator: {} (recognised from the first row)",
+            delimiter.name()
+        ),
+    );
+    Ok(log)
+}
+
+/// Read a joint log's rows (line, fields): a header row or not, then one configuration per row.
+pub(super) fn read_rows(
+    path: &Path,
+    rows: &[(usize, Vec<String>)],
+    dc: bool,
+    o: &JointLogOptions,
+) -> Result<JointLog, ImportError> {
+    let Some((first_line, first)) = rows.first() else {
+        return Err(ImportError::Format {
+            path: path.to_path_buf(),
+            message: "no rows: expected `id,q1,…,qN`".to_string(),
+        });
+    };
+    let header = Header::of(path, *first_line, first, dc, o.joint_names)?;
+    let it = rows.iter().skip(usize::from(header.named));
     let mut notes = Vec::new();
     let (cols, order) = header.chain_columns(path, o)?;
     let angle_unit = header.angle_unit(path, o, &mut notes)?;
@@ -414,18 +456,17 @@ pub fn read(path: &Path, text: &str, o: &JointLogOptions) -> Result<JointLog, Im
         header: &header,
         cols: &cols,
         angle_unit,
-        delimiter,
         dc,
         needed: header.needed_fields(&cols),
         id_prefix: o.id_prefix,
     };
-    let mut rows: Vec<JointRow> = Vec::new();
+    let mut out: Vec<JointRow> = Vec::new();
     let mut seen = std::collections::HashMap::new();
-    for (line, t) in it {
-        rows.push(format.row(line, t, rows.len(), &mut seen)?);
+    for (line, fields) in it {
+        out.push(format.row(*line, fields, out.len(), &mut seen)?);
     }
     Ok(JointLog {
-        rows,
+        rows: out,
         angle_unit,
         order,
         notes,

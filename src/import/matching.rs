@@ -39,7 +39,8 @@ fn place(
                 None => Err(format!("no configuration `{id}` in the joint log")),
             }
         }
-        MatchRule::Order => {
+        // Order and Auto are resolved before points are placed: `k` is the point's shot group.
+        MatchRule::Order | MatchRule::Auto => {
             let c = k / r;
             if c < log.rows.len() {
                 Ok((c, Some(k % r)))
@@ -98,31 +99,52 @@ pub(super) fn match_points(
         .enumerate()
         .map(|(k, row)| (row.id.as_str(), k))
         .collect();
-    if o.matching == MatchRule::Time && log.rows.iter().all(|row| row.time_s.is_none()) {
-        return Err(ImportError::Options(format!(
-            "{}: matching by time needs a time column (`time`) in the joint log",
-            joints_file.unwrap_or(points_file).display()
-        )));
-    }
-    // Per configuration: named shots per reflector, and shots without a reflector (time rule).
-    let mut shots: Vec<Vec<Vec<&Point>>> = vec![vec![Vec::new(); r]; log.rows.len()];
-    let mut unnamed: Vec<Vec<&Point>> = vec![Vec::new(); log.rows.len()];
-    for (k, p) in pts.iter().enumerate() {
-        match place(p, k, log, &ids, o) {
-            Ok((c, Some(refl))) => shots[c][refl].push(p),
-            Ok((c, None)) => unnamed[c].push(p),
-            Err(reason) => report.unmatched_points.push(Unmatched {
-                name: label(p, k),
-                file: points_file.to_path_buf(),
-                line: p.line,
-                reason,
-            }),
-        }
-    }
     let files = MatchFiles {
         points: points_file,
         joints: joints_file.unwrap_or(points_file),
     };
+    let rule = resolve_rule(pts, log, &ids, o, &files, report)?;
+    if rule == MatchRule::Time && log.rows.iter().all(|row| row.time_s.is_none()) {
+        return Err(ImportError::Options(format!(
+            "{}: matching by time needs a time column (`time`) in the joint log",
+            files.joints.display()
+        )));
+    }
+    let o = &ImportOptions {
+        matching: rule,
+        ..o.clone()
+    };
+    // Per configuration: named shots per reflector, and shots without a reflector (time rule).
+    let mut shots: Vec<Vec<Vec<&Point>>> = vec![vec![Vec::new(); r]; log.rows.len()];
+    let mut unnamed: Vec<Vec<&Point>> = vec![Vec::new(); log.rows.len()];
+    // By order, the k-th group of shots (one shot, or one repeated) is placed.
+    let all: Vec<&Point> = pts.iter().collect();
+    let groups: Vec<Vec<usize>> = match rule {
+        MatchRule::Order => shot_groups(&all),
+        _ => (0..pts.len()).map(|k| vec![k]).collect(),
+    };
+    for (g, group) in groups.iter().enumerate() {
+        for &k in group {
+            let p = &pts[k];
+            match place(p, g, log, &ids, o) {
+                Ok((c, Some(refl))) => shots[c][refl].push(p),
+                Ok((c, None)) => unnamed[c].push(p),
+                Err(reason) => report.unmatched_points.push(Unmatched {
+                    name: label(p, k),
+                    file: points_file.to_path_buf(),
+                    line: p.line,
+                    reason,
+                }),
+            }
+        }
+    }
+    if rule == MatchRule::Name && shots.iter().flatten().all(Vec::is_empty) && !pts.is_empty() {
+        report.notes.push(
+            "no target name carries a configuration id of the joint log: match by file order \
+             (--match order) or by time stamps (--match time), or leave --match out to choose"
+                .to_string(),
+        );
+    }
     let mut out = Vec::new();
     for (c, row) in log.rows.iter().enumerate() {
         let per = std::mem::take(&mut shots[c]);
@@ -160,9 +182,10 @@ fn measurement<'p>(
         reason,
     };
     if !loose.is_empty() {
-        if per.iter().all(Vec::is_empty) && loose.len() == r {
-            for (k, p) in loose.into_iter().enumerate() {
-                per[k].push(p);
+        let groups = shot_groups(&loose);
+        if per.iter().all(Vec::is_empty) && groups.len() == r {
+            for (k, group) in groups.into_iter().enumerate() {
+                per[k].extend(group.into_iter().map(|i| loose[i]));
             }
         } else {
             for p in loose {
@@ -303,14 +326,15 @@ pub(super) fn match_rows(
             "the point file's joint columns are not used: the joint log gives the joints".into(),
         );
     }
-    let by_id = o.matching == MatchRule::Name && rows.iter().all(|r| r.id.is_some());
+    let rule = rows_rule(rows, log, o, report);
+    let by_id = rule == MatchRule::Name && rows.iter().all(|r| r.id.is_some());
     let mut used = vec![false; log.rows.len()];
     let mut out = Vec::new();
     for (k, row) in rows.iter().enumerate() {
         let c = if by_id {
             let id = row.id.as_deref().unwrap_or_default();
             log.rows.iter().position(|j| j.id == id)
-        } else if o.matching == MatchRule::Time {
+        } else if rule == MatchRule::Time {
             row.time_s.and_then(|t| {
                 log.rows
                     .iter()
@@ -360,4 +384,242 @@ pub(super) fn match_rows(
         }
     }
     Ok(out)
+}
+
+/// The rule a table's rows are matched to the joint log by: the one forced, else by id where every
+/// row has one and one of them is the log's, by time where every row and configuration has a time
+/// stamp, else by order. Noted in the report.
+fn rows_rule(
+    rows: &[ConfigRow],
+    log: &JointLog,
+    o: &ImportOptions,
+    report: &mut ArmReport,
+) -> MatchRule {
+    if o.matching != MatchRule::Auto {
+        return o.matching;
+    }
+    let ids_match = rows.iter().all(|r| r.id.is_some())
+        && rows
+            .iter()
+            .any(|r| log.rows.iter().any(|j| Some(&j.id) == r.id.as_ref()));
+    let timed =
+        rows.iter().all(|r| r.time_s.is_some()) && log.rows.iter().all(|j| j.time_s.is_some());
+    let (rule, why) = if ids_match {
+        (MatchRule::Name, "by id (the rows' ids are the joint log's)")
+    } else if timed {
+        (
+            MatchRule::Time,
+            "by time stamp (the rows' ids are not the joint log's; both files have time stamps)",
+        )
+    } else {
+        (
+            MatchRule::Order,
+            "by file order (the rows' ids are not the joint log's, and not both files have time \
+             stamps)",
+        )
+    };
+    report.notes.push(format!("matching: {why}"));
+    rule
+}
+
+/// Consecutive shots closer than this to the one before are one shot repeated (a tracker's noise is
+/// hundredths of a millimetre; the arm between configurations, and the reflectors of one
+/// configuration, are centimetres apart), mm.
+pub const REPEAT_MM: f64 = 1.0;
+
+/// The shots in file order grouped: consecutive shots within [`REPEAT_MM`] of the one before are
+/// one group (a shot repeated). Indices into `pts`.
+fn shot_groups(pts: &[&Point]) -> Vec<Vec<usize>> {
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    for (k, p) in pts.iter().enumerate() {
+        match groups.last_mut() {
+            Some(g) if k > 0 && (p.position_mm - pts[k - 1].position_mm).norm() < REPEAT_MM => {
+                g.push(k);
+            }
+            _ => groups.push(vec![k]),
+        }
+    }
+    groups
+}
+
+/// What the points' names are, for the report: none, one name on every row, or names of no form
+/// that gives a configuration id.
+fn describe_names(pts: &[Point]) -> String {
+    let names: Vec<&str> = pts.iter().filter_map(|p| p.target.as_deref()).collect();
+    match names.first() {
+        None => "the points have no names".to_string(),
+        Some(first) if names.len() == pts.len() && names.iter().all(|n| n == first) => {
+            format!("one name, `{first}`, on every row")
+        }
+        Some(first) => format!(
+            "no name (`{first}`, …) is `<id>_<reflector>` with a configuration id of the joint log"
+        ),
+    }
+}
+
+/// The rule points are matched by: the one forced, else (`Auto`) by name where a name carries a
+/// configuration id of the log, by time where every point and configuration has a time stamp, by
+/// order where the counts agree (repeated shots merged). The rule and why go to the report's notes;
+/// counts that disagree are an error naming both and where the sequences part.
+fn resolve_rule(
+    pts: &[Point],
+    log: &JointLog,
+    ids: &std::collections::HashMap<&str, usize>,
+    o: &ImportOptions,
+    files: &MatchFiles,
+    report: &mut ArmReport,
+) -> Result<MatchRule, ImportError> {
+    let names = &o.reflector_names;
+    let rule_name = |rule: MatchRule| match rule {
+        MatchRule::Name => "by target name",
+        MatchRule::Time => "by time stamp",
+        MatchRule::Order | MatchRule::Auto => "by file order",
+    };
+    if o.matching != MatchRule::Auto {
+        report
+            .notes
+            .push(format!("matching: {} (--match)", rule_name(o.matching)));
+        return Ok(o.matching);
+    }
+    let named = pts.iter().any(|p| {
+        p.target
+            .as_deref()
+            .and_then(|t| split_target(t, names))
+            .is_some_and(|(id, _)| ids.contains_key(id))
+    });
+    if named {
+        report.notes.push(
+            "matching: by target name (the names carry the joint log's configuration ids)"
+                .to_string(),
+        );
+        return Ok(MatchRule::Name);
+    }
+    let why = describe_names(pts);
+    let pts_timed = !pts.is_empty() && pts.iter().all(|p| p.time_s.is_some());
+    let log_timed = !log.rows.is_empty() && log.rows.iter().all(|r| r.time_s.is_some());
+    if pts_timed && log_timed {
+        report.notes.push(format!(
+            "matching: by time stamp ({why}; both files have time stamps; tolerance {} s)",
+            o.time_tolerance_s
+        ));
+        return Ok(MatchRule::Time);
+    }
+    let untimed = match (pts_timed, log_timed) {
+        (false, false) => "neither file has time stamps",
+        (false, true) => "the point file has no time stamps",
+        _ => "the joint log has no time stamps",
+    };
+    let all: Vec<&Point> = pts.iter().collect();
+    let groups = shot_groups(&all);
+    let (r, rows) = (names.len(), log.rows.len());
+    let repeated = pts.len() - groups.len();
+    let merged = if repeated > 0 {
+        format!(
+            " ({} points, {repeated} of them a shot repeated)",
+            pts.len()
+        )
+    } else {
+        String::new()
+    };
+    if groups.len() == rows * r {
+        report.notes.push(format!(
+            "matching: by file order ({why}; {untimed}; {} shots{merged} for {rows} \
+             configurations × {r} reflector{})",
+            groups.len(),
+            if r == 1 { "" } else { "s" }
+        ));
+        return Ok(MatchRule::Order);
+    }
+    Err(ImportError::Content {
+        path: files.points.to_path_buf(),
+        message: format!(
+            "{why} and {untimed}, so the points would be matched by file order, but the counts \
+             disagree: {} shots{merged} in {}, {rows} configurations × {r} reflector{} = {} in {}; \
+             {}. Name the points `<id>_<reflector>`, give both files time stamps, or force a rule \
+             with --match order or --match time",
+            groups.len(),
+            files.points.display(),
+            if r == 1 { "" } else { "s" },
+            rows * r,
+            files.joints.display(),
+            parting(pts, &groups, log, r)
+        ),
+    })
+}
+
+/// Where a point file's shot groups and a joint log first part, as far as the files show it: a time
+/// gap among the shots or the configurations (a configuration skipped), a jump in joint values.
+fn parting(pts: &[Point], groups: &[Vec<usize>], log: &JointLog, r: usize) -> String {
+    // The first shot of each configuration (every r-th group).
+    let starts: Vec<&Point> = groups
+        .iter()
+        .step_by(r.max(1))
+        .map(|g| &pts[g[0]])
+        .collect();
+    let shot_times: Vec<Option<f64>> = starts.iter().map(|p| p.time_s).collect();
+    if let Some((k, dt, median)) = first_gap(&shot_times) {
+        return format!(
+            "the shots part at line {}: {dt:.1} s after the configuration before (line {}), where \
+             configurations are {median:.1} s apart — a configuration skipped, or measured again",
+            starts[k].line,
+            starts[k - 1].line
+        );
+    }
+    let row_times: Vec<Option<f64>> = log.rows.iter().map(|row| row.time_s).collect();
+    if let Some((k, dt, median)) = first_gap(&row_times) {
+        let row = &log.rows[k];
+        return format!(
+            "the joint log parts at configuration `{}` (line {}): {dt:.1} s after the one before, \
+             where configurations are {median:.1} s apart",
+            row.id, row.line
+        );
+    }
+    let steps: Vec<Option<f64>> = log
+        .rows
+        .windows(2)
+        .map(|w| {
+            let d = w[1]
+                .q_rad
+                .iter()
+                .zip(&w[0].q_rad)
+                .map(|(a, b)| (a - b).abs());
+            Some(d.fold(0.0, f64::max))
+        })
+        .collect();
+    let cumulative: Vec<Option<f64>> = std::iter::once(Some(0.0))
+        .chain(steps.iter().scan(0.0, |t, s| {
+            *t += s.unwrap_or(0.0);
+            Some(Some(*t))
+        }))
+        .collect();
+    if let Some((k, step, median)) = first_gap(&cumulative) {
+        let row = &log.rows[k];
+        return format!(
+            "the joint log jumps at configuration `{}` (line {}): {:.1}° from the one before, \
+             where steps are {:.1}° — a configuration not measured",
+            row.id,
+            row.line,
+            step.to_degrees(),
+            median.to_degrees()
+        );
+    }
+    "neither time stamps nor joint values show where they part".to_string()
+}
+
+/// The first step of a sequence more than 1.5 times the median step (and the step and the median), when
+/// every value is known and there are at least three steps.
+fn first_gap(values: &[Option<f64>]) -> Option<(usize, f64, f64)> {
+    let v: Vec<f64> = values.iter().copied().collect::<Option<_>>()?;
+    let steps: Vec<f64> = v.windows(2).map(|w| w[1] - w[0]).collect();
+    if steps.len() < 3 {
+        return None;
+    }
+    let mut sorted = steps.clone();
+    sorted.sort_by(f64::total_cmp);
+    let median = sorted[sorted.len() / 2];
+    if median <= 0.0 {
+        return None;
+    }
+    let k = steps.iter().position(|&s| s > 1.5 * median)?;
+    Some((k + 1, steps[k], median))
 }

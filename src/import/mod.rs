@@ -9,6 +9,7 @@ mod error;
 pub mod joints;
 mod matching;
 pub mod points;
+pub mod sheet;
 pub mod text;
 
 pub use error::ImportError;
@@ -32,11 +33,16 @@ use std::path::{Path, PathBuf};
 /// How points are matched to the joint log's configurations.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum MatchRule {
-    /// Target names `<id>_<reflector>` (`L012_a`) against the joint log's ids.
+    /// By name where the target names carry the joint log's configuration ids, else by time where
+    /// both files have time stamps, else by order where the counts agree (the report says which and
+    /// why; counts that disagree are an error saying where the two sequences part).
     #[default]
+    Auto,
+    /// Target names `<id>_<reflector>` (`L012_a`) against the joint log's ids.
     Name,
     /// The points in file order, one group of every reflector (in the dataset's order) per
-    /// configuration of the joint log.
+    /// configuration of the joint log; consecutive shots within 1 mm of each other are one shot
+    /// repeated (averaged).
     Order,
     /// Each point to the configuration with the nearest time stamp within the tolerance; the reflector
     /// from a name's `_<reflector>` suffix, else by order within the configuration.
@@ -104,6 +110,8 @@ pub struct ImportOptions {
     /// The last N configurations of each arm, in file order, are verification (`ver`), the others
     /// calibration (`cal`), whatever the files say. `None`: the files' splits, else `cal`.
     pub verify_last: Option<usize>,
+    /// The sheet of spreadsheet joint logs (`None`: the first).
+    pub sheet: Option<String>,
 }
 
 impl ImportOptions {
@@ -116,7 +124,7 @@ impl ImportOptions {
             angle_unit: None,
             decimal_comma: false,
             joint_order: None,
-            matching: MatchRule::Name,
+            matching: MatchRule::Auto,
             time_tolerance_s: 0.5,
             reflector_names,
             nominal_reflectors_mm,
@@ -132,6 +140,7 @@ impl ImportOptions {
             measured_together: false,
             shared_joints: SharedJoints::default(),
             verify_last: None,
+            sheet: None,
         }
     }
 }
@@ -206,10 +215,17 @@ pub struct ArmReport {
     pub notes: Vec<String>,
 }
 
-/// What an import did, per arm.
+/// What an import did, per arm (`None`: the arm was not imported — a dataset of one arm).
 #[derive(Clone, Debug, PartialEq)]
 pub struct ImportReport {
-    pub arms: PerSide<ArmReport>,
+    pub arms: PerSide<Option<ArmReport>>,
+}
+
+impl ImportReport {
+    /// The reports of the arms imported, left first.
+    pub fn imported(&self) -> impl Iterator<Item = &ArmReport> {
+        self.arms.values().filter_map(Option::as_ref)
+    }
 }
 
 /// The result of an import: the dataset (its arms' `file` are the joint logs, or the point files, so
@@ -226,15 +242,58 @@ pub fn import(
     inputs: &PerSide<ArmFiles>,
     options: &ImportOptions,
 ) -> Result<Imported, ImportError> {
+    import_arms(files, &both(inputs), options)
+}
+
+/// Both arms' files as [`import_arms`] takes them.
+fn both(inputs: &PerSide<ArmFiles>) -> PerSide<Option<ArmFiles>> {
+    PerSide::from_fn(|side| Some(inputs[side].clone()))
+}
+
+/// Import the arms whose files are given (`None`: the arm was not measured): both, or one alone —
+/// the dataset's one-arm form (one `[[arms]]` entry).
+pub fn import_arms(
+    files: &dyn FileSource,
+    inputs: &PerSide<Option<ArmFiles>>,
+    options: &ImportOptions,
+) -> Result<Imported, ImportError> {
     check_options(options)?;
-    let arms = PerSide::try_from_fn(|side| import_arm(files, side, &inputs[side], options))?;
-    let (mut data, mut reports) = (
-        PerSide::new(arms.left.0.clone(), arms.right.0.clone()),
-        PerSide::new(arms.left.1.clone(), arms.right.1.clone()),
-    );
+    let given: Vec<Side> = Side::BOTH
+        .into_iter()
+        .filter(|&s| inputs[s].is_some())
+        .collect();
+    match given.as_slice() {
+        [] => {
+            return Err(ImportError::Options(
+                "no point file: give one arm's point file (a dataset of that arm alone) or both \
+                 arms'"
+                    .to_string(),
+            ));
+        }
+        [side] if options.measured_together => {
+            return Err(ImportError::Options(format!(
+                "both hands measured together, but only the {side} arm's files are given"
+            )));
+        }
+        _ => {}
+    }
+    let arms = PerSide::try_from_fn(|side| {
+        inputs[side]
+            .as_ref()
+            .map(|input| import_arm(files, side, input, options))
+            .transpose()
+    })?;
+    let mut data = PerSide::from_fn(|side| {
+        arms[side]
+            .as_ref()
+            .map_or_else(|| ArmData::not_measured(side), |a| a.0.clone())
+    });
+    let mut reports = PerSide::from_fn(|side| arms[side].as_ref().map(|a| a.1.clone()));
     if let Some(n) = options.verify_last {
         for side in Side::BOTH {
-            verify_last(&mut data[side], n, &mut reports[side])?;
+            if let Some(report) = &mut reports[side] {
+                verify_last(&mut data[side], n, report)?;
+            }
         }
     }
     let dataset = Dataset {
@@ -341,7 +400,7 @@ fn import_arm(
     o: &ImportOptions,
 ) -> Result<ArmOut, ImportError> {
     let joint_names = o.joint_names[side].as_deref();
-    let text = text::read(files, &input.points)?;
+    let (text, encoding) = text::read_noted(files, &input.points)?;
     let read_options = points::ReadOptions {
         format: o.points_format,
         unit: o.length_unit,
@@ -354,7 +413,7 @@ fn import_arm(
     let pf = points::read(&input.points, &text, &read_options)?;
     let prefix = id_prefix(side, o.measured_together);
     let log = match &input.joints {
-        Some(path) => Some(read_joint_log(files, path, o, joint_names, prefix)?),
+        Some(path) => Some(read_log(files, path, o, joint_names, prefix)?),
         None => None,
     };
     let mut report = ArmReport {
@@ -372,7 +431,10 @@ fn import_arm(
         unmatched_points: Vec::new(),
         unmatched_configurations: Vec::new(),
         repeated: Vec::new(),
-        notes: pf.notes.clone(),
+        notes: encoding
+            .into_iter()
+            .chain(pf.notes.iter().cloned())
+            .collect(),
     };
     if let Some(log) = &log {
         report.notes.extend(log.notes.iter().cloned());
@@ -431,28 +493,6 @@ fn import_arm(
     Ok((arm, report))
 }
 
-/// An arm's joint log, read with the import's options.
-fn read_joint_log(
-    files: &dyn FileSource,
-    path: &Path,
-    o: &ImportOptions,
-    joint_names: Option<&[String]>,
-    id_prefix: &'static str,
-) -> Result<JointLog, ImportError> {
-    let text = text::read(files, path)?;
-    joints::read(
-        path,
-        &text,
-        &JointLogOptions {
-            angle_unit: o.angle_unit,
-            joint_order: o.joint_order.as_deref(),
-            joint_names,
-            decimal_comma: o.decimal_comma,
-            id_prefix,
-        },
-    )
-}
-
 /// The units an arm's joint values were written in: angles in the joint log's unit, else radians in
 /// a FIGAROH file, else the options' (degrees unless given); lengths as the options say, else metres
 /// in a FIGAROH file and millimetres otherwise.
@@ -469,6 +509,28 @@ fn joint_value_units(format: PointsFormat, log: Option<&JointLog>, o: &ImportOpt
             None if figaroh => AngleUnit::Rad,
             None => o.angle_unit.unwrap_or(AngleUnit::Deg),
         },
+    }
+}
+
+/// A joint log: a spreadsheet (by its extension) or CSV/TXT.
+fn read_log(
+    files: &dyn FileSource,
+    path: &Path,
+    o: &ImportOptions,
+    joint_names: Option<&[String]>,
+    prefix: &str,
+) -> Result<JointLog, ImportError> {
+    let log_options = JointLogOptions {
+        angle_unit: o.angle_unit,
+        joint_order: o.joint_order.as_deref(),
+        joint_names,
+        decimal_comma: o.decimal_comma,
+        id_prefix: prefix,
+    };
+    if sheet::is_sheet(path) {
+        sheet::read(files, path, o.sheet.as_deref(), &log_options)
+    } else {
+        joints::read(path, &text::read(files, path)?, &log_options)
     }
 }
 
@@ -490,13 +552,17 @@ fn id_prefix(side: Side, measured_together: bool) -> &'static str {
 pub fn check(imported: &Imported) -> Result<(), ImportError> {
     let ds = &imported.dataset;
     for side in Side::BOTH {
-        dataset::check_arm_rows(
-            &ds.arms[side],
-            ds.nominal_reflectors(side),
-            &ds.reflector_names,
-        )?;
+        if imported.report.arms[side].is_some() {
+            dataset::check_arm_rows(
+                &ds.arms[side],
+                ds.nominal_reflectors(side),
+                &ds.reflector_names,
+            )?;
+        }
     }
-    dataset::check_arms_differ(&ds.arms)?;
+    if imported.report.arms.values().all(Option::is_some) {
+        dataset::check_arms_differ(&ds.arms)?;
+    }
     Ok(())
 }
 
@@ -526,6 +592,17 @@ pub fn write(
     out: &Path,
     overwrite: Overwrite,
 ) -> Result<(), ImportError> {
+    write_arms(imported, &both(inputs), out, overwrite)
+}
+
+/// [`write`] for an import of the arms whose files are given (one arm alone: a dataset of that arm,
+/// one `[[arms]]` entry).
+pub fn write_arms(
+    imported: &Imported,
+    inputs: &PerSide<Option<ArmFiles>>,
+    out: &Path,
+    overwrite: Overwrite,
+) -> Result<(), ImportError> {
     if out.exists() && !out.is_dir() {
         return Err(ImportError::Content {
             path: out.to_path_buf(),
@@ -540,8 +617,9 @@ pub fn write(
         .into());
     }
     let input_paths: Vec<&Path> = inputs
-        .iter()
-        .flat_map(|(_, f)| std::iter::once(f.points.as_path()).chain(f.joints.as_deref()))
+        .values()
+        .flatten()
+        .flat_map(|f| std::iter::once(f.points.as_path()).chain(f.joints.as_deref()))
         .collect();
     for name in [MANIFEST_FILE, "left.csv", "right.csv", REPORT_FILE] {
         refuse_overwrite_input(&out.join(name), &input_paths)?;
@@ -558,8 +636,20 @@ pub fn write(
 
 impl std::fmt::Display for ImportReport {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        for (_, arm) in self.arms.iter() {
+        for arm in self.imported() {
             write!(f, "{arm}")?;
+        }
+        if let [side] = Side::BOTH
+            .into_iter()
+            .filter(|&s| self.arms[s].is_none())
+            .collect::<Vec<_>>()
+            .as_slice()
+        {
+            writeln!(
+                f,
+                "{side} arm: not imported (a dataset of the {} arm alone)",
+                side.other()
+            )?;
         }
         Ok(())
     }

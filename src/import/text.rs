@@ -55,6 +55,28 @@ fn windows_1252_char(byte: u8) -> char {
     }
 }
 
+/// Read and decode a file, with a note when the encoding was guessed (not UTF-8: read as
+/// Windows-1252).
+pub fn read_noted(
+    files: &dyn FileSource,
+    path: &Path,
+) -> Result<(String, Option<String>), ImportError> {
+    let bytes = files
+        .read_limited(path, MAX_FILE_BYTES)
+        .map_err(|error| ImportError::Io {
+            path: path.to_path_buf(),
+            error,
+        })?;
+    let text = decode(path, &bytes)?;
+    let guessed = std::str::from_utf8(&bytes).is_err().then(|| {
+        format!(
+            "encoding: {} is not UTF-8: read as Windows-1252 (ANSI)",
+            path.display()
+        )
+    });
+    Ok((text, guessed))
+}
+
 /// Read and decode a file.
 pub fn read(files: &dyn FileSource, path: &Path) -> Result<String, ImportError> {
     let bytes = files
@@ -87,6 +109,16 @@ impl Delimiter {
             Delimiter::Tab
         } else {
             Delimiter::Whitespace
+        }
+    }
+
+    /// How the report names it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Delimiter::Comma => "`,`",
+            Delimiter::Semicolon => "`;`",
+            Delimiter::Tab => "tab",
+            Delimiter::Whitespace => "spaces",
         }
     }
 

@@ -62,8 +62,9 @@ fn files_ui(
     ui.label(
         RichText::new(
             "Each arm's point file (SpatialAnalyzer, Leica Tracker Pilot, figaroh, or any CSV with a \
-             column mapping) and its joint log (id,q1..qN; not needed when the point file has the \
-             joints). docs/formats.md describes each format.",
+             column mapping) and its joint log (id,q1..qN as CSV, or a spreadsheet; not needed when \
+             the point file has the joints); one arm's files alone make a dataset of that arm. \
+             docs/formats.md describes each format.",
         )
         .small()
         .color(Color32::GRAY),
@@ -186,31 +187,17 @@ fn options_ui(ui: &mut egui::Ui, inputs: &mut ImportInputs) {
                     .desired_width(300.0),
             );
             ui.end_row();
+            ui.label("sheet");
+            ui.add(
+                egui::TextEdit::singleline(&mut inputs.sheet)
+                    .hint_text("spreadsheet joint logs: the first sheet")
+                    .desired_width(300.0),
+            );
+            ui.end_row();
             ui.label("decimal comma");
             ui.checkbox(&mut inputs.decimal_comma, "1234,56");
             ui.end_row();
-            ui.label("match points by");
-            combo(
-                ui,
-                "match",
-                &mut inputs.matching,
-                &[
-                    (MatchRule::Name, "target name <id>_<reflector>"),
-                    (MatchRule::Order, "file order"),
-                    (MatchRule::Time, "time stamp"),
-                ],
-            );
-            ui.end_row();
-            if inputs.matching == MatchRule::Time {
-                ui.label("time tolerance");
-                ui.add(
-                    egui::DragValue::new(&mut inputs.time_tolerance_s)
-                        .range(0.001..=3600.0)
-                        .speed(0.05)
-                        .suffix(" s"),
-                );
-                ui.end_row();
-            }
+            matching_ui(ui, inputs);
             for side in Side::BOTH {
                 ui.label(format!("{side} station"));
                 ui.add(
@@ -221,6 +208,33 @@ fn options_ui(ui: &mut egui::Ui, inputs: &mut ImportInputs) {
                 ui.end_row();
             }
         });
+}
+
+/// The matching rule and, where time stamps may be used, the tolerance (rows of the options' grid).
+fn matching_ui(ui: &mut egui::Ui, inputs: &mut ImportInputs) {
+    ui.label("match points by");
+    combo(
+        ui,
+        "match",
+        &mut inputs.matching,
+        &[
+            (MatchRule::Auto, "automatic (the report says which)"),
+            (MatchRule::Name, "target name <id>_<reflector>"),
+            (MatchRule::Order, "file order"),
+            (MatchRule::Time, "time stamp"),
+        ],
+    );
+    ui.end_row();
+    if matches!(inputs.matching, MatchRule::Time | MatchRule::Auto) {
+        ui.label("time tolerance");
+        ui.add(
+            egui::DragValue::new(&mut inputs.time_tolerance_s)
+                .range(0.001..=3600.0)
+                .speed(0.05)
+                .suffix(" s"),
+        );
+        ui.end_row();
+    }
 }
 
 /// Both arms in one file (a motion-capture export): each arm's own mapping, measured together, the
@@ -288,7 +302,7 @@ fn preview_ui(ui: &mut egui::Ui, preview: Option<&Preview>, commands: &mut Vec<C
         }
     });
     let Some(preview) = preview else {
-        ui.label("Choose both arms' point files.");
+        ui.label("Choose a point file: one arm's for a dataset of that arm alone, or both arms'.");
         return;
     };
     ui.label(
@@ -301,8 +315,11 @@ fn preview_ui(ui: &mut egui::Ui, preview: Option<&Preview>, commands: &mut Vec<C
             ui.label(RichText::new(e).color(ERROR_COLOR));
         }
         Ok(imported) => {
-            for (_, arm) in imported.report.arms.iter() {
+            for arm in imported.report.imported() {
                 arm_line(ui, arm);
+            }
+            if let [side] = imported.dataset.measured_sides().as_slice() {
+                ui.label(format!("the {side} arm alone (a dataset of one arm)"));
             }
             if let Some(refused) = &preview.refused {
                 ui.label(RichText::new(refused).color(ERROR_COLOR));
@@ -360,6 +377,15 @@ fn arm_line(ui: &mut egui::Ui, arm: &ArmReport) {
         ui.visuals().text_color()
     };
     ui.label(RichText::new(text).color(color));
+    // What the import guessed or decided (encoding, unit, separator, matching rule, sheet, rows
+    // deleted, U(95)), as the report writes it.
+    for note in &arm.notes {
+        ui.label(
+            RichText::new(format!("  {note}"))
+                .small()
+                .color(Color32::GRAY),
+        );
+    }
 }
 
 fn finish_ui(
