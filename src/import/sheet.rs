@@ -31,10 +31,7 @@ pub fn read(
 ) -> Result<JointLog, ImportError> {
     let bytes = files
         .read_limited(path, MAX_SHEET_BYTES)
-        .map_err(|error| ImportError::Io {
-            path: path.to_path_buf(),
-            error,
-        })?;
+        .map_err(|error| crate::output::FileError::read(path, error))?;
     let format_error = |message: String| ImportError::Format {
         path: path.to_path_buf(),
         message,

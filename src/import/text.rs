@@ -63,10 +63,7 @@ pub fn read_noted(
 ) -> Result<(String, Option<String>), ImportError> {
     let bytes = files
         .read_limited(path, MAX_FILE_BYTES)
-        .map_err(|error| ImportError::Io {
-            path: path.to_path_buf(),
-            error,
-        })?;
+        .map_err(|error| crate::output::FileError::read(path, error))?;
     let text = decode(path, &bytes)?;
     let guessed = std::str::from_utf8(&bytes).is_err().then(|| {
         format!(
