@@ -8,18 +8,18 @@ use super::set_up::{
     ArmSetUp, ArmStage, TreeSetUp, TreeStage, column_scales, least_squares_solver,
     require_kinematics,
 };
-use super::{MethodSpec, Observes, SolverKind};
+use super::spec::{MethodSpec, Observes, SolverKind};
 use crate::side::{PerSide, Side};
-use crate::solver::CalibrationError;
-use crate::solver::Stage;
-use crate::solver::absolute_problem::{
+use crate::solver::algorithms::least_squares::LsqAlgorithm;
+use crate::solver::analysis::identifiability::{self, IdentifiabilityReport, ParameterInfo};
+use crate::solver::error::CalibrationError;
+use crate::solver::problems::absolute_problem::{
     AbsoluteData, AbsoluteProblem, as_triangle, moore_penrose_fit, transform_param_name,
     triangle_area_mm2,
 };
-use crate::solver::identifiability::{self, IdentifiabilityReport, ParameterInfo};
-use crate::solver::least_squares::LsqAlgorithm;
-use crate::solver::tree_absolute::TreeAbsoluteProblem;
-use crate::solver::tree_problem::TreeLayout;
+use crate::solver::problems::tree_absolute::TreeAbsoluteProblem;
+use crate::solver::problems::tree_problem::TreeLayout;
+use crate::solver::types::Stage;
 use nalgebra::DVector;
 use nalgebra::{DMatrix, Vector3};
 

@@ -6,9 +6,9 @@ use super::set_up::{
     ArmSetUp, ArmStage, DistanceAnalysis, column_scales, distance_identifiability,
     least_squares_solver, require_kinematics, worst_reflector,
 };
-use super::{MethodSpec, Observes, SolverKind};
-use crate::solver::CalibrationError;
-use crate::solver::least_squares::{DistanceLeastSquares, LsqAlgorithm};
+use super::spec::{MethodSpec, Observes, SolverKind};
+use crate::solver::algorithms::least_squares::{DistanceLeastSquares, LsqAlgorithm};
+use crate::solver::error::CalibrationError;
 use nalgebra::DVector;
 
 pub const DISTANCE_SINGLE: MethodSpec = MethodSpec {

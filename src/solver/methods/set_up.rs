@@ -3,19 +3,21 @@
 //! the executor's re-check at the solution), column scaling, the start of the tracker frame, and the
 //! solvers.
 
-use super::super::absolute_problem::{
-    AbsoluteData, AbsoluteProblem, as_triangle, moore_penrose_fit, triangle_area_mm2,
-};
-use super::super::arm_problem::ArmProblem;
-use super::super::base_problem::BaseProblem;
-use super::super::identifiability::{self, IdentifiabilityReport, ParameterInfo};
-use super::super::least_squares::{LeastSquaresProblem, LsqAlgorithm, LsqState};
-use super::super::problem::MinimaxProblem;
-use super::super::sqp::{SqpSettings, SqpState};
-use super::super::tree_problem::{TreeLayout, TreeProblem};
-use super::super::{CalibrationError, CalibrationSettings, Reflector, Stage, StageSolver};
 use crate::kinematics::{ArmModel, DualArmModel, SharedJoints};
 use crate::side::{PerSide, Side};
+use crate::solver::algorithms::least_squares::{LeastSquaresProblem, LsqAlgorithm, LsqState};
+use crate::solver::algorithms::sqp::{SqpSettings, SqpState};
+use crate::solver::algorithms::stage::StageSolver;
+use crate::solver::analysis::identifiability::{self, IdentifiabilityReport, ParameterInfo};
+use crate::solver::error::CalibrationError;
+use crate::solver::problems::absolute_problem::{
+    AbsoluteData, AbsoluteProblem, as_triangle, moore_penrose_fit, triangle_area_mm2,
+};
+use crate::solver::problems::arm_problem::ArmProblem;
+use crate::solver::problems::base_problem::BaseProblem;
+use crate::solver::problems::problem::MinimaxProblem;
+use crate::solver::problems::tree_problem::{TreeLayout, TreeProblem};
+use crate::solver::types::{CalibrationSettings, Reflector, Stage};
 use nalgebra::{DMatrix, DVector, Isometry3, Vector3};
 
 /// Pairs per reflector sampled for identifiability, column scaling and the start Hessian.

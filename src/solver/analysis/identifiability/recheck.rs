@@ -6,10 +6,10 @@
 //! QR the start uses for the built-in robot (a test holds them on the test robots and the distance
 //! methods).
 
-use super::{IdentifiabilityReport, ParameterInfo, analyse, gram_by_qr};
+use super::analyse::{IdentifiabilityReport, ParameterInfo, analyse, gram_by_qr};
 use crate::kinematics::{ArmJacobians, ArmModel};
 use crate::par::prelude::*;
-use crate::solver::arm_problem::{pair_jacobian_columns, pair_jacobian_gram};
+use crate::solver::problems::arm_problem::{pair_jacobian_columns, pair_jacobian_gram};
 use nalgebra::DMatrix;
 
 /// How the re-check forms the Gram matrix of the sampled pair Jacobian.

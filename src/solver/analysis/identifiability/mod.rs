@@ -1,0 +1,14 @@
+//! Which parameters can the data identify? The analysis of a Gram matrix ([`analyse`](analyse::analyse)),
+//! and its repetition at a step-1 solution ([`recheck`]).
+
+pub mod analyse;
+mod recheck;
+
+pub use analyse::{
+    FixedParameter, IdentifiabilityReport, NEAR_DEPENDENT_TOL, NEGLIGIBLE_COLUMN, ParameterInfo,
+    UNIDENTIFIABLE_TOL, analyse, gram_by_product, gram_by_qr,
+};
+pub use recheck::{GramMethod, at_solution, identifiable_at};
+
+#[cfg(test)]
+mod tests;
