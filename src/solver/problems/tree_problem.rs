@@ -21,7 +21,7 @@ use super::arm_problem::ArmProblem;
 use super::problem::{Eval, LeastSquaresSystem, MinimaxProblem, StageParams};
 use crate::kinematics::{ArmModel, SharedJoints};
 use crate::side::{PerSide, Side};
-use crate::solver::analysis::identifiability::{FixedParameter, IdentifiabilityReport};
+use crate::solver::analysis::identifiability::analyse::{FixedParameter, IdentifiabilityReport};
 use nalgebra::{DMatrix, DVector};
 
 /// Where each arm's parameters sit in the tree's vector `X`.
