@@ -1,5 +1,5 @@
 //! The stage-solver interface: one outer iteration at a time, whatever the method (argmin's
-//! `Solver::next_iter`). [`super::CalibrationRun`] is the one executor that drives it.
+//! `Solver::next_iter`). [`crate::solver::CalibrationRun`] is the one executor that drives it.
 
 use super::sqp::SqpState;
 use crate::side::PerSide;

@@ -1,6 +1,7 @@
 //! Step 1's two arms at once. The arms' stages are independent (each starts from the nominal model and
-//! sees only its own arm's data), so [`Calibrator::run`](super::calibrator::Calibrator::run) solves the right arm's
-//! as a job of the work pool (rayon's) while the left arm's runs on the caller's thread. The right arm's events reach the
+//! sees only its own arm's data), so [`Calibrator::run`](super::calibrator::Calibrator::run) solves
+//! the right arm's as a job of the work pool (rayon's) while the left arm's runs on the caller's
+//! thread. The right arm's events reach the
 //! observers afterwards, in the order and with the models a one-stage-at-a-time run gives them: its
 //! iterations follow the left arm's `stage_finished`, and `current_model` shows the left arm's result
 //! with the right arm's iterate of the iteration reported. The history, the stages and the
