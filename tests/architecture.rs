@@ -142,3 +142,95 @@ fn no_module_uses_one_of_a_higher_layer() {
     assert!(!arrows["dataset"].contains("robot") && !arrows["dataset"].contains("quality"));
     assert!(arrows["report"].contains("params") && arrows["report"].contains("analysis"));
 }
+
+/// The modules of a folder (its files and subfolders, `mod.rs` left out).
+fn modules_in(dir: &Path) -> BTreeSet<String> {
+    std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter_map(|p| {
+            let name = p.file_name()?.to_string_lossy().into_owned();
+            match name.strip_suffix(".rs") {
+                Some("mod") => None,
+                Some(stem) => Some(stem.to_string()),
+                None => p.is_dir().then_some(name),
+            }
+        })
+        .collect()
+}
+
+/// The rooms of solver/ (issue 46): each `mod.rs` only declares and re-exports; a module reaches the
+/// others by their own paths — `super::x` only for a sibling module `x`, `crate::solver::x` only for
+/// a folder or file `x` of solver/ — never through its parent's items or re-exports, never by
+/// `super::super`.
+#[test]
+fn solver_modules_only_reach_down_or_across() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("src/solver");
+    let top = modules_in(&root);
+    let mut problems = Vec::new();
+    let mut seen = 0;
+    for file in files_of(root.parent().unwrap(), "solver") {
+        let text = std::fs::read_to_string(&file).unwrap();
+        let code = match text.find("#[cfg(test)]\nmod tests {") {
+            Some(k) => &text[..k],
+            None => &text[..],
+        };
+        let code: String = code
+            .lines()
+            .map(|l| l.find("//").map_or(l, |k| &l[..k]))
+            .collect::<Vec<_>>()
+            .join("\n");
+        let is_mod = file.file_name().unwrap() == "mod.rs";
+        // A folder's mod.rs is its module; a file's siblings are the files beside it.
+        let dir = file.parent().unwrap();
+        let siblings = modules_in(if is_mod { dir.parent().unwrap() } else { dir });
+        let name = file.strip_prefix(&root).unwrap().display().to_string();
+        if code.contains("super::super") {
+            problems.push(format!("{name}: `super::super`"));
+        }
+        for (prefix, allowed) in [("crate::solver::", &top), ("super::", &siblings)] {
+            for (k, _) in code.match_indices(prefix) {
+                let rest = &code[k + prefix.len()..];
+                let names: Vec<&str> = match rest.strip_prefix('{') {
+                    Some(group) => group[..group.find('}').unwrap_or(group.len())]
+                        .split(',')
+                        .map(|s| s.trim().split("::").next().unwrap_or(""))
+                        .collect(),
+                    None => vec![
+                        rest.split(|c: char| !c.is_alphanumeric() && c != '_')
+                            .next()
+                            .unwrap(),
+                    ],
+                };
+                for n in names.into_iter().filter(|n| !n.is_empty() && *n != "*") {
+                    seen += 1;
+                    if !allowed.contains(n) {
+                        problems.push(format!("{name}: `{prefix}{n}` is not a module of its own"));
+                    }
+                }
+            }
+        }
+        if is_mod {
+            let mut body = code.clone();
+            while let Some(k) = body.find("pub use ") {
+                let end = body[k..].find(';').map_or(body.len(), |e| k + e + 1);
+                body.replace_range(k..end, "");
+            }
+            for line in body.lines().map(str::trim).filter(|l| !l.is_empty()) {
+                let declares =
+                    line.ends_with(';') && ["mod ", "pub mod "].iter().any(|p| line.starts_with(p));
+                if !declares && line != "#[cfg(test)]" {
+                    problems.push(format!(
+                        "{name}: `{line}` in a mod.rs (only declarations and re-exports)"
+                    ));
+                }
+            }
+        }
+    }
+    assert!(problems.is_empty(), "{}", problems.join("\n"));
+    // The test reads what it claims to read.
+    assert!(
+        seen > 50 && top.contains("methods") && top.contains("types"),
+        "{seen} {top:?}"
+    );
+}

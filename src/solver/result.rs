@@ -1,13 +1,13 @@
 //! What a calibration run returns, however it ended.
 
-use super::identifiability::IdentifiabilityReport;
-use super::{
-    CalibrationSettings, IterationRecord, QpMethod, Reflector, Stage, StageSummary, Termination,
-};
 use crate::dataset::{Dataset, Split};
 use crate::kinematics::DualArmModel;
 use crate::metrics::{ConfigResiduals, MetricsError, PairKind, PairResiduals};
 use crate::side::{PerSide, Side};
+use crate::solver::analysis::identifiability::IdentifiabilityReport;
+use crate::solver::types::{
+    CalibrationSettings, IterationRecord, QpMethod, Reflector, Stage, StageSummary, Termination,
+};
 use nalgebra::Isometry3;
 
 /// The stages of a two-step calibration, in the order they run (arms that share no joint).
@@ -37,12 +37,12 @@ pub struct CalibrationResult {
     pub diagnostics: Vec<String>,
     /// Allowed deviation δ of the reflector triangle's sides (constraint 14, ε = δ²), mm, per arm.
     pub side_tolerance_mm: PerSide<f64>,
-    /// The reflector each arm's step 1 used, for [`super::Method::DistanceSingle`] (`None` otherwise
+    /// The reflector each arm's step 1 used, for [`crate::solver::Method::DistanceSingle`] (`None` otherwise
     /// or for an arm whose stage did not start).
     pub reflector_used: PerSide<Option<Reflector>>,
     /// Each arm's model base in the tracker frame, where a method identified it (the absolute methods
-    /// [`super::Method::Pose`], [`super::Method::Position`] in step 1 and
-    /// [`super::BaseMethod::Absolute`] in step 2, which overrides step 1's); `None` for the distance
+    /// [`crate::solver::Method::Pose`], [`crate::solver::Method::Position`] in step 1 and
+    /// [`crate::solver::BaseMethod::Absolute`] in step 2, which overrides step 1's); `None` for the distance
     /// methods, which cannot see it.
     pub tracker_from_base: PerSide<Option<Isometry3<f64>>>,
     /// Why step 2 was not run, when the data cannot measure the base (the arms were measured from
@@ -80,7 +80,7 @@ impl CalibrationResult {
             Stage::Arm(_) | Stage::Arms => self.settings.method.spec().solver,
             Stage::Base => self.settings.base_method.spec().solver,
         };
-        solver == super::SolverKind::Sqp
+        solver == crate::solver::methods::spec::SolverKind::Sqp
     }
 
     /// The summary of `stage`, if it ran.
@@ -115,13 +115,13 @@ impl CalibrationResult {
                     "{} stopped where the Gauss–Newton model still predicts a decrease of the cost \
                      by more than {:.0e} of itself; the parameters are usable but not optimal",
                     s.stage,
-                    super::least_squares::STATIONARY_RTOL,
+                    crate::solver::algorithms::least_squares::STATIONARY_RTOL,
                 ),
                 _ => format!(
                     "{} stopped where the exact QP still predicts a decrease of ψ by more than {:.0e} \
                      of itself; the parameters are usable but not optimal{}",
                     s.stage,
-                    super::sqp::STATIONARY_RTOL,
+                    crate::solver::algorithms::sqp::STATIONARY_RTOL,
                     if self.settings.qp == QpMethod::Paper {
                         " (the paper's subgradient QP is inexact: try the exact QP)"
                     } else {

@@ -8,20 +8,18 @@ use super::set_up::{
     ArmSetUp, ArmStage, TreeSetUp, TreeStage, column_scales, least_squares_solver,
     require_kinematics,
 };
-use super::{MethodSpec, Observes, SolverKind};
+use super::spec::{MethodSpec, Observes, SolverKind};
 use crate::side::{PerSide, Side};
-use crate::solver::CalibrationError;
-use crate::solver::Stage;
-use crate::solver::absolute_problem::{
-    AbsoluteData, AbsoluteProblem, as_triangle, moore_penrose_fit, transform_param_name,
-    triangle_area_mm2,
+use crate::solver::algorithms::least_squares::LsqAlgorithm;
+use crate::solver::analysis::identifiability::{
+    Analysis, Columns, IdentifiabilityReport, ParameterInfo, analyse_columns,
 };
-use crate::solver::identifiability::{self, IdentifiabilityReport, ParameterInfo};
-use crate::solver::least_squares::LsqAlgorithm;
-use crate::solver::tree_absolute::TreeAbsoluteProblem;
-use crate::solver::tree_problem::TreeLayout;
-use nalgebra::DVector;
-use nalgebra::{DMatrix, Vector3};
+use crate::solver::error::CalibrationError;
+use crate::solver::problems::absolute_problem::{AbsoluteData, AbsoluteProblem, moore_penrose_fit};
+use crate::solver::problems::tree_absolute::TreeAbsoluteProblem;
+use crate::solver::problems::tree_problem::TreeLayout;
+use crate::solver::types::Stage;
+use nalgebra::{DMatrix, DVector, Isometry3, Vector3};
 
 pub const POSE: MethodSpec = MethodSpec {
     name: "pose",
@@ -90,47 +88,17 @@ fn set_up(
         .data
         .absolute_probe(data, start, (0..n_params).collect())?;
     let gram = probe.gram();
-    // The transform first: what it absorbs (a rigid motion of the whole arm) is fixed in the arm.
-    let mut order: Vec<usize> = (n_params..n_params + 6).collect();
-    order.extend(start.identifiability_order());
     // Held kinematics: only the reflector coordinates and the transform are free.
     let hold = s.settings.hold_kinematics;
     let allowed: Vec<bool> = (0..n_params + 6)
         .map(|p| !hold || p >= start.reflector_offset())
         .collect();
-    let report = identifiability::analyse(
-        &gram,
-        &ParameterInfo {
-            order: &order,
-            allowed: &allowed,
-            name: &|p| {
-                if p < n_params {
-                    start.param_name(p)
-                } else {
-                    transform_param_name(side, p - n_params)
-                }
-            },
-            reason: &|p| {
-                if p < n_params {
-                    start.unidentifiable_reason(p)
-                } else {
-                    None
-                }
-            },
-            data: what,
-            not_allowed: ParameterInfo::FIXED_BY_USER,
-        },
-    );
-    if let Some(f) = report.fixed.iter().find(|f| f.index >= n_params) {
-        return Err(CalibrationError::RankDeficient {
-            stage,
-            detail: format!(
-                "the tracker-from-base transform is not identifiable from these configurations \
-                 ({}: {})",
-                f.name, f.reason
-            ),
-        });
-    }
+    let columns = Columns::Arm {
+        arm: start,
+        transform: Some(side),
+    };
+    let report = analyse_columns(&gram, &columns, &analysis(&allowed, what));
+    require_transform(stage, &report, n_params)?;
     let free: Vec<usize> = report
         .free
         .iter()
@@ -156,6 +124,35 @@ fn set_up(
     })
 }
 
+/// What the analysis of an absolute method fitting `what` is told.
+fn analysis<'a>(allowed: &'a [bool], what: &'a str) -> Analysis<'a> {
+    Analysis {
+        allowed,
+        data: what,
+        not_allowed: ParameterInfo::FIXED_BY_USER,
+    }
+}
+
+/// `RankDeficient` when the analysis fixed a parameter of the tracker-from-base transform (the
+/// columns from `n` on).
+fn require_transform(
+    stage: Stage,
+    report: &IdentifiabilityReport,
+    n: usize,
+) -> Result<(), CalibrationError> {
+    match report.fixed.iter().find(|f| f.index >= n) {
+        Some(f) => Err(CalibrationError::RankDeficient {
+            stage,
+            detail: format!(
+                "the tracker-from-base transform is not identifiable from these configurations \
+                 ({}: {})",
+                f.name, f.reason
+            ),
+        }),
+        None => Ok(()),
+    }
+}
+
 /// Both arms at once (a robot whose arms share joints) with one tracker frame: the positions of both
 /// arms' reflectors (`solver::tree_absolute`). The identifiability analysis runs on the tree's
 /// parameters and the transform (transform first, then each arm's preference order interleaved, a
@@ -166,79 +163,15 @@ fn tree_set_up(
     algorithm: LsqAlgorithm,
 ) -> Result<TreeStage, CalibrationError> {
     let arms = &s.start.arms;
-    let base = &s.start.left_base_from_right_base;
-    if base.translation.vector.norm() > 1e-9 || base.rotation.angle() > 1e-12 {
-        return Err(CalibrationError::InvalidSettings(
-            "the absolute positions of arms that share joints are fitted with one tracker frame, \
-             which needs both arms' chains to start at one link (their base_link)"
-                .into(),
-        ));
-    }
     let layout = TreeLayout::new(&arms.left, &arms.right, s.shared);
-    // One start of the transform, from both arms' points.
-    let (mut model, mut measured): (Vec<Vector3<f64>>, Vec<Vector3<f64>>) = (vec![], vec![]);
-    for side in Side::BOTH {
-        let d = &s.data[side];
-        model.extend(
-            d.qs.iter()
-                .flat_map(|q| arms[side].reflector_fk(q).points_mm),
-        );
-        measured.extend(d.measured.iter().flatten().copied());
-    }
-    let t0 = moore_penrose_fit(&model, &measured).ok_or_else(|| CalibrationError::NonFinite {
-        stage: Stage::Arms,
-        detail: "the tracker-from-base fit of the start model".into(),
-    })?;
+    let t0 = tree_tracker_start(s)?;
     let probes = PerSide::try_from_fn(|side| {
-        let (d, arm) = (&s.data[side], &arms[side]);
-        let n = arm.param_count();
-        AbsoluteProblem::new(
-            AbsoluteData::Position,
-            side,
-            d.qs.clone(),
-            d.measured.clone(),
-            arm,
-            t0,
-            (0..n).collect(),
-            DVector::from_element(n + 6, 1.0),
-        )
-        .map_err(|i| CalibrationError::DegenerateReflectors {
-            side,
-            id: d.ids[i].clone(),
-            area_mm2: as_triangle(&d.measured[i]).map_or(0.0, |t| triangle_area_mm2(t).0),
-        })
+        let n = arms[side].param_count();
+        s.data[side].absolute_problem(AbsoluteData::Position, &arms[side], t0, (0..n).collect())
     })?;
     let n_x = layout.len;
     let transform = n_x..n_x + 6;
-    let mut gram = DMatrix::zeros(n_x + 6, n_x + 6);
-    for side in Side::BOTH {
-        let g = probes[side].gram();
-        let index: Vec<usize> = layout.index[side]
-            .iter()
-            .copied()
-            .chain(transform.clone())
-            .collect();
-        for (a, &ia) in index.iter().enumerate() {
-            for (b, &ib) in index.iter().enumerate() {
-                gram[(ia, ib)] += g[(a, b)];
-            }
-        }
-    }
-    // The transform first: what it absorbs (a rigid motion of the whole robot) is fixed in the arms.
-    let mut order: Vec<usize> = transform.clone().collect();
-    order.extend(layout.interleaved_order(arms));
-    let name = |x: usize| {
-        if x >= n_x {
-            transform_param_name(Side::Left, x - n_x)
-        } else {
-            layout.param_name(x, arms)
-        }
-    };
-    let reason = |x: usize| {
-        (x < n_x)
-            .then(|| layout.owner(x))
-            .and_then(|(side, k)| arms[side].unidentifiable_reason(k))
-    };
+    let gram = tree_gram(&probes, &layout);
     let hold = s.settings.hold_kinematics;
     let allowed: Vec<bool> = (0..n_x + 6)
         .map(|x| {
@@ -248,27 +181,13 @@ fn tree_set_up(
             }
         })
         .collect();
-    let report = identifiability::analyse(
-        &gram,
-        &ParameterInfo {
-            order: &order,
-            allowed: &allowed,
-            name: &name,
-            reason: &reason,
-            data: what,
-            not_allowed: ParameterInfo::FIXED_BY_USER,
-        },
-    );
-    if let Some(f) = report.fixed.iter().find(|f| f.index >= n_x) {
-        return Err(CalibrationError::RankDeficient {
-            stage: Stage::Arms,
-            detail: format!(
-                "the tracker-from-base transform is not identifiable from these configurations \
-                 ({}: {})",
-                f.name, f.reason
-            ),
-        });
-    }
+    let columns = Columns::Tree {
+        layout: &layout,
+        arms,
+        transform: true,
+    };
+    let report = analyse_columns(&gram, &columns, &analysis(&allowed, what));
+    require_transform(Stage::Arms, &report, n_x)?;
     let free: Vec<usize> = report.free.iter().copied().filter(|&x| x < n_x).collect();
     let tree_report = IdentifiabilityReport {
         free: free.clone(),
@@ -289,4 +208,52 @@ fn tree_set_up(
         ),
         identifiability: reports,
     })
+}
+
+/// The one start of the tracker frame of both arms' chains, from both arms' points; refused unless
+/// the chains start at one link.
+fn tree_tracker_start(s: &TreeSetUp) -> Result<Isometry3<f64>, CalibrationError> {
+    let arms = &s.start.arms;
+    let base = &s.start.left_base_from_right_base;
+    if base.translation.vector.norm() > 1e-9 || base.rotation.angle() > 1e-12 {
+        return Err(CalibrationError::InvalidSettings(
+            "the absolute positions of arms that share joints are fitted with one tracker frame, \
+             which needs both arms' chains to start at one link (their base_link)"
+                .into(),
+        ));
+    }
+    let (mut model, mut measured): (Vec<Vector3<f64>>, Vec<Vector3<f64>>) = (vec![], vec![]);
+    for side in Side::BOTH {
+        let d = &s.data[side];
+        model.extend(
+            d.qs.iter()
+                .flat_map(|q| arms[side].reflector_fk(q).points_mm),
+        );
+        measured.extend(d.measured.iter().flatten().copied());
+    }
+    moore_penrose_fit(&model, &measured).ok_or_else(|| CalibrationError::NonFinite {
+        stage: Stage::Arms,
+        detail: "the tracker-from-base fit of the start model".into(),
+    })
+}
+
+/// Both arms' Gram matrices summed on the tree's parameters (`layout`) and the transform's six after
+/// them.
+fn tree_gram(probes: &PerSide<AbsoluteProblem>, layout: &TreeLayout) -> DMatrix<f64> {
+    let n_x = layout.len;
+    let mut gram = DMatrix::zeros(n_x + 6, n_x + 6);
+    for side in Side::BOTH {
+        let g = probes[side].gram();
+        let index: Vec<usize> = layout.index[side]
+            .iter()
+            .copied()
+            .chain(n_x..n_x + 6)
+            .collect();
+        for (a, &ia) in index.iter().enumerate() {
+            for (b, &ib) in index.iter().enumerate() {
+                gram[(ia, ib)] += g[(a, b)];
+            }
+        }
+    }
+    gram
 }

@@ -3,11 +3,13 @@
 //! tracker frame combined through the Moore–Penrose inverse.
 
 use super::set_up::{BaseSetUp, column_scales, least_squares_solver, sqp_solver};
-use super::{BaseMethodSpec, SolverKind};
+use super::spec::{BaseMethodSpec, SolverKind};
 use crate::side::PerSide;
-use crate::solver::absolute_problem::{AbsoluteData, BaseAbsoluteProblem};
-use crate::solver::least_squares::{DistanceLeastSquares, LsqAlgorithm};
-use crate::solver::{CalibrationError, Stage, StageSolver};
+use crate::solver::algorithms::least_squares::{DistanceLeastSquares, LsqAlgorithm};
+use crate::solver::algorithms::stage::StageSolver;
+use crate::solver::error::CalibrationError;
+use crate::solver::problems::absolute_problem::{AbsoluteData, BaseAbsoluteProblem};
+use crate::solver::types::Stage;
 use nalgebra::DVector;
 
 pub const MINIMAX: BaseMethodSpec = BaseMethodSpec {

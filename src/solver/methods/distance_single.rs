@@ -3,12 +3,13 @@
 //! two reflectors' coordinates are not identified and stay nominal.
 
 use super::set_up::{
-    ArmSetUp, ArmStage, DistanceAnalysis, column_scales, distance_identifiability,
-    least_squares_solver, require_kinematics, worst_reflector,
+    ArmSetUp, ArmStage, column_scales, distance_identifiability, least_squares_solver,
+    require_kinematics, worst_reflector,
 };
-use super::{MethodSpec, Observes, SolverKind};
-use crate::solver::CalibrationError;
-use crate::solver::least_squares::{DistanceLeastSquares, LsqAlgorithm};
+use super::spec::{MethodSpec, Observes, SolverKind};
+use crate::solver::algorithms::least_squares::{DistanceLeastSquares, LsqAlgorithm};
+use crate::solver::analysis::identifiability::Analysis;
+use crate::solver::error::CalibrationError;
 use nalgebra::DVector;
 
 pub const DISTANCE_SINGLE: MethodSpec = MethodSpec {
@@ -62,7 +63,7 @@ fn set_up(s: &ArmSetUp) -> Result<ArmStage, CalibrationError> {
     let (gram, report) = distance_identifiability(
         &probe,
         start,
-        &DistanceAnalysis {
+        &Analysis {
             allowed: &allowed,
             data: "one reflector's distances",
             not_allowed: &not_allowed,

@@ -3,9 +3,9 @@
 //! reflector-triangle constraints).
 
 use super::set_up::{ArmSetUp, ArmStage, TreeSetUp, TreeStage, least_squares_solver};
-use super::{MethodSpec, Observes, SolverKind};
-use crate::solver::CalibrationError;
-use crate::solver::least_squares::{DistanceLeastSquares, LsqAlgorithm};
+use super::spec::{MethodSpec, Observes, SolverKind};
+use crate::solver::algorithms::least_squares::{DistanceLeastSquares, LsqAlgorithm};
+use crate::solver::error::CalibrationError;
 
 pub const LSQ: MethodSpec = MethodSpec {
     name: "lsq",
@@ -20,7 +20,7 @@ pub const LSQ: MethodSpec = MethodSpec {
     paper: None,
     observes: Observes::ThreeReflectors,
     count_rule: "9n − 18 independent distances",
-    min_configurations: crate::solver::min_configurations,
+    min_configurations: crate::solver::types::min_configurations,
     identifies_tracker_frame: false,
     takes_reflector: false,
     solver: SolverKind::LeastSquares,

@@ -1,8 +1,9 @@
 //! The paper's Algorithm I: minimax of the three reflectors' summed squared distance errors, by SQP.
 
 use super::set_up::{ArmSetUp, ArmStage, TreeSetUp, TreeStage, sqp_solver};
-use super::{MethodSpec, Observes, SolverKind};
-use crate::solver::{CalibrationError, Stage};
+use super::spec::{MethodSpec, Observes, SolverKind};
+use crate::solver::error::CalibrationError;
+use crate::solver::types::Stage;
 
 pub const MINIMAX: MethodSpec = MethodSpec {
     name: "minimax",
@@ -17,7 +18,7 @@ pub const MINIMAX: MethodSpec = MethodSpec {
     paper: Some("Our method"),
     observes: Observes::ThreeReflectors,
     count_rule: "9n − 18 independent distances",
-    min_configurations: crate::solver::min_configurations,
+    min_configurations: crate::solver::types::min_configurations,
     identifies_tracker_frame: false,
     takes_reflector: false,
     solver: SolverKind::Sqp,

@@ -3,19 +3,23 @@
 //! the executor's re-check at the solution), column scaling, the start of the tracker frame, and the
 //! solvers.
 
-use super::super::absolute_problem::{
-    AbsoluteData, AbsoluteProblem, as_triangle, moore_penrose_fit, triangle_area_mm2,
-};
-use super::super::arm_problem::ArmProblem;
-use super::super::base_problem::BaseProblem;
-use super::super::identifiability::{self, IdentifiabilityReport, ParameterInfo};
-use super::super::least_squares::{LeastSquaresProblem, LsqAlgorithm, LsqState};
-use super::super::problem::MinimaxProblem;
-use super::super::sqp::{SqpSettings, SqpState};
-use super::super::tree_problem::{TreeLayout, TreeProblem};
-use super::super::{CalibrationError, CalibrationSettings, Reflector, Stage, StageSolver};
 use crate::kinematics::{ArmModel, DualArmModel, SharedJoints};
 use crate::side::{PerSide, Side};
+use crate::solver::algorithms::least_squares::{LeastSquaresProblem, LsqAlgorithm, LsqState};
+use crate::solver::algorithms::sqp::{SqpSettings, SqpState};
+use crate::solver::algorithms::stage::StageSolver;
+use crate::solver::analysis::identifiability::{
+    self, Analysis, Columns, IdentifiabilityReport, analyse_columns,
+};
+use crate::solver::error::CalibrationError;
+use crate::solver::problems::absolute_problem::{
+    AbsoluteData, AbsoluteProblem, as_triangle, moore_penrose_fit, triangle_area_mm2,
+};
+use crate::solver::problems::arm_problem::ArmProblem;
+use crate::solver::problems::base_problem::BaseProblem;
+use crate::solver::problems::problem::MinimaxProblem;
+use crate::solver::problems::tree_problem::{TreeLayout, TreeProblem};
+use crate::solver::types::{CalibrationSettings, Reflector, Stage};
 use nalgebra::{DMatrix, DVector, Isometry3, Vector3};
 
 /// Pairs per reflector sampled for identifiability, column scaling and the start Hessian.
@@ -90,6 +94,18 @@ impl ArmData {
             });
         }
         let t0 = self.tracker_start(arm)?;
+        self.absolute_problem(data, arm, t0, free)
+    }
+
+    /// An absolute problem of `arm` on these data from the transform `t0` with the parameters `free`
+    /// (unit scales), or the typed error of a configuration whose measured reflectors are collinear.
+    pub fn absolute_problem(
+        &self,
+        data: AbsoluteData,
+        arm: &ArmModel,
+        t0: Isometry3<f64>,
+        free: Vec<usize>,
+    ) -> Result<AbsoluteProblem, CalibrationError> {
         let scale = DVector::from_element(free.len() + 6, 1.0);
         AbsoluteProblem::new(
             data,
@@ -109,27 +125,6 @@ impl ArmData {
     }
 }
 
-/// What the distance identifiability analysis is told.
-pub struct DistanceAnalysis<'a> {
-    /// Parameters that may be free at all.
-    pub allowed: &'a [bool],
-    /// What the method fits, for the reasons.
-    pub data: &'a str,
-    /// Why a parameter that is not allowed is fixed.
-    pub not_allowed: &'a str,
-}
-
-impl DistanceAnalysis<'_> {
-    /// Every parameter allowed, the distances of all three reflectors.
-    pub fn all(allowed: &[bool]) -> DistanceAnalysis<'_> {
-        DistanceAnalysis {
-            allowed,
-            data: ParameterInfo::DISTANCES,
-            not_allowed: ParameterInfo::FIXED_BY_USER,
-        }
-    }
-}
-
 /// The identifiability analysis of `arm`'s distances on `probe` (its every parameter free at unit
 /// scale, [`ArmData::distance_probe`], restricted to the reflectors it fits): the mean Gram matrix of
 /// [`IDENTIFIABILITY_PAIRS`] sampled pairs per reflector — a few thousand show every dependency (they
@@ -138,22 +133,18 @@ impl DistanceAnalysis<'_> {
 pub fn distance_identifiability(
     probe: &ArmProblem,
     arm: &ArmModel,
-    analysis: &DistanceAnalysis,
+    analysis: &Analysis,
 ) -> (DMatrix<f64>, IdentifiabilityReport) {
     let n_params = arm.param_count();
     let start = DVector::zeros(n_params);
     let gram = probe.sample_pair_jacobian_gram(&start, IDENTIFIABILITY_PAIRS);
-    let order = arm.identifiability_order();
-    let report = identifiability::analyse(
+    let report = analyse_columns(
         &gram,
-        &ParameterInfo {
-            order: &order,
-            allowed: analysis.allowed,
-            name: &|k| arm.param_name(k),
-            reason: &|k| arm.unidentifiable_reason(k),
-            data: analysis.data,
-            not_allowed: analysis.not_allowed,
+        &Columns::Arm {
+            arm,
+            transform: None,
         },
+        analysis,
     );
     (gram, report)
 }
@@ -162,6 +153,27 @@ pub fn distance_identifiability(
 pub fn column_scales(gram: &DMatrix<f64>, idx: impl Iterator<Item = usize>) -> Vec<f64> {
     idx.map(|k| 1.0 / gram[(k, k)].max(0.0).sqrt().max(1e-12))
         .collect()
+}
+
+/// The start of the distance methods on the free parameters of `report`: each scaled by its RMS
+/// sensitivity ([`column_scales`]) and H₀ = 2·D·G·D, the Gauss–Newton matrix in those variables;
+/// `RankDeficient` when no parameter is free.
+fn scaled_start(
+    gram: &DMatrix<f64>,
+    report: &IdentifiabilityReport,
+    stage: Stage,
+) -> Result<(DVector<f64>, DMatrix<f64>), CalibrationError> {
+    if report.free.is_empty() {
+        return Err(CalibrationError::RankDeficient {
+            stage,
+            detail: "no parameter is identifiable from these configurations".into(),
+        });
+    }
+    let scale = DVector::from_vec(column_scales(gram, report.free.iter().copied()));
+    let h0 = DMatrix::from_fn(report.free.len(), report.free.len(), |i, j| {
+        2.0 * gram[(report.free[i], report.free[j])] * scale[i] * scale[j]
+    });
+    Ok((scale, h0))
 }
 
 /// `RankDeficient` unless some kinematic parameter (not a reflector coordinate) is free: data in
@@ -261,23 +273,8 @@ impl ArmSetUp<'_> {
         let probe = self.data.distance_probe(start);
         let allowed = vec![true; start.param_count()];
         let (gram, report) =
-            distance_identifiability(&probe, start, &DistanceAnalysis::all(&allowed));
-        if report.free.is_empty() {
-            return Err(CalibrationError::RankDeficient {
-                stage: self.stage(),
-                detail: "no parameter is identifiable from these configurations".into(),
-            });
-        }
-        let scale = DVector::from_iterator(
-            report.free.len(),
-            report
-                .free
-                .iter()
-                .map(|&k| 1.0 / gram[(k, k)].sqrt().max(1e-12)),
-        );
-        let h0 = DMatrix::from_fn(report.free.len(), report.free.len(), |i, j| {
-            2.0 * gram[(report.free[i], report.free[j])] * scale[i] * scale[j]
-        });
+            distance_identifiability(&probe, start, &Analysis::distances(&allowed));
+        let (scale, h0) = scaled_start(&gram, &report, self.stage())?;
         Ok(DistanceStart {
             problem: probe.with_free(report.free.clone(), scale),
             h0,
@@ -336,34 +333,14 @@ impl TreeSetUp<'_> {
             first += c.ncols();
         }
         let gram = identifiability::gram_by_product(&m);
-        let order = layout.interleaved_order(arms);
         let allowed = vec![true; layout.len];
-        let name = |x: usize| layout.param_name(x, arms);
-        let reason = |x: usize| {
-            let (side, k) = layout.owner(x);
-            arms[side].unidentifiable_reason(k)
+        let columns = Columns::Tree {
+            layout: &layout,
+            arms,
+            transform: false,
         };
-        let report = identifiability::analyse(
-            &gram,
-            &ParameterInfo {
-                order: &order,
-                allowed: &allowed,
-                name: &name,
-                reason: &reason,
-                data: ParameterInfo::DISTANCES,
-                not_allowed: ParameterInfo::FIXED_BY_USER,
-            },
-        );
-        if report.free.is_empty() {
-            return Err(CalibrationError::RankDeficient {
-                stage: Stage::Arms,
-                detail: "no parameter is identifiable from these configurations".into(),
-            });
-        }
-        let scale = DVector::from_vec(column_scales(&gram, report.free.iter().copied()));
-        let h0 = DMatrix::from_fn(report.free.len(), report.free.len(), |i, j| {
-            2.0 * gram[(report.free[i], report.free[j])] * scale[i] * scale[j]
-        });
+        let report = analyse_columns(&gram, &columns, &Analysis::distances(&allowed));
+        let (scale, h0) = scaled_start(&gram, &report, Stage::Arms)?;
         let reports = layout.split_report(&report, arms);
         Ok(TreeStart {
             problem: TreeProblem::new(probes, &layout, &report.free, &scale),

@@ -1,6 +1,7 @@
 //! Step 1's two arms at once. The arms' stages are independent (each starts from the nominal model and
-//! sees only its own arm's data), so [`Calibrator::run`](super::Calibrator::run) solves the right arm's
-//! as a job of the work pool (rayon's) while the left arm's runs on the caller's thread. The right arm's events reach the
+//! sees only its own arm's data), so [`Calibrator::run`](super::calibrator::Calibrator::run) solves
+//! the right arm's as a job of the work pool (rayon's) while the left arm's runs on the caller's
+//! thread. The right arm's events reach the
 //! observers afterwards, in the order and with the models a one-stage-at-a-time run gives them: its
 //! iterations follow the left arm's `stage_finished`, and `current_model` shows the left arm's result
 //! with the right arm's iterate of the iteration reported. The history, the stages and the
@@ -9,10 +10,11 @@
 //! A run stepped by its caller ([`CalibrationRun::step`]: a UI frame loop, the browser) solves one
 //! stage at a time as before.
 
-use super::{CalibrationRun, Observer, Progress};
+use super::executor::{CalibrationRun, Observer, Progress};
 use crate::side::Side;
-use crate::solver::problem::StageParams;
-use crate::solver::{CalibrationError, IterationRecord, Stage, StageSummary, Termination};
+use crate::solver::error::CalibrationError;
+use crate::solver::problems::problem::StageParams;
+use crate::solver::types::{IterationRecord, Stage, StageSummary, Termination};
 use std::collections::VecDeque;
 
 /// What the right arm's stage told its observer, kept for the replay.

@@ -209,9 +209,3 @@ pub fn analyse(gram: &DMatrix<f64>, info: &ParameterInfo) -> IdentifiabilityRepo
         condition_after,
     }
 }
-
-mod recheck;
-pub use recheck::{GramMethod, at_solution, identifiable_at};
-
-#[cfg(test)]
-mod tests;

@@ -16,11 +16,11 @@
 //!   weight).
 
 use super::base_problem::left_jacobian_so3;
-use super::least_squares::LeastSquaresProblem;
 use super::problem::{LeastSquaresSystem, StageParams};
 use crate::kinematics::{ArmModel, nearest_rotation};
 use crate::par::prelude::*;
 use crate::side::{PerSide, Side};
+use crate::solver::algorithms::least_squares::LeastSquaresProblem;
 use nalgebra::{
     DMatrix, DVector, Isometry3, Matrix3, Matrix4, Rotation3, SMatrix, Translation3,
     UnitQuaternion, Vector3,

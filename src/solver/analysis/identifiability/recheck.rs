@@ -6,10 +6,11 @@
 //! QR the start uses for the built-in robot (a test holds them on the test robots and the distance
 //! methods).
 
-use super::{IdentifiabilityReport, ParameterInfo, analyse, gram_by_qr};
+use super::analyse::{IdentifiabilityReport, gram_by_qr};
+use super::columns::{Analysis, Columns, analyse_columns};
 use crate::kinematics::{ArmJacobians, ArmModel};
 use crate::par::prelude::*;
-use crate::solver::arm_problem::{pair_jacobian_columns, pair_jacobian_gram};
+use crate::solver::problems::arm_problem::{pair_jacobian_columns, pair_jacobian_gram};
 use nalgebra::DMatrix;
 
 /// How the re-check forms the Gram matrix of the sampled pair Jacobian.
@@ -41,17 +42,13 @@ pub fn at_solution(
     for &k in allowed_free {
         allowed[k] = true;
     }
-    let order = arm.identifiability_order();
-    analyse(
+    analyse_columns(
         &gram,
-        &ParameterInfo {
-            order: &order,
-            allowed: &allowed,
-            name: &|k| arm.param_name(k),
-            reason: &|k| arm.unidentifiable_reason(k),
-            data: ParameterInfo::DISTANCES,
-            not_allowed: ParameterInfo::FIXED_BY_USER,
+        &Columns::Arm {
+            arm,
+            transform: None,
         },
+        &Analysis::distances(&allowed),
     )
 }
 

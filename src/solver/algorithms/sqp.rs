@@ -2,9 +2,9 @@
 //! Hessian of the Lagrangian, an ℓ1 merit line search and a parameter-step stopping rule. One call of
 //! [`SqpState::next_iter`] is one outer iteration.
 
-use super::problem::{Eval, MinimaxProblem};
 use super::qp::{Qp, QpSolution, SubgradientSettings, solve_exact, solve_paper};
-use super::{QpMethod, Termination};
+use crate::solver::problems::problem::{Eval, MinimaxProblem};
+use crate::solver::types::{QpMethod, Termination};
 use nalgebra::{DMatrix, DVector};
 
 /// Tunables of the outer loop.

@@ -18,10 +18,10 @@
 //! variables from its own and adds their gradients, constraint gradients and normal equations back.
 
 use super::arm_problem::ArmProblem;
-use super::identifiability::{FixedParameter, IdentifiabilityReport};
 use super::problem::{Eval, LeastSquaresSystem, MinimaxProblem, StageParams};
 use crate::kinematics::{ArmModel, SharedJoints};
 use crate::side::{PerSide, Side};
+use crate::solver::analysis::identifiability::analyse::{FixedParameter, IdentifiabilityReport};
 use nalgebra::{DMatrix, DVector};
 
 /// Where each arm's parameters sit in the tree's vector `X`.

@@ -1,10 +1,10 @@
 //! The stage-solver interface: one outer iteration at a time, whatever the method (argmin's
-//! `Solver::next_iter`). [`super::CalibrationRun`] is the one executor that drives it.
+//! `Solver::next_iter`). [`crate::solver::CalibrationRun`] is the one executor that drives it.
 
-use super::Termination;
-use super::problem::{MinimaxProblem, StageParams};
 use super::sqp::SqpState;
 use crate::side::PerSide;
+use crate::solver::problems::problem::{MinimaxProblem, StageParams};
+use crate::solver::types::Termination;
 use nalgebra::Isometry3;
 
 /// What one outer iteration reports.

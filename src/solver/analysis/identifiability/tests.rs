@@ -2,9 +2,9 @@
 
 use super::*;
 use crate::kinematics::{ArmModel, CORRECTION_NAMES, SerialChain, minimal_parameter_count};
-use crate::solver::arm_problem::pair_jacobian_columns;
+use crate::solver::problems::arm_problem::pair_jacobian_columns;
 use crate::test_robots::{dual_ur_like_urdf, yumi_like_urdf};
-use nalgebra::Vector3;
+use nalgebra::{DMatrix, Vector3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::sync::Arc;
@@ -185,7 +185,7 @@ fn the_chains_physical_reasons_name_what_the_analysis_fixes() {
         }
         assert_eq!(named, fixed, "{tip}");
         assert_eq!(
-            crate::solver::identifiable_params(&arm),
+            crate::solver::types::identifiable_params(&arm),
             rep.free.len(),
             "{tip}"
         );
@@ -198,7 +198,7 @@ fn the_chains_physical_reasons_name_what_the_analysis_fixes() {
 /// and with several blocks.
 #[test]
 fn the_blocked_sample_gives_the_full_samples_gram() {
-    use crate::solver::arm_problem::pair_jacobian_gram;
+    use crate::solver::problems::arm_problem::pair_jacobian_gram;
     let mut rng = ChaCha8Rng::seed_from_u64(21);
     let yumi = chain(&yumi_like_urdf(), "yumi_body", "yumi_link_7_l");
     for arm in [
@@ -301,8 +301,10 @@ fn the_recheck_by_product_gives_the_qr_verdicts() {
     use crate::side::{PerSide, Side};
     use crate::simulate::{paper_options, simulate_with_robot};
     use crate::solver::methods::set_up::IDENTIFIABILITY_PAIRS;
-    use crate::solver::run::CONDITION_GROWTH;
-    use crate::solver::{CalibrationSettings, Calibrator, Method};
+    use crate::solver::methods::table::Method;
+    use crate::solver::run::calibrator::Calibrator;
+    use crate::solver::run::executor::CONDITION_GROWTH;
+    use crate::solver::types::CalibrationSettings;
     let urdf = |text: String, arms: [(&str, &str); 2]| {
         let options = LoadOptions {
             arms: PerSide::new(

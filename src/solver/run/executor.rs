@@ -1,22 +1,27 @@
-//! The executor: [`Calibrator`] sets a run up, [`CalibrationRun`] runs the stages in turn — step 1 for
-//! the left arm, step 1 for the right arm, step 2 — one outer iteration per [`CalibrationRun::step`],
-//! reporting to [`Observer`]s and polling the cancel flag. It names no method: each stage is set up by
-//! the chosen method's entry of the table ([`super::methods`]).
+//! The executor: [`CalibrationRun`] runs the stages in turn — step 1 for the left arm, step 1 for the
+//! right arm, step 2 — one outer iteration per [`CalibrationRun::step`], reporting to [`Observer`]s and
+//! polling the cancel flag. It names no method: each stage is set up by the chosen method's entry of
+//! the table ([`crate::solver::methods`]). Its input is checked before ([`super::inputs`]), and the
+//! stages it plans are [`super::policy`]'s.
 
-use super::identifiability::{self, IdentifiabilityReport};
-use super::methods::Method;
-use super::methods::set_up::{ArmData, ArmSetUp, BaseSetUp, IDENTIFIABILITY_PAIRS, TreeSetUp};
-use super::problem::StageParams;
-use super::result::CalibrationResult;
-use super::stage::StageSolver;
-use super::{
-    CalibrationError, CalibrationEvent, CalibrationSettings, IterationRecord, Reflector, Stage,
-    StageSummary, Termination,
-};
+use super::inputs::{arm_input, check_settings, unsupported};
+use super::policy::{alone_arm, planned_stages};
 use crate::dataset::Dataset;
 use crate::kinematics::{ArmModel, DualArmModel, SharedJoints};
-use crate::side::{ConfigId, PerSide, Side};
-use nalgebra::{Isometry3, Vector3};
+use crate::side::{PerSide, Side};
+use crate::solver::algorithms::stage::StageSolver;
+use crate::solver::analysis::identifiability::{self, IdentifiabilityReport};
+use crate::solver::error::CalibrationError;
+use crate::solver::methods::set_up::{
+    ArmData, ArmSetUp, BaseSetUp, IDENTIFIABILITY_PAIRS, TreeSetUp,
+};
+use crate::solver::problems::problem::StageParams;
+use crate::solver::result::CalibrationResult;
+use crate::solver::types::{
+    CalibrationEvent, CalibrationSettings, DIVERGED_ANGLE_RAD, DIVERGED_LENGTH_MM, IterationRecord,
+    Reflector, Stage, StageSummary, Termination,
+};
+use nalgebra::Isometry3;
 use std::collections::VecDeque;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -26,8 +31,7 @@ use web_time::Instant;
 /// Watches a run. Every method defaults to doing nothing; a closure over [`CalibrationEvent`] is an
 /// observer too. The command line's progress lines, the workbench's live curves and the tests are
 /// observers.
-mod arms_at_once;
-
+///
 /// What a run reports as it goes. `Send`: [`Calibrator::run`] moves the run onto a thread of the work
 /// pool.
 pub trait Observer: Send {
@@ -62,82 +66,6 @@ impl<F: FnMut(&CalibrationEvent) + Send> Observer for F {
     }
 }
 
-/// Sets up and runs a calibration:
-/// `Calibrator::new(&dataset, &nominal).settings(s).observer(&mut o).cancel(flag).run()`.
-pub struct Calibrator<'a> {
-    dataset: &'a Dataset,
-    nominal: &'a DualArmModel,
-    settings: CalibrationSettings,
-    observers: Vec<&'a mut dyn Observer>,
-    cancel: Arc<AtomicBool>,
-}
-
-impl<'a> Calibrator<'a> {
-    /// A calibration of `nominal` on `dataset` with the default settings.
-    pub fn new(dataset: &'a Dataset, nominal: &'a DualArmModel) -> Self {
-        Self {
-            dataset,
-            nominal,
-            settings: CalibrationSettings::default(),
-            observers: Vec::new(),
-            cancel: Arc::new(AtomicBool::new(false)),
-        }
-    }
-
-    pub fn settings(mut self, settings: CalibrationSettings) -> Self {
-        self.settings = settings;
-        self
-    }
-
-    /// Add an observer (several may watch one run).
-    pub fn observer(mut self, observer: &'a mut dyn Observer) -> Self {
-        self.observers.push(observer);
-        self
-    }
-
-    /// A flag another thread sets to cancel the run; it is polled between outer iterations (each takes
-    /// milliseconds on paper-size data) and inside the paper's QP solver (every 256 iterations).
-    pub fn cancel(mut self, flag: Arc<AtomicBool>) -> Self {
-        self.cancel = flag;
-        self
-    }
-
-    /// Run every stage to its end. A run that hits the iteration limit or is cancelled returns its
-    /// result too; `Err` is for input the calibration cannot use.
-    pub fn run(self) -> Result<CalibrationResult, CalibrationError> {
-        // Called from a thread outside rayon's pool, every parallel loop of the run would hand its
-        // work over and sleep on a latch until it is done (at the paper's size that costs more than
-        // the loop saves): the run moves onto a pool thread, whose loops share their work with the
-        // other threads directly, and this thread waits for it once.
-        if !cfg!(target_arch = "wasm32") && crate::par::current_thread_index().is_none() {
-            return crate::par::scope(|_| self.run_here());
-        }
-        self.run_here()
-    }
-
-    fn run_here(mut self) -> Result<CalibrationResult, CalibrationError> {
-        let mut observers = std::mem::take(&mut self.observers);
-        let mut run = CalibrationRun::new(self.dataset, self.nominal, self.settings, self.cancel)?;
-        if !run.arms_at_once(&mut observers)? {
-            run.start_next()?;
-        }
-        loop {
-            if let Progress::Finished(result) = run.step(&mut observers)? {
-                return Ok(*result);
-            }
-        }
-    }
-
-    /// The run, to be advanced by the caller one outer iteration per [`CalibrationRun::step`] (a UI
-    /// frame loop, or the browser, where there are no threads). Observers given to the calibrator are
-    /// not used: pass them to each step.
-    pub fn start(self) -> Result<CalibrationRun, CalibrationError> {
-        let mut run = CalibrationRun::new(self.dataset, self.nominal, self.settings, self.cancel)?;
-        run.start_next()?;
-        Ok(run)
-    }
-}
-
 /// Outcome of [`CalibrationRun::step`].
 #[derive(Debug)]
 pub enum Progress {
@@ -146,56 +74,56 @@ pub enum Progress {
 }
 
 /// The stage being solved.
-struct ActiveStage {
-    stage: Stage,
-    solver: Box<dyn StageSolver>,
-    iterations: usize,
+pub(super) struct ActiveStage {
+    pub(super) stage: Stage,
+    pub(super) solver: Box<dyn StageSolver>,
+    pub(super) iterations: usize,
     start_psi_mm2: f64,
     /// `StageStarted` is reported by the first step of the stage.
-    announced: bool,
+    pub(super) announced: bool,
     /// The last iterate with finite, plausible parameters (kept when the stage ends `NonFinite` or
     /// `Diverged`); `None` until the first iteration.
-    last_good: Option<StageParams>,
+    pub(super) last_good: Option<StageParams>,
 }
 
 /// A two-step calibration in progress: the executor of the stages. Advance it with
 /// [`CalibrationRun::step`] until it reports [`Progress::Finished`].
 pub struct CalibrationRun {
-    settings: CalibrationSettings,
-    nominal: DualArmModel,
+    pub(super) settings: CalibrationSettings,
+    pub(super) nominal: DualArmModel,
     /// The model with the parameters of the finished stages.
-    committed: DualArmModel,
-    inputs: PerSide<ArmData>,
+    pub(super) committed: DualArmModel,
+    pub(super) inputs: PerSide<ArmData>,
     /// The joints both arms' chains hold (a torso): step 1 is then one fit of both arms (empty when
     /// one arm was measured alone).
-    shared: SharedJoints,
+    pub(super) shared: SharedJoints,
     /// The arm measured alone, if the dataset has one arm only: its stage is the only one.
-    alone: Option<Side>,
-    active: Option<ActiveStage>,
+    pub(super) alone: Option<Side>,
+    pub(super) active: Option<ActiveStage>,
     /// The stages after the active one, in order.
-    plan: VecDeque<Stage>,
+    pub(super) plan: VecDeque<Stage>,
     /// While [`CalibrationRun::arms_at_once`] replays the right arm's iterations: the stage and its
     /// parameters at the iteration replayed ([`CalibrationRun::current_model`] shows them).
-    replaying: Option<(Stage, StageParams)>,
-    history: Vec<IterationRecord>,
-    stages: Vec<StageSummary>,
-    identifiability: PerSide<Option<IdentifiabilityReport>>,
+    pub(super) replaying: Option<(Stage, StageParams)>,
+    pub(super) history: Vec<IterationRecord>,
+    pub(super) stages: Vec<StageSummary>,
+    pub(super) identifiability: PerSide<Option<IdentifiabilityReport>>,
     /// The identifiability analysis repeated at each arm's solution.
-    identifiability_at_solution: PerSide<Option<IdentifiabilityReport>>,
+    pub(super) identifiability_at_solution: PerSide<Option<IdentifiabilityReport>>,
     /// What went wrong and where, for the warnings (divergence, non-finite values, new dependencies).
-    diagnostics: Vec<String>,
+    pub(super) diagnostics: Vec<String>,
     /// The reflector of each arm's single-reflector fit.
-    reflector_used: PerSide<Option<Reflector>>,
+    pub(super) reflector_used: PerSide<Option<Reflector>>,
     /// Each arm's base in the tracker frame, where the method identified it.
-    tracker_from_base: PerSide<Option<Isometry3<f64>>>,
+    pub(super) tracker_from_base: PerSide<Option<Isometry3<f64>>>,
     /// Why step 2 is not in the plan (see [`CalibrationResult::base_not_measurable`]).
-    base_not_measurable: Option<String>,
-    cancel: Arc<AtomicBool>,
-    started: Instant,
+    pub(super) base_not_measurable: Option<String>,
+    pub(super) cancel: Arc<AtomicBool>,
+    pub(super) started: Instant,
 }
 
 impl CalibrationRun {
-    fn new(
+    pub(super) fn new(
         dataset: &Dataset,
         nominal: &DualArmModel,
         settings: CalibrationSettings,
@@ -276,7 +204,7 @@ impl CalibrationRun {
     }
 
     /// Set the plan's next stage up (the first, when the run has not started).
-    fn start_next(&mut self) -> Result<(), CalibrationError> {
+    pub(super) fn start_next(&mut self) -> Result<(), CalibrationError> {
         if let Some(stage) = self.plan.pop_front() {
             self.active = Some(self.start_stage(stage)?);
         }
@@ -506,7 +434,7 @@ impl CalibrationRun {
     }
 
     /// Set a stage up by the chosen method's entry of the table.
-    fn start_stage(&mut self, stage: Stage) -> Result<ActiveStage, CalibrationError> {
+    pub(super) fn start_stage(&mut self, stage: Stage) -> Result<ActiveStage, CalibrationError> {
         let solver = match stage {
             Stage::Arm(side) => {
                 let set_up = ArmSetUp {
@@ -575,9 +503,9 @@ impl CalibrationRun {
         (0..arm.error_offset().min(nominal.len())).find_map(|k| {
             let moved = (now[k] - nominal[k]).abs();
             let (limit, unit) = if arm.param_is_angle(k) {
-                (super::DIVERGED_ANGLE_RAD, "rad")
+                (DIVERGED_ANGLE_RAD, "rad")
             } else {
-                (super::DIVERGED_LENGTH_MM, "mm")
+                (DIVERGED_LENGTH_MM, "mm")
             };
             (moved > limit).then(|| {
                 format!(
@@ -665,167 +593,6 @@ impl CalibrationRun {
             elapsed_secs: self.started.elapsed().as_secs_f64(),
         }
     }
-}
-
-/// The refusal of a method without a fit of both arms on a robot whose arms share `shared`.
-fn unsupported(shared: &SharedJoints, method: Method) -> CalibrationError {
-    CalibrationError::SharedJointsUnsupported {
-        joints: shared
-            .names
-            .iter()
-            .map(|n| format!("`{n}`"))
-            .collect::<Vec<_>>()
-            .join(", "),
-        method,
-    }
-}
-
-/// Settings that cannot work together are refused before any work.
-fn check_settings(settings: &CalibrationSettings) -> Result<(), CalibrationError> {
-    if settings.hold_kinematics && !settings.method.is_absolute() {
-        return Err(CalibrationError::InvalidSettings(format!(
-            "holding the kinematics (fitting only the tracker frame and the reflectors) needs a \
-             method that identifies the tracker frame (`position` or `pose`), not `{}`",
-            settings.method.name()
-        )));
-    }
-    if let Some(r) = settings.reflector
-        && !settings.method.spec().takes_reflector
-    {
-        let takers = Method::ALL
-            .iter()
-            .filter(|m| m.spec().takes_reflector)
-            .map(|m| format!("`{}`", m.name()))
-            .collect::<Vec<_>>()
-            .join(" or ");
-        return Err(CalibrationError::InvalidSettings(format!(
-            "a reflector ({r}) can only be chosen for method {takers}; `{}` uses all three",
-            settings.method.name()
-        )));
-    }
-    Ok(())
-}
-
-/// The selected split of one arm, checked.
-fn arm_input(
-    dataset: &Dataset,
-    nominal: &DualArmModel,
-    side: Side,
-    settings: &CalibrationSettings,
-) -> Result<ArmData, CalibrationError> {
-    let ms: Vec<&crate::dataset::Measurement> = dataset
-        .arm(side)
-        .measurements
-        .iter()
-        .enumerate()
-        .filter(|(i, m)| {
-            settings.split.contains(m.split) && !settings.exclude.contains(&ConfigId::new(side, *i))
-        })
-        .map(|(_, m)| m)
-        .collect();
-    let params = super::identifiable_params(nominal.arm(side));
-    let needed = settings.method.min_configurations(nominal.arm(side));
-    if ms.len() < needed {
-        return Err(CalibrationError::TooFewConfigurations {
-            side,
-            found: ms.len(),
-            needed,
-            params,
-            method: settings.method,
-        });
-    }
-    let expected = nominal.arm(side).joint_count();
-    if let Some(m) = ms.iter().find(|m| m.q_rad.len() != expected) {
-        return Err(CalibrationError::JointCount {
-            side,
-            id: m.id.clone(),
-            found: m.q_rad.len(),
-            expected,
-        });
-    }
-    let qs: Vec<Vec<f64>> = ms.iter().map(|m| m.q_rad.clone()).collect();
-    let reflectors = nominal.arm(side).reflector_count();
-    if let Some(m) = ms.iter().find(|m| m.tracker_points_mm.len() != reflectors) {
-        return Err(CalibrationError::InvalidSettings(format!(
-            "{side} arm: configuration `{}` has {} reflector positions, the model has {reflectors} \
-             reflectors",
-            m.id,
-            m.tracker_points_mm.len()
-        )));
-    }
-    let measured: Vec<Vec<Vector3<f64>>> = ms.iter().map(|m| m.tracker_points_mm.clone()).collect();
-    if qs
-        .iter()
-        .flatten()
-        .chain(measured.iter().flatten().flat_map(|v| v.iter()))
-        .any(|v| !v.is_finite())
-    {
-        return Err(CalibrationError::NonFinite {
-            stage: Stage::Arm(side),
-            detail: "measurement data".into(),
-        });
-    }
-    // ε of constraint (14): the tracker's MPE at the mean measuring distance, squared.
-    let mean_dist_m = measured.iter().flatten().map(|p| p.norm()).sum::<f64>()
-        / (reflectors as f64 * measured.len() as f64)
-        / 1000.0;
-    let side_tolerance_mm =
-        (dataset.tracker.mpe_um + dataset.tracker.mpe_um_per_m * mean_dist_m) / 1000.0;
-    Ok(ArmData {
-        side,
-        ids: ms.iter().map(|m| m.id.clone()).collect(),
-        qs,
-        measured,
-        side_tolerance_mm,
-    })
-}
-
-/// The step-1 method a calibration of `dataset` uses unless told otherwise: the paper's minimax on
-/// distances, or the absolute positions ([`Method::Position`]) where the data call for it
-/// ([`default_method_reason`]).
-pub fn default_method(dataset: &Dataset) -> Method {
-    if default_method_reason(dataset).is_some() {
-        Method::Position
-    } else {
-        Method::Minimax
-    }
-}
-
-/// Why [`default_method`] is the absolute positions for `dataset`, if it is: one marker per hand and
-/// both hands measured together in one tracker frame (a motion-capture camera, as DLR's data) —
-/// distances of one marker see a third of what three do and nothing of the camera frame, which the
-/// absolute positions identify with the arms.
-pub fn default_method_reason(dataset: &Dataset) -> Option<&'static str> {
-    (dataset.reflector_count() == 1 && dataset.measured_together && dataset.one_tracker_frame())
-        .then_some(
-            "one marker per hand, both measured together in one tracker frame: the absolute \
-             positions, the camera frame identified with the arms",
-        )
-}
-
-/// The arm measured alone, when `dataset` has one arm only.
-fn alone_arm(dataset: &Dataset) -> Option<Side> {
-    match dataset.measured_sides().as_slice() {
-        [side] => Some(*side),
-        _ => None,
-    }
-}
-
-/// The stages a calibration of `dataset` from `nominal` runs, in order: each arm's step 1 (one stage
-/// of both where their chains share joints; the one arm's where one arm was measured alone), then
-/// step 2 unless the data cannot measure the base ([`Dataset::base_not_measurable`]).
-pub fn planned_stages(dataset: &Dataset, nominal: &DualArmModel) -> Vec<Stage> {
-    let mut plan = match alone_arm(dataset) {
-        Some(side) => vec![Stage::Arm(side)],
-        None if nominal.shared_joints().is_empty() => {
-            vec![Stage::Arm(Side::Left), Stage::Arm(Side::Right)]
-        }
-        None => vec![Stage::Arms],
-    };
-    if dataset.base_not_measurable().is_none() {
-        plan.push(Stage::Base);
-    }
-    plan
 }
 
 /// `model` with the other arm's copy of the joints both chains hold (a torso) corrected as `side`'s

@@ -472,7 +472,7 @@ fn rectangle_rows<const L: usize, const K: bool>(
 /// The pass of step 2 over every pair (l, r) of each reflector: F_k = Σ Δd² and a_r,k = Σ_l t_lr,k,
 /// with `left` the left arm's model points, `right` the right arm's rotated into the left base
 /// (R q_r) and `t` the translation (the model point of r is R q_r + t). Always blocked: the sequential
-/// order of earlier releases is [`super::base_problem`]'s own.
+/// order of earlier releases is [`crate::solver::base_problem`]'s own.
 /// `kept`: the measured distances from [`kept_rectangle_distances`], if kept.
 pub fn rectangle(
     left: &[Points],

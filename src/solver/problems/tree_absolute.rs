@@ -10,11 +10,11 @@
 //! both arms' position errors (every measured point weighs alike).
 
 use super::absolute_problem::AbsoluteProblem;
-use super::least_squares::LeastSquaresProblem;
 use super::problem::{LeastSquaresSystem, StageParams};
 use super::tree_problem::TreeLayout;
 use crate::kinematics::ArmModel;
 use crate::side::{PerSide, Side};
+use crate::solver::algorithms::least_squares::LeastSquaresProblem;
 use nalgebra::{DMatrix, DVector, Isometry3};
 
 /// One arm's part of the tree's absolute problem.

@@ -137,7 +137,7 @@ pub fn predicted_for_tracker(
     tracker_in_body_mm: &Vector3<f64>,
 ) -> Option<PredictedDesign> {
     // The parameters a calibration on `qs` frees (its own analysis).
-    let free = crate::solver::identifiability::identifiable_at(arm, qs);
+    let free = crate::solver::analysis::identifiability::identifiable_at(arm, qs);
     let base = robot.body_from_arm_base(side).translation.vector;
     let sigma_mm =
         0.5e-3 * (tracker.mpe_um + tracker.mpe_um_per_m * (tracker_in_body_mm - base).norm() / 1e3);
@@ -447,7 +447,7 @@ fn scaled_condition(jtj: &DMatrix<f64>) -> f64 {
 /// single-reflector and the absolute methods: not covered yet).
 pub fn for_result(
     dataset: &crate::dataset::Dataset,
-    result: &super::CalibrationResult,
+    result: &crate::solver::result::CalibrationResult,
 ) -> crate::side::PerSide<Option<ArmUncertainty>> {
     for_result_reusing(dataset, result, Default::default())
 }
@@ -456,7 +456,7 @@ pub fn for_result(
 /// same computation on the same arm).
 pub fn for_result_reusing(
     dataset: &crate::dataset::Dataset,
-    result: &super::CalibrationResult,
+    result: &crate::solver::result::CalibrationResult,
     mut early: crate::side::PerSide<Option<EarlyArmUncertainty>>,
 ) -> crate::side::PerSide<Option<ArmUncertainty>> {
     let settings = &result.settings;
@@ -486,7 +486,7 @@ pub fn for_result_reusing(
 /// [`arm_uncertainty`] of `side`'s fitted configurations of `kept` (the split `settings` fits).
 fn arm_uncertainty_on(
     kept: &crate::dataset::Dataset,
-    settings: &super::CalibrationSettings,
+    settings: &crate::solver::types::CalibrationSettings,
     side: crate::side::Side,
     arm: &ArmModel,
     free: &[usize],
@@ -511,7 +511,7 @@ impl EarlyArmUncertainty {
     /// `settings` fit it.
     pub fn new(
         dataset: &crate::dataset::Dataset,
-        settings: &super::CalibrationSettings,
+        settings: &crate::solver::types::CalibrationSettings,
         side: crate::side::Side,
         arm: ArmModel,
         free: Vec<usize>,
@@ -528,7 +528,7 @@ impl EarlyArmUncertainty {
 /// the fit cannot be summarised (too few configurations, a singular fit).
 fn tree_uncertainty(
     kept: &crate::dataset::Dataset,
-    result: &super::CalibrationResult,
+    result: &crate::solver::result::CalibrationResult,
     shared: &crate::kinematics::SharedJoints,
 ) -> Option<crate::side::PerSide<Option<ArmUncertainty>>> {
     use crate::side::{PerSide, Side};

@@ -4,10 +4,10 @@
 //! the absolute positions, the full poses, the collaborative distances and the bases in the tracker
 //! frame. [`LsqState`] performs one outer iteration per [`StageSolver::next_iter`], like the SQP.
 
-use super::Termination;
-use super::problem::{LeastSquaresSystem, MinimaxProblem, StageParams};
 use super::stage::{IterState, StageSolver};
 use crate::side::PerSide;
+use crate::solver::problems::problem::{LeastSquaresSystem, MinimaxProblem, StageParams};
+use crate::solver::types::Termination;
 use nalgebra::{DMatrix, DVector, Isometry3};
 
 /// A failed step search counts as convergence when the Gauss–Newton model predicts a decrease of

@@ -1,0 +1,5 @@
+//! What the data can tell: which parameters they identify ([`identifiability`]) and how precisely
+//! ([`uncertainty`]).
+
+pub mod identifiability;
+pub mod uncertainty;
