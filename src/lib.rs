@@ -1,9 +1,44 @@
-//! dualcal: two-step minimax kinematic calibration of dual-arm robots from laser-tracker data.
+//! dualcal: two-step minimax kinematic calibration of dual-arm robots from laser-tracker data — the
+//! method of *Robust Kinematic Calibration for Improving Collaboration Accuracy of Dual-arm
+//! Manipulators* (Algorithms I and II), for the built-in ABB IRB 14000 (YuMi) and any dual-arm robot
+//! described by a URDF or a DH table.
 //!
-//! The engine modules (`kinematics`, `robot`, `meshes`, `collision`, `dataset`, `params`, `textfile`,
-//! `simulate`, `metrics`, `quality`, `solver`, `urdf_export`, `cli`) never depend on egui or wgpu; the
-//! workbench lives in `app` behind the `gui` feature.
+//! # The front door
+//!
+//! Five types cover what a program does: [`Dataset`] (measurements with the robot they were taken
+//! on: a dataset directory, or arrays), [`Robot`] (the built-in IRB 14000, a URDF, a DH table),
+//! [`Calibration`] (what to run: method, error model, split, exclusions — the command line's
+//! defaults otherwise), [`Calibrated`] (parameters with their σ, accuracy before and after on both
+//! splits, per-configuration errors, the exports) and [`Error`] (the engine's messages, naming file,
+//! line and field).
+//!
+//! ```
+//! let ds = dualcal::Dataset::load(concat!(env!("CARGO_MANIFEST_DIR"), "/assets/datasets/example"))?;
+//! let result = dualcal::Calibration::new(&ds).run()?;
+//! let ver = result.accuracy()?.verification.expect("the example has a verification split");
+//! let collaborative = |r: &dualcal::metrics::AccuracyReport| r.collaborative.unwrap().pos_rms_mm;
+//! println!("collaborative RMS {:.3} → {:.3} mm", collaborative(&ver.nominal), collaborative(&ver.calibrated));
+//! assert!(collaborative(&ver.calibrated) < 0.05);
+//! let urdf = result.urdf()?; // the calibrated description, only the arm joints' origins changed
+//! # let _ = urdf;
+//! # Ok::<(), dualcal::Error>(())
+//! ```
+//!
+//! Everything else — the kinematics, the solver's stages, the metrics, imports and planning — is the
+//! engine's own modules below, which the command line (`dualcal`) and the workbench (feature `gui`)
+//! are built on. The engine never depends on egui or wgpu.
 #![forbid(unsafe_code)]
+
+#[warn(missing_docs)]
+mod api;
+pub use api::{
+    Accuracy, ArmArrays, Arrays, Calibrated, Calibration, Dataset, Error, Parameter, PerSplit,
+    Result, Robot, SplitAccuracy, evaluate,
+};
+pub use dataset::Split;
+pub use kinematics::ErrorTerms;
+pub use side::Side;
+pub use solver::{BaseMethod, Method};
 
 pub mod analysis;
 #[cfg(feature = "gui")]

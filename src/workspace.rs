@@ -77,7 +77,7 @@ impl Workspace {
     pub fn load(dataset_path: &Path, options: &WorkspaceOptions) -> Result<Self, LoadError> {
         // The built-in robot's description (parsed once per process) parsed while the measurements
         // are read, when the dataset names no robot of its own.
-        let (mut dataset, units, ()) =
+        let (dataset, units, ()) =
             dataset::load_from_with(&*options.files, dataset_path, |robot| {
                 if options.robot.is_none() && robot.is_none() {
                     RobotDescription::builtin_parsed();
@@ -98,12 +98,24 @@ impl Workspace {
             dataset_dir: dataset.dir.clone(),
             source,
         })?;
+        Self::from_loaded(dataset, units, robot, &options.screen)
+    }
+
+    /// A dataset read in `units` (its joint columns as read: angles) and the robot description
+    /// compiled for it: the prismatic joints' columns made lengths, then checked against each other,
+    /// the nominal model, screened.
+    pub fn from_loaded(
+        mut dataset: Dataset,
+        units: Units,
+        robot: RobotDescription,
+        screen: &ScreenSettings,
+    ) -> Result<Self, LoadError> {
         // A prismatic joint's column holds a length (the file's length unit), known now.
         for side in Side::BOTH {
             let linear = robot.arm(side).linear_joints();
             dataset.arms[side].set_linear_joints(&linear, units)?;
         }
-        Self::checked(dataset, robot, &options.screen, units)
+        Self::checked(dataset, robot, screen, units)
     }
 
     /// A dataset and a robot description already in hand (simulated, imported, compiled in): checked

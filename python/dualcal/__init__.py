@@ -1,0 +1,163 @@
+"""dualcal: two-step minimax kinematic calibration of dual-arm robots from laser-tracker data.
+
+The same engine as the ``dualcal`` command line and workbench (Rust), with numpy arrays in and out::
+
+    import dualcal
+    ds = dualcal.Dataset.load("assets/datasets/example")
+    result = dualcal.calibrate(ds)                     # the paper's minimax, both steps
+    ver = result.accuracy["verification"]["calibrated"]
+    print(ver["collaborative"]["pos_rms_mm"])
+    result.save("params.json")
+
+Arrays: joint values ``(n, J)`` float64 in rad (a prismatic joint's in mm), chain order; tracker
+points ``(n, K, 3)`` float64 in mm, the tracker frame; nominal reflector coordinates ``(K, 3)`` mm in
+the arm's tip frame. Errors raise :class:`DualcalError` with the engine's message (file, line, field).
+The calibration releases the interpreter lock while it runs.
+"""
+
+from __future__ import annotations
+
+from typing import Iterable, Optional, Sequence
+
+import numpy as np
+
+from ._dualcal import (
+    BASE_METHODS,
+    METHODS,
+    CalibrationResult,
+    Dataset as _NativeDataset,
+    DualcalError,
+    Robot,
+    calibrate as _calibrate,
+    evaluate,
+)
+
+__all__ = [
+    "BASE_METHODS",
+    "METHODS",
+    "CalibrationResult",
+    "Dataset",
+    "DualcalError",
+    "Robot",
+    "calibrate",
+    "evaluate",
+]
+
+
+def _f64(array, ndim: int, name: str) -> np.ndarray:
+    out = np.ascontiguousarray(array, dtype=np.float64)
+    if out.ndim != ndim:
+        raise DualcalError(f"{name} has {out.ndim} dimension(s), expected {ndim}")
+    return out
+
+
+class Dataset:
+    """Measurements with the robot they were taken on, loaded and checked (joint counts, limits)."""
+
+    __slots__ = ("_native",)
+
+    def __init__(self, native: _NativeDataset):
+        self._native = native
+
+    @staticmethod
+    def load(path, robot: Optional[Robot] = None) -> "Dataset":
+        """A dataset directory (``dataset.toml`` and its CSVs) with the robot its manifest names
+        (else the built-in IRB 14000), or with ``robot``."""
+        return Dataset(_NativeDataset.load(str(path), robot))
+
+    @staticmethod
+    def from_arrays(
+        robot: Robot,
+        reflector_names: Sequence[str],
+        nominal_reflectors_mm,
+        left_joints=None,
+        left_points_mm=None,
+        right_joints=None,
+        right_points_mm=None,
+        *,
+        left_split: Optional[Sequence[str]] = None,
+        right_split: Optional[Sequence[str]] = None,
+        left_ids: Optional[Sequence[str]] = None,
+        right_ids: Optional[Sequence[str]] = None,
+        measured_together: bool = False,
+    ) -> "Dataset":
+        """Measurements in memory: per arm joints ``(n, J)`` (rad; mm for prismatic joints) and
+        points ``(n, K, 3)`` (mm); ``*_split`` per configuration ``"cal"`` or ``"ver"`` (default
+        all ``"cal"``). An arm left out (``None``) is not measured."""
+        arm = lambda a, n, name: None if a is None else _f64(a, n, name)  # noqa: E731
+        return Dataset(
+            _NativeDataset.from_arrays(
+                robot,
+                list(reflector_names),
+                _f64(nominal_reflectors_mm, 2, "nominal_reflectors_mm"),
+                arm(left_joints, 2, "left_joints"),
+                arm(left_points_mm, 3, "left_points_mm"),
+                None if left_split is None else list(left_split),
+                None if left_ids is None else list(left_ids),
+                arm(right_joints, 2, "right_joints"),
+                arm(right_points_mm, 3, "right_points_mm"),
+                None if right_split is None else list(right_split),
+                None if right_ids is None else list(right_ids),
+                measured_together,
+            )
+        )
+
+    def configuration_count(self, side: str) -> int:
+        """Configurations of ``side`` (``"left"`` or ``"right"``), both splits."""
+        return self._native.configuration_count(side)
+
+    @property
+    def reflector_names(self) -> list:
+        return self._native.reflector_names
+
+    @property
+    def warnings(self) -> list:
+        return self._native.warnings
+
+    @property
+    def robot_name(self) -> str:
+        return self._native.robot_name
+
+    def __repr__(self) -> str:
+        return repr(self._native)
+
+
+def calibrate(
+    dataset: Dataset,
+    robot: Optional[Robot] = None,
+    method: Optional[str] = None,
+    base_method: str = "minimax",
+    model: str = "geometric",
+    split: str = "cal",
+    exclude: Iterable[str] = (),
+    max_iterations: Optional[int] = None,
+) -> CalibrationResult:
+    """Both steps of the calibration with the command line's defaults (``dualcal calibrate``).
+
+    ``method``: step 1's, one of :data:`METHODS` (default: ``"minimax"``, or ``"position"`` for one
+    marker per hand measured together in one camera frame); ``base_method``: step 2's, one of
+    :data:`BASE_METHODS`; ``model``: ``"geometric"`` (the paper's), ``"elastic"``, ``"harmonic"``,
+    ``"full"``, …; ``split``: ``"cal"`` or ``"all"``; ``exclude``: configuration ids left out;
+    ``robot``: calibrate a dataset loaded from a directory on another robot description.
+    """
+    native = dataset._native if isinstance(dataset, Dataset) else dataset
+    return _calibrate(
+        native,
+        robot,
+        method,
+        base_method,
+        model,
+        split,
+        [str(e) for e in exclude],
+        max_iterations,
+    )
+
+
+_evaluate = evaluate
+
+
+def evaluate(dataset: Dataset, params) -> dict:  # noqa: F811
+    """The accuracy of a parameter file's model on ``dataset``: ``{"calibration": …,
+    "verification": …}`` (what ``dualcal evaluate`` prints)."""
+    native = dataset._native if isinstance(dataset, Dataset) else dataset
+    return _evaluate(native, str(params))
