@@ -56,6 +56,7 @@ pub use run::{
     planned_stages,
 };
 pub use types::{
-    CalibrationEvent, CalibrationSettings, DIVERGED_ANGLE_RAD, DIVERGED_LENGTH_MM, IterationRecord,
-    QpMethod, Reflector, Stage, StageSummary, Termination, identifiable_params, min_configurations,
+    CalibrationEvent, CalibrationSettings, DIVERGED_ANGLE_RAD, DIVERGED_LENGTH_MM, Hessian,
+    IterationRecord, QpMethod, Reflector, Stage, StageSummary, Termination, identifiable_params,
+    min_configurations,
 };

@@ -18,6 +18,42 @@ pub enum QpMethod {
     Exact,
 }
 
+/// The curvature model of the SQP's quadratic subproblems (the Hessian of the Lagrangian).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum Hessian {
+    /// Gauss–Newton curvature of the active sums, `Σ_k λ_k ∇²F_k ≈ Σ_k λ_k 2 J_kᵀJ_k` with the QP's
+    /// multipliers (a small floor keeps every reflector's curvature): exact for the residual-free
+    /// part of the paper's sums of squares, recomputed at every iterate. On ill-conditioned data with
+    /// unmodelled errors it converges as least squares does (docs/solver.md, "Curvature").
+    GaussNewton,
+    /// The paper's BFGS update of the Lagrangian's Hessian (Powell's damping), started from the
+    /// Gauss–Newton matrix: the method of Algorithm I as published (the default until the
+    /// Gauss–Newton curvature has been through the whole test suite as the default).
+    #[default]
+    Bfgs,
+}
+
+impl Hessian {
+    /// The name on the command line and in parameter files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Hessian::GaussNewton => "gauss-newton",
+            Hessian::Bfgs => "bfgs",
+        }
+    }
+
+    /// What parameter files written before the setting existed used.
+    fn of_older_files() -> Self {
+        Hessian::Bfgs
+    }
+
+    /// The paper's BFGS (written in parameter files only when another curvature was used).
+    fn is_bfgs(&self) -> bool {
+        *self == Hessian::Bfgs
+    }
+}
+
 /// The first, second or third reflector of the dataset (`a`, `b`, `c` in the paper's set-up; by position
 /// in the dataset's order whatever their names), for the single-reflector method.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, clap::ValueEnum)]
@@ -70,6 +106,12 @@ pub struct CalibrationSettings {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reflector: Option<Reflector>,
     pub qp: QpMethod,
+    /// The SQP's curvature model (files without it were computed with BFGS).
+    #[serde(
+        default = "Hessian::of_older_files",
+        skip_serializing_if = "Hessian::is_bfgs"
+    )]
+    pub hessian: Hessian,
     /// Outer SQP iterations per stage.
     pub max_iterations: usize,
     /// Stop when the scaled parameter step norm falls below this.
@@ -125,6 +167,7 @@ impl Default for CalibrationSettings {
             base_method: BaseMethod::Minimax,
             reflector: None,
             qp: QpMethod::Exact,
+            hessian: Hessian::Bfgs,
             // The command line's `--max-iterations` default too, so that the workbench and the
             // library end a stage where `dualcal calibrate` does: a minimax stage at a three-way tie
             // with a vanishing multiplier can crawl for more than 100 iterations before "ψ

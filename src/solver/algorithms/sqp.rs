@@ -1,16 +1,17 @@
-//! Algorithm I/II's outer loop: sequential quadratic programming on the minimax problem with a BFGS
-//! Hessian of the Lagrangian, an ℓ1 merit line search and a parameter-step stopping rule. One call of
-//! [`SqpState::next_iter`] is one outer iteration.
+//! Algorithm I/II's outer loop: sequential quadratic programming on the minimax problem with a
+//! Gauss–Newton (default) or BFGS (the paper's) Hessian of the Lagrangian, an ℓ1 merit line search and
+//! a parameter-step stopping rule. One call of [`SqpState::next_iter`] is one outer iteration.
 
 use super::qp::{Qp, QpSolution, SubgradientSettings, solve_exact, solve_paper};
 use crate::solver::problems::problem::{Eval, MinimaxProblem};
-use crate::solver::types::{QpMethod, Termination};
+use crate::solver::types::{Hessian, QpMethod, Termination};
 use nalgebra::{DMatrix, DVector};
 
 /// Tunables of the outer loop.
 #[derive(Clone, Copy, Debug)]
 pub struct SqpSettings {
     pub qp: QpMethod,
+    pub hessian: Hessian,
     pub step_tolerance: f64,
     /// See [`PROGRESS_RTOL`]; 0 disables the no-progress rule.
     pub progress_tolerance: f64,
@@ -73,6 +74,12 @@ pub const PAPER_RETRY_RTOL: f64 = 1e-8;
 /// RMS), which matters on noise-free data where ψ itself is at the rounding level.
 pub const STATIONARY_ABS_MM2: f64 = 1e-12;
 
+/// The floor added to each objective's QP multiplier in the Gauss–Newton curvature
+/// ([`Hessian::GaussNewton`]): at a minimax kink the multipliers often put (nearly) all weight on one
+/// or two reflectors, and parameters that only the others see (their reflector coordinates) would get
+/// no curvature at all; with the floor their steps stay those of a damped Gauss–Newton step.
+pub const CURVATURE_FLOOR: f64 = 0.02;
+
 /// Is a predicted change of the merit function negligible against its value `phi0`?
 fn negligible(predicted: f64, phi0: f64) -> bool {
     predicted > -1e-15 * phi0.abs().max(1e-300)
@@ -83,12 +90,23 @@ fn objective_multipliers(sol: &QpSolution, n_obj: usize) -> Vec<f64> {
     sol.nu.iter().take(n_obj).copied().collect()
 }
 
+/// `h` with a ridge of 1e-8 of its mean diagonal (positive definite where it is only semi-definite:
+/// parameters the data hardly see).
+fn regularised(mut h: DMatrix<f64>) -> DMatrix<f64> {
+    let m = h.nrows();
+    let mean_diag = (h.trace() / m.max(1) as f64).max(1e-12);
+    for i in 0..m {
+        h[(i, i)] += 1e-8 * mean_diag;
+    }
+    h
+}
+
 /// Non-finite values in the problem at the start point.
 #[derive(Debug)]
 pub struct NonFiniteStart;
 
 impl<P: MinimaxProblem> SqpState<P> {
-    /// Start at y = 0 with the initial BFGS matrix H₀ (typically the problem's Gauss–Newton matrix).
+    /// Start at y = 0 with the initial curvature H₀ (typically the problem's Gauss–Newton matrix).
     pub fn new(
         problem: P,
         settings: SqpSettings,
@@ -99,12 +117,7 @@ impl<P: MinimaxProblem> SqpState<P> {
         if !eval.is_finite() || h0.nrows() != y.len() || h0.ncols() != y.len() {
             return Err(NonFiniteStart);
         }
-        let mut h = h0;
-        let m = h.nrows();
-        let mean_diag = (h.trace() / m.max(1) as f64).max(1e-12);
-        for i in 0..m {
-            h[(i, i)] += 1e-8 * mean_diag;
-        }
+        let h = regularised(h0);
         if !h.iter().all(|v| v.is_finite()) {
             return Err(NonFiniteStart);
         }
@@ -275,7 +288,7 @@ impl<P: MinimaxProblem> SqpState<P> {
         let Some((y_new, eval_new)) = self.line_search(&sol, phi0, predicted) else {
             return self.done(Termination::Stalled, kkt, Some(&sol));
         };
-        self.bfgs_update(&y_new, &eval_new, &sol.nu);
+        self.update_curvature(&y_new, &eval_new, &sol.nu);
         let step_norm = (&y_new - &self.y).norm();
         self.last_nu = Some(sol.nu.clone());
         self.y = y_new;
@@ -384,6 +397,24 @@ impl<P: MinimaxProblem> SqpState<P> {
             self.problem.evaluate(&y_new)
         };
         eval_new.is_finite().then_some((y_new, eval_new))
+    }
+
+    /// The next iterate's curvature: the problem's Gauss–Newton matrix weighted by this iteration's
+    /// multipliers (each floored at [`CURVATURE_FLOOR`]), or the BFGS update where the settings ask
+    /// for it or the problem has no Gauss–Newton matrix.
+    fn update_curvature(&mut self, y_new: &DVector<f64>, eval_new: &Eval, nu: &DVector<f64>) {
+        if self.settings.hessian == Hessian::GaussNewton {
+            let weights: Vec<f64> = (0..eval_new.f.len())
+                .map(|i| nu[i].max(0.0) + CURVATURE_FLOOR)
+                .collect();
+            if let Some(h) = self.problem.curvature(y_new, &weights)
+                && h.iter().all(|v| v.is_finite())
+            {
+                self.h = regularised(h);
+                return;
+            }
+        }
+        self.bfgs_update(y_new, eval_new, nu);
     }
 
     /// BFGS on the Lagrangian with Powell's damping (keeps H positive definite).

@@ -213,6 +213,7 @@ pub fn sqp_solver<P: MinimaxProblem + 'static>(
 ) -> Result<Box<dyn StageSolver>, CalibrationError> {
     let sqp = SqpSettings {
         qp: settings.qp,
+        hessian: settings.hessian,
         step_tolerance: settings.step_tolerance,
         progress_tolerance: settings.progress_tolerance,
         max_qp_iterations: settings.max_qp_iterations,

@@ -229,6 +229,11 @@ impl ArmProblem {
     }
 }
 
+/// Pairs per reflector whose rows make the Gauss–Newton curvature ([`MinimaxProblem::curvature`]):
+/// evenly strided over all pairs, enough for the curvature's shape (it scales the steps; the gradient
+/// and the objectives are summed over every pair).
+pub const CURVATURE_PAIRS: usize = 1000;
+
 /// Each reflector's model points of every configuration (`per_config` yields the `n`
 /// configurations' points, `reflectors` each).
 fn model_points<'a>(
@@ -483,6 +488,33 @@ impl MinimaxProblem for ArmProblem {
         let (cons, _) = self.constraints(&x, false);
         (f, cons)
     }
+    /// `Σ_k w_k 2 G_k` with `G_k` the mean Gram matrix of reflector k's pair rows, sampled on
+    /// [`CURVATURE_PAIRS`] pairs ([`pair_jacobian_gram`]; the curvature only shapes the step, the
+    /// gradient and values stay exact), restricted to the free parameters and scaled.
+    fn curvature(&self, y: &DVector<f64>, weights: &[f64]) -> Option<DMatrix<f64>> {
+        if weights.len() != self.measured.len() {
+            return None;
+        }
+        let model = self.model_at(y);
+        let jac = self.jac_all(&model);
+        let grams: Vec<(f64, DMatrix<f64>)> = (0..weights.len())
+            .into_par_iter()
+            .map(|k| {
+                let only_k: Vec<bool> = (0..weights.len()).map(|r| r == k).collect();
+                (
+                    weights[k],
+                    pair_jacobian_gram(&jac, CURVATURE_PAIRS, &only_k),
+                )
+            })
+            .collect();
+        let m = self.free.len();
+        Some(DMatrix::from_fn(m, m, |i, j| {
+            let (fi, fj) = (self.free[i], self.free[j]);
+            let sum: f64 = grams.iter().map(|(w, g)| w * g[(fi, fj)]).sum();
+            2.0 * sum * self.scale[i] * self.scale[j]
+        }))
+    }
+
     fn least_squares(&self, y: &DVector<f64>) -> LeastSquaresSystem {
         let model = self.model_at(y);
         let jac = self.jac_all(&model);

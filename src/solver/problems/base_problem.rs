@@ -223,12 +223,17 @@ impl BaseProblem {
     /// Σ rows rowsᵀ regrouped: row = C_r u with C_r = [S_ω J_lᵀ [R q_r]×; S_p], so the sum over l is
     /// C_r M_r C_rᵀ with M_r = Σ_l u uᵀ.
     fn gauss_newton_regrouped(&self, y: &DVector<f64>) -> SMatrix<f64, 6, 6> {
+        self.gauss_newton_per_reflector(y).into_iter().sum()
+    }
+
+    /// [`Self::gauss_newton_regrouped`]'s terms, one per reflector (Σ over its rows of row rowᵀ).
+    fn gauss_newton_per_reflector(&self, y: &DVector<f64>) -> Vec<SMatrix<f64, 6, 6>> {
         let (b, jl, right) = self.rotated_right(y);
         let t = b.translation.vector;
         let s = &self.scale;
         let sw = Matrix3::from_diagonal(&Vector3::new(s[0], s[1], s[2]));
         let sp = Matrix3::from_diagonal(&Vector3::new(s[3], s[4], s[5]));
-        let per_reflector: Vec<SMatrix<f64, 6, 6>> = (0..self.reflectors)
+        (0..self.reflectors)
             .into_par_iter()
             .map(|k| {
                 let m = pairs::rectangle_directions(&self.left_points[k], &right[k], &t);
@@ -247,8 +252,7 @@ impl BaseProblem {
                 }
                 h
             })
-            .collect();
-        per_reflector.into_iter().sum()
+            .collect()
     }
 
     /// Calls `visit(k, residual, ∂Δd/∂y)` for every pair and reflector.
@@ -306,6 +310,21 @@ pub(super) fn left_jacobian_so3(w: &Vector3<f64>) -> nalgebra::Matrix3<f64> {
 impl MinimaxProblem for BaseProblem {
     fn dim(&self) -> usize {
         6
+    }
+
+    /// `Σ_k w_k ∇²f_k ≈ Σ_k w_k 2 Σ_rows row rowᵀ / pairs` (every pair: the regrouped sums cost one
+    /// 3 × 3 outer-product sum per right configuration).
+    fn curvature(&self, y: &DVector<f64>, weights: &[f64]) -> Option<DMatrix<f64>> {
+        if weights.len() != self.reflectors {
+            return None;
+        }
+        let per_reflector = self.gauss_newton_per_reflector(y);
+        let mut h = SMatrix::<f64, 6, 6>::zeros();
+        for (w, hk) in weights.iter().zip(&per_reflector) {
+            h += hk * *w;
+        }
+        let h = h * (2.0 / self.n_pairs().max(1) as f64);
+        Some(DMatrix::from_column_slice(6, 6, h.as_slice()))
     }
 
     fn pair_count(&self) -> usize {

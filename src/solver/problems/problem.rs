@@ -84,4 +84,11 @@ pub trait MinimaxProblem: Send + Sync {
     fn values(&self, y: &DVector<f64>) -> (Vec<f64>, Vec<f64>);
     /// Normal equations of Σ_i F_i (least-squares baseline); `cost` is Σ r².
     fn least_squares(&self, y: &DVector<f64>) -> LeastSquaresSystem;
+    /// The Gauss–Newton curvature `Σ_i weights[i] ∇²f_i ≈ Σ_i weights[i] 2 J_iᵀJ_i / pairs` of the
+    /// objectives at `y` (scaled variables, the [`Eval::f`] normalisation), or `None` where the
+    /// problem has none (its SQP then updates BFGS).
+    fn curvature(&self, y: &DVector<f64>, weights: &[f64]) -> Option<DMatrix<f64>> {
+        let _ = (y, weights);
+        None
+    }
 }
