@@ -27,6 +27,11 @@ pub struct CalibrateArgs {
     pub reflector: Option<String>,
     #[arg(long, value_enum, default_value_t = QpMethod::Exact)]
     pub qp: QpMethod,
+    /// The SQP's curvature: `bfgs` (the paper's update) or `gauss-newton` (Σ λ_k 2 J_kᵀJ_k of the
+    /// active sums, recomputed at each iterate: on ill-conditioned data with unmodelled errors about
+    /// half the iterations; docs/solver.md, "Curvature").
+    #[arg(long, value_enum, default_value_t = crate::solver::Hessian::Bfgs)]
+    pub hessian: crate::solver::Hessian,
     /// Where to write the parameters (dualcal-params/1 JSON).
     #[arg(long)]
     pub out: PathBuf,

@@ -64,6 +64,7 @@ pub(super) fn settings_from(
         base_method: a.base_method,
         reflector,
         qp: a.qp,
+        hessian: a.hessian,
         max_iterations: a.max_iterations,
         step_tolerance: a.tolerance,
         progress_tolerance: a.progress_tolerance,
