@@ -33,7 +33,16 @@ fn a_panicking_worker_is_shown(execution: Execution) {
     let mut harness = Harness::builder()
         .with_size(eframe::egui::Vec2::new(1400.0, 900.0))
         .wgpu()
-        .build_eframe(|cc| WorkbenchApp::with_options(cc, AppLaunch::default(), crate::app::LaunchOptions { msaa_samples: Some(1), ..Default::default() }));
+        .build_eframe(|cc| {
+            WorkbenchApp::with_options(
+                cc,
+                AppLaunch::default(),
+                crate::app::LaunchOptions {
+                    msaa_samples: Some(1),
+                    ..Default::default()
+                },
+            )
+        });
     step_until(&mut harness, "loading the example", |app| !app.is_loading());
     assert!(
         harness.state().session().is_some(),
