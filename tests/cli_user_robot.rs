@@ -199,16 +199,28 @@ fn refusals_name_the_link_joint_column_or_command() {
         err.contains("`yumi_link_9_l`") && err.contains("yumi.urdf"),
         "{err}"
     );
-    // A mimic joint whose leader is not on the chain (the gripper's second finger; the first, on a
-    // prismatic joint, is a chain like any other).
-    let err = simulate("yumi_body:gripper_l_finger_l");
-    assert!(
-        err.contains("`gripper_l_joint_m`")
-            && err.contains("`gripper_l_joint`")
-            && err.contains("not a joint of this arm's chain")
-            && err.contains(", line "),
-        "{err}"
-    );
+    // A mimic joint whose leader is not on the chain (the gripper's second finger, following the first
+    // finger's joint) is no refusal any more: the leader becomes the arm's joint column where its
+    // follower stands (issue 45) — eight columns, the last the gripper's.
+    let finger = dir.path().join("finger");
+    ok(&[
+        "simulate",
+        "--urdf",
+        s(&yumi),
+        "--left",
+        "yumi_body:gripper_l_finger_l",
+        "--right",
+        "yumi_body:yumi_link_7_r",
+        "--configs",
+        "30",
+        "--cal",
+        "20",
+        "--out",
+        s(&finger),
+    ]);
+    let header = std::fs::read_to_string(finger.join("left.csv")).unwrap();
+    let header = header.lines().find(|l| l.starts_with("id,")).unwrap().to_string();
+    assert!(header.contains(",q8,") && !header.contains(",q9,"), "{header}");
     // Not BASE:TIP.
     let err = simulate("yumi_body");
     assert!(err.contains("BASE:TIP"), "{err}");
