@@ -43,6 +43,9 @@ pub use solver::{BaseMethod, Method};
 pub mod analysis;
 #[cfg(feature = "gui")]
 pub mod app;
+/// The `dualcal` command line's internals (its subcommands): not an interface to build on — use the
+/// front door above.
+#[doc(hidden)]
 pub mod cli;
 pub mod collision;
 pub mod comparison;

@@ -2,7 +2,7 @@
 //! them (SpatialAnalyzer, Leica Tracker Pilot, figaroh, any CSV with a column mapping), joint logs, the
 //! matching of points to configurations (by target name, order or time stamp; repeated shots averaged)
 //! and a report of what matched and what did not. The result is a [`Dataset`] that
-//! [`write`] saves as a `dualcal-dataset/1` directory. See docs/formats.md, "Importing tracker and
+//! [`write()`] saves as a `dualcal-dataset/1` directory. See docs/formats.md, "Importing tracker and
 //! controller files".
 
 mod error;
@@ -545,7 +545,7 @@ fn id_prefix(side: Side, measured_together: bool) -> &'static str {
 }
 
 /// What the dataset reader would refuse on loading the import's result, refused before it is
-/// written (by [`write`] and [`files_of`]): too few configurations matched, reflector distances
+/// written (by [`write()`] and [`files_of`]): too few configurations matched, reflector distances
 /// that do not fit the nominal ones (the unit), degenerate reflector triangles, a row twice — named
 /// by the arm's file (its joint log, else its point file) and line. The import itself succeeds, so
 /// that its report says what did not match.
@@ -566,7 +566,7 @@ pub fn check(imported: &Imported) -> Result<(), ImportError> {
     Ok(())
 }
 
-/// The files [`write`] writes into `out` — the dataset's (mm and rad, full precision) and the
+/// The files [`write()`] writes into `out` — the dataset's (mm and rad, full precision) and the
 /// report — with their contents, written nowhere (a browser keeps them in memory).
 pub fn files_of(imported: &Imported, out: &Path) -> Result<Vec<(PathBuf, Vec<u8>)>, ImportError> {
     check(imported)?;
@@ -595,7 +595,7 @@ pub fn write(
     write_arms(imported, &both(inputs), out, overwrite)
 }
 
-/// [`write`] for an import of the arms whose files are given (one arm alone: a dataset of that arm,
+/// [`write()`] for an import of the arms whose files are given (one arm alone: a dataset of that arm,
 /// one `[[arms]]` entry).
 pub fn write_arms(
     imported: &Imported,

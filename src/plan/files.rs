@@ -105,7 +105,7 @@ pub fn summary_line(side: Side, p: &ArmPlan) -> String {
 /// What [`ArmPlan::bound`] says, for `dualcal plan` and the planning window: no design of as many of
 /// these candidates predicts a better verification accuracy than the bound; the relaxed design's and
 /// this design's with an efficient fit of the distances beside it, and the method that fits them so:
-/// the absolute positions with the tracker's pose (`position`, ref. [18]) measures within a few
+/// the absolute positions with the tracker's pose (`position`, ref. \[18\]) measures within a few
 /// thousandths of that prediction in simulation, where the distance methods (least squares, the
 /// paper's minimax) measure above the least-squares one (docs/planning.md).
 pub fn bound_line(p: &ArmPlan) -> Option<String> {

@@ -627,7 +627,7 @@ fn check_path(
 }
 
 /// Re-route each colliding leg through a via point: of the arm's home pose and the candidates
-/// (all collision-free), the [`VIA_CANDIDATES`] shortest detours `a → v → b` are tried in order and
+/// (all collision-free), the `VIA_CANDIDATES` shortest detours `a → v → b` are tried in order and
 /// the first whose two straight motions are both clear is taken. The via points, the legs no via
 /// point clears, and the path's new length.
 #[allow(clippy::too_many_arguments)]

@@ -6,7 +6,7 @@
 //!
 //! [`Report::build`] gathers the figures from the engine — the parameter file's records
 //! (`method`, `termination`, `fixed_parameters`, `uncertainty`, `quality`, `statistics`), the
-//! accuracy of the nominal and the calibrated model ([`metrics::evaluate`]), their [`Analysis`]
+//! accuracy of the nominal and the calibrated model ([`metrics::evaluate`](crate::metrics::evaluate)), their [`Analysis`](crate::analysis::Analysis)
 //! (histograms, per-pair samples, per-configuration rows) and the screening — into a [`Report`];
 //! [`render`] writes it as HTML. Nothing is estimated twice: where the parameter file lacks a record
 //! the report computes it with the function that writes it (`solver::uncertainty`,

@@ -330,7 +330,7 @@ impl<'a> From<&'a PathBuf> for RobotSource<'a> {
 impl RobotDescription {
     /// The built-in IRB 14000 description (`assets/irb14000.urdf`): arms `yumi_body → yumi_flange_x`,
     /// nominal model Table 3. ([`RobotDescription::load`] of [`RobotSource::Builtin`] with the default
-    /// options, which cannot fail.) Parsed once per process ([`Self::builtin_parsed`]), then copied.
+    /// options, which cannot fail.) Parsed once per process (`Self::builtin_parsed`), then copied.
     pub fn builtin_irb14000() -> Self {
         Self::builtin_parsed().clone()
     }

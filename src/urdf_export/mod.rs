@@ -3,9 +3,9 @@
 //!
 //! - For a description loaded from a file (the user's own robot) the copy is the user's text with only
 //!   the arm joints' `<origin>` attributes changed, each by the identified correction, and the
-//!   reflectors added as fixed links on the tips ([`patch`]): every link, visual, collision, sensor,
+//!   reflectors added as fixed links on the tips (`patch`): every link, visual, collision, sensor,
 //!   gripper and extra tag stays where it was.
-//! - For the built-in IRB 14000 the joint origins are written in its DH frames ([`dh`]).
+//! - For the built-in IRB 14000 the joint origins are written in its DH frames (`dh`).
 //!
 //! [`calibrated_overlay`] is the same calibration as a small file robot software can apply to its own
 //! description: the corrected origin of every arm joint and the reflector links.

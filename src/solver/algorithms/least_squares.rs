@@ -1,6 +1,6 @@
 //! Nonlinear least squares for the paper's comparison methods (its Table 1): Gauss–Newton with the
-//! normal equations (ref. [26]), Gauss–Newton with a QR decomposition of the Jacobian (ref. [19]) and
-//! Levenberg–Marquardt (ref. [18]), on any [`LeastSquaresProblem`] — the single-reflector distances,
+//! normal equations (ref. \[26\]), Gauss–Newton with a QR decomposition of the Jacobian (ref. \[19\]) and
+//! Levenberg–Marquardt (ref. \[18\]), on any [`LeastSquaresProblem`] — the single-reflector distances,
 //! the absolute positions, the full poses, the collaborative distances and the bases in the tracker
 //! frame. [`LsqState`] performs one outer iteration per [`StageSolver::next_iter`], like the SQP.
 
@@ -249,7 +249,7 @@ impl<P: LeastSquaresProblem> StageSolver for LsqState<P> {
 }
 
 /// A distance problem of the minimax form solved as least squares of the distance errors of the
-/// reflectors in `reflectors` (all for the collaborative distances of ref. [26]'s step 2, one for its
+/// reflectors in `reflectors` (all for the collaborative distances of ref. \[26\]'s step 2, one for its
 /// step 1, where the problem's normal equations are restricted to that reflector too).
 pub struct DistanceLeastSquares<P: MinimaxProblem> {
     pub problem: P,

@@ -196,7 +196,7 @@ pub fn require_kinematics(
 }
 
 /// The reflector `distance-single` uses by default: the one whose distance errors the nominal model
-/// fits worst (largest F_k), as ref. [26] is compared in the paper.
+/// fits worst (largest F_k), as ref. \[26\] is compared in the paper.
 pub fn worst_reflector(objectives_mm2: &[f64]) -> Reflector {
     let k = (0..objectives_mm2.len().min(Reflector::ALL.len()))
         .max_by(|&a, &b| objectives_mm2[a].total_cmp(&objectives_mm2[b]))

@@ -35,11 +35,11 @@ impl Method {
     pub const Minimax: Method = Method(&minimax::MINIMAX);
     /// Least squares of all three reflectors' distance errors.
     pub const LeastSquares: Method = Method(&lsq::LSQ);
-    /// Ref. [26]: one reflector's distance errors.
+    /// Ref. \[26\]: one reflector's distance errors.
     pub const DistanceSingle: Method = Method(&distance_single::DISTANCE_SINGLE);
-    /// Ref. [19]: full-pose errors of a tool frame built from the three reflectors.
+    /// Ref. \[19\]: full-pose errors of a tool frame built from the three reflectors.
     pub const Pose: Method = Method(&absolute::POSE);
-    /// Ref. [18]: absolute positioning errors in the tracker frame.
+    /// Ref. \[18\]: absolute positioning errors in the tracker frame.
     pub const Position: Method = Method(&absolute::POSITION);
 
     /// A method defined outside the table (a test's, an experiment's): it runs through the executor
@@ -99,9 +99,9 @@ impl BaseMethod {
 
     /// The paper's Algorithm II: minimax of the collaborative distance errors.
     pub const Minimax: BaseMethod = BaseMethod(&base::MINIMAX);
-    /// Ref. [26]: least squares of all collaborative distance errors.
+    /// Ref. \[26\]: least squares of all collaborative distance errors.
     pub const Distance: BaseMethod = BaseMethod(&base::DISTANCE);
-    /// Ref. [28]: each arm's base in the tracker frame, combined.
+    /// Ref. \[28\]: each arm's base in the tracker frame, combined.
     pub const Absolute: BaseMethod = BaseMethod(&base::ABSOLUTE);
 
     /// A step-2 method defined outside the table.

@@ -1,7 +1,7 @@
 //! The absolute (tracker-frame) problems of the comparison methods: one arm's model and its base in
-//! the tracker frame from the measured reflector positions (ref. [18], [`AbsoluteData::Position`]) or
-//! from tool frames built from the three measured reflectors (ref. [19], [`AbsoluteData::Pose`]); and
-//! both arms' bases in the tracker frame with the arms held (ref. [28], [`BaseAbsoluteProblem`]).
+//! the tracker frame from the measured reflector positions (ref. \[18\], [`AbsoluteData::Position`]) or
+//! from tool frames built from the three measured reflectors (ref. \[19\], [`AbsoluteData::Pose`]); and
+//! both arms' bases in the tracker frame with the arms held (ref. \[28\], [`BaseAbsoluteProblem`]).
 //!
 //! The model point of reflector k at configuration i in the tracker frame is
 //! `q_ik = T · p_ik(x)` with `T = tracker_from_base = (Exp(ω)·R₀, t₀ + δp)`. Variables, scaled:
@@ -29,9 +29,9 @@ use nalgebra::{
 /// What the absolute problem fits.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum AbsoluteData {
-    /// The three reflectors' positions (ref. [18]).
+    /// The three reflectors' positions (ref. \[18\]).
     Position,
-    /// The tool frame's pose (ref. [19]); rotation errors weighted by `rotation_weight_mm` mm/rad.
+    /// The tool frame's pose (ref. \[19\]); rotation errors weighted by `rotation_weight_mm` mm/rad.
     Pose { rotation_weight_mm: f64 },
 }
 
@@ -121,7 +121,7 @@ pub fn as_triangle(p: &[Vector3<f64>]) -> Option<&[Vector3<f64>; 3]> {
     p.try_into().ok()
 }
 
-/// `measured ≈ T · model` over all points, as ref. [28] computes it: the affine map from the
+/// `measured ≈ T · model` over all points, as ref. \[28\] computes it: the affine map from the
 /// Moore–Penrose inverse of the homogeneous model points, `X = M · P⁺` (3 × 4), its linear part
 /// projected onto the nearest rotation and the translation refitted to the centroids. `None` when the
 /// data are not finite or there are no points.
@@ -184,7 +184,7 @@ fn isometry_of(h: &Matrix4<f64>) -> Isometry3<f64> {
 }
 
 /// `left_base_from_right_base = tracker_from_left_base⁺ · tracker_from_right_base` with ⁺ the
-/// Moore–Penrose inverse of the homogeneous matrix (ref. [28]; for a rigid transform it is its
+/// Moore–Penrose inverse of the homogeneous matrix (ref. \[28\]; for a rigid transform it is its
 /// inverse).
 pub fn combine_bases(
     tracker_from_left_base: &Isometry3<f64>,
@@ -555,7 +555,7 @@ impl LeastSquaresProblem for AbsoluteProblem {
     }
 }
 
-/// Ref. [28]'s step 2: each arm's base in the tracker frame from its absolute positioning errors,
+/// Ref. \[28\]'s step 2: each arm's base in the tracker frame from its absolute positioning errors,
 /// step 1's arms held; `left_base_from_right_base` is their combination ([`combine_bases`]).
 /// Variables: the left problem's six, then the right's.
 pub struct BaseAbsoluteProblem {

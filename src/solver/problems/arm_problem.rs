@@ -5,7 +5,7 @@
 //! ∇F_k = −2 Σ_{i<j} Δd u_ijᵀ (J_i,k − J_j,k) with u_ij the unit model direction (eq. 34, exact distances).
 //! The pair sum is regrouped per configuration, ∇F_k = −2 Σ_i J_i,kᵀ w_i,k with
 //! w_i,k = Σ_{j≠i} Δd_ij,k u_ij,k, so the Jacobians are computed once per configuration and iterate and
-//! no pair Jacobian is ever formed. The pair pass itself (distances, Σ Δd², the weights) is [`pairs`]:
+//! no pair Jacobian is ever formed. The pair pass itself (distances, Σ Δd², the weights) is `pairs`:
 //! the measured distances are kept up to `pairs::KEPT_DISTANCE_PAIRS` pairs per reflector, recomputed beyond.
 
 use super::problem::{Eval, LeastSquaresSystem, MinimaxProblem, StageParams};

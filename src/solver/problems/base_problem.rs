@@ -4,12 +4,12 @@
 //! `B(y) = (Exp(ω)·R₀, p₀ + δp)` with `y = (ω/s_rot, δp/s_trans)`; Δd_lr,k = |m_L,l,k − m_R,r,k| −
 //! |p_L,l,k − (R p_R,r,k + p)|.
 //!
-//! Up to [`pairs::SEQUENTIAL_PAIRS`] pairs per reflector (the paper's 14 400) the values, gradients and
+//! Up to `pairs::SEQUENTIAL_PAIRS` pairs per reflector (the paper's 14 400) the values, gradients and
 //! the Gauss–Newton matrix are sums of pair rows in the order of earlier releases. Beyond, the gradient
 //! is regrouped per right configuration like step 1's, ∇ = 2 Σ_r (−S_ω J_lᵀ (a_r × R q_r), S_p a_r)
 //! with a_r = Σ_l Δd_lr u_lr, and the Gauss–Newton matrix per right configuration from
 //! M_r = Σ_l u_lr u_lrᵀ: the pair loop does a distance and a few multiply-adds per pair, in the
-//! blocks and lanes of [`pairs`], and nothing is stored per pair.
+//! blocks and lanes of `pairs`, and nothing is stored per pair.
 
 use super::arm_problem::pairs::{self, Plan, Points};
 use super::problem::{Eval, LeastSquaresSystem, MinimaxProblem, StageParams};

@@ -1,4 +1,4 @@
-//! Step 1's absolute method ([`super::absolute_problem`], ref. [18]'s positions) on a robot whose arms
+//! Step 1's absolute method ([`super::absolute_problem`], ref. \[18\]'s positions) on a robot whose arms
 //! share joints (a torso): one fit of both arms and of **one** tracker (camera) frame.
 //!
 //! Both chains start at one link (their shared joints sit above both arms), so one tracker-from-base

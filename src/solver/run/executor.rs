@@ -1,7 +1,7 @@
 //! The executor: [`CalibrationRun`] runs the stages in turn — step 1 for the left arm, step 1 for the
 //! right arm, step 2 — one outer iteration per [`CalibrationRun::step`], reporting to [`Observer`]s and
 //! polling the cancel flag. It names no method: each stage is set up by the chosen method's entry of
-//! the table ([`crate::solver::methods`]). Its input is checked before ([`super::inputs`]), and the
+//! the table ([`crate::solver::methods`]). Its input is checked before (`super::inputs`), and the
 //! stages it plans are [`super::policy`]'s.
 
 use super::inputs::{arm_input, check_settings, unsupported};
@@ -32,7 +32,7 @@ use web_time::Instant;
 /// observer too. The command line's progress lines, the workbench's live curves and the tests are
 /// observers.
 ///
-/// What a run reports as it goes. `Send`: [`Calibrator::run`] moves the run onto a thread of the work
+/// What a run reports as it goes. `Send`: [`Calibrator::run`](crate::solver::Calibrator::run) moves the run onto a thread of the work
 /// pool.
 pub trait Observer: Send {
     /// A stage begins: `n_configs` configurations (both arms' for step 2) and `n_pairs` pairs per

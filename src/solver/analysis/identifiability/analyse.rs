@@ -74,7 +74,7 @@ pub struct ParameterInfo<'a> {
     pub name: &'a dyn Fn(usize) -> String,
     /// Why a parameter is unidentifiable, when physics says so.
     pub reason: &'a dyn Fn(usize) -> Option<String>,
-    /// What the method fits, for the reasons: `distances` (the paper's and ref. [26]'s methods),
+    /// What the method fits, for the reasons: `distances` (the paper's and ref. \[26\]'s methods),
     /// `absolute positions`, `poses`.
     pub data: &'a str,
     /// Why a parameter that is not `allowed` is fixed (e.g. `fixed by the user`).

@@ -1,6 +1,6 @@
 //! Which parameters can the data identify? The analysis of a Gram matrix ([`analyse`](analyse::analyse)),
 //! told whose parameters its columns are ([`columns`]), and its repetition at a step-1 solution
-//! ([`recheck`]).
+//! (`recheck`).
 
 pub mod analyse;
 pub mod columns;
