@@ -4,8 +4,11 @@
 //! otherwise). Rows are numbered as the spreadsheet numbers them.
 
 use super::error::ImportError;
-use super::joints::{self, JointLog, JointLogOptions};
+#[cfg(not(target_arch = "wasm32"))]
+use super::joints;
+use super::joints::{JointLog, JointLogOptions};
 use crate::source::FileSource;
+#[cfg(not(target_arch = "wasm32"))]
 use calamine::{Data, Reader};
 use std::path::Path;
 
@@ -32,6 +35,33 @@ pub fn read(
     let bytes = files
         .read_limited(path, MAX_SHEET_BYTES)
         .map_err(|error| crate::output::FileError::read(path, error))?;
+    read_book(path, bytes, sheet, o)
+}
+
+/// In a browser: no spreadsheet reader in the module (its size budget).
+#[cfg(target_arch = "wasm32")]
+fn read_book(
+    path: &Path,
+    _bytes: Vec<u8>,
+    _sheet: Option<&str>,
+    _o: &JointLogOptions,
+) -> Result<JointLog, ImportError> {
+    Err(ImportError::Format {
+        path: path.to_path_buf(),
+        message: "spreadsheets are read by the desktop workbench and `dualcal import`, not in the \
+                  browser: save the sheet as CSV (the same header and rows) and choose that"
+            .into(),
+    })
+}
+
+/// The workbook in `bytes`: its sheet `sheet` (`None`: the first) as a joint log.
+#[cfg(not(target_arch = "wasm32"))]
+fn read_book(
+    path: &Path,
+    bytes: Vec<u8>,
+    sheet: Option<&str>,
+    o: &JointLogOptions,
+) -> Result<JointLog, ImportError> {
     let format_error = |message: String| ImportError::Format {
         path: path.to_path_buf(),
         message,
@@ -84,6 +114,7 @@ pub fn read(
     Ok(log)
 }
 
+#[cfg(not(target_arch = "wasm32"))]
 /// A cell as the text reader sees it: numbers in their shortest exact form, dates and times as
 /// seconds (Excel's day count × 86 400), text as it is.
 fn cell_text(cell: &Data) -> String {
