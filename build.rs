@@ -11,6 +11,38 @@ fn main() {
     println!("cargo::rerun-if-changed=build.rs");
     #[cfg(feature = "web-fonts")]
     web_fonts::write();
+    #[cfg(feature = "web-fonts")]
+    web_example::write();
+}
+
+/// The browser's modules: the bundled example's two CSVs in the compact form of
+/// `src/app/example_codec.rs` (its numbers as `f64`s), written to `$OUT_DIR/web-example/` for
+/// `app::example` to compile in and decode.
+#[cfg(feature = "web-fonts")]
+#[allow(dead_code)]
+#[path = "src/app/example_codec.rs"]
+mod example_codec;
+
+#[cfg(feature = "web-fonts")]
+mod web_example {
+
+    pub fn write() {
+        let out =
+            std::path::PathBuf::from(std::env::var_os("OUT_DIR").expect("cargo sets OUT_DIR"))
+                .join("web-example");
+        std::fs::create_dir_all(&out).expect("cannot create $OUT_DIR/web-example");
+        println!("cargo::rerun-if-changed=src/app/example_codec.rs");
+        for arm in ["left", "right"] {
+            let csv = format!("assets/datasets/example/{arm}.csv");
+            println!("cargo::rerun-if-changed={csv}");
+            let text = std::fs::read_to_string(&csv).unwrap_or_else(|e| panic!("{csv}: {e}"));
+            std::fs::write(
+                out.join(format!("{arm}.bin")),
+                super::example_codec::encode(&text),
+            )
+            .expect("cannot write the example's compact form");
+        }
+    }
 }
 
 #[cfg(feature = "web-fonts")]

@@ -15,6 +15,10 @@ pub mod command;
 pub mod compare;
 pub mod events;
 mod example;
+// The encoder is build.rs's (it includes the file), the decoder the browser's modules'.
+#[cfg(any(feature = "web-fonts", test))]
+#[allow(dead_code)]
+mod example_codec;
 pub mod export;
 pub mod files;
 mod frame_stats;

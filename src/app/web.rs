@@ -93,8 +93,8 @@ fn document() -> Option<web_sys::Document> {
 /// Files in memory with the example mounted, and the browser's file seam on them.
 pub fn io(ctx: &egui::Context) -> Io {
     let memory = MemoryFiles::new();
-    for (name, bytes) in super::example::EXAMPLE_FILES {
-        memory.insert(Path::new(IN_MEMORY_EXAMPLE_DIR).join(name), bytes.to_vec());
+    for (name, bytes) in super::example::example_files() {
+        memory.insert(Path::new(IN_MEMORY_EXAMPLE_DIR).join(name), bytes);
     }
     Io {
         files: Files(Arc::new(memory.clone())),
