@@ -43,8 +43,8 @@ pub use solver::{BaseMethod, Method};
 pub mod analysis;
 #[cfg(feature = "gui")]
 pub mod app;
-/// The `dualcal` command line's internals (its subcommands): not an interface to build on — use the
-/// front door above.
+// The `dualcal` command line's internals (its subcommands): not an interface to build on — the
+// front door above is.
 #[doc(hidden)]
 pub mod cli;
 pub mod collision;
