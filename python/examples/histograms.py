@@ -39,7 +39,7 @@ for column, (key, label) in enumerate(panels):
         values = samples[key]
         ax.hist(values, bins=41, color="#888" if row == 0 else "#2a7")
         rms = float(np.sqrt(np.mean(values**2)))
-        ax.set_title(f"{name}: RMS {rms:.3f} mm", fontsize=10)
+        ax.set_title(f"{name}: worst reflector per pair, RMS {rms:.3f} mm", fontsize=9)
         ax.set_xlabel(label)
         ax.set_ylabel("pairs")
 fig.suptitle(f"{pathlib.Path(dataset).name}: verification pairs, nominal vs calibrated")
