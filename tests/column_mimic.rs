@@ -41,22 +41,8 @@ fn load(urdf: &Path) -> RobotDescription {
 /// Tip poses (base link frame, mm) of `qs` (URDF units: m for the column) by `tools/urdf_fk.py`,
 /// and the joints it reads the values as.
 fn independent_tips(urdf: &Path, qs: &[Vec<f64>], dir: &Path) -> (Vec<String>, Vec<Matrix4<f64>>) {
-    let configs = dir.join("configs.json");
-    std::fs::write(&configs, serde_json::to_vec(qs).unwrap()).unwrap();
     let (base, tip) = robots::COLUMN_MIMIC_ARM;
-    let out = Command::new(common::python("numpy"))
-        .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/urdf_fk.py"))
-        .arg(urdf)
-        .args([base, tip])
-        .arg(&configs)
-        .output()
-        .expect("run tools/urdf_fk.py");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let v = common::urdf_fk(urdf, base, tip, qs, &[], &dir.join("configs.json"));
     let joints = v["joints"]
         .as_array()
         .unwrap()

@@ -19,7 +19,6 @@ use dualcal::solver::CalibrationSettings;
 use dualcal::urdf_export::calibrated_urdf;
 use nalgebra::Vector3;
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 fn links(arms: [(&str, &str); 2]) -> PerSide<Option<ArmLinks>> {
     PerSide::new(
@@ -36,27 +35,18 @@ fn independent_points(
     qs: &[Vec<f64>],
     dir: &Path,
 ) -> Vec<Vec<Vector3<f64>>> {
-    let configs = dir.join(format!("{}.json", arm.tip_link));
-    std::fs::write(&configs, serde_json::to_vec(qs).unwrap()).unwrap();
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/urdf_fk.py");
     let names: Vec<String> = ["a", "b", "c"]
         .iter()
         .map(|r| format!("reflector_{r}_{}", arm.tip_link))
         .collect();
-    let out = Command::new(common::python("numpy"))
-        .arg(script)
-        .arg(urdf)
-        .args([&arm.base_link, &arm.tip_link])
-        .arg(&configs)
-        .args(&names)
-        .output()
-        .expect("run tools/urdf_fk.py");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    let v = common::urdf_fk(
+        urdf,
+        &arm.base_link,
+        &arm.tip_link,
+        qs,
+        &names,
+        &dir.join(format!("{}.json", arm.tip_link)),
     );
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     v["configs"]
         .as_array()
         .unwrap()

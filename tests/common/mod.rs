@@ -181,3 +181,33 @@ pub fn assert_check_urdf(path: &std::path::Path, name: &str) {
         String::from_utf8_lossy(&o.stderr)
     );
 }
+
+/// `tools/urdf_fk.py` (the independent forward kinematics, numpy) on `urdf` from `base` to `tip` at
+/// the configurations `qs` (URDF units), with the positions of `links` below the tip: its JSON
+/// output (`joints`, `configs[i].tip` 4 × 4 mm, `configs[i].links[name]`). `configs_json` is where
+/// the configurations are written for it.
+#[allow(dead_code)] // not every test file that includes this module runs the FK
+pub fn urdf_fk(
+    urdf: &std::path::Path,
+    base: &str,
+    tip: &str,
+    qs: &[Vec<f64>],
+    links: &[String],
+    configs_json: &std::path::Path,
+) -> serde_json::Value {
+    std::fs::write(configs_json, serde_json::to_vec(qs).unwrap()).unwrap();
+    let out = std::process::Command::new(python("numpy"))
+        .arg(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/urdf_fk.py"))
+        .arg(urdf)
+        .args([base, tip])
+        .arg(configs_json)
+        .args(links)
+        .output()
+        .expect("run tools/urdf_fk.py");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap()
+}
