@@ -43,8 +43,10 @@ pub use solver::{BaseMethod, Method};
 pub mod analysis;
 #[cfg(feature = "gui")]
 pub mod app;
+pub mod choice;
 // The `dualcal` command line's internals (its subcommands): not an interface to build on — the
 // front door above is.
+#[cfg(feature = "cli")]
 #[doc(hidden)]
 pub mod cli;
 pub mod collision;

@@ -11,7 +11,14 @@ const LAYERS: &[&[&str]] = &[
     // The parallel loops (rayon, or in order in a browser); the sorts (one compiled sort in a browser).
     &["par", "sort"],
     // Leaves: values, statistics, where files come from and what they are, atomic writes.
-    &["side", "stats", "source", "output", "finite_difference"],
+    &[
+        "side",
+        "stats",
+        "source",
+        "output",
+        "finite_difference",
+        "choice",
+    ],
     // Text files, the arm models (DH and URDF chains), meshes.
     &["textfile", "kinematics", "meshes"],
     // Measurements.
@@ -238,4 +245,23 @@ fn solver_modules_only_reach_down_or_across() {
         seen > 50 && top.contains("methods") && top.contains("types"),
         "{seen} {top:?}"
     );
+}
+
+/// The engine parses nothing from a command line: its enums parse from strings (`FromStr`, through
+/// `dualcal::choice`), and only the command line (`cli`) and the workbench (`app`) know clap.
+#[test]
+fn only_the_command_line_knows_clap() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut problems = Vec::new();
+    for layer in LAYERS {
+        for m in layer.iter().filter(|m| !["cli", "app", "main"].contains(m)) {
+            for file in files_of(&src, m) {
+                let text = std::fs::read_to_string(&file).unwrap();
+                if text.contains("clap::") || text.contains("use clap") {
+                    problems.push(file.strip_prefix(&src).unwrap().display().to_string());
+                }
+            }
+        }
+    }
+    assert!(problems.is_empty(), "engine files using clap: {problems:?}");
 }

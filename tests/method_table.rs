@@ -44,7 +44,7 @@ fn gauss_newton_all(s: &ArmSetUp) -> Result<ArmStage, CalibrationError> {
         reflectors: vec![true; 3],
     };
     Ok(ArmStage {
-        solver: least_squares_solver(problem, LsqAlgorithm::GaussNewton, s.settings),
+        solver: least_squares_solver(problem, LsqAlgorithm::GaussNewton, &s.options),
         identifiability: start.report,
         reflector: None,
     })
@@ -123,7 +123,7 @@ fn a_method_outside_the_table_runs_through_the_one_executor() {
         .run()
         .unwrap_err();
     assert!(
-        matches!(err, CalibrationError::TooFewConfigurations { method, .. } if method == TEST_METHOD),
+        matches!(err, CalibrationError::TooFewConfigurations { method, .. } if method == TEST_METHOD.name()),
         "{err}"
     );
     assert!(err.to_string().contains("(test method)"), "{err}");

@@ -1,6 +1,7 @@
 //! What several subcommands share: the dataset loaded with its robot (the description's warnings
 //! printed), the robot described in one line, a vector argument parsed.
 
+use crate::choice::Choice;
 use crate::robot::RobotDescription;
 use crate::workspace::{Workspace, WorkspaceOptions};
 use anyhow::Result;
@@ -72,4 +73,20 @@ pub(super) fn parse_xyz(s: &str) -> std::result::Result<Vector3<f64>, String> {
         [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok(Vector3::new(*x, *y, *z)),
         _ => Err(format!("`{s}`: expected X,Y,Z, three numbers (mm)")),
     }
+}
+
+/// The argument parser of one of the engine's [`Choice`]s: its spellings (and their aliases), each
+/// with its line of help, as `--help` lists them.
+pub(crate) fn choice<T: Choice + Clone + Send + Sync>()
+-> impl clap::builder::TypedValueParser<Value = T> {
+    let values = T::all().iter().map(|&v| {
+        let value =
+            clap::builder::PossibleValue::new(v.spelling()).aliases(v.aliases().iter().copied());
+        match v.help() {
+            Some(help) => value.help(help),
+            None => value,
+        }
+    });
+    use clap::builder::TypedValueParser;
+    clap::builder::PossibleValuesParser::new(values).try_map(|text: String| T::parse_choice(&text))
 }

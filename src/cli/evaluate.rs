@@ -23,7 +23,7 @@ pub struct EvaluateArgs {
     /// the URDF's own arm chains), the dataset's nominal reflectors and the URDF's base transform.
     #[arg(long)]
     pub nominal: bool,
-    #[arg(long, value_enum, default_value_t = Split::All)]
+    #[arg(long, value_parser = crate::cli::common::choice::<Split>(), default_value_t = Split::All)]
     pub split: Split,
     /// Print JSON instead of a table.
     #[arg(long)]

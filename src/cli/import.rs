@@ -43,7 +43,7 @@ pub struct ImportArgs {
     #[arg(long)]
     pub force: bool,
     /// The point files' format [default: recognised from each file].
-    #[arg(long, value_enum)]
+    #[arg(long, value_parser = crate::cli::common::choice::<crate::import::PointsFormat>())]
     pub points_format: Option<crate::import::PointsFormat>,
     /// Column mapping of a generic CSV/TXT (implies --points-format generic): `target=1,x=2,y=3,z=4`
     /// (a point per row) or `id=1,a.x=2,a.y=3,a.z=4,…,q=11-17,split=18` (a configuration per row);
@@ -71,7 +71,7 @@ pub struct ImportArgs {
     #[arg(long, value_name = "N")]
     pub verify_last: Option<usize>,
     /// Length unit of point files that do not state theirs [default: mm; m for figaroh].
-    #[arg(long, value_enum)]
+    #[arg(long, value_parser = crate::cli::common::choice::<crate::import::PointUnit>())]
     pub length_unit: Option<crate::import::PointUnit>,
     /// Angle unit of the joint logs [default: the header's `[deg]`/`[rad]`, else deg].
     #[arg(long, value_enum)]
@@ -90,7 +90,7 @@ pub struct ImportArgs {
     /// How points find their configuration: target names `<id>_<reflector>`, file order, or time
     /// stamps [default: auto — by name where the names carry configuration ids, else by time where
     /// both files have time stamps, else by order where the counts agree].
-    #[arg(long = "match", value_enum, default_value_t = crate::import::MatchRule::Auto)]
+    #[arg(long = "match", value_parser = crate::cli::common::choice::<crate::import::MatchRule>(), default_value_t = crate::import::MatchRule::Auto)]
     pub matching: crate::import::MatchRule,
     /// The sheet of spreadsheet joint logs (.xlsx, .xls, .ods) [default: the first].
     #[arg(long, value_name = "NAME")]

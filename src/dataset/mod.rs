@@ -33,16 +33,7 @@ pub const MIN_CONFIGS: usize = 4;
 /// The calibration or verification configurations, or all of them: a measurement's `split` is
 /// `Cal` or `Ver`; an operation selects `Cal`, `Ver` or `All`.
 #[derive(
-    Clone,
-    Copy,
-    Debug,
-    PartialEq,
-    Eq,
-    Hash,
-    Default,
-    serde::Serialize,
-    serde::Deserialize,
-    clap::ValueEnum,
+    Clone, Copy, Debug, PartialEq, Eq, Hash, Default, serde::Serialize, serde::Deserialize,
 )]
 #[serde(rename_all = "lowercase")]
 pub enum Split {
@@ -51,6 +42,20 @@ pub enum Split {
     #[default]
     All,
 }
+
+impl crate::choice::Choice for Split {
+    const WHAT: &'static str = "split";
+
+    fn all() -> &'static [Self] {
+        &[Split::Cal, Split::Ver, Split::All]
+    }
+
+    fn spelling(self) -> &'static str {
+        self.name()
+    }
+}
+
+crate::choice_strings!(Split);
 
 impl Split {
     /// Whether a measurement of split `row` belongs to this selection.

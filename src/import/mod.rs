@@ -31,7 +31,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 /// How points are matched to the joint log's configurations.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum MatchRule {
     /// By name where the target names carry the joint log's configuration ids, else by time where
     /// both files have time stamps, else by order where the counts agree (the report says which and
@@ -48,6 +48,54 @@ pub enum MatchRule {
     /// from a name's `_<reflector>` suffix, else by order within the configuration.
     Time,
 }
+
+impl crate::choice::Choice for MatchRule {
+    const WHAT: &'static str = "matching rule";
+
+    fn all() -> &'static [Self] {
+        &[
+            MatchRule::Auto,
+            MatchRule::Name,
+            MatchRule::Order,
+            MatchRule::Time,
+        ]
+    }
+
+    fn spelling(self) -> &'static str {
+        match self {
+            MatchRule::Auto => "auto",
+            MatchRule::Name => "name",
+            MatchRule::Order => "order",
+            MatchRule::Time => "time",
+        }
+    }
+
+    fn help(self) -> Option<&'static str> {
+        Some(match self {
+            MatchRule::Auto => {
+                "By name where the target names carry the joint log's configuration ids, else by \
+                 time where both files have time stamps, else by order where the counts agree (the \
+                 report says which and why; counts that disagree are an error saying where the two \
+                 sequences part)"
+            }
+            MatchRule::Name => {
+                "Target names `<id>_<reflector>` (`L012_a`) against the joint log's ids"
+            }
+            MatchRule::Order => {
+                "The points in file order, one group of every reflector (in the dataset's order) \
+                 per configuration of the joint log; consecutive shots within 1 mm of each other \
+                 are one shot repeated (averaged)"
+            }
+            MatchRule::Time => {
+                "Each point to the configuration with the nearest time stamp within the tolerance; \
+                 the reflector from a name's `_<reflector>` suffix, else by order within the \
+                 configuration"
+            }
+        })
+    }
+}
+
+crate::choice_strings!(MatchRule);
 
 /// One arm's input files.
 #[derive(Clone, Debug, PartialEq)]

@@ -258,7 +258,7 @@ pub fn number(field: &str, decimal_comma: bool) -> Option<f64> {
 }
 
 /// A length unit of a point file.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum PointUnit {
     #[default]
     Mm,
@@ -266,6 +266,39 @@ pub enum PointUnit {
     Um,
     In,
     Ft,
+}
+
+impl crate::choice::Choice for PointUnit {
+    const WHAT: &'static str = "length unit";
+
+    fn all() -> &'static [Self] {
+        &[
+            PointUnit::Mm,
+            PointUnit::M,
+            PointUnit::Um,
+            PointUnit::In,
+            PointUnit::Ft,
+        ]
+    }
+
+    /// ASCII spellings (`um` for µm).
+    fn spelling(self) -> &'static str {
+        match self {
+            PointUnit::Mm => "mm",
+            PointUnit::M => "m",
+            PointUnit::Um => "um",
+            PointUnit::In => "in",
+            PointUnit::Ft => "ft",
+        }
+    }
+}
+
+impl std::str::FromStr for PointUnit {
+    type Err = crate::choice::UnknownChoice;
+
+    fn from_str(text: &str) -> Result<Self, Self::Err> {
+        <PointUnit as crate::choice::Choice>::parse_choice(text)
+    }
 }
 
 impl PointUnit {

@@ -160,7 +160,7 @@ fn by_spelling<T: Copy, E: serde::de::Error>(
 
 mod qp_spelling {
     use super::*;
-    use clap::ValueEnum;
+    use crate::choice::Choice;
 
     pub fn serialize<S: serde::Serializer>(qp: &QpMethod, s: S) -> Result<S::Ok, S::Error> {
         s.serialize_str(qp_spelling(*qp))
@@ -168,13 +168,13 @@ mod qp_spelling {
 
     pub fn deserialize<'de, D: serde::Deserializer<'de>>(d: D) -> Result<QpMethod, D::Error> {
         let text = String::deserialize(d)?;
-        by_spelling(QpMethod::value_variants(), qp_spelling, "QP solver", &text)
+        by_spelling(QpMethod::all(), qp_spelling, "QP solver", &text)
     }
 }
 
 mod split_spelling {
     use super::*;
-    use clap::ValueEnum;
+    use crate::choice::Choice;
 
     pub fn serialize<S: serde::Serializer>(split: &Split, s: S) -> Result<S::Ok, S::Error> {
         s.serialize_str(split_spelling(*split))
@@ -182,7 +182,7 @@ mod split_spelling {
 
     pub fn deserialize<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Split, D::Error> {
         let text = String::deserialize(d)?;
-        by_spelling(Split::value_variants(), split_spelling, "split", &text)
+        by_spelling(Split::all(), split_spelling, "split", &text)
     }
 }
 

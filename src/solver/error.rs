@@ -1,7 +1,6 @@
 //! Why a calibration could not run.
 
 use crate::side::Side;
-use crate::solver::methods::table::Method;
 use crate::solver::types::Stage;
 
 /// Why a calibration could not run: bad input, non-finite values, rank deficiency. How a run ended
@@ -11,8 +10,8 @@ use crate::solver::types::Stage;
 pub enum CalibrationError {
     #[error(
         "{side} arm: {found} configurations in the selected split (after exclusions), at least {needed} \
-         are needed to identify the arm's parameters by method `{}` ({}; {params} parameters; the paper \
-         uses 120)", method.name(), method.count_rule()
+         are needed to identify the arm's parameters by method `{method}` ({count_rule}; {params} \
+         parameters; the paper uses 120)"
     )]
     TooFewConfigurations {
         side: Side,
@@ -20,7 +19,10 @@ pub enum CalibrationError {
         needed: usize,
         /// The arm's identifiable parameters (by distances).
         params: usize,
-        method: Method,
+        /// The method's name.
+        method: &'static str,
+        /// How the method counts what it needs ([`crate::solver::Method::count_rule`]).
+        count_rule: &'static str,
     },
     #[error(
         "{side} arm: configuration `{id}` has {found} joint values, the arm's model has {expected} joints"
@@ -46,9 +48,15 @@ pub enum CalibrationError {
     /// The arms share joints (a torso) and the method has no fit of both arms at once.
     #[error(
         "the arms share joint(s) {joints}: their corrections must be identified once, from both arms' \
-         data, and method `{}` cannot fit both arms at once; use {}", method.name(), tree_methods()
+         data, and method `{method}` cannot fit both arms at once; use {alternatives}"
     )]
-    SharedJointsUnsupported { joints: String, method: Method },
+    SharedJointsUnsupported {
+        joints: String,
+        /// The method's name.
+        method: &'static str,
+        /// The methods that can (`\`minimax\` or \`lsq\``).
+        alternatives: String,
+    },
     /// Settings that do not fit together (e.g. a reflector chosen for a method that uses all three).
     #[error("invalid calibration settings: {0}")]
     InvalidSettings(String),
@@ -63,14 +71,4 @@ pub enum CalibrationError {
         id: String,
         area_mm2: f64,
     },
-}
-
-/// The methods that fit both arms at once (robots whose arms share joints), for messages.
-fn tree_methods() -> String {
-    Method::ALL
-        .iter()
-        .filter(|m| m.spec().tree_set_up.is_some())
-        .map(|m| format!("`{}`", m.name()))
-        .collect::<Vec<_>>()
-        .join(" or ")
 }

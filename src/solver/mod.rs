@@ -30,7 +30,7 @@
 //! The folder by kind: [`problems`] (what each stage minimises), [`algorithms`] (the solvers that
 //! minimise it), [`methods`] (the table of methods, each setting its stage up), [`run`] (the executor
 //! and its entry point), [`analysis`] (identifiability, uncertainty); the types they share in
-//! [`types`] and [`error`], a run's outcome in [`result`]. This file only declares and re-exports:
+//! [`types`] and [`error`], a run's [`settings`], a run's outcome in [`result`]. This file only declares and re-exports:
 //! every `crate::solver::X` path of the rest of the crate is one of the lines below.
 
 pub mod algorithms;
@@ -40,6 +40,7 @@ pub mod methods;
 pub mod problems;
 pub mod result;
 pub mod run;
+pub mod settings;
 pub mod types;
 
 pub use algorithms::stage::{IterState, StageSolver};
@@ -55,8 +56,9 @@ pub use run::{
     CalibrationRun, Calibrator, Observer, Progress, default_method, default_method_reason,
     planned_stages,
 };
+pub use settings::CalibrationSettings;
 pub use types::{
-    CalibrationEvent, CalibrationSettings, DIVERGED_ANGLE_RAD, DIVERGED_LENGTH_MM, Hessian,
-    IterationRecord, QpMethod, Reflector, Stage, StageSummary, Termination, identifiable_params,
+    CalibrationEvent, DIVERGED_ANGLE_RAD, DIVERGED_LENGTH_MM, Hessian, IterationRecord, QpMethod,
+    Reflector, Stage, StageOptions, StageSummary, Termination, identifiable_params,
     min_configurations,
 };

@@ -5,8 +5,9 @@ use crate::kinematics::DualArmModel;
 use crate::metrics::{ConfigResiduals, MetricsError, PairKind, PairResiduals};
 use crate::side::{PerSide, Side};
 use crate::solver::analysis::identifiability::IdentifiabilityReport;
+use crate::solver::settings::CalibrationSettings;
 use crate::solver::types::{
-    CalibrationSettings, IterationRecord, QpMethod, Reflector, Stage, StageSummary, Termination,
+    IterationRecord, QpMethod, Reflector, Stage, StageSummary, Termination,
 };
 use nalgebra::Isometry3;
 

@@ -1,14 +1,11 @@
-//! The types the solver's parts share: the settings of a run, its stages, how a stage ended, the
+//! The types the solver's parts share: the options a stage is given, its stages, how a stage ended, the
 //! progress records and events, and the limits a stage is held to.
 
-use crate::dataset::Split;
-use crate::kinematics::ErrorTerms;
-use crate::side::{ConfigId, PerSide, Side};
-use crate::solver::methods::table::{BaseMethod, Method};
+use crate::side::Side;
 use serde::{Deserialize, Serialize};
 
 /// How the QP subproblem of each SQP iteration is solved.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum QpMethod {
     /// The paper's primal-dual subgradient method, eqs. (29)–(31).
@@ -18,8 +15,30 @@ pub enum QpMethod {
     Exact,
 }
 
+impl crate::choice::Choice for QpMethod {
+    const WHAT: &'static str = "QP solver";
+
+    fn all() -> &'static [Self] {
+        &[QpMethod::Paper, QpMethod::Exact]
+    }
+
+    fn spelling(self) -> &'static str {
+        match self {
+            QpMethod::Paper => "paper",
+            QpMethod::Exact => "exact",
+        }
+    }
+
+    fn help(self) -> Option<&'static str> {
+        Some(match self {
+            QpMethod::Paper => "The paper's primal-dual subgradient method, eqs. (29)–(31)",
+            QpMethod::Exact => "An exact dual active-set solution of the same QP",
+        })
+    }
+}
+
 /// The curvature model of the SQP's quadratic subproblems (the Hessian of the Lagrangian).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Hessian {
     /// Gauss–Newton curvature of the active sums, `Σ_k λ_k ∇²F_k ≈ Σ_k λ_k 2 J_kᵀJ_k` with the QP's
@@ -44,19 +63,51 @@ impl Hessian {
     }
 
     /// What parameter files written before the setting existed used.
-    fn of_older_files() -> Self {
+    pub(crate) fn of_older_files() -> Self {
         Hessian::Bfgs
     }
 
     /// The paper's BFGS (written in parameter files only when another curvature was used).
-    fn is_bfgs(&self) -> bool {
+    pub(crate) fn is_bfgs(&self) -> bool {
         *self == Hessian::Bfgs
     }
 }
 
+impl crate::choice::Choice for Hessian {
+    const WHAT: &'static str = "curvature";
+
+    fn all() -> &'static [Self] {
+        &[Hessian::GaussNewton, Hessian::Bfgs]
+    }
+
+    fn spelling(self) -> &'static str {
+        self.name()
+    }
+
+    fn help(self) -> Option<&'static str> {
+        Some(match self {
+            Hessian::GaussNewton => {
+                "Gauss–Newton curvature of the active sums, `Σ_k λ_k ∇²F_k ≈ Σ_k λ_k 2 J_kᵀJ_k` with \
+                 the QP's multipliers (a small floor keeps every reflector's curvature): exact for the \
+                 residual-free part of the paper's sums of squares, recomputed at every iterate. On \
+                 ill-conditioned data with unmodelled errors it converges as least squares does \
+                 (docs/solver.md, \"Curvature\")"
+            }
+            Hessian::Bfgs => {
+                "The paper's BFGS update of the Lagrangian's Hessian (Powell's damping), started \
+                 from the Gauss–Newton matrix: the method of Algorithm I as published (the default \
+                 until the Gauss–Newton curvature has been through the whole test suite as the \
+                 default)"
+            }
+        })
+    }
+}
+
+crate::choice_strings!(QpMethod, Hessian);
+
 /// The first, second or third reflector of the dataset (`a`, `b`, `c` in the paper's set-up; by position
 /// in the dataset's order whatever their names), for the single-reflector method.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Reflector {
     A,
@@ -85,105 +136,42 @@ impl Reflector {
     }
 }
 
+impl crate::choice::Choice for Reflector {
+    const WHAT: &'static str = "reflector";
+
+    fn all() -> &'static [Self] {
+        &Self::ALL
+    }
+
+    fn spelling(self) -> &'static str {
+        self.name()
+    }
+}
+
 impl std::fmt::Display for Reflector {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(self.name())
     }
 }
 
-/// Settings of a calibration run.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct CalibrationSettings {
-    /// Configurations used for identification (`cal` or `all`).
-    pub split: Split,
-    /// Step 1's method (each arm).
-    pub method: Method,
-    /// Step 2's method (the right-arm base); files without it mean the paper's minimax.
-    #[serde(default)]
-    pub base_method: BaseMethod,
-    /// The reflector of [`Method::DistanceSingle`] (`None`: the one with the largest nominal error,
-    /// chosen per arm); refused with any other method.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub reflector: Option<Reflector>,
+/// What a stage's set-up and solver are told of the run's settings
+/// ([`crate::solver::CalibrationSettings::stage_options`]): the QP, the curvature, the tolerances.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StageOptions {
+    /// How the SQP's QP subproblems are solved.
     pub qp: QpMethod,
-    /// The SQP's curvature model (files without it were computed with BFGS).
-    #[serde(
-        default = "Hessian::of_older_files",
-        skip_serializing_if = "Hessian::is_bfgs"
-    )]
+    /// The SQP's curvature model.
     pub hessian: Hessian,
-    /// Outer SQP iterations per stage.
-    pub max_iterations: usize,
     /// Stop when the scaled parameter step norm falls below this.
     pub step_tolerance: f64,
-    /// Also stop (as converged) when ψ fell by less than this, relative, over the last five outer
-    /// iterations; 0 disables the rule and leaves only the step-norm test.
-    #[serde(default = "default_progress_tolerance")]
+    /// Also stop when ψ fell by less than this, relative, over the last five outer iterations.
     pub progress_tolerance: f64,
     /// Iterations of the paper's subgradient QP solver per outer iteration.
     pub max_qp_iterations: usize,
-    /// Configurations left out of the identification (suspect measurements: see
-    /// [`crate::quality`]). Indices refer to the dataset given to the calibration.
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub exclude: Vec<ConfigId>,
-    /// Fit only the tracker frame and the reflector coordinates, the kinematic parameters held at the
-    /// start model's (the absolute methods only; no step 2): the nominal robot's figure with its frame
-    /// and markers fitted.
-    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    /// The absolute methods: fit only the tracker frame and the reflectors.
     pub hold_kinematics: bool,
-    /// The model's errors beyond geometry, identified with it by step 1's method
-    /// ([`crate::kinematics::joint_errors`]); geometric (the paper's) by default.
-    #[serde(default, skip_serializing_if = "ErrorTerms::is_geometric")]
-    pub model: ErrorTerms,
-    /// Gravity's direction in the left arm's model base frame, for the elastic terms (`None`: −z of that
-    /// frame; the command line and the workbench give the robot's: −z of its root link).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub gravity_in_left_base: Option<[f64; 3]>,
-    /// The elastic terms' held lumped masses per arm — per movable joint kg and first moment kg·mm in
-    /// the next joint frame — from the robot description's inertials
-    /// ([`crate::robot::RobotDescription::lumped_masses`]); `None`: 1 kg at each next joint.
-    #[serde(default, skip_serializing_if = "no_masses")]
-    pub held_masses: PerSide<Option<crate::kinematics::joint_errors::LinkMasses>>,
-    /// Gear ratios (motor turns per joint turn) by joint name: with harmonics in the model, the
-    /// motor's harmonics are identified too for each joint whose ratio is not ±1 (the command line
-    /// and the workbench give the URDF's `<transmission>` reductions, `--gear-ratio` overrides).
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub gear_ratios: Vec<(String, f64)>,
-}
-
-fn no_masses(m: &PerSide<Option<crate::kinematics::joint_errors::LinkMasses>>) -> bool {
-    m.left.is_none() && m.right.is_none()
-}
-
-fn default_progress_tolerance() -> f64 {
-    crate::solver::algorithms::sqp::PROGRESS_RTOL
-}
-
-impl Default for CalibrationSettings {
-    fn default() -> Self {
-        Self {
-            split: Split::Cal,
-            method: Method::Minimax,
-            base_method: BaseMethod::Minimax,
-            reflector: None,
-            qp: QpMethod::Exact,
-            hessian: Hessian::Bfgs,
-            // The command line's `--max-iterations` default too, so that the workbench and the
-            // library end a stage where `dualcal calibrate` does: a minimax stage at a three-way tie
-            // with a vanishing multiplier can crawl for more than 100 iterations before "ψ
-            // stationary" (docs/planning.md, *The estimator*: 175 on a public-YuMi simulation).
-            max_iterations: 200,
-            step_tolerance: 1e-8,
-            progress_tolerance: default_progress_tolerance(),
-            max_qp_iterations: 2000,
-            exclude: Vec::new(),
-            hold_kinematics: false,
-            model: ErrorTerms::GEOMETRIC,
-            gravity_in_left_base: None,
-            held_masses: PerSide::default(),
-            gear_ratios: Vec::new(),
-        }
-    }
+    /// The single-reflector method's reflector (`None`: the one with the largest nominal error).
+    pub reflector: Option<Reflector>,
 }
 
 /// Which part of the two-step calibration.

@@ -1,6 +1,6 @@
 //! `dualcal calibrate`'s arguments, and the parser of `--gear-ratio`.
 
-use crate::cli::common::parse_xyz;
+use crate::cli::common::{choice, parse_xyz};
 use crate::dataset::Split;
 use crate::solver::{BaseMethod, Method, QpMethod};
 use clap::Args;
@@ -10,27 +10,27 @@ use std::path::PathBuf;
 pub struct CalibrateArgs {
     /// Dataset directory or its dataset.toml.
     pub dataset: PathBuf,
-    #[arg(long, value_enum, default_value_t = Split::Cal)]
+    #[arg(long, value_parser = choice::<Split>(), default_value_t = Split::Cal)]
     pub split: Split,
     /// Step 1 (each arm): what is fitted, and how (the methods' table; see docs/solver.md)
     /// [default: minimax; position where the data call for it — one marker per hand, both measured
     /// together in one tracker frame — so that the camera frame is identified].
-    #[arg(long, value_enum)]
+    #[arg(long, value_parser = choice::<Method>())]
     pub method: Option<Method>,
     /// Step 2 (the right-arm base in the left-arm base): what is fitted, and how.
-    #[arg(long, value_enum, default_value_t = BaseMethod::Minimax)]
+    #[arg(long, value_parser = choice::<BaseMethod>(), default_value_t = BaseMethod::Minimax)]
     pub base_method: BaseMethod,
     /// With `--method distance-single`: the reflector whose distances are fitted, by its name in
     /// the dataset's `[reflectors]` (or `a`, `b`, `c` for the first three by position); default: the
     /// one with the largest nominal error, per arm (the summary and the parameter file say which).
     #[arg(long, value_name = "NAME")]
     pub reflector: Option<String>,
-    #[arg(long, value_enum, default_value_t = QpMethod::Exact)]
+    #[arg(long, value_parser = choice::<QpMethod>(), default_value_t = QpMethod::Exact)]
     pub qp: QpMethod,
     /// The SQP's curvature: `bfgs` (the paper's update) or `gauss-newton` (Σ λ_k 2 J_kᵀJ_k of the
     /// active sums, recomputed at each iterate: on ill-conditioned data with unmodelled errors about
     /// half the iterations; docs/solver.md, "Curvature").
-    #[arg(long, value_enum, default_value_t = crate::solver::Hessian::Bfgs)]
+    #[arg(long, value_parser = choice::<crate::solver::Hessian>(), default_value_t = crate::solver::Hessian::Bfgs)]
     pub hessian: crate::solver::Hessian,
     /// Where to write the parameters (dualcal-params/1 JSON).
     #[arg(long)]

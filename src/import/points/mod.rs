@@ -20,11 +20,10 @@ pub use cells::Array;
 pub use mapping::{CellRef, ColumnMap, ColumnRef, ColumnRole, Formula, Source};
 
 /// The formats of point files.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum PointsFormat {
     /// SpatialAnalyzer ASCII/CSV export: optional `//` header lines, optional column names, name
     /// columns (`Collection Group Target`, `Group Target`, `Target` or none), then X Y Z.
-    #[value(name = "spatial-analyzer", alias = "sa")]
     SpatialAnalyzer,
     /// Leica Tracker Pilot CSV: `X  [mm],Y  [mm],Z  [mm],…,Target,…,Time Stamp,…`.
     Leica,
@@ -32,6 +31,60 @@ pub enum PointsFormat {
     Figaroh,
     /// Any CSV/TXT with a column mapping (`--columns`).
     Generic,
+}
+
+impl crate::choice::Choice for PointsFormat {
+    const WHAT: &'static str = "point file format";
+
+    fn all() -> &'static [Self] {
+        &[
+            PointsFormat::SpatialAnalyzer,
+            PointsFormat::Leica,
+            PointsFormat::Figaroh,
+            PointsFormat::Generic,
+        ]
+    }
+
+    fn spelling(self) -> &'static str {
+        match self {
+            PointsFormat::SpatialAnalyzer => "spatial-analyzer",
+            PointsFormat::Leica => "leica",
+            PointsFormat::Figaroh => "figaroh",
+            PointsFormat::Generic => "generic",
+        }
+    }
+
+    fn aliases(self) -> &'static [&'static str] {
+        match self {
+            PointsFormat::SpatialAnalyzer => &["sa"],
+            _ => &[],
+        }
+    }
+
+    fn help(self) -> Option<&'static str> {
+        Some(match self {
+            PointsFormat::SpatialAnalyzer => {
+                "SpatialAnalyzer ASCII/CSV export: optional `//` header lines, optional column \
+                 names, name columns (`Collection Group Target`, `Group Target`, `Target` or none), \
+                 then X Y Z"
+            }
+            PointsFormat::Leica => {
+                "Leica Tracker Pilot CSV: `X  [mm],Y  [mm],Z  [mm],…,Target,…,Time Stamp,…`"
+            }
+            PointsFormat::Figaroh => {
+                "figaroh's calibration CSV: `x1,y1,z1,…` per marker, then one column per joint (m, rad)"
+            }
+            PointsFormat::Generic => "Any CSV/TXT with a column mapping (`--columns`)",
+        })
+    }
+}
+
+impl std::str::FromStr for PointsFormat {
+    type Err = crate::choice::UnknownChoice;
+
+    fn from_str(text: &str) -> Result<Self, Self::Err> {
+        <PointsFormat as crate::choice::Choice>::parse_choice(text)
+    }
 }
 
 impl PointsFormat {

@@ -486,7 +486,7 @@ pub fn for_result_reusing(
 /// [`arm_uncertainty`] of `side`'s fitted configurations of `kept` (the split `settings` fits).
 fn arm_uncertainty_on(
     kept: &crate::dataset::Dataset,
-    settings: &crate::solver::types::CalibrationSettings,
+    settings: &crate::solver::settings::CalibrationSettings,
     side: crate::side::Side,
     arm: &ArmModel,
     free: &[usize],
@@ -511,7 +511,7 @@ impl EarlyArmUncertainty {
     /// `settings` fit it.
     pub fn new(
         dataset: &crate::dataset::Dataset,
-        settings: &crate::solver::types::CalibrationSettings,
+        settings: &crate::solver::settings::CalibrationSettings,
         side: crate::side::Side,
         arm: ArmModel,
         free: Vec<usize>,

@@ -89,7 +89,7 @@ fn set_up(
         .absolute_probe(data, start, (0..n_params).collect())?;
     let gram = probe.gram();
     // Held kinematics: only the reflector coordinates and the transform are free.
-    let hold = s.settings.hold_kinematics;
+    let hold = s.options.hold_kinematics;
     let allowed: Vec<bool> = (0..n_params + 6)
         .map(|p| !hold || p >= start.reflector_offset())
         .collect();
@@ -118,7 +118,7 @@ fn set_up(
         free.iter().copied().chain(n_params..n_params + 6),
     ));
     Ok(ArmStage {
-        solver: least_squares_solver(probe.with_free(free, scale), algorithm, s.settings),
+        solver: least_squares_solver(probe.with_free(free, scale), algorithm, &s.options),
         identifiability: arm_report,
         reflector: None,
     })
@@ -172,7 +172,7 @@ fn tree_set_up(
     let n_x = layout.len;
     let transform = n_x..n_x + 6;
     let gram = tree_gram(&probes, &layout);
-    let hold = s.settings.hold_kinematics;
+    let hold = s.options.hold_kinematics;
     let allowed: Vec<bool> = (0..n_x + 6)
         .map(|x| {
             !hold || x >= n_x || {
@@ -204,7 +204,7 @@ fn tree_set_up(
         solver: least_squares_solver(
             TreeAbsoluteProblem::new(probes, &layout, &free, &scale),
             algorithm,
-            s.settings,
+            &s.options,
         ),
         identifiability: reports,
     })

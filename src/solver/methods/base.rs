@@ -27,7 +27,7 @@ pub const MINIMAX: BaseMethodSpec = BaseMethodSpec {
     solver: SolverKind::Sqp,
     set_up: |s| {
         let (problem, h0) = s.collaborative_distances()?;
-        sqp_solver(problem, Stage::Base, h0, s.settings)
+        sqp_solver(problem, Stage::Base, h0, &s.options)
     },
 };
 
@@ -52,7 +52,7 @@ pub const DISTANCE: BaseMethodSpec = BaseMethodSpec {
         Ok(least_squares_solver(
             problem,
             LsqAlgorithm::GaussNewton,
-            s.settings,
+            &s.options,
         ))
     },
 };
@@ -97,6 +97,6 @@ fn absolute(s: &BaseSetUp) -> Result<Box<dyn StageSolver>, CalibrationError> {
     Ok(least_squares_solver(
         BaseAbsoluteProblem { arms },
         LsqAlgorithm::GaussNewton,
-        s.settings,
+        &s.options,
     ))
 }

@@ -38,7 +38,7 @@ fn set_up(s: &ArmSetUp) -> Result<ArmStage, CalibrationError> {
     let n_params = start.param_count();
     let probe = s.data.distance_probe(start);
     let reflector = s
-        .settings
+        .options
         .reflector
         .unwrap_or_else(|| worst_reflector(&probe.start_objectives_mm2()));
     let k = reflector.index();
@@ -76,7 +76,7 @@ fn set_up(s: &ArmSetUp) -> Result<ArmStage, CalibrationError> {
         reflectors: mask,
     };
     Ok(ArmStage {
-        solver: least_squares_solver(problem, LsqAlgorithm::GaussNewton, s.settings),
+        solver: least_squares_solver(problem, LsqAlgorithm::GaussNewton, &s.options),
         identifiability: report,
         reflector: Some(reflector),
     })

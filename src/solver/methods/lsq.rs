@@ -35,7 +35,7 @@ fn set_up(s: &ArmSetUp) -> Result<ArmStage, CalibrationError> {
         problem: start.problem,
     };
     Ok(ArmStage {
-        solver: least_squares_solver(problem, LsqAlgorithm::LevenbergMarquardt, s.settings),
+        solver: least_squares_solver(problem, LsqAlgorithm::LevenbergMarquardt, &s.options),
         identifiability: start.report,
         reflector: None,
     })
@@ -49,7 +49,7 @@ fn tree_set_up(s: &TreeSetUp) -> Result<TreeStage, CalibrationError> {
         problem: start.problem,
     };
     Ok(TreeStage {
-        solver: least_squares_solver(problem, LsqAlgorithm::LevenbergMarquardt, s.settings),
+        solver: least_squares_solver(problem, LsqAlgorithm::LevenbergMarquardt, &s.options),
         identifiability: start.reports,
     })
 }

@@ -29,7 +29,7 @@ pub const MINIMAX: MethodSpec = MethodSpec {
 fn set_up(s: &ArmSetUp) -> Result<ArmStage, CalibrationError> {
     let start = s.all_distances()?;
     Ok(ArmStage {
-        solver: sqp_solver(start.problem, s.stage(), start.h0, s.settings)?,
+        solver: sqp_solver(start.problem, s.stage(), start.h0, &s.options)?,
         identifiability: start.report,
         reflector: None,
     })
@@ -40,7 +40,7 @@ fn set_up(s: &ArmSetUp) -> Result<ArmStage, CalibrationError> {
 fn tree_set_up(s: &TreeSetUp) -> Result<TreeStage, CalibrationError> {
     let start = s.all_distances()?;
     Ok(TreeStage {
-        solver: sqp_solver(start.problem, Stage::Arms, start.h0, s.settings)?,
+        solver: sqp_solver(start.problem, Stage::Arms, start.h0, &s.options)?,
         identifiability: start.reports,
     })
 }

@@ -19,7 +19,7 @@ use crate::solver::problems::arm_problem::ArmProblem;
 use crate::solver::problems::base_problem::BaseProblem;
 use crate::solver::problems::problem::MinimaxProblem;
 use crate::solver::problems::tree_problem::{TreeLayout, TreeProblem};
-use crate::solver::types::{CalibrationSettings, Reflector, Stage};
+use crate::solver::types::{Reflector, Stage, StageOptions};
 use nalgebra::{DMatrix, DVector, Isometry3, Vector3};
 
 /// Pairs per reflector sampled for identifiability, column scaling and the start Hessian.
@@ -209,14 +209,14 @@ pub fn sqp_solver<P: MinimaxProblem + 'static>(
     problem: P,
     stage: Stage,
     h0: DMatrix<f64>,
-    settings: &CalibrationSettings,
+    options: &StageOptions,
 ) -> Result<Box<dyn StageSolver>, CalibrationError> {
     let sqp = SqpSettings {
-        qp: settings.qp,
-        hessian: settings.hessian,
-        step_tolerance: settings.step_tolerance,
-        progress_tolerance: settings.progress_tolerance,
-        max_qp_iterations: settings.max_qp_iterations,
+        qp: options.qp,
+        hessian: options.hessian,
+        step_tolerance: options.step_tolerance,
+        progress_tolerance: options.progress_tolerance,
+        max_qp_iterations: options.max_qp_iterations,
     };
     Ok(Box::new(SqpState::new(problem, sqp, h0).map_err(|_| {
         CalibrationError::NonFinite {
@@ -230,9 +230,9 @@ pub fn sqp_solver<P: MinimaxProblem + 'static>(
 pub fn least_squares_solver<P: LeastSquaresProblem + 'static>(
     problem: P,
     algorithm: LsqAlgorithm,
-    settings: &CalibrationSettings,
+    options: &StageOptions,
 ) -> Box<dyn StageSolver> {
-    Box::new(LsqState::new(problem, algorithm, settings.step_tolerance))
+    Box::new(LsqState::new(problem, algorithm, options.step_tolerance))
 }
 
 /// What a step-1 method's set-up is given: the arm's data, its start model, the settings.
@@ -240,7 +240,7 @@ pub struct ArmSetUp<'a> {
     pub data: &'a ArmData,
     /// The arm's start (nominal) model.
     pub start: &'a ArmModel,
-    pub settings: &'a CalibrationSettings,
+    pub options: StageOptions,
 }
 
 /// What a step-1 method's set-up returns: the stage's solver and what it identifies.
@@ -290,7 +290,7 @@ pub struct TreeSetUp<'a> {
     pub data: &'a PerSide<ArmData>,
     pub start: &'a DualArmModel,
     pub shared: &'a SharedJoints,
-    pub settings: &'a CalibrationSettings,
+    pub options: StageOptions,
 }
 
 /// What a set-up for both arms at once returns: the stage's solver and each arm's identifiability
@@ -356,7 +356,7 @@ impl TreeSetUp<'_> {
 pub struct BaseSetUp<'a> {
     pub data: &'a PerSide<ArmData>,
     pub model: &'a DualArmModel,
-    pub settings: &'a CalibrationSettings,
+    pub options: StageOptions,
 }
 
 impl BaseSetUp<'_> {

@@ -192,6 +192,32 @@ impl std::fmt::Display for BaseMethod {
     }
 }
 
+/// By name, alias or parameter-file spelling.
+impl std::str::FromStr for Method {
+    type Err = crate::choice::UnknownChoice;
+
+    fn from_str(text: &str) -> Result<Self, Self::Err> {
+        Method::named(text).ok_or_else(|| crate::choice::UnknownChoice {
+            what: "method",
+            given: text.to_string(),
+            known: Method::ALL.iter().map(|m| m.name()).collect(),
+        })
+    }
+}
+
+/// By name or alias.
+impl std::str::FromStr for BaseMethod {
+    type Err = crate::choice::UnknownChoice;
+
+    fn from_str(text: &str) -> Result<Self, Self::Err> {
+        BaseMethod::named(text).ok_or_else(|| crate::choice::UnknownChoice {
+            what: "step-2 method",
+            given: text.to_string(),
+            known: BaseMethod::ALL.iter().map(|m| m.name()).collect(),
+        })
+    }
+}
+
 /// Serialised by name; read by name, alias or parameter-file spelling.
 impl Serialize for Method {
     fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
@@ -238,24 +264,36 @@ fn names<'a>(names: impl Iterator<Item = &'a str>) -> String {
 }
 
 /// The command line's `--method`: the table's names, each with its summary in `--help`.
-impl clap::ValueEnum for Method {
-    fn value_variants<'a>() -> &'a [Self] {
+impl crate::choice::Choice for Method {
+    const WHAT: &'static str = "method";
+
+    fn all() -> &'static [Self] {
         Method::ALL
     }
 
-    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
-        Some(clap::builder::PossibleValue::new(self.0.name).help(self.0.summary))
+    fn spelling(self) -> &'static str {
+        self.0.name
+    }
+
+    fn help(self) -> Option<&'static str> {
+        Some(self.0.summary)
     }
 }
 
 /// The command line's `--base-method`.
-impl clap::ValueEnum for BaseMethod {
-    fn value_variants<'a>() -> &'a [Self] {
+impl crate::choice::Choice for BaseMethod {
+    const WHAT: &'static str = "step-2 method";
+
+    fn all() -> &'static [Self] {
         BaseMethod::ALL
     }
 
-    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
-        Some(clap::builder::PossibleValue::new(self.0.name).help(self.0.summary))
+    fn spelling(self) -> &'static str {
+        self.0.name
+    }
+
+    fn help(self) -> Option<&'static str> {
+        Some(self.0.summary)
     }
 }
 

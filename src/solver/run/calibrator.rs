@@ -6,7 +6,7 @@ use crate::dataset::Dataset;
 use crate::kinematics::DualArmModel;
 use crate::solver::error::CalibrationError;
 use crate::solver::result::CalibrationResult;
-use crate::solver::types::CalibrationSettings;
+use crate::solver::settings::CalibrationSettings;
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 

@@ -17,9 +17,10 @@ use crate::solver::methods::set_up::{
 };
 use crate::solver::problems::problem::StageParams;
 use crate::solver::result::CalibrationResult;
+use crate::solver::settings::CalibrationSettings;
 use crate::solver::types::{
-    CalibrationEvent, CalibrationSettings, DIVERGED_ANGLE_RAD, DIVERGED_LENGTH_MM, IterationRecord,
-    Reflector, Stage, StageSummary, Termination,
+    CalibrationEvent, DIVERGED_ANGLE_RAD, DIVERGED_LENGTH_MM, IterationRecord, Reflector, Stage,
+    StageSummary, Termination,
 };
 use nalgebra::Isometry3;
 use std::collections::VecDeque;
@@ -440,7 +441,7 @@ impl CalibrationRun {
                 let set_up = ArmSetUp {
                     data: &self.inputs[side],
                     start: self.nominal.arm(side),
-                    settings: &self.settings,
+                    options: self.settings.stage_options(),
                 };
                 let arm = (self.settings.method.spec().set_up)(&set_up)?;
                 self.identifiability[side] = Some(arm.identifiability);
@@ -457,7 +458,7 @@ impl CalibrationRun {
                     data: &self.inputs,
                     start: &self.nominal,
                     shared: &self.shared,
-                    settings: &self.settings,
+                    options: self.settings.stage_options(),
                 };
                 let tree = tree_set_up(&set_up)?;
                 for (side, report) in tree.identifiability.into_iter() {
@@ -469,7 +470,7 @@ impl CalibrationRun {
                 let set_up = BaseSetUp {
                     data: &self.inputs,
                     model: &self.committed,
-                    settings: &self.settings,
+                    options: self.settings.stage_options(),
                 };
                 (self.settings.base_method.spec().set_up)(&set_up)?
             }

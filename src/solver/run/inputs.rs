@@ -7,7 +7,8 @@ use crate::side::{ConfigId, Side};
 use crate::solver::error::CalibrationError;
 use crate::solver::methods::set_up::ArmData;
 use crate::solver::methods::table::Method;
-use crate::solver::types::{CalibrationSettings, Stage, identifiable_params};
+use crate::solver::settings::CalibrationSettings;
+use crate::solver::types::{Stage, identifiable_params};
 use nalgebra::Vector3;
 
 /// Settings that cannot work together are refused before any work.
@@ -61,7 +62,8 @@ pub(super) fn arm_input(
             found: ms.len(),
             needed,
             params,
-            method: settings.method,
+            method: settings.method.name(),
+            count_rule: settings.method.count_rule(),
         });
     }
     let expected = nominal.arm(side).joint_count();
@@ -119,6 +121,17 @@ pub(super) fn unsupported(shared: &SharedJoints, method: Method) -> CalibrationE
             .map(|n| format!("`{n}`"))
             .collect::<Vec<_>>()
             .join(", "),
-        method,
+        method: method.name(),
+        alternatives: tree_methods(),
     }
+}
+
+/// The methods that fit both arms at once (robots whose arms share joints), for messages.
+fn tree_methods() -> String {
+    Method::ALL
+        .iter()
+        .filter(|m| m.spec().tree_set_up.is_some())
+        .map(|m| format!("`{}`", m.name()))
+        .collect::<Vec<_>>()
+        .join(" or ")
 }

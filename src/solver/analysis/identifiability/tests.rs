@@ -304,7 +304,7 @@ fn the_recheck_by_product_gives_the_qr_verdicts() {
     use crate::solver::methods::table::Method;
     use crate::solver::run::calibrator::Calibrator;
     use crate::solver::run::executor::CONDITION_GROWTH;
-    use crate::solver::types::CalibrationSettings;
+    use crate::solver::settings::CalibrationSettings;
     let urdf = |text: String, arms: [(&str, &str); 2]| {
         let options = LoadOptions {
             arms: PerSide::new(
