@@ -105,7 +105,8 @@ fn exclusions_are_left_out_and_too_few_are_refused() {
                 needed: 6,
                 params: 31,
                 method,
-            } if method == Method::Minimax
+                ..
+            } if method == Method::Minimax.name()
         ),
         "{err}"
     );
