@@ -1380,11 +1380,11 @@ fn the_robot_section_lists_prismatic_and_mimic_joints() {
     assert_eq!(harness.query_all_by_label("q7").count(), 0);
 }
 
-/// A run's end moves nothing (the Calibrate button, the plots' tabs, the registration RMS stay
-/// where they were), and the status line saying how it ended, longer than the window is wide, keeps
-/// to its one line left of the registration RMS (elided, the whole on hover).
+/// In a window narrower than the status line saying how a run ended, the line keeps to its one line
+/// left of the registration RMS (elided, the whole on hover), and the bottom of the window moves
+/// nothing either (the plots' tabs, the RMS; `a_finished_run_moves_no_control` checks the left panel).
 #[test]
-fn the_layout_stays_when_a_run_ends_and_a_long_status_keeps_to_its_line() {
+fn a_long_status_line_keeps_to_its_line_left_of_the_registration_rms() {
     let mut harness = harness([1024.0, 768.0], AppLaunch::default());
     loaded(&mut harness);
     let places = |harness: &Harness<'_, WorkbenchApp>| {
