@@ -4,6 +4,7 @@
 //!
 //! ```sh
 //! cargo run --release --example workbench_pictures -- workbench        # README: docs/workbench-yumi.png
+//! cargo run --release --example workbench_pictures -- layout           # README: docs/screenshot-1280x800.png
 //! cargo run --release --example workbench_pictures -- meshes           # docs/performance.md: yumi-*.png
 //! cargo run --release --example workbench_pictures -- compare          # README: docs/compare-methods.png
 //! cargo run --release --example workbench_pictures -- beyond-geometry  # docs/solver.md
@@ -14,6 +15,9 @@
 //!   simulated with the public YuMi description, see docs/performance.md), after Auto-exclude, the
 //!   most severe flagged configuration selected (its row struck through in the table, its flag
 //!   beside it). Window size `DUALCAL_SCREENSHOT_SIZE` (default 1280x800).
+//! - `layout`: the workbench on the bundled example after a calibration, the convergence plots of
+//!   its last step and the status line saying how it ended (window size `DUALCAL_SCREENSHOT_SIZE`,
+//!   default 1280x800; 1920x1080 for docs/screenshot-1920x1080.png).
 //! - `meshes`: the robot's meshes as the viewport draws them, the viewport alone (no panels), only
 //!   the robot and the grid, with the mesh detail `DUALCAL_MESH_DETAIL` chooses
 //!   (`DUALCAL_SCREENSHOT_DATASET=DIR`; size `DUALCAL_SCREENSHOT_SIZE`, default 640x480).
@@ -43,12 +47,13 @@ fn main() -> anyhow::Result<()> {
     let what = std::env::args().nth(1).unwrap_or_default();
     match what.as_str() {
         "workbench" => workbench(),
+        "layout" => layout(),
         "meshes" => meshes(),
         "compare" => compare(),
         "beyond-geometry" => beyond_geometry(),
         "frame-time" => frame_time(),
         _ => anyhow::bail!(
-            "usage: workbench_pictures workbench|meshes|compare|beyond-geometry|frame-time"
+            "usage: workbench_pictures workbench|layout|meshes|compare|beyond-geometry|frame-time"
         ),
     }
 }
@@ -188,6 +193,21 @@ fn workbench() -> anyhow::Result<()> {
         options.show_ver = false;
     });
     save(&mut harness, "workbench")?;
+    Ok(())
+}
+
+fn layout() -> anyhow::Result<()> {
+    let size = size_from_env([1280.0, 800.0])?;
+    let mut harness = harness(size, None, true);
+    loaded(&mut harness)?;
+    harness.get_by_label("Calibrate").click();
+    harness.step();
+    step_until(&mut harness, MAX_RUN_FRAMES, "calibration", |app| {
+        !app.is_calibrating()
+    })?;
+    no_errors(&harness)?;
+    let name = format!("screenshot-{}x{}", size[0], size[1]);
+    save(&mut harness, &name)?;
     Ok(())
 }
 

@@ -1380,6 +1380,95 @@ fn the_robot_section_lists_prismatic_and_mimic_joints() {
     assert_eq!(harness.query_all_by_label("q7").count(), 0);
 }
 
+/// In a window narrower than the status line saying how a run ended, the line keeps to its one line
+/// left of the registration RMS (elided, the whole on hover), and the bottom of the window moves
+/// nothing either (the plots' tabs, the RMS; `a_finished_run_moves_no_control` checks the left panel).
+#[test]
+fn a_long_status_line_keeps_to_its_line_left_of_the_registration_rms() {
+    let mut harness = harness([1024.0, 768.0], AppLaunch::default());
+    loaded(&mut harness);
+    let places = |harness: &Harness<'_, WorkbenchApp>| {
+        [
+            harness.get_by_label("Calibrate").rect(),
+            harness.get_by_label("Convergence").rect(),
+            harness.get_by_label_contains("registration RMS").rect(),
+        ]
+    };
+    let before = places(&harness);
+    harness.get_by_label("Calibrate").click();
+    harness.step();
+    step_until(&mut harness, MAX_RUN_FRAMES, "calibration", |app| {
+        !app.is_calibrating()
+    });
+    harness.run_steps(2);
+    assert_eq!(places(&harness), before, "Calibrate, the tabs, the RMS");
+    let status = harness.get_by_label_contains("Calibration done").rect();
+    let rms = before[2];
+    assert!(
+        status.max.x <= rms.min.x,
+        "the status {status:?} reaches the registration RMS {rms:?}"
+    );
+    assert!(
+        status.height() < 1.5 * rms.height(),
+        "the status {status:?} is one line, as the RMS {rms:?}"
+    );
+}
+
+/// A one-arm dataset of a lifting column whose measured joint is a leader off the chain (the
+/// column's two stages on the chain mimic it, tests/column_mimic.rs): the robot section lists the
+/// leader as the arm's first column, under its own name and with its limits, before its followers.
+#[test]
+fn the_robot_section_lists_a_mimic_leader_off_the_chain_as_a_column() {
+    let dir = tempfile::tempdir().unwrap();
+    let urdf = robots::write_file(
+        dir.path(),
+        "column.urdf",
+        robots::column_mimic_urdf().as_bytes(),
+    );
+    let (base, tip) = robots::COLUMN_MIMIC_ARM;
+    let links = dualcal::robot::ArmLinks::new(base, tip);
+    let options = dualcal::robot::LoadOptions {
+        arms: PerSide::new(Some(links.clone()), Some(links.clone())),
+        ..Default::default()
+    };
+    let robot = dualcal::robot::RobotDescription::load(urdf.as_path(), &options).unwrap();
+    let sim = dualcal::simulate::simulate_with_robot(
+        &dualcal::simulate::paper_options(4, 40, 20),
+        &robot,
+    )
+    .unwrap();
+    let mut ds = sim.dataset.clone();
+    ds.robot = Some(urdf.clone());
+    ds.arms.left.links = Some(links);
+    ds.arms.right = dualcal::dataset::ArmData::not_measured(dualcal::side::Side::Right);
+    let data = dir.path().join("data");
+    dualcal::dataset::save(&ds, &data, dualcal::dataset::Units::MM_DEG).unwrap();
+    let mut harness = open_at(&data);
+    assert!(
+        harness.state().errors().is_empty(),
+        "{:?}",
+        harness.state().errors()
+    );
+    let leader = robot.arm(dualcal::side::Side::Left).chain.variables()[0].clone();
+    assert!(
+        leader.is_off_chain(),
+        "the fixture's first column is its leader"
+    );
+    harness.get_by_label("left joints and parameters").click();
+    harness.run_steps(2);
+    let row = harness.get_by_label(&leader.name).rect();
+    let (lo, hi) = leader.range();
+    harness.get_by_label(&format!("{lo:.1} … {hi:.1} mm"));
+    // Its row is the first column's, above the stages that follow it.
+    let q1 = harness.get_by_label("q1").rect();
+    assert!(
+        (q1.center().y - row.center().y).abs() < 1.0,
+        "{q1:?} {row:?}"
+    );
+    let mimic = harness.get_all_by_label("mimic").next().unwrap().rect();
+    assert!(mimic.min.y > row.max.y, "{mimic:?} below {row:?}");
+}
+
 /// The example's measurements as a tracker would export them (SpatialAnalyzer-style points
 /// `<id>_<reflector> x y z` under a `//` header) and a controller's joint log, per arm.
 fn tracker_files(dir: &std::path::Path) -> PerSide<(std::path::PathBuf, std::path::PathBuf)> {

@@ -23,31 +23,38 @@ fn log10(x: f64) -> Option<f64> {
     (x.is_finite() && x > 0.0).then(|| x.log10())
 }
 
-/// `10^k` axis labels for a log10 axis.
+/// `10^k` axis labels for a log10 axis: `1e2` on a decade, else as many digits as the marks' spacing
+/// tells apart (`2e1`, `5e1`; `2.2e1`, `2.4e1`).
 fn log_axis_label(mark: egui_plot::GridMark, _range: &std::ops::RangeInclusive<f64>) -> String {
     let v = mark.value;
     if (v - v.round()).abs() < 1e-9 {
-        format!("1e{}", v.round() as i64)
-    } else {
-        format!("{:.0e}", 10f64.powf(v))
+        return format!("1e{}", v.round() as i64);
     }
+    // Neighbours differ by the factor 10^step: the digits that tell a relative 10^step − 1 apart
+    // (none for the 2× and 5× marks).
+    let apart = 10f64.powf(mark.step_size) - 1.0;
+    let digits = (-apart.log10() - 0.05).ceil().clamp(0.0, 6.0) as usize;
+    format!("{:.digits$e}", 10f64.powf(v))
 }
 
+/// The spacing, points, at which egui_plot shows a y tick label at full strength (it hides those
+/// under 20 points apart and fades them in up to 30).
+const Y_LABEL_SPACING_PT: f64 = 30.0;
+
+/// Log10 axis: marks on whole decades, as many decades apart (1, 2, 5 × 10^k) as their labels need
+/// to show however many decades the curves span; 2× and 5× marks between decades when each decade
+/// has room; within one decade, marks within it, so a labelled mark is always inside the plot.
 fn log_spacer(input: egui_plot::GridInput) -> Vec<egui_plot::GridMark> {
     let (lo, hi) = input.bounds;
-    let (lo, hi) = (lo.floor() as i64, hi.ceil() as i64);
-    let span = (hi - lo).max(1);
-    let step = (span / 8).max(1);
-    let mut marks: Vec<egui_plot::GridMark> = (lo..=hi)
-        .filter(|k| k % step == 0)
-        .map(|k| egui_plot::GridMark {
-            value: k as f64,
-            step_size: step as f64,
-        })
-        .collect();
-    // Few decades in view: add 2× and 5× marks.
-    if span <= 3 {
-        for k in lo..hi {
+    if !(input.base_step_size > 0.0 && lo.is_finite() && hi.is_finite()) {
+        return Vec::new();
+    }
+    // The smallest spacing, in decades, at which labels show.
+    let label_spacing = points(&input, Y_LABEL_SPACING_PT);
+    let step = nice_step(label_spacing.max(1.0));
+    let mut marks: Vec<egui_plot::GridMark> = marks_apart((lo, hi), step);
+    if step <= 1.0 {
+        for k in lo.floor() as i64..hi.ceil() as i64 {
             for m in [2f64, 5.0] {
                 marks.push(egui_plot::GridMark {
                     value: k as f64 + m.log10(),
@@ -55,6 +62,14 @@ fn log_spacer(input: egui_plot::GridInput) -> Vec<egui_plot::GridMark> {
                 });
             }
         }
+    }
+    // No labelled mark clear of the ends (the curves within a decade): marks within it.
+    let margin = points(&input, Y_LABEL_MARGIN_PT);
+    let labelled_inside = marks
+        .iter()
+        .any(|m| m.step_size >= label_spacing && m.value >= lo + margin && m.value <= hi - margin);
+    if !labelled_inside {
+        marks = marks_apart((lo + margin, hi - margin), label_spacing);
     }
     marks
 }
@@ -71,19 +86,38 @@ pub const X_LABEL_MARGIN_PT: f64 = 12.0;
 /// `spacer`'s marks but those whose tick labels would reach out of the plot: a mark outside the
 /// bounds, or closer than `margin_pt` to either end (egui_plot centres a label on its mark and does
 /// not clip it to the plot, so a mark at the top edge puts half its label on what is above the
-/// plot). The plot's grid spacing must start at [`GRID_SPACING_MIN_PT`] ([`framed`]).
+/// plot). When none left is labelled (egui_plot labels marks at least `label_pt` apart), one
+/// labelled mark at a round value within: a plot always has a label on each axis. The plot's grid
+/// spacing must start at [`GRID_SPACING_MIN_PT`] ([`framed`]).
 pub fn labels_inside<'a>(
     spacer: impl Fn(egui_plot::GridInput) -> Vec<egui_plot::GridMark> + 'a,
     margin_pt: f64,
+    label_pt: f64,
 ) -> impl Fn(egui_plot::GridInput) -> Vec<egui_plot::GridMark> + 'a {
     move |input| {
         let (lo, hi) = input.bounds;
-        // `base_step_size` is the value of GRID_SPACING_MIN_PT points.
-        let margin = margin_pt * input.base_step_size / f64::from(GRID_SPACING_MIN_PT);
-        spacer(input)
+        let margin = points(&input, margin_pt);
+        let label_spacing = points(&input, label_pt);
+        let mut marks: Vec<egui_plot::GridMark> = spacer(input)
             .into_iter()
             .filter(|m| m.value >= lo + margin && m.value <= hi - margin)
-            .collect()
+            .collect();
+        let (inner_lo, inner_hi) = (lo + margin, hi - margin);
+        if !marks.iter().any(|m| m.step_size >= label_spacing) && inner_hi > inner_lo {
+            // The largest 1, 2, 5 × 10^k step, which has a multiple within.
+            let width = inner_hi - inner_lo;
+            let p = 10f64.powf(width.log10().floor());
+            let step = [5.0, 2.0, 1.0]
+                .into_iter()
+                .map(|m| m * p)
+                .find(|s| *s <= width)
+                .unwrap_or(p);
+            marks.push(egui_plot::GridMark {
+                value: (inner_lo / step).ceil() * step,
+                step_size: step.max(label_spacing),
+            });
+        }
+        marks
     }
 }
 
@@ -94,23 +128,58 @@ pub fn framed<'a>(
     y_spacer: impl Fn(egui_plot::GridInput) -> Vec<egui_plot::GridMark> + 'a,
 ) -> Plot<'a> {
     plot.grid_spacing(egui::Rangef::new(GRID_SPACING_MIN_PT, 300.0))
-        .x_grid_spacer(labels_inside(x_spacer, X_LABEL_MARGIN_PT))
-        .y_grid_spacer(labels_inside(y_spacer, Y_LABEL_MARGIN_PT))
+        .x_grid_spacer(labels_inside(
+            x_spacer,
+            X_LABEL_MARGIN_PT,
+            X_LABEL_SPACING_PT,
+        ))
+        .y_grid_spacer(labels_inside(
+            y_spacer,
+            Y_LABEL_MARGIN_PT,
+            Y_LABEL_SPACING_PT,
+        ))
 }
 
-/// Iteration axis: integer marks about a third of the range apart (1, 2, 5 × 10^k), so their
-/// labels have room.
+/// The spacing, points, at which egui_plot shows an x tick label at full strength (it hides those
+/// under 60 points apart and fades them in up to 80).
+const X_LABEL_SPACING_PT: f64 = 80.0;
+
+/// `pt` points in the axis's value.
+fn points(input: &egui_plot::GridInput, pt: f64) -> f64 {
+    pt * input.base_step_size / f64::from(GRID_SPACING_MIN_PT)
+}
+
+/// Iteration axis: integer marks about a third of the range apart (1, 2, 5 × 10^k), and far enough
+/// apart for their labels to show.
 fn iteration_spacer(input: egui_plot::GridInput) -> Vec<egui_plot::GridMark> {
-    marks_apart(
-        input.bounds,
-        ((input.bounds.1 - input.bounds.0) / 3.0).max(1.0),
-    )
+    let raw = ((input.bounds.1 - input.bounds.0) / 3.0)
+        .max(points(&input, X_LABEL_SPACING_PT))
+        .max(1.0);
+    marks_apart(input.bounds, raw)
 }
 
 /// Histogram axis: marks about a quarter of the range apart (1, 2, 5 × 10^k), so a narrow histogram
-/// still has labels (egui_plot's own marks are powers of ten, whose labels a narrow plot hides).
+/// still has labels (egui_plot's own marks are powers of ten, whose labels a narrow plot hides), and
+/// far enough apart for their labels to show.
 fn histogram_spacer(input: egui_plot::GridInput) -> Vec<egui_plot::GridMark> {
-    marks_apart(input.bounds, (input.bounds.1 - input.bounds.0) / 4.0)
+    let raw = ((input.bounds.1 - input.bounds.0) / 4.0).max(points(&input, X_LABEL_SPACING_PT));
+    marks_apart(input.bounds, raw)
+}
+
+/// Percentage axis: marks as close as their labels show (1, 2, 5 × 10^k apart), so a low histogram
+/// keeps labels.
+fn percent_spacer(input: egui_plot::GridInput) -> Vec<egui_plot::GridMark> {
+    marks_apart(input.bounds, points(&input, Y_LABEL_SPACING_PT))
+}
+
+/// The smallest 1, 2, 5 × 10^k of at least `raw` (> 0).
+fn nice_step(raw: f64) -> f64 {
+    let p = 10f64.powf(raw.log10().floor());
+    [1.0, 2.0, 5.0, 10.0]
+        .into_iter()
+        .map(|m| m * p)
+        .find(|s| *s >= raw)
+        .unwrap_or(10.0 * p)
 }
 
 /// Marks at multiples of the smallest 1, 2, 5 × 10^k step of at least `raw` within `(lo, hi)`.
@@ -118,12 +187,7 @@ fn marks_apart((lo, hi): (f64, f64), raw: f64) -> Vec<egui_plot::GridMark> {
     if !(raw.is_finite() && raw > 0.0) {
         return Vec::new();
     }
-    let p = 10f64.powf(raw.log10().floor());
-    let step = [1.0, 2.0, 5.0, 10.0]
-        .into_iter()
-        .map(|m| m * p)
-        .find(|s| *s >= raw)
-        .unwrap_or(10.0 * p);
+    let step = nice_step(raw);
     let first = (lo / step).ceil() as i64;
     let last = (hi / step).floor() as i64;
     (first..=last)
@@ -213,7 +277,7 @@ fn iteration_plot<'a>(id: (&str, Stage), y_label: &str) -> Plot<'a> {
 /// Width of the numbers beside the histograms.
 const NUMBERS_WIDTH: f32 = 290.0;
 /// Narrowest histogram worth drawing.
-const MIN_HISTOGRAM_WIDTH: f32 = 230.0;
+const MIN_HISTOGRAM_WIDTH: f32 = 210.0;
 /// Lowest histogram worth drawing.
 const MIN_HISTOGRAM_HEIGHT: f32 = 110.0;
 
@@ -444,7 +508,7 @@ fn histogram_plot_ui(
         })
         .y_axis_label("% of samples")
         .allow_scroll(false);
-    framed(plot, histogram_spacer, egui_plot::log_grid_spacer(10)).show(ui, |plot| {
+    framed(plot, histogram_spacer, percent_spacer).show(ui, |plot| {
         plot.bar_chart(BarChart::new(name, bars).color(color));
         let t = if indicator.is_position() {
             POS_THRESHOLDS_MM.to_vec()
@@ -565,13 +629,18 @@ pub fn accuracy_summary_ui(ui: &mut egui::Ui, session: &Session, split: Split) {
 mod tests {
     use super::*;
 
+    /// The grid input of an axis showing `bounds` on `length_pt` points.
+    fn input(bounds: (f64, f64), length_pt: f64) -> egui_plot::GridInput {
+        egui_plot::GridInput {
+            bounds,
+            base_step_size: (bounds.1 - bounds.0) / length_pt * f64::from(GRID_SPACING_MIN_PT),
+        }
+    }
+
     #[test]
     fn iteration_marks_are_whole_and_spaced_about_a_third_of_the_range() {
         for (lo, hi) in [(0.0, 7.0), (-0.5, 100.5), (0.0, 2.0), (3.0, 1234.0)] {
-            let marks = iteration_spacer(egui_plot::GridInput {
-                bounds: (lo, hi),
-                base_step_size: 1.0,
-            });
+            let marks = iteration_spacer(input((lo, hi), 600.0));
             assert!(!marks.is_empty(), "{lo}..{hi}");
             for m in &marks {
                 assert!(m.value >= lo && m.value <= hi);
@@ -579,6 +648,71 @@ mod tests {
                 assert!(m.step_size >= (hi - lo) / 3.0 - 1e-9 || m.step_size == 1.0);
                 assert!(m.step_size <= (hi - lo) / 1.0 + 1.0);
             }
+        }
+    }
+
+    /// However many decades the curves span, on however tall a plot, labelled marks (as far apart
+    /// as egui_plot shows their labels) stand inside it, clear of its ends.
+    #[test]
+    fn log_marks_keep_labels_inside_the_plot_over_any_span() {
+        for decades in [0.05, 0.4, 1.0, 3.0, 8.0, 17.0, 40.0, 300.0] {
+            for height_pt in [70.0, 140.0, 400.0] {
+                for lo in [-12.3, -1.0, 0.4, 2.0] {
+                    let bounds = (lo, lo + decades);
+                    let input = input(bounds, height_pt);
+                    let per_pt = (bounds.1 - bounds.0) / height_pt;
+                    let labelled: Vec<_> =
+                        labels_inside(log_spacer, Y_LABEL_MARGIN_PT, Y_LABEL_SPACING_PT)(input)
+                            .into_iter()
+                            .filter(|m| m.step_size / per_pt >= Y_LABEL_SPACING_PT - 1e-6)
+                            .collect();
+                    assert!(
+                        !labelled.is_empty(),
+                        "{decades} decades from {lo} on {height_pt} pt: no labelled mark"
+                    );
+                    for m in &labelled {
+                        assert!(m.value - bounds.0 >= Y_LABEL_MARGIN_PT * per_pt - 1e-9);
+                        assert!(bounds.1 - m.value >= Y_LABEL_MARGIN_PT * per_pt - 1e-9);
+                    }
+                    let texts: Vec<String> = labelled
+                        .iter()
+                        .map(|m| log_axis_label(*m, &(bounds.0..=bounds.1)))
+                        .collect();
+                    let mut unique = texts.clone();
+                    unique.dedup();
+                    assert_eq!(unique, texts, "labels told apart");
+                }
+            }
+        }
+    }
+
+    /// A histogram's axes keep labelled marks however narrow or low it is drawn.
+    #[test]
+    fn histogram_marks_are_far_enough_apart_to_be_labelled() {
+        for (bounds, length_pt) in [
+            ((-0.2, 0.2), 120.0),
+            ((-30.0, 30.0), 600.0),
+            ((0.0, 0.02), 180.0),
+        ] {
+            let per_pt = (bounds.1 - bounds.0) / length_pt;
+            let x = histogram_spacer(input(bounds, length_pt));
+            assert!(!x.is_empty());
+            assert!(
+                x.iter()
+                    .all(|m| m.step_size / per_pt >= X_LABEL_SPACING_PT - 1e-6)
+            );
+        }
+        for height_pt in [50.0, 90.0, 300.0] {
+            let bounds = (-1.0, 11.0);
+            let per_pt = 12.0 / height_pt;
+            let y = labels_inside(percent_spacer, Y_LABEL_MARGIN_PT, Y_LABEL_SPACING_PT)(input(
+                bounds, height_pt,
+            ));
+            assert!(!y.is_empty(), "{height_pt} pt");
+            assert!(
+                y.iter()
+                    .all(|m| m.step_size / per_pt >= Y_LABEL_SPACING_PT - 1e-6)
+            );
         }
     }
 }

@@ -426,17 +426,45 @@ fn robot_summary_ui(ui: &mut egui::Ui, session: &Session) {
     }
 }
 
+/// A joint's range: mm for a prismatic joint (its CSV column is a length), else degrees.
+fn joint_range_ui(ui: &mut egui::Ui, linear: bool, (lo, hi): (f64, f64)) {
+    if linear {
+        ui.label(RichText::new(format!("{lo:.1} … {hi:.1} mm")).small())
+            .on_hover_text("prismatic: its CSV column is a length");
+    } else {
+        ui.label(
+            RichText::new(format!("{:.1}° … {:.1}°", lo.to_degrees(), hi.to_degrees())).small(),
+        )
+        .on_hover_text(format!("{lo:.4} … {hi:.4} rad"));
+    }
+}
+
 /// One arm's joints (chain order, the CSV's `q1 … qN`) with their limits, and its calibration
 /// parameters: how many, which distances cannot identify (and why), and after a calibration which
-/// were identified.
+/// were identified. A leader off the chain (a column's measured joint that chain joints mimic) is a
+/// column of the data: it stands before its first follower.
 fn arm_details_ui(ui: &mut egui::Ui, session: &Session, side: Side) {
     let arm = &session.robot.arms()[side];
+    let variables = arm.chain.variables();
     egui::Grid::new(("joints", side.name()))
         .num_columns(3)
         .striped(true)
         .show(ui, |ui| {
+            let mut leaders_shown = Vec::new();
             for j in &arm.chain.joints {
-                let (lo, hi) = j.range();
+                let leader = j.drive.leader().filter(|&k| {
+                    variables.get(k).is_some_and(|v| v.is_off_chain())
+                        && !leaders_shown.contains(&k)
+                });
+                if let Some(k) = leader {
+                    leaders_shown.push(k);
+                    let v = &variables[k];
+                    ui.label(RichText::new(format!("q{}", k + 1)).small());
+                    ui.label(RichText::new(v.name.as_str()).small().monospace())
+                        .on_hover_text("off the chain: the joints mimicking it (below) follow it");
+                    joint_range_ui(ui, v.kind.is_linear(), v.range());
+                    ui.end_row();
+                }
                 match j.drive {
                     crate::kinematics::JointDrive::Variable(k) => {
                         ui.label(RichText::new(format!("q{}", k + 1)).small());
@@ -450,16 +478,7 @@ fn arm_details_ui(ui: &mut egui::Ui, session: &Session, side: Side) {
                     }
                 }
                 ui.label(RichText::new(j.name.as_str()).small().monospace());
-                if j.kind.is_linear() {
-                    ui.label(RichText::new(format!("{lo:.1} … {hi:.1} mm")).small())
-                        .on_hover_text("prismatic: its CSV column is a length");
-                } else {
-                    ui.label(
-                        RichText::new(format!("{:.1}° … {:.1}°", lo.to_degrees(), hi.to_degrees()))
-                            .small(),
-                    )
-                    .on_hover_text(format!("{lo:.4} … {hi:.4} rad"));
-                }
+                joint_range_ui(ui, j.kind.is_linear(), j.range());
                 ui.end_row();
             }
         });

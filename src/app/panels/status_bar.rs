@@ -25,43 +25,15 @@ impl StatusBar<'_> {
                 if ui.small_button("×").on_hover_text("Dismiss").clicked() {
                     commands.push(Command::DismissError(k));
                 }
-                ui.label(RichText::new(e).color(ERROR_COLOR));
+                ui.add(egui::Label::new(RichText::new(e).color(ERROR_COLOR)).wrap());
             });
         }
+        // One line whatever it says: the registration RMS at the right, then what the workbench is
+        // doing in the width left, elided (the whole on hover); nothing moves when a message
+        // grows, nor when a run ends.
         ui.horizontal(|ui| {
-            match self.status {
-                Status::Idle(text) => {
-                    if self.loading {
-                        ui.spinner();
-                    }
-                    ui.label(text);
-                }
-                Status::Running { stage, iteration } => {
-                    ui.spinner();
-                    let task = self.calibration;
-                    let elapsed = task.map_or(0.0, |t| t.elapsed_secs());
-                    let cancelling = task.is_some_and(|t| t.is_cancelling());
-                    ui.label(match stage {
-                        Some(stage) => format!(
-                            "Calibrating: {stage}, iteration {iteration} ({elapsed:.1} s){}",
-                            if cancelling { " — cancelling…" } else { "" }
-                        ),
-                        None => "Calibrating: starting…".into(),
-                    });
-                    if let Some(live) = self.session.and_then(|s| s.live.as_ref()) {
-                        ui.label(
-                            RichText::new(format!(
-                                "· figures of {} (evaluated in {:.0} ms)",
-                                live.label(),
-                                live.evaluation_secs * 1e3
-                            ))
-                            .color(plots::LIVE_COLOR),
-                        );
-                    }
-                }
-            }
-            if let Some(session) = self.session {
-                ui.with_layout(egui::Layout::right_to_left(egui::Align::Center), |ui| {
+            ui.with_layout(egui::Layout::right_to_left(egui::Align::Center), |ui| {
+                if let Some(session) = self.session {
                     ui.label(
                         RichText::new(format!(
                             "registration RMS {:.3} mm",
@@ -72,8 +44,53 @@ impl StatusBar<'_> {
                     .on_hover_text(
                         "RMS residual of the best-fit tracker-to-robot transform used to draw the measured points",
                     );
+                }
+                ui.with_layout(egui::Layout::left_to_right(egui::Align::Center), |ui| {
+                    self.status_ui(ui);
                 });
-            }
+            });
         });
+    }
+
+    /// What the workbench is doing, in one line.
+    fn status_ui(&self, ui: &mut egui::Ui) {
+        let elided = |ui: &mut egui::Ui, text: RichText| {
+            ui.add(egui::Label::new(text).truncate());
+        };
+        match self.status {
+            Status::Idle(text) => {
+                if self.loading {
+                    ui.spinner();
+                }
+                elided(ui, RichText::new(text));
+            }
+            Status::Running { stage, iteration } => {
+                ui.spinner();
+                let task = self.calibration;
+                let elapsed = task.map_or(0.0, |t| t.elapsed_secs());
+                let cancelling = task.is_some_and(|t| t.is_cancelling());
+                elided(
+                    ui,
+                    RichText::new(match stage {
+                        Some(stage) => format!(
+                            "Calibrating: {stage}, iteration {iteration} ({elapsed:.1} s){}",
+                            if cancelling { " — cancelling…" } else { "" }
+                        ),
+                        None => "Calibrating: starting…".into(),
+                    }),
+                );
+                if let Some(live) = self.session.and_then(|s| s.live.as_ref()) {
+                    elided(
+                        ui,
+                        RichText::new(format!(
+                            "· figures of {} (evaluated in {:.0} ms)",
+                            live.label(),
+                            live.evaluation_secs * 1e3
+                        ))
+                        .color(plots::LIVE_COLOR),
+                    );
+                }
+            }
+        }
     }
 }
