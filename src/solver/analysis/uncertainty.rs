@@ -26,7 +26,7 @@
 
 use crate::kinematics::{ArmJacobians, ArmModel};
 use crate::par::prelude::*;
-use nalgebra::{DMatrix, Matrix3xX, Vector3};
+use nalgebra::{DMatrix, DVector, Matrix3xX, Vector3};
 use serde::{Deserialize, Serialize};
 
 /// At most this many configurations per arm enter the sums (every k-th beyond; the pair sums grow as
@@ -83,8 +83,13 @@ impl ArmUncertainty {
 struct Sums {
     jtj: DMatrix<f64>,
     meat: DMatrix<f64>,
+    /// Σ r² and the row count over the reflectors of non-zero weight.
     cost: f64,
     rows: usize,
+    /// Per reflector (every one, whatever its weight): F_k = Σ r² and its gradient `2 Σ r ∂r/∂x`
+    /// over the free parameters.
+    f_k: Vec<f64>,
+    g_k: Vec<DVector<f64>>,
 }
 
 /// The uncertainty of `arm`'s parameters `free` (indices into its parameter vector) fitted to the
@@ -162,7 +167,14 @@ fn uncertainty(
     free: &[usize],
     point_sigma_mm: Option<f64>,
 ) -> Option<ArmUncertainty> {
-    let fit = covariance(arm, qs, measured, free, point_sigma_mm)?;
+    let fit = covariance(
+        arm,
+        qs,
+        measured,
+        free,
+        point_sigma_mm,
+        &Weighting::LeastSquares,
+    )?;
     Some(summarise(
         arm,
         free,
@@ -193,6 +205,7 @@ fn covariance(
     measured: &[Vec<Vector3<f64>>],
     free: &[usize],
     point_sigma_mm: Option<f64>,
+    weighting: &Weighting,
 ) -> Option<Covariance> {
     let n_all = qs.len().min(measured.len());
     let stride = n_all.div_ceil(MAX_CONFIGURATIONS).max(1);
@@ -206,14 +219,25 @@ fn covariance(
         .map(|&i| arm.reflector_jacobians(&qs[i]))
         .collect();
     let points: Vec<&Vec<Vector3<f64>>> = used.iter().map(|&i| &measured[i]).collect();
-    let sums = pair_sums(&jac, &points, free, arm.reflector_count());
+    let sums = pair_sums(&jac, &points, free, &weighting.first_weights(arm));
     let dof = sums.rows.checked_sub(p).filter(|&d| d > 0)?;
     let point_var = match point_sigma_mm {
         Some(s) => s * s,
         None => sums.cost / (2.0 * dof as f64),
     };
-    let inverse = sums.jtj.clone().cholesky()?.inverse();
-    let mut cov = &inverse * &sums.meat * &inverse * point_var;
+    // The minimax: the sums again, each reflector weighed by its multiplier at the solution.
+    let weighted = match weighting {
+        Weighting::Minimax => {
+            let lambda = minimax_weights(arm, free, &sums);
+            Some(pair_sums(&jac, &points, free, &lambda))
+        }
+        _ => None,
+    };
+    let (a, b) = weighted
+        .as_ref()
+        .map_or((&sums.jtj, &sums.meat), |w| (&w.jtj, &w.meat));
+    let inverse = a.clone().cholesky()?.inverse();
+    let mut cov = &inverse * b * &inverse * point_var;
     if n < n_all {
         cov *= n as f64 / n_all as f64;
     }
@@ -235,7 +259,15 @@ pub fn predicted_covariance(
     point_sigma_mm: f64,
 ) -> Option<DMatrix<f64>> {
     let points: Vec<Vec<Vector3<f64>>> = qs.iter().map(|q| arm.reflector_fk(q).points_mm).collect();
-    covariance(arm, qs, &points, free, Some(point_sigma_mm)).map(|c| c.cov)
+    covariance(
+        arm,
+        qs,
+        &points,
+        free,
+        Some(point_sigma_mm),
+        &Weighting::LeastSquares,
+    )
+    .map(|c| c.cov)
 }
 
 /// The verification accuracy a design predicts, as a multiple of the noise floor: over the pairs of
@@ -341,14 +373,16 @@ fn pair_sums(
     jac: &[ArmJacobians],
     measured: &[&Vec<Vector3<f64>>],
     free: &[usize],
-    reflectors: usize,
+    weights: &[f64],
 ) -> Sums {
-    let (n, p) = (jac.len(), free.len());
+    let (n, p, reflectors) = (jac.len(), free.len(), weights.len());
     let zero = || Sums {
         jtj: DMatrix::zeros(p, p),
         meat: DMatrix::zeros(p, p),
         cost: 0.0,
         rows: 0,
+        f_k: vec![0.0; reflectors],
+        g_k: vec![DVector::zeros(p); reflectors],
     };
     // The free columns of every configuration's reflector Jacobians, contiguous (3 × p each).
     let free_jac: Vec<Vec<Matrix3xX<f64>>> = jac
@@ -367,7 +401,7 @@ fn pair_sums(
             let mut r = DMatrix::<f64>::zeros(n - 1, p);
             let mut u = DMatrix::<f64>::zeros(n - 1, 3);
             let mut a = DMatrix::<f64>::zeros(p, 3);
-            for k in 0..reflectors {
+            for (k, &w) in weights.iter().enumerate() {
                 // Rows with j > i first (they enter JᵀJ), then j < i.
                 for (row, j) in (i + 1..n).chain(0..i).enumerate() {
                     let v = jac[i].fk.points_mm[k] - jac[j].fk.points_mm[k];
@@ -390,11 +424,18 @@ fn pair_sums(
                     }
                     if j > i {
                         let e = measured_dist - dist;
-                        s.cost += e * e;
-                        s.rows += 1;
+                        s.f_k[k] += e * e;
+                        s.g_k[k].axpy(2.0 * e, &r.row(row).transpose(), 1.0);
+                        if w > 0.0 {
+                            s.cost += e * e;
+                            s.rows += 1;
+                        }
                     }
                 }
-                a.gemm_tr(1.0, &r, &u, 0.0);
+                if w == 0.0 {
+                    continue;
+                }
+                a.gemm_tr(w, &r, &u, 0.0);
                 for c in 0..3 {
                     s.meat.ger(1.0, &a.column(c), &a.column(c), 1.0);
                 }
@@ -405,7 +446,7 @@ fn pair_sums(
                 for c2 in 0..p {
                     let column = upper.column(c2);
                     for c1 in 0..=c2 {
-                        s.jtj[(c1, c2)] += upper.column(c1).dot(&column);
+                        s.jtj[(c1, c2)] += w * upper.column(c1).dot(&column);
                     }
                 }
             }
@@ -419,6 +460,10 @@ fn pair_sums(
             a.meat += b.meat;
             a.cost += b.cost;
             a.rows += b.rows;
+            for k in 0..reflectors {
+                a.f_k[k] += b.f_k[k];
+                a.g_k[k] += &b.g_k[k];
+            }
             a
         });
     sums.jtj.fill_lower_triangle_with_upper_triangle();
@@ -468,18 +513,17 @@ pub fn for_result_reusing(
         return tree_uncertainty(&kept, result, &shared).unwrap_or_default();
     }
     crate::side::PerSide::from_fn(|side| {
-        if settings.method.is_absolute() || result.reflector_used[side].is_some() {
-            return None;
-        }
+        let weighting = Weighting::of(settings.method, result.reflector_used[side])?;
         let report = result.identifiability[side].as_ref()?;
         let arm = result.calibrated.arm(side);
         if let Some(early) = early[side].take()
             && early.arm == *arm
             && early.free == report.free
+            && early.weighting == weighting
         {
             return early.value;
         }
-        arm_uncertainty_on(&kept, settings, side, arm, &report.free)
+        arm_uncertainty_on(&kept, settings, side, arm, &report.free, &weighting)
     })
 }
 
@@ -490,11 +534,12 @@ fn arm_uncertainty_on(
     side: crate::side::Side,
     arm: &ArmModel,
     free: &[usize],
+    weighting: &Weighting,
 ) -> Option<ArmUncertainty> {
     let ms = kept.arm(side).select(settings.split);
     let qs: Vec<Vec<f64>> = ms.iter().map(|m| m.q_rad.clone()).collect();
     let measured: Vec<Vec<Vector3<f64>>> = ms.iter().map(|m| m.tracker_points_mm.clone()).collect();
-    arm_uncertainty(arm, &qs, &measured, free)
+    arm_uncertainty_weighted(arm, &qs, &measured, free, weighting)
 }
 
 /// An arm's uncertainty computed as soon as its step-1 stage ended (beside step 2, which does not
@@ -503,6 +548,7 @@ fn arm_uncertainty_on(
 pub struct EarlyArmUncertainty {
     arm: ArmModel,
     free: Vec<usize>,
+    weighting: Weighting,
     value: Option<ArmUncertainty>,
 }
 
@@ -517,8 +563,15 @@ impl EarlyArmUncertainty {
         free: Vec<usize>,
     ) -> Self {
         let kept = dataset.excluding(&settings.exclude);
-        let value = arm_uncertainty_on(&kept, settings, side, &arm, &free);
-        Self { arm, free, value }
+        // A single-reflector method's reflector is known once it ran: computed again then.
+        let weighting = Weighting::of(settings.method, None).unwrap_or(Weighting::LeastSquares);
+        let value = arm_uncertainty_on(&kept, settings, side, &arm, &free, &weighting);
+        Self {
+            arm,
+            free,
+            weighting,
+            value,
+        }
     }
 }
 
@@ -569,7 +622,8 @@ fn tree_uncertainty(
             .collect();
         let points: Vec<&Vec<Vector3<f64>>> =
             used.iter().map(|&i| &ms[i].tracker_points_mm).collect();
-        let sums = pair_sums(&jac, &points, &reports[side].free, arm.reflector_count());
+        let weights = vec![1.0; arm.reflector_count()];
+        let sums = pair_sums(&jac, &points, &reports[side].free, &weights);
         let c = &cols[side];
         for i in 0..c.len() {
             for j in 0..c.len() {
@@ -604,4 +658,174 @@ fn tree_uncertainty(
             &sub(&jtj),
         ))
     }))
+}
+
+/// Each identified parameter's error against a known `truth` over its reported σ, both arms of
+/// `result` (the parameters of `uncertainty`, matched by name): the measure of how well the σ describe
+/// the errors on simulations — their RMS is 1 when they do (`examples/sigma_coverage.rs`).
+pub fn sigma_ratios(
+    result: &crate::solver::result::CalibrationResult,
+    uncertainty: &crate::side::PerSide<Option<ArmUncertainty>>,
+    truth: &crate::kinematics::DualArmModel,
+) -> Vec<f64> {
+    let mut ratios = Vec::new();
+    for side in crate::side::Side::BOTH {
+        let Some(u) = &uncertainty[side] else {
+            continue;
+        };
+        let (arm, true_arm) = (result.calibrated.arm(side), truth.arm(side));
+        let (x, t) = (arm.to_vector(), true_arm.to_vector());
+        for p in &u.parameters {
+            let Some(k) = (0..arm.param_count()).find(|&k| arm.param_name(k) == p.name) else {
+                continue;
+            };
+            let scale = if p.unit == "mrad" { 1000.0 } else { 1.0 };
+            if p.sigma > 0.0 && k < t.len() {
+                ratios.push((x[k] - t[k]) * scale / p.sigma);
+            }
+        }
+    }
+    ratios
+}
+
+/// How a step-1 method weighs the reflectors' distance errors: the covariance is the sandwich of
+/// that weighted fit (module documentation).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Weighting {
+    /// Least squares of every reflector's distance errors (`lsq`).
+    LeastSquares,
+    /// Least squares of one reflector's distance errors (`distance-single`, the reflector's index).
+    Reflector(usize),
+    /// Given weights per reflector.
+    Weights(Vec<f64>),
+    /// The minimax (`minimax`): each reflector weighed by its multiplier λ_k at the solution
+    /// ([`minimax_weights`]).
+    Minimax,
+}
+
+impl Weighting {
+    /// The weighting of `method`'s fit (`reflector`: the one a single-reflector method used); `None`
+    /// for a method not fitted by distances.
+    pub fn of(
+        method: crate::solver::Method,
+        reflector: Option<crate::solver::types::Reflector>,
+    ) -> Option<Weighting> {
+        if method.is_absolute() {
+            return None;
+        }
+        Some(match reflector {
+            Some(r) => Weighting::Reflector(r as usize),
+            None if method.spec().solver == crate::solver::methods::SolverKind::Sqp => {
+                Weighting::Minimax
+            }
+            None => Weighting::LeastSquares,
+        })
+    }
+
+    /// The weights of the first pass over the pairs (the minimax's: equal, for its multipliers).
+    fn first_weights(&self, arm: &ArmModel) -> Vec<f64> {
+        let n = arm.reflector_count();
+        match self {
+            Weighting::Reflector(k) => (0..n).map(|r| f64::from(u8::from(r == *k))).collect(),
+            Weighting::Weights(w) => w.clone(),
+            Weighting::LeastSquares | Weighting::Minimax => vec![1.0; n],
+        }
+    }
+}
+
+/// Relative tolerance below the largest F_k within which a reflector counts as active at a minimax
+/// solution.
+pub const ACTIVE_TOLERANCE: f64 = 1e-3;
+
+/// The minimax's multipliers λ_k at its solution (summing to one): over the active reflectors, the
+/// convex combination of their gradients ∇F_k closest to zero (the KKT condition Σ λ_k ∇F_k = 0), in
+/// the column-scaled geometric parameters (the reflector coordinates also answer to the triangle's
+/// side constraints, whose multipliers are not known here).
+fn minimax_weights(arm: &ArmModel, free: &[usize], sums: &Sums) -> Vec<f64> {
+    let n = sums.f_k.len();
+    let top = sums.f_k.iter().copied().fold(0.0f64, f64::max);
+    let active: Vec<usize> = (0..n)
+        .filter(|&k| sums.f_k[k] >= top * (1.0 - ACTIVE_TOLERANCE))
+        .collect();
+    let off = arm.reflector_offset();
+    let cols: Vec<usize> = (0..free.len())
+        .filter(|&c| free[c] < off || free[c] >= off + 3 * n)
+        .collect();
+    let scaled = |k: usize| -> DVector<f64> {
+        DVector::from_iterator(
+            cols.len(),
+            cols.iter()
+                .map(|&c| sums.g_k[k][c] / sums.jtj[(c, c)].max(f64::MIN_POSITIVE).sqrt()),
+        )
+    };
+    let h: Vec<DVector<f64>> = active.iter().map(|&k| scaled(k)).collect();
+    let m = active.len();
+    let gram = DMatrix::from_fn(m, m, |a, b| h[a].dot(&h[b]));
+    // Every non-empty subset S: λ_S ∝ G_S⁻¹ 1, kept if non-negative; the smallest λᵀGλ.
+    let mut best: Option<(f64, Vec<f64>)> = None;
+    for mask in 1u32..(1 << m) {
+        let set: Vec<usize> = (0..m).filter(|&a| mask & (1 << a) != 0).collect();
+        let g = DMatrix::from_fn(set.len(), set.len(), |a, b| gram[(set[a], set[b])]);
+        let Some(mu) = g.lu().solve(&DVector::from_element(set.len(), 1.0)) else {
+            continue;
+        };
+        let total = mu.sum();
+        if !(total.is_finite() && total != 0.0) || mu.iter().any(|&x| x / total < 0.0) {
+            continue;
+        }
+        let mut lambda = vec![0.0; m];
+        for (a, &i) in set.iter().enumerate() {
+            lambda[i] = mu[a] / total;
+        }
+        let value = (0..m)
+            .map(|a| (0..m).map(|b| lambda[a] * gram[(a, b)] * lambda[b]).sum::<f64>())
+            .sum::<f64>();
+        if best.as_ref().is_none_or(|(v, _)| value < *v) {
+            best = Some((value, lambda));
+        }
+    }
+    let mut weights = vec![0.0; n];
+    match best {
+        Some((_, lambda)) => {
+            for (a, &k) in active.iter().enumerate() {
+                weights[k] = lambda[a];
+            }
+        }
+        None => active.iter().for_each(|&k| weights[k] = 1.0 / m as f64),
+    }
+    weights
+}
+
+/// [`arm_uncertainty`] of a fit weighing the reflectors as `weighting` says.
+pub fn arm_uncertainty_weighted(
+    arm: &ArmModel,
+    qs: &[Vec<f64>],
+    measured: &[Vec<Vector3<f64>>],
+    free: &[usize],
+    weighting: &Weighting,
+) -> Option<ArmUncertainty> {
+    let fit = covariance(arm, qs, measured, free, None, weighting)?;
+    Some(summarise(
+        arm,
+        free,
+        &fit.cov,
+        fit.point_var,
+        fit.used,
+        fit.configurations,
+        &fit.jtj,
+    ))
+}
+
+/// The minimax's multipliers ([`Weighting::Minimax`]) of `arm` at `qs` against `measured`: one per
+/// reflector, summing to one.
+pub fn minimax_multipliers(
+    arm: &ArmModel,
+    qs: &[Vec<f64>],
+    measured: &[Vec<Vector3<f64>>],
+    free: &[usize],
+) -> Vec<f64> {
+    let jac: Vec<ArmJacobians> = qs.iter().map(|q| arm.reflector_jacobians(q)).collect();
+    let points: Vec<&Vec<Vector3<f64>>> = measured.iter().collect();
+    let sums = pair_sums(&jac, &points, free, &vec![1.0; arm.reflector_count()]);
+    minimax_weights(arm, free, &sums)
 }
