@@ -3,14 +3,14 @@
 //! over the identified parameters of both arms of (error / σ) — 1 when the σ describe the errors —
 //! within 0.9–1.15 for every method. `DUALCAL_SIGMA_SIMS=24 DUALCAL_SIGMA_CONFIGS=60 cargo test --test
 //! sigma_coverage -- --nocapture` measures the figures of docs/solver.md ("The uncertainty of each
-//! method"); the test's own run is 20 simulations of 30 calibration configurations per arm.
+//! method"); the test's own run is 20 simulations of 60 calibration configurations per arm.
 
 mod common;
 
 use dualcal::dataset::Split;
 use dualcal::robot::RobotDescription;
-use dualcal::simulate::{paper_options, simulate_with_robot};
 use dualcal::side::{PerSide, Side};
+use dualcal::simulate::{paper_options, simulate_with_robot};
 use dualcal::solver::uncertainty::{
     Weighting, arm_uncertainty_weighted, for_result, minimax_multipliers, sigma_ratios,
 };
@@ -59,7 +59,7 @@ fn ratios(sims: usize, configs: usize) -> Vec<Vec<f64>> {
 #[test]
 fn every_methods_sigma_describes_its_errors() {
     let sims = env_or("DUALCAL_SIGMA_SIMS", 20);
-    let configs = env_or("DUALCAL_SIGMA_CONFIGS", 30);
+    let configs = env_or("DUALCAL_SIGMA_CONFIGS", 60);
     let ratios = ratios(sims, configs);
     println!("{sims} simulations, {configs} calibration configurations per arm");
     println!("| step-1 method | parameters × arms | RMS(error/σ) | beyond 3σ |");
@@ -79,7 +79,10 @@ fn every_methods_sigma_describes_its_errors() {
         rms_of.push((method.name(), r.len(), rms));
     }
     for (name, count, rms) in rms_of {
-        assert!(count >= 20 * sims, "{name}: only {count} parameters with a σ");
+        assert!(
+            count >= 20 * sims,
+            "{name}: only {count} parameters with a σ"
+        );
         assert!((0.9..=1.15).contains(&rms), "{name}: RMS(error/σ) {rms:.3}");
     }
 }

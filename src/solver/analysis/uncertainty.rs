@@ -228,7 +228,12 @@ fn covariance(
     // The minimax: the sums again, each reflector weighed by its multiplier at the solution.
     let weighted = match weighting {
         Weighting::Minimax => {
-            let lambda = minimax_weights(arm, free, &sums);
+            // A reflector below the floor (λ_k = 0: F_k not active, or a kink) still fits its own
+            // coordinates; the floor keeps them in the covariance.
+            let lambda: Vec<f64> = minimax_weights(arm, free, &sums)
+                .iter()
+                .map(|l| l.max(MINIMAX_WEIGHT_FLOOR))
+                .collect();
             Some(pair_sums(&jac, &points, free, &lambda))
         }
         _ => None,
@@ -513,8 +518,11 @@ pub fn for_result_reusing(
         return tree_uncertainty(&kept, result, &shared).unwrap_or_default();
     }
     crate::side::PerSide::from_fn(|side| {
-        let weighting = Weighting::of(settings.method, result.reflector_used[side])?;
         let report = result.identifiability[side].as_ref()?;
+        if settings.method.is_absolute() {
+            return absolute_uncertainty(&kept, result, side, &report.free);
+        }
+        let weighting = Weighting::of(settings.method, result.reflector_used[side])?;
         let arm = result.calibrated.arm(side);
         if let Some(early) = early[side].take()
             && early.arm == *arm
@@ -733,6 +741,9 @@ impl Weighting {
     }
 }
 
+/// The smallest weight of a reflector in the minimax's covariance (its multipliers sum to one).
+pub const MINIMAX_WEIGHT_FLOOR: f64 = 0.1;
+
 /// Relative tolerance below the largest F_k within which a reflector counts as active at a minimax
 /// solution.
 pub const ACTIVE_TOLERANCE: f64 = 1e-3;
@@ -778,7 +789,11 @@ fn minimax_weights(arm: &ArmModel, free: &[usize], sums: &Sums) -> Vec<f64> {
             lambda[i] = mu[a] / total;
         }
         let value = (0..m)
-            .map(|a| (0..m).map(|b| lambda[a] * gram[(a, b)] * lambda[b]).sum::<f64>())
+            .map(|a| {
+                (0..m)
+                    .map(|b| lambda[a] * gram[(a, b)] * lambda[b])
+                    .sum::<f64>()
+            })
             .sum::<f64>();
         if best.as_ref().is_none_or(|(v, _)| value < *v) {
             best = Some((value, lambda));
@@ -828,4 +843,76 @@ pub fn minimax_multipliers(
     let points: Vec<&Vec<Vector3<f64>>> = measured.iter().collect();
     let sums = pair_sums(&jac, &points, free, &vec![1.0; arm.reflector_count()]);
     minimax_weights(arm, free, &sums)
+}
+
+/// The uncertainty of an absolute method's fit (`pose`, `position`) of `side`: its own residuals and
+/// Jacobian at the solution, the tracker-from-base transform's six columns with the arm's `free`
+/// ones. Rows of one kind (positions, mm; a pose's origin, mm, and its weighted rotation) are taken
+/// as independent with one variance per kind, estimated from the residuals:
+/// `C = (JᵀJ)⁻¹ (Σ_rows s²_kind j jᵀ) (JᵀJ)⁻¹`, the arm's block reported.
+fn absolute_uncertainty(
+    kept: &crate::dataset::Dataset,
+    result: &crate::solver::result::CalibrationResult,
+    side: crate::side::Side,
+    free: &[usize],
+) -> Option<ArmUncertainty> {
+    use crate::solver::problems::absolute_problem::{AbsoluteData, AbsoluteProblem};
+    let ms = kept.arm(side).select(result.settings.split);
+    let qs: Vec<Vec<f64>> = ms.iter().map(|m| m.q_rad.clone()).collect();
+    let measured: Vec<Vec<Vector3<f64>>> = ms.iter().map(|m| m.tracker_points_mm.clone()).collect();
+    let arm = result.calibrated.arm(side);
+    let (data, kinds) = if result.settings.method == crate::solver::Method::Pose {
+        let w = AbsoluteProblem::rotation_weight_mm(&result.nominal.arm(side).reflectors_mm);
+        (
+            AbsoluteData::Pose {
+                rotation_weight_mm: w,
+            },
+            2,
+        )
+    } else {
+        (AbsoluteData::Position, 1)
+    };
+    let (n, p) = (qs.len(), free.len());
+    let dim = p + 6;
+    let problem = AbsoluteProblem::new(
+        data,
+        side,
+        qs,
+        measured,
+        arm,
+        result.tracker_from_base[side]?,
+        free.to_vec(),
+        DVector::from_element(dim, 1.0),
+    )
+    .ok()?;
+    let (r, j) = problem.jacobian(&DVector::zeros(dim));
+    let rows = r.len();
+    let per_config = rows / n.max(1);
+    let kind = |row: usize| {
+        if kinds == 2 {
+            (row % per_config) / 3
+        } else {
+            0
+        }
+    };
+    let dof_fraction = 1.0 - dim as f64 / rows as f64;
+    if dof_fraction <= 0.0 {
+        return None;
+    }
+    let mut var = vec![0.0; kinds];
+    let mut count = vec![0usize; kinds];
+    for row in 0..rows {
+        var[kind(row)] += r[row] * r[row];
+        count[kind(row)] += 1;
+    }
+    for c in 0..kinds {
+        var[c] /= count[c] as f64 * dof_fraction;
+    }
+    let jtj = j.tr_mul(&j);
+    let weighted = DMatrix::from_fn(rows, dim, |row, c| j[(row, c)] * var[kind(row)]);
+    let meat = j.tr_mul(&weighted);
+    let inverse = jtj.clone().cholesky()?.inverse();
+    let cov = &inverse * meat * &inverse;
+    let arm_block = cov.view((0, 0), (p, p)).into_owned();
+    Some(summarise(arm, free, &arm_block, var[0], n, n, &jtj))
 }
