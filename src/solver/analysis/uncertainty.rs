@@ -14,10 +14,14 @@
 //! `Σ r² / (2 (rows − p))` (a distance error has the variance of two point errors along the line): a
 //! geometric model that does not explain the data counts as noise here, so the σ grow with it.
 //!
-//! What it means for the minimax fit: it is the covariance of the least-squares fit linearised at the
-//! minimax solution, a yardstick rather than the minimax estimate's exact spread (the two estimates
-//! differ in how they weigh the reflectors; `tests/uncertainty.rs` compares both with the spread over
-//! repeated simulated measurements). Beyond [`MAX_CONFIGURATIONS`] per arm the sums use every k-th
+//! Each method's σ is its own ([`Weighting`]). The minimax: at its solution the KKT condition is
+//! `Σ λ_k ∇F_k = 0` over the active reflectors, so locally it is the least squares of `Σ λ_k F_k` —
+//! the same sandwich with reflector k's rows weighted by λ_k in `JᵀJ` and by λ_k² in the middle, the
+//! λ_k recomputed here from the gradients at the solution ([`MINIMAX_WEIGHT_FLOOR`] keeps a reflector
+//! of zero weight in it). The single-reflector method: its reflector's rows only. The absolute
+//! methods: their own residuals and Jacobian with the tracker transform (`absolute_uncertainty`).
+//! `tests/sigma_coverage.rs` checks every method's RMS(error/σ) on simulations (docs/solver.md).
+//! Beyond [`MAX_CONFIGURATIONS`] per arm the sums use every k-th
 //! configuration and the covariance is scaled by the fraction used (a covariance falls as 1/n).
 //! The condition number is that of the column-scaled Jacobian of the free parameters: how much a
 //! relative error of the data can grow in the parameters; above ~1e3 single parameters are poorly
@@ -493,8 +497,8 @@ fn scaled_condition(jtj: &DMatrix<f64>) -> f64 {
 }
 
 /// The uncertainty of each arm's step-1 parameters of `result`, fitted to `dataset` (its split and
-/// exclusions); `None` for an arm the result did not fit with all reflectors by distances (the
-/// single-reflector and the absolute methods: not covered yet).
+/// exclusions), the method's own ([`Weighting`]; the absolute methods from their own residuals);
+/// `None` for an arm without an identifiability report or whose fit cannot be summarised.
 pub fn for_result(
     dataset: &crate::dataset::Dataset,
     result: &crate::solver::result::CalibrationResult,
