@@ -9,7 +9,9 @@ use dualcal::dataset::Split;
 use dualcal::robot::RobotDescription;
 use dualcal::side::Side;
 use dualcal::simulate::{paper_options, simulate_with_robot};
-use dualcal::solver::uncertainty::{arm_uncertainty, for_result};
+use dualcal::solver::uncertainty::{
+    Weighting, arm_uncertainty, arm_uncertainty_weighted, for_result,
+};
 use dualcal::solver::{CalibrationSettings, Method};
 use nalgebra::{DVector, Vector3};
 
@@ -40,10 +42,15 @@ fn predicted_and_spread(method: Method, trials: u64) -> Vec<(String, f64, f64)> 
             let qs: Vec<Vec<f64>> = ms.iter().map(|m| m.q_rad.clone()).collect();
             let pts: Vec<Vec<Vector3<f64>>> =
                 ms.iter().map(|m| m.tracker_points_mm.clone()).collect();
+            let weighting = Weighting::of(method, None).unwrap();
+            let arm = result.calibrated.arm(Side::Left);
             assert_eq!(
-                arm_uncertainty(result.calibrated.arm(Side::Left), &qs, &pts, &free),
+                arm_uncertainty_weighted(arm, &qs, &pts, &free, &weighting),
                 u.left
             );
+            if method == Method::LeastSquares {
+                assert_eq!(arm_uncertainty(arm, &qs, &pts, &free), u.left);
+            }
         }
         vectors.push(result.calibrated.arm(Side::Left).to_vector());
     }

@@ -105,7 +105,7 @@ impl crate::solver::Observer for UncertaintyBesideStep2<'_, '_> {
         summary: &crate::solver::StageSummary,
         run: &crate::solver::CalibrationRun,
     ) {
-        // The absolute methods' arms have no uncertainty to compute (`uncertainty::for_result`).
+        // The absolute methods' uncertainty comes from their own problem (`uncertainty::for_result`).
         if summary.stage != crate::solver::Stage::Arm(Side::Right)
             || summary.termination == crate::solver::Termination::Cancelled
             || self.settings.method.is_absolute()

@@ -14,10 +14,14 @@
 //! `Σ r² / (2 (rows − p))` (a distance error has the variance of two point errors along the line): a
 //! geometric model that does not explain the data counts as noise here, so the σ grow with it.
 //!
-//! What it means for the minimax fit: it is the covariance of the least-squares fit linearised at the
-//! minimax solution, a yardstick rather than the minimax estimate's exact spread (the two estimates
-//! differ in how they weigh the reflectors; `tests/uncertainty.rs` compares both with the spread over
-//! repeated simulated measurements). Beyond [`MAX_CONFIGURATIONS`] per arm the sums use every k-th
+//! Each method's σ is its own ([`Weighting`]). The minimax: at its solution the KKT condition is
+//! `Σ λ_k ∇F_k = 0` over the active reflectors, so locally it is the least squares of `Σ λ_k F_k` —
+//! the same sandwich with reflector k's rows weighted by λ_k in `JᵀJ` and by λ_k² in the middle, the
+//! λ_k recomputed here from the gradients at the solution ([`MINIMAX_WEIGHT_FLOOR`] keeps a reflector
+//! of zero weight in it). The single-reflector method: its reflector's rows only. The absolute
+//! methods: their own residuals and Jacobian with the tracker transform (`absolute_uncertainty`).
+//! `tests/sigma_coverage.rs` checks every method's RMS(error/σ) on simulations (docs/solver.md).
+//! Beyond [`MAX_CONFIGURATIONS`] per arm the sums use every k-th
 //! configuration and the covariance is scaled by the fraction used (a covariance falls as 1/n).
 //! The condition number is that of the column-scaled Jacobian of the free parameters: how much a
 //! relative error of the data can grow in the parameters; above ~1e3 single parameters are poorly
@@ -26,7 +30,7 @@
 
 use crate::kinematics::{ArmJacobians, ArmModel};
 use crate::par::prelude::*;
-use nalgebra::{DMatrix, Matrix3xX, Vector3};
+use nalgebra::{DMatrix, DVector, Matrix3xX, Vector3};
 use serde::{Deserialize, Serialize};
 
 /// At most this many configurations per arm enter the sums (every k-th beyond; the pair sums grow as
@@ -83,8 +87,13 @@ impl ArmUncertainty {
 struct Sums {
     jtj: DMatrix<f64>,
     meat: DMatrix<f64>,
+    /// Σ r² and the row count over the reflectors of non-zero weight.
     cost: f64,
     rows: usize,
+    /// Per reflector (every one, whatever its weight): F_k = Σ r² and its gradient `2 Σ r ∂r/∂x`
+    /// over the free parameters.
+    f_k: Vec<f64>,
+    g_k: Vec<DVector<f64>>,
 }
 
 /// The uncertainty of `arm`'s parameters `free` (indices into its parameter vector) fitted to the
@@ -162,7 +171,14 @@ fn uncertainty(
     free: &[usize],
     point_sigma_mm: Option<f64>,
 ) -> Option<ArmUncertainty> {
-    let fit = covariance(arm, qs, measured, free, point_sigma_mm)?;
+    let fit = covariance(
+        arm,
+        qs,
+        measured,
+        free,
+        point_sigma_mm,
+        &Weighting::LeastSquares,
+    )?;
     Some(summarise(
         arm,
         free,
@@ -193,6 +209,7 @@ fn covariance(
     measured: &[Vec<Vector3<f64>>],
     free: &[usize],
     point_sigma_mm: Option<f64>,
+    weighting: &Weighting,
 ) -> Option<Covariance> {
     let n_all = qs.len().min(measured.len());
     let stride = n_all.div_ceil(MAX_CONFIGURATIONS).max(1);
@@ -206,14 +223,30 @@ fn covariance(
         .map(|&i| arm.reflector_jacobians(&qs[i]))
         .collect();
     let points: Vec<&Vec<Vector3<f64>>> = used.iter().map(|&i| &measured[i]).collect();
-    let sums = pair_sums(&jac, &points, free, arm.reflector_count());
+    let sums = pair_sums(&jac, &points, free, &weighting.first_weights(arm));
     let dof = sums.rows.checked_sub(p).filter(|&d| d > 0)?;
     let point_var = match point_sigma_mm {
         Some(s) => s * s,
         None => sums.cost / (2.0 * dof as f64),
     };
-    let inverse = sums.jtj.clone().cholesky()?.inverse();
-    let mut cov = &inverse * &sums.meat * &inverse * point_var;
+    // The minimax: the sums again, each reflector weighed by its multiplier at the solution.
+    let weighted = match weighting {
+        Weighting::Minimax => {
+            // A reflector below the floor (λ_k = 0: F_k not active, or a kink) still fits its own
+            // coordinates; the floor keeps them in the covariance.
+            let lambda: Vec<f64> = minimax_weights(arm, free, &sums)
+                .iter()
+                .map(|l| l.max(MINIMAX_WEIGHT_FLOOR))
+                .collect();
+            Some(pair_sums(&jac, &points, free, &lambda))
+        }
+        _ => None,
+    };
+    let (a, b) = weighted
+        .as_ref()
+        .map_or((&sums.jtj, &sums.meat), |w| (&w.jtj, &w.meat));
+    let inverse = a.clone().cholesky()?.inverse();
+    let mut cov = &inverse * b * &inverse * point_var;
     if n < n_all {
         cov *= n as f64 / n_all as f64;
     }
@@ -235,7 +268,15 @@ pub fn predicted_covariance(
     point_sigma_mm: f64,
 ) -> Option<DMatrix<f64>> {
     let points: Vec<Vec<Vector3<f64>>> = qs.iter().map(|q| arm.reflector_fk(q).points_mm).collect();
-    covariance(arm, qs, &points, free, Some(point_sigma_mm)).map(|c| c.cov)
+    covariance(
+        arm,
+        qs,
+        &points,
+        free,
+        Some(point_sigma_mm),
+        &Weighting::LeastSquares,
+    )
+    .map(|c| c.cov)
 }
 
 /// The verification accuracy a design predicts, as a multiple of the noise floor: over the pairs of
@@ -341,14 +382,16 @@ fn pair_sums(
     jac: &[ArmJacobians],
     measured: &[&Vec<Vector3<f64>>],
     free: &[usize],
-    reflectors: usize,
+    weights: &[f64],
 ) -> Sums {
-    let (n, p) = (jac.len(), free.len());
+    let (n, p, reflectors) = (jac.len(), free.len(), weights.len());
     let zero = || Sums {
         jtj: DMatrix::zeros(p, p),
         meat: DMatrix::zeros(p, p),
         cost: 0.0,
         rows: 0,
+        f_k: vec![0.0; reflectors],
+        g_k: vec![DVector::zeros(p); reflectors],
     };
     // The free columns of every configuration's reflector Jacobians, contiguous (3 × p each).
     let free_jac: Vec<Vec<Matrix3xX<f64>>> = jac
@@ -367,7 +410,7 @@ fn pair_sums(
             let mut r = DMatrix::<f64>::zeros(n - 1, p);
             let mut u = DMatrix::<f64>::zeros(n - 1, 3);
             let mut a = DMatrix::<f64>::zeros(p, 3);
-            for k in 0..reflectors {
+            for (k, &w) in weights.iter().enumerate() {
                 // Rows with j > i first (they enter JᵀJ), then j < i.
                 for (row, j) in (i + 1..n).chain(0..i).enumerate() {
                     let v = jac[i].fk.points_mm[k] - jac[j].fk.points_mm[k];
@@ -390,11 +433,18 @@ fn pair_sums(
                     }
                     if j > i {
                         let e = measured_dist - dist;
-                        s.cost += e * e;
-                        s.rows += 1;
+                        s.f_k[k] += e * e;
+                        s.g_k[k].axpy(2.0 * e, &r.row(row).transpose(), 1.0);
+                        if w > 0.0 {
+                            s.cost += e * e;
+                            s.rows += 1;
+                        }
                     }
                 }
-                a.gemm_tr(1.0, &r, &u, 0.0);
+                if w == 0.0 {
+                    continue;
+                }
+                a.gemm_tr(w, &r, &u, 0.0);
                 for c in 0..3 {
                     s.meat.ger(1.0, &a.column(c), &a.column(c), 1.0);
                 }
@@ -405,7 +455,7 @@ fn pair_sums(
                 for c2 in 0..p {
                     let column = upper.column(c2);
                     for c1 in 0..=c2 {
-                        s.jtj[(c1, c2)] += upper.column(c1).dot(&column);
+                        s.jtj[(c1, c2)] += w * upper.column(c1).dot(&column);
                     }
                 }
             }
@@ -419,6 +469,10 @@ fn pair_sums(
             a.meat += b.meat;
             a.cost += b.cost;
             a.rows += b.rows;
+            for k in 0..reflectors {
+                a.f_k[k] += b.f_k[k];
+                a.g_k[k] += &b.g_k[k];
+            }
             a
         });
     sums.jtj.fill_lower_triangle_with_upper_triangle();
@@ -443,8 +497,8 @@ fn scaled_condition(jtj: &DMatrix<f64>) -> f64 {
 }
 
 /// The uncertainty of each arm's step-1 parameters of `result`, fitted to `dataset` (its split and
-/// exclusions); `None` for an arm the result did not fit with all reflectors by distances (the
-/// single-reflector and the absolute methods: not covered yet).
+/// exclusions), the method's own ([`Weighting`]; the absolute methods from their own residuals);
+/// `None` for an arm without an identifiability report or whose fit cannot be summarised.
 pub fn for_result(
     dataset: &crate::dataset::Dataset,
     result: &crate::solver::result::CalibrationResult,
@@ -468,18 +522,20 @@ pub fn for_result_reusing(
         return tree_uncertainty(&kept, result, &shared).unwrap_or_default();
     }
     crate::side::PerSide::from_fn(|side| {
-        if settings.method.is_absolute() || result.reflector_used[side].is_some() {
-            return None;
-        }
         let report = result.identifiability[side].as_ref()?;
+        if settings.method.is_absolute() {
+            return absolute_uncertainty(&kept, result, side, &report.free);
+        }
+        let weighting = Weighting::of(settings.method, result.reflector_used[side])?;
         let arm = result.calibrated.arm(side);
         if let Some(early) = early[side].take()
             && early.arm == *arm
             && early.free == report.free
+            && early.weighting == weighting
         {
             return early.value;
         }
-        arm_uncertainty_on(&kept, settings, side, arm, &report.free)
+        arm_uncertainty_on(&kept, settings, side, arm, &report.free, &weighting)
     })
 }
 
@@ -490,11 +546,12 @@ fn arm_uncertainty_on(
     side: crate::side::Side,
     arm: &ArmModel,
     free: &[usize],
+    weighting: &Weighting,
 ) -> Option<ArmUncertainty> {
     let ms = kept.arm(side).select(settings.split);
     let qs: Vec<Vec<f64>> = ms.iter().map(|m| m.q_rad.clone()).collect();
     let measured: Vec<Vec<Vector3<f64>>> = ms.iter().map(|m| m.tracker_points_mm.clone()).collect();
-    arm_uncertainty(arm, &qs, &measured, free)
+    arm_uncertainty_weighted(arm, &qs, &measured, free, weighting)
 }
 
 /// An arm's uncertainty computed as soon as its step-1 stage ended (beside step 2, which does not
@@ -503,6 +560,7 @@ fn arm_uncertainty_on(
 pub struct EarlyArmUncertainty {
     arm: ArmModel,
     free: Vec<usize>,
+    weighting: Weighting,
     value: Option<ArmUncertainty>,
 }
 
@@ -517,8 +575,15 @@ impl EarlyArmUncertainty {
         free: Vec<usize>,
     ) -> Self {
         let kept = dataset.excluding(&settings.exclude);
-        let value = arm_uncertainty_on(&kept, settings, side, &arm, &free);
-        Self { arm, free, value }
+        // A single-reflector method's reflector is known once it ran: computed again then.
+        let weighting = Weighting::of(settings.method, None).unwrap_or(Weighting::LeastSquares);
+        let value = arm_uncertainty_on(&kept, settings, side, &arm, &free, &weighting);
+        Self {
+            arm,
+            free,
+            weighting,
+            value,
+        }
     }
 }
 
@@ -569,7 +634,8 @@ fn tree_uncertainty(
             .collect();
         let points: Vec<&Vec<Vector3<f64>>> =
             used.iter().map(|&i| &ms[i].tracker_points_mm).collect();
-        let sums = pair_sums(&jac, &points, &reports[side].free, arm.reflector_count());
+        let weights = vec![1.0; arm.reflector_count()];
+        let sums = pair_sums(&jac, &points, &reports[side].free, &weights);
         let c = &cols[side];
         for i in 0..c.len() {
             for j in 0..c.len() {
@@ -604,4 +670,253 @@ fn tree_uncertainty(
             &sub(&jtj),
         ))
     }))
+}
+
+/// Each identified parameter's error against a known `truth` over its reported σ, both arms of
+/// `result` (the parameters of `uncertainty`, matched by name): the measure of how well the σ describe
+/// the errors on simulations — their RMS is 1 when they do (`examples/sigma_coverage.rs`).
+pub fn sigma_ratios(
+    result: &crate::solver::result::CalibrationResult,
+    uncertainty: &crate::side::PerSide<Option<ArmUncertainty>>,
+    truth: &crate::kinematics::DualArmModel,
+) -> Vec<f64> {
+    let mut ratios = Vec::new();
+    for side in crate::side::Side::BOTH {
+        let Some(u) = &uncertainty[side] else {
+            continue;
+        };
+        let (arm, true_arm) = (result.calibrated.arm(side), truth.arm(side));
+        let (x, t) = (arm.to_vector(), true_arm.to_vector());
+        for p in &u.parameters {
+            let Some(k) = (0..arm.param_count()).find(|&k| arm.param_name(k) == p.name) else {
+                continue;
+            };
+            let scale = if p.unit == "mrad" { 1000.0 } else { 1.0 };
+            if p.sigma > 0.0 && k < t.len() {
+                ratios.push((x[k] - t[k]) * scale / p.sigma);
+            }
+        }
+    }
+    ratios
+}
+
+/// How a step-1 method weighs the reflectors' distance errors: the covariance is the sandwich of
+/// that weighted fit (module documentation).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Weighting {
+    /// Least squares of every reflector's distance errors (`lsq`).
+    LeastSquares,
+    /// Least squares of one reflector's distance errors (`distance-single`, the reflector's index).
+    Reflector(usize),
+    /// Given weights per reflector.
+    Weights(Vec<f64>),
+    /// The minimax (`minimax`): each reflector weighed by its multiplier λ_k at the solution
+    /// ([`minimax_weights`]).
+    Minimax,
+}
+
+impl Weighting {
+    /// The weighting of `method`'s fit (`reflector`: the one a single-reflector method used); `None`
+    /// for a method not fitted by distances.
+    pub fn of(
+        method: crate::solver::Method,
+        reflector: Option<crate::solver::types::Reflector>,
+    ) -> Option<Weighting> {
+        if method.is_absolute() {
+            return None;
+        }
+        Some(match reflector {
+            Some(r) => Weighting::Reflector(r as usize),
+            None if method.spec().solver == crate::solver::methods::SolverKind::Sqp => {
+                Weighting::Minimax
+            }
+            None => Weighting::LeastSquares,
+        })
+    }
+
+    /// The weights of the first pass over the pairs (the minimax's: equal, for its multipliers).
+    fn first_weights(&self, arm: &ArmModel) -> Vec<f64> {
+        let n = arm.reflector_count();
+        match self {
+            Weighting::Reflector(k) => (0..n).map(|r| f64::from(u8::from(r == *k))).collect(),
+            Weighting::Weights(w) => w.clone(),
+            Weighting::LeastSquares | Weighting::Minimax => vec![1.0; n],
+        }
+    }
+}
+
+/// The smallest weight of a reflector in the minimax's covariance (its multipliers sum to one).
+pub const MINIMAX_WEIGHT_FLOOR: f64 = 0.1;
+
+/// Relative tolerance below the largest F_k within which a reflector counts as active at a minimax
+/// solution.
+pub const ACTIVE_TOLERANCE: f64 = 1e-3;
+
+/// The minimax's multipliers λ_k at its solution (summing to one): over the active reflectors, the
+/// convex combination of their gradients ∇F_k closest to zero (the KKT condition Σ λ_k ∇F_k = 0), in
+/// the column-scaled geometric parameters (the reflector coordinates also answer to the triangle's
+/// side constraints, whose multipliers are not known here).
+fn minimax_weights(arm: &ArmModel, free: &[usize], sums: &Sums) -> Vec<f64> {
+    let n = sums.f_k.len();
+    let top = sums.f_k.iter().copied().fold(0.0f64, f64::max);
+    let active: Vec<usize> = (0..n)
+        .filter(|&k| sums.f_k[k] >= top * (1.0 - ACTIVE_TOLERANCE))
+        .collect();
+    let off = arm.reflector_offset();
+    let cols: Vec<usize> = (0..free.len())
+        .filter(|&c| free[c] < off || free[c] >= off + 3 * n)
+        .collect();
+    let scaled = |k: usize| -> DVector<f64> {
+        DVector::from_iterator(
+            cols.len(),
+            cols.iter()
+                .map(|&c| sums.g_k[k][c] / sums.jtj[(c, c)].max(f64::MIN_POSITIVE).sqrt()),
+        )
+    };
+    let h: Vec<DVector<f64>> = active.iter().map(|&k| scaled(k)).collect();
+    let m = active.len();
+    let gram = DMatrix::from_fn(m, m, |a, b| h[a].dot(&h[b]));
+    // Every non-empty subset S: λ_S ∝ G_S⁻¹ 1, kept if non-negative; the smallest λᵀGλ.
+    let mut best: Option<(f64, Vec<f64>)> = None;
+    for mask in 1u32..(1 << m) {
+        let set: Vec<usize> = (0..m).filter(|&a| mask & (1 << a) != 0).collect();
+        let g = DMatrix::from_fn(set.len(), set.len(), |a, b| gram[(set[a], set[b])]);
+        let Some(mu) = g.lu().solve(&DVector::from_element(set.len(), 1.0)) else {
+            continue;
+        };
+        let total = mu.sum();
+        if !(total.is_finite() && total != 0.0) || mu.iter().any(|&x| x / total < 0.0) {
+            continue;
+        }
+        let mut lambda = vec![0.0; m];
+        for (a, &i) in set.iter().enumerate() {
+            lambda[i] = mu[a] / total;
+        }
+        let value = (0..m)
+            .map(|a| {
+                (0..m)
+                    .map(|b| lambda[a] * gram[(a, b)] * lambda[b])
+                    .sum::<f64>()
+            })
+            .sum::<f64>();
+        if best.as_ref().is_none_or(|(v, _)| value < *v) {
+            best = Some((value, lambda));
+        }
+    }
+    let mut weights = vec![0.0; n];
+    match best {
+        Some((_, lambda)) => {
+            for (a, &k) in active.iter().enumerate() {
+                weights[k] = lambda[a];
+            }
+        }
+        None => active.iter().for_each(|&k| weights[k] = 1.0 / m as f64),
+    }
+    weights
+}
+
+/// [`arm_uncertainty`] of a fit weighing the reflectors as `weighting` says.
+pub fn arm_uncertainty_weighted(
+    arm: &ArmModel,
+    qs: &[Vec<f64>],
+    measured: &[Vec<Vector3<f64>>],
+    free: &[usize],
+    weighting: &Weighting,
+) -> Option<ArmUncertainty> {
+    let fit = covariance(arm, qs, measured, free, None, weighting)?;
+    Some(summarise(
+        arm,
+        free,
+        &fit.cov,
+        fit.point_var,
+        fit.used,
+        fit.configurations,
+        &fit.jtj,
+    ))
+}
+
+/// The minimax's multipliers ([`Weighting::Minimax`]) of `arm` at `qs` against `measured`: one per
+/// reflector, summing to one.
+pub fn minimax_multipliers(
+    arm: &ArmModel,
+    qs: &[Vec<f64>],
+    measured: &[Vec<Vector3<f64>>],
+    free: &[usize],
+) -> Vec<f64> {
+    let jac: Vec<ArmJacobians> = qs.iter().map(|q| arm.reflector_jacobians(q)).collect();
+    let points: Vec<&Vec<Vector3<f64>>> = measured.iter().collect();
+    let sums = pair_sums(&jac, &points, free, &vec![1.0; arm.reflector_count()]);
+    minimax_weights(arm, free, &sums)
+}
+
+/// The uncertainty of an absolute method's fit (`pose`, `position`) of `side`: its own residuals and
+/// Jacobian at the solution, the tracker-from-base transform's six columns with the arm's `free`
+/// ones. Rows of one kind (positions, mm; a pose's origin, mm, and its weighted rotation) are taken
+/// as independent with one variance per kind, estimated from the residuals:
+/// `C = (JᵀJ)⁻¹ (Σ_rows s²_kind j jᵀ) (JᵀJ)⁻¹`, the arm's block reported.
+fn absolute_uncertainty(
+    kept: &crate::dataset::Dataset,
+    result: &crate::solver::result::CalibrationResult,
+    side: crate::side::Side,
+    free: &[usize],
+) -> Option<ArmUncertainty> {
+    use crate::solver::problems::absolute_problem::{AbsoluteData, AbsoluteProblem};
+    let ms = kept.arm(side).select(result.settings.split);
+    let qs: Vec<Vec<f64>> = ms.iter().map(|m| m.q_rad.clone()).collect();
+    let measured: Vec<Vec<Vector3<f64>>> = ms.iter().map(|m| m.tracker_points_mm.clone()).collect();
+    let arm = result.calibrated.arm(side);
+    let (data, kinds) = if result.settings.method == crate::solver::Method::Pose {
+        let w = AbsoluteProblem::rotation_weight_mm(&result.nominal.arm(side).reflectors_mm);
+        (
+            AbsoluteData::Pose {
+                rotation_weight_mm: w,
+            },
+            2,
+        )
+    } else {
+        (AbsoluteData::Position, 1)
+    };
+    let (n, p) = (qs.len(), free.len());
+    let dim = p + 6;
+    let problem = AbsoluteProblem::new(
+        data,
+        side,
+        qs,
+        measured,
+        arm,
+        result.tracker_from_base[side]?,
+        free.to_vec(),
+        DVector::from_element(dim, 1.0),
+    )
+    .ok()?;
+    let (r, j) = problem.jacobian(&DVector::zeros(dim));
+    let rows = r.len();
+    let per_config = rows / n.max(1);
+    let kind = |row: usize| {
+        if kinds == 2 {
+            (row % per_config) / 3
+        } else {
+            0
+        }
+    };
+    let dof_fraction = 1.0 - dim as f64 / rows as f64;
+    if dof_fraction <= 0.0 {
+        return None;
+    }
+    let mut var = vec![0.0; kinds];
+    let mut count = vec![0usize; kinds];
+    for row in 0..rows {
+        var[kind(row)] += r[row] * r[row];
+        count[kind(row)] += 1;
+    }
+    for c in 0..kinds {
+        var[c] /= count[c] as f64 * dof_fraction;
+    }
+    let jtj = j.tr_mul(&j);
+    let weighted = DMatrix::from_fn(rows, dim, |row, c| j[(row, c)] * var[kind(row)]);
+    let meat = j.tr_mul(&weighted);
+    let inverse = jtj.clone().cholesky()?.inverse();
+    let cov = &inverse * meat * &inverse;
+    let arm_block = cov.view((0, 0), (p, p)).into_owned();
+    Some(summarise(arm, free, &arm_block, var[0], n, n, &jtj))
 }
