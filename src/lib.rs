@@ -5,7 +5,7 @@
 //!
 //! # The front door
 //!
-//! Five types cover what a program does: [`Dataset`] (measurements with the robot they were taken
+//! Five types cover calibrating: [`Dataset`] (measurements with the robot they were taken
 //! on: a dataset directory, or arrays), [`Robot`] (the built-in IRB 14000, a URDF, a DH table),
 //! [`Calibration`] (what to run: method, error model, split, exclusions — the command line's
 //! defaults otherwise), [`Calibrated`] (parameters with their σ, accuracy before and after on both
@@ -24,16 +24,23 @@
 //! # Ok::<(), dualcal::Error>(())
 //! ```
 //!
-//! Everything else — the kinematics, the solver's stages, the metrics, imports and planning — is the
-//! engine's own modules below, which the command line (`dualcal`) and the workbench (feature `gui`)
+//! The other tasks: [`Import`] reads tracker exports and joint logs into a [`Dataset`] (with the
+//! report of what matched), [`Plan`] says which configurations to measure for a tracker at a given
+//! place (with the predicted accuracy), [`evaluate`] gives a parameter file's accuracy on a dataset,
+//! and [`Calibrated`] exports the parameter file, the calibrated URDF and overlay, the ABB base frames
+//! and compensated joint targets. One runnable example per task in `examples/`: `calibrate`,
+//! `from_arrays`, `import`, `plan`, `export` (`cargo run --release --example import`).
+//!
+//! Everything else — the kinematics, the solver's stages, the metrics, the import readers and the
+//! planner — is the engine's own modules below, which the command line (`dualcal`) and the workbench (feature `gui`)
 //! are built on. The engine never depends on egui or wgpu.
 #![forbid(unsafe_code)]
 
 #[warn(missing_docs)]
 mod api;
 pub use api::{
-    Accuracy, ArmArrays, Arrays, Calibrated, Calibration, Dataset, Error, Parameter, PerSplit,
-    Result, Robot, SplitAccuracy, evaluate,
+    Accuracy, ArmArrays, Arrays, Calibrated, Calibration, Dataset, Error, Import, ImportedDataset,
+    Parameter, PerSplit, Plan, Planned, Result, Robot, SplitAccuracy, evaluate,
 };
 pub use dataset::Split;
 pub use kinematics::ErrorTerms;

@@ -27,9 +27,13 @@ from ._dualcal import (
     CalibrationResult,
     Dataset as _NativeDataset,
     DualcalError,
+    ImportResult as _NativeImportResult,
+    PlanResult,
     Robot,
     calibrate as _calibrate,
     evaluate,
+    import_files as _import_files,
+    plan as _plan,
 )
 
 __all__ = [
@@ -38,9 +42,13 @@ __all__ = [
     "CalibrationResult",
     "Dataset",
     "DualcalError",
+    "ImportResult",
+    "PlanResult",
     "Robot",
     "calibrate",
     "evaluate",
+    "import_files",
+    "plan",
 ]
 
 
@@ -161,3 +169,117 @@ def evaluate(dataset: Dataset, params) -> dict:  # noqa: F811
     "verification": …}`` (what ``dualcal evaluate`` prints)."""
     native = dataset._native if isinstance(dataset, Dataset) else dataset
     return _evaluate(native, str(params))
+
+
+class ImportResult:
+    """What :func:`import_files` made: the :class:`Dataset` (ready to calibrate) and the report."""
+
+    __slots__ = ("_native",)
+
+    def __init__(self, native: _NativeImportResult):
+        self._native = native
+
+    @property
+    def dataset(self) -> Dataset:
+        """The imported measurements with their robot, checked and screened."""
+        return Dataset(self._native.dataset)
+
+    @property
+    def report(self) -> str:
+        """What matched and what did not, and why (file and line): ``dualcal import``'s report."""
+        return self._native.report
+
+    def save(self, path, overwrite: bool = False) -> None:
+        """Write the dataset directory ``path`` (``dataset.toml``, the arms' CSVs, the report as
+        ``import-report.txt``); an existing non-empty directory only with ``overwrite``."""
+        self._native.save(str(path), overwrite)
+
+    def __repr__(self) -> str:
+        return repr(self._native)
+
+
+def import_files(
+    left_points=None,
+    left_joints=None,
+    right_points=None,
+    right_joints=None,
+    *,
+    robot: Optional[Robot] = None,
+    match: str = "auto",
+    points_format: Optional[str] = None,
+    length_unit: Optional[str] = None,
+    angle_unit: Optional[str] = None,
+    joint_length_unit: Optional[str] = None,
+    columns: Optional[str] = None,
+    joint_order: Optional[str] = None,
+    decimal_comma: bool = False,
+    time_tolerance_s: Optional[float] = None,
+    verify_last: Optional[int] = None,
+    measured_together: bool = False,
+    reflectors: Optional[dict] = None,
+) -> ImportResult:
+    """Tracker point files and the controller's joint logs as a dataset (``dualcal import``).
+
+    Per arm a point file (SpatialAnalyzer, Leica Tracker Pilot, figaroh, or any CSV with
+    ``columns="target=1,x=2,y=3,z=4"``) and a joint log (``id,q1..qN[,split]``; ``None`` when the
+    point file holds the joints); one arm alone makes a dataset of that arm. ``match``: ``"auto"``,
+    ``"name"`` (targets ``<id>_<reflector>``), ``"order"`` or ``"time"``; ``length_unit``: of point
+    files that do not state theirs (``"mm"``, ``"m"``, ``"um"``, ``"in"``, ``"ft"``); ``angle_unit``:
+    of the joint logs (``"deg"``, ``"rad"``; default the header's, else degrees); ``reflectors``:
+    ``{name: (x, y, z)}`` in the tip frame, mm (default ``a``, ``b``, ``c`` at the paper's positions);
+    ``robot``: the robot measured (default the built-in IRB 14000). Errors name file, line and field.
+    """
+    return ImportResult(
+        _import_files(
+            robot,
+            None if left_points is None else str(left_points),
+            None if left_joints is None else str(left_joints),
+            None if right_points is None else str(right_points),
+            None if right_joints is None else str(right_joints),
+            matching=match,
+            points_format=points_format,
+            length_unit=length_unit,
+            angle_unit=angle_unit,
+            joint_length_unit=joint_length_unit,
+            columns=columns,
+            joint_order=joint_order,
+            decimal_comma=decimal_comma,
+            time_tolerance_s=time_tolerance_s,
+            verify_last=verify_last,
+            measured_together=measured_together,
+            reflectors=None
+            if reflectors is None
+            else [(str(k), tuple(float(c) for c in v)) for k, v in reflectors.items()],
+        )
+    )
+
+
+def plan(
+    tracker_mm,
+    n: int = 20,
+    *,
+    robot: Optional[Robot] = None,
+    candidates: int = 600,
+    seed: int = 1,
+    max_incidence_deg: float = 60.0,
+    keep_out: Iterable = (),
+    extend: Optional[Dataset] = None,
+) -> PlanResult:
+    """The configurations to measure (``dualcal plan``): ``n`` per arm, collision-free, the
+    reflectors facing a tracker at ``tracker_mm`` (x, y, z in the robot's body frame, mm), in a
+    short visiting order, with the predicted accuracy. ``keep_out``: boxes ``((x0, y0, z0), (x1, y1,
+    z1))`` of the cell (mm) no arm may come near; ``extend``: a dataset whose configurations start
+    the design. The result's ``configurations(side)`` is ``(n, J)`` float64 (rad)."""
+    boxes = [
+        (tuple(float(c) for c in lo), tuple(float(c) for c in hi)) for lo, hi in keep_out
+    ]
+    return _plan(
+        robot,
+        tuple(float(c) for c in tracker_mm),
+        n,
+        candidates=candidates,
+        seed=seed,
+        max_incidence_deg=max_incidence_deg,
+        keep_out=boxes,
+        extend=None if extend is None else extend._native,
+    )

@@ -92,6 +92,39 @@ class CalibrationResult:
     def save_urdf(self, path: str) -> None: ...
     def overlay(self, json: bool = False) -> str: ...
     def abb_base_frames(self) -> str: ...
+    def compensate(
+        self, side: str, joints: npt.NDArray[np.float64], controller_base: str = "nominal"
+    ) -> Dict[str, Any]:
+        """Nominal joint targets ``(n, J)`` (rad) compensated for the calibrated robot: ``joints``
+        ``(n, J)`` (NaN rows where refused), ``ok`` ``(n,)`` bool, ``residual_mm`` ``(n,)``,
+        ``largest_change`` ``(n,)``, ``reasons`` (``None`` or why a target was refused)."""
+    def compensate_file(
+        self,
+        side: str,
+        path: str,
+        angle_unit: str = "deg",
+        length_unit: str = "mm",
+        controller_base: str = "nominal",
+    ) -> str:
+        """A target list file compensated: the CSV ``dualcal compensate`` writes."""
+
+class ImportResult:
+    @property
+    def dataset(self) -> Dataset: ...
+    @property
+    def report(self) -> str: ...
+    def save(self, path: str, overwrite: bool = False) -> None: ...
+
+class PlanResult:
+    def configurations(self, side: str) -> npt.NDArray[np.float64]:
+        """The configurations of ``side`` in visiting order, ``(n, J)`` float64 (rad)."""
+    @property
+    def predicted(self) -> Dict[str, Optional[Dict[str, Any]]]:
+        """Per arm ``point_sigma_mm``, ``verification_ratio`` and ``uncertainty`` (σ per parameter)."""
+    @property
+    def summary(self) -> str: ...
+    def files(self) -> Dict[str, str]: ...
+    def save(self, path: str, overwrite: bool = False) -> None: ...
 
 def calibrate(
     dataset: Dataset,
@@ -104,3 +137,34 @@ def calibrate(
     max_iterations: Optional[int] = None,
 ) -> CalibrationResult: ...
 def evaluate(dataset: Dataset, params: str) -> Dict[str, Any]: ...
+def import_files(
+    robot: Optional[Robot] = None,
+    left_points: Optional[str] = None,
+    left_joints: Optional[str] = None,
+    right_points: Optional[str] = None,
+    right_joints: Optional[str] = None,
+    *,
+    matching: Optional[str] = None,
+    points_format: Optional[str] = None,
+    length_unit: Optional[str] = None,
+    angle_unit: Optional[str] = None,
+    joint_length_unit: Optional[str] = None,
+    columns: Optional[str] = None,
+    joint_order: Optional[str] = None,
+    decimal_comma: bool = False,
+    time_tolerance_s: Optional[float] = None,
+    verify_last: Optional[int] = None,
+    measured_together: bool = False,
+    reflectors: Optional[List[Tuple[str, Tuple[float, float, float]]]] = None,
+) -> ImportResult: ...
+def plan(
+    robot: Optional[Robot],
+    tracker_mm: Tuple[float, float, float],
+    n: int = 20,
+    *,
+    candidates: int = 600,
+    seed: int = 1,
+    max_incidence_deg: float = 60.0,
+    keep_out: Sequence[Tuple[Tuple[float, float, float], Tuple[float, float, float]]] = ...,
+    extend: Optional[Dataset] = None,
+) -> PlanResult: ...

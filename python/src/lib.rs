@@ -11,6 +11,8 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use std::path::PathBuf;
 
+mod tasks;
+
 create_exception!(
     _dualcal,
     DualcalError,
@@ -507,6 +509,39 @@ impl PyCalibrated {
         self.inner.abb_base_frames()
     }
 
+    /// Nominal joint targets `(n, J)` of `side` compensated for the calibrated robot.
+    #[pyo3(signature = (side, joints, controller_base="nominal"))]
+    fn compensate<'py>(
+        &self,
+        py: Python<'py>,
+        side: &str,
+        joints: numpy::PyReadonlyArray2<'_, f64>,
+        controller_base: &str,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        tasks::compensate(py, &self.inner, side, joints, controller_base)
+    }
+
+    /// A target list file of `side` compensated: the table `dualcal compensate` writes.
+    #[pyo3(signature = (side, path, angle_unit="deg", length_unit="mm", controller_base="nominal"))]
+    fn compensate_file(
+        &self,
+        py: Python<'_>,
+        side: &str,
+        path: PathBuf,
+        angle_unit: &str,
+        length_unit: &str,
+        controller_base: &str,
+    ) -> PyResult<String> {
+        tasks::compensate_file(
+            py,
+            &self.inner,
+            side,
+            path,
+            (angle_unit, length_unit),
+            controller_base,
+        )
+    }
+
     fn __repr__(&self) -> String {
         let (m, b) = self.method();
         format!(
@@ -644,6 +679,10 @@ fn _dualcal(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyCalibrated>()?;
     m.add_function(wrap_pyfunction!(calibrate, m)?)?;
     m.add_function(wrap_pyfunction!(evaluate, m)?)?;
+    m.add_class::<tasks::PyImported>()?;
+    m.add_class::<tasks::PyPlanned>()?;
+    m.add_function(wrap_pyfunction!(tasks::import_files, m)?)?;
+    m.add_function(wrap_pyfunction!(tasks::plan, m)?)?;
     m.add("DualcalError", m.py().get_type::<DualcalError>())?;
     m.add("METHODS", method_names())?;
     m.add("BASE_METHODS", base_method_names())?;

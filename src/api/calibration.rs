@@ -3,6 +3,10 @@
 use super::dataset::Dataset;
 use super::error::{Error, Result};
 use crate::analysis::{Analysis, ConfigRow, Indicator};
+use crate::controller::compensate::{
+    Compensated, CompensationSettings, Refusal, Target, compensate_all,
+};
+use crate::controller::targets::TargetUnits;
 use crate::dataset::Split;
 use crate::kinematics::ErrorTerms;
 use crate::metrics::AccuracyReport;
@@ -421,6 +425,61 @@ impl Calibrated {
         crate::controller::abb::to_cfg(&frames, "dualcal: the calibrated base frames")
     }
 
+    /// Joint targets of `side` compensated: the joint values with which the calibrated robot reaches
+    /// the pose its controller's nominal model meant (nominal joint targets, or flange poses in the
+    /// arm's base frame) — `dualcal compensate` (docs/controller.md). One result per target, in
+    /// order: the compensated joints, or why the target was refused (out of reach, beyond a joint
+    /// limit, near a singular configuration).
+    ///
+    /// ```
+    /// # let ds = dualcal::Dataset::load(concat!(env!("CARGO_MANIFEST_DIR"), "/assets/datasets/example"))?;
+    /// # let result = dualcal::Calibration::new(&ds).max_iterations(5).run()?;
+    /// use dualcal::controller::compensate::{CompensationSettings, Target};
+    /// let q = ds.data().arm(dualcal::Side::Left).measurements[0].q_rad.clone(); // rad, chain order
+    /// let out = result.compensate(dualcal::Side::Left, &[Target::Joints(q)], &CompensationSettings::default());
+    /// let q = out[0].as_ref().expect("reached");
+    /// assert!(q.residual_mm < 1e-3);
+    /// # Ok::<(), dualcal::Error>(())
+    /// ```
+    pub fn compensate(
+        &self,
+        side: Side,
+        targets: &[Target],
+        settings: &CompensationSettings,
+    ) -> Vec<Result<Compensated, Refusal>> {
+        compensate_all(
+            &self.result.nominal,
+            &self.result.calibrated,
+            side,
+            targets,
+            &self.robot.arm_joint_names(side),
+            settings,
+        )
+    }
+
+    /// A target list file of `side` (`id,q1..qN` nominal joints, or `id,x,y,z,qw,qx,qy,qz[,q1..qN]`
+    /// flange poses in the arm's base frame; docs/formats.md) compensated: the table `dualcal
+    /// compensate --out` writes (the joints, the change, the residual, `ok` or why a row was refused).
+    pub fn compensate_file(
+        &self,
+        side: Side,
+        targets: impl AsRef<Path>,
+        units: TargetUnits,
+        settings: &CompensationSettings,
+    ) -> Result<String> {
+        let path = targets.as_ref();
+        let text =
+            std::fs::read_to_string(path).map_err(|e| crate::output::FileError::read(path, e))?;
+        let names = self.robot.arm_joint_names(side);
+        let linear = self.result.nominal.arm(side).linear_joints();
+        let rows = crate::controller::targets::parse(path, &text, &names, &linear, units)?;
+        let targets: Vec<Target> = rows.iter().map(|r| r.target.clone()).collect();
+        let results = self.compensate(side, &targets, settings);
+        Ok(crate::controller::targets::to_csv(
+            &rows, &results, &names, &linear, units,
+        ))
+    }
+
     /// The engine's whole result (history, identifiability, stages).
     pub fn result(&self) -> &CalibrationResult {
         &self.result
@@ -431,8 +490,7 @@ impl Calibrated {
         inputs.extend(self.dataset.robot.clone());
         inputs.extend(self.robot.source.clone());
         let inputs: Vec<&Path> = inputs.iter().map(|p| p.as_path()).collect();
-        crate::output::refuse_overwrite_input(path, &inputs)
-            .map_err(|e| Error::Invalid(e.to_string()))
+        Ok(crate::output::refuse_overwrite_input(path, &inputs)?)
     }
 
     fn write(&self, path: &Path, bytes: &[u8]) -> Result<()> {

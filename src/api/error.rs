@@ -32,9 +32,24 @@ pub enum Error {
     /// The per-configuration figures could not be computed.
     #[error(transparent)]
     Analysis(#[from] crate::analysis::AnalysisError),
+    /// Tracker or controller files could not be imported (the file, line and field at fault).
+    #[error(transparent)]
+    Import(#[from] crate::import::ImportError),
+    /// A measurement could not be planned (too few candidates facing the tracker, options).
+    #[error(transparent)]
+    Plan(#[from] crate::plan::PlanError),
+    /// A target list could not be read (the file, line and field at fault).
+    #[error(transparent)]
+    Targets(#[from] crate::controller::targets::TargetsError),
     /// An option's value is not one the engine knows (a method's or model's name, a configuration id).
     #[error("{0}")]
     Invalid(String),
+    /// A file could not be read.
+    #[error(transparent)]
+    File(#[from] crate::output::FileError),
+    /// An output would replace an input file, or a file or directory that exists.
+    #[error(transparent)]
+    Output(#[from] crate::output::OutputError),
     /// A file could not be written.
     #[error("writing {}: {source}", path.display())]
     Write {

@@ -101,6 +101,15 @@ impl Robot {
         &self.description.warnings
     }
 
+    /// The file the description was read from (`None`: the built-in robot, or text without a path).
+    pub(crate) fn file(&self) -> Option<&Path> {
+        match &self.origin {
+            Origin::Builtin => None,
+            Origin::File(path) => Some(path),
+            Origin::Text { path, .. } => path.as_deref(),
+        }
+    }
+
     /// The compiled description (the engine's type, for what the front door does not cover).
     pub fn description(&self) -> &RobotDescription {
         &self.description

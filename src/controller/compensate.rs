@@ -45,7 +45,9 @@ pub enum ControllerBase {
 /// How targets are compensated.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CompensationSettings {
+    /// The base frames the controller uses (nominal, or the calibrated ones loaded into it).
     pub controller_base: ControllerBase,
+    /// Newton steps at most per target.
     pub max_iterations: usize,
     /// Largest position error accepted, mm.
     pub tolerance_mm: f64,
@@ -55,6 +57,7 @@ pub struct CompensationSettings {
     /// one means a target near a singular configuration, where the compensated motion would differ
     /// from the programmed one by more than a correction (the target is refused).
     pub max_change_rad: f64,
+    /// [`Self::max_change_rad`] for a prismatic joint, mm.
     pub max_change_mm: f64,
 }
 
@@ -79,14 +82,18 @@ pub enum Target {
     /// A flange pose in the arm's model base frame (mm) as the nominal model places it, and the joint
     /// values to start from (the program's own, or the previous target's).
     Pose {
+        /// The flange pose in the arm's model base frame, mm.
         base_from_flange: Isometry3<f64>,
+        /// The joint values to start from (empty: the previous target's result).
         seed: Vec<f64>,
     },
     /// A flange pose where it is physically wanted, in the world (the left arm's model base frame;
     /// from a tracker-frame pose through the tracker's registration), and the joint values to start
     /// from. The controller's base frame plays no part.
     WorldPose {
+        /// The flange pose in the left arm's model base frame, mm.
         left_base_from_flange: Isometry3<f64>,
+        /// The joint values to start from (empty: the previous target's result).
         seed: Vec<f64>,
     },
 }
@@ -108,9 +115,11 @@ pub struct Compensated {
     pub q: Vec<f64>,
     /// The largest change from the start (the nominal target or the seed), per joint in its unit.
     pub largest_change: f64,
-    /// The remaining pose error of the calibrated model, mm and rad.
+    /// The remaining position error of the calibrated model, mm.
     pub residual_mm: f64,
+    /// The remaining rotation error, rad.
     pub residual_rad: f64,
+    /// The Newton steps taken.
     pub iterations: usize,
 }
 
@@ -121,19 +130,29 @@ pub enum Refusal {
         "not reached: after {iterations} steps the calibrated robot is {residual_mm:.3e} mm and \
          {residual_rad:.3e} rad from the pose (out of reach, or a singular configuration)"
     )]
+    /// The pose was not reached within the tolerances (out of reach, or a singular configuration).
     NotReached {
+        /// The steps taken.
         iterations: usize,
+        /// The remaining position error, mm.
         residual_mm: f64,
+        /// The remaining rotation error, rad.
         residual_rad: f64,
     },
     #[error(
         "joint {joint} would be at {value:.6} {unit}, beyond its limits [{lower:.6}, {upper:.6}] {unit}"
     )]
+    /// The solution puts a joint beyond its limits.
     JointLimit {
+        /// The joint's name.
         joint: String,
+        /// Its value, in `unit`.
         value: f64,
+        /// Its lower limit, in `unit`.
         lower: f64,
+        /// Its upper limit, in `unit`.
         upper: f64,
+        /// `rad` or `mm`.
         unit: &'static str,
     },
     #[error(
@@ -141,14 +160,25 @@ pub enum Refusal {
          near a singular configuration, where a correction becomes a large motion; move it away from \
          the singularity (or allow larger changes)"
     )]
+    /// A joint would move by more than the largest change allowed (near a singular configuration).
     LargeChange {
+        /// The joint's name.
         joint: String,
+        /// Its change, in `unit`.
         change: f64,
+        /// The largest change allowed, in `unit`.
         limit: f64,
+        /// `rad` or `mm`.
         unit: &'static str,
     },
+    /// The target has another number of joint values than the arm.
     #[error("expected {expected} joint values, found {found}")]
-    JointCount { expected: usize, found: usize },
+    JointCount {
+        /// The arm's joints.
+        expected: usize,
+        /// The target's values.
+        found: usize,
+    },
 }
 
 /// Rotation error weight: 1 mm per mrad.

@@ -9,6 +9,7 @@
 //! world moved by the left base's nominal place in the body ([`RobotDescription::body_from_arm_base`]).
 
 pub mod abb;
+#[warn(missing_docs)]
 pub mod compensate;
 pub mod targets;
 

@@ -98,14 +98,17 @@ impl crate::choice::Choice for MatchRule {
 crate::choice_strings!(MatchRule);
 
 /// One arm's input files.
+#[warn(missing_docs)]
 #[derive(Clone, Debug, PartialEq)]
 pub struct ArmFiles {
+    /// The point file (tracker export).
     pub points: PathBuf,
     /// `None`: the point file gives the joints (figaroh, or a mapping with joint columns).
     pub joints: Option<PathBuf>,
 }
 
 /// Everything an import is told besides the files.
+#[warn(missing_docs)]
 #[derive(Clone, Debug)]
 pub struct ImportOptions {
     /// `None`: recognised from each file.
@@ -120,24 +123,29 @@ pub struct ImportOptions {
     /// The unit of joint logs (`None`: the header's `[deg]`/`[rad]`, else degrees) and of a mapping's
     /// joint columns (`None`: degrees).
     pub angle_unit: Option<AngleUnit>,
+    /// Numbers with a decimal comma (`1234,56`; fields then separated by `;`, tabs or spaces).
     pub decimal_comma: bool,
     /// Chain joint k is the joint log's joint column `joint_order[k]` (1-based).
     pub joint_order: Option<Vec<usize>>,
+    /// How points find their configuration.
     pub matching: MatchRule,
     /// `MatchRule::Time`: the largest time difference between a point and its configuration.
     pub time_tolerance_s: f64,
     /// The dataset's reflectors: names (target suffixes) and nominal positions in the tip frame, mm.
     pub reflector_names: Vec<String>,
+    /// The reflectors' nominal positions in the tip frame, mm, in the order of `reflector_names`.
     pub nominal_reflectors_mm: Vec<Vector3<f64>>,
     /// An arm's own nominal reflector positions (markers that sit differently on each hand), in the
     /// order of `reflector_names`, mm: the dataset's `[[arms]] reflectors`.
     pub arm_reflectors_mm: PerSide<Option<Vec<Vector3<f64>>>>,
+    /// The tracker's maximum permissible error (the dataset's `[tracker]`).
     pub tracker: TrackerSpec,
     /// Each arm's joints in chain order (from the robot description): counts checked, figaroh's
     /// columns and named log columns put in chain order.
     pub joint_names: PerSide<Option<Vec<String>>>,
     /// The dataset's robot description (`None`: the built-in IRB 14000) and arm chains.
     pub robot: Option<PathBuf>,
+    /// The arms' chains the dataset names (with `robot`).
     pub links: PerSide<Option<ArmLinks>>,
     /// The tracker station each arm was measured from.
     pub stations: PerSide<Option<String>>,
@@ -217,20 +225,28 @@ impl ImportOptions {
 }
 
 /// A point or configuration that was not used, and why.
+#[warn(missing_docs)]
 #[derive(Clone, Debug, PartialEq)]
 pub struct Unmatched {
     /// The target name (or `#k`, the point's place in the file) or the configuration id.
     pub name: String,
+    /// The file it is in.
     pub file: PathBuf,
+    /// Its line (1-based).
     pub line: usize,
+    /// Why it was not used.
     pub reason: String,
 }
 
 /// Several shots of one reflector in one configuration, averaged.
+#[warn(missing_docs)]
 #[derive(Clone, Debug, PartialEq)]
 pub struct RepeatedShots {
+    /// The configuration's id.
     pub id: String,
+    /// The reflector's name.
     pub reflector: String,
+    /// How many shots were averaged.
     pub shots: usize,
     /// The largest distance of a shot from their mean, mm.
     pub spread_mm: f64,
@@ -239,17 +255,24 @@ pub struct RepeatedShots {
 }
 
 /// What one arm's import did.
+#[warn(missing_docs)]
 #[derive(Clone, Debug, PartialEq)]
 pub struct ArmReport {
+    /// The arm.
     pub side: Side,
+    /// Its point file.
     pub points_file: PathBuf,
+    /// Its joint log (`None`: the point file gave the joints).
     pub joints_file: Option<PathBuf>,
+    /// The point file's format (recognised or forced).
     pub format: PointsFormat,
+    /// The point file's length unit.
     pub length_unit: PointUnit,
     /// The working frame named in the point file's header.
     pub frame: Option<String>,
     /// The joint log's unit and order, when there is a log.
     pub angle_unit: Option<AngleUnit>,
+    /// The joint log's column order (`None`: chain order).
     pub joint_order: Option<String>,
     /// Points (or configuration rows) in the point file.
     pub points_read: usize,
@@ -257,15 +280,21 @@ pub struct ArmReport {
     pub configurations_read: usize,
     /// Configurations of the dataset.
     pub matched: usize,
+    /// Points that found no configuration, and why.
     pub unmatched_points: Vec<Unmatched>,
+    /// Configurations of the joint log that got no points, and why.
     pub unmatched_configurations: Vec<Unmatched>,
+    /// Reflectors shot more than once in a configuration (averaged).
     pub repeated: Vec<RepeatedShots>,
+    /// What the import worked out and how (the matching rule chosen, units, …).
     pub notes: Vec<String>,
 }
 
 /// What an import did, per arm (`None`: the arm was not imported — a dataset of one arm).
+#[warn(missing_docs)]
 #[derive(Clone, Debug, PartialEq)]
 pub struct ImportReport {
+    /// Each arm's report.
     pub arms: PerSide<Option<ArmReport>>,
 }
 
@@ -278,9 +307,12 @@ impl ImportReport {
 
 /// The result of an import: the dataset (its arms' `file` are the joint logs, or the point files, so
 /// that messages about its rows name the input) and the report.
+#[warn(missing_docs)]
 #[derive(Clone, Debug)]
 pub struct Imported {
+    /// The imported measurements.
     pub dataset: Dataset,
+    /// What matched and what did not.
     pub report: ImportReport,
 }
 
