@@ -212,20 +212,23 @@ fn clock_offset(
     };
     notes.push(format!(
         "clock offset: the robot's clock minus the tracker PC's = {:+.3} s (estimated: with it \
-         {} of {} shots fall into still intervals, ±{} s, {} intervals hold shots; offsets from \
-         {:+.3} to {:+.3} s do as well; --clock-offset to give it)",
+         {} of {} shots fall into still intervals, ±{} s, {} intervals hold shots, the shots {:.2} \
+         s RMS from their intervals' middles; offsets from {:+.3} to {:+.3} s fit as many; \
+         --clock-offset to give it)",
         fit.offset_s,
         fit.shots,
         shot_times.len(),
         o.time_tolerance_s,
         fit.intervals,
+        fit.rms_s,
         fit.range_s.0,
         fit.range_s.1
     ));
-    if let Some(other) = fit.other_s {
+    if let Some((other, rms)) = fit.other_s {
         notes.push(format!(
-            "clock offset: ambiguous — {other:+.3} s puts as many shots into as many intervals; \
-             check the matches, or give --clock-offset"
+            "clock offset: {other:+.3} s also puts as many shots into as many still intervals, \
+             but further from their middles ({rms:.2} s RMS): check the matches, or give \
+             --clock-offset"
         ));
     }
     Some(fit.offset_s)
@@ -550,8 +553,9 @@ fn still_flags(samples: &[Sample], threshold: f64, still_secs: f64) -> Vec<bool>
 }
 
 /// The offset within `[lo, hi]` (where the same shots fall into the same intervals) that puts the
-/// shots on average at the middle of their intervals.
-fn centred(shot_times: &[f64], spans: &[(f64, f64)], slack: f64, lo: f64, hi: f64) -> f64 {
+/// shots on average at the middle of their intervals, and the shots' RMS distance from those middles
+/// with it, s.
+fn centred(shot_times: &[f64], spans: &[(f64, f64)], slack: f64, lo: f64, hi: f64) -> (f64, f64) {
     let mid = 0.5 * (lo + hi);
     let residuals: Vec<f64> = shot_times
         .iter()
@@ -564,10 +568,17 @@ fn centred(shot_times: &[f64], spans: &[(f64, f64)], slack: f64, lo: f64, hi: f6
         })
         .collect();
     if residuals.is_empty() {
-        return mid;
+        return (mid, 0.0);
     }
-    let mean = residuals.iter().sum::<f64>() / residuals.len() as f64;
-    (mid + mean).clamp(lo, hi)
+    let n = residuals.len() as f64;
+    let d = (mid + residuals.iter().sum::<f64>() / n).clamp(lo, hi);
+    let rms = (residuals
+        .iter()
+        .map(|r| (r - (d - mid)).powi(2))
+        .sum::<f64>()
+        / n)
+        .sqrt();
+    (d, rms)
 }
 
 /// The best clock offset found.
@@ -581,14 +592,17 @@ struct OffsetFit {
     /// Still intervals holding shots, and shots within one.
     intervals: usize,
     shots: usize,
-    /// Another range, apart from this one, that does as well.
-    other_s: Option<f64>,
+    /// The shots' RMS distance from the middle of their intervals with it, s.
+    rms_s: f64,
+    /// Another offset, apart from these, that puts as many shots into as many intervals, and its RMS
+    /// distance (larger).
+    other_s: Option<(f64, f64)>,
 }
 
 /// The robot's clock minus the tracker PC's that puts shots into the most still intervals, then the
-/// most shots into still intervals (`slack`: how far outside one a shot may be, s); within the widest
-/// range of offsets that does, the one that centres the shots in their intervals. A sweep over the
-/// offsets where a shot enters or leaves an interval.
+/// most shots into still intervals (`slack`: how far outside one a shot may be, s); among the ranges
+/// of offsets that do, the one whose shots lie nearest the middles of their intervals, and in it the
+/// offset that centres them. A sweep over the offsets where a shot enters or leaves an interval.
 fn estimate_offset(shot_times: &[f64], spans: &[(f64, f64)], slack: f64) -> Option<OffsetFit> {
     // (offset, change of intervals hit, change of shots within one)
     let mut events: Vec<(f64, i64, i64)> = Vec::new();
@@ -634,21 +648,30 @@ fn estimate_offset(shot_times: &[f64], spans: &[(f64, f64)], slack: f64) -> Opti
             ranges.push(((hit, within), x, next.0));
         }
     }
-    let best = ranges
+    // Among the ranges that do best, the one whose shots lie nearest the middles of their intervals
+    // (a shift by one configuration can fit as many when the arm was parked, still, before and after).
+    let top = ranges.iter().map(|r| r.0).max()?;
+    let mut fits: Vec<(f64, f64, (f64, f64))> = ranges
         .iter()
-        .max_by(|a, b| a.0.cmp(&b.0).then((a.2 - a.1).total_cmp(&(b.2 - b.1))))?;
-    let offset_s = centred(shot_times, spans, slack, best.1, best.2);
+        .filter(|r| r.0 == top)
+        .map(|r| {
+            let (d, rms) = centred(shot_times, spans, slack, r.1, r.2);
+            (d, rms, (r.1, r.2))
+        })
+        .collect();
+    fits.sort_by(|a, b| a.1.total_cmp(&b.1));
+    let &(offset_s, rms_s, range_s) = fits.first()?;
     let margin = 1.0 + slack;
-    let other_s = ranges
+    let other_s = fits
         .iter()
-        .filter(|r| r.0 == best.0 && (r.2 < best.1 - margin || r.1 > best.2 + margin))
-        .map(|r| 0.5 * (r.1 + r.2))
-        .next();
+        .find(|f| f.2.1 < range_s.0 - margin || f.2.0 > range_s.1 + margin)
+        .map(|f| (f.0, f.1));
     Some(OffsetFit {
         offset_s,
-        range_s: (best.1, best.2),
-        intervals: best.0.0 as usize,
-        shots: best.0.1 as usize,
+        range_s,
+        intervals: top.0 as usize,
+        shots: top.1 as usize,
+        rms_s,
         other_s,
     })
 }
@@ -675,6 +698,25 @@ mod tests {
         );
         assert!((fit.offset_s - 3600.0).abs() < 2.5, "{fit:?}");
         assert_eq!(fit.other_s, None);
+    }
+
+    #[test]
+    fn a_shift_by_one_configuration_into_a_parked_interval_loses_to_the_centred_fit() {
+        // Parked before and after three configurations: shifted by ±20 s the shots fit as many
+        // intervals, off their middles.
+        let spans = [
+            (370.0, 398.0),
+            (400.0, 410.0),
+            (420.0, 430.0),
+            (440.0, 450.0),
+            (452.0, 480.0),
+        ];
+        let shots: Vec<f64> = [405.0, 425.0, 445.0].iter().map(|t| t - 3600.0).collect();
+        let fit = estimate_offset(&shots, &spans, 0.5).unwrap();
+        assert!((fit.offset_s - 3600.0).abs() < 1e-9, "{fit:?}");
+        assert_eq!((fit.intervals, fit.shots), (3, 3));
+        let (other, rms) = fit.other_s.unwrap();
+        assert!((other - 3600.0).abs() > 15.0 && rms > fit.rms_s, "{fit:?}");
     }
 
     #[test]
