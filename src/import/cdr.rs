@@ -171,7 +171,7 @@ mod tests {
     ) -> Vec<u8> {
         let mut w = vec![0u8, 1, 0, 0];
         let align = |w: &mut Vec<u8>, n: usize| {
-            while (w.len() - 4) % n != 0 {
+            while !(w.len() - 4).is_multiple_of(n) {
                 w.push(0);
             }
         };

@@ -69,9 +69,11 @@ pub(super) fn read(
     table: &PointTable,
 ) -> Result<JointLog, ImportError> {
     let bag = &o.bag;
-    if !(bag.still_velocity > 0.0 && bag.still_velocity.is_finite())
-        || !(bag.still_secs >= 0.0 && bag.still_secs.is_finite())
-    {
+    let thresholds_ok = bag.still_velocity > 0.0
+        && bag.still_velocity.is_finite()
+        && bag.still_secs >= 0.0
+        && bag.still_secs.is_finite();
+    if !thresholds_ok {
         return Err(ImportError::Options(format!(
             "--still-velocity {} and --still-secs {}: expected a positive velocity and a \
              duration ≥ 0",
