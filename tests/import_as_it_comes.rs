@@ -537,3 +537,427 @@ fn the_command_line_imports_one_arm_of_the_yumi_from_a_sheet() {
     let stderr = String::from_utf8_lossy(&run.stderr);
     assert!(stderr.contains("give one arm's point file"), "{stderr}");
 }
+
+/// A minimal .ods (the mimetype, the manifest and content.xml) of sheets (name, rows).
+fn ods(sheets: &[(&str, Vec<Vec<Cell>>)]) -> Vec<u8> {
+    let mut content = String::from(
+        "<?xml version=\"1.0\" encoding=\"UTF-8\"?><office:document-content \
+         xmlns:office=\"urn:oasis:names:tc:opendocument:xmlns:office:1.0\" \
+         xmlns:table=\"urn:oasis:names:tc:opendocument:xmlns:table:1.0\" \
+         xmlns:text=\"urn:oasis:names:tc:opendocument:xmlns:text:1.0\" office:version=\"1.2\">\
+         <office:body><office:spreadsheet>",
+    );
+    for (name, rows) in sheets {
+        content += &format!("<table:table table:name=\"{name}\">");
+        for row in rows {
+            content += "<table:table-row>";
+            for cell in row {
+                content += &match cell {
+                    Cell::Num(v) => format!(
+                        "<table:table-cell office:value-type=\"float\" office:value=\"{}\">\
+                         <text:p>{}</text:p></table:table-cell>",
+                        num(*v),
+                        num(*v)
+                    ),
+                    Cell::Text(t) => format!(
+                        "<table:table-cell office:value-type=\"string\"><text:p>{t}</text:p>\
+                         </table:table-cell>"
+                    ),
+                };
+            }
+            content += "</table:table-row>";
+        }
+        content += "</table:table>";
+    }
+    content += "</office:spreadsheet></office:body></office:document-content>";
+    let manifest = "<?xml version=\"1.0\" encoding=\"UTF-8\"?><manifest:manifest \
+         xmlns:manifest=\"urn:oasis:names:tc:opendocument:xmlns:manifest:1.0\" manifest:version=\"1.2\">\
+         <manifest:file-entry manifest:full-path=\"/\" \
+         manifest:media-type=\"application/vnd.oasis.opendocument.spreadsheet\"/>\
+         <manifest:file-entry manifest:full-path=\"content.xml\" manifest:media-type=\"text/xml\"/>\
+         </manifest:manifest>";
+    let mut zip = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
+    let options =
+        zip::write::SimpleFileOptions::default().compression_method(zip::CompressionMethod::Stored);
+    for (name, text) in [
+        ("mimetype", "application/vnd.oasis.opendocument.spreadsheet"),
+        ("META-INF/manifest.xml", manifest),
+        ("content.xml", content.as_str()),
+    ] {
+        zip.start_file(name, options).unwrap();
+        zip.write_all(text.as_bytes()).unwrap();
+    }
+    zip.finish().unwrap().into_inner()
+}
+
+#[test]
+fn an_ods_sheet_chosen_by_name_is_read_with_its_rows_numbered() {
+    let dir = tempfile::tempdir().unwrap();
+    let (urdf, robot, ds) = six_axis_arm(dir.path());
+    let points = dir.path().join("tracker.csv");
+    std::fs::write(&points, tracker_pilot(&shots(&ds)).0).unwrap();
+    // The joints on the second sheet, in radians by the header's unit; the first sheet a decoy
+    // with the same header and other values.
+    let n = ds.arms.left.joint_count();
+    let rows = |offset: f64| -> Vec<Vec<Cell>> {
+        let mut rows = vec![(1..=n).map(|k| Cell::Text(format!("q{k} [rad]"))).collect()];
+        for m in &ds.arms.left.measurements {
+            rows.push(m.q_rad.iter().map(|q| Cell::Num(q + offset)).collect());
+        }
+        rows
+    };
+    let joints = dir.path().join("joints.ods");
+    std::fs::write(
+        &joints,
+        ods(&[("Plan", rows(0.1)), ("Measured", rows(0.0))]),
+    )
+    .unwrap();
+    let mut o = options(&robot, &urdf, &ds);
+    o.sheet = Some("Measured".into());
+    let imported =
+        import::import_arms(&OsFiles, &left_only(points.clone(), joints.clone()), &o).unwrap();
+    let report = imported.report.arms.left.as_ref().unwrap();
+    assert_eq!(report.matched, 40, "{}", imported.report);
+    assert!(
+        has_note(&imported, "sheet: `Measured`"),
+        "{}",
+        imported.report
+    );
+    for (m, truth) in imported
+        .dataset
+        .arms
+        .left
+        .measurements
+        .iter()
+        .zip(&ds.arms.left.measurements)
+    {
+        assert_eq!(m.q_rad, truth.q_rad, "{}", m.id);
+    }
+    // The first sheet by default, named in the report; a text cell refused with its row.
+    let mut default_sheet = o.clone();
+    default_sheet.sheet = None;
+    let first = import::import_arms(
+        &OsFiles,
+        &left_only(points.clone(), joints.clone()),
+        &default_sheet,
+    )
+    .unwrap();
+    assert!(
+        has_note(&first, "sheet: `Plan`, the first of 2"),
+        "{}",
+        first.report
+    );
+    let moved = first.dataset.arms.left.measurements[3].q_rad[0];
+    assert!((moved - ds.arms.left.measurements[3].q_rad[0] - 0.1).abs() < 1e-12);
+    let mut bad = rows(0.0);
+    bad[9][4] = Cell::Text("--".into());
+    std::fs::write(&joints, ods(&[("Plan", rows(0.1)), ("Measured", bad)])).unwrap();
+    let err = import::import_arms(&OsFiles, &left_only(points, joints.clone()), &o).unwrap_err();
+    assert_eq!(err.path(), Some(joints.as_path()), "{err}");
+    assert_eq!(err.line(), Some(10), "{err}");
+    assert_eq!(err.field(), Some("q5"), "{err}");
+}
+
+/// A `sensor_msgs/msg/JointState` as rmw serialises it (CDR, little-endian), written here from
+/// the format's rules: the 4-byte encapsulation header, then every value aligned to its size
+/// counted from the end of that header.
+fn joint_state_cdr(time_ns: u64, names: &[String], position: &[f64], velocity: &[f64]) -> Vec<u8> {
+    struct Out(Vec<u8>);
+    impl Out {
+        fn pad(&mut self, n: usize) {
+            while !(self.0.len() - 4).is_multiple_of(n) {
+                self.0.push(0);
+            }
+        }
+        fn u32(&mut self, v: u32) {
+            self.pad(4);
+            self.0.extend(v.to_le_bytes());
+        }
+        fn text(&mut self, s: &str) {
+            self.u32(s.len() as u32 + 1);
+            self.0.extend(s.bytes().chain([0]));
+        }
+        fn floats(&mut self, v: &[f64]) {
+            self.u32(v.len() as u32);
+            for x in v {
+                self.pad(8);
+                self.0.extend(x.to_le_bytes());
+            }
+        }
+    }
+    let mut out = Out(vec![0, 1, 0, 0]);
+    out.u32((time_ns / 1_000_000_000) as u32);
+    out.u32((time_ns % 1_000_000_000) as u32);
+    out.text("arm_base_link");
+    out.u32(names.len() as u32);
+    for n in names {
+        out.text(n);
+    }
+    out.floats(position);
+    out.floats(velocity);
+    out.floats(&[]);
+    out.0
+}
+
+/// A ROS 2 bag (MCAP, written with the mcap crate) of messages (topic, log time ns, data).
+fn mcap_bag(messages: &[(&str, u64, Vec<u8>)]) -> Vec<u8> {
+    let mut writer = mcap::Writer::new(std::io::Cursor::new(Vec::new())).unwrap();
+    let schema = writer
+        .add_schema(
+            "sensor_msgs/msg/JointState",
+            "ros2msg",
+            b"std_msgs/Header header\nstring[] name\nfloat64[] position\nfloat64[] velocity\n\
+              float64[] effort\n",
+        )
+        .unwrap();
+    let mut channels = std::collections::BTreeMap::new();
+    for (k, (topic, log_time, data)) in messages.iter().enumerate() {
+        let channel = match channels.get(topic) {
+            Some(&c) => c,
+            None => {
+                let c = writer
+                    .add_channel(schema, topic, "cdr", &Default::default())
+                    .unwrap();
+                channels.insert(*topic, c);
+                c
+            }
+        };
+        let header = mcap::records::MessageHeader {
+            channel_id: channel,
+            sequence: k as u32,
+            log_time: *log_time,
+            publish_time: *log_time,
+        };
+        writer.write_to_known_channel(&header, data).unwrap();
+    }
+    writer.finish().unwrap();
+    writer.into_inner().into_inner()
+}
+
+/// The robot's clock minus the tracker PC's in the bags written here (a time zone and a drift).
+const CLOCK_OFFSET_S: f64 = 3600.0 + 12.345;
+
+/// The left arm's joint states at 50 Hz on the robot's clock, as the arm went through `ds`'s
+/// configurations for the shots of [`shots`] (configuration i shot at 10 i s): parked at zero,
+/// still ±3 s about each shot, 4 s moves between, parked again at the end. Names in reverse chain
+/// order, a gripper's messages on the same topic between, positions with a tiny ripple.
+fn joint_bag(
+    ds: &Dataset,
+    names: &[String],
+    tracker_t0_s: f64,
+) -> Vec<(&'static str, u64, Vec<u8>)> {
+    let configs: Vec<&Vec<f64>> = ds.arms.left.measurements.iter().map(|m| &m.q_rad).collect();
+    let zero = vec![0.0; names.len()];
+    // Still poses (tracker-relative times): parked, each configuration, parked.
+    let mut stills: Vec<(f64, f64, &Vec<f64>)> = vec![(-20.0, -7.0, &zero)];
+    for (i, q) in configs.iter().enumerate() {
+        stills.push((10.0 * i as f64 - 3.0, 10.0 * i as f64 + 3.0, q));
+    }
+    let end = 10.0 * configs.len() as f64 - 3.0;
+    stills.push((end, end + 20.0, &zero));
+    let reversed: Vec<String> = names.iter().rev().cloned().collect();
+    let mut out = Vec::new();
+    let mut k = 0u64;
+    loop {
+        let t = -20.0 + k as f64 * 0.02;
+        if t > end + 20.0 {
+            break;
+        }
+        let (q, v): (Vec<f64>, Vec<f64>) = match stills.iter().position(|s| t <= s.1) {
+            Some(i) if t >= stills[i].0 || i == 0 => (stills[i].2.clone(), zero.clone()),
+            Some(i) => {
+                let (a, b) = (&stills[i - 1], &stills[i]);
+                let f = (t - a.1) / (b.0 - a.1);
+                let q = a.2.iter().zip(b.2).map(|(x, y)| x + f * (y - x)).collect();
+                let v =
+                    a.2.iter()
+                        .zip(b.2)
+                        .map(|(x, y)| (y - x) / (b.0 - a.1))
+                        .collect();
+                (q, v)
+            }
+            None => unreachable!(),
+        };
+        let ripple = 1e-7 * (k as f64).sin();
+        let q: Vec<f64> = q.iter().rev().map(|x| x + ripple).collect();
+        let v: Vec<f64> = v.into_iter().rev().collect();
+        let time_ns = ((tracker_t0_s + t + CLOCK_OFFSET_S) * 1e9).round() as u64;
+        out.push((
+            "/joint_states",
+            time_ns,
+            joint_state_cdr(time_ns, &reversed, &q, &v),
+        ));
+        if k % 10 == 5 {
+            let gripper = ["gripper_joint".to_string()];
+            out.push((
+                "/joint_states",
+                time_ns,
+                joint_state_cdr(time_ns, &gripper, &[0.01], &[]),
+            ));
+        }
+        k += 1;
+    }
+    out
+}
+
+/// A note's number after `prefix` (up to the next space).
+fn note_number(imported: &Imported, prefix: &str) -> f64 {
+    let arm = imported.report.arms.left.as_ref().unwrap();
+    let note = arm.notes.iter().find(|n| n.contains(prefix)).unwrap();
+    let rest = &note[note.find(prefix).unwrap() + prefix.len()..];
+    rest.split(' ').next().unwrap().parse().unwrap()
+}
+
+#[test]
+fn a_ros2_bag_gives_one_configuration_per_still_interval_with_the_clock_offset_estimated() {
+    let dir = tempfile::tempdir().unwrap();
+    let (urdf, robot, ds) = six_axis_arm(dir.path());
+    let shots = shots_as_measured(&ds);
+    let points = dir.path().join("tracker.csv");
+    std::fs::write(&points, tracker_pilot(&shots).0).unwrap();
+    let tracker_t0_s = import::text::time_s(&stamp(0)[1..]).unwrap();
+    let names = robot.arm_joint_names(Side::Left);
+    let bag = dir.path().join("run.mcap");
+    std::fs::write(&bag, mcap_bag(&joint_bag(&ds, &names, tracker_t0_s))).unwrap();
+    let o = options(&robot, &urdf, &ds);
+    let imported = import::import_arms(&OsFiles, &left_only(points.clone(), bag.clone()), &o)
+        .unwrap_or_else(|e| panic!("{e}"));
+    let report = imported.report.arms.left.as_ref().unwrap();
+    let n = ds.arms.left.measurements.len();
+    assert_eq!(report.matched, n, "{}", imported.report);
+    // The parked intervals before and after: still, but no shots.
+    assert_eq!(report.configurations_read, n + 2, "{}", imported.report);
+    assert_eq!(
+        report.unmatched_configurations.len(),
+        2,
+        "{}",
+        imported.report
+    );
+    assert_eq!(report.repeated.len(), 1, "{}", imported.report);
+    for text in [
+        "ROS 2 bag: topic `/joint_states`",
+        "messages on the topic without the arm's joints skipped",
+        "still intervals: 42",
+        "matching: by time stamp",
+    ] {
+        assert!(has_note(&imported, text), "{text}: {}", imported.report);
+    }
+    let offset = note_number(&imported, "the robot's clock minus the tracker PC's = ");
+    assert!(
+        (offset - CLOCK_OFFSET_S).abs() < 0.5,
+        "{offset}: {}",
+        imported.report
+    );
+    for (m, truth) in imported
+        .dataset
+        .arms
+        .left
+        .measurements
+        .iter()
+        .zip(&ds.arms.left.measurements)
+    {
+        assert!((m.tracker_points_mm[0] - truth.tracker_points_mm[0]).amax() < 0.01);
+        for (a, b) in m.q_rad.iter().zip(&truth.q_rad) {
+            assert!((a - b).abs() < 1e-6, "{} {a} {b}", m.id);
+        }
+    }
+    // Written, the report says the same.
+    let out = dir.path().join("dataset");
+    import::write_arms(
+        &imported,
+        &left_only(points.clone(), bag.clone()),
+        &out,
+        Overwrite::Refuse,
+    )
+    .unwrap();
+    let text = std::fs::read_to_string(out.join(import::REPORT_FILE)).unwrap();
+    assert!(text.contains("clock offset: the robot's clock"), "{text}");
+    // A given offset is taken as it is.
+    let mut given = o.clone();
+    given.bag.clock_offset_s = Some(CLOCK_OFFSET_S + 1.0);
+    let imported = import::import_arms(&OsFiles, &left_only(points, bag), &given).unwrap();
+    assert_eq!(imported.report.arms.left.as_ref().unwrap().matched, n);
+    assert!(
+        has_note(&imported, "(--clock-offset)"),
+        "{}",
+        imported.report
+    );
+}
+
+#[test]
+fn bad_bags_are_refused_with_file_time_and_field() {
+    let dir = tempfile::tempdir().unwrap();
+    let (urdf, robot, ds) = six_axis_arm(dir.path());
+    let points = dir.path().join("tracker.csv");
+    std::fs::write(&points, tracker_pilot(&shots(&ds)).0).unwrap();
+    let tracker_t0_s = import::text::time_s(&stamp(0)[1..]).unwrap();
+    let names = robot.arm_joint_names(Side::Left);
+    let messages = joint_bag(&ds, &names, tracker_t0_s);
+    let o = options(&robot, &urdf, &ds);
+    let bag = dir.path().join("run.mcap");
+    let import = |messages: &[(&str, u64, Vec<u8>)], o: &ImportOptions| {
+        std::fs::write(&bag, mcap_bag(messages)).unwrap();
+        import::import_arms(&OsFiles, &left_only(points.clone(), bag.clone()), o).unwrap_err()
+    };
+    // No topic: the topics found.
+    let other: Vec<_> = messages
+        .iter()
+        .take(30)
+        .map(|(_, t, d)| ("/robot/joint_states", *t, d.clone()))
+        .collect();
+    let err = import(&other, &o).to_string();
+    assert!(
+        err.contains("no messages on topic `/joint_states`"),
+        "{err}"
+    );
+    assert!(err.contains("`/robot/joint_states` (30 messages)"), "{err}");
+    assert!(err.contains(&bag.display().to_string()), "{err}");
+    // Fewer still intervals than configurations: only the parked ones last 7 s.
+    let mut long = o.clone();
+    long.bag.still_secs = 7.0;
+    let err = import(&messages, &long);
+    assert!(matches!(err, ImportError::Stream { .. }), "{err}");
+    assert_eq!(err.path(), Some(bag.as_path()));
+    assert_eq!(err.field(), Some("velocity"));
+    let text = err.to_string();
+    assert!(text.contains("2 still intervals"), "{text}");
+    assert!(text.contains("40 configurations"), "{text}");
+    // Time going backwards: the message, its time and the field.
+    // (Message k+1 is the arm's where its time is after message k's; a gripper's repeats its time.)
+    let arm_message = |from: usize| {
+        (from..)
+            .find(|&k| messages[k].1 < messages[k + 1].1)
+            .unwrap()
+            + 1
+    };
+    let k = arm_message(100) - 1;
+    let t_k = messages[k].1;
+    let mut swapped = messages.clone();
+    let (a, b) = (swapped[k].2.clone(), swapped[k + 1].2.clone());
+    swapped[k].2 = b;
+    swapped[k + 1].2 = a;
+    let err = import(&swapped, &o);
+    assert_eq!(err.field(), Some("header.stamp"), "{err}");
+    assert_eq!(err.path(), Some(bag.as_path()));
+    let text = err.to_string();
+    assert!(text.contains("goes backwards"), "{text}");
+    assert!(
+        text.contains(&format!("{:.3}", t_k as f64 * 1e-9)),
+        "{text}"
+    );
+    // A message cut short: its number, time and the field it ends in.
+    let mut cut = messages.clone();
+    let k = arm_message(200);
+    let len = cut[k].2.len();
+    cut[k].2.truncate(len - 30);
+    let err = import(&cut, &o);
+    assert!(matches!(err, ImportError::Stream { .. }), "{err}");
+    assert_eq!(err.path(), Some(bag.as_path()));
+    let text = err.to_string();
+    assert!(
+        err.field()
+            .is_some_and(|f| ["velocity", "position"].contains(&f)),
+        "{text}"
+    );
+    assert!(text.contains("message "), "{text}");
+}

@@ -92,12 +92,19 @@ impl FileAccess for NativeFiles {
                             crate::source::FileKind::robot_extensions().as_slice(),
                         )
                         .pick_file(),
-                    OpenKind::ImportFile(slot) => dialog
-                        .set_title(if slot.joints {
-                            "Joint log (CSV)"
-                        } else {
-                            "Tracker export (points)"
-                        })
+                    OpenKind::ImportFile(slot) if slot.joints => dialog
+                        .set_title("Joint log (CSV, spreadsheet or ROS 2 bag)")
+                        .add_filter(
+                            "Joint logs",
+                            &[
+                                "csv", "txt", "tsv", "dat", "asc", "xlsx", "xlsm", "xls", "ods",
+                                "mcap",
+                            ],
+                        )
+                        .add_filter("Any file", &["*"])
+                        .pick_file(),
+                    OpenKind::ImportFile(_) => dialog
+                        .set_title("Tracker export (points)")
                         .add_filter("Text and CSV", &["txt", "csv", "tsv", "dat", "asc"])
                         .add_filter("Any file", &["*"])
                         .pick_file(),

@@ -60,6 +60,13 @@ pub struct ImportInputs {
     pub verify_last: String,
     /// `--sheet NAME`: the sheet of spreadsheet joint logs (empty: the first).
     pub sheet: String,
+    /// ROS 2 bag joint logs: `--joint-topic`, `--still-velocity`, `--still-secs` (the desktop's
+    /// only: a browser refuses bags).
+    #[cfg(not(target_arch = "wasm32"))]
+    pub bag: import::BagOptions,
+    /// `--clock-offset S` (empty: estimated).
+    #[cfg(not(target_arch = "wasm32"))]
+    pub clock_offset: String,
 }
 
 impl Default for ImportInputs {
@@ -81,6 +88,10 @@ impl Default for ImportInputs {
             measured_together: false,
             verify_last: String::new(),
             sheet: String::new(),
+            #[cfg(not(target_arch = "wasm32"))]
+            bag: import::BagOptions::default(),
+            #[cfg(not(target_arch = "wasm32"))]
+            clock_offset: String::new(),
         }
     }
 }
@@ -222,6 +233,22 @@ pub fn options(inputs: &ImportInputs, target: &ImportTarget<'_>) -> Result<Impor
     }
     o.measured_together = inputs.measured_together;
     o.sheet = Some(inputs.sheet.trim().to_string()).filter(|s| !s.is_empty());
+    #[cfg(not(target_arch = "wasm32"))]
+    {
+        o.bag = inputs.bag.clone();
+        let offset = inputs.clock_offset.trim();
+        if !offset.is_empty() {
+            o.bag.clock_offset_s = Some(
+                offset
+                    .parse::<f64>()
+                    .ok()
+                    .filter(|d| d.is_finite())
+                    .ok_or_else(|| {
+                        format!("clock offset: `{offset}` is not a number of seconds")
+                    })?,
+            );
+        }
+    }
     let last = inputs.verify_last.trim();
     if !last.is_empty() {
         o.verify_last =

@@ -27,13 +27,14 @@ pub struct ImportArgs {
     /// arm alone.
     #[arg(long)]
     pub left_points: Option<PathBuf>,
-    /// The left arm's joint log (`id,q1..qN`, CSV/TXT, or a spreadsheet: .xlsx, .xls, .ods); not needed when the point file has the joints (figaroh).
+    /// The left arm's joint log (`id,q1..qN`, CSV/TXT, or a spreadsheet: .xlsx, .xls, .ods, or a
+    /// ROS 2 bag: .mcap); not needed when the point file has the joints (figaroh).
     #[arg(long)]
     pub left_joints: Option<PathBuf>,
     /// The right arm's point file (tracker export).
     #[arg(long)]
     pub right_points: Option<PathBuf>,
-    /// The right arm's joint log (`id,q1..qN`); not needed when the point file has the joints.
+    /// The right arm's joint log (as --left-joints); not needed when the point file has the joints.
     #[arg(long)]
     pub right_joints: Option<PathBuf>,
     /// Output dataset directory (created; must be empty or absent unless --force).
@@ -95,7 +96,21 @@ pub struct ImportArgs {
     /// The sheet of spreadsheet joint logs (.xlsx, .xls, .ods) [default: the first].
     #[arg(long, value_name = "NAME")]
     pub sheet: Option<String>,
-    /// With --match time: the largest time difference between a point and its configuration, s.
+    /// ROS 2 bags (.mcap joint logs): the topic of the `sensor_msgs/msg/JointState` messages.
+    #[arg(long, value_name = "TOPIC", default_value = crate::import::bag::DEFAULT_TOPIC)]
+    pub joint_topic: String,
+    /// ROS 2 bags: a joint is still below this velocity, rad/s (m/s for a prismatic joint).
+    #[arg(long, value_name = "RAD_PER_S", default_value_t = crate::import::bag::DEFAULT_STILL_VELOCITY)]
+    pub still_velocity: f64,
+    /// ROS 2 bags: the shortest still interval (every joint still), s; each becomes a configuration.
+    #[arg(long, value_name = "S", default_value_t = crate::import::bag::DEFAULT_STILL_SECS)]
+    pub still_secs: f64,
+    /// ROS 2 bags: the robot's clock minus the tracker PC's, s [default: estimated from the shots'
+    /// time stamps — the offset that puts the most shots into still intervals — and reported].
+    #[arg(long, value_name = "S", allow_hyphen_values = true)]
+    pub clock_offset: Option<f64>,
+    /// With --match time: the largest time difference between a point and its configuration (a
+    /// bag's still interval), s.
     #[arg(long, default_value_t = 0.5)]
     pub time_tolerance_s: f64,
     /// A reflector and its nominal position in the tip (flange) frame, mm: NAME=X,Y,Z; repeat for each,
@@ -247,6 +262,12 @@ pub fn run(a: &ImportArgs) -> Result<()> {
     options.matching = a.matching;
     options.time_tolerance_s = a.time_tolerance_s;
     options.sheet = a.sheet.clone();
+    options.bag = import::BagOptions {
+        topic: a.joint_topic.clone(),
+        still_velocity: a.still_velocity,
+        still_secs: a.still_secs,
+        clock_offset_s: a.clock_offset,
+    };
     options.tracker = dataset::TrackerSpec {
         mpe_um: a.mpe_um,
         mpe_um_per_m: a.mpe_um_per_m,

@@ -53,6 +53,15 @@ pub enum ImportError {
         expected: usize,
         found: usize,
     },
+    /// A message of a ROS 2 bag is wrong: `at` names the topic, the message's number on it and its
+    /// time; `field` the message's field.
+    #[error("{path}: {at}: field `{field}`: {message}")]
+    Stream {
+        path: PathBuf,
+        at: String,
+        field: String,
+        message: String,
+    },
     /// Two rows of a joint log share an id.
     #[error("{path}:{line}: field `id`: duplicate id `{id}` (first used on line {first_line})")]
     DuplicateId {
@@ -93,7 +102,8 @@ impl ImportError {
         match self {
             ImportError::Header { field, .. }
             | ImportError::Field { field, .. }
-            | ImportError::Cell { field, .. } => Some(field),
+            | ImportError::Cell { field, .. }
+            | ImportError::Stream { field, .. } => Some(field),
             ImportError::DuplicateId { .. } => Some("id"),
             _ => None,
         }
@@ -110,6 +120,7 @@ impl ImportError {
             | ImportError::Cell { path, .. }
             | ImportError::FieldCount { path, .. }
             | ImportError::DuplicateId { path, .. }
+            | ImportError::Stream { path, .. }
             | ImportError::Content { path, .. } => Some(path),
             _ => None,
         }

@@ -14,9 +14,22 @@ pub struct JointRow {
     /// Chain order, rad.
     pub q_rad: Vec<f64>,
     pub time_s: Option<f64>,
+    /// A still interval of a ROS 2 bag (tracker clock, s): a shot within it is at distance 0.
+    pub span_s: Option<(f64, f64)>,
     pub split: Option<Split>,
-    /// 1-based line in the file.
+    /// 1-based line in the file (a bag's: the number of the interval's first message on its topic).
     pub line: usize,
+}
+
+impl JointRow {
+    /// How far time `t` (s) is from this configuration: from its time span (0 within it), else from
+    /// its time stamp.
+    pub fn time_distance_s(&self, t: f64) -> Option<f64> {
+        match self.span_s {
+            Some((a, b)) => Some((a - t).max(t - b).max(0.0)),
+            None => self.time_s.map(|s| (s - t).abs()),
+        }
+    }
 }
 
 /// A joint log read.
@@ -396,6 +409,7 @@ impl RowFormat<'_> {
             id,
             q_rad,
             time_s,
+            span_s: None,
             split,
             line,
         })

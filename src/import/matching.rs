@@ -57,7 +57,7 @@ fn place(
                 .rows
                 .iter()
                 .enumerate()
-                .filter_map(|(c, row)| Some((c, (row.time_s? - t).abs())))
+                .filter_map(|(c, row)| Some((c, row.time_distance_s(t)?)))
                 .min_by(|a, b| a.1.total_cmp(&b.1));
             match nearest {
                 Some((c, dt)) if dt <= o.time_tolerance_s => {
@@ -339,7 +339,7 @@ pub(super) fn match_rows(
                 log.rows
                     .iter()
                     .enumerate()
-                    .filter_map(|(c, j)| Some((c, (j.time_s? - t).abs())))
+                    .filter_map(|(c, j)| Some((c, j.time_distance_s(t)?)))
                     .filter(|&(_, dt)| dt <= o.time_tolerance_s)
                     .min_by(|a, b| a.1.total_cmp(&b.1))
                     .map(|(c, _)| c)
@@ -429,7 +429,7 @@ pub const REPEAT_MM: f64 = 1.0;
 
 /// The shots in file order grouped: consecutive shots within [`REPEAT_MM`] of the one before are
 /// one group (a shot repeated). Indices into `pts`.
-fn shot_groups(pts: &[&Point]) -> Vec<Vec<usize>> {
+pub(super) fn shot_groups(pts: &[&Point]) -> Vec<Vec<usize>> {
     let mut groups: Vec<Vec<usize>> = Vec::new();
     for (k, p) in pts.iter().enumerate() {
         match groups.last_mut() {

@@ -1,17 +1,24 @@
 //! Importing tracker and controller files (`dualcal import`): point lists as tracker software writes
-//! them (SpatialAnalyzer, Leica Tracker Pilot, figaroh, any CSV with a column mapping), joint logs, the
+//! them (SpatialAnalyzer, Leica Tracker Pilot, figaroh, any CSV with a column mapping), joint logs
+//! (CSV/TXT, spreadsheets, ROS 2 bags: the robot's still intervals, the clock offset estimated), the
 //! matching of points to configurations (by target name, order or time stamp; repeated shots averaged)
 //! and a report of what matched and what did not. The result is a [`Dataset`] that
 //! [`write()`] saves as a `dualcal-dataset/1` directory. See docs/formats.md, "Importing tracker and
 //! controller files".
 
+pub mod bag;
+#[cfg(not(target_arch = "wasm32"))]
+mod cdr;
 mod error;
 pub mod joints;
 mod matching;
 pub mod points;
+#[cfg(not(target_arch = "wasm32"))]
+mod ros2;
 pub mod sheet;
 pub mod text;
 
+pub use bag::BagOptions;
 pub use error::ImportError;
 pub use joints::{JointLog, JointLogOptions, JointRow, YUMI_ABB_ORDER, parse_joint_order};
 pub use points::{ColumnMap, ConfigRow, Point, PointFile, PointTable, PointsFormat};
@@ -168,6 +175,8 @@ pub struct ImportOptions {
     pub verify_last: Option<usize>,
     /// The sheet of spreadsheet joint logs (`None`: the first).
     pub sheet: Option<String>,
+    /// ROS 2 bags (`.mcap` joint logs): the topic, the still intervals' thresholds, the clock offset.
+    pub bag: BagOptions,
 }
 
 impl ImportOptions {
@@ -197,6 +206,7 @@ impl ImportOptions {
             shared_joints: SharedJoints::default(),
             verify_last: None,
             sheet: None,
+            bag: BagOptions::default(),
         }
     }
 }
@@ -493,7 +503,7 @@ fn import_arm(
     let pf = points::read(&input.points, &text, &read_options)?;
     let prefix = id_prefix(side, o.measured_together);
     let log = match &input.joints {
-        Some(path) => Some(read_log(files, path, o, joint_names, prefix)?),
+        Some(path) => Some(read_log(files, path, o, joint_names, prefix, &pf.table)?),
         None => None,
     };
     let mut report = ArmReport {
@@ -568,7 +578,11 @@ fn import_arm(
     };
     // The readers convert every joint value with the angle unit; a prismatic joint's value is a
     // length, converted again here with the units the joint values were written in.
-    let units = joint_value_units(pf.format, log.as_ref(), o);
+    let mut units = joint_value_units(pf.format, log.as_ref(), o);
+    if input.joints.as_deref().is_some_and(bag::is_bag) {
+        // ROS's units: a bag's prismatic joints are in metres.
+        units.length = LengthUnit::M;
+    }
     arm.set_linear_joints(&o.linear_joints[side], units)?;
     Ok((arm, report))
 }
@@ -592,13 +606,15 @@ fn joint_value_units(format: PointsFormat, log: Option<&JointLog>, o: &ImportOpt
     }
 }
 
-/// A joint log: a spreadsheet (by its extension) or CSV/TXT.
+/// A joint log: a ROS 2 bag or a spreadsheet (by its extension; a bag's still intervals matched in
+/// time to `table`'s shots), or CSV/TXT.
 fn read_log(
     files: &dyn FileSource,
     path: &Path,
     o: &ImportOptions,
     joint_names: Option<&[String]>,
     prefix: &str,
+    table: &PointTable,
 ) -> Result<JointLog, ImportError> {
     let log_options = JointLogOptions {
         angle_unit: o.angle_unit,
@@ -607,10 +623,16 @@ fn read_log(
         decimal_comma: o.decimal_comma,
         id_prefix: prefix,
     };
-    if sheet::is_sheet(path) {
+    if bag::is_bag(path) {
+        bag::read(files, path, o, &log_options, table)
+    } else if sheet::is_sheet(path) {
         sheet::read(files, path, o.sheet.as_deref(), &log_options)
     } else {
-        joints::read(path, &text::read(files, path)?, &log_options)
+        // The encoding, when guessed (not UTF-8: Windows-1252), noted as for point files.
+        let (text, encoding) = text::read_noted(files, path)?;
+        let mut log = joints::read(path, &text, &log_options)?;
+        log.notes.splice(0..0, encoding);
+        Ok(log)
     }
 }
 

@@ -62,7 +62,7 @@ fn files_ui(
     ui.label(
         RichText::new(
             "Each arm's point file (SpatialAnalyzer, Leica Tracker Pilot, figaroh, or any CSV with a \
-             column mapping) and its joint log (id,q1..qN as CSV, or a spreadsheet; not needed when \
+             column mapping) and its joint log (id,q1..qN as CSV, a spreadsheet or a ROS 2 bag; not needed when \
              the point file has the joints); one arm's files alone make a dataset of that arm. \
              docs/formats.md describes each format.",
         )
@@ -197,6 +197,8 @@ fn options_ui(ui: &mut egui::Ui, inputs: &mut ImportInputs) {
             ui.label("decimal comma");
             ui.checkbox(&mut inputs.decimal_comma, "1234,56");
             ui.end_row();
+            #[cfg(not(target_arch = "wasm32"))]
+            bag_ui(ui, inputs);
             matching_ui(ui, inputs);
             for side in Side::BOTH {
                 ui.label(format!("{side} station"));
@@ -211,6 +213,51 @@ fn options_ui(ui: &mut egui::Ui, inputs: &mut ImportInputs) {
 }
 
 /// The matching rule and, where time stamps may be used, the tolerance (rows of the options' grid).
+/// A ROS 2 bag's options (`--joint-topic`, `--still-velocity`, `--still-secs`, `--clock-offset`),
+/// shown when a joint log is a bag.
+#[cfg(not(target_arch = "wasm32"))]
+fn bag_ui(ui: &mut egui::Ui, inputs: &mut ImportInputs) {
+    let bag = inputs
+        .joints
+        .values()
+        .any(|j| crate::import::bag::is_bag(std::path::Path::new(j.trim())));
+    if !bag {
+        return;
+    }
+    ui.label("ROS 2 bag topic");
+    ui.add(
+        egui::TextEdit::singleline(&mut inputs.bag.topic)
+            .hint_text(crate::import::bag::DEFAULT_TOPIC)
+            .desired_width(300.0),
+    );
+    ui.end_row();
+    ui.label("still when");
+    ui.horizontal(|ui| {
+        ui.label("every joint below");
+        ui.add(
+            egui::DragValue::new(&mut inputs.bag.still_velocity)
+                .range(1e-6..=1.0)
+                .speed(0.0005)
+                .suffix(" rad/s"),
+        );
+        ui.label("for");
+        ui.add(
+            egui::DragValue::new(&mut inputs.bag.still_secs)
+                .range(0.0..=60.0)
+                .speed(0.05)
+                .suffix(" s"),
+        );
+    });
+    ui.end_row();
+    ui.label("clock offset");
+    ui.add(
+        egui::TextEdit::singleline(&mut inputs.clock_offset)
+            .hint_text("robot minus tracker PC, s: estimated (the report says)")
+            .desired_width(300.0),
+    );
+    ui.end_row();
+}
+
 fn matching_ui(ui: &mut egui::Ui, inputs: &mut ImportInputs) {
     ui.label("match points by");
     combo(
