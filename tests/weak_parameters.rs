@@ -118,6 +118,9 @@ fn reflector_weak(result: &Calibrated) -> Vec<&dualcal::solver::weak::WeakParame
 fn a_flange_that_hardly_turns_leaves_the_reflector_offsets_weak_and_held() {
     let ds = dataset(Some(1.0), 3);
     let held = Calibration::new(&ds).run().unwrap();
+    for w in held.weak(Side::Left) {
+        eprintln!("weak {}", w.describe());
+    }
     let weak = reflector_weak(&held);
     assert!(!weak.is_empty(), "{:#?}", held.weak(Side::Left));
     for w in &weak {
@@ -183,5 +186,25 @@ fn nothing_is_weak_on_the_paper_size_simulation() {
         .unwrap();
     for side in Side::BOTH {
         assert!(result.weak[side].is_empty(), "{:#?}", result.weak[side]);
+        // The margin: the largest workspace effect over the noise (docs/reliability.md).
+        let qs: Vec<Vec<f64>> = sim
+            .dataset
+            .arm(side)
+            .select(dualcal::Split::Cal)
+            .iter()
+            .map(|m| m.q_rad.clone())
+            .collect();
+        let free = &result.identifiability[side].as_ref().unwrap().free;
+        let ratios =
+            dualcal::solver::weak::workspace_noise_ratios(result.calibrated.arm(side), &qs, free)
+                .unwrap();
+        let (k, largest) = ratios
+            .iter()
+            .enumerate()
+            .max_by(|a, b| a.1.total_cmp(b.1))
+            .unwrap();
+        let name = result.calibrated.arm(side).param_name(free[k]);
+        eprintln!("{side} arm: largest workspace effect {largest:.2}× the noise ({name})");
+        assert!(*largest < dualcal::solver::weak::WEAK_NOISE_RATIO);
     }
 }

@@ -97,20 +97,11 @@ pub fn weak_parameters(
     let Some(noise_mm) = residual_noise_mm(arm, qs, measured, free.len()) else {
         return Vec::new();
     };
-    let Some(cov) = predicted_covariance(arm, qs, free, 1.0) else {
+    let Some((cov, ratios)) = covariance_and_ratios(arm, qs, free) else {
         return Vec::new();
     };
     let p = free.len();
     let sigma: Vec<f64> = (0..p).map(|c| cov[(c, c)].max(0.0).sqrt()).collect();
-    // Column j: the parameters' move when θ_j moves by its 1σ (unit noise).
-    let v = DMatrix::from_fn(p, p, |r, c| {
-        if sigma[c] > 0.0 {
-            cov[(r, c)] / sigma[c]
-        } else {
-            0.0
-        }
-    });
-    let ratios = workspace_ratios(arm, free, &v);
     let spread = orientation_spread_deg(arm, qs);
     (0..p)
         .filter(|&c| ratios[c] > WEAK_NOISE_RATIO)
@@ -132,6 +123,33 @@ pub fn weak_parameters(
             }
         })
         .collect()
+}
+
+/// Each of `free`'s workspace effect over the tracker's noise per axis (steps 1–3 of the module
+/// documentation): the figure [`WEAK_NOISE_RATIO`] bounds. `None` where the fit is singular.
+pub fn workspace_noise_ratios(arm: &ArmModel, qs: &[Vec<f64>], free: &[usize]) -> Option<Vec<f64>> {
+    covariance_and_ratios(arm, qs, free).map(|(_, ratios)| ratios)
+}
+
+/// The unit-noise covariance of the fit on `qs` and [`workspace_noise_ratios`].
+fn covariance_and_ratios(
+    arm: &ArmModel,
+    qs: &[Vec<f64>],
+    free: &[usize],
+) -> Option<(DMatrix<f64>, Vec<f64>)> {
+    let cov = predicted_covariance(arm, qs, free, 1.0)?;
+    let p = free.len();
+    let sigma: Vec<f64> = (0..p).map(|c| cov[(c, c)].max(0.0).sqrt()).collect();
+    // Column j: the parameters' move when θ_j moves by its 1σ (unit noise).
+    let v = DMatrix::from_fn(p, p, |r, c| {
+        if sigma[c] > 0.0 {
+            cov[(r, c)] / sigma[c]
+        } else {
+            0.0
+        }
+    });
+    let ratios = workspace_ratios(arm, free, &v);
+    Some((cov, ratios))
 }
 
 /// The noise per axis the residuals of `arm` on `measured` show, mm: `Σ e² / (2 (rows − p))` over
