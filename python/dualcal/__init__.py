@@ -139,6 +139,7 @@ def calibrate(
     split: str = "cal",
     exclude: Iterable[str] = (),
     max_iterations: Optional[int] = None,
+    keep_weak: bool = False,
 ) -> CalibrationResult:
     """Both steps of the calibration with the command line's defaults (``dualcal calibrate``).
 
@@ -146,7 +147,9 @@ def calibrate(
     marker per hand measured together in one camera frame); ``base_method``: step 2's, one of
     :data:`BASE_METHODS`; ``model``: ``"geometric"`` (the paper's), ``"elastic"``, ``"harmonic"``,
     ``"full"``, …; ``split``: ``"cal"`` or ``"all"``; ``exclude``: configuration ids left out;
-    ``robot``: calibrate a dataset loaded from a directory on another robot description.
+    ``robot``: calibrate a dataset loaded from a directory on another robot description;
+    ``keep_weak``: keep the weak parameters — those the configurations barely constrain across the
+    workspace — free rather than held at their nominal values (``--keep-weak``).
     """
     native = dataset._native if isinstance(dataset, Dataset) else dataset
     return _calibrate(
@@ -158,6 +161,7 @@ def calibrate(
         split,
         [str(e) for e in exclude],
         max_iterations,
+        keep_weak,
     )
 
 

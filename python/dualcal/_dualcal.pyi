@@ -135,6 +135,7 @@ def calibrate(
     split: str = "cal",
     exclude: Sequence[str] = ...,
     max_iterations: Optional[int] = None,
+    keep_weak: bool = False,
 ) -> CalibrationResult: ...
 def evaluate(dataset: Dataset, params: str) -> Dict[str, Any]: ...
 def import_files(

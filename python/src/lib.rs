@@ -582,7 +582,7 @@ impl PyCalibrated {
 #[pyfunction]
 #[allow(clippy::too_many_arguments)]
 #[pyo3(signature = (dataset, robot=None, method=None, base_method="minimax", model="geometric",
-    split="cal", exclude=Vec::new(), max_iterations=None))]
+    split="cal", exclude=Vec::new(), max_iterations=None, keep_weak=false))]
 fn calibrate(
     py: Python<'_>,
     dataset: &PyDataset,
@@ -593,6 +593,7 @@ fn calibrate(
     split: &str,
     exclude: Vec<String>,
     max_iterations: Option<usize>,
+    keep_weak: bool,
 ) -> PyResult<PyCalibrated> {
     let method = method
         .map(|m| dualcal::Method::named(m).ok_or_else(|| err(unknown("method", m, method_names()))))
@@ -626,7 +627,8 @@ fn calibrate(
                 .base_method(base_method)
                 .model(model)
                 .split(split)
-                .exclude(&exclude);
+                .exclude(&exclude)
+                .keep_weak(keep_weak);
             if let Some(method) = method {
                 c = c.method(method);
             }

@@ -14,6 +14,7 @@ use crate::params::ParamsFile;
 use crate::quality::{QualityRecord, ScreenSettings, Screening};
 use crate::side::{ConfigId, PerSide, Side};
 use crate::solver::uncertainty::ArmUncertainty;
+use crate::solver::weak::WeakParameter;
 use crate::solver::{
     BaseMethod, CalibrationEvent, CalibrationResult, CalibrationSettings, Calibrator, Method,
     StageSummary,
@@ -98,6 +99,13 @@ impl<'d> Calibration<'d> {
     /// Outer iterations per stage at most.
     pub fn max_iterations(mut self, n: usize) -> Self {
         self.settings.max_iterations = n;
+        self
+    }
+
+    /// Keep the weak parameters free (`true`) rather than holding them at their nominal values, as
+    /// by default: the command line's `--keep-weak` ([`Calibrated::weak`] names them either way).
+    pub fn keep_weak(mut self, keep: bool) -> Self {
+        self.settings.keep_weak = keep;
         self
     }
 
@@ -291,6 +299,13 @@ impl Calibrated {
     /// The right-arm base in the left-arm base frame, calibrated (mm).
     pub fn left_base_from_right_base(&self) -> nalgebra::Isometry3<f64> {
         self.result.calibrated.left_base_from_right_base
+    }
+
+    /// `side`'s weak parameters: identified, but barely constrained by the configurations across the
+    /// workspace, each with the reason in words and whether it was held at its nominal value
+    /// ([`Calibration::keep_weak`]); empty when there are none.
+    pub fn weak(&self, side: Side) -> &[WeakParameter] {
+        &self.result.weak[side]
     }
 
     /// Each arm's uncertainty: σ of every identified parameter (its units as in

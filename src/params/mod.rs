@@ -199,6 +199,15 @@ pub struct FixedParameters {
     pub right: Vec<FixedParameter>,
 }
 
+/// Weak parameters per arm ([`ParamsFile::weak_parameters`]).
+#[derive(Clone, Debug, PartialEq, Default, Serialize, Deserialize)]
+pub struct WeakParameters {
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub left: Vec<crate::solver::weak::WeakParameter>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub right: Vec<crate::solver::weak::WeakParameter>,
+}
+
 /// The whole parameter file. Required: `format`, `units`, `arms`, `right_base_in_left`; the rest is
 /// optional and kept as written.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -235,6 +244,11 @@ pub struct ParamsFile {
     /// arm (free form; dualcal writes `{"left": solver::uncertainty::ArmUncertainty, "right": …}`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub uncertainty: Option<Value>,
+    /// The weak parameters per arm — identified, but barely constrained by the configurations across
+    /// the workspace — with the reason in words and whether they were held at their nominal values
+    /// (`solver::weak`); absent when there are none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub weak_parameters: Option<WeakParameters>,
     /// Fields this version does not know; kept for round trips.
     #[serde(flatten)]
     pub extra: serde_json::Map<String, Value>,
@@ -257,6 +271,7 @@ impl ParamsFile {
             provenance: None,
             quality: None,
             uncertainty: None,
+            weak_parameters: None,
             extra: Default::default(),
         }
     }

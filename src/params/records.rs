@@ -3,6 +3,7 @@
 
 use super::{
     BaseTransform, FixedParameter, FixedParameters, ParamsError, ParamsFile, TrackerFrames,
+    WeakParameters,
 };
 use crate::dataset::{Dataset, Split};
 use crate::metrics::AccuracyReport;
@@ -330,6 +331,12 @@ impl ParamsFile {
             left: fixed(Side::Left),
             right: fixed(Side::Right),
         });
+        if result.weak.values().any(|w| !w.is_empty()) {
+            file.weak_parameters = Some(WeakParameters {
+                left: result.weak.left.clone(),
+                right: result.weak.right.clone(),
+            });
+        }
         file.termination = record(&result.stages);
         let frames = result.tracker_from_base;
         if frames.values().any(Option::is_some) {

@@ -282,9 +282,18 @@ fn arm_summary(
             }
         })
         .collect();
+    let weak = params
+        .weak_parameters
+        .as_ref()
+        .map(|w| match side {
+            Side::Left => w.left.clone(),
+            Side::Right => w.right.clone(),
+        })
+        .unwrap_or_default();
     ArmSummary {
         parameters,
         fixed,
+        weak,
         conditioning: method
             .statistics
             .as_ref()

@@ -155,6 +155,8 @@ pub struct ArmSummary {
     pub parameters: Vec<ParamRow>,
     /// The parameters held at their value, with why (`fixed_parameters`).
     pub fixed: Vec<FixedParameter>,
+    /// The weak parameters, with why (`weak_parameters`; empty when the file has none).
+    pub weak: Vec<crate::solver::weak::WeakParameter>,
     /// The `statistics.identifiability` record of the arm.
     pub conditioning: Option<ConditioningRecord>,
     pub uncertainty: Option<ArmUncertainty>,

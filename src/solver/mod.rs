@@ -45,7 +45,7 @@ pub mod types;
 
 pub use algorithms::stage::{IterState, StageSolver};
 pub use algorithms::{least_squares, qp, sqp};
-pub use analysis::{identifiability, uncertainty};
+pub use analysis::{identifiability, uncertainty, weak};
 pub use error::CalibrationError;
 pub use methods::{BaseMethod, BaseMethodSpec, Method, MethodSpec, Observes, SolverKind};
 pub use problems::{

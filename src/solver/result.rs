@@ -5,6 +5,7 @@ use crate::kinematics::DualArmModel;
 use crate::metrics::{ConfigResiduals, MetricsError, PairKind, PairResiduals};
 use crate::side::{PerSide, Side};
 use crate::solver::analysis::identifiability::IdentifiabilityReport;
+use crate::solver::analysis::weak::WeakParameter;
 use crate::solver::settings::CalibrationSettings;
 use crate::solver::types::{
     IterationRecord, QpMethod, Reflector, Stage, StageSummary, Termination,
@@ -52,6 +53,10 @@ pub struct CalibrationResult {
     /// The arm measured alone, when the dataset has one arm only: its stage is the only one (the
     /// other arm keeps its nominal parameters, and has no figures).
     pub alone: Option<Side>,
+    /// Each arm's weak parameters ([`crate::solver::weak`]): identified, but barely constrained
+    /// across the workspace; held at their nominal values unless the settings keep them
+    /// ([`CalibrationSettings::keep_weak`]). Empty for the methods the analysis does not cover.
+    pub weak: PerSide<Vec<WeakParameter>>,
     pub elapsed_secs: f64,
 }
 

@@ -66,6 +66,10 @@ pub struct CalibrationSettings {
     /// and the workbench give the URDF's `<transmission>` reductions, `--gear-ratio` overrides).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub gear_ratios: Vec<(String, f64)>,
+    /// Keep the weak parameters free ([`crate::solver::analysis::weak`]): by default each arm's step
+    /// 1 is solved again with them held at their nominal values (`--keep-weak`).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub keep_weak: bool,
 }
 
 fn no_masses(m: &PerSide<Option<crate::kinematics::joint_errors::LinkMasses>>) -> bool {
@@ -114,6 +118,7 @@ impl Default for CalibrationSettings {
             gravity_in_left_base: None,
             held_masses: PerSide::default(),
             gear_ratios: Vec::new(),
+            keep_weak: false,
         }
     }
 }

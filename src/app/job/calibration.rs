@@ -575,7 +575,23 @@ fn done_status(calibrated: &Calibrated, task: &BackgroundTask, kind: RunKind) ->
         0 => String::new(),
         n => format!(" {n} configuration(s) left out."),
     };
-    let advice = excluded + &warnings;
+    let weak: Vec<String> = result
+        .weak
+        .iter()
+        .flat_map(|(side, w)| w.iter().map(move |w| format!("{} ({side} arm)", w.name)))
+        .collect();
+    let weak = match (weak.is_empty(), result.settings.keep_weak) {
+        (true, _) => String::new(),
+        (false, false) => format!(
+            " Weak, held at nominal: {} (the arm's panel says why).",
+            weak.join(", ")
+        ),
+        (false, true) => format!(
+            " Weak, kept free: {} (the arm's panel says why).",
+            weak.join(", ")
+        ),
+    };
+    let advice = excluded + &weak + &warnings;
     let method = compare::method_used(result);
     match kind {
         RunKind::Adopt => format!(

@@ -541,6 +541,18 @@ fn arm_details_ui(ui: &mut egui::Ui, session: &Session, side: Side) {
                     .color(Color32::GRAY),
             );
         }
+        // What the data cannot tell (docs/reliability.md, *Weak parameters*): nothing when none.
+        for w in &c.result.weak[side] {
+            ui.label(
+                RichText::new(format!("weak {}", w.describe()))
+                    .small()
+                    .color(Color32::from_rgb(200, 140, 40)),
+            )
+            .on_hover_text(
+                "Identified, but barely constrained by these configurations: its 1σ would move \
+                 distances across the robot's workspace by more than 3× the tracker's noise",
+            );
+        }
         if let Some(u) = &c.uncertainty[side] {
             uncertainty_ui(ui, side, u);
         }

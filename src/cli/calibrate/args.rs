@@ -57,6 +57,13 @@ pub struct CalibrateArgs {
     /// robot reaches once its frame and markers are known. No step 2.
     #[arg(long)]
     pub hold_kinematics: bool,
+    /// Keep the weak parameters free. A weak parameter is one these configurations barely
+    /// constrain: its 1σ would move distances across the robot's workspace (random configurations
+    /// within the joint limits) by more than 3× the tracker's noise — e.g. the reflector's offset
+    /// along the flange's axis when the flange hardly turns. By default each is named with the reason
+    /// and held at its nominal value (step 1 solved again without it); docs/reliability.md.
+    #[arg(long)]
+    pub keep_weak: bool,
     /// The model identified with the geometry: `geometric` (the paper's), `elastic-axis` (each joint
     /// giving about its axis under gravity, lumped masses), `elastic` (about its axis and across it),
     /// `harmonic` (first and second harmonics of each joint's angle), `full` (elastic and harmonic);

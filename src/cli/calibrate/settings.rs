@@ -69,6 +69,7 @@ pub(super) fn settings_from(
         step_tolerance: a.tolerance,
         progress_tolerance: a.progress_tolerance,
         hold_kinematics: a.hold_kinematics,
+        keep_weak: a.keep_weak,
         ..CalibrationSettings::default()
     };
     Ok((settings, by_default))

@@ -48,6 +48,9 @@ pub(super) fn print_identifiability(result: &CalibrationResult) {
         for f in &rep.fixed {
             outln!("  fixed {:<8} {}", f.name, f.reason);
         }
+        for w in &result.weak[side] {
+            outln!("  weak  {}", w.describe());
+        }
     }
     for (side, t) in result.tracker_from_base.iter() {
         let Some(t) = t else { continue };

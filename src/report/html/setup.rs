@@ -250,8 +250,51 @@ pub(super) fn identifiability(r: &Report) -> String {
         if !rows.is_empty() {
             out.push_str(&table("Fixed parameters", &["parameter", "why"], &rows));
         }
+        out.push_str(&weak_table(&arm.weak));
     }
     out
+}
+
+/// The weak parameters: identified, but barely constrained across the workspace (none: nothing).
+fn weak_table(weak: &[crate::solver::weak::WeakParameter]) -> String {
+    if weak.is_empty() {
+        return String::new();
+    }
+    let rows: Vec<Vec<String>> = weak
+        .iter()
+        .map(|w| {
+            vec![
+                td(&w.name),
+                td(&w.reason),
+                num(&format!("{:.3} {}", w.sigma, w.unit)),
+                num(&format!("{:.3}", w.workspace_mm)),
+                num(&format!("{:.0}×", w.workspace_mm / w.noise_mm)),
+                td(if w.held {
+                    "held at its nominal value"
+                } else {
+                    "kept free (--keep-weak)"
+                }),
+            ]
+        })
+        .collect();
+    format!(
+        "<p>Weak parameters: these configurations barely constrain them — their 1σ would move \
+         distances across the robot's workspace by more than {}× the tracker's noise \
+         (docs/reliability.md, <em>Weak parameters</em>).</p>{}",
+        crate::solver::weak::WEAK_NOISE_RATIO,
+        table(
+            "Weak parameters",
+            &[
+                "parameter",
+                "why",
+                "1σ",
+                "workspace effect (mm RMS)",
+                "× noise",
+                "done"
+            ],
+            &rows
+        )
+    )
 }
 
 pub(super) fn parameters(r: &Report) -> String {

@@ -9,7 +9,7 @@ use crate::solver::algorithms::least_squares::{LeastSquaresProblem, LsqAlgorithm
 use crate::solver::algorithms::sqp::{SqpSettings, SqpState};
 use crate::solver::algorithms::stage::StageSolver;
 use crate::solver::analysis::identifiability::{
-    self, Analysis, Columns, IdentifiabilityReport, analyse_columns,
+    self, Analysis, Columns, IdentifiabilityReport, ParameterInfo, analyse_columns,
 };
 use crate::solver::error::CalibrationError;
 use crate::solver::problems::absolute_problem::{
@@ -21,6 +21,10 @@ use crate::solver::problems::problem::MinimaxProblem;
 use crate::solver::problems::tree_problem::{TreeLayout, TreeProblem};
 use crate::solver::types::{Reflector, Stage, StageOptions};
 use nalgebra::{DMatrix, DVector, Isometry3, Vector3};
+
+/// The reason of a parameter held as weak ([`ArmSetUp::held`]).
+pub const HELD_WEAK: &str = "held at its nominal value: a weak parameter, barely constrained by these \
+                             configurations across the workspace (--keep-weak fits it)";
 
 /// Pairs per reflector sampled for identifiability, column scaling and the start Hessian.
 pub const IDENTIFIABILITY_PAIRS: usize = 3000;
@@ -241,6 +245,9 @@ pub struct ArmSetUp<'a> {
     /// The arm's start (nominal) model.
     pub start: &'a ArmModel,
     pub options: StageOptions,
+    /// Parameters held at their start values as weak ([`crate::solver::weak`]; the distance
+    /// methods of all the reflectors hold them, the others find none).
+    pub held: &'a [usize],
 }
 
 /// What a step-1 method's set-up returns: the stage's solver and what it identifies.
@@ -272,9 +279,15 @@ impl ArmSetUp<'_> {
     pub fn all_distances(&self) -> Result<DistanceStart, CalibrationError> {
         let start = self.start;
         let probe = self.data.distance_probe(start);
-        let allowed = vec![true; start.param_count()];
-        let (gram, report) =
-            distance_identifiability(&probe, start, &Analysis::distances(&allowed));
+        let allowed: Vec<bool> = (0..start.param_count())
+            .map(|k| !self.held.contains(&k))
+            .collect();
+        let analysis = Analysis {
+            allowed: &allowed,
+            data: ParameterInfo::DISTANCES,
+            not_allowed: HELD_WEAK,
+        };
+        let (gram, report) = distance_identifiability(&probe, start, &analysis);
         let (scale, h0) = scaled_start(&gram, &report, self.stage())?;
         Ok(DistanceStart {
             problem: probe.with_free(report.free.clone(), scale),

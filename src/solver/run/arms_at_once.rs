@@ -149,6 +149,8 @@ impl CalibrationRun {
             identifiability: Default::default(),
             identifiability_at_solution: Default::default(),
             diagnostics: Vec::new(),
+            weak: Default::default(),
+            held: Default::default(),
             reflector_used: Default::default(),
             tracker_from_base: Default::default(),
             base_not_measurable: self.base_not_measurable.clone(),
@@ -168,14 +170,16 @@ impl CalibrationRun {
         Ok(())
     }
 
-    /// Take `side`'s finished stage from `other`: the arm, the stage's summary, diagnostics and
-    /// identifiability reports, the reflector used and the tracker frame.
+    /// Take `side`'s finished stage from `other`: the arm, the stage's summary, diagnostics,
+    /// identifiability reports and weak parameters, the reflector used and the tracker frame.
     fn adopt_arm(&mut self, other: &mut CalibrationRun, side: Side) {
         *self.committed.arm_mut(side) = other.committed.arm(side).clone();
         self.stages.append(&mut other.stages);
         self.diagnostics.append(&mut other.diagnostics);
         self.identifiability[side] = other.identifiability[side].take();
         self.identifiability_at_solution[side] = other.identifiability_at_solution[side].take();
+        self.weak[side] = std::mem::take(&mut other.weak[side]);
+        self.held[side] = std::mem::take(&mut other.held[side]);
         self.reflector_used[side] = other.reflector_used[side];
         if other.tracker_from_base[side].is_some() {
             self.tracker_from_base[side] = other.tracker_from_base[side];

@@ -11,6 +11,7 @@ use crate::kinematics::{ArmModel, DualArmModel, SharedJoints};
 use crate::side::{PerSide, Side};
 use crate::solver::algorithms::stage::StageSolver;
 use crate::solver::analysis::identifiability::{self, IdentifiabilityReport};
+use crate::solver::analysis::weak::{WeakParameter, weak_parameters};
 use crate::solver::error::CalibrationError;
 use crate::solver::methods::set_up::{
     ArmData, ArmSetUp, BaseSetUp, IDENTIFIABILITY_PAIRS, TreeSetUp,
@@ -85,6 +86,11 @@ pub(super) struct ActiveStage {
     /// The last iterate with finite, plausible parameters (kept when the stage ends `NonFinite` or
     /// `Diverged`); `None` until the first iteration.
     pub(super) last_good: Option<StageParams>,
+    /// The iterations before the weak parameters were held (the stage solved again from the start:
+    /// [`CalibrationRun::hold_weak`]); the iteration limit counts those after.
+    pub(super) before_hold: usize,
+    /// The run's diagnostics when the stage started (a stage solved again drops its first solve's).
+    pub(super) diagnostics_at_start: usize,
 }
 
 /// A two-step calibration in progress: the executor of the stages. Advance it with
@@ -113,6 +119,10 @@ pub struct CalibrationRun {
     pub(super) identifiability_at_solution: PerSide<Option<IdentifiabilityReport>>,
     /// What went wrong and where, for the warnings (divergence, non-finite values, new dependencies).
     pub(super) diagnostics: Vec<String>,
+    /// Each arm's weak parameters ([`crate::solver::weak`]), found at its step-1 solution.
+    pub(super) weak: PerSide<Vec<WeakParameter>>,
+    /// Each arm's parameters held at their nominal values as weak (step 1 solved again without them).
+    pub(super) held: PerSide<Vec<usize>>,
     /// The reflector of each arm's single-reflector fit.
     pub(super) reflector_used: PerSide<Option<Reflector>>,
     /// Each arm's base in the tracker frame, where the method identified it.
@@ -197,6 +207,8 @@ impl CalibrationRun {
             identifiability: PerSide::default(),
             identifiability_at_solution: PerSide::default(),
             diagnostics: Vec::new(),
+            weak: PerSide::default(),
+            held: PerSide::default(),
             reflector_used: PerSide::default(),
             tracker_from_base: PerSide::default(),
             cancel,
@@ -320,10 +332,9 @@ impl CalibrationRun {
                     o.iteration(&record, self);
                 }
                 active = self.active.take().expect("put back above");
-                state
-                    .termination
-                    .or((active.iterations >= self.settings.max_iterations)
-                        .then_some(Termination::MaxIterations))
+                state.termination.or((active.iterations - active.before_hold
+                    >= self.settings.max_iterations)
+                    .then_some(Termination::MaxIterations))
             }
         };
         let Some(termination) = termination else {
@@ -386,6 +397,22 @@ impl CalibrationRun {
         {
             self.recheck_identifiability(side);
         }
+        if let Stage::Arm(side) = active.stage
+            && termination != Termination::Cancelled
+            && self.hold_weak(side)
+        {
+            // Solved again from the nominal model with the weak parameters held; one stage to the
+            // observers, its iterations counted on.
+            let mut again = self.start_stage(active.stage)?;
+            again.announced = true;
+            again.iterations = active.iterations;
+            again.before_hold = active.iterations;
+            again.start_psi_mm2 = active.start_psi_mm2;
+            again.diagnostics_at_start = active.diagnostics_at_start;
+            self.diagnostics.truncate(active.diagnostics_at_start);
+            self.active = Some(again);
+            return Ok(Progress::Running);
+        }
         let summary = StageSummary {
             stage: active.stage,
             n_configs: self.stage_size(active.stage).0,
@@ -442,6 +469,7 @@ impl CalibrationRun {
                     data: &self.inputs[side],
                     start: self.nominal.arm(side),
                     options: self.settings.stage_options(),
+                    held: &self.held[side],
                 };
                 let arm = (self.settings.method.spec().set_up)(&set_up)?;
                 self.identifiability[side] = Some(arm.identifiability);
@@ -482,6 +510,8 @@ impl CalibrationRun {
             iterations: 0,
             announced: false,
             last_good: None,
+            before_hold: 0,
+            diagnostics_at_start: self.diagnostics.len(),
         })
     }
 
@@ -576,6 +606,38 @@ impl CalibrationRun {
         self.identifiability_at_solution[side] = Some(at_solution);
     }
 
+    /// Find `side`'s weak parameters at its step-1 solution (the distance methods of all the
+    /// reflectors); unless the settings keep them, hold them at their nominal values: `true` when the
+    /// stage is to be solved again (the arm is back at its nominal model). Once per arm.
+    fn hold_weak(&mut self, side: Side) -> bool {
+        if self.settings.method.is_absolute()
+            || self.reflector_used[side].is_some()
+            || !self.held[side].is_empty()
+        {
+            return false;
+        }
+        let Some(report) = &self.identifiability[side] else {
+            return false;
+        };
+        let input = &self.inputs[side];
+        let mut weak = weak_parameters(
+            self.committed.arm(side),
+            &input.qs,
+            &input.measured,
+            &report.free,
+        );
+        let hold = !weak.is_empty() && !self.settings.keep_weak;
+        if hold {
+            for w in &mut weak {
+                w.held = true;
+            }
+            self.held[side] = weak.iter().map(|w| w.index).collect();
+            *self.committed.arm_mut(side) = self.nominal.arm(side).clone();
+        }
+        self.weak[side] = weak;
+        hold
+    }
+
     fn result(&self) -> CalibrationResult {
         CalibrationResult {
             nominal: self.nominal.clone(),
@@ -591,6 +653,7 @@ impl CalibrationRun {
             tracker_from_base: self.tracker_from_base,
             base_not_measurable: self.base_not_measurable.clone(),
             alone: self.alone,
+            weak: self.weak.clone(),
             elapsed_secs: self.started.elapsed().as_secs_f64(),
         }
     }
