@@ -469,3 +469,40 @@ fn colliding_legs_are_rerouted_through_via_points() {
         "the example plan has a colliding leg to re-route"
     );
 }
+
+/// `--target` (issue 44): the plan's N is the smallest tried whose predicted accuracy over the region
+/// (the default method's mean) reaches the target, every smaller N tried misses it, and the one just
+/// below was tried; the curve is sorted by N.
+#[test]
+fn a_target_plans_the_smallest_number_that_reaches_it() {
+    let robot = RobotDescription::builtin_irb14000();
+    let target = 1.3;
+    let options = PlanOptions {
+        candidates: 120,
+        region_samples: 30,
+        prediction_draws: 12,
+        robust_draws: 2,
+        tracker_in_body_mm: Vector3::new(2000.0, 0.0, 500.0),
+        target: Some(target),
+        ..PlanOptions::default()
+    };
+    let planned = plan(&robot, &default_reflectors_for(&robot), &options).unwrap();
+    let reaches = |p: &Option<dualcal::plan::RegionPrediction>| {
+        p.as_ref().unwrap().default_method.mean <= target
+    };
+    for side in Side::BOTH {
+        let p = &planned[side];
+        let n = p.configs.len();
+        assert!(reaches(&p.prediction), "{side}: {:?}", p.curve);
+        assert!(p.curve.windows(2).all(|w| w[0].0 < w[1].0), "{side}");
+        assert!(p.curve.iter().any(|(m, _)| *m == n), "{side}");
+        for (m, pred) in p.curve.iter().filter(|(m, _)| *m < n) {
+            assert!(!reaches(pred), "{side}: {m} configurations reach it too");
+        }
+        assert!(
+            n == 6 || p.curve.iter().any(|(m, _)| *m == n - 1),
+            "{side}: {n} chosen, {:?} tried",
+            p.curve.iter().map(|c| c.0).collect::<Vec<_>>()
+        );
+    }
+}

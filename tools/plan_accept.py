@@ -42,7 +42,7 @@ def seeds_of(text):
 
 def predictions(text):
     """The plan's predictions per method, averaged over its arms: the region's where printed."""
-    region = re.findall(r"over the region[^:]*: default method ([0-9.]+)× \(([0-9.]+)–([0-9.]+)\), by positions ([0-9.]+)×", text)
+    region = re.findall(r"predicted over the region .*?\): default method ([0-9.]+)× \(([0-9.]+)–([0-9.]+)\), by positions ([0-9.]+)×", text)
     if region:
         return {"default": statistics.mean(float(r[0]) for r in region), "position": statistics.mean(float(r[3]) for r in region)}
     lsq = [float(v) for v in re.findall(r"predicted verification accuracy: ([0-9.]+)×", text)]

@@ -365,3 +365,61 @@ fn position_fit(
     let x = info.cholesky()?.solve(&rhs);
     Some(x.rows(0, p).into_owned())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn random_configs(arm: &ArmModel, n: usize, seed: u64) -> Vec<Vec<f64>> {
+        let limits = limits_with_margin(arm, 0.1);
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        (0..n).map(|_| draw_q(&mut rng, &limits)).collect()
+    }
+
+    fn arm() -> ArmModel {
+        ArmModel::nominal_irb14000(vec![
+            Vector3::new(45.0, 0.0, 40.0),
+            Vector3::new(-25.0, 40.0, 40.0),
+            Vector3::new(-25.0, -40.0, 40.0),
+        ])
+    }
+
+    #[test]
+    fn the_simulated_least_squares_prediction_matches_the_closed_form() {
+        // Over many draws the mean squared excess of the linearised fit is trace(C Q): the
+        // sandwich covariance's prediction (solver::uncertainty), computed apart.
+        let arm = arm();
+        let design = random_configs(&arm, 15, 1);
+        let region = random_configs(&arm, 25, 2);
+        let sigma = 0.01;
+        let p = predict(&arm, &design, &region, sigma, 300, 7).unwrap();
+        let free = crate::solver::identifiability::identifiable_at(&arm, &design);
+        let closed = crate::solver::uncertainty::predicted_verification_ratio(
+            &arm, &design, &region, &free, sigma,
+        )
+        .unwrap();
+        let excess = |r: f64| r * r - 1.0;
+        // The mean of the ratios is below the ratio of the mean excess (Jensen): compare the
+        // excess of the mean ratio, within the draws' scatter.
+        let simulated = excess(p.least_squares.mean);
+        assert!(
+            (simulated / excess(closed) - 1.0).abs() < 0.1,
+            "simulated {} against the closed form {closed}",
+            p.least_squares.mean
+        );
+        assert!(p.least_squares.lo <= p.least_squares.mean && p.least_squares.mean <= p.least_squares.hi);
+        assert!(p.default_method.mean > p.least_squares.mean);
+    }
+
+    #[test]
+    fn more_configurations_predict_better_and_the_position_fit_at_least_as_well() {
+        let arm = arm();
+        let region = random_configs(&arm, 25, 3);
+        let small = predict(&arm, &random_configs(&arm, 10, 4), &region, 0.01, 40, 1).unwrap();
+        let large = predict(&arm, &random_configs(&arm, 40, 5), &region, 0.01, 40, 1).unwrap();
+        assert!(large.default_method.mean < small.default_method.mean);
+        assert!(large.position.mean < small.position.mean);
+        // The position fit sees the points themselves: it does better than the distances.
+        assert!(small.position.mean < small.least_squares.mean);
+    }
+}
