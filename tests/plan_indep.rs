@@ -81,32 +81,87 @@ fn the_independent_simulator_agrees_with_the_model_and_the_plan_predicts_what_it
     // Without noise the true robot's own URDF, read by dualcal, gives the simulator's points: the
     // independent kinematics and the model agree on the perturbed description.
     indep_sim(&[
-        "measure", "--urdf", &urdf, "--configs", &d("plan"), "--seed", "3", "--builtin",
-        "--noise-scale", "0", "--nver", "30", "--out", &d("exact"),
+        "measure",
+        "--urdf",
+        &urdf,
+        "--configs",
+        &d("plan"),
+        "--seed",
+        "3",
+        "--builtin",
+        "--noise-scale",
+        "0",
+        "--nver",
+        "30",
+        "--out",
+        &d("exact"),
     ]);
     let exact = relative_rms(&dualcal(&[
-        "evaluate", &d("exact/truth"), "--nominal", "--split", "all", "--json",
+        "evaluate",
+        &d("exact/truth"),
+        "--nominal",
+        "--split",
+        "all",
+        "--json",
     ]));
     let nominal = relative_rms(&dualcal(&[
-        "evaluate", &d("exact/data"), "--nominal", "--split", "ver", "--json",
+        "evaluate",
+        &d("exact/data"),
+        "--nominal",
+        "--split",
+        "ver",
+        "--json",
     ]));
-    assert!(exact < 1e-5, "the truth's own error without noise: {exact} mm");
-    assert!(nominal > 0.2, "the drawn errors move the points: {nominal} mm");
+    assert!(
+        exact < 1e-5,
+        "the truth's own error without noise: {exact} mm"
+    );
+    assert!(
+        nominal > 0.2,
+        "the drawn errors move the points: {nominal} mm"
+    );
     // With noise: the calibrated model within the prediction's reach of the noise floor.
     indep_sim(&[
-        "measure", "--urdf", &urdf, "--configs", &d("plan"), "--seed", "3", "--builtin", "--nver",
-        "60", "--out", &d("sim"),
+        "measure",
+        "--urdf",
+        &urdf,
+        "--configs",
+        &d("plan"),
+        "--seed",
+        "3",
+        "--builtin",
+        "--nver",
+        "60",
+        "--out",
+        &d("sim"),
     ]);
     let floor = relative_rms(&dualcal(&[
-        "evaluate", &d("sim/truth"), "--nominal", "--split", "ver", "--json",
+        "evaluate",
+        &d("sim/truth"),
+        "--nominal",
+        "--split",
+        "ver",
+        "--json",
     ]));
     for (method, prediction) in [("minimax", &def), ("position", &pos)] {
         let params = d(&format!("{method}.json"));
         dualcal(&[
-            "calibrate", &d("sim/data"), "--method", method, "--out", &params, "--quiet",
+            "calibrate",
+            &d("sim/data"),
+            "--method",
+            method,
+            "--out",
+            &params,
+            "--quiet",
         ]);
         let calibrated = relative_rms(&dualcal(&[
-            "evaluate", &d("sim/data"), "--params", &params, "--split", "ver", "--json",
+            "evaluate",
+            &d("sim/data"),
+            "--params",
+            &params,
+            "--split",
+            "ver",
+            "--json",
         ]));
         let measured = calibrated / floor;
         let predicted = 0.5 * (prediction[0] + prediction[1]);

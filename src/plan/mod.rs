@@ -37,13 +37,13 @@ pub mod bound;
 pub mod exchange;
 mod files;
 pub mod region;
-pub use region::{Region, RegionPrediction};
 pub use bound::DesignBound;
 pub use files::{PlanOutput, bound_line, id_prefix, is_yumi, plan_files, summary_line};
 #[cfg(test)]
 use rand::Rng;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
+pub use region::{Region, RegionPrediction};
 
 /// What the planner is told.
 #[derive(Clone, Debug, PartialEq)]
@@ -764,8 +764,13 @@ struct Pool<'a> {
 impl Pool<'_> {
     /// Greedy, then exchange, for `n` new configurations.
     fn design(&self, n: usize) -> exchange::Exchange {
-        let greedy =
-            select_by_distances(self.points, self.jac, self.info, self.existing + n, self.start);
+        let greedy = select_by_distances(
+            self.points,
+            self.jac,
+            self.info,
+            self.existing + n,
+            self.start,
+        );
         exchange::exchange(
             self.points,
             self.jac,
@@ -789,7 +794,12 @@ fn target_search(
     pool: &Pool,
     target: f64,
     predict: &dyn Fn(&[usize]) -> Predicted,
-) -> (usize, exchange::Exchange, Predicted, Vec<(usize, Predicted)>) {
+) -> (
+    usize,
+    exchange::Exchange,
+    Predicted,
+    Vec<(usize, Predicted)>,
+) {
     let reaches = |p: &Predicted| p.as_ref().is_some_and(|p| p.default_method.mean <= target);
     let mut curve = Vec::new();
     let tried = |n: usize, curve: &mut Vec<(usize, Predicted)>| {
@@ -868,13 +878,8 @@ fn plan_arm_with(
     };
     // The verification pairs the criterion weighs: the region's, over robots with errors.
     let region_qs = region::samples(robot, arm, side, world, options)?;
-    let pool_info = region::robust_information(
-        arm,
-        &region_qs,
-        &scale,
-        options.robust_draws,
-        options.seed,
-    );
+    let pool_info =
+        region::robust_information(arm, &region_qs, &scale, options.robust_draws, options.seed);
     // The configurations already measured stay (they lead the design); the others are exchanged.
     let fixed = if existing.is_empty() { 0 } else { start.len() };
     let shared = Pool {

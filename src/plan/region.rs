@@ -119,8 +119,7 @@ pub fn samples(
         attempts += 1;
         let q = draw_q(&mut rng, &limits);
         if let Region::Box { min_mm, max_mm } = &options.region {
-            let flange = body_from_base
-                * Point3::from(arm.base_from_flange(&q).translation.vector);
+            let flange = body_from_base * Point3::from(arm.base_from_flange(&q).translation.vector);
             if (0..3).any(|k| flange[k] < min_mm[k] || flange[k] > max_mm[k]) {
                 continue;
             }
@@ -245,7 +244,10 @@ pub fn predict(
     let (mut lsq, mut pos) = (Vec::new(), Vec::new());
     for _ in 0..draws.max(1) {
         let model = perturbed(arm, &mut rng);
-        let dj: Vec<ArmJacobians> = design.iter().map(|q| model.reflector_jacobians(q)).collect();
+        let dj: Vec<ArmJacobians> = design
+            .iter()
+            .map(|q| model.reflector_jacobians(q))
+            .collect();
         let noise: Vec<Vec<Vector3<f64>>> = dj
             .iter()
             .map(|j| {
@@ -255,7 +257,10 @@ pub fn predict(
                     .collect()
             })
             .collect();
-        let rj: Vec<ArmJacobians> = region.iter().map(|q| model.reflector_jacobians(q)).collect();
+        let rj: Vec<ArmJacobians> = region
+            .iter()
+            .map(|q| model.reflector_jacobians(q))
+            .collect();
         let q_region = distance_information(&rj, &free, None);
         let x = distance_fit(&dj, &noise, &free)?;
         lsq.push(x.dot(&(&q_region * &x)) / floor);
@@ -407,7 +412,10 @@ mod tests {
             "simulated {} against the closed form {closed}",
             p.least_squares.mean
         );
-        assert!(p.least_squares.lo <= p.least_squares.mean && p.least_squares.mean <= p.least_squares.hi);
+        assert!(
+            p.least_squares.lo <= p.least_squares.mean
+                && p.least_squares.mean <= p.least_squares.hi
+        );
         assert!(p.default_method.mean > p.least_squares.mean);
     }
 
