@@ -291,12 +291,15 @@ fn sensitivity(
     Some((g, u))
 }
 
+/// The point noise of a design (per configuration, per reflector) and the right-hand side it adds to.
+type NoiseAndRhs<'a> = (&'a [Vec<Vector3<f64>>], &'a mut DVector<f64>);
+
 /// The mean of `g gᵀ` over the pairs of `jac` (every k-th pair, at most ~1500) and reflectors; with
 /// `noise`, also `Σ g n` (n the noise on each distance) — the normal equations of the distance fit.
 fn distance_information(
     jac: &[ArmJacobians],
     free: &[usize],
-    noise: Option<(&[Vec<Vector3<f64>>], &mut DVector<f64>)>,
+    noise: Option<NoiseAndRhs>,
 ) -> DMatrix<f64> {
     let count = jac.len();
     let total = count * count.saturating_sub(1) / 2;
