@@ -6,7 +6,8 @@ use crate::dataset::TrackerSpec;
 use crate::kinematics::ArmLinks;
 use crate::output::{Overwrite, write_atomic};
 use crate::plan::{
-    ArmPlan, PlanOptions, PlanOutput, bound_line, is_yumi, plan, plan_files, summary_line,
+    ArmPlan, PlanOptions, PlanOutput, Region, RegionPrediction, bound_line, is_yumi, plan,
+    plan_files, summary_line,
 };
 use crate::robot::{LoadOptions, RobotDescription};
 use crate::side::{PerSide, Side};
@@ -70,6 +71,34 @@ pub struct PlanArgs {
     /// The tracker's maximum permissible error, part per metre, µm/m.
     #[arg(long, default_value_t = TrackerSpec::default().mpe_um_per_m)]
     pub mpe_um_per_m: f64,
+    /// Plan the smallest N per arm whose predicted verification accuracy over the region (the
+    /// default method's mean, a multiple of the noise floor) reaches this (e.g. 1.1); prints the
+    /// curve N → predicted accuracy. --n is then ignored.
+    #[arg(long)]
+    pub target: Option<f64>,
+    /// The region where accuracy is needed, a box of the root frame: X0,Y0,Z0,X1,Y1,Z1 (mm; the
+    /// flange's position) [default: the whole workspace].
+    #[arg(long, value_parser = crate::collision::KeepOutBox::parse, conflicts_with = "region_configs")]
+    pub region_box: Option<crate::collision::KeepOutBox>,
+    /// The region where accuracy is needed: this dataset's configurations (both splits).
+    #[arg(long)]
+    pub region_configs: Option<PathBuf>,
+    /// Configurations drawn for the region per arm.
+    #[arg(long, default_value_t = PlanOptions::default().region_samples)]
+    pub region_samples: usize,
+}
+
+/// The configurations of the dataset at `dir`, per arm.
+fn dataset_configs(dir: &std::path::Path) -> Result<PerSide<Vec<Vec<f64>>>> {
+    // Through the load pipeline: a prismatic joint's column read in its length unit.
+    let ds = super::common::load_workspace(dir)?.dataset;
+    Ok(PerSide::from_fn(|side| {
+        ds.arm(side)
+            .measurements
+            .iter()
+            .map(|m| m.q_rad.clone())
+            .collect::<Vec<_>>()
+    }))
 }
 
 /// `dualcal plan`.
@@ -107,18 +136,20 @@ pub fn run(a: &PlanArgs) -> Result<()> {
     }
     let reflectors = simulate::default_reflectors_for(&robot);
     let existing = match &a.extend {
-        Some(dir) => {
-            // Through the load pipeline: a prismatic joint's column read in its length unit.
-            let ds = super::common::load_workspace(dir)?.dataset;
-            PerSide::from_fn(|side| {
-                ds.arm(side)
-                    .measurements
-                    .iter()
-                    .map(|m| m.q_rad.clone())
-                    .collect::<Vec<_>>()
-            })
-        }
+        Some(dir) => dataset_configs(dir)?,
         None => PerSide::new(Vec::new(), Vec::new()),
+    };
+    let region = match (&a.region_box, &a.region_configs) {
+        (Some(b), _) => Region::Box {
+            min_mm: b.min_mm,
+            max_mm: b.max_mm,
+        },
+        (None, Some(dir)) => Region::Configs(dataset_configs(dir)?),
+        (None, None) => Region::Workspace,
+    };
+    let tracker = TrackerSpec {
+        mpe_um: a.mpe_um,
+        mpe_um_per_m: a.mpe_um_per_m,
     };
     let options = PlanOptions {
         per_arm: a.n,
@@ -131,15 +162,15 @@ pub fn run(a: &PlanArgs) -> Result<()> {
         clearance_mm: a.clearance_mm,
         keep_out: a.keep_out.clone(),
         existing,
+        region,
+        region_samples: a.region_samples,
+        tracker_mpe: tracker,
+        target: a.target,
         ..PlanOptions::default()
     };
     let plans = plan(&robot, &reflectors, &options)?;
     outln!("{}", describe_robot(&robot));
     let nominal = robot.nominal_model(reflectors.to_vec());
-    let tracker = TrackerSpec {
-        mpe_um: a.mpe_um,
-        mpe_um_per_m: a.mpe_um_per_m,
-    };
     for side in Side::BOTH {
         print_arm(
             &robot,
@@ -149,6 +180,7 @@ pub fn run(a: &PlanArgs) -> Result<()> {
             side,
             &plans[side],
         );
+        print_region(&options, &plans[side]);
     }
     let output = PlanOutput {
         robot: &robot,
@@ -221,5 +253,53 @@ fn print_arm(
     }
     if let Some(line) = bound_line(p) {
         outln!("  {line}");
+    }
+}
+
+/// `1.153× (1.121–1.190)`: a prediction's mean and its 10th–90th percentiles.
+fn spread(s: &crate::plan::region::Spread) -> String {
+    format!("{:.3}× ({:.3}–{:.3})", s.mean, s.lo, s.hi)
+}
+
+/// The default method's and the position fit's predicted accuracy.
+fn prediction_text(p: &RegionPrediction) -> String {
+    format!(
+        "default method {}, by positions {} (least squares {:.3}×)",
+        spread(&p.default_method),
+        spread(&p.position),
+        p.least_squares.mean
+    )
+}
+
+/// An arm's prediction over the region and, with a target, the curve N → prediction.
+fn print_region(options: &PlanOptions, p: &ArmPlan) {
+    let region = options.region.describe(p.region_count);
+    match &p.prediction {
+        Some(pred) => outln!(
+            "  predicted over the region ({region}; {} draws of the robot's errors and the noise, \
+             10–90 %): {}",
+            pred.draws,
+            prediction_text(pred)
+        ),
+        None => outln!("  predicted over the region ({region}): not predictable (singular fit)"),
+    }
+    let Some(target) = options.target else {
+        return;
+    };
+    let n = p.configs.len();
+    let reached = p
+        .prediction
+        .as_ref()
+        .is_some_and(|q| q.default_method.mean <= target);
+    if reached {
+        outln!("  target {target:.3}×: {n} configurations reach it (the default method's mean)");
+    } else {
+        outln!("  target {target:.3}×: not reached with up to {n} configurations");
+    }
+    for (n, pred) in &p.curve {
+        match pred {
+            Some(pred) => outln!("    N = {n:3}: {}", prediction_text(pred)),
+            None => outln!("    N = {n:3}: not predictable"),
+        }
     }
 }

@@ -36,10 +36,14 @@ use nalgebra::{DMatrix, Point3, Vector3};
 pub mod bound;
 pub mod exchange;
 mod files;
+pub mod region;
 pub use bound::DesignBound;
 pub use files::{PlanOutput, bound_line, id_prefix, is_yumi, plan_files, summary_line};
-use rand::{Rng, SeedableRng};
+#[cfg(test)]
+use rand::Rng;
+use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
+pub use region::{Region, RegionPrediction};
 
 /// What the planner is told.
 #[derive(Clone, Debug, PartialEq)]
@@ -66,6 +70,20 @@ pub struct PlanOptions {
     /// Configurations already measured, per arm (extending a dataset): the design starts from them
     /// and adds `per_arm` new ones.
     pub existing: PerSide<Vec<Vec<f64>>>,
+    /// Where the calibrated robot must be accurate: the criterion's verification pairs and the
+    /// prediction's ([`region`]).
+    pub region: Region,
+    /// Configurations drawn for the region (per arm).
+    pub region_samples: usize,
+    /// Robots (the nominal one and perturbed ones) the region's information is averaged over.
+    pub robust_draws: usize,
+    /// Draws of the robot's errors and the tracker's noise behind the prediction.
+    pub prediction_draws: usize,
+    /// The tracker's MPE (the prediction's noise).
+    pub tracker_mpe: crate::dataset::TrackerSpec,
+    /// Plan the smallest number of configurations per arm whose predicted accuracy over the region
+    /// (the default method's mean) reaches this multiple of the noise floor (`per_arm` ignored).
+    pub target: Option<f64>,
 }
 
 impl Default for PlanOptions {
@@ -82,6 +100,12 @@ impl Default for PlanOptions {
             max_attempts_per_candidate: 200,
             keep_out: Vec::new(),
             existing: PerSide::new(Vec::new(), Vec::new()),
+            region: Region::Workspace,
+            region_samples: 100,
+            robust_draws: 4,
+            prediction_draws: 32,
+            tracker_mpe: crate::dataset::TrackerSpec::default(),
+            target: None,
         }
     }
 }
@@ -139,6 +163,12 @@ pub struct ArmPlan {
     /// What no design of as many of these candidates predicts better than, judged on
     /// [`Self::sample`] ([`bound::relaxed_bound`]; `None` where its information is singular).
     pub bound: Option<DesignBound>,
+    /// Configurations of the region ([`region::samples`]) the criterion and the prediction used.
+    pub region_count: usize,
+    /// What the design predicts over the region ([`region::predict`]; `None` where singular).
+    pub prediction: Option<RegionPrediction>,
+    /// With a target ([`PlanOptions::target`]): the designs tried, N and their prediction, by N.
+    pub curve: Vec<(usize, Option<RegionPrediction>)>,
 }
 
 /// How many unchosen candidates [`ArmPlan::sample`] keeps.
@@ -196,14 +226,7 @@ pub fn candidates(
     let rest = Resting::of(robot);
     let body_from_base = robot.body_from_arm_base(side);
     let tracker = body_from_base.inverse_transform_point(&Point3::from(options.tracker_in_body_mm));
-    let limits: Vec<(f64, f64)> = arm
-        .joint_limits_rad()
-        .into_iter()
-        .map(|(lo, hi)| {
-            let m = options.joint_limit_margin_fraction * (hi - lo);
-            (lo + m, hi - m)
-        })
-        .collect();
+    let limits = region::limits_with_margin(arm, options.joint_limit_margin_fraction);
     let axis = facing_axis(arm);
     let cos_max = options.max_incidence_deg.to_radians().cos();
     let mut rng = ChaCha8Rng::seed_from_u64(options.seed ^ (0x9e37 + side as u64));
@@ -222,16 +245,7 @@ pub fn candidates(
             });
         }
         attempts += 1;
-        let q: Vec<f64> = limits
-            .iter()
-            .map(|&(lo, hi)| {
-                if lo < hi {
-                    rng.random_range(lo..hi)
-                } else {
-                    lo
-                }
-            })
-            .collect();
+        let q = region::draw_q(&mut rng, &limits);
         let flange = arm.base_from_flange(&q);
         let to_tracker = tracker - Point3::from(flange.translation.vector);
         let dist = to_tracker.norm();
@@ -285,27 +299,38 @@ pub fn facing_axis(arm: &ArmModel) -> Vector3<f64> {
     }
 }
 
+/// The columns the design works on and their scale: the parameters distances between the candidates
+/// identify ([`crate::solver::identifiability::identifiable_at`], the calibration's analysis), each
+/// scaled to unit RMS scatter over the candidates.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ColumnScale {
+    pub free: Vec<usize>,
+    pub scale: Vec<f64>,
+}
+
 /// The reflector Jacobians of every candidate, the columns distances between the candidates identify
 /// ([`crate::solver::identifiability::identifiable_at`], the calibration's analysis) scaled to unit
 /// RMS scatter over the candidates: one `3·reflectors × p` matrix per candidate.
 pub fn scaled_jacobians(arm: &ArmModel, configs: &[Vec<f64>]) -> Vec<DMatrix<f64>> {
+    let scale = column_scale(arm, configs);
+    jacobians_scaled(arm, configs, &scale)
+}
+
+/// [`ColumnScale`] over `configs`.
+pub fn column_scale(arm: &ArmModel, configs: &[Vec<f64>]) -> ColumnScale {
     let free = crate::solver::identifiability::identifiable_at(arm, configs);
+    let unit = ColumnScale {
+        scale: vec![1.0; free.len()],
+        free,
+    };
+    let jac = jacobians_scaled(arm, configs, &unit);
     let rows = 3 * arm.reflector_count();
-    let jac: Vec<DMatrix<f64>> = configs
-        .iter()
-        .map(|q| {
-            let j = arm.reflector_jacobians(q);
-            DMatrix::from_fn(rows, free.len(), |r, c| {
-                j.jacobians[r / 3][(r % 3, free[c])]
-            })
-        })
-        .collect();
     let n = jac.len().max(1) as f64;
     let mean = jac
         .iter()
-        .fold(DMatrix::zeros(rows, free.len()), |a, j| a + j)
+        .fold(DMatrix::zeros(rows, unit.free.len()), |a, j| a + j)
         / n;
-    let scale: Vec<f64> = (0..free.len())
+    let scale: Vec<f64> = (0..unit.free.len())
         .map(|c| {
             let ss: f64 = jac
                 .iter()
@@ -315,12 +340,26 @@ pub fn scaled_jacobians(arm: &ArmModel, configs: &[Vec<f64>]) -> Vec<DMatrix<f64
             if rms > 0.0 { 1.0 / rms } else { 0.0 }
         })
         .collect();
-    jac.into_iter()
-        .map(|mut j| {
-            for (c, s) in scale.iter().enumerate() {
-                j.column_mut(c).scale_mut(*s);
-            }
-            j
+    ColumnScale {
+        free: unit.free,
+        scale,
+    }
+}
+
+/// The reflector Jacobians of `configs`, the columns of `scale` scaled by it.
+pub fn jacobians_scaled(
+    arm: &ArmModel,
+    configs: &[Vec<f64>],
+    scale: &ColumnScale,
+) -> Vec<DMatrix<f64>> {
+    let rows = 3 * arm.reflector_count();
+    configs
+        .iter()
+        .map(|q| {
+            let j = arm.reflector_jacobians(q);
+            DMatrix::from_fn(rows, scale.free.len(), |r, c| {
+                j.jacobians[r / 3][(r % 3, scale.free[c])] * scale.scale[c]
+            })
         })
         .collect()
 }
@@ -693,7 +732,14 @@ pub fn plan_arm(
 }
 
 fn check_options(options: &PlanOptions) -> Result<(), PlanError> {
-    if options.per_arm < 2 || options.candidates < options.per_arm {
+    if let Some(t) = options.target
+        && !(t.is_finite() && t > 1.0)
+    {
+        return Err(PlanError::Options(format!(
+            "target {t}: expected a multiple of the noise floor above 1"
+        )));
+    }
+    if options.target.is_none() && (options.per_arm < 2 || options.candidates < options.per_arm) {
         return Err(PlanError::Options(format!(
             "{} configurations per arm from {} candidates: expected at least 2, and at least as many \
              candidates",
@@ -701,6 +747,102 @@ fn check_options(options: &PlanOptions) -> Result<(), PlanError> {
         )));
     }
     Ok(())
+}
+
+/// What the designs of one arm share: the pool (candidates, then the configurations already
+/// measured), its scaled Jacobians and points, the region's information, the design's start.
+struct Pool<'a> {
+    points: &'a [Vec<Vector3<f64>>],
+    jac: &'a [DMatrix<f64>],
+    info: &'a DMatrix<f64>,
+    start: &'a [usize],
+    fixed: usize,
+    drawn: usize,
+    existing: usize,
+}
+
+impl Pool<'_> {
+    /// Greedy, then exchange, for `n` new configurations.
+    fn design(&self, n: usize) -> exchange::Exchange {
+        let greedy = select_by_distances(
+            self.points,
+            self.jac,
+            self.info,
+            self.existing + n,
+            self.start,
+        );
+        exchange::exchange(
+            self.points,
+            self.jac,
+            self.info,
+            &greedy,
+            self.fixed,
+            self.drawn,
+        )
+    }
+}
+
+/// The numbers of configurations [`target_search`] tries first.
+const TARGET_LADDER: [usize; 13] = [6, 8, 10, 12, 15, 20, 25, 30, 40, 50, 60, 80, 100];
+
+type Predicted = Option<RegionPrediction>;
+
+/// The smallest N (up to the candidates' number) whose design's predicted default-method mean is at
+/// most `target`: up [`TARGET_LADDER`], then by bisection below the first N that reaches it. Returns
+/// that N (the largest tried where none does), its design and prediction, and every N tried.
+fn target_search(
+    pool: &Pool,
+    target: f64,
+    predict: &dyn Fn(&[usize]) -> Predicted,
+) -> (
+    usize,
+    exchange::Exchange,
+    Predicted,
+    Vec<(usize, Predicted)>,
+) {
+    let reaches = |p: &Predicted| p.as_ref().is_some_and(|p| p.default_method.mean <= target);
+    let mut curve = Vec::new();
+    let tried = |n: usize, curve: &mut Vec<(usize, Predicted)>| {
+        let ex = pool.design(n);
+        let p = predict(&ex.chosen);
+        curve.push((n, p.clone()));
+        (ex, p)
+    };
+    let ladder: Vec<usize> = TARGET_LADDER
+        .iter()
+        .copied()
+        .filter(|&n| n <= pool.drawn)
+        .chain((!TARGET_LADDER.contains(&pool.drawn)).then_some(pool.drawn))
+        .filter(|&n| n >= 2)
+        .collect();
+    let mut lo = 1usize;
+    let mut best = None;
+    for &n in &ladder {
+        let (ex, p) = tried(n, &mut curve);
+        let ok = reaches(&p);
+        best = Some((n, ex, p));
+        if ok {
+            break;
+        }
+        lo = n;
+    }
+    let (mut hi, mut ex, mut p) = best.unwrap_or_else(|| {
+        let ex = pool.design(2);
+        (2, ex, None)
+    });
+    if reaches(&p) {
+        while hi - lo > 1 {
+            let mid = (lo + hi) / 2;
+            let (e, q) = tried(mid, &mut curve);
+            if reaches(&q) {
+                (hi, ex, p) = (mid, e, q);
+            } else {
+                lo = mid;
+            }
+        }
+    }
+    crate::sort::sort_by(&mut curve, |a, b| a.0.cmp(&b.0));
+    (hi, ex, p, curve)
 }
 
 fn plan_arm_with(
@@ -723,7 +865,8 @@ fn plan_arm_with(
         )));
     }
     pool.extend(existing.iter().cloned());
-    let jac = scaled_jacobians(arm, &pool);
+    let scale = column_scale(arm, &pool);
+    let jac = jacobians_scaled(arm, &pool, &scale);
     let points: Vec<Vec<Vector3<f64>>> =
         pool.iter().map(|q| arm.reflector_fk(q).points_mm).collect();
     // The isotropic design's first two picks start the exact one (a single configuration has no
@@ -733,20 +876,44 @@ fn plan_arm_with(
     } else {
         (drawn..pool.len()).collect()
     };
-    let pool_info = pair_information(&points, &jac);
-    let greedy = select_by_distances(
-        &points,
-        &jac,
-        &pool_info,
-        existing.len() + options.per_arm,
-        &start,
-    );
+    // The verification pairs the criterion weighs: the region's, over robots with errors.
+    let region_qs = region::samples(robot, arm, side, world, options)?;
+    let pool_info =
+        region::robust_information(arm, &region_qs, &scale, options.robust_draws, options.seed);
     // The configurations already measured stay (they lead the design); the others are exchanged.
     let fixed = if existing.is_empty() { 0 } else { start.len() };
-    let exchanged = exchange::exchange(&points, &jac, &pool_info, &greedy, fixed, drawn);
+    let shared = Pool {
+        points: &points,
+        jac: &jac,
+        info: &pool_info,
+        start: &start,
+        fixed,
+        drawn,
+        existing: existing.len(),
+    };
+    let sigma_mm = region::point_sigma_mm(robot, side, options);
+    let predict = |design: &[usize]| {
+        let qs: Vec<Vec<f64>> = design.iter().map(|&i| pool[i].clone()).collect();
+        region::predict(
+            arm,
+            &qs,
+            &region_qs,
+            sigma_mm,
+            options.prediction_draws,
+            options.seed,
+        )
+    };
+    let (per_arm, exchanged, prediction, curve) = match options.target {
+        None => {
+            let ex = shared.design(options.per_arm);
+            let p = predict(&ex.chosen);
+            (options.per_arm, ex, p, Vec::new())
+        }
+        Some(target) => target_search(&shared, target, &predict),
+    };
     let design = exchanged.chosen.clone();
     let chosen: Vec<usize> = design.iter().copied().filter(|&i| i < drawn).collect();
-    let random: Vec<usize> = (0..options.per_arm).collect();
+    let random: Vec<usize> = (0..per_arm.min(drawn)).collect();
     let configs: Vec<Vec<f64>> = chosen.iter().map(|&i| pool[i].clone()).collect();
     let path = order(&configs);
     let configs: Vec<Vec<f64>> = path.iter().map(|&k| configs[k].clone()).collect();
@@ -770,7 +937,7 @@ fn plan_arm_with(
         &jac,
         drawn,
         &start[..fixed],
-        options.per_arm,
+        per_arm,
         &design,
         &sample_indices,
     );
@@ -788,6 +955,9 @@ fn plan_arm_with(
         path_length,
         vias,
         colliding_legs,
+        region_count: region_qs.len(),
+        prediction,
+        curve,
     })
 }
 
