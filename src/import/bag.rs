@@ -1,12 +1,7 @@
 //! ROS 2 bags (`.mcap`) as joint logs: what an import is told about them, and how a bag is
-//! recognised. The reader itself ([`super::ros2`]) is the desktop's and the command line's only: a
+//! recognised. The reader itself (`ros2.rs`, called by `read_bag` in `import/mod.rs`) is the desktop's and the command line's only: a
 //! browser refuses a bag with the advice to export the joints as CSV (the module's size budget).
 
-use super::ImportOptions;
-use super::error::ImportError;
-use super::joints::{JointLog, JointLogOptions};
-use super::points::PointTable;
-use crate::source::FileSource;
 use std::path::Path;
 
 /// What a bag's import is told (`--joint-topic`, `--still-velocity`, `--still-secs`,
@@ -47,34 +42,4 @@ pub fn is_bag(path: &Path) -> bool {
     path.extension()
         .and_then(|e| e.to_str())
         .is_some_and(|e| e.eq_ignore_ascii_case("mcap"))
-}
-
-/// Read a bag's still intervals as a joint log, matched in time to the point file's shots
-/// (`table`).
-#[cfg(not(target_arch = "wasm32"))]
-pub(super) fn read(
-    files: &dyn FileSource,
-    path: &Path,
-    o: &ImportOptions,
-    log_options: &JointLogOptions,
-    table: &PointTable,
-) -> Result<JointLog, ImportError> {
-    super::ros2::read(files, path, o, log_options, table)
-}
-
-/// In a browser: no bag reader in the module (its size budget).
-#[cfg(target_arch = "wasm32")]
-pub(super) fn read(
-    _files: &dyn FileSource,
-    path: &Path,
-    _o: &ImportOptions,
-    _log_options: &JointLogOptions,
-    _table: &PointTable,
-) -> Result<JointLog, ImportError> {
-    Err(ImportError::Format {
-        path: path.to_path_buf(),
-        message: "ROS 2 bags are read by the desktop workbench and `dualcal import`, not in the \
-                  browser: import there, or export the configurations as CSV (`id,q1,…`)"
-            .into(),
-    })
 }

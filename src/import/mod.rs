@@ -624,7 +624,7 @@ fn read_log(
         id_prefix: prefix,
     };
     if bag::is_bag(path) {
-        bag::read(files, path, o, &log_options, table)
+        read_bag(files, path, o, &log_options, table)
     } else if sheet::is_sheet(path) {
         sheet::read(files, path, o.sheet.as_deref(), &log_options)
     } else {
@@ -634,6 +634,36 @@ fn read_log(
         log.notes.splice(0..0, encoding);
         Ok(log)
     }
+}
+
+/// Read a bag's still intervals as a joint log, matched in time to the point file's shots
+/// (`table`).
+#[cfg(not(target_arch = "wasm32"))]
+fn read_bag(
+    files: &dyn FileSource,
+    path: &Path,
+    o: &ImportOptions,
+    log_options: &JointLogOptions,
+    table: &PointTable,
+) -> Result<JointLog, ImportError> {
+    ros2::read(files, path, o, log_options, table)
+}
+
+/// In a browser: no bag reader in the module (its size budget).
+#[cfg(target_arch = "wasm32")]
+fn read_bag(
+    _files: &dyn FileSource,
+    path: &Path,
+    _o: &ImportOptions,
+    _log_options: &JointLogOptions,
+    _table: &PointTable,
+) -> Result<JointLog, ImportError> {
+    Err(ImportError::Format {
+        path: path.to_path_buf(),
+        message: "ROS 2 bags are read by the desktop workbench and `dualcal import`, not in the \
+                  browser: import there, or export the configurations as CSV (`id,q1,…`)"
+            .into(),
+    })
 }
 
 /// The prefix of ids made up for rows without one (`L001`, `R001`): the same on both arms (`C001`)

@@ -5,10 +5,9 @@ use crate::kinematics::DualArmModel;
 use crate::metrics::{ConfigResiduals, MetricsError, PairKind, PairResiduals};
 use crate::side::{PerSide, Side};
 use crate::solver::analysis::identifiability::IdentifiabilityReport;
-use crate::solver::analysis::weak::WeakParameter;
 use crate::solver::settings::CalibrationSettings;
 use crate::solver::types::{
-    IterationRecord, QpMethod, Reflector, Stage, StageSummary, Termination,
+    IterationRecord, QpMethod, Reflector, Stage, StageSummary, Termination, WeakParameter,
 };
 use nalgebra::Isometry3;
 

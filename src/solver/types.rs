@@ -318,3 +318,45 @@ pub struct StageSummary {
     /// Initial ψ, mm².
     pub psi_start_mm2: f64,
 }
+
+/// A parameter the configurations barely constrain, and why ([`crate::solver::weak`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct WeakParameter {
+    pub name: String,
+    /// Its index in the arm's parameter vector.
+    #[serde(skip)]
+    pub index: usize,
+    /// One standard deviation in `unit` (`mm`, `mrad`, or an error parameter's own).
+    pub sigma: f64,
+    pub unit: String,
+    /// RMS over the workspace of the distance change its 1σ brings, mm.
+    pub workspace_mm: f64,
+    /// The tracker's noise per axis it is compared with (the residuals' estimate), mm.
+    pub noise_mm: f64,
+    /// Why, in words.
+    pub reason: String,
+    /// Held at its nominal value in the calibration (`false`: kept free, `--keep-weak`).
+    pub held: bool,
+}
+
+impl WeakParameter {
+    /// One line: the name, the reason, the figures, and what was done.
+    pub fn describe(&self) -> String {
+        let done = if self.held {
+            "held at its nominal value (--keep-weak fits it)"
+        } else {
+            "kept free (--keep-weak)"
+        };
+        format!(
+            "{}: {}; its 1σ of {:.3} {} would move distances across the workspace by {:.3} mm RMS, \
+             {:.0}× the noise ({:.4} mm); {done}",
+            self.name,
+            self.reason,
+            self.sigma,
+            self.unit,
+            self.workspace_mm,
+            self.workspace_mm / self.noise_mm,
+            self.noise_mm
+        )
+    }
+}

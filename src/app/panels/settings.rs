@@ -444,6 +444,13 @@ fn joint_range_ui(ui: &mut egui::Ui, linear: bool, (lo, hi): (f64, f64)) {
 /// were identified. A leader off the chain (a column's measured joint that chain joints mimic) is a
 /// column of the data: it stands before its first follower.
 fn arm_details_ui(ui: &mut egui::Ui, session: &Session, side: Side) {
+    joints_grid_ui(ui, session, side);
+    parameters_ui(ui, session, side);
+}
+
+/// The arm's joints in chain order, each with its data column (or `mimic`) and limits; an off-chain
+/// leader before its first follower.
+fn joints_grid_ui(ui: &mut egui::Ui, session: &Session, side: Side) {
     let arm = &session.robot.arms()[side];
     let variables = arm.chain.variables();
     egui::Grid::new(("joints", side.name()))
@@ -482,6 +489,11 @@ fn arm_details_ui(ui: &mut egui::Ui, session: &Session, side: Side) {
                 ui.end_row();
             }
         });
+}
+
+/// The arm's calibration parameters: which distances cannot identify, and after a calibration which
+/// were identified, held, weak, with their σ and the errors beyond geometry.
+fn parameters_ui(ui: &mut egui::Ui, session: &Session, side: Side) {
     let model = session.nominal.model.arm(side);
     let n = model.param_count();
     let unidentifiable: Vec<(String, String)> = (0..n)

@@ -28,7 +28,6 @@ use crate::par::prelude::*;
 use nalgebra::{DMatrix, DVector, Vector3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use serde::{Deserialize, Serialize};
 
 /// Configurations drawn within the joint limits to judge the workspace effect.
 pub const WORKSPACE_CONFIGURATIONS: usize = 200;
@@ -42,47 +41,7 @@ pub const WORKSPACE_SEED: u64 = 47;
 /// (docs/reliability.md, *Weak parameters*).
 pub const WEAK_NOISE_RATIO: f64 = 3.0;
 
-/// A parameter the configurations barely constrain, and why.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct WeakParameter {
-    pub name: String,
-    /// Its index in the arm's parameter vector.
-    #[serde(skip)]
-    pub index: usize,
-    /// One standard deviation in `unit` (`mm`, `mrad`, or an error parameter's own).
-    pub sigma: f64,
-    pub unit: String,
-    /// RMS over the workspace of the distance change its 1σ brings, mm.
-    pub workspace_mm: f64,
-    /// The tracker's noise per axis it is compared with (the residuals' estimate), mm.
-    pub noise_mm: f64,
-    /// Why, in words.
-    pub reason: String,
-    /// Held at its nominal value in the calibration (`false`: kept free, `--keep-weak`).
-    pub held: bool,
-}
-
-impl WeakParameter {
-    /// One line: the name, the reason, the figures, and what was done.
-    pub fn describe(&self) -> String {
-        let done = if self.held {
-            "held at its nominal value (--keep-weak fits it)"
-        } else {
-            "kept free (--keep-weak)"
-        };
-        format!(
-            "{}: {}; its 1σ of {:.3} {} would move distances across the workspace by {:.3} mm RMS, \
-             {:.0}× the noise ({:.4} mm); {done}",
-            self.name,
-            self.reason,
-            self.sigma,
-            self.unit,
-            self.workspace_mm,
-            self.workspace_mm / self.noise_mm,
-            self.noise_mm
-        )
-    }
-}
+pub use crate::solver::types::WeakParameter;
 
 /// The weak parameters among `free` (indices into `arm`'s parameters) of `arm` fitted to the
 /// configurations `qs` and their measured points `measured` (module documentation); every one with
