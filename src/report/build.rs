@@ -304,7 +304,8 @@ fn arm_summary(
 }
 
 /// The arm's σ: the parameter file's record, else computed as `dualcal calibrate` does
-/// ([`uncertainty::arm_uncertainty`] on the fitted configurations, the fixed parameters left out).
+/// ([`uncertainty::arm_uncertainty_weighted`] with the method's weighting on the fitted
+/// configurations, the fixed parameters left out).
 fn arm_uncertainty(
     side: Side,
     calibrated: &ArmModel,
@@ -356,7 +357,17 @@ fn arm_uncertainty(
     let ms = kept.arm(side).select(record.split);
     let qs: Vec<Vec<f64>> = ms.iter().map(|m| m.q_rad.clone()).collect();
     let measured: Vec<Vec<Vector3<f64>>> = ms.iter().map(|m| m.tracker_points_mm.clone()).collect();
-    match uncertainty::arm_uncertainty(calibrated, &qs, &measured, &free) {
+    // The method's own weighting of the reflectors (the minimax's multipliers), as `calibrate` does.
+    let Some(weighting) = uncertainty::Weighting::of(m, None) else {
+        return (
+            None,
+            UncertaintySource::NotAvailable(format!(
+                "not recorded; not computed for the `{}` method",
+                m.name()
+            )),
+        );
+    };
+    match uncertainty::arm_uncertainty_weighted(calibrated, &qs, &measured, &free, &weighting) {
         Some(u) => (Some(u), UncertaintySource::Computed),
         None => (
             None,

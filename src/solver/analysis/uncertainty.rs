@@ -719,7 +719,7 @@ impl Weighting {
     /// The weighting of `method`'s fit (`reflector`: the one a single-reflector method used); `None`
     /// for a method not fitted by distances.
     pub fn of(
-        method: crate::solver::Method,
+        method: crate::solver::methods::table::Method,
         reflector: Option<crate::solver::types::Reflector>,
     ) -> Option<Weighting> {
         if method.is_absolute() {
@@ -865,7 +865,7 @@ fn absolute_uncertainty(
     let qs: Vec<Vec<f64>> = ms.iter().map(|m| m.q_rad.clone()).collect();
     let measured: Vec<Vec<Vector3<f64>>> = ms.iter().map(|m| m.tracker_points_mm.clone()).collect();
     let arm = result.calibrated.arm(side);
-    let (data, kinds) = if result.settings.method == crate::solver::Method::Pose {
+    let (data, kinds) = if result.settings.method == crate::solver::methods::table::Method::Pose {
         let w = AbsoluteProblem::rotation_weight_mm(&result.nominal.arm(side).reflectors_mm);
         (
             AbsoluteData::Pose {
