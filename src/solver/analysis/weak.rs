@@ -21,8 +21,6 @@
 //! The reason in words comes from the measured configurations: for a reflector coordinate, how far
 //! the flange turned about the two axes that would move it; for a DH parameter, how far its joint
 //! moved of its range; otherwise what it trades with.
-// In a browser only `weak_parameters`'s empty stand-in is compiled (the module's size budget).
-#![cfg_attr(target_arch = "wasm32", allow(dead_code))]
 
 use super::uncertainty::{MAX_CONFIGURATIONS, predicted_covariance};
 use crate::kinematics::{ArmJacobians, ArmModel, N_DH};
@@ -45,24 +43,10 @@ pub const WEAK_NOISE_RATIO: f64 = 3.0;
 
 pub use crate::solver::types::WeakParameter;
 
-/// In a browser: none — the analysis is not in the browser's module (its size budget, as the
-/// spreadsheet and bag readers): the workbench there keeps every parameter free, as `--keep-weak`
-/// does; the desktop workbench and the command line name and hold them.
-#[cfg(target_arch = "wasm32")]
-pub fn weak_parameters(
-    _arm: &ArmModel,
-    _qs: &[Vec<f64>],
-    _measured: &[Vec<Vector3<f64>>],
-    _free: &[usize],
-) -> Vec<WeakParameter> {
-    Vec::new()
-}
-
 /// The weak parameters among `free` (indices into `arm`'s parameters) of `arm` fitted to the
 /// configurations `qs` and their measured points `measured` (module documentation); every one with
 /// `held: false`. Empty when the fit cannot be summarised (fewer than three configurations, a
 /// singular fit, no residual degrees of freedom).
-#[cfg(not(target_arch = "wasm32"))]
 pub fn weak_parameters(
     arm: &ArmModel,
     qs: &[Vec<f64>],
