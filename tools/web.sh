@@ -157,14 +157,15 @@ browser_test() {
   say "browser test on $backend done in $((SECONDS - started)) s (after the build)"
 }
 
-# The WebGPU module's size budget (issue 18: ≤ 6 MB raw, ≤ 2 MB gzip -9, MB = 10^6 bytes), from
+# The WebGPU module's size budget (issue 18: ≤ 6 MB raw, ≤ 2 MB gzip -9, MB = 10^6 bytes; raised to
+# 2 020 000 gzip on 2026-12-07, a decision recorded in docs/performance.md, "Tenth pass"), from
 # build.json: `tools/web.sh test` fails above it, so that growth past it is a decision, not a drift
 # (docs/performance.md, "The workbench in the browser"). The WebGL2 module, for browsers without
 # WebGPU, carries wgpu's shader translator and GL layer and is above it (its size is printed).
 size_budget() {
   python3 - "$test_out/build.json" <<'PY'
 import json, sys
-budget = {"webgpu": (6_000_000, 2_000_000)}
+budget = {"webgpu": (6_000_000, 2_020_000)}
 failed = False
 for m in json.load(open(sys.argv[1]))["modules"]:
     raw, gz = m["wasm_bytes"], m["wasm_gzip_bytes"]
