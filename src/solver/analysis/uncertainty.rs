@@ -711,7 +711,7 @@ pub enum Weighting {
     /// Given weights per reflector.
     Weights(Vec<f64>),
     /// The minimax (`minimax`): each reflector weighed by its multiplier λ_k at the solution
-    /// ([`minimax_weights`]).
+    /// ([`minimax_multipliers`]).
     Minimax,
 }
 
