@@ -5,7 +5,7 @@
 use super::{PyDataset, PyRobot, err, side_of, to_python};
 use dualcal::controller::compensate::{CompensationSettings, ControllerBase, Target};
 use dualcal::dataset::{AngleUnit, LengthUnit};
-use dualcal::import::{ColumnMap, MatchRule, PointUnit, PointsFormat};
+use dualcal::import::{ColumnMap, PointUnit};
 use dualcal::side::Side;
 use numpy::{PyArray1, PyArray2, PyReadonlyArray2};
 use pyo3::prelude::*;
@@ -14,6 +14,16 @@ use std::collections::HashMap;
 use std::path::PathBuf;
 
 /// `name`, one of `known` (by their names), else an error naming the option.
+/// The engine's value spelled `name` (its `Choice` table, as the command line reads it).
+fn choice<T: dualcal::choice::Choice>(what: &str, name: &str) -> PyResult<T> {
+    T::parse_choice(name).map_err(|e| {
+        err(format!(
+            "{what} `{name}`: expected one of {}",
+            e.known.join(", ")
+        ))
+    })
+}
+
 fn one_of<T: Copy>(what: &str, name: &str, known: &[(&str, T)]) -> PyResult<T> {
     known
         .iter()
@@ -159,28 +169,10 @@ fn import_of(
         }
     }
     if let Some(m) = &options.matching {
-        import = import.matching(one_of(
-            "match",
-            m,
-            &[
-                ("auto", MatchRule::Auto),
-                ("name", MatchRule::Name),
-                ("order", MatchRule::Order),
-                ("time", MatchRule::Time),
-            ],
-        )?);
+        import = import.matching(choice("match", m)?);
     }
     if let Some(f) = &options.points_format {
-        import = import.points_format(one_of(
-            "points_format",
-            f,
-            &[
-                ("spatial-analyzer", PointsFormat::SpatialAnalyzer),
-                ("leica", PointsFormat::Leica),
-                ("figaroh", PointsFormat::Figaroh),
-                ("generic", PointsFormat::Generic),
-            ],
-        )?);
+        import = import.points_format(choice("points_format", f)?);
     }
     if let Some(u) = &options.length_unit {
         import = import.length_unit(
