@@ -65,6 +65,18 @@ fn the_gauss_newton_curvature_converges_about_as_least_squares_does() {
         let gn = step1(&data, &["--hessian", "gauss-newton", "--keep-weak"]);
         let bfgs = step1(&data, &["--hessian", "bfgs", "--keep-weak"]);
         let lsq = step1(&data, &["--method", "lsq", "--keep-weak"]);
+        // The same data solve the same way every time: least squares' normal equations were once
+        // summed in whatever order rayon's threads stole the work, and its stopping test fired 9 to
+        // 12 iterations in on one data set from run to run (CI saw 9 where this machine saw 12).
+        for again in 0..2 {
+            let repeated = step1(&data, &["--method", "lsq", "--keep-weak"]);
+            assert_eq!(
+                repeated,
+                lsq,
+                "seed {seed}: least squares' run {}",
+                again + 2
+            );
+        }
         eprintln!("seed {seed}: Gauss–Newton {gn:?}, BFGS {bfgs:?}, least squares {lsq:?}");
         for (name, (termination, _)) in [("Gauss–Newton", &gn), ("least squares", &lsq)] {
             assert!(
@@ -82,7 +94,7 @@ fn the_gauss_newton_curvature_converges_about_as_least_squares_does() {
         total_gn += gn.1;
         total_lsq += lsq.1;
     }
-    // Over the seeds, within a quarter of least squares' iterations (measured: 100 against 84; the
+    // Over the seeds, within a quarter of least squares' iterations (measured: 100 against 87; the
     // paper's BFGS 173).
     assert!(
         total_gn * 4 <= total_lsq * 5,

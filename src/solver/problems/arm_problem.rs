@@ -520,44 +520,54 @@ impl MinimaxProblem for ArmProblem {
         let jac = self.jac_all(&model);
         let m = self.free.len();
         let n = jac.len();
-        // Accumulate per first index i in parallel, then reduce.
-        let (cost, jtj, jtr) = (0..n)
+        // Blocks of first indices with nearly equal pair counts, fixed by n alone, summed in
+        // parallel and added in block order: the system (and so the iterations) do not depend on
+        // how the threads were scheduled (a parallel `reduce` adds in whatever order the work was
+        // stolen, and least squares' stopping test then fired an iteration or three apart from run
+        // to run on the same data).
+        let blocks = pairs::triangle_blocks(n, Plan::Blocked);
+        let parts: Vec<(f64, DMatrix<f64>, DVector<f64>)> = blocks
             .into_par_iter()
-            .map(|i| {
+            .map(|rows| {
                 let mut jtj = DMatrix::<f64>::zeros(m, m);
                 let mut jtr = DVector::<f64>::zeros(m);
                 let mut cost = 0.0;
                 let mut row = DVector::<f64>::zeros(m);
-                for j in i + 1..n {
-                    for k in (0..self.reflectors.len()).filter(|&k| self.reflectors[k]) {
-                        let v = jac[i].fk.points_mm[k] - jac[j].fk.points_mm[k];
-                        let dist = v.norm();
-                        if dist <= 0.0 {
-                            continue;
+                for i in rows {
+                    for j in i + 1..n {
+                        for k in (0..self.reflectors.len()).filter(|&k| self.reflectors[k]) {
+                            let v = jac[i].fk.points_mm[k] - jac[j].fk.points_mm[k];
+                            let dist = v.norm();
+                            if dist <= 0.0 {
+                                continue;
+                            }
+                            let r = self.measured[k].distance(i, j) - dist;
+                            let u = v / dist;
+                            pair_row(
+                                &jac[i].jacobians[k],
+                                &jac[j].jacobians[k],
+                                &u,
+                                self.free.iter().copied(),
+                                row.as_mut_slice(),
+                            );
+                            for (c, r) in row.iter_mut().enumerate() {
+                                *r *= self.scale[c];
+                            }
+                            jtj.ger(1.0, &row, &row, 1.0);
+                            jtr.axpy(r, &row, 1.0);
+                            cost += r * r;
                         }
-                        let r = self.measured[k].distance(i, j) - dist;
-                        let u = v / dist;
-                        pair_row(
-                            &jac[i].jacobians[k],
-                            &jac[j].jacobians[k],
-                            &u,
-                            self.free.iter().copied(),
-                            row.as_mut_slice(),
-                        );
-                        for (c, r) in row.iter_mut().enumerate() {
-                            *r *= self.scale[c];
-                        }
-                        jtj.ger(1.0, &row, &row, 1.0);
-                        jtr.axpy(r, &row, 1.0);
-                        cost += r * r;
                     }
                 }
                 (cost, jtj, jtr)
             })
-            .reduce(
-                || (0.0, DMatrix::zeros(m, m), DVector::zeros(m)),
-                |a, b| (a.0 + b.0, a.1 + b.1, a.2 + b.2),
-            );
+            .collect();
+        let (mut cost, mut jtj, mut jtr) = (0.0, DMatrix::zeros(m, m), DVector::zeros(m));
+        for (c, a, b) in parts {
+            cost += c;
+            jtj += a;
+            jtr += b;
+        }
         LeastSquaresSystem { cost, jtj, jtr }
     }
 }

@@ -116,7 +116,7 @@ impl Plan {
 }
 
 /// Rows `0..n` of the pairs (i, j > i) cut into blocks of nearly equal pair counts.
-fn triangle_blocks(n: usize, plan: Plan) -> Vec<Range<usize>> {
+pub fn triangle_blocks(n: usize, plan: Plan) -> Vec<Range<usize>> {
     if plan == Plan::Sequential || n < 2 {
         #[allow(clippy::single_range_in_vec_init)] // one block: all rows
         return vec![0..n];
