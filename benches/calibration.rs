@@ -159,6 +159,39 @@ fn identifiability(c: &mut Criterion) {
             })
         });
         let free: Vec<usize> = (0..arm.param_count()).collect();
+        // What the data cannot tell (issue 47), on every calibration: the unit-noise covariance of
+        // the fit, then the weak-parameter rule (that covariance, the workspace's 2000 pairs per
+        // reflector, the residuals' noise).
+        let measured: Vec<_> = sim
+            .dataset
+            .arms
+            .left
+            .measurements
+            .iter()
+            .filter(|m| m.split == dualcal::dataset::Split::Cal)
+            .map(|m| m.tracker_points_mm.clone())
+            .collect();
+        let identified = at_solution(arm, &qs, &free, 3000, GramMethod::Product).free;
+        group.bench_function(format!("predicted_covariance_{cal}"), |b| {
+            b.iter(|| {
+                black_box(dualcal::solver::uncertainty::predicted_covariance(
+                    arm,
+                    black_box(&qs),
+                    &identified,
+                    1.0,
+                ))
+            })
+        });
+        group.bench_function(format!("weak_parameters_{cal}"), |b| {
+            b.iter(|| {
+                black_box(dualcal::solver::weak::weak_parameters(
+                    arm,
+                    black_box(&qs),
+                    &measured,
+                    &identified,
+                ))
+            })
+        });
         for (name, how) in [("product", GramMethod::Product), ("qr", GramMethod::Qr)] {
             group.bench_function(format!("recheck_by_{name}_{cal}"), |b| {
                 b.iter(|| black_box(at_solution(arm, black_box(&qs), &free, 3000, how)))

@@ -25,7 +25,7 @@
 use super::uncertainty::{MAX_CONFIGURATIONS, predicted_covariance};
 use crate::kinematics::{ArmJacobians, ArmModel, N_DH};
 use crate::par::prelude::*;
-use nalgebra::{DMatrix, DVector, Vector3};
+use nalgebra::{DMatrix, Vector3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -166,11 +166,14 @@ fn workspace_ratios(arm: &ArmModel, free: &[usize], v: &DMatrix<f64>) -> Vec<f64
     let jac: Vec<ArmJacobians> = qs.par_iter().map(|q| arm.reflector_jacobians(q)).collect();
     let p = free.len();
     let n = jac.len();
-    let mut sums = vec![0.0; p];
+    // The rows g = (J_a − J_b)ᵀ u of every pair and reflector, then every column's move `G v_j` at
+    // once (one matrix product: the rows' dot products with each v_j one by one were three quarters
+    // of the analysis' time).
+    let partners = PARTNERS.min(n.saturating_sub(1));
+    let mut g = DMatrix::<f64>::zeros(n * partners * arm.reflector_count(), p);
     let mut rows = 0usize;
-    let mut g = DVector::<f64>::zeros(p);
     for a in 0..n {
-        for s in 1..=PARTNERS.min(n.saturating_sub(1)) {
+        for s in 1..=partners {
             let b = (a + s) % n;
             for k in 0..arm.reflector_count() {
                 let d = jac[a].fk.points_mm[k] - jac[b].fk.points_mm[k];
@@ -179,19 +182,18 @@ fn workspace_ratios(arm: &ArmModel, free: &[usize], v: &DMatrix<f64>) -> Vec<f64
                     continue;
                 }
                 let u = d / dist;
+                let (ja, jb) = (&jac[a].jacobians[k], &jac[b].jacobians[k]);
                 for (c, &f) in free.iter().enumerate() {
-                    g[c] = (jac[a].jacobians[k].column(f) - jac[b].jacobians[k].column(f)).dot(&u);
-                }
-                let moved = v.tr_mul(&g);
-                for (sum, m) in sums.iter_mut().zip(moved.iter()) {
-                    *sum += m * m;
+                    g[(rows, c)] = (ja.column(f) - jb.column(f)).dot(&u);
                 }
                 rows += 1;
             }
         }
     }
-    sums.iter()
-        .map(|s| (s / rows.max(1) as f64).sqrt())
+    let moved = g.rows(0, rows) * v;
+    moved
+        .column_iter()
+        .map(|m| (m.norm_squared() / rows.max(1) as f64).sqrt())
         .collect()
 }
 
