@@ -1587,19 +1587,21 @@ fn the_import_window_previews_the_files_then_writes_and_opens_the_dataset() {
     assert!(err.contains("imported"), "{err}");
 }
 
-/// The planning window: plan both arms of the loaded robot in the background, the plan drawn in 3D
-/// (the tracker, its lines of sight, the planned reflectors) with the arm in the chosen planned
-/// pose; closing the window draws the dataset again. `DUALCAL_SCREENSHOT_OUT=docs/planning-view.png`
-/// also saves the window's picture (1280×800).
+/// The planning window: plan both arms of the loaded robot in the background for a target accuracy
+/// (the fewest configurations whose predicted accuracy over the workspace reaches it, and the curve
+/// N → predicted accuracy, as `dualcal plan --target`), the plan drawn in 3D (the tracker, its lines
+/// of sight, the planned reflectors) with the arm in the chosen planned pose; closing the window
+/// draws the dataset again. `DUALCAL_SCREENSHOT_OUT=docs/planning-view.png` also saves the window's
+/// picture (1280×800).
 #[test]
-fn the_planning_window_plans_and_draws_the_plan_with_the_tracker() {
+fn the_planning_window_plans_for_a_target_and_draws_the_plan_with_the_tracker() {
     let mut harness = harness([1280.0, 800.0], AppLaunch::default());
     loaded(&mut harness);
     harness.get_by_label("Plan measurements…").click();
     harness.run_steps(2);
     assert!(harness.state().plan_view().open);
     let mut inputs = harness.state().plan_view().inputs.clone();
-    inputs.per_arm = 8;
+    inputs.target = Some(1.3);
     inputs.candidates = 60;
     harness
         .state_mut()
@@ -1620,7 +1622,46 @@ fn the_planning_window_plans_and_draws_the_plan_with_the_tracker() {
         app.plan_view().error
     );
     let plans = app.plan_view().result.as_ref().unwrap().plans().unwrap();
-    assert_eq!(plans.left.configs.len(), 8);
+    // Each arm: the number of configurations the target search settled on, its prediction at or
+    // under the target, the designs tried on the way (N = 6 and 8 at least, predicting worse) — and
+    // the window says so.
+    for (side, plan) in [("left", &plans.left), ("right", &plans.right)] {
+        let n = plan.configs.len();
+        let predicted = plan
+            .prediction
+            .as_ref()
+            .expect("a prediction")
+            .default_method
+            .mean;
+        assert!(
+            predicted <= 1.3,
+            "{side}: {n} configurations predict {predicted}"
+        );
+        assert!(plan.curve.len() >= 3, "{side}: {:?}", plan.curve);
+        assert!(plan.curve.iter().any(|(m, _)| *m == n));
+        let first = plan.curve[0].1.as_ref().unwrap().default_method.mean;
+        assert!(
+            first > 1.3,
+            "{side}: the smallest design tried predicts {first}"
+        );
+        let said = format!("target 1.300×: {n} configurations reach it");
+        assert!(
+            harness
+                .query_all(egui_kittest::kittest::by().label_contains(&said))
+                .count()
+                >= 1,
+            "{said}"
+        );
+    }
+    assert!(
+        harness
+            .query_all(egui_kittest::kittest::by().label_contains("predicted over the region"))
+            .count()
+            == 2
+    );
+    let n_left = plans.left.configs.len();
+    let n_right = plans.right.configs.len();
+    assert!(n_left >= 8 && n_right >= 8, "{n_left} {n_right}");
     // Drawn: the first planned pose of each arm, the tracker where it was put, every planned
     // configuration's reflectors.
     let overlay = app.viewport().plan.clone().expect("the plan is drawn");
@@ -1629,7 +1670,7 @@ fn the_planning_window_plans_and_draws_the_plan_with_the_tracker() {
         overlay.tracker_mm,
         nalgebra::Vector3::new(2000.0, 0.0, 300.0)
     );
-    assert_eq!(overlay.points_mm.right.len(), 8);
+    assert_eq!(overlay.points_mm.right.len(), n_right);
     // Another planned pose of the right arm.
     harness.get_by_label("R003").scroll_to_me();
     harness.run_steps(4);

@@ -33,6 +33,9 @@ pub struct PlanInputs {
     pub keep_out: String,
     /// Start from the loaded dataset's configurations and add new ones.
     pub extend: bool,
+    /// The predicted accuracy to reach (× the noise floor): the smallest number of configurations
+    /// that reaches it instead of `per_arm` (`dualcal plan --target`).
+    pub target: Option<f64>,
 }
 
 impl Default for PlanInputs {
@@ -53,6 +56,7 @@ impl Default for PlanInputs {
             clearance_mm: d.clearance_mm,
             keep_out: String::new(),
             extend: false,
+            target: None,
         }
     }
 }
@@ -147,6 +151,7 @@ impl PlanView {
             } else {
                 PerSide::new(Vec::new(), Vec::new())
             },
+            target: i.target,
             ..PlanOptions::default()
         })
     }

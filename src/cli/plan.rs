@@ -6,8 +6,7 @@ use crate::dataset::TrackerSpec;
 use crate::kinematics::ArmLinks;
 use crate::output::{Overwrite, write_atomic};
 use crate::plan::{
-    ArmPlan, PlanOptions, PlanOutput, Region, RegionPrediction, bound_line, is_yumi, plan,
-    plan_files, summary_line,
+    ArmPlan, PlanOptions, PlanOutput, Region, bound_line, is_yumi, plan, plan_files, summary_line,
 };
 use crate::robot::{LoadOptions, RobotDescription};
 use crate::side::{PerSide, Side};
@@ -256,21 +255,6 @@ fn print_arm(
     }
 }
 
-/// `1.153× (1.121–1.190)`: a prediction's mean and its 10th–90th percentiles.
-fn spread(s: &crate::plan::region::Spread) -> String {
-    format!("{:.3}× ({:.3}–{:.3})", s.mean, s.lo, s.hi)
-}
-
-/// The default method's and the position fit's predicted accuracy.
-fn prediction_text(p: &RegionPrediction) -> String {
-    format!(
-        "default method {}, by positions {} (least squares {:.3}×)",
-        spread(&p.default_method),
-        spread(&p.position),
-        p.least_squares.mean
-    )
-}
-
 /// An arm's prediction over the region and, with a target, the curve N → prediction.
 fn print_region(options: &PlanOptions, p: &ArmPlan) {
     let region = options.region.describe(p.region_count);
@@ -279,7 +263,7 @@ fn print_region(options: &PlanOptions, p: &ArmPlan) {
             "  predicted over the region ({region}; {} draws of the robot's errors and the noise, \
              10–90 %): {}",
             pred.draws,
-            prediction_text(pred)
+            pred.summary()
         ),
         None => outln!("  predicted over the region ({region}): not predictable (singular fit)"),
     }
@@ -298,7 +282,7 @@ fn print_region(options: &PlanOptions, p: &ArmPlan) {
     }
     for (n, pred) in &p.curve {
         match pred {
-            Some(pred) => outln!("    N = {n:3}: {}", prediction_text(pred)),
+            Some(pred) => outln!("    N = {n:3}: {}", pred.summary()),
             None => outln!("    N = {n:3}: not predictable"),
         }
     }

@@ -207,6 +207,13 @@ impl Spread {
     }
 }
 
+/// `1.153× (1.121–1.190)`: the mean and the 10th–90th percentiles.
+impl std::fmt::Display for Spread {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{:.3}× ({:.3}–{:.3})", self.mean, self.lo, self.hi)
+    }
+}
+
 /// What a design predicts over the region, as multiples of the noise floor (1.0: the true
 /// parameters' verification accuracy).
 #[derive(Clone, Debug, PartialEq)]
@@ -218,6 +225,17 @@ pub struct RegionPrediction {
     /// Least squares on the distances.
     pub least_squares: Spread,
     pub draws: usize,
+}
+
+impl RegionPrediction {
+    /// `default method 1.153× (1.121–1.190), by positions 1.090× (…) (least squares 1.101×)` — as
+    /// `dualcal plan` prints it and the workbench's plan view shows it.
+    pub fn summary(&self) -> String {
+        format!(
+            "default method {}, by positions {} (least squares {:.3}×)",
+            self.default_method, self.position, self.least_squares.mean
+        )
+    }
 }
 
 /// The tracker's noise per axis at `side`'s base (half the MPE at the distance).

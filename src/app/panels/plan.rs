@@ -7,8 +7,10 @@
 use super::{ERROR_COLOR, WARNING_COLOR};
 use crate::app::command::Command;
 use crate::app::plan_view::{ArmOutcome, PlanInputs, PlanView};
+use crate::plan::{ArmPlan, PlanOptions};
 use crate::side::Side;
 use eframe::egui::{self, Color32, RichText};
+use egui_plot::{HLine, Line, Plot, PlotPoints};
 
 /// What the window needs besides the view.
 pub struct PlanContext {
@@ -99,7 +101,35 @@ fn inputs_ui(ui: &mut egui::Ui, i: &mut PlanInputs, has_dataset: bool) {
             });
             ui.end_row();
             ui.label("configurations per arm");
-            ui.add(egui::DragValue::new(&mut i.per_arm).range(2..=500));
+            ui.add_enabled(
+                i.target.is_none(),
+                egui::DragValue::new(&mut i.per_arm).range(2..=500),
+            );
+            ui.end_row();
+            ui.label("target accuracy");
+            ui.horizontal(|ui| {
+                let mut on = i.target.is_some();
+                if ui
+                    .checkbox(&mut on, "fewest configurations reaching")
+                    .on_hover_text(
+                        "The smallest number of configurations per arm whose predicted accuracy \
+                         over the region (the default method's mean, × the noise floor) reaches \
+                         the target, and the curve N → predicted accuracy (dualcal plan --target)",
+                    )
+                    .changed()
+                {
+                    i.target = on.then_some(i.target.unwrap_or(1.1));
+                }
+                if let Some(t) = &mut i.target {
+                    ui.add(
+                        egui::DragValue::new(t)
+                            .range(1.01..=3.0)
+                            .speed(0.005)
+                            .fixed_decimals(3)
+                            .suffix("×"),
+                    );
+                }
+            });
             ui.end_row();
             ui.label("candidates per arm");
             ui.add(
@@ -168,7 +198,7 @@ fn results_ui(ui: &mut egui::Ui, view: &mut PlanView, commands: &mut Vec<Command
             ui.label(format!("{side} arm: planning…"));
             continue;
         };
-        arm_ui(ui, side, arm, view.shown[side], commands);
+        arm_ui(ui, side, arm, &result.options, view.shown[side], commands);
     }
 }
 
@@ -176,6 +206,7 @@ fn arm_ui(
     ui: &mut egui::Ui,
     side: Side,
     arm: &ArmOutcome,
+    options: &PlanOptions,
     shown: Option<usize>,
     commands: &mut Vec<Command>,
 ) {
@@ -228,16 +259,11 @@ fn arm_ui(
             largest("mrad"),
             u.condition
         ));
-        if let Some(ratio) = d.verification_ratio {
-            ui.label(format!(
-                "predicted verification accuracy: {ratio:.3}× the noise floor (least squares; \
-                 the true parameters give 1.000×)"
-            ));
-        }
     }
     if let Some(line) = crate::plan::bound_line(p) {
         ui.label(line);
     }
+    prediction_ui(ui, side, options, p);
     ui.horizontal_wrapped(|ui| {
         ui.label("show:");
         if ui.selectable_label(shown.is_none(), "home").clicked() {
@@ -251,4 +277,126 @@ fn arm_ui(
             }
         }
     });
+}
+
+/// What the design predicts over the region (× the noise floor, over draws of the robot's errors and
+/// the noise: mean and 10–90 %), as `dualcal plan` prints it; with a target, whether it is reached and
+/// the curve N → predicted accuracy of the designs tried.
+fn prediction_ui(ui: &mut egui::Ui, side: Side, options: &PlanOptions, p: &ArmPlan) {
+    let region = options.region.describe(p.region_count);
+    match &p.prediction {
+        Some(pred) => ui.label(format!(
+            "predicted over the region ({region}; {} draws of the robot's errors and the noise, \
+             10–90 %; 1.000× = the true parameters): {}",
+            pred.draws,
+            pred.summary()
+        )),
+        None => ui.label(
+            RichText::new(format!(
+                "predicted over the region ({region}): not predictable (singular fit)"
+            ))
+            .color(WARNING_COLOR),
+        ),
+    };
+    let Some(target) = options.target else {
+        return;
+    };
+    let n = p.configs.len();
+    if p.prediction
+        .as_ref()
+        .is_some_and(|q| q.default_method.mean <= target)
+    {
+        ui.label(format!(
+            "target {target:.3}×: {n} configurations reach it (the default method's mean)"
+        ));
+    } else {
+        ui.label(
+            RichText::new(format!(
+                "target {target:.3}×: not reached with up to {n} configurations"
+            ))
+            .color(WARNING_COLOR),
+        );
+    }
+    curve_plot(ui, side, target, &p.curve);
+}
+
+/// The curve N → predicted accuracy of the designs the target search tried: the default method's
+/// mean with its 10–90 % band, the position fit's mean, and the target.
+fn curve_plot(
+    ui: &mut egui::Ui,
+    side: Side,
+    target: f64,
+    curve: &[(usize, Option<crate::plan::region::RegionPrediction>)],
+) {
+    let points = |f: &dyn Fn(&crate::plan::region::RegionPrediction) -> f64| -> Vec<[f64; 2]> {
+        curve
+            .iter()
+            .filter_map(|(n, p)| p.as_ref().map(|p| [*n as f64, f(p)]))
+            .collect()
+    };
+    let mean = points(&|p| p.default_method.mean);
+    if mean.len() < 2 {
+        return;
+    }
+    let lo = points(&|p| p.default_method.lo);
+    let hi = points(&|p| p.default_method.hi);
+    let position = points(&|p| p.position.mean);
+    // From the noise floor to three times the target's distance from it: the smallest designs
+    // predict many times the floor and would flatten the rest (they are named below the plot).
+    let top = 1.0 + 3.0 * (target - 1.0);
+    let default_color = Color32::from_rgb(90, 160, 255);
+    let position_color = Color32::from_rgb(230, 150, 60);
+    // The key in words above the plot: a legend would cover a plot this small.
+    ui.horizontal_wrapped(|ui| {
+        ui.spacing_mut().item_spacing.x = 0.0;
+        let key = |ui: &mut egui::Ui, text: &str, color: Color32| {
+            ui.label(RichText::new(text).small().color(color));
+        };
+        key(ui, "predicted accuracy against N: ", Color32::GRAY);
+        key(ui, "default method (mean, dashed 10–90 %)", default_color);
+        key(ui, ", ", Color32::GRAY);
+        key(ui, "by positions (mean)", position_color);
+        key(ui, ", target (grey)", Color32::GRAY);
+    });
+    Plot::new(format!("plan curve {side}"))
+        .height(150.0)
+        .default_y_bounds(1.0, top)
+        .x_axis_label("configurations per arm")
+        .y_axis_label("× floor")
+        .allow_drag(false)
+        .allow_zoom(false)
+        .allow_scroll(false)
+        .show(ui, |plot| {
+            plot.line(
+                Line::new("default method (mean)", PlotPoints::from(mean))
+                    .color(default_color)
+                    .width(2.0),
+            );
+            for band in [lo, hi] {
+                plot.line(
+                    Line::new("default method (10–90 %)", PlotPoints::from(band))
+                        .color(default_color.gamma_multiply(0.5))
+                        .style(egui_plot::LineStyle::dashed_dense()),
+                );
+            }
+            plot.line(
+                Line::new("by positions (mean)", PlotPoints::from(position)).color(position_color),
+            );
+            plot.hline(HLine::new("target", target).color(Color32::GRAY));
+        });
+    let above: Vec<String> = curve
+        .iter()
+        .filter_map(|(n, p)| {
+            p.as_ref()
+                .filter(|p| p.default_method.mean > top)
+                .map(|p| format!("N = {n}: {:.2}×", p.default_method.mean))
+        })
+        .collect();
+    if !above.is_empty() {
+        ui.label(
+            RichText::new(format!("above the plot: {}", above.join(", ")))
+                .small()
+                .color(Color32::GRAY),
+        );
+    }
 }
