@@ -58,7 +58,7 @@ pub use run::{
 };
 pub use settings::CalibrationSettings;
 pub use types::{
-    CalibrationEvent, DIVERGED_ANGLE_RAD, DIVERGED_LENGTH_MM, Hessian, IterationRecord, QpMethod,
-    Reflector, Stage, StageOptions, StageSummary, Termination, identifiable_params,
-    min_configurations,
+    AUTO_GAUSS_NEWTON_CONDITION, CalibrationEvent, DIVERGED_ANGLE_RAD, DIVERGED_LENGTH_MM, Hessian,
+    IterationRecord, QpMethod, Reflector, Stage, StageOptions, StageSummary, Termination,
+    identifiable_params, min_configurations,
 };

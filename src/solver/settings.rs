@@ -103,7 +103,7 @@ impl Default for CalibrationSettings {
             base_method: BaseMethod::Minimax,
             reflector: None,
             qp: QpMethod::Exact,
-            hessian: Hessian::Bfgs,
+            hessian: Hessian::Auto,
             // The command line's `--max-iterations` default too, so that the workbench and the
             // library end a stage where `dualcal calibrate` does: a minimax stage at a three-way tie
             // with a vanishing multiplier can crawl for more than 100 iterations before "ψ

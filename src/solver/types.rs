@@ -41,24 +41,50 @@ impl crate::choice::Choice for QpMethod {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Hessian {
+    /// Gauss–Newton curvature where the data are ill-conditioned, the paper's BFGS elsewhere: per
+    /// arm stage by the condition number of the start's scaled Jacobian of the identified parameters
+    /// (above [`AUTO_GAUSS_NEWTON_CONDITION`]: Gauss–Newton); step 2 (six parameters) BFGS
+    /// (docs/solver.md, "Curvature").
+    #[default]
+    Auto,
     /// Gauss–Newton curvature of the active sums, `Σ_k λ_k ∇²F_k ≈ Σ_k λ_k 2 J_kᵀJ_k` with the QP's
     /// multipliers (a small floor keeps every reflector's curvature): exact for the residual-free
     /// part of the paper's sums of squares, recomputed at every iterate. On ill-conditioned data with
     /// unmodelled errors it converges as least squares does (docs/solver.md, "Curvature").
     GaussNewton,
     /// The paper's BFGS update of the Lagrangian's Hessian (Powell's damping), started from the
-    /// Gauss–Newton matrix: the method of Algorithm I as published (the default until the
-    /// Gauss–Newton curvature has been through the whole test suite as the default).
-    #[default]
+    /// Gauss–Newton matrix: the method of Algorithm I as published.
     Bfgs,
 }
+
+/// Under [`Hessian::Auto`], an arm stage whose identified parameters' scaled Jacobian has a larger
+/// condition number at the start is solved with the Gauss–Newton curvature. Measured: 14–16 on the
+/// paper-size simulations (BFGS and Gauss–Newton take about the same iterations there, BFGS each
+/// cheaper), 600–710 on the ill-conditioned one-reflector arm (BFGS 173 iterations over five seeds,
+/// Gauss–Newton 100, least squares 87), 1.2e3 on the Leica-measured arm of issue 47 (BFGS 200+,
+/// least squares 20).
+pub const AUTO_GAUSS_NEWTON_CONDITION: f64 = 100.0;
 
 impl Hessian {
     /// The name on the command line and in parameter files.
     pub fn name(self) -> &'static str {
         match self {
+            Hessian::Auto => "auto",
             Hessian::GaussNewton => "gauss-newton",
             Hessian::Bfgs => "bfgs",
+        }
+    }
+
+    /// The curvature a stage uses: [`Hessian::Auto`] resolved by the condition number of the
+    /// start's scaled Jacobian of the identified parameters (`None`: a stage without one, step 2:
+    /// BFGS).
+    pub fn resolved(self, condition: Option<f64>) -> Hessian {
+        match self {
+            Hessian::Auto => match condition {
+                Some(c) if c > AUTO_GAUSS_NEWTON_CONDITION => Hessian::GaussNewton,
+                _ => Hessian::Bfgs,
+            },
+            other => other,
         }
     }
 
@@ -77,7 +103,7 @@ impl crate::choice::Choice for Hessian {
     const WHAT: &'static str = "curvature";
 
     fn all() -> &'static [Self] {
-        &[Hessian::GaussNewton, Hessian::Bfgs]
+        &[Hessian::Auto, Hessian::GaussNewton, Hessian::Bfgs]
     }
 
     fn spelling(self) -> &'static str {
@@ -86,6 +112,12 @@ impl crate::choice::Choice for Hessian {
 
     fn help(self) -> Option<&'static str> {
         Some(match self {
+            Hessian::Auto => {
+                "Gauss–Newton where an arm's data are ill-conditioned (the identified parameters' \
+                 scaled Jacobian has a condition number above 100 at the start: a flange that \
+                 hardly turns, one reflector), the paper's BFGS elsewhere and in step 2; the \
+                 command says when it chose Gauss–Newton"
+            }
             Hessian::GaussNewton => {
                 "Gauss–Newton curvature of the active sums, `Σ_k λ_k ∇²F_k ≈ Σ_k λ_k 2 J_kᵀJ_k` with \
                  the QP's multipliers (a small floor keeps every reflector's curvature): exact for the \
@@ -95,9 +127,7 @@ impl crate::choice::Choice for Hessian {
             }
             Hessian::Bfgs => {
                 "The paper's BFGS update of the Lagrangian's Hessian (Powell's damping), started \
-                 from the Gauss–Newton matrix: the method of Algorithm I as published (the default \
-                 until the Gauss–Newton curvature has been through the whole test suite as the \
-                 default)"
+                 from the Gauss–Newton matrix: the method of Algorithm I as published"
             }
         })
     }
@@ -317,6 +347,9 @@ pub struct StageSummary {
     pub f_mm2: Vec<f64>,
     /// Initial ψ, mm².
     pub psi_start_mm2: f64,
+    /// The SQP's curvature in this stage (`None`: not an SQP stage).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub curvature: Option<Hessian>,
 }
 
 /// A parameter the configurations barely constrain, and why ([`crate::solver::weak`]).

@@ -30,7 +30,7 @@ pub struct CalibrateArgs {
     /// The SQP's curvature: `bfgs` (the paper's update) or `gauss-newton` (Σ λ_k 2 J_kᵀJ_k of the
     /// active sums, recomputed at each iterate: on ill-conditioned data with unmodelled errors about
     /// half the iterations; docs/solver.md, "Curvature").
-    #[arg(long, value_parser = choice::<crate::solver::Hessian>(), default_value_t = crate::solver::Hessian::Bfgs)]
+    #[arg(long, value_parser = choice::<crate::solver::Hessian>(), default_value_t = crate::solver::Hessian::Auto)]
     pub hessian: crate::solver::Hessian,
     /// Where to write the parameters (dualcal-params/1 JSON).
     #[arg(long)]

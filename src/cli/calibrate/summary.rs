@@ -6,8 +6,8 @@ use crate::metrics;
 use crate::params::StatisticsRecord;
 use crate::quality;
 use crate::side::{ConfigId, PerSide, Side};
-use crate::solver::CalibrationResult;
 use crate::solver::uncertainty::ArmUncertainty;
+use crate::solver::{CalibrationResult, Stage};
 use anyhow::Result;
 
 /// Step 1's and step 2's methods, what each arm identified, the tracker frames, how each stage
@@ -77,6 +77,21 @@ pub(super) fn print_identifiability(result: &CalibrationResult) {
             s.psi_start_mm2,
             s.psi_mm2
         );
+        if result.settings.hessian == crate::solver::Hessian::Auto
+            && s.curvature == Some(crate::solver::Hessian::GaussNewton)
+            && let Stage::Arm(side) = s.stage
+        {
+            let condition = result.identifiability[side]
+                .as_ref()
+                .map_or(f64::NAN, |r| r.condition_after);
+            outln!(
+                "{}: Gauss–Newton curvature: the identified parameters' scaled Jacobian has \
+                 condition number {condition:.0} at the start (above {:.0}: ill-conditioned data, \
+                 where the paper's BFGS crawls; `--hessian bfgs` for it)",
+                s.stage,
+                crate::solver::AUTO_GAUSS_NEWTON_CONDITION
+            );
+        }
     }
     let reflectors = result.nominal.arm(Side::Left).reflector_count();
     if reflectors == 1 {

@@ -53,6 +53,8 @@ pub struct SqpState<P: MinimaxProblem> {
     /// The largest objective gradient component at the start: the scale of a single objective's
     /// stationarity (one reflector), where the current gradient cannot scale itself.
     start_gradient_scale: f64,
+    /// The problem had no Gauss–Newton matrix where one was asked for: BFGS was used.
+    gauss_newton_unavailable: bool,
 }
 
 /// Outer iterations over which the no-progress rule looks back.
@@ -106,6 +108,16 @@ fn regularised(mut h: DMatrix<f64>) -> DMatrix<f64> {
 pub struct NonFiniteStart;
 
 impl<P: MinimaxProblem> SqpState<P> {
+    /// The curvature this solve uses: the settings', or BFGS where the problem has no Gauss–Newton
+    /// matrix.
+    pub fn curvature_used(&self) -> Hessian {
+        if self.gauss_newton_unavailable {
+            Hessian::Bfgs
+        } else {
+            self.settings.hessian.resolved(None)
+        }
+    }
+
     /// Start at y = 0 with the initial curvature H₀ (typically the problem's Gauss–Newton matrix).
     pub fn new(
         problem: P,
@@ -128,6 +140,7 @@ impl<P: MinimaxProblem> SqpState<P> {
             eval,
             h,
             start_gradient_scale,
+            gauss_newton_unavailable: false,
             rho: 1.0,
             settings,
             iterations: 0,
@@ -413,6 +426,7 @@ impl<P: MinimaxProblem> SqpState<P> {
                 self.h = regularised(h);
                 return;
             }
+            self.gauss_newton_unavailable = true;
         }
         self.bfgs_update(y_new, eval_new, nu);
     }

@@ -42,6 +42,10 @@ pub trait StageSolver: Send {
     fn tracker_frames(&self) -> PerSide<Option<Isometry3<f64>>> {
         PerSide::default()
     }
+    /// The SQP's curvature (`None`: not an SQP).
+    fn curvature(&self) -> Option<crate::solver::types::Hessian> {
+        None
+    }
 }
 
 impl<P: MinimaxProblem> StageSolver for SqpState<P> {
@@ -68,5 +72,9 @@ impl<P: MinimaxProblem> StageSolver for SqpState<P> {
 
     fn pair_count(&self) -> usize {
         self.problem.pair_count()
+    }
+
+    fn curvature(&self) -> Option<crate::solver::types::Hessian> {
+        Some(self.curvature_used())
     }
 }

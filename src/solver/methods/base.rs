@@ -27,7 +27,11 @@ pub const MINIMAX: BaseMethodSpec = BaseMethodSpec {
     solver: SolverKind::Sqp,
     set_up: |s| {
         let (problem, h0) = s.collaborative_distances()?;
-        sqp_solver(problem, Stage::Base, h0, &s.options)
+        let options = crate::solver::types::StageOptions {
+            hessian: s.options.hessian.resolved(None),
+            ..s.options
+        };
+        sqp_solver(problem, Stage::Base, h0, &options)
     },
 };
 

@@ -3,7 +3,7 @@
 use super::set_up::{ArmSetUp, ArmStage, TreeSetUp, TreeStage, sqp_solver};
 use super::spec::{MethodSpec, Observes, SolverKind};
 use crate::solver::error::CalibrationError;
-use crate::solver::types::Stage;
+use crate::solver::types::{Stage, StageOptions};
 
 pub const MINIMAX: MethodSpec = MethodSpec {
     name: "minimax",
@@ -28,8 +28,15 @@ pub const MINIMAX: MethodSpec = MethodSpec {
 
 fn set_up(s: &ArmSetUp) -> Result<ArmStage, CalibrationError> {
     let start = s.all_distances()?;
+    let options = StageOptions {
+        hessian: s
+            .options
+            .hessian
+            .resolved(Some(start.report.condition_after)),
+        ..s.options
+    };
     Ok(ArmStage {
-        solver: sqp_solver(start.problem, s.stage(), start.h0, &s.options)?,
+        solver: sqp_solver(start.problem, s.stage(), start.h0, &options)?,
         identifiability: start.report,
         reflector: None,
     })
@@ -39,8 +46,13 @@ fn set_up(s: &ArmSetUp) -> Result<ArmStage, CalibrationError> {
 /// distance errors ([`crate::solver::tree_problem`]).
 fn tree_set_up(s: &TreeSetUp) -> Result<TreeStage, CalibrationError> {
     let start = s.all_distances()?;
+    // The tree problem has no Gauss–Newton matrix yet: `auto` is BFGS there (docs/solver.md).
+    let options = StageOptions {
+        hessian: s.options.hessian.resolved(None),
+        ..s.options
+    };
     Ok(TreeStage {
-        solver: sqp_solver(start.problem, Stage::Arms, start.h0, &s.options)?,
+        solver: sqp_solver(start.problem, Stage::Arms, start.h0, &options)?,
         identifiability: start.reports,
     })
 }

@@ -421,6 +421,7 @@ impl CalibrationRun {
             psi_mm2: max_of(&f_mm2),
             f_mm2,
             psi_start_mm2: active.start_psi_mm2,
+            curvature: active.solver.curvature(),
         };
         self.stages.push(summary.clone());
         for o in observers.iter_mut() {

@@ -188,6 +188,12 @@ pub(crate) fn report(plan: &Plan, runs: &[SeedRun], tables: &Tables, elapsed_sec
             .join(", "),
         elapsed_secs
     );
+    let _ = writeln!(
+        out,
+        "Curvature of every SQP stage: the paper's BFGS (Algorithm I as published; `dualcal \
+         calibrate`'s default `--hessian auto` takes Gauss–Newton only on ill-conditioned data, \
+         docs/solver.md).\n"
+    );
     terminations(&mut out, plan, runs);
     out.push('\n');
     for t in &tables.tables {
