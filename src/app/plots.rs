@@ -113,7 +113,8 @@ pub fn labels_inside<'a>(
                 .find(|s| *s <= width)
                 .unwrap_or(p);
             marks.push(egui_plot::GridMark {
-                value: (inner_lo / step).ceil() * step,
+                // `+ 0.0`: a mark at −0.0 would be labelled "-0.0".
+                value: (inner_lo / step).ceil() * step + 0.0,
                 step_size: step.max(label_spacing),
             });
         }
@@ -127,12 +128,20 @@ pub fn framed<'a>(
     x_spacer: impl Fn(egui_plot::GridInput) -> Vec<egui_plot::GridMark> + 'a,
     y_spacer: impl Fn(egui_plot::GridInput) -> Vec<egui_plot::GridMark> + 'a,
 ) -> Plot<'a> {
+    framed_with(plot, (x_spacer, X_LABEL_SPACING_PT), y_spacer)
+}
+
+/// [`framed`] with the x marks' labelled spacing `x_label_pt` (the spacing `x_spacer` keeps).
+fn framed_with<'a>(
+    plot: Plot<'a>,
+    (x_spacer, x_label_pt): (
+        impl Fn(egui_plot::GridInput) -> Vec<egui_plot::GridMark> + 'a,
+        f64,
+    ),
+    y_spacer: impl Fn(egui_plot::GridInput) -> Vec<egui_plot::GridMark> + 'a,
+) -> Plot<'a> {
     plot.grid_spacing(egui::Rangef::new(GRID_SPACING_MIN_PT, 300.0))
-        .x_grid_spacer(labels_inside(
-            x_spacer,
-            X_LABEL_MARGIN_PT,
-            X_LABEL_SPACING_PT,
-        ))
+        .x_grid_spacer(labels_inside(x_spacer, X_LABEL_MARGIN_PT, x_label_pt))
         .y_grid_spacer(labels_inside(
             y_spacer,
             Y_LABEL_MARGIN_PT,
@@ -158,11 +167,18 @@ fn iteration_spacer(input: egui_plot::GridInput) -> Vec<egui_plot::GridMark> {
     marks_apart(input.bounds, raw)
 }
 
+/// The histograms' x marks are closer than [`X_LABEL_SPACING_PT`]: their labels are short ("-0.05",
+/// "10"), so their axis fades labels in from 35 to this many points apart instead of egui_plot's
+/// 60–80, and a histogram ~190 points wide (the three of the Accuracy tab at 1280 × 800) keeps
+/// −0.05, 0, 0.05 or −10, 0, 10 instead of a lone 0.
+const HISTOGRAM_LABEL_SPACING_PT: f64 = 50.0;
+
 /// Histogram axis: marks about a quarter of the range apart (1, 2, 5 × 10^k), so a narrow histogram
 /// still has labels (egui_plot's own marks are powers of ten, whose labels a narrow plot hides), and
 /// far enough apart for their labels to show.
 fn histogram_spacer(input: egui_plot::GridInput) -> Vec<egui_plot::GridMark> {
-    let raw = ((input.bounds.1 - input.bounds.0) / 4.0).max(points(&input, X_LABEL_SPACING_PT));
+    let raw =
+        ((input.bounds.1 - input.bounds.0) / 4.0).max(points(&input, HISTOGRAM_LABEL_SPACING_PT));
     marks_apart(input.bounds, raw)
 }
 
@@ -501,14 +517,23 @@ fn histogram_plot_ui(
         .width(size.x.max(MIN_HISTOGRAM_WIDTH * 0.5))
         .height(size.y.max(MIN_HISTOGRAM_HEIGHT * 0.5))
         .legend(Legend::default())
-        .x_axis_label(if indicator.is_position() {
-            "Δd (mm)"
-        } else {
-            "Δo (rad)"
-        })
+        .custom_x_axes(vec![
+            egui_plot::AxisHints::new_x()
+                .label(if indicator.is_position() {
+                    "Δd (mm)"
+                } else {
+                    "Δo (rad)"
+                })
+                .label_spacing(35.0..=HISTOGRAM_LABEL_SPACING_PT as f32),
+        ])
         .y_axis_label("% of samples")
         .allow_scroll(false);
-    framed(plot, histogram_spacer, percent_spacer).show(ui, |plot| {
+    framed_with(
+        plot,
+        (histogram_spacer, HISTOGRAM_LABEL_SPACING_PT),
+        percent_spacer,
+    )
+    .show(ui, |plot| {
         plot.bar_chart(BarChart::new(name, bars).color(color));
         let t = if indicator.is_position() {
             POS_THRESHOLDS_MM.to_vec()
@@ -699,9 +724,18 @@ mod tests {
             assert!(!x.is_empty());
             assert!(
                 x.iter()
-                    .all(|m| m.step_size / per_pt >= X_LABEL_SPACING_PT - 1e-6)
+                    .all(|m| m.step_size / per_pt >= HISTOGRAM_LABEL_SPACING_PT - 1e-6)
             );
         }
+        // The Accuracy tab's histograms at 1280 × 800 (~190 points for ±0.065 mm): three labelled
+        // marks, not a lone 0.
+        let x = labels_inside(
+            histogram_spacer,
+            X_LABEL_MARGIN_PT,
+            HISTOGRAM_LABEL_SPACING_PT,
+        )(input((-0.065, 0.065), 190.0));
+        let values: Vec<f64> = x.iter().map(|m| m.value).collect();
+        assert_eq!(values.len(), 3, "{values:?}");
         for height_pt in [50.0, 90.0, 300.0] {
             let bounds = (-1.0, 11.0);
             let per_pt = 12.0 / height_pt;
