@@ -27,9 +27,10 @@ pub struct CalibrateArgs {
     pub reflector: Option<String>,
     #[arg(long, value_parser = choice::<QpMethod>(), default_value_t = QpMethod::Exact)]
     pub qp: QpMethod,
-    /// The SQP's curvature: `bfgs` (the paper's update) or `gauss-newton` (Σ λ_k 2 J_kᵀJ_k of the
-    /// active sums, recomputed at each iterate: on ill-conditioned data with unmodelled errors about
-    /// half the iterations; docs/solver.md, "Curvature").
+    /// The SQP's curvature: `auto` (Gauss–Newton on an arm whose data are ill-conditioned, else the
+    /// paper's BFGS), `gauss-newton` (Σ λ_k 2 J_kᵀJ_k of the active sums, recomputed at each iterate:
+    /// on ill-conditioned data with unmodelled errors about half BFGS's iterations) or `bfgs` (the
+    /// paper's update); docs/solver.md, "Curvature".
     #[arg(long, value_parser = choice::<crate::solver::Hessian>(), default_value_t = crate::solver::Hessian::Auto)]
     pub hessian: crate::solver::Hessian,
     /// Where to write the parameters (dualcal-params/1 JSON).
