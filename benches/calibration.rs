@@ -139,15 +139,16 @@ fn identifiability(c: &mut Criterion) {
     for (configs, cal) in [(220usize, 120usize), (1100, 1000)] {
         let sim = simulate_with_robot(&paper_options(7, configs, cal), &robot).expect("simulation");
         let arm = sim.nominal.arm(dualcal::side::Side::Left);
-        let qs: Vec<Vec<f64>> = sim
+        // The calibration split's joint values and measured points.
+        let (qs, measured): (Vec<Vec<f64>>, Vec<_>) = sim
             .dataset
             .arms
             .left
             .measurements
             .iter()
             .filter(|m| m.split == dualcal::dataset::Split::Cal)
-            .map(|m| m.q_rad.clone())
-            .collect();
+            .map(|m| (m.q_rad.clone(), m.tracker_points_mm.clone()))
+            .unzip();
         let jac: Vec<_> = qs.iter().map(|q| arm.reflector_jacobians(q)).collect();
         group.bench_function(format!("start_sample_and_gram_{cal}"), |b| {
             b.iter(|| black_box(pair_jacobian_gram(black_box(&jac), 3000, &[true; 3])))
@@ -162,15 +163,6 @@ fn identifiability(c: &mut Criterion) {
         // What the data cannot tell (issue 47), on every calibration: the unit-noise covariance of
         // the fit, then the weak-parameter rule (that covariance, the workspace's 2000 pairs per
         // reflector, the residuals' noise).
-        let measured: Vec<_> = sim
-            .dataset
-            .arms
-            .left
-            .measurements
-            .iter()
-            .filter(|m| m.split == dualcal::dataset::Split::Cal)
-            .map(|m| m.tracker_points_mm.clone())
-            .collect();
         let identified = at_solution(arm, &qs, &free, 3000, GramMethod::Product).free;
         group.bench_function(format!("predicted_covariance_{cal}"), |b| {
             b.iter(|| {
