@@ -10,32 +10,29 @@ mod common;
 use std::path::Path;
 use std::process::Command;
 
-fn dualcal(args: &[&str]) -> String {
-    let out = Command::new(env!("CARGO_BIN_EXE_dualcal"))
-        .args(args)
-        .output()
-        .expect("run dualcal");
+/// The standard output of `command`, which must succeed (else its standard error, as `what`).
+fn succeed(mut command: Command, what: &str) -> String {
+    let out = command.output().unwrap_or_else(|e| panic!("{what}: {e}"));
     assert!(
         out.status.success(),
-        "dualcal {args:?}: {}",
+        "{what}: {}",
         String::from_utf8_lossy(&out.stderr)
     );
     String::from_utf8(out.stdout).expect("utf-8")
 }
 
+fn dualcal(args: &[&str]) -> String {
+    let mut command = Command::new(env!("CARGO_BIN_EXE_dualcal"));
+    command.args(args);
+    succeed(command, &format!("dualcal {args:?}"))
+}
+
 fn indep_sim(args: &[&str]) -> String {
-    let tool = Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/indep_sim.py");
-    let out = Command::new(common::python("numpy"))
-        .arg(tool)
-        .args(args)
-        .output()
-        .expect("run tools/indep_sim.py");
-    assert!(
-        out.status.success(),
-        "indep_sim.py {args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout).expect("utf-8")
+    let mut command = Command::new(common::python("numpy"));
+    command
+        .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("tools/indep_sim.py"))
+        .args(args);
+    succeed(command, &format!("indep_sim.py {args:?}"))
 }
 
 /// Both arms' mean verification relative positioning RMS of `dualcal evaluate … --json`.

@@ -13,7 +13,6 @@ use pyo3::types::PyDict;
 use std::collections::HashMap;
 use std::path::PathBuf;
 
-/// `name`, one of `known` (by their names), else an error naming the option.
 /// The engine's value spelled `name` (its `Choice` table, as the command line reads it).
 fn choice<T: dualcal::choice::Choice>(what: &str, name: &str) -> PyResult<T> {
     T::parse_choice(name).map_err(|e| {
@@ -24,6 +23,7 @@ fn choice<T: dualcal::choice::Choice>(what: &str, name: &str) -> PyResult<T> {
     })
 }
 
+/// `name`, one of `known` (by their names), else an error naming the option.
 fn one_of<T: Copy>(what: &str, name: &str, known: &[(&str, T)]) -> PyResult<T> {
     known
         .iter()
