@@ -119,9 +119,15 @@ impl crate::solver::Observer for UncertaintyBesideStep2<'_, '_> {
             };
             let (dataset, settings, early) = (self.dataset, self.settings.clone(), self.early);
             let (arm, free) = (model.arm(side).clone(), report.free.clone());
+            let sums = run.pair_sums(side);
             self.scope.spawn(move |_| {
-                let value = crate::solver::uncertainty::EarlyArmUncertainty::new(
-                    dataset, &settings, side, arm, free,
+                let value = crate::solver::uncertainty::EarlyArmUncertainty::reusing(
+                    dataset,
+                    &settings,
+                    side,
+                    arm,
+                    free,
+                    sums.as_deref(),
                 );
                 if let Ok(mut early) = early.lock() {
                     early[side] = Some(value);

@@ -22,7 +22,7 @@
 //! the flange turned about the two axes that would move it; for a DH parameter, how far its joint
 //! moved of its range; otherwise what it trades with.
 
-use super::uncertainty::{MAX_CONFIGURATIONS, predicted_covariance};
+use super::uncertainty::{PairSums, predicted_covariance, predicted_covariance_of};
 use crate::kinematics::{ArmJacobians, ArmModel, N_DH};
 use crate::par::prelude::*;
 use nalgebra::{DMatrix, Vector3};
@@ -53,10 +53,19 @@ pub fn weak_parameters(
     measured: &[Vec<Vector3<f64>>],
     free: &[usize],
 ) -> Vec<WeakParameter> {
-    let Some(noise_mm) = residual_noise_mm(arm, qs, measured, free.len()) else {
+    weak_parameters_of(arm, qs, &PairSums::new(arm, qs, measured, free))
+}
+
+/// [`weak_parameters`] with the fit's pair sums at hand (computed on `qs` and the measured points;
+/// the free parameters are theirs).
+pub fn weak_parameters_of(arm: &ArmModel, qs: &[Vec<f64>], sums: &PairSums) -> Vec<WeakParameter> {
+    let free = sums.free();
+    let Some(noise_mm) = sums.point_sigma_mm() else {
         return Vec::new();
     };
-    let Some((cov, ratios)) = covariance_and_ratios(arm, qs, free) else {
+    let Some((cov, ratios)) =
+        covariance_and_ratios(arm, free, predicted_covariance_of(arm, sums, 1.0))
+    else {
         return Vec::new();
     };
     let p = free.len();
@@ -87,16 +96,17 @@ pub fn weak_parameters(
 /// Each of `free`'s workspace effect over the tracker's noise per axis (steps 1–3 of the module
 /// documentation): the figure [`WEAK_NOISE_RATIO`] bounds. `None` where the fit is singular.
 pub fn workspace_noise_ratios(arm: &ArmModel, qs: &[Vec<f64>], free: &[usize]) -> Option<Vec<f64>> {
-    covariance_and_ratios(arm, qs, free).map(|(_, ratios)| ratios)
+    covariance_and_ratios(arm, free, predicted_covariance(arm, qs, free, 1.0))
+        .map(|(_, ratios)| ratios)
 }
 
-/// The unit-noise covariance of the fit on `qs` and [`workspace_noise_ratios`].
+/// The unit-noise covariance `cov` of the fit and [`workspace_noise_ratios`].
 fn covariance_and_ratios(
     arm: &ArmModel,
-    qs: &[Vec<f64>],
     free: &[usize],
+    cov: Option<DMatrix<f64>>,
 ) -> Option<(DMatrix<f64>, Vec<f64>)> {
-    let cov = predicted_covariance(arm, qs, free, 1.0)?;
+    let cov = cov?;
     let p = free.len();
     let sigma: Vec<f64> = (0..p).map(|c| cov[(c, c)].max(0.0).sqrt()).collect();
     // Column j: the parameters' move when θ_j moves by its 1σ (unit noise).
@@ -109,39 +119,6 @@ fn covariance_and_ratios(
     });
     let ratios = workspace_ratios(arm, free, &v);
     Some((cov, ratios))
-}
-
-/// The noise per axis the residuals of `arm` on `measured` show, mm: `Σ e² / (2 (rows − p))` over
-/// the pairs of at most [`MAX_CONFIGURATIONS`] configurations (as the uncertainty estimates it).
-fn residual_noise_mm(
-    arm: &ArmModel,
-    qs: &[Vec<f64>],
-    measured: &[Vec<Vector3<f64>>],
-    p: usize,
-) -> Option<f64> {
-    let n_all = qs.len().min(measured.len());
-    let stride = n_all.div_ceil(MAX_CONFIGURATIONS).max(1);
-    let used: Vec<usize> = (0..n_all).step_by(stride).collect();
-    let model: Vec<Vec<Vector3<f64>>> = used
-        .iter()
-        .map(|&i| arm.reflector_fk(&qs[i]).points_mm)
-        .collect();
-    let (mut cost, mut rows) = (0.0, 0usize);
-    for a in 0..used.len() {
-        for b in a + 1..used.len() {
-            for k in 0..arm.reflector_count() {
-                let m = (measured[used[a]][k] - measured[used[b]][k]).norm();
-                let d = (model[a][k] - model[b][k]).norm();
-                if m > 0.0 && d > 0.0 {
-                    cost += (m - d) * (m - d);
-                    rows += 1;
-                }
-            }
-        }
-    }
-    let dof = rows.checked_sub(p).filter(|&d| d > 0)?;
-    let noise = (cost / (2.0 * dof as f64)).sqrt();
-    (noise.is_finite() && noise > 0.0).then_some(noise)
 }
 
 /// Per column of `v` (the free parameters' 1σ moves), the RMS distance change across the workspace
@@ -166,34 +143,53 @@ fn workspace_ratios(arm: &ArmModel, free: &[usize], v: &DMatrix<f64>) -> Vec<f64
     let jac: Vec<ArmJacobians> = qs.par_iter().map(|q| arm.reflector_jacobians(q)).collect();
     let p = free.len();
     let n = jac.len();
-    // The rows g = (J_a − J_b)ᵀ u of every pair and reflector, then every column's move `G v_j` at
-    // once (one matrix product: the rows' dot products with each v_j one by one were three quarters
-    // of the analysis' time).
+    let reflectors = arm.reflector_count();
+    // A pair's distance change under column j's move is `uᵀ (J_a − J_b) v_j = uᵀ (W_a − W_b)_j` with
+    // `W = J V` per configuration and reflector: one matrix product of V by the stacked Jacobian
+    // rows (3 per configuration and reflector, as columns), then 6 products per pair and column —
+    // instead of a p-long row per pair multiplied by V.
+    let mut stack = DMatrix::<f64>::zeros(p, 3 * n * reflectors);
+    for (a, j) in jac.iter().enumerate() {
+        for (k, m) in j.jacobians.iter().enumerate() {
+            for t in 0..3 {
+                let mut column = stack.column_mut(3 * (a * reflectors + k) + t);
+                for (c, &f) in free.iter().enumerate() {
+                    column[c] = m[(t, f)];
+                }
+            }
+        }
+    }
+    // Column 3 (a R + k) + t: row t of W for configuration a and reflector k.
+    let w = v.transpose() * &stack;
+    let w = w.as_slice();
     let partners = PARTNERS.min(n.saturating_sub(1));
-    let mut g = DMatrix::<f64>::zeros(n * partners * arm.reflector_count(), p);
+    let mut squares = vec![0.0; p];
     let mut rows = 0usize;
     for a in 0..n {
         for s in 1..=partners {
             let b = (a + s) % n;
-            for k in 0..arm.reflector_count() {
+            for k in 0..reflectors {
                 let d = jac[a].fk.points_mm[k] - jac[b].fk.points_mm[k];
                 let dist = d.norm();
                 if dist <= 0.0 {
                     continue;
                 }
                 let u = d / dist;
-                let (ja, jb) = (&jac[a].jacobians[k], &jac[b].jacobians[k]);
-                for (c, &f) in free.iter().enumerate() {
-                    g[(rows, c)] = (ja.column(f) - jb.column(f)).dot(&u);
+                let (ra, rb) = (3 * (a * reflectors + k) * p, 3 * (b * reflectors + k) * p);
+                let (wa, wb) = (&w[ra..ra + 3 * p], &w[rb..rb + 3 * p]);
+                for (c, sq) in squares.iter_mut().enumerate() {
+                    let moved = u.x * (wa[c] - wb[c])
+                        + u.y * (wa[p + c] - wb[p + c])
+                        + u.z * (wa[2 * p + c] - wb[2 * p + c]);
+                    *sq += moved * moved;
                 }
                 rows += 1;
             }
         }
     }
-    let moved = g.rows(0, rows) * v;
-    moved
-        .column_iter()
-        .map(|m| (m.norm_squared() / rows.max(1) as f64).sqrt())
+    squares
+        .iter()
+        .map(|sq| (sq / rows.max(1) as f64).sqrt())
         .collect()
 }
 

@@ -151,6 +151,7 @@ impl CalibrationRun {
             diagnostics: Vec::new(),
             weak: Default::default(),
             held: Default::default(),
+            pair_sums: Default::default(),
             reflector_used: Default::default(),
             tracker_from_base: Default::default(),
             base_not_measurable: self.base_not_measurable.clone(),
@@ -180,6 +181,7 @@ impl CalibrationRun {
         self.identifiability_at_solution[side] = other.identifiability_at_solution[side].take();
         self.weak[side] = std::mem::take(&mut other.weak[side]);
         self.held[side] = std::mem::take(&mut other.held[side]);
+        self.pair_sums[side] = other.pair_sums[side].take();
         self.reflector_used[side] = other.reflector_used[side];
         if other.tracker_from_base[side].is_some() {
             self.tracker_from_base[side] = other.tracker_from_base[side];

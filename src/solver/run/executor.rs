@@ -11,7 +11,8 @@ use crate::kinematics::{ArmModel, DualArmModel, SharedJoints};
 use crate::side::{PerSide, Side};
 use crate::solver::algorithms::stage::StageSolver;
 use crate::solver::analysis::identifiability::{self, IdentifiabilityReport};
-use crate::solver::analysis::weak::{WeakParameter, weak_parameters};
+use crate::solver::analysis::uncertainty::PairSums;
+use crate::solver::analysis::weak::{WeakParameter, weak_parameters_of};
 use crate::solver::error::CalibrationError;
 use crate::solver::methods::set_up::{
     ArmData, ArmSetUp, BaseSetUp, IDENTIFIABILITY_PAIRS, TreeSetUp,
@@ -123,6 +124,9 @@ pub struct CalibrationRun {
     pub(super) weak: PerSide<Vec<WeakParameter>>,
     /// Each arm's parameters held at their nominal values as weak (step 1 solved again without them).
     pub(super) held: PerSide<Vec<usize>>,
+    /// Each arm's pair sums at its step-1 solution, from the weak-parameter analysis (`None` where it
+    /// did not run, or held parameters and the arm was solved again).
+    pub(super) pair_sums: PerSide<Option<Arc<PairSums>>>,
     /// The reflector of each arm's single-reflector fit.
     pub(super) reflector_used: PerSide<Option<Reflector>>,
     /// Each arm's base in the tracker frame, where the method identified it.
@@ -209,6 +213,7 @@ impl CalibrationRun {
             diagnostics: Vec::new(),
             weak: PerSide::default(),
             held: PerSide::default(),
+            pair_sums: PerSide::default(),
             reflector_used: PerSide::default(),
             tracker_from_base: PerSide::default(),
             cancel,
@@ -243,6 +248,14 @@ impl CalibrationRun {
     /// method without one).
     pub fn identifiability(&self, side: Side) -> Option<&IdentifiabilityReport> {
         self.identifiability[side].as_ref()
+    }
+
+    /// The pair sums of `side`'s step-1 fit at its solution (its free parameters, the configurations it
+    /// fitted), as the weak-parameter analysis computed them: a method's uncertainty of that arm
+    /// starts from them ([`crate::solver::uncertainty::PairSums::matches`] says whether they are the
+    /// arm's). `None` before that analysis, where it did not run, or after held parameters.
+    pub fn pair_sums(&self, side: Side) -> Option<Arc<PairSums>> {
+        self.pair_sums[side].clone()
     }
 
     /// Outer iterations done in the current stage.
@@ -621,13 +634,11 @@ impl CalibrationRun {
             return false;
         };
         let input = &self.inputs[side];
-        let mut weak = weak_parameters(
-            self.committed.arm(side),
-            &input.qs,
-            &input.measured,
-            &report.free,
-        );
+        let arm = self.committed.arm(side);
+        let sums = PairSums::new(arm, &input.qs, &input.measured, &report.free);
+        let mut weak = weak_parameters_of(arm, &input.qs, &sums);
         let hold = !weak.is_empty() && !self.settings.keep_weak;
+        self.pair_sums[side] = (!hold).then(|| Arc::new(sums));
         if hold {
             for w in &mut weak {
                 w.held = true;

@@ -30,8 +30,12 @@
 
 use crate::kinematics::{ArmJacobians, ArmModel};
 use crate::par::prelude::*;
-use nalgebra::{DMatrix, DVector, Matrix3xX, Vector3};
+use nalgebra::{DMatrix, DVector, Vector3};
 use serde::{Deserialize, Serialize};
+
+mod sums;
+use sums::Sums;
+pub use sums::{Directions, PairSums};
 
 /// At most this many configurations per arm enter the sums (every k-th beyond; the pair sums grow as
 /// n², and 80 keep both arms at ~3 ms).
@@ -81,19 +85,6 @@ impl ArmUncertainty {
             .filter(|p| p.unit == unit)
             .max_by(|a, b| a.sigma.total_cmp(&b.sigma))
     }
-}
-
-/// Sums over the pairs of the configurations used.
-struct Sums {
-    jtj: DMatrix<f64>,
-    meat: DMatrix<f64>,
-    /// Σ r² and the row count over the reflectors of non-zero weight.
-    cost: f64,
-    rows: usize,
-    /// Per reflector (every one, whatever its weight): F_k = Σ r² and its gradient `2 Σ r ∂r/∂x`
-    /// over the free parameters.
-    f_k: Vec<f64>,
-    g_k: Vec<DVector<f64>>,
 }
 
 /// The uncertainty of `arm`'s parameters `free` (indices into its parameter vector) fitted to the
@@ -201,8 +192,16 @@ struct Covariance {
     jtj: DMatrix<f64>,
 }
 
-/// The sandwich covariance of the least-squares distance fit of `arm` at `qs` against `measured`
-/// (at most [`MAX_CONFIGURATIONS`] of them in the sums, the covariance scaled by the fraction used).
+/// The configurations of `n_all` that enter the sums: all up to [`MAX_CONFIGURATIONS`], else every
+/// k-th.
+fn used_configurations(n_all: usize) -> Vec<usize> {
+    let stride = n_all.div_ceil(MAX_CONFIGURATIONS).max(1);
+    (0..n_all).step_by(stride).collect()
+}
+
+/// The sandwich covariance of the distance fit of `arm` at `qs` against `measured`, weighed as
+/// `weighting` says (at most [`MAX_CONFIGURATIONS`] of them in the sums, the covariance scaled by the
+/// fraction used).
 fn covariance(
     arm: &ArmModel,
     qs: &[Vec<f64>],
@@ -211,40 +210,46 @@ fn covariance(
     point_sigma_mm: Option<f64>,
     weighting: &Weighting,
 ) -> Option<Covariance> {
-    let n_all = qs.len().min(measured.len());
-    let stride = n_all.div_ceil(MAX_CONFIGURATIONS).max(1);
-    let used: Vec<usize> = (0..n_all).step_by(stride).collect();
-    let (n, p) = (used.len(), free.len());
+    let sums = PairSums::new(arm, qs, measured, free);
+    covariance_of(arm, &sums, point_sigma_mm, weighting, Directions::Measured)
+}
+
+/// [`covariance`] of sums at hand, the sandwich's middle of `directions`.
+fn covariance_of(
+    arm: &ArmModel,
+    sums: &PairSums,
+    point_sigma_mm: Option<f64>,
+    weighting: &Weighting,
+    directions: Directions,
+) -> Option<Covariance> {
+    let (n_all, n) = sums.configurations();
+    let free = sums.free();
+    let p = free.len();
     if n < 3 || p == 0 {
         return None;
     }
-    let jac: Vec<ArmJacobians> = used
-        .par_iter()
-        .map(|&i| arm.reflector_jacobians(&qs[i]))
-        .collect();
-    let points: Vec<&Vec<Vector3<f64>>> = used.iter().map(|&i| &measured[i]).collect();
-    let sums = pair_sums(&jac, &points, free, &weighting.first_weights(arm));
-    let dof = sums.rows.checked_sub(p).filter(|&d| d > 0)?;
+    let first = sums.weighed(&weighting.first_weights(arm), directions);
+    let dof = first.rows.checked_sub(p).filter(|&d| d > 0)?;
     let point_var = match point_sigma_mm {
         Some(s) => s * s,
-        None => sums.cost / (2.0 * dof as f64),
+        None => first.cost / (2.0 * dof as f64),
     };
     // The minimax: the sums again, each reflector weighed by its multiplier at the solution.
     let weighted = match weighting {
         Weighting::Minimax => {
             // A reflector below the floor (λ_k = 0: F_k not active, or a kink) still fits its own
             // coordinates; the floor keeps them in the covariance.
-            let lambda: Vec<f64> = minimax_weights(arm, free, &sums)
+            let lambda: Vec<f64> = minimax_weights(arm, free, &first)
                 .iter()
                 .map(|l| l.max(MINIMAX_WEIGHT_FLOOR))
                 .collect();
-            Some(pair_sums(&jac, &points, free, &lambda))
+            Some(sums.weighed(&lambda, directions))
         }
         _ => None,
     };
     let (a, b) = weighted
         .as_ref()
-        .map_or((&sums.jtj, &sums.meat), |w| (&w.jtj, &w.meat));
+        .map_or((&first.jtj, &first.meat), |w| (&w.jtj, &w.meat));
     let inverse = a.clone().cholesky()?.inverse();
     let mut cov = &inverse * b * &inverse * point_var;
     if n < n_all {
@@ -255,7 +260,7 @@ fn covariance(
         point_var,
         configurations: n_all,
         used: n,
-        jtj: sums.jtj,
+        jtj: first.jtj,
     })
 }
 
@@ -268,13 +273,22 @@ pub fn predicted_covariance(
     point_sigma_mm: f64,
 ) -> Option<DMatrix<f64>> {
     let points: Vec<Vec<Vector3<f64>>> = qs.iter().map(|q| arm.reflector_fk(q).points_mm).collect();
-    covariance(
+    predicted_covariance_of(arm, &PairSums::new(arm, qs, &points, free), point_sigma_mm)
+}
+
+/// [`predicted_covariance`] of the configurations `sums` were computed on (the model's directions in
+/// the sandwich's middle; the measured points enter nothing else).
+pub fn predicted_covariance_of(
+    arm: &ArmModel,
+    sums: &PairSums,
+    point_sigma_mm: f64,
+) -> Option<DMatrix<f64>> {
+    covariance_of(
         arm,
-        qs,
-        &points,
-        free,
+        sums,
         Some(point_sigma_mm),
         &Weighting::LeastSquares,
+        Directions::Model,
     )
     .map(|c| c.cov)
 }
@@ -375,110 +389,6 @@ fn summarise(
     }
 }
 
-/// JᵀJ, the sandwich's middle `Σ A Aᵀ`, Σ r² and the row count, per configuration in parallel (then
-/// summed in order): the rows R of configuration i with every other j (`A_i,k = Rᵀ Û`) and, for
-/// j > i, its share of JᵀJ (`R₊ᵀ R₊`), as matrix products into reused buffers.
-fn pair_sums(
-    jac: &[ArmJacobians],
-    measured: &[&Vec<Vector3<f64>>],
-    free: &[usize],
-    weights: &[f64],
-) -> Sums {
-    let (n, p, reflectors) = (jac.len(), free.len(), weights.len());
-    let zero = || Sums {
-        jtj: DMatrix::zeros(p, p),
-        meat: DMatrix::zeros(p, p),
-        cost: 0.0,
-        rows: 0,
-        f_k: vec![0.0; reflectors],
-        g_k: vec![DVector::zeros(p); reflectors],
-    };
-    // The free columns of every configuration's reflector Jacobians, contiguous (3 × p each).
-    let free_jac: Vec<Vec<Matrix3xX<f64>>> = jac
-        .iter()
-        .map(|j| {
-            j.jacobians
-                .iter()
-                .map(|m| Matrix3xX::from_fn(p, |r, c| m[(r, free[c])]))
-                .collect()
-        })
-        .collect();
-    let mut sums = (0..n)
-        .into_par_iter()
-        .map(|i| {
-            let mut s = zero();
-            let mut r = DMatrix::<f64>::zeros(n - 1, p);
-            let mut u = DMatrix::<f64>::zeros(n - 1, 3);
-            let mut a = DMatrix::<f64>::zeros(p, 3);
-            for (k, &w) in weights.iter().enumerate() {
-                // Rows with j > i first (they enter JᵀJ), then j < i.
-                for (row, j) in (i + 1..n).chain(0..i).enumerate() {
-                    let v = jac[i].fk.points_mm[k] - jac[j].fk.points_mm[k];
-                    let m = measured[i][k] - measured[j][k];
-                    let (dist, measured_dist) = (v.norm(), m.norm());
-                    if !(dist > 0.0 && measured_dist > 0.0) {
-                        r.row_mut(row).fill(0.0);
-                        u.row_mut(row).fill(0.0);
-                        continue;
-                    }
-                    let unit = v / dist;
-                    let (ji, jj) = (free_jac[i][k].as_slice(), free_jac[j][k].as_slice());
-                    for c in 0..p {
-                        let d = |t: usize| ji[3 * c + t] - jj[3 * c + t];
-                        r[(row, c)] = -(d(0) * unit.x + d(1) * unit.y + d(2) * unit.z);
-                    }
-                    let um = m / measured_dist;
-                    for c in 0..3 {
-                        u[(row, c)] = um[c];
-                    }
-                    if j > i {
-                        let e = measured_dist - dist;
-                        s.f_k[k] += e * e;
-                        s.g_k[k].axpy(2.0 * e, &r.row(row).transpose(), 1.0);
-                        if w > 0.0 {
-                            s.cost += e * e;
-                            s.rows += 1;
-                        }
-                    }
-                }
-                if w == 0.0 {
-                    continue;
-                }
-                a.gemm_tr(w, &r, &u, 0.0);
-                for c in 0..3 {
-                    s.meat.ger(1.0, &a.column(c), &a.column(c), 1.0);
-                }
-                // `jtj.gemm_tr(1.0, &upper, &upper, 1.0)` on the upper triangle: that adds the dot of
-                // columns c1, c2 to (c1, c2) and the same dot, operand for operand, to (c2, c1) — the
-                // lower triangle is the upper's mirror to the bit, filled in once at the end.
-                let upper = r.rows(0, n - 1 - i);
-                for c2 in 0..p {
-                    let column = upper.column(c2);
-                    for c1 in 0..=c2 {
-                        s.jtj[(c1, c2)] += w * upper.column(c1).dot(&column);
-                    }
-                }
-            }
-            s
-        })
-        // Summed in configuration order: the same bits whatever the threads.
-        .collect::<Vec<Sums>>()
-        .into_iter()
-        .fold(zero(), |mut a, b| {
-            a.jtj += b.jtj;
-            a.meat += b.meat;
-            a.cost += b.cost;
-            a.rows += b.rows;
-            for k in 0..reflectors {
-                a.f_k[k] += b.f_k[k];
-                a.g_k[k] += &b.g_k[k];
-            }
-            a
-        });
-    sums.jtj.fill_lower_triangle_with_upper_triangle();
-    sums
-}
-
 /// Condition number of `JᵀJ` with unit-scaled columns, as of J: √(λ_max / λ_min).
 fn scaled_condition(jtj: &DMatrix<f64>) -> f64 {
     let d: Vec<f64> = (0..jtj.nrows())
@@ -548,10 +458,20 @@ fn arm_uncertainty_on(
     free: &[usize],
     weighting: &Weighting,
 ) -> Option<ArmUncertainty> {
-    let ms = kept.arm(side).select(settings.split);
-    let qs: Vec<Vec<f64>> = ms.iter().map(|m| m.q_rad.clone()).collect();
-    let measured: Vec<Vec<Vector3<f64>>> = ms.iter().map(|m| m.tracker_points_mm.clone()).collect();
+    let (qs, measured) = fitted(kept, settings, side);
     arm_uncertainty_weighted(arm, &qs, &measured, free, weighting)
+}
+
+/// The joint values and measured points of `side`'s configurations of `kept` that `settings` fit.
+fn fitted(
+    kept: &crate::dataset::Dataset,
+    settings: &crate::solver::settings::CalibrationSettings,
+    side: crate::side::Side,
+) -> (Vec<Vec<f64>>, Vec<Vec<Vector3<f64>>>) {
+    let ms = kept.arm(side).select(settings.split);
+    let qs = ms.iter().map(|m| m.q_rad.clone()).collect();
+    let measured = ms.iter().map(|m| m.tracker_points_mm.clone()).collect();
+    (qs, measured)
 }
 
 /// An arm's uncertainty computed as soon as its step-1 stage ended (beside step 2, which does not
@@ -574,10 +494,28 @@ impl EarlyArmUncertainty {
         arm: ArmModel,
         free: Vec<usize>,
     ) -> Self {
+        Self::reusing(dataset, settings, side, arm, free, None)
+    }
+
+    /// [`EarlyArmUncertainty::new`] from the pair sums of the run's weak-parameter analysis
+    /// ([`crate::solver::CalibrationRun::pair_sums`]) where they are this arm's (the same numbers,
+    /// without the second pass over the pairs); computed afresh otherwise.
+    pub fn reusing(
+        dataset: &crate::dataset::Dataset,
+        settings: &crate::solver::settings::CalibrationSettings,
+        side: crate::side::Side,
+        arm: ArmModel,
+        free: Vec<usize>,
+        sums: Option<&PairSums>,
+    ) -> Self {
         let kept = dataset.excluding(&settings.exclude);
         // A single-reflector method's reflector is known once it ran: computed again then.
         let weighting = Weighting::of(settings.method, None).unwrap_or(Weighting::LeastSquares);
-        let value = arm_uncertainty_on(&kept, settings, side, &arm, &free, &weighting);
+        let (qs, measured) = fitted(&kept, settings, side);
+        let value = match sums.filter(|s| s.matches(&arm, &qs, &measured, &free)) {
+            Some(sums) => arm_uncertainty_from(&arm, sums, &weighting),
+            None => arm_uncertainty_weighted(&arm, &qs, &measured, &free, &weighting),
+        };
         Self {
             arm,
             free,
@@ -635,7 +573,8 @@ fn tree_uncertainty(
         let points: Vec<&Vec<Vector3<f64>>> =
             used.iter().map(|&i| &ms[i].tracker_points_mm).collect();
         let weights = vec![1.0; arm.reflector_count()];
-        let sums = pair_sums(&jac, &points, &reports[side].free, &weights);
+        let sums = PairSums::from_jacobians(arm, &jac, &points, &reports[side].free, n_all)
+            .weighed(&weights, Directions::Measured);
         let c = &cols[side];
         for i in 0..c.len() {
             for j in 0..c.len() {
@@ -835,6 +774,24 @@ pub fn arm_uncertainty_weighted(
     ))
 }
 
+/// [`arm_uncertainty_weighted`] of the fit's pair sums at hand.
+pub fn arm_uncertainty_from(
+    arm: &ArmModel,
+    sums: &PairSums,
+    weighting: &Weighting,
+) -> Option<ArmUncertainty> {
+    let fit = covariance_of(arm, sums, None, weighting, Directions::Measured)?;
+    Some(summarise(
+        arm,
+        sums.free(),
+        &fit.cov,
+        fit.point_var,
+        fit.used,
+        fit.configurations,
+        &fit.jtj,
+    ))
+}
+
 /// The minimax's multipliers ([`Weighting::Minimax`]) of `arm` at `qs` against `measured`: one per
 /// reflector, summing to one.
 pub fn minimax_multipliers(
@@ -845,8 +802,9 @@ pub fn minimax_multipliers(
 ) -> Vec<f64> {
     let jac: Vec<ArmJacobians> = qs.iter().map(|q| arm.reflector_jacobians(q)).collect();
     let points: Vec<&Vec<Vector3<f64>>> = measured.iter().collect();
-    let sums = pair_sums(&jac, &points, free, &vec![1.0; arm.reflector_count()]);
-    minimax_weights(arm, free, &sums)
+    let sums = PairSums::from_jacobians(arm, &jac, &points, free, qs.len());
+    let ones = vec![1.0; arm.reflector_count()];
+    minimax_weights(arm, free, &sums.weighed(&ones, Directions::Measured))
 }
 
 /// The uncertainty of an absolute method's fit (`pose`, `position`) of `side`: its own residuals and
