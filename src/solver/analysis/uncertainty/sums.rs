@@ -16,12 +16,23 @@
 //! gradients first, and no second pass). A pair whose measured or model points coincide has no row.
 //!
 //! Work: regrouped by configuration (`one_reflector`), three matrix products of 3n × 3n by 3n × p per
-//! reflector instead of a p × p update per pair (n ≤ [`super::MAX_CONFIGURATIONS`]); the reflectors
+//! reflector instead of a p × p update per pair (n ≤ [`MAX_CONFIGURATIONS`]); the reflectors
 //! side by side. The matrices are made symmetric to the bit (upper triangle mirrored).
 
 use crate::kinematics::{ArmJacobians, ArmModel};
 use crate::par::prelude::*;
 use nalgebra::{DMatrix, DVector, Vector3};
+
+/// At most this many configurations per arm enter the sums (every k-th beyond; the pair sums grow as
+/// n², and 80 keep both arms at ~3 ms).
+pub const MAX_CONFIGURATIONS: usize = 80;
+
+/// The configurations of `n_all` that enter the sums: all up to [`MAX_CONFIGURATIONS`], else every
+/// k-th.
+pub(super) fn used_configurations(n_all: usize) -> Vec<usize> {
+    let stride = n_all.div_ceil(MAX_CONFIGURATIONS).max(1);
+    (0..n_all).step_by(stride).collect()
+}
 
 /// Which unit directions the sandwich's middle uses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -62,7 +73,7 @@ pub(super) struct Sums {
 pub struct PairSums {
     reflectors: Vec<ReflectorSums>,
     /// What they were computed for: the arm's parameter vector, the free parameters and the number of
-    /// configurations given (before the stride of [`super::MAX_CONFIGURATIONS`]).
+    /// configurations given (before the stride of [`MAX_CONFIGURATIONS`]).
     params: DVector<f64>,
     free: Vec<usize>,
     configurations: usize,
@@ -73,7 +84,7 @@ pub struct PairSums {
 }
 
 impl PairSums {
-    /// The sums of `arm` at the configurations `qs` (every k-th beyond [`super::MAX_CONFIGURATIONS`])
+    /// The sums of `arm` at the configurations `qs` (every k-th beyond [`MAX_CONFIGURATIONS`])
     /// against `measured` (one point per reflector each), over the parameters `free`.
     pub fn new(
         arm: &ArmModel,
@@ -82,7 +93,7 @@ impl PairSums {
         free: &[usize],
     ) -> Self {
         let n_all = qs.len().min(measured.len());
-        let used = super::used_configurations(n_all);
+        let used = used_configurations(n_all);
         let jac: Vec<ArmJacobians> = used
             .par_iter()
             .map(|&i| arm.reflector_jacobians(&qs[i]))
@@ -183,7 +194,7 @@ impl PairSums {
 fn data_hash(qs: &[Vec<f64>], measured: &[Vec<Vector3<f64>>]) -> u64 {
     use std::hash::{Hash, Hasher};
     let mut h = std::collections::hash_map::DefaultHasher::new();
-    for i in super::used_configurations(qs.len().min(measured.len())) {
+    for i in used_configurations(qs.len().min(measured.len())) {
         qs[i].iter().for_each(|v| v.to_bits().hash(&mut h));
         measured[i]
             .iter()
