@@ -5,11 +5,13 @@ use crate::kinematics::DualArmModel;
 use crate::metrics::{ConfigResiduals, MetricsError, PairKind, PairResiduals};
 use crate::side::{PerSide, Side};
 use crate::solver::analysis::identifiability::IdentifiabilityReport;
+use crate::solver::analysis::uncertainty::PairSums;
 use crate::solver::settings::CalibrationSettings;
 use crate::solver::types::{
     IterationRecord, QpMethod, Reflector, Stage, StageSummary, Termination, WeakParameter,
 };
 use nalgebra::Isometry3;
+use std::sync::Arc;
 
 /// The stages of a two-step calibration, in the order they run (arms that share no joint).
 pub const STAGES: [Stage; 3] = [Stage::Arm(Side::Left), Stage::Arm(Side::Right), Stage::Base];
@@ -56,6 +58,11 @@ pub struct CalibrationResult {
     /// across the workspace; held at their nominal values unless the settings keep them
     /// ([`CalibrationSettings::keep_weak`]). Empty for the methods the analysis does not cover.
     pub weak: PerSide<Vec<WeakParameter>>,
+    /// Each arm's pair sums at its step-1 solution, from the weak-parameter analysis
+    /// ([`crate::solver::CalibrationRun::pair_sums`]): [`crate::solver::uncertainty::for_result`]
+    /// takes the arm's σ from them instead of a pass of its own. `None` where the analysis did not run
+    /// or the arm was solved again with held parameters.
+    pub pair_sums: PerSide<Option<Arc<PairSums>>>,
     pub elapsed_secs: f64,
 }
 

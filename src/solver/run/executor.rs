@@ -666,6 +666,7 @@ impl CalibrationRun {
             base_not_measurable: self.base_not_measurable.clone(),
             alone: self.alone,
             weak: self.weak.clone(),
+            pair_sums: self.pair_sums.clone(),
             elapsed_secs: self.started.elapsed().as_secs_f64(),
         }
     }

@@ -47,21 +47,15 @@ pub fn for_result_reusing(
         {
             return early.value;
         }
-        arm_uncertainty_on(&kept, settings, side, arm, &report.free, &weighting)
+        let (qs, measured) = fitted(&kept, settings, side);
+        match result.pair_sums[side]
+            .as_deref()
+            .filter(|s| s.matches(arm, &qs, &measured, &report.free))
+        {
+            Some(sums) => arm_uncertainty_from(arm, sums, &weighting),
+            None => arm_uncertainty_weighted(arm, &qs, &measured, &report.free, &weighting),
+        }
     })
-}
-
-/// [`arm_uncertainty`] of `side`'s fitted configurations of `kept` (the split `settings` fits).
-pub(super) fn arm_uncertainty_on(
-    kept: &crate::dataset::Dataset,
-    settings: &crate::solver::settings::CalibrationSettings,
-    side: crate::side::Side,
-    arm: &ArmModel,
-    free: &[usize],
-    weighting: &Weighting,
-) -> Option<ArmUncertainty> {
-    let (qs, measured) = fitted(kept, settings, side);
-    arm_uncertainty_weighted(arm, &qs, &measured, free, weighting)
 }
 
 /// The joint values and measured points of `side`'s configurations of `kept` that `settings` fit.
