@@ -44,6 +44,14 @@ fn predicted_and_spread(method: Method, trials: u64) -> Vec<(String, f64, f64)> 
                 ms.iter().map(|m| m.tracker_points_mm.clone()).collect();
             let weighting = Weighting::of(method, None).unwrap();
             let arm = result.calibrated.arm(Side::Left);
+            // `for_result` took the σ from the pair sums of the run's weak analysis (the result keeps
+            // them): the same numbers, to the bit, as a pass of its own.
+            assert!(
+                result.pair_sums[Side::Left]
+                    .as_ref()
+                    .is_some_and(|s| s.matches(arm, &qs, &pts, &free)),
+                "the run kept the left arm's pair sums at its solution"
+            );
             assert_eq!(
                 arm_uncertainty_weighted(arm, &qs, &pts, &free, &weighting),
                 u.left
