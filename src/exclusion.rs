@@ -18,6 +18,21 @@ pub fn screen_result(
     quality::screen_model(dataset, &result.nominal, &result.calibrated, settings)
 }
 
+/// [`screen_result`], taking the arms' part from `arms` (computed beside step 2 with the arms of
+/// step 1: [`quality::screen_arms`]) where it was made with the result's arms; the whole screening
+/// otherwise.
+pub fn screen_result_reusing(
+    dataset: &Dataset,
+    result: &CalibrationResult,
+    settings: &ScreenSettings,
+    arms: Option<quality::ArmsScreening>,
+) -> Screening {
+    match arms.filter(|a| a.is_for(&result.calibrated)) {
+        Some(arms) => arms.finish(dataset, &result.nominal, &result.calibrated),
+        None => screen_result(dataset, result, settings),
+    }
+}
+
 /// What [`auto_exclude`] did.
 #[derive(Clone, Debug)]
 pub struct AutoExclusion {

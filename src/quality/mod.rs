@@ -37,7 +37,7 @@ pub mod triangle;
 use crate::dataset::{Dataset, Split};
 use crate::kinematics::DualArmModel;
 use crate::par::prelude::*;
-use crate::side::{ConfigId, Side};
+use crate::side::{ConfigId, PerSide, Side};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
@@ -315,7 +315,17 @@ pub fn screen_model(
     model: &DualArmModel,
     settings: &ScreenSettings,
 ) -> Screening {
-    let mut out = Screening::default();
+    screen_arms(dataset, model, settings).finish(dataset, nominal, model)
+}
+
+/// The part of [`screen_model`] that depends on the arms' models alone (not on the base): each
+/// measured arm's triangle and residual flags and its moved-tracker findings — what can run as soon
+/// as the arms are fitted, beside step 2.
+pub fn screen_arms(
+    dataset: &Dataset,
+    model: &DualArmModel,
+    settings: &ScreenSettings,
+) -> ArmsScreening {
     let fits = residual::fits(dataset, model);
     let per_side = per_measured_side(dataset, |side| {
         let mut side_out = Screening::default();
@@ -334,15 +344,44 @@ pub fn screen_model(
         ));
         side_out
     });
-    for side_out in per_side {
-        out.flags.extend(side_out.flags);
-        out.findings.extend(side_out.findings);
+    ArmsScreening {
+        arms: PerSide::from_fn(|side| model.arm(side).clone()),
+        per_side,
     }
-    if dataset.one_tracker_frame() {
-        out.findings.extend(frames::base_deviation(nominal, model));
+}
+
+/// The arms' part of a screening ([`screen_arms`]) and the arm models it was made with.
+pub struct ArmsScreening {
+    arms: PerSide<crate::kinematics::ArmModel>,
+    per_side: Vec<Screening>,
+}
+
+impl ArmsScreening {
+    /// Whether this is the arms' screening of `model` (its arms are the ones it was made with).
+    pub fn is_for(&self, model: &DualArmModel) -> bool {
+        Side::BOTH
+            .into_iter()
+            .all(|side| self.arms[side] == *model.arm(side))
     }
-    out.sort();
-    out
+
+    /// The whole screening of `model` ([`screen_model`]): the arms' part and the base's finding.
+    pub fn finish(
+        self,
+        dataset: &Dataset,
+        nominal: &DualArmModel,
+        model: &DualArmModel,
+    ) -> Screening {
+        let mut out = Screening::default();
+        for side_out in self.per_side {
+            out.flags.extend(side_out.flags);
+            out.findings.extend(side_out.findings);
+        }
+        if dataset.one_tracker_frame() {
+            out.findings.extend(frames::base_deviation(nominal, model));
+        }
+        out.sort();
+        out
+    }
 }
 
 /// One round of the `--auto-exclude` rule ([`crate::exclusion::auto_exclude`]) on a screening.

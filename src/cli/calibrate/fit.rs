@@ -1,5 +1,5 @@
 //! `dualcal calibrate`'s fit: the calibration with `--auto-exclude` or with progress lines, and what
-//! runs beside it (each arm's uncertainty beside step 2; the screening of the result, its
+//! runs beside it (the arms' screening and each arm's uncertainty beside step 2; the screening of the result, its
 //! uncertainty and the caller's tables side by side).
 
 use super::args::CalibrateArgs;
@@ -59,12 +59,15 @@ pub(super) fn fit_and_screen<T: Send>(
         // Each arm's uncertainty is computed beside step 2 (which runs on one thread and does not
         // change the arms), taken below where the result's arms are those it was computed for.
         let early = std::sync::Mutex::new(PerSide::default());
+        let arms_screened = std::sync::Mutex::new(None);
         let result = crate::par::scope(|scope| {
-            let mut beside = UncertaintyBesideStep2 {
+            let mut beside = BesideStep2 {
                 dataset: ds,
                 settings: settings.clone(),
+                screen_settings: &screen_settings,
                 scope,
                 early: &early,
+                arms_screened: &arms_screened,
             };
             let calibrator = Calibrator::new(ds, nominal).settings(settings);
             let calibrator = if a.quiet {
@@ -75,12 +78,18 @@ pub(super) fn fit_and_screen<T: Send>(
             calibrator.observer(&mut beside).run()
         })?;
         let early = early.into_inner().unwrap_or_default();
-        // The screening of the result, its uncertainty (mostly done beside step 2) and the tables
-        // need nothing of each other: side by side.
+        let arms_screened = arms_screened.into_inner().unwrap_or_default();
+        // The screening of the result, its uncertainty (both mostly done beside step 2) and the
+        // tables need nothing of each other: side by side.
         let ((after, uncertainty), tables) = crate::par::join(
             || {
                 (
-                    crate::exclusion::screen_result(ds, &result, &screen_settings),
+                    crate::exclusion::screen_result_reusing(
+                        ds,
+                        &result,
+                        &screen_settings,
+                        arms_screened,
+                    ),
                     crate::solver::uncertainty::for_result_reusing(ds, &result, early),
                 )
             },
@@ -90,29 +99,44 @@ pub(super) fn fit_and_screen<T: Send>(
     })
 }
 
-/// Starts each arm's uncertainty on the work pool when step 1 has ended (the right arm's stage is
-/// step 1's last), so that it runs beside step 2.
-struct UncertaintyBesideStep2<'s, 'd> {
+/// Starts the arms' part of the result's screening and each arm's uncertainty on the work pool when
+/// step 1 has ended (the right arm's stage is step 1's last), so that they run beside step 2 (which
+/// does not change the arms); each is taken afterwards where the result's arms are those it was
+/// computed for.
+struct BesideStep2<'s, 'd> {
     dataset: &'d Dataset,
     settings: CalibrationSettings,
+    screen_settings: &'d quality::ScreenSettings,
     scope: &'s crate::par::Scope<'d>,
     early: &'d std::sync::Mutex<PerSide<Option<crate::solver::uncertainty::EarlyArmUncertainty>>>,
+    arms_screened: &'d std::sync::Mutex<Option<quality::ArmsScreening>>,
 }
 
-impl crate::solver::Observer for UncertaintyBesideStep2<'_, '_> {
+impl crate::solver::Observer for BesideStep2<'_, '_> {
     fn stage_finished(
         &mut self,
         summary: &crate::solver::StageSummary,
         run: &crate::solver::CalibrationRun,
     ) {
-        // The absolute methods' uncertainty comes from their own problem (`uncertainty::for_result`).
         if summary.stage != crate::solver::Stage::Arm(Side::Right)
             || summary.termination == crate::solver::Termination::Cancelled
-            || self.settings.method.is_absolute()
         {
             return;
         }
         let model = run.current_model();
+        let (dataset, screen_settings, arms_screened) =
+            (self.dataset, self.screen_settings, self.arms_screened);
+        let screened_model = model.clone();
+        self.scope.spawn(move |_| {
+            let screened = quality::screen_arms(dataset, &screened_model, screen_settings);
+            if let Ok(mut slot) = arms_screened.lock() {
+                *slot = Some(screened);
+            }
+        });
+        // The absolute methods' uncertainty comes from their own problem (`uncertainty::for_result`).
+        if self.settings.method.is_absolute() {
+            return;
+        }
         for side in Side::BOTH {
             let Some(report) = run.identifiability(side) else {
                 continue;
