@@ -89,15 +89,7 @@ pub(super) fn uncertainty(
         point_sigma_mm,
         &Weighting::LeastSquares,
     )?;
-    Some(summarise(
-        arm,
-        free,
-        &fit.cov,
-        fit.point_var,
-        fit.used,
-        fit.configurations,
-        &fit.jtj,
-    ))
+    Some(fit.summary(arm, free))
 }
 
 /// A fit's covariance and what it was made of.
@@ -109,6 +101,21 @@ pub(super) struct Covariance {
     configurations: usize,
     used: usize,
     jtj: DMatrix<f64>,
+}
+
+impl Covariance {
+    /// The report of this covariance of `arm`'s parameters `free` ([`summarise`]).
+    fn summary(&self, arm: &ArmModel, free: &[usize]) -> ArmUncertainty {
+        summarise(
+            arm,
+            free,
+            &self.cov,
+            self.point_var,
+            self.used,
+            self.configurations,
+            &self.jtj,
+        )
+    }
 }
 
 /// The sandwich covariance of the distance fit of `arm` at `qs` against `measured`, weighed as
@@ -256,15 +263,7 @@ pub fn arm_uncertainty_weighted(
     weighting: &Weighting,
 ) -> Option<ArmUncertainty> {
     let fit = covariance(arm, qs, measured, free, None, weighting)?;
-    Some(summarise(
-        arm,
-        free,
-        &fit.cov,
-        fit.point_var,
-        fit.used,
-        fit.configurations,
-        &fit.jtj,
-    ))
+    Some(fit.summary(arm, free))
 }
 
 /// [`arm_uncertainty_weighted`] of the fit's pair sums at hand.
@@ -274,13 +273,5 @@ pub fn arm_uncertainty_from(
     weighting: &Weighting,
 ) -> Option<ArmUncertainty> {
     let fit = covariance_of(arm, sums, None, weighting, Directions::Measured)?;
-    Some(summarise(
-        arm,
-        sums.free(),
-        &fit.cov,
-        fit.point_var,
-        fit.used,
-        fit.configurations,
-        &fit.jtj,
-    ))
+    Some(fit.summary(arm, sums.free()))
 }
