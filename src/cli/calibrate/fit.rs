@@ -1,6 +1,6 @@
 //! `dualcal calibrate`'s fit: the calibration with `--auto-exclude` or with progress lines, and what
-//! runs beside it (the arms' screening and each arm's uncertainty beside step 2; the screening of the result, its
-//! uncertainty and the caller's tables side by side).
+//! runs beside it (the arms' screening and, where the run kept no pair sums, each arm's uncertainty
+//! beside step 2; the screening of the result, its uncertainty and the caller's tables side by side).
 
 use super::args::CalibrateArgs;
 use super::progress::ProgressLines;
@@ -56,8 +56,9 @@ pub(super) fn fit_and_screen<T: Send>(
         let mut progress = ProgressLines {
             reflectors: &ds.reflector_names,
         };
-        // Each arm's uncertainty is computed beside step 2 (which runs on one thread and does not
-        // change the arms), taken below where the result's arms are those it was computed for.
+        // The arms' screening, and each arm's uncertainty where the run kept no pair sums for it, are
+        // computed beside step 2 (which does not change the arms), taken below where the result's
+        // arms are those they were computed for.
         let early = std::sync::Mutex::new(PerSide::default());
         let arms_screened = std::sync::Mutex::new(None);
         let result = crate::par::scope(|scope| {
@@ -99,10 +100,10 @@ pub(super) fn fit_and_screen<T: Send>(
     })
 }
 
-/// Starts the arms' part of the result's screening and each arm's uncertainty on the work pool when
-/// step 1 has ended (the right arm's stage is step 1's last), so that they run beside step 2 (which
-/// does not change the arms); each is taken afterwards where the result's arms are those it was
-/// computed for.
+/// Starts the arms' part of the result's screening and (where the run kept no pair sums for the
+/// arm) each arm's uncertainty on the work pool when step 1 has ended (the right arm's stage is
+/// step 1's last), so that they run beside step 2 (which does not change the arms); each is taken
+/// afterwards where the result's arms are those it was computed for.
 struct BesideStep2<'s, 'd> {
     dataset: &'d Dataset,
     settings: CalibrationSettings,
@@ -138,20 +139,19 @@ impl crate::solver::Observer for BesideStep2<'_, '_> {
             return;
         }
         for side in Side::BOTH {
-            let Some(report) = run.identifiability(side) else {
+            // An arm whose pair sums the run kept gets its σ from them at the end (`for_result`):
+            // nothing to start here.
+            let Some(report) = run
+                .identifiability(side)
+                .filter(|_| run.pair_sums(side).is_none())
+            else {
                 continue;
             };
             let (dataset, settings, early) = (self.dataset, self.settings.clone(), self.early);
             let (arm, free) = (model.arm(side).clone(), report.free.clone());
-            let sums = run.pair_sums(side);
             self.scope.spawn(move |_| {
-                let value = crate::solver::uncertainty::EarlyArmUncertainty::reusing(
-                    dataset,
-                    &settings,
-                    side,
-                    arm,
-                    free,
-                    sums.as_deref(),
+                let value = crate::solver::uncertainty::EarlyArmUncertainty::new(
+                    dataset, &settings, side, arm, free,
                 );
                 if let Ok(mut early) = early.lock() {
                     early[side] = Some(value);

@@ -90,28 +90,11 @@ impl EarlyArmUncertainty {
         arm: ArmModel,
         free: Vec<usize>,
     ) -> Self {
-        Self::reusing(dataset, settings, side, arm, free, None)
-    }
-
-    /// [`EarlyArmUncertainty::new`] from the pair sums of the run's weak-parameter analysis
-    /// ([`crate::solver::CalibrationRun::pair_sums`]) where they are this arm's (the same numbers,
-    /// without the second pass over the pairs); computed afresh otherwise.
-    pub fn reusing(
-        dataset: &crate::dataset::Dataset,
-        settings: &crate::solver::settings::CalibrationSettings,
-        side: crate::side::Side,
-        arm: ArmModel,
-        free: Vec<usize>,
-        sums: Option<&PairSums>,
-    ) -> Self {
         let kept = dataset.excluding(&settings.exclude);
         // A single-reflector method's reflector is known once it ran: computed again then.
         let weighting = Weighting::of(settings.method, None).unwrap_or(Weighting::LeastSquares);
         let (qs, measured) = fitted(&kept, settings, side);
-        let value = match sums.filter(|s| s.matches(&arm, &qs, &measured, &free)) {
-            Some(sums) => arm_uncertainty_from(&arm, sums, &weighting),
-            None => arm_uncertainty_weighted(&arm, &qs, &measured, &free, &weighting),
-        };
+        let value = arm_uncertainty_weighted(&arm, &qs, &measured, &free, &weighting);
         Self {
             arm,
             free,
