@@ -4,23 +4,23 @@
 //! `B(y) = (Exp(ω)·R₀, p₀ + δp)` with `y = (ω/s_rot, δp/s_trans)`; Δd_lr,k = |m_L,l,k − m_R,r,k| −
 //! |p_L,l,k − (R p_R,r,k + p)|.
 //!
-//! Up to `pairs::SEQUENTIAL_PAIRS` pairs per reflector (the paper's 14 400) the values, gradients and
-//! the Gauss–Newton matrix are sums of pair rows in the order of earlier releases. Beyond, the gradient
-//! is regrouped per right configuration like step 1's, ∇ = 2 Σ_r (−S_ω J_lᵀ (a_r × R q_r), S_p a_r)
-//! with a_r = Σ_l Δd_lr u_lr, and the Gauss–Newton matrix per right configuration from
-//! M_r = Σ_l u_lr u_lrᵀ: the pair loop does a distance and a few multiply-adds per pair, in the
-//! blocks and lanes of `pairs`, and nothing is stored per pair.
+//! The values and gradients are regrouped per right configuration like step 1's,
+//! ∇ = 2 Σ_r (−S_ω J_lᵀ (a_r × R q_r), S_p a_r) with a_r = Σ_l Δd_lr u_lr, and the Gauss–Newton
+//! matrix per right configuration from M_r = Σ_l u_lr u_lrᵀ: the pair loop does a distance and a few
+//! multiply-adds per pair, in the blocks and lanes of `pairs` (run in parallel, reduced in order: the
+//! same numbers on any number of threads), and nothing is stored per pair. At every size: at the
+//! paper's 14 400 pairs per reflector a sequential sum of stored pair rows (earlier releases' order)
+//! took twice as long and gave the same base to ~1e-14 mm (docs/performance.md, "Fourteenth pass").
+//! A pair's row one by one (`BaseProblem::for_each_row`) is the least-squares method's (ref. 26) and the
+//! tests' reference.
 
-use super::arm_problem::pairs::{self, Plan, Points};
+use super::arm_problem::pairs::{self, Points};
 use super::problem::{Eval, LeastSquaresSystem, MinimaxProblem, StageParams};
 use crate::par::prelude::*;
 use nalgebra::{
     DMatrix, DVector, Isometry3, Matrix3, Rotation3, SMatrix, SVector, Translation3,
     UnitQuaternion, Vector3,
 };
-
-/// A pair's residual Δd, mm, and its row ∂Δd/∂y.
-type PairRow = (f64, SVector<f64, 6>);
 
 pub struct BaseProblem {
     /// Model reflector points of the left arm in the left base frame.
@@ -36,18 +36,11 @@ pub struct BaseProblem {
     measured_left: Vec<Points>,
     measured_right: Vec<Points>,
     /// Their pairwise (left × right) distances, kept up to [`pairs::KEPT_DISTANCE_PAIRS`] pairs per
-    /// reflector when the passes are blocked; recomputed per pass otherwise.
+    /// reflector; recomputed per pass beyond.
     kept_distances: Option<Vec<Vec<f64>>>,
     start: Isometry3<f64>,
     /// Scales of (ω, δp).
     scale: SVector<f64, 6>,
-    plan: Plan,
-    /// At the start (y = 0) and for the sequential passes: per reflector, each pair's residual and
-    /// unscaled row, in the passes' order (a pair at zero distance left out). The set-up's two
-    /// Gauss–Newton matrices (the column scales', then H₀ in the scaled variables) and the SQP's first
-    /// evaluation read them instead of recomputing the pairs; a scaled row is the unscaled one times
-    /// the scale, the number [`Self::for_each_row`] computes, so the sums are the same to the bit.
-    start_rows: Option<Vec<Vec<PairRow>>>,
 }
 
 impl BaseProblem {
@@ -66,12 +59,8 @@ impl BaseProblem {
                 .map(|k| Points::from_fn(points.len(), |i| points[i][k]))
                 .collect()
         };
-        let plan = Plan::for_pairs(left_mm.len() * right_mm.len());
         let (measured_left, measured_right) = (soa(measured_left), soa(measured_right));
-        let kept_distances = match plan {
-            Plan::Blocked => pairs::kept_rectangle_distances(&measured_left, &measured_right),
-            Plan::Sequential => None,
-        };
+        let kept_distances = pairs::kept_rectangle_distances(&measured_left, &measured_right);
         let mut p = Self {
             left_points: soa(&left_mm),
             measured_left,
@@ -82,23 +71,7 @@ impl BaseProblem {
             reflectors,
             start,
             scale: SVector::from_element(1.0),
-            plan,
-            start_rows: None,
         };
-        if plan == Plan::Sequential {
-            // The rows at the start with unit scales: each reflector's on the work pool.
-            let zero = DVector::zeros(6);
-            p.start_rows = Some(
-                (0..reflectors)
-                    .into_par_iter()
-                    .map(|k| {
-                        let mut rows = Vec::with_capacity(p.n_pairs());
-                        p.for_each_row(&zero, k, |r, row| rows.push((r, *row)));
-                        rows
-                    })
-                    .collect(),
-            );
-        }
         // Column scaling from the Gauss–Newton diagonal at the start.
         let h = p.gauss_newton(&DVector::zeros(6));
         p.scale = SVector::from_fn(|i, _| {
@@ -111,36 +84,8 @@ impl BaseProblem {
     /// Gauss–Newton approximation of the Hessian of the mean of the f_i (the initial BFGS matrix and
     /// the column scaling).
     pub fn gauss_newton(&self, y: &DVector<f64>) -> DMatrix<f64> {
-        let mut h = nalgebra::SMatrix::<f64, 6, 6>::zeros();
-        match (self.plan, self.rows_at(y)) {
-            (Plan::Sequential, Some(rows)) => {
-                // Σ row rowᵀ on the upper triangle, mirrored: each entry the same sum of the same
-                // products (row_i row_j = row_j row_i) as the full outer products'.
-                for row in rows
-                    .iter()
-                    .flatten()
-                    .map(|(_, row)| row.component_mul(&self.scale))
-                {
-                    for j in 0..6 {
-                        for i in 0..=j {
-                            h[(i, j)] += row[i] * row[j];
-                        }
-                    }
-                }
-                for j in 0..6 {
-                    for i in 0..j {
-                        h[(j, i)] = h[(i, j)];
-                    }
-                }
-            }
-            (Plan::Sequential, None) => {
-                for k in 0..self.reflectors {
-                    self.for_each_row(y, k, |_, row| h += row * row.transpose());
-                }
-            }
-            (Plan::Blocked, _) => h = self.gauss_newton_regrouped(y),
-        }
-        let h = h * (2.0 / (self.reflectors as f64 * self.n_pairs().max(1) as f64));
+        let h = self.gauss_newton_regrouped(y)
+            * (2.0 / (self.reflectors as f64 * self.n_pairs().max(1) as f64));
         DMatrix::from_column_slice(6, 6, h.as_slice())
     }
 
@@ -155,22 +100,8 @@ impl BaseProblem {
         )
     }
 
-    /// The kept rows of the start, when `y` is the start.
-    fn rows_at(&self, y: &DVector<f64>) -> Option<&[Vec<PairRow>]> {
-        self.start_rows
-            .as_deref()
-            .filter(|_| y.iter().all(|&v| v == 0.0))
-    }
-
     fn n_pairs(&self) -> usize {
         self.left_mm.len() * self.right_mm.len()
-    }
-
-    /// The regrouped passes whatever the size (tests of the blocked path on small data).
-    #[cfg(test)]
-    fn blocked(mut self) -> Self {
-        self.plan = Plan::Blocked;
-        self
     }
 
     /// J_l(ω) and the right arm's points rotated into the left base (R q_r), per reflector.
@@ -333,39 +264,11 @@ impl MinimaxProblem for BaseProblem {
 
     fn evaluate(&self, y: &DVector<f64>) -> Eval {
         let norm = 1.0 / self.n_pairs().max(1) as f64;
-        if self.plan == Plan::Blocked {
-            let (f, grad) = self
-                .sums_regrouped(y)
-                .into_iter()
-                .map(|(f, g)| (f * norm, DVector::from_column_slice((g * norm).as_slice())))
-                .unzip();
-            return Eval {
-                f,
-                grad,
-                cons: Vec::new(),
-                cons_grad: Vec::new(),
-            };
-        }
-        let start = self.rows_at(y);
-        let parts: Vec<(f64, DVector<f64>)> = (0..self.reflectors)
-            .into_par_iter()
-            .map(|k| {
-                let mut f = 0.0;
-                let mut g = SVector::<f64, 6>::zeros();
-                let mut add = |r: f64, row: &SVector<f64, 6>| {
-                    f += r * r;
-                    g += row * (2.0 * r);
-                };
-                match start {
-                    Some(rows) => rows[k]
-                        .iter()
-                        .for_each(|(r, row)| add(*r, &row.component_mul(&self.scale))),
-                    None => self.for_each_row(y, k, add),
-                }
-                (f * norm, DVector::from_column_slice((g * norm).as_slice()))
-            })
-            .collect();
-        let (f, grad) = parts.into_iter().unzip();
+        let (f, grad) = self
+            .sums_regrouped(y)
+            .into_iter()
+            .map(|(f, g)| (f * norm, DVector::from_column_slice((g * norm).as_slice())))
+            .unzip();
         Eval {
             f,
             grad,
@@ -411,62 +314,42 @@ mod tests {
 
     #[test]
     fn gradient_matches_finite_differences() {
-        for blocked in [false, true] {
-            let p = problem(6, 5);
-            let p = if blocked { p.blocked() } else { p };
-            let y = DVector::from_fn(6, |i, _| 0.1 * (i as f64 - 2.5));
-            let e = p.evaluate(&y);
-            let analytic = DMatrix::from_fn(3, 6, |k, c| e.grad[k][c]);
-            let objectives = |y: &DVector<f64>| DVector::from_row_slice(&p.values(y).0);
-            check_jacobian(objectives, &y, &analytic, |_| 1e-6, Tolerance::rel(1e-6))
-                .unwrap_or_else(|m| panic!("objectives f0..f2 (blocked: {blocked}): {m}"));
-        }
+        let p = problem(6, 5);
+        let y = DVector::from_fn(6, |i, _| 0.1 * (i as f64 - 2.5));
+        let e = p.evaluate(&y);
+        let analytic = DMatrix::from_fn(3, 6, |k, c| e.grad[k][c]);
+        let objectives = |y: &DVector<f64>| DVector::from_row_slice(&p.values(y).0);
+        check_jacobian(objectives, &y, &analytic, |_| 1e-6, Tolerance::rel(1e-6))
+            .unwrap_or_else(|m| panic!("objectives f0..f2: {m}"));
     }
 
-    /// Beyond [`pairs::SEQUENTIAL_PAIRS`] the values, gradients and Gauss–Newton matrix are regrouped
-    /// per right configuration: the same sums up to rounding.
+    /// The regrouped passes (values, gradients, Gauss–Newton matrix per reflector) are the sums of
+    /// the pair rows taken one by one, up to rounding — at the start, where the set-up's column scales
+    /// and H₀ come from, and away from it.
     #[test]
     fn the_regrouped_passes_sum_the_pair_rows() {
-        let (seq, blocked) = (problem(23, 19), problem(23, 19).blocked());
-        let y = DVector::from_fn(6, |i, _| 0.03 * (i as f64 - 2.5));
-        let (a, b) = (seq.evaluate(&y), blocked.evaluate(&y));
-        for k in 0..3 {
-            assert!(
-                (a.f[k] - b.f[k]).abs() <= 1e-12 * a.f[k],
-                "{} {}",
-                a.f[k],
-                b.f[k]
-            );
-            let diff = (&a.grad[k] - &b.grad[k]).amax();
-            assert!(diff <= 1e-10 * a.grad[k].amax(), "{diff}");
+        let p = problem(23, 19);
+        let norm = 1.0 / (23.0 * 19.0);
+        for y in [
+            DVector::zeros(6),
+            DVector::from_fn(6, |i, _| 0.03 * (i as f64 - 2.5)),
+        ] {
+            let e = p.evaluate(&y);
+            let per_reflector = p.gauss_newton_per_reflector(&y);
+            for (k, hk) in per_reflector.iter().enumerate() {
+                let (mut f, mut g, mut h) = (0.0, SVector::<f64, 6>::zeros(), SMatrix::zeros());
+                p.for_each_row(&y, k, |r, row| {
+                    f += r * r;
+                    g += row * (2.0 * r);
+                    h += row * row.transpose();
+                });
+                let (f, g) = (f * norm, g * norm);
+                assert!((e.f[k] - f).abs() <= 1e-12 * f, "{} {f}", e.f[k]);
+                let diff = (&e.grad[k] - DVector::from_column_slice(g.as_slice())).amax();
+                assert!(diff <= 1e-10 * g.amax(), "{diff}");
+                assert!((hk - h).amax() <= 1e-11 * h.amax(), "{hk} {h}");
+            }
         }
-        let (ha, hb) = (seq.gauss_newton(&y), blocked.gauss_newton(&y));
-        assert!((&ha - &hb).amax() <= 1e-11 * ha.amax(), "{ha} {hb}");
-    }
-
-    /// The kept rows of the start (the set-up's Gauss–Newton matrices, the first evaluation) give
-    /// the numbers the passes over the pairs give, to the bit: the column scales, H₀, F_k and ∇F_k.
-    #[test]
-    fn the_kept_start_rows_give_the_passes_numbers_to_the_bit() {
-        let kept = problem(23, 19);
-        let mut recomputed = problem(23, 19);
-        recomputed.start_rows = None;
-        let zero = DVector::zeros(6);
-        // The column scales as the passes alone find them (unit scales, then the diagonal).
-        let scale = recomputed.scale;
-        recomputed.scale = SVector::from_element(1.0);
-        let h = recomputed.gauss_newton(&zero);
-        let rescaled = SVector::<f64, 6>::from_fn(|i, _| 1.0 / (h[(i, i)] * 0.5).sqrt());
-        recomputed.scale = scale;
-        assert_eq!(kept.scale, rescaled);
-        assert_eq!(kept.gauss_newton(&zero), recomputed.gauss_newton(&zero));
-        let (a, b) = (kept.evaluate(&zero), recomputed.evaluate(&zero));
-        assert_eq!(a.f, b.f);
-        assert_eq!(a.grad, b.grad);
-        // Away from the start the kept rows are not used.
-        let y = DVector::from_fn(6, |i, _| 0.01 * i as f64);
-        assert!(kept.rows_at(&y).is_none());
-        assert_eq!(kept.evaluate(&y).f, recomputed.evaluate(&y).f);
     }
 
     /// Left and right model points, measurements of a true base, a start near it.

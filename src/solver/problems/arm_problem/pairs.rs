@@ -6,11 +6,12 @@
 //! weights `t_ij = (p_i − p_j) Δd / d` that the gradients are regrouped by (eq. 34; step 2 likewise).
 //! Points are kept as struct-of-arrays ([`Points`]) so the inner loop runs in SIMD lanes.
 //!
-//! Summation order: up to [`SEQUENTIAL_PAIRS`] pairs per reflector (the paper's size: 7 140 pairs per
-//! arm, 14 400 for step 2) one sequential pass in the order of earlier releases — the calibrations are
-//! bit-identical to theirs. Beyond, [`BLOCKS`] blocks of rows with (nearly) equal pair counts, fixed by
-//! n alone, summed in [`LANES`] partial sums each and run in parallel; the blocks are reduced in order,
-//! so the results do not depend on the number of threads.
+//! Summation order: step 1's passes, up to [`SEQUENTIAL_PAIRS`] pairs per reflector (the paper's size:
+//! 7 140 pairs per arm), are one sequential pass in the order of earlier releases — step 1 is
+//! bit-identical to theirs. Beyond, and step 2's passes at every size ([`rectangle`]), [`BLOCKS`]
+//! blocks of rows with (nearly) equal pair counts, fixed by n alone, summed in [`LANES`] partial sums
+//! each and run in parallel; the blocks are reduced in order, so the results do not depend on the
+//! number of threads.
 
 use crate::par::prelude::*;
 use nalgebra::Vector3;
