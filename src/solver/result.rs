@@ -58,10 +58,10 @@ pub struct CalibrationResult {
     /// across the workspace; held at their nominal values unless the settings keep them
     /// ([`CalibrationSettings::keep_weak`]). Empty for the methods the analysis does not cover.
     pub weak: PerSide<Vec<WeakParameter>>,
-    /// Each arm's pair sums at its step-1 solution, from the weak-parameter analysis
-    /// ([`crate::solver::CalibrationRun::pair_sums`]): [`crate::solver::uncertainty::for_result`]
-    /// takes the arm's σ from them instead of a pass of its own. `None` where the analysis did not run
-    /// or the arm was solved again with held parameters.
+    /// Each arm's pair sums at its step-1 solution, which the identifiability re-check and the
+    /// weak-parameter analysis took ([`crate::solver::CalibrationRun::pair_sums`]):
+    /// [`crate::solver::uncertainty::for_result`] takes the arm's σ from them instead of a pass of its
+    /// own. `None` for the methods that do not fit distances and for a cancelled stage.
     pub pair_sums: PerSide<Option<Arc<PairSums>>>,
     pub elapsed_secs: f64,
 }

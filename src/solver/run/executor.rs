@@ -14,9 +14,7 @@ use crate::solver::analysis::identifiability::{self, IdentifiabilityReport};
 use crate::solver::analysis::uncertainty::PairSums;
 use crate::solver::analysis::weak::{WeakParameter, weak_parameters_of};
 use crate::solver::error::CalibrationError;
-use crate::solver::methods::set_up::{
-    ArmData, ArmSetUp, BaseSetUp, IDENTIFIABILITY_PAIRS, TreeSetUp,
-};
+use crate::solver::methods::set_up::{ArmData, ArmSetUp, BaseSetUp, TreeSetUp};
 use crate::solver::problems::problem::StageParams;
 use crate::solver::result::CalibrationResult;
 use crate::solver::settings::CalibrationSettings;
@@ -251,9 +249,10 @@ impl CalibrationRun {
     }
 
     /// The pair sums of `side`'s step-1 fit at its solution (its free parameters, the configurations it
-    /// fitted), as the weak-parameter analysis computed them: a method's uncertainty of that arm
-    /// starts from them ([`crate::solver::uncertainty::PairSums::matches`] says whether they are the
-    /// arm's). `None` before that analysis, where it did not run, or after held parameters.
+    /// fitted), as the identifiability re-check and the weak-parameter analysis took them: a method's
+    /// uncertainty of that arm starts from them ([`crate::solver::uncertainty::PairSums::matches`] says
+    /// whether they are the arm's). `None` before the arm's stage ends, for the methods that do not
+    /// fit distances, and while the arm is solved again with held parameters.
     pub fn pair_sums(&self, side: Side) -> Option<Arc<PairSums>> {
         self.pair_sums[side].clone()
     }
@@ -403,16 +402,21 @@ impl CalibrationRun {
         } else {
             self.stage_objectives(active.stage)
         };
-        // The distance analysis at the solution, for the methods that fit distances.
-        if let Stage::Arm(side) = active.stage
-            && termination != Termination::Cancelled
-            && !self.settings.method.is_absolute()
-        {
-            self.recheck_identifiability(side);
+        // The distance analyses at the solution, for the methods that fit distances: one pass of pair
+        // sums for the identifiability re-check, the weak parameters and the uncertainty.
+        let sums = match active.stage {
+            Stage::Arm(side)
+                if termination != Termination::Cancelled && !self.settings.method.is_absolute() =>
+            {
+                self.solution_sums(side)
+            }
+            _ => None,
+        };
+        if let (Stage::Arm(side), Some(sums)) = (active.stage, &sums) {
+            self.recheck_identifiability(side, sums);
         }
-        if let Stage::Arm(side) = active.stage
-            && termination != Termination::Cancelled
-            && self.hold_weak(side)
+        if let (Stage::Arm(side), Some(sums)) = (active.stage, sums)
+            && self.hold_weak(side, sums)
         {
             // Solved again from the nominal model with the weak parameters held; one stage to the
             // observers, its iterations counted on.
@@ -582,22 +586,27 @@ impl CalibrationRun {
         }
     }
 
-    /// Repeat the identifiability analysis at `side`'s solution: a parameter that was identifiable at
-    /// the start but is (nearly) dependent there is poorly determined by the data at the answer.
-    fn recheck_identifiability(&mut self, side: Side) {
+    /// `side`'s pair sums at its solution over the parameters its start left free (`None` without a
+    /// start analysis).
+    fn solution_sums(&self, side: Side) -> Option<PairSums> {
+        let start = self.identifiability[side].as_ref()?;
+        let input = &self.inputs[side];
+        let arm = self.committed.arm(side);
+        Some(PairSums::new(arm, &input.qs, &input.measured, &start.free))
+    }
+
+    /// Repeat the identifiability analysis at `side`'s solution, from its pair sums there: a parameter
+    /// that was identifiable at the start but is (nearly) dependent there is poorly determined by the
+    /// data at the answer.
+    fn recheck_identifiability(&mut self, side: Side, sums: &PairSums) {
         let Some(start) = &self.identifiability[side] else {
             return;
         };
-        let arm = self.committed.arm(side);
-        let input = &self.inputs[side];
-        // The start's sample of pairs at the solution; one Gram product (the verdicts are the QR's).
-        let at_solution = identifiability::at_solution(
-            arm,
-            &input.qs,
-            &start.free,
-            IDENTIFIABILITY_PAIRS,
-            identifiability::GramMethod::Product,
-        );
+        let Some(at_solution) =
+            identifiability::at_solution_of_sums(self.committed.arm(side), sums)
+        else {
+            return;
+        };
         let allowed = |k: usize| start.free.contains(&k);
         let before = start.condition_after;
         for f in &at_solution.fixed {
@@ -620,22 +629,17 @@ impl CalibrationRun {
         self.identifiability_at_solution[side] = Some(at_solution);
     }
 
-    /// Find `side`'s weak parameters at its step-1 solution (the distance methods of all the
-    /// reflectors); unless the settings keep them, hold them at their nominal values: `true` when the
-    /// stage is to be solved again (the arm is back at its nominal model). Once per arm.
-    fn hold_weak(&mut self, side: Side) -> bool {
-        if self.settings.method.is_absolute()
-            || self.reflector_used[side].is_some()
-            || !self.held[side].is_empty()
-        {
+    /// Find `side`'s weak parameters at its step-1 solution from its pair sums there (the distance
+    /// methods of all the reflectors); unless the settings keep them, hold them at their nominal values:
+    /// `true` when the stage is to be solved again (the arm is back at its nominal model). Once per arm.
+    /// The sums are kept for the arm's uncertainty unless the stage is solved again.
+    fn hold_weak(&mut self, side: Side, sums: PairSums) -> bool {
+        if self.reflector_used[side].is_some() || !self.held[side].is_empty() {
+            self.pair_sums[side] = Some(Arc::new(sums));
             return false;
         }
-        let Some(report) = &self.identifiability[side] else {
-            return false;
-        };
         let input = &self.inputs[side];
         let arm = self.committed.arm(side);
-        let sums = PairSums::new(arm, &input.qs, &input.measured, &report.free);
         let mut weak = weak_parameters_of(arm, &input.qs, &sums);
         let hold = !weak.is_empty() && !self.settings.keep_weak;
         self.pair_sums[side] = (!hold).then(|| Arc::new(sums));

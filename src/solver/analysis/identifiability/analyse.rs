@@ -89,7 +89,7 @@ impl ParameterInfo<'_> {
 }
 
 /// Condition number of the scaled Gram submatrix of `idx` (the square root of its eigenvalue ratio).
-fn condition(scaled: &DMatrix<f64>, idx: &[usize]) -> f64 {
+pub(super) fn condition(scaled: &DMatrix<f64>, idx: &[usize]) -> f64 {
     if idx.is_empty() {
         return 1.0;
     }

@@ -11,7 +11,7 @@ pub use analyse::{
     UNIDENTIFIABLE_TOL, analyse, gram_by_product, gram_by_qr,
 };
 pub use columns::{Analysis, Columns, analyse_columns};
-pub use recheck::{GramMethod, at_solution, identifiable_at};
+pub use recheck::{GramMethod, at_solution, at_solution_of_sums, identifiable_at};
 
 #[cfg(test)]
 mod tests;

@@ -1,15 +1,21 @@
-//! The identifiability analysis repeated at a step-1 solution: the distance Jacobian of the calibrated
-//! arm on the start's sample of pairs (the same evenly strided pairs), with the parameters the start
-//! left free as the only allowed ones. Its Gram matrix is the product `MMᵀ` summed over blocks of
-//! rows without holding `M` (`arm_problem::pair_jacobian_gram`) whatever the robot: only its verdicts
-//! are used (a parameter no longer identifiable, a grown condition number), and they are those of the
-//! QR the start uses for the built-in robot (a test holds them on the test robots and the distance
-//! methods).
+//! The identifiability analysis repeated at a step-1 solution, with the parameters the start left free
+//! as the only allowed ones: only its verdicts are used (a parameter no longer identifiable, a grown
+//! condition number).
+//!
+//! A calibration's run takes it from the pair sums it computes at the solution anyway for the
+//! weak-parameter analysis and the uncertainty ([`at_solution_of_sums`]: the Gram matrix of every
+//! pair's rows over the free parameters, on the configurations the sums use — all up to
+//! `uncertainty::MAX_CONFIGURATIONS`, every k-th beyond). [`at_solution`] forms it afresh on the
+//! start's sample of pairs (the same evenly strided pairs) over every parameter, as the product `MMᵀ`
+//! summed over blocks of rows without holding `M` (`arm_problem::pair_jacobian_gram`): what the
+//! planner's [`identifiable_at`] uses, and the comparison in the tests (the verdicts of both agree
+//! with the QR's on the test robots and the distance methods).
 
-use super::analyse::{IdentifiabilityReport, gram_by_qr};
+use super::analyse::{IdentifiabilityReport, condition, gram_by_qr};
 use super::columns::{Analysis, Columns, analyse_columns};
 use crate::kinematics::{ArmJacobians, ArmModel};
 use crate::par::prelude::*;
+use crate::solver::analysis::uncertainty::PairSums;
 use crate::solver::problems::arm_problem::{pair_jacobian_columns, pair_jacobian_gram};
 use nalgebra::DMatrix;
 
@@ -50,6 +56,45 @@ pub fn at_solution(
         },
         &Analysis::distances(&allowed),
     )
+}
+
+/// The analysis of `arm` at the solution its pair sums `sums` were computed at: their mean Gram matrix
+/// over every reflector's pairs, with only their free parameters allowed (the others' columns are not
+/// formed: they are fixed as at the start). Its `condition_before` is the condition number of all the
+/// allowed parameters' scaled columns (not of every parameter's). `None` when the sums have no rows.
+pub fn at_solution_of_sums(arm: &ArmModel, sums: &PairSums) -> Option<IdentifiabilityReport> {
+    let reduced = sums.mean_gram()?;
+    let free = sums.free();
+    let n_params = arm.param_count();
+    let mut gram = DMatrix::zeros(n_params, n_params);
+    let mut allowed = vec![false; n_params];
+    for (a, &ka) in free.iter().enumerate() {
+        allowed[ka] = true;
+        for (b, &kb) in free.iter().enumerate() {
+            gram[(ka, kb)] = reduced[(a, b)];
+        }
+    }
+    let mut report = analyse_columns(
+        &gram,
+        &Columns::Arm {
+            arm,
+            transform: None,
+        },
+        &Analysis::distances(&allowed),
+    );
+    let norms: Vec<f64> = (0..free.len())
+        .map(|a| reduced[(a, a)].max(0.0).sqrt())
+        .collect();
+    let scaled = DMatrix::from_fn(free.len(), free.len(), |a, b| {
+        reduced[(a, b)] / (norms[a] * norms[b])
+    });
+    let all: Vec<usize> = (0..free.len()).collect();
+    report.condition_before = if norms.iter().all(|&n| n > 0.0 && n.is_finite()) {
+        condition(&scaled, &all)
+    } else {
+        f64::INFINITY
+    };
+    Some(report)
 }
 
 /// The parameters of `arm` that distances measured at the configurations `qs` identify: the

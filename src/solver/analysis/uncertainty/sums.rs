@@ -143,6 +143,21 @@ impl PairSums {
         &self.free
     }
 
+    /// The mean Gram matrix of the pair Jacobian's rows over every reflector, `Σ_k JᵀJ_k / rows`, over
+    /// the free parameters (in [`PairSums::free`]'s order); `None` without rows.
+    pub fn mean_gram(&self) -> Option<DMatrix<f64>> {
+        let p = self.free.len();
+        let rows: usize = self.reflectors.iter().map(|r| r.rows).sum();
+        if rows == 0 {
+            return None;
+        }
+        let mut gram = DMatrix::zeros(p, p);
+        for r in &self.reflectors {
+            gram += &r.jtj;
+        }
+        Some(gram / rows as f64)
+    }
+
     /// The point noise per axis the residuals show, mm: `Σ e² / (2 (rows − p))` over every reflector's
     /// pairs (as the least-squares uncertainty estimates it); `None` without residual degrees of
     /// freedom or with a zero or broken noise.
