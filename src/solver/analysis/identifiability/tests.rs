@@ -402,31 +402,50 @@ fn the_recheck_by_product_gives_the_qr_verdicts() {
     assert_eq!(checked, 18);
 }
 
+/// The built-in robot's paper-like simulation (`configs` per arm, `cal` of them to calibrate) and its
+/// default calibration.
+fn calibrated_builtin(
+    seed: u64,
+    configs: usize,
+    cal: usize,
+) -> (
+    crate::simulate::SimOutput,
+    crate::solver::result::CalibrationResult,
+) {
+    use crate::robot::RobotDescription;
+    use crate::simulate::{paper_options, simulate_with_robot};
+    use crate::solver::run::calibrator::Calibrator;
+    let robot = RobotDescription::builtin_irb14000();
+    let sim = simulate_with_robot(&paper_options(seed, configs, cal), &robot).unwrap();
+    let result = Calibrator::new(&sim.dataset, &sim.nominal).run().unwrap();
+    (sim, result)
+}
+
+/// The joint values and measured points of `side`'s calibration split.
+fn calibration_split(
+    dataset: &crate::dataset::Dataset,
+    side: crate::side::Side,
+) -> (Vec<Vec<f64>>, Vec<Vec<Vector3<f64>>>) {
+    dataset
+        .arm(side)
+        .select(crate::dataset::Split::Cal)
+        .iter()
+        .map(|m| (m.q_rad.clone(), m.tracker_points_mm.clone()))
+        .unzip()
+}
+
 /// The re-check from the pair sums is the sampled re-check when the sample is every pair of the
 /// configurations the sums use: the same Gram matrix over the free parameters up to rounding, so the
 /// same verdicts and condition number.
 #[test]
 fn the_recheck_of_the_sums_is_the_recheck_of_every_pair() {
-    use crate::dataset::Split;
-    use crate::robot::RobotDescription;
     use crate::side::Side;
-    use crate::simulate::{paper_options, simulate_with_robot};
-    use crate::solver::analysis::uncertainty::PairSums;
-    use crate::solver::run::calibrator::Calibrator;
-    let robot = RobotDescription::builtin_irb14000();
-    let sim = simulate_with_robot(&paper_options(31, 60, 40), &robot).unwrap();
-    let result = Calibrator::new(&sim.dataset, &sim.nominal).run().unwrap();
+    use crate::solver::analysis::uncertainty::{MAX_CONFIGURATIONS, PairSums};
+    let (sim, result) = calibrated_builtin(31, 60, 40);
     for side in Side::BOTH {
         let start = result.identifiability[side].as_ref().unwrap();
-        let (qs, measured): (Vec<Vec<f64>>, Vec<_>) = sim
-            .dataset
-            .arm(side)
-            .measurements
-            .iter()
-            .filter(|m| m.split == Split::Cal)
-            .map(|m| (m.q_rad.clone(), m.tracker_points_mm.clone()))
-            .unzip();
-        assert!(qs.len() <= crate::solver::analysis::uncertainty::MAX_CONFIGURATIONS);
+        let (qs, measured) = calibration_split(&sim.dataset, side);
+        assert!(qs.len() <= MAX_CONFIGURATIONS);
         let arm = result.calibrated.arm(side);
         let sums = PairSums::new(arm, &qs, &measured, &start.free);
         let of_sums = at_solution_of_sums(arm, &sums).unwrap();
@@ -451,26 +470,13 @@ fn the_recheck_of_the_sums_is_the_recheck_of_every_pair() {
 /// warning is for a growth of 10×).
 #[test]
 fn the_recheck_of_the_sums_beyond_their_configurations_keeps_the_verdicts() {
-    use crate::dataset::Split;
-    use crate::robot::RobotDescription;
     use crate::side::Side;
-    use crate::simulate::{paper_options, simulate_with_robot};
     use crate::solver::analysis::uncertainty::MAX_CONFIGURATIONS;
     use crate::solver::methods::set_up::IDENTIFIABILITY_PAIRS;
-    use crate::solver::run::calibrator::Calibrator;
-    let robot = RobotDescription::builtin_irb14000();
-    let sim = simulate_with_robot(&paper_options(37, 200, 180), &robot).unwrap();
-    let result = Calibrator::new(&sim.dataset, &sim.nominal).run().unwrap();
+    let (sim, result) = calibrated_builtin(37, 200, 180);
     for side in Side::BOTH {
         let start = result.identifiability[side].as_ref().unwrap();
-        let qs: Vec<Vec<f64>> = sim
-            .dataset
-            .arm(side)
-            .measurements
-            .iter()
-            .filter(|m| m.split == Split::Cal)
-            .map(|m| m.q_rad.clone())
-            .collect();
+        let (qs, _) = calibration_split(&sim.dataset, side);
         assert!(qs.len() > 2 * MAX_CONFIGURATIONS);
         let arm = result.calibrated.arm(side);
         let run = result.identifiability_at_solution[side].as_ref().unwrap();
