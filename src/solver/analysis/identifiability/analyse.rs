@@ -89,7 +89,7 @@ impl ParameterInfo<'_> {
 }
 
 /// Condition number of the scaled Gram submatrix of `idx` (the square root of its eigenvalue ratio).
-pub(super) fn condition(scaled: &DMatrix<f64>, idx: &[usize]) -> f64 {
+fn condition(scaled: &DMatrix<f64>, idx: &[usize]) -> f64 {
     if idx.is_empty() {
         return 1.0;
     }
@@ -101,6 +101,19 @@ pub(super) fn condition(scaled: &DMatrix<f64>, idx: &[usize]) -> f64 {
     } else {
         (max / min).sqrt()
     }
+}
+
+/// Condition number of the columns `idx` of the Gram matrix `gram`, each scaled to unit norm (∞ when
+/// one of them has none).
+pub(super) fn scaled_condition(gram: &DMatrix<f64>, idx: &[usize]) -> f64 {
+    let norms: Vec<f64> = idx.iter().map(|&k| gram[(k, k)].max(0.0).sqrt()).collect();
+    if !norms.iter().all(|&n| n > 0.0 && n.is_finite()) {
+        return f64::INFINITY;
+    }
+    let scaled = DMatrix::from_fn(idx.len(), idx.len(), |a, b| {
+        gram[(idx[a], idx[b])] / (norms[a] * norms[b])
+    });
+    condition(&scaled, &(0..idx.len()).collect::<Vec<_>>())
 }
 
 /// The kept parameters that column `k` leans on most (largest coefficients of its projection).

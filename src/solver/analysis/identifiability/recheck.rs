@@ -11,7 +11,7 @@
 //! planner's [`identifiable_at`] uses, and the comparison in the tests (the verdicts of both agree
 //! with the QR's on the test robots and the distance methods).
 
-use super::analyse::{IdentifiabilityReport, condition, gram_by_qr};
+use super::analyse::{IdentifiabilityReport, gram_by_qr, scaled_condition};
 use super::columns::{Analysis, Columns, analyse_columns};
 use crate::kinematics::{ArmJacobians, ArmModel};
 use crate::par::prelude::*;
@@ -82,18 +82,7 @@ pub fn at_solution_of_sums(arm: &ArmModel, sums: &PairSums) -> Option<Identifiab
         },
         &Analysis::distances(&allowed),
     );
-    let norms: Vec<f64> = (0..free.len())
-        .map(|a| reduced[(a, a)].max(0.0).sqrt())
-        .collect();
-    let scaled = DMatrix::from_fn(free.len(), free.len(), |a, b| {
-        reduced[(a, b)] / (norms[a] * norms[b])
-    });
-    let all: Vec<usize> = (0..free.len()).collect();
-    report.condition_before = if norms.iter().all(|&n| n > 0.0 && n.is_finite()) {
-        condition(&scaled, &all)
-    } else {
-        f64::INFINITY
-    };
+    report.condition_before = scaled_condition(&reduced, &(0..free.len()).collect::<Vec<_>>());
     Some(report)
 }
 
